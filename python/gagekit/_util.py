@@ -1,0 +1,59 @@
+"""Small helpers shared by the gagekit modules (array checks, JSON)."""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import asdict, is_dataclass
+from typing import Any
+
+import numpy as np
+
+from .errors import InvalidInputError
+
+
+def as_points(points: Any, dim: int = 3, what: str = "points") -> np.ndarray:
+    """Return ``points`` as a C-contiguous float64 array of shape (n, dim).
+
+    Raises :class:`InvalidInputError` for a wrong shape or a non-numeric dtype.
+    Finiteness is checked by the Rust kernels (they name the offending row).
+    """
+    try:
+        arr = np.asarray(points, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise InvalidInputError(f"{what}: cannot be read as numbers ({exc})") from None
+    if arr.ndim != 2 or arr.shape[1] != dim:
+        raise InvalidInputError(f"{what}: expected an (n, {dim}) array, got shape {arr.shape}")
+    return np.ascontiguousarray(arr)
+
+
+def check_finite(arr: np.ndarray, what: str = "points") -> None:
+    """Raise :class:`InvalidInputError` naming the first row with NaN or inf."""
+    bad = ~np.isfinite(arr)
+    if bad.any():
+        row = int(np.argmax(bad.any(axis=1))) if arr.ndim == 2 else int(np.argmax(bad))
+        raise InvalidInputError(f"{what}: point {row} has a non-finite coordinate (NaN or inf)")
+
+
+def to_jsonable(obj: Any) -> Any:
+    """Convert results (dataclasses, numpy scalars and arrays) to JSON-ready values."""
+    if hasattr(obj, "to_dict") and callable(obj.to_dict):
+        return to_jsonable(obj.to_dict())
+    if is_dataclass(obj) and not isinstance(obj, type):
+        return to_jsonable(asdict(obj))
+    if isinstance(obj, dict):
+        return {str(k): to_jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [to_jsonable(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return to_jsonable(obj.tolist())
+    if isinstance(obj, np.generic):
+        return to_jsonable(obj.item())
+    if isinstance(obj, float) and not math.isfinite(obj):
+        return None
+    return obj
+
+
+def dumps(obj: Any) -> str:
+    """JSON text of a result, strict (no NaN), stable key order as produced."""
+    return json.dumps(to_jsonable(obj), indent=2, allow_nan=False)

@@ -1,0 +1,53 @@
+"""The gagekit exception hierarchy.
+
+Every error gagekit raises on purpose is a :class:`GagekitError`; the Rust
+kernels' errors arrive as the same classes (the binding crate looks them up
+here), and a panic inside a kernel arrives as :class:`InternalError`, never as
+an abort of the Python process.
+"""
+
+from __future__ import annotations
+
+
+class GagekitError(Exception):
+    """Root of every gagekit exception."""
+
+
+class InvalidInputError(GagekitError, ValueError):
+    """Bad numbers, shapes or dtypes: NaN, infinities, empty input, wrong sizes."""
+
+
+class FileFormatError(InvalidInputError):
+    """A file that cannot be read: unknown format, malformed line, empty file."""
+
+
+class DegenerateGeometryError(GagekitError, ValueError):
+    """Too few points or a configuration too degenerate for the computation."""
+
+
+class InfeasibleError(GagekitError):
+    """An optimisation problem without a feasible solution."""
+
+
+class ConfigError(GagekitError, ValueError):
+    """An inconsistent configuration: machine file, gage file, region."""
+
+
+class NumericalError(GagekitError, ArithmeticError):
+    """A numerical method failed to converge or lost accuracy."""
+
+
+class InternalError(GagekitError, RuntimeError):
+    """A bug inside gagekit (a caught panic of a Rust kernel). Please report it."""
+
+
+__all__ = [
+    "GagekitError",
+    "InvalidInputError",
+    "FileFormatError",
+    "DegenerateGeometryError",
+    "InfeasibleError",
+    "ConfigError",
+    "NumericalError",
+    "InternalError",
+]

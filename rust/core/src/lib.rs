@@ -1,0 +1,94 @@
+//! Shared pieces of the gagekit kernels: the error type every kernel returns.
+//!
+//! Kernels never depend on PyO3; the binding crate maps [`ErrorKind`] to the
+//! Python exception classes of `gagekit.errors`.
+
+use std::fmt;
+
+/// What went wrong, in the categories the Python exception hierarchy uses.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ErrorKind {
+    /// Bad numbers or shapes: NaN, infinities, empty input, wrong sizes.
+    InvalidInput,
+    /// Geometry too degenerate for the requested computation.
+    DegenerateGeometry,
+    /// An optimisation problem without a feasible point.
+    Infeasible,
+    /// A configuration (machine file, gage file, region) is inconsistent.
+    Config,
+    /// A numerical method did not converge or lost accuracy.
+    Numerical,
+}
+
+/// The error every gagekit kernel returns.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct GkError {
+    pub kind: ErrorKind,
+    pub message: String,
+}
+
+impl GkError {
+    pub fn new(kind: ErrorKind, message: impl Into<String>) -> Self {
+        Self { kind, message: message.into() }
+    }
+    pub fn invalid(message: impl Into<String>) -> Self {
+        Self::new(ErrorKind::InvalidInput, message)
+    }
+    pub fn degenerate(message: impl Into<String>) -> Self {
+        Self::new(ErrorKind::DegenerateGeometry, message)
+    }
+    pub fn infeasible(message: impl Into<String>) -> Self {
+        Self::new(ErrorKind::Infeasible, message)
+    }
+    pub fn config(message: impl Into<String>) -> Self {
+        Self::new(ErrorKind::Config, message)
+    }
+    pub fn numerical(message: impl Into<String>) -> Self {
+        Self::new(ErrorKind::Numerical, message)
+    }
+}
+
+impl fmt::Display for GkError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.message)
+    }
+}
+
+impl std::error::Error for GkError {}
+
+pub type Result<T> = std::result::Result<T, GkError>;
+
+/// Check that a flat row-major coordinate buffer holds finite values only.
+///
+/// `dim` is the number of coordinates per point; the message names the first
+/// offending point (0-based row) so a user can find it in the file.
+pub fn check_finite(coords: &[f64], dim: usize, what: &str) -> Result<()> {
+    if dim == 0 || coords.len() % dim != 0 {
+        return Err(GkError::invalid(format!(
+            "{what}: expected {dim} coordinates per point, got a buffer of {} values",
+            coords.len()
+        )));
+    }
+    if let Some(pos) = coords.iter().position(|v| !v.is_finite()) {
+        let row = pos / dim;
+        return Err(GkError::invalid(format!(
+            "{what}: point {row} has a non-finite coordinate ({}); remove NaN/inf values first",
+            coords[pos]
+        )));
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn finite_check_names_the_row() {
+        let e = check_finite(&[0.0, 1.0, 2.0, 3.0, f64::NAN, 5.0], 3, "cloud").unwrap_err();
+        assert_eq!(e.kind, ErrorKind::InvalidInput);
+        assert!(e.message.contains("point 1"), "{}", e.message);
+        assert!(check_finite(&[0.0; 6], 3, "cloud").is_ok());
+        assert!(check_finite(&[0.0; 5], 3, "cloud").is_err());
+    }
+}
