@@ -7,8 +7,12 @@ from __future__ import annotations
 
 from importlib.metadata import PackageNotFoundError, version as _version
 
-from . import _core
-from .cloud import Box, classify, select
+from . import _core, cloud, design, form, gage, machine
+from .cloud import *  # noqa: F401,F403  (each subpackage lists its public names in __all__)
+from .design import *  # noqa: F401,F403
+from .form import *  # noqa: F401,F403
+from .gage import *  # noqa: F401,F403
+from .machine import *  # noqa: F401,F403
 from .errors import (
     ConfigError,
     DegenerateGeometryError,
@@ -27,9 +31,11 @@ except PackageNotFoundError:  # pragma: no cover - running from a source tree
 
 __all__ = [
     "__version__",
-    "Box",
-    "classify",
-    "select",
+    *cloud.__all__,
+    *design.__all__,
+    *form.__all__,
+    *gage.__all__,
+    *machine.__all__,
     "GagekitError",
     "InvalidInputError",
     "FileFormatError",

@@ -4,7 +4,11 @@
 
 mod arrays;
 mod errors;
+mod design;
+mod form;
+mod gage;
 mod geometry;
+mod kinematics;
 
 use pyo3::prelude::*;
 
@@ -12,5 +16,9 @@ use pyo3::prelude::*;
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     geometry::register(m)?;
+    form::register(m)?;
+    kinematics::register(m)?;
+    gage::register(m)?;
+    design::register(m)?;
     Ok(())
 }

@@ -1,0 +1,1 @@
+//! Optimal experimental design: A-, D-, K-optimal plans with zones (Ch. 4).

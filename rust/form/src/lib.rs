@@ -1,0 +1,9 @@
+//! Form fitting of circles, cylinders, lines, planes and spheres (Ch. 6).
+//!
+//! - [`circle`]: 2-D circles: minimum circumscribed, maximum inscribed, minimum zone, least squares.
+//! - [`lsq`]: least-squares lines, planes, spheres, 3-D circles and cylinders.
+//! - [`cylinder`]: cylinders by the projection model and the parallel PSO.
+
+pub mod circle;
+pub mod cylinder;
+pub mod lsq;

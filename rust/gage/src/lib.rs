@@ -1,0 +1,1 @@
+//! Virtual-gage linear program with slacks (Ch. 5).

@@ -1,0 +1,1 @@
+//! Machine-tool chains of homogeneous transforms, first-order error model, identification (Ch. 3).

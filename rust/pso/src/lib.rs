@@ -1,0 +1,1 @@
+//! Parallel, seeded particle swarm optimisation (Sec. 6.3).
