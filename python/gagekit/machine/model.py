@@ -237,11 +237,11 @@ class Machine:
         return len(self._labels)
 
     def parameter_units(self) -> list[str]:
-        """Unit of each parameter: mm, rad, rad/mm, or 1 (scale error)."""
+        """Unit of each parameter: mm, rad, rad/mm, or mm/mm (scale error)."""
         out = []
         for k, n, p in self._labels:
             if n == "delta":
-                out.append("1")
+                out.append("mm/mm")
             else:
                 out.append({0: "mm", 1: "rad", 2: "rad/mm"}[p])
         return out
