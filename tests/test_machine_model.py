@@ -9,9 +9,8 @@ from hypothesis import given, settings, strategies as st
 import gagekit
 from gagekit.errors import ConfigError, FileFormatError, InvalidInputError
 
-EXAMPLE = Path("/work/shared/examples/dissertation-5axis.toml")
-if not EXAMPLE.exists():  # the repository's copy once the lead bundles it
-    EXAMPLE = Path(__file__).resolve().parents[1] / "python/gagekit/data/dissertation-5axis.toml"
+SHARED = Path("/work/shared/examples/dissertation-5axis.toml")
+EXAMPLE = SHARED if SHARED.exists() else gagekit.machine.example_machine_path()
 
 
 @pytest.fixture(scope="module")
@@ -181,3 +180,10 @@ offset = [0.0, 30.0, -100.0]
     assert 0 < s.rank < m.n_parameters
     cmds = m.sample_commands(50, seed=1)
     assert np.allclose(s.reduce(m.design_matrix(cmds)) @ s.coefficients, m.design_matrix(cmds), atol=1e-8)
+
+
+def test_bundled_example_is_the_shared_one():
+    bundled = gagekit.machine.example_machine_path()
+    assert gagekit.load_machine(bundled).n_parameters == 52
+    if SHARED.exists():
+        assert bundled.read_bytes() == SHARED.read_bytes()

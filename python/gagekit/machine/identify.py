@@ -188,7 +188,13 @@ class GroupEstimate:
 
 @dataclass(frozen=True)
 class Calibration:
-    """The result of :func:`identify` (Tables 3.2 to 3.5)."""
+    """The result of :func:`identify` (Tables 3.2 to 3.5).
+
+    ``frame`` maps the table frame to the tracker frame (q = R p + t); ``frame_std`` holds
+    the standard uncertainties of its small-angle correction (alpha0, beta0, gamma0 rad,
+    x0, y0, z0 mm; joint method). ``sigma`` is the estimated noise per coordinate and
+    ``noise_floor`` = 1.596 sigma the mean residual length that noise alone leaves.
+    """
 
     machine: str
     method: str
@@ -203,6 +209,7 @@ class Calibration:
     test: Optional[ResidualStats] = None
     frame_step1: Optional[Frame] = None
     iterations: int = 1
+    frame_std: Optional[dict] = None
     units: dict = field(default_factory=lambda: {"length": "mm", "angle": "rad"})
 
     @property
@@ -235,6 +242,8 @@ class Calibration:
             "iterations": self.iterations,
             "units": dict(self.units),
         }
+        if self.frame_std is not None:
+            d["frame_std"] = dict(self.frame_std)
         if self.frame_step1 is not None:
             d["frame_step1"] = self.frame_step1.to_dict()
         if self.test is not None:
@@ -273,6 +282,7 @@ class Calibration:
                 test=ResidualStats.from_dict(d["test"]["residuals"]) if d.get("test") else None,
                 frame_step1=Frame.from_dict(d["frame_step1"]) if d.get("frame_step1") else None,
                 iterations=int(d.get("iterations", 1)),
+                frame_std=d.get("frame_std"),
             )
         except (KeyError, TypeError, ValueError, AttributeError, StopIteration) as exc:
             raise FileFormatError(f"calibration: malformed ({type(exc).__name__}: {exc})") from None
@@ -412,6 +422,10 @@ def identify(
     cov = np.asarray(sol["cov_unscaled"]) * sigma**2
     std = np.full(n_groups, np.nan)
     std[cols] = np.sqrt(np.diag(cov)[: len(cols)])
+    frame_std = None
+    if method == "joint":
+        fs = np.sqrt(np.diag(cov)[len(cols) :])
+        frame_std = {n.split(".")[1]: float(v) for n, v in zip(frame_names, fs)}
     units = machine.parameter_units()
     groups = tuple(
         GroupEstimate(
@@ -438,6 +452,7 @@ def identify(
         dof=dof,
         frame_step1=frame1,
         iterations=iterations,
+        frame_std=frame_std,
     )
     if test is not None:
         tobs = _as_obs(machine, test, "test observations")

@@ -43,6 +43,7 @@ __all__ = [
     "load_machine",
     "parse_machine",
     "halton",
+    "example_machine_path",
 ]
 
 _NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
@@ -154,6 +155,11 @@ class ModelStructure:
             "rank_gap": self.rank_gap,
             "n_commands": self.n_commands,
         }
+
+
+def example_machine_path() -> Path:
+    """Path of the bundled copy of the dissertation's 5-axis machine file (Eq. 3.1, Table 3.1)."""
+    return Path(__file__).resolve().parent / "examples" / "dissertation-5axis.toml"
 
 
 def halton(n: int, dim: int, seed: Optional[int] = 0) -> np.ndarray:
