@@ -4,6 +4,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import given, settings, strategies as st
 
 import gagekit
 from gagekit.errors import ConfigError, DegenerateGeometryError, FileFormatError, InvalidInputError
@@ -195,7 +196,66 @@ def test_observation_files(machine, tmp_path):
         gagekit.read_observations(tmp_path / "t.csv", machine)
     _write(tmp_path / "r.csv", ok, [[10, 1300] + row[2:]])
     with pytest.warns(UserWarning, match="outside the machine's joint ranges \\(X: 1\\)"):
-        gagekit.read_observations(tmp_path / "r.csv", machine)
+        gagekit.read_observations(tmp_path / "r.csv", machine, warn_range=True)
     (tmp_path / "empty.csv").write_text("")
     with pytest.raises(FileFormatError, match="empty file"):
         gagekit.read_observations(tmp_path / "empty.csv", machine)
+
+
+def test_identify_warns_for_commands_outside_the_ranges(machine, structure):
+    truth = gagekit.Truth.random(machine, seed=2)
+    c = machine.sample_commands(60, seed=2)
+    c[0, 3] = 2600.0  # Y beyond 2500
+    obs = gagekit.simulate(machine, truth, c)
+    with pytest.warns(UserWarning, match=r"\(Y: 1\)"):
+        gagekit.identify(machine, obs, structure=structure)
+
+
+def test_compensation_warns_when_the_axes_cannot_reach(machine, structure, case):
+    cmds = machine.sample_commands(5, seed=8)
+    with pytest.warns(UserWarning, match="cannot move the target in every direction"):
+        _, rem = gagekit.compensate(machine, case[3]["joint"], cmds, axes=["X"], structure=structure)
+    assert np.abs(rem).max() > 1e-4
+
+
+def test_singular_chain_is_a_clear_error():
+    line = gagekit.parse_machine(
+        'chain = ["X"]\n[joints.X]\ntype = "prismatic"\naxis = [1.0, 0.0, 0.0]\nrange = [0, 100]\n[tool]\noffset = [0.0, 0.0, 0.0]\n'
+    )
+    s = line.structure(n=200)
+    assert s.rank == 3 and s.no_effect == ("X.dgamma",)  # roll about the line moves nothing on it
+    truth = gagekit.Truth.random(line, seed=1)
+    obs = gagekit.simulate(line, truth, line.sample_commands(50, seed=1))
+    with pytest.raises(DegenerateGeometryError, match="collinear"):
+        gagekit.identify(line, obs)
+
+
+@settings(max_examples=30, deadline=None)
+@given(
+    st.lists(st.floats(-3.2, 3.2), min_size=3, max_size=3),
+    st.lists(st.floats(-5000, 5000), min_size=3, max_size=3),
+)
+def test_step1_recovers_any_tracker_placement(rotvec, shift):
+    """Closed-form rigid fit: any rotation (up to 180 degrees) and shift, no small angles."""
+    m = gagekit.load_machine(EXAMPLE)
+    frame = gagekit.Frame(rotation_from_vector(rotvec), shift)
+    p = m.nominal(m.sample_commands(30, seed=1))
+    r, t, rms = gagekit._core.machine_rigid_fit(p, frame.to_tracker(p))
+    assert rms < 1e-8
+    assert np.allclose(r, frame.rotation, atol=1e-10) and np.allclose(t, frame.translation, atol=1e-7)
+
+
+def test_design_matrix_independent_of_thread_count(machine):
+    import subprocess, sys, os
+
+    code = (
+        "import gagekit, hashlib;"
+        f"m = gagekit.load_machine({str(EXAMPLE)!r});"
+        "print(hashlib.sha256(m.design_matrix(m.sample_commands(5000, seed=3)).tobytes()).hexdigest())"
+    )
+    env = {**os.environ, "RAYON_NUM_THREADS": "1"}
+    one = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True).stdout.strip()
+    import hashlib
+
+    here = hashlib.sha256(machine.design_matrix(machine.sample_commands(5000, seed=3)).tobytes()).hexdigest()
+    assert one == here

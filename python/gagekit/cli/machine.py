@@ -131,7 +131,7 @@ def identify_cmd(
     with _warnings_to_stderr():
         obs = read_observations(observations, m)
         tobs = read_observations(test, m) if test is not None else None
-    cal = identify(m, obs, test=tobs, method=method, test_frame=test_frame)
+        cal = identify(m, obs, test=tobs, method=method, test_frame=test_frame)
     if out is not None:
         cal.save(out)
     emit(cal, as_json, _identify_text)
@@ -151,9 +151,9 @@ def predict_cmd(
 
     m = load_machine(machine_file)
     cal = load_calibration(calibration)
+    cmds = read_commands(commands, m)
     with _warnings_to_stderr():
-        cmds = read_commands(commands, m)
-    err = predict(m, cal, cmds)
+        err = predict(m, cal, cmds)
     write_csv(out, m.joint_names + ["ex", "ey", "ez"], np.hstack([cmds, err]))
     length = np.linalg.norm(err, axis=1) if len(err) else np.zeros(1)
     result = {"points": int(len(err)), "out": str(out), "mean": float(length.mean()), "max": float(length.max())}
@@ -175,10 +175,10 @@ def compensate_cmd(
 
     m = load_machine(machine_file)
     cal = load_calibration(calibration)
-    with _warnings_to_stderr():
-        cmds = read_commands(commands, m)
+    cmds = read_commands(commands, m)
     ax = [a.strip() for a in axes.split(",") if a.strip()] if axes else None
-    corrected, remaining = compensate(m, cal, cmds, axes=ax)
+    with _warnings_to_stderr():
+        corrected, remaining = compensate(m, cal, cmds, axes=ax)
     write_csv(out, m.joint_names, corrected)
     rem = np.linalg.norm(remaining, axis=1) if len(remaining) else np.zeros(1)
     result = {"points": int(len(corrected)), "out": str(out), "remaining_max": float(rem.max())}

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import json
 import math
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Optional, Sequence, Union
@@ -371,6 +372,7 @@ def identify(
     if test_frame not in ("same", "refit"):
         raise InvalidInputError(f"test_frame must be 'same' or 'refit', got {test_frame!r}")
     obs = _as_obs(machine, observations, "observations")
+    machine.warn_out_of_range(obs.commands, what=obs.source or "observations")
     st = structure if structure is not None else machine.structure()
     n = len(obs)
     n_groups = st.rank
@@ -456,6 +458,7 @@ def identify(
     )
     if test is not None:
         tobs = _as_obs(machine, test, "test observations")
+        machine.warn_out_of_range(tobs.commands, what=tobs.source or "test observations")
         cal = _with_test(machine, cal, tobs, test_frame, st)
     return cal
 
@@ -501,6 +504,7 @@ def predict(machine: Machine, calibration: Calibration, commands: Any, structure
     """Volumetric error (n, 3), mm, in the table frame at ``commands`` (file units): M p
     (Eq. 3.9, 3.13) with p any parameter vector having the identified group values."""
     st = structure if structure is not None else machine.structure()
+    machine.warn_out_of_range(commands)
     c = _coefficients(machine, calibration, st)
     values = np.array([g.value for g in calibration.groups])
     p = np.linalg.pinv(c) @ values
@@ -523,6 +527,7 @@ def compensate(
     """
     st = structure if structure is not None else machine.structure()
     c0 = machine.commands_array(commands)
+    machine.warn_out_of_range(c0)
     joints = machine.joints
     if axes is None:
         axes = [j.name for j in joints if j.kind == "prismatic"]
@@ -544,4 +549,13 @@ def compensate(
         step = np.linalg.pinv(jac) @ miss
         c[:, idx] -= step[:, :, 0]
     remaining = machine.nominal(c) + machine.volumetric_error(c, p) - target
+    worst = float(np.linalg.norm(remaining, axis=1).max()) if n else 0.0
+    if worst > 1e-6:
+        warnings.warn(
+            f"compensation with axes {', '.join(axes)} leaves up to {worst:.2e} mm of predicted error: "
+            "these axes cannot move the target in every direction",
+            UserWarning,
+            stacklevel=2,
+        )
+    machine.warn_out_of_range(c, what="corrected commands")
     return c, remaining

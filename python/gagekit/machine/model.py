@@ -332,6 +332,12 @@ class Machine:
         m = self.design_matrix(commands)
         return (m @ np.asarray(params, dtype=np.float64)).reshape(-1, 3)
 
+    def reduced_design_matrix(self, commands: Any, structure: Optional["ModelStructure"] = None) -> np.ndarray:
+        """The design matrix of the identifiable groups (3n, rank), Eq. 3.14 / 4.9: the
+        leader columns of M, in the order of ``structure.groups``."""
+        st = structure if structure is not None else self.structure()
+        return st.reduce(self.design_matrix(commands))
+
     def length_scale(self, commands: Any) -> float:
         """RMS distance of the nominal targets from the table origin plus the tool length."""
         p = self.nominal(commands)
@@ -345,7 +351,12 @@ class Machine:
         (leaders = first independent columns in chain order), coefficients in the parameters'
         own units.
         """
-        cmds = self.sample_commands(n, seed) if commands is None else self.commands_array(commands)
+        if commands is None:
+            key = (self, n, seed, rtol)
+            if key not in _STRUCTURES:
+                _STRUCTURES[key] = self.structure(self.sample_commands(n, seed), rtol=rtol)
+            return _STRUCTURES[key]
+        cmds = self.commands_array(commands)
         m = self.design_matrix(cmds)
         res = _core.machine_identifiability(m, self.length_scale(cmds), self.parameter_length_powers, rtol)
         names = self.parameter_names
@@ -375,6 +386,9 @@ class Machine:
             "tool": list(self.tool),
             "parameters": self.parameter_names,
         }
+
+
+_STRUCTURES: dict = {}
 
 
 def _tidy(c: float) -> float:

@@ -112,10 +112,11 @@ def _columns(header: list[str], machine: Machine, path, with_xyz: bool) -> list[
     return [header.index(c) for c in joints]
 
 
-def read_observations(path: Union[str, Path], machine: Machine, warn_range: bool = True) -> Observations:
+def read_observations(path: Union[str, Path], machine: Machine, warn_range: bool = False) -> Observations:
     """Read an observations CSV for ``machine``: exactly its joint columns and x, y, z.
-    Missing or unknown columns, non-numbers and NaN are errors naming the line; commands
-    outside the joint ranges give a warning."""
+    Missing or unknown columns, non-numbers and NaN are errors naming the line; with
+    ``warn_range``, commands outside the joint ranges give a warning (identify, predict and
+    compensate warn anyway)."""
     header, data = _read_table(path)
     idx = _columns(header, machine, path, with_xyz=True)
     if data.shape[0] == 0:
@@ -131,7 +132,7 @@ def read_observations(path: Union[str, Path], machine: Machine, warn_range: bool
     return obs
 
 
-def read_commands(path: Union[str, Path], machine: Machine, warn_range: bool = True) -> np.ndarray:
+def read_commands(path: Union[str, Path], machine: Machine, warn_range: bool = False) -> np.ndarray:
     """Read a commands CSV for ``machine`` (joint columns; x, y, z ignored)."""
     header, data = _read_table(path)
     idx = _columns(header, machine, path, with_xyz=False)
