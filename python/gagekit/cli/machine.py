@@ -120,6 +120,9 @@ def identify_cmd(
     method: str = typer.Option("joint", "--method", help="joint (frame correction estimated with the groups) or two-step (dissertation)."),
     test_frame: str = typer.Option("same", "--test-frame", help="same (test set measured in the same tracker set-up) or refit."),
     out: Optional[Path] = typer.Option(None, "--out", help="Write the calibration JSON (input of predict and compensate)."),
+    residuals: Optional[Path] = typer.Option(
+        None, "--residuals", help="Write per-point residuals (CSV: set, joints, nominal and model residual vectors and lengths, mm)."
+    ),
     as_json: bool = JSON_OPTION,
 ) -> None:
     """Identify the error model's groups from tracker observations (Sec. 3.1.5, Tables 3.2-3.5)."""
@@ -134,7 +137,24 @@ def identify_cmd(
         cal = identify(m, obs, test=tobs, method=method, test_frame=test_frame)
     if out is not None:
         cal.save(out)
+    if residuals is not None:
+        _write_residuals(residuals, m, cal, obs, tobs)
     emit(cal, as_json, _identify_text)
+
+
+def _write_residuals(path: Path, m, cal, obs, tobs) -> None:
+    from ..machine.observations import write_csv
+
+    pr = cal.point_residuals
+    blocks = [(0.0, obs.commands, pr["nominal"], pr["model"])]
+    if tobs is not None:
+        blocks.append((1.0, tobs.commands, pr["test_nominal"], pr["test_model"]))
+    rows = [
+        np.hstack([np.full((len(c), 1), k), c, a, np.linalg.norm(a, axis=1)[:, None], b, np.linalg.norm(b, axis=1)[:, None]])
+        for k, c, a, b in blocks
+    ]
+    header = ["test"] + m.joint_names + ["nx", "ny", "nz", "nominal", "mx", "my", "mz", "model"]
+    write_csv(path, header, np.vstack(rows))
 
 
 @app.command("predict")

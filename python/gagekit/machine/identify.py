@@ -212,6 +212,10 @@ class Calibration:
     iterations: int = 1
     frame_std: Optional[dict] = None
     units: dict = field(default_factory=lambda: {"length": "mm", "angle": "rad"})
+    #: Per-point residual vectors (n, 3), table frame, mm: "nominal" and "model" for the
+    #: identification set, "test_nominal" and "test_model" with a test set (Figure 3.12).
+    #: Not part of the JSON.
+    point_residuals: Optional[dict] = field(default=None, repr=False, compare=False)
 
     @property
     def values(self) -> dict:
@@ -455,6 +459,7 @@ def identify(
         frame_step1=frame1,
         iterations=iterations,
         frame_std=frame_std,
+        point_residuals={"nominal": nominal_res.reshape(-1, 3), "model": model_res.reshape(-1, 3)},
     )
     if test is not None:
         tobs = _as_obs(machine, test, "test observations")
@@ -472,7 +477,8 @@ def _with_test(machine: Machine, cal: Calibration, tobs: Observations, test_fram
     predicted = p + predict(machine, cal, tobs.commands, structure=st)
     frame = cal.frame if test_frame == "same" else _rigid(predicted, tobs.measured)
     model = frame.to_table(tobs.measured) - predicted
-    return Calibration(**{**cal.__dict__, "test": ResidualStats.of(nominal, model)})
+    points = {**(cal.point_residuals or {}), "test_nominal": nominal, "test_model": model}
+    return Calibration(**{**cal.__dict__, "test": ResidualStats.of(nominal, model), "point_residuals": points})
 
 
 def _coefficients(machine: Machine, cal: Calibration, st: ModelStructure) -> np.ndarray:

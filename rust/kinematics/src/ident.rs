@@ -182,8 +182,8 @@ pub fn lstsq(a: &[f64], nrows: usize, ncols: usize, b: &[f64]) -> Result<Lstsq> 
         return Err(GkError::degenerate(format!("least squares: column {j} is zero")));
     }
     let mut eq = am.clone();
-    for j in 0..ncols {
-        eq.column_mut(j).scale_mut(1.0 / norms[j]);
+    for (j, nj) in norms.iter().enumerate() {
+        eq.column_mut(j).scale_mut(1.0 / nj);
     }
     let svd = eq.try_svd(true, true, f64::EPSILON, 0).ok_or_else(|| GkError::numerical("least squares: SVD failed"))?;
     let s = &svd.singular_values;
@@ -194,7 +194,7 @@ pub fn lstsq(a: &[f64], nrows: usize, ncols: usize, b: &[f64]) -> Result<Lstsq> 
     let mut singular_values: Vec<f64> = s.iter().copied().collect();
     singular_values.sort_by(|a, b| b.partial_cmp(a).unwrap());
     let condition_number = smax / smin;
-    if !(smin > 1e-12 * smax) {
+    if smin.is_nan() || smin <= 1e-12 * smax {
         return Err(GkError::degenerate(format!(
             "least squares: the design matrix is rank deficient (condition number {condition_number:.3e})"
         )));
