@@ -54,6 +54,16 @@ def test_joint_residuals_reach_the_noise_floor(case):
     assert joint.rank == 32 and joint.dof == 3 * 290 - 36
 
 
+def test_test_set_residual_matches_the_realised_noise(case, machine):
+    """A 50-point mean of noise lengths scatters by ~6 % (1 sigma) around 1.60 sigma; against the
+    noise actually drawn, the test-set residual (noise + prediction uncertainty) must agree to
+    10 % for every seed (0.98 to 1.07 over 30 seeds), not only on average."""
+    truth, _, test, res = case
+    clean = gagekit.simulate(machine, truth, test.commands, noise=0.0)
+    realised = np.linalg.norm(test.measured - clean.measured, axis=1).mean()
+    assert abs(res["joint"].test.model_mean / realised - 1) < 0.10
+
+
 def test_joint_groups_within_4_std_of_truth(case, machine, structure):
     truth, _, _, res = case
     joint = res["joint"]
