@@ -187,3 +187,45 @@ def test_bundled_example_is_the_shared_one():
     assert gagekit.load_machine(bundled).n_parameters == 52
     if SHARED.exists():
         assert bundled.read_bytes() == SHARED.read_bytes()
+
+
+def test_rotary_error_about_its_own_axis_adds_to_the_joint_angle(machine):
+    """Eq. 3.5: beta (about the B axis) shifts the angle by beta sin(B/2) (Eq. 3.6), exactly."""
+    cmds = machine.sample_commands(30, seed=4)
+    b = 2e-4
+    p = np.zeros(52)
+    p[machine.parameter_names.index("B.beta.1")] = b
+    shifted = cmds.copy()
+    shifted[:, 0] += np.degrees(b * np.sin(np.radians(cmds[:, 0]) / 2))
+    assert np.allclose(machine.positions(cmds, p), machine.nominal(shifted), atol=1e-9)
+
+
+def test_rotary_tilts_and_shifts_enter_in_the_fixed_frame(machine):
+    """Eq. 3.5: alpha, gamma and dx, dy, dz of B act in the table frame, scaled by sin(B/2)."""
+    cmds = machine.sample_commands(30, seed=5)
+    p_nom = machine.nominal(cmds)
+    w = np.sin(np.radians(cmds[:, 0]) / 2)[:, None]
+    names = machine.parameter_names
+    m = machine.design_matrix(cmds).reshape(-1, 3, 52)
+    for name, axis in (("B.alpha.1", 2), ("B.gamma.1", 0)):
+        e = np.zeros(3)
+        e[axis] = 1.0
+        assert np.allclose(m[:, :, names.index(name)], w * np.cross(e, p_nom), atol=1e-9)
+    for name, axis in (("B.dx.1", 0), ("B.dy.1", 1), ("B.dz.1", 2)):
+        e = np.zeros(3)
+        e[axis] = 1.0
+        assert np.allclose(m[:, :, names.index(name)], w * e, atol=1e-12)
+
+
+def test_prismatic_joint_of_eq_3_3(machine):
+    """X.delta scales the X travel; X.dalpha bends it by (x^2/2) dalpha along y (Eq. 3.3)."""
+    cmds = machine.sample_commands(10, seed=6)
+    cmds[:, 0] = 0.0  # B = 0: table and machine frames coincide
+    names = machine.parameter_names
+    m = machine.design_matrix(cmds).reshape(-1, 3, 52)
+    x = cmds[:, 1]
+    assert np.allclose(m[:, :, names.index("X.delta")], np.c_[x, 0 * x, 0 * x])
+    col = m[:, :, names.index("X.dalpha")]
+    # rotation x*dalpha about z of the point beyond X, plus the straightness x^2/2 along y
+    beyond = machine.nominal(cmds) - np.c_[x, 0 * x, 0 * x]
+    assert np.allclose(col, x[:, None] * np.cross([0, 0, 1.0], beyond) + np.c_[0 * x, x**2 / 2, 0 * x])

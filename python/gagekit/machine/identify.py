@@ -404,7 +404,7 @@ def identify(
         cols = [c for c in range(n_groups) if c not in conf]
         a = np.hstack([m_red[:, cols], frame_columns(p_nom)])
         names = [group_names[c] for c in cols] + frame_names
-        frame, iterations = frame1, 0
+        frame, iterations, converged = frame1, 0, False
         for iterations in range(1, _MAX_ITER + 1):
             r = (frame.to_table(obs.measured) - p_nom).reshape(-1)
             sol = _solve(a, r, names)
@@ -412,7 +412,15 @@ def identify(
             small = x[len(cols) :]
             frame = frame.corrected(small)
             if np.abs(small[:3]).max() < 1e-13 and np.abs(small[3:]).max() < 1e-10:
+                converged = True
                 break
+        if not converged:
+            warnings.warn(
+                f"the frame correction did not settle in {_MAX_ITER} iterations (last step {np.abs(small).max():.1e}): "
+                "errors this large are beyond the first-order model",
+                UserWarning,
+                stacklevel=2,
+            )
         r = (frame.to_table(obs.measured) - p_nom).reshape(-1)
         sol = _solve(a, r, names)
         x = np.asarray(sol["x"])
