@@ -269,3 +269,12 @@ def test_design_matrix_independent_of_thread_count(machine):
 
     here = hashlib.sha256(machine.design_matrix(machine.sample_commands(5000, seed=3)).tobytes()).hexdigest()
     assert one == here
+
+
+def test_wrong_units_are_flagged(machine, structure):
+    truth = gagekit.Truth.random(machine, seed=2)
+    c = machine.sample_commands(60, seed=2)
+    obs = gagekit.simulate(machine, truth, c)
+    as_rad = gagekit.Observations(np.c_[np.radians(c[:, :1]), c[:, 1:]], obs.measured, obs.joint_names)
+    with pytest.warns(UserWarning, match="fits the observations to only"):
+        gagekit.identify(machine, as_rad, structure=structure)

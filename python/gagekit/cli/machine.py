@@ -66,7 +66,12 @@ def simulate_cmd(
     noise: float = typer.Option(0.0089, "--noise", help="Tracker noise sigma per coordinate, mm."),
     seed: int = typer.Option(0, "--seed", help="Seed for commands, noise and (without --params) the truth."),
     truth: Optional[Path] = typer.Option(None, "--truth", help="Write the true parameters, groups and frame (JSON)."),
-    params: Optional[Path] = typer.Option(None, "--params", help="Use this truth JSON (e.g. from --truth) instead of random errors."),
+    params: Optional[Path] = typer.Option(
+        None,
+        "--params",
+        help='Truth JSON to use instead of random errors (e.g. written by --truth): {"parameters": {name: value}, '
+        '"frame": {"rotation": 3x3, "translation": 3}}; parameters left out are zero.',
+    ),
     scale: float = typer.Option(1.0, "--scale", help="Scale of the random errors (1 = Table 3.3's magnitudes)."),
     as_json: bool = JSON_OPTION,
 ) -> None:

@@ -53,6 +53,8 @@ METHODS = ("joint", "two-step")
 #: Mean length of a 3-D vector of independent N(0, sigma) coordinates, in sigma: 2 sqrt(2/pi).
 NOISE_FLOOR_FACTOR = 2.0 * math.sqrt(2.0 / math.pi)
 _MAX_ITER = 10
+#: Mean nominal error (mm) beyond which the data are more likely wrong than the machine.
+_SUSPICIOUS_MM = 2.0
 
 
 def rotation_from_vector(v: Sequence[float]) -> np.ndarray:
@@ -389,6 +391,14 @@ def identify(
     m_red = st.reduce(machine.design_matrix(obs.commands))
     frame1 = _rigid(p_nom, obs.measured)  # Step 1 (Eq. 3.10 - 3.12)
     nominal_res = frame1.to_table(obs.measured) - p_nom
+    fit = float(np.linalg.norm(nominal_res, axis=1).mean())
+    if fit > _SUSPICIOUS_MM:
+        warnings.warn(
+            f"the ideal machine fits the observations to only {fit:.3g} mm on average: check the units "
+            f"(mm, angle_unit = {machine.angle_unit!r}), the column names and the tool offset",
+            UserWarning,
+            stacklevel=2,
+        )
     group_names = [g.name for g in st.groups]
     frame_names = ["frame.alpha0", "frame.beta0", "frame.gamma0", "frame.x0", "frame.y0", "frame.z0"]
     conf: list[int] = []
