@@ -229,3 +229,61 @@ def test_prismatic_joint_of_eq_3_3(machine):
     # rotation x*dalpha about z of the point beyond X, plus the straightness x^2/2 along y
     beyond = machine.nominal(cmds) - np.c_[x, 0 * x, 0 * x]
     assert np.allclose(col, x[:, None] * np.cross([0, 0, 1.0], beyond) + np.c_[0 * x, x**2 / 2, 0 * x])
+
+
+@st.composite
+def random_machines(draw):
+    """Chains of 1-6 elements: shapes with offsets, prismatic and rotary joints on any axes."""
+    n = draw(st.integers(1, 6))
+    kinds = draw(st.lists(st.sampled_from(["shape", "prismatic", "rotary"]), min_size=n, max_size=n))
+    if all(k == "shape" for k in kinds):
+        kinds[0] = "prismatic"
+    coord = st.floats(-500, 500, allow_nan=False)
+    lines, chain = ['angle_unit = "rad"'], []
+    body = []
+    for i, k in enumerate(kinds):
+        name = f"E{i}"
+        chain.append(name)
+        if k == "shape":
+            body.append(f"[shapes.{name}]\noffset = {[draw(coord) for _ in range(3)]}")
+        else:
+            v = np.array([draw(st.floats(-1, 1)) for _ in range(3)])
+            if np.linalg.norm(v) < 0.1:
+                v = np.array([0.0, 0.0, 1.0])
+            v = (v / np.linalg.norm(v)).tolist()
+            rng = "[-3.0, 3.0]" if k == "rotary" else "[-800.0, 800.0]"
+            extra = f"\nfourier_terms = {draw(st.integers(1, 3))}" if k == "rotary" else ""
+            body.append(f'[joints.{name}]\ntype = "{k}"\naxis = {v}\nrange = {rng}{extra}')
+    lines.append(f"chain = {chain}".replace("'", '"'))
+    lines += body
+    lines.append(f"[tool]\noffset = {[draw(coord) for _ in range(3)]}")
+    return gagekit.parse_machine("\n".join(lines) + "\n")
+
+
+@settings(max_examples=20, deadline=None)
+@given(random_machines(), st.integers(0, 1000))
+def test_any_chain_design_matrix_matches_central_differences(m, seed):
+    cmds = m.sample_commands(4, seed=seed)
+    d = m.design_matrix(cmds)
+    for j, power in enumerate(m.parameter_length_powers):
+        h = {0: 1e-1, 1: 1e-5, 2: 1e-7}[power]
+        p = np.zeros(m.n_parameters)
+        p[j] = h
+        plus = m.positions(cmds, p)
+        p[j] = -h
+        fd = ((plus - m.positions(cmds, p)) / (2 * h)).reshape(-1)
+        # central differences: O(h^2) truncation (relative to the column) plus the round-off
+        # of positions of size |p| divided by 2h
+        tol = 1e-7 * np.abs(d[:, j]).max() + 50 * np.finfo(float).eps * (np.abs(plus).max() + 1.0) / h
+        assert np.abs(d[:, j] - fd).max() < tol, m.parameter_names[j]
+
+
+@settings(max_examples=25, deadline=None)
+@given(random_machines())
+def test_any_chain_groups_reproduce_the_design_matrix(m):
+    s = m.structure(n=300)
+    assert len(s.groups) == s.rank <= m.n_parameters - len(s.no_effect)
+    d = m.design_matrix(m.sample_commands(40, seed=3))
+    assert np.abs(s.reduce(d) @ s.coefficients - d).max() <= 1e-6 * (np.abs(d).max() + 1)
+    for g in s.groups:
+        assert g.terms[g.leader] == 1.0
