@@ -101,9 +101,10 @@ def _identify_text(cal) -> str:
         f"no effect: {', '.join(cal.unidentifiable) or 'none'}",
     ]
     if cal.frame_confounded:
+        how = "taken by the tracker frame" if cal.method == "joint" else "estimated relative to the step-1 frame"
         lines.append(
-            "taken by the tracker frame (a rigid motion of the table frame, not separable from the tracker "
-            f"placement): {'; '.join(cal.frame_confounded)}"
+            f"(frame): a rigid motion of the table frame, not separable from the tracker placement; {how}: "
+            f"{'; '.join(cal.frame_confounded)}"
         )
     lines.append("")
     for label, st in (("identification", cal.residuals), ("test", cal.test)):

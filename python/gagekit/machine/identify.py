@@ -17,7 +17,8 @@ Methods:
   so the frame takes them and the groups concerned are reported as ``frame_confounded``
   (value 0, no uncertainty). Volumetric errors differ only by that rigid motion, which part
   set-up (work offsets) takes up anyway.
-- ``"two-step"``: the dissertation's procedure, frame fixed after step 1, all groups fitted.
+- ``"two-step"``: the dissertation's procedure, frame fixed after step 1, all groups fitted;
+  the frame-confounded groups are then estimated relative to the step-1 frame (and flagged).
 """
 
 from __future__ import annotations
@@ -401,7 +402,7 @@ def identify(
         )
     group_names = [g.name for g in st.groups]
     frame_names = ["frame.alpha0", "frame.beta0", "frame.gamma0", "frame.x0", "frame.y0", "frame.z0"]
-    conf: list[int] = []
+    conf = _confounded(machine, st)
     if method == "two-step":
         sol = _solve(m_red, nominal_res.reshape(-1), group_names)
         frame, iterations, cols = frame1, 1, list(range(n_groups))
@@ -410,7 +411,6 @@ def identify(
         model_res = nominal_res.reshape(-1) - m_red @ x
         k = n_groups
     else:
-        conf = _confounded(machine, st)
         cols = [c for c in range(n_groups) if c not in conf]
         a = np.hstack([m_red[:, cols], frame_columns(p_nom)])
         names = [group_names[c] for c in cols] + frame_names
@@ -435,9 +435,9 @@ def identify(
         sol = _solve(a, r, names)
         x = np.asarray(sol["x"])
         frame = frame.corrected(x[len(cols) :])
-        model_res = r - a @ x
         values = np.zeros(n_groups)
         values[cols] = x[: len(cols)]
+        model_res = (frame.to_table(obs.measured) - p_nom).reshape(-1) - m_red @ values
         k = a.shape[1]
     dof = 3 * n - k
     if dof <= 0:
@@ -449,7 +449,7 @@ def identify(
     frame_std = None
     if method == "joint":
         fs = np.sqrt(np.diag(cov)[len(cols) :])
-        frame_std = {n.split(".")[1]: float(v) for n, v in zip(frame_names, fs)}
+        frame_std = {name.split(".")[1]: float(v) for name, v in zip(frame_names, fs)}
     units = machine.parameter_units()
     groups = tuple(
         GroupEstimate(
@@ -457,7 +457,7 @@ def identify(
             leader=g.leader,
             terms=dict(g.terms),
             value=float(values[i]),
-            std=None if i in conf else float(std[i]),
+            std=None if (method == "joint" and i in conf) else float(std[i]),
             unit=units[st.leaders[i]],
             frame_confounded=i in conf,
         )
