@@ -198,6 +198,9 @@ class Calibration:
     the standard uncertainties of its small-angle correction (alpha0, beta0, gamma0 rad,
     x0, y0, z0 mm; joint method). ``sigma`` is the estimated noise per coordinate and
     ``noise_floor`` = 1.596 sigma the mean residual length that noise alone leaves.
+    ``condition_number`` is s_max / s_min (ERRATA item 2) of the column-equilibrated
+    least-squares matrix: the groups, plus the frame correction for the joint method.
+    ``rank`` is the model's (Eq. 3.14); ``dof`` = 3n minus the unknowns actually fitted.
     """
 
     machine: str
