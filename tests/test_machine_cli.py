@@ -65,7 +65,7 @@ def test_predict_and_compensate(files):
     gk("identify", EXAMPLE, files / "obs.csv", "--out", files / "cal2.json")
     gk("predict", EXAMPLE, files / "cal2.json", files / "test.csv", "--out", files / "err.csv")
     lines = (files / "err.csv").read_text().splitlines()
-    assert lines[0] == "B,X,Z,Y,W,ex,ey,ez" and len(lines) == 51
+    assert lines[0] == "B,X,Z,Y,W,ex,ey,ez,ux,uy,uz" and len(lines) == 51
     d = json.loads(gk("compensate", EXAMPLE, files / "cal2.json", files / "test.csv", "--out", files / "comp.csv", "--json").stdout)
     assert d["points"] == 50 and d["remaining_max"] < 1e-9
 

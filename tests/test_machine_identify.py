@@ -280,3 +280,20 @@ def test_wrong_units_are_flagged(machine, structure):
         gagekit.identify(machine, as_rad, structure=structure)
     messages = " | ".join(str(w.message) for w in rec)
     assert "fits the observations to only" in messages and "did not settle" in messages
+
+
+def test_prediction_uncertainty_is_calibrated(machine, structure):
+    """Over repeated simulated calibrations, the spread of the predicted error at fixed commands
+    matches the propagated standard uncertainty (sqrt(diag(M_L Sigma M_L^T)))."""
+    truth = gagekit.Truth.random(machine, seed=11)
+    cmds = machine.sample_commands(290, seed=11)
+    probe = machine.sample_commands(8, seed=12)
+    preds, us = [], []
+    for k in range(40):
+        obs = gagekit.simulate(machine, truth, cmds, noise=SIGMA, seed=1000 + k)
+        cal = gagekit.identify(machine, obs, structure=structure)
+        preds.append(gagekit.predict(machine, cal, probe, structure=structure))
+        us.append(gagekit.predict_uncertainty(machine, cal, probe, structure=structure))
+    spread = np.std(np.array(preds), axis=0, ddof=1)
+    ratio = spread / np.mean(np.array(us), axis=0)
+    assert 0.7 < np.median(ratio) < 1.3, np.median(ratio)

@@ -168,11 +168,13 @@ def predict_cmd(
     machine_file: Path = MACHINE_ARG,
     calibration: Path = typer.Argument(..., help="Calibration JSON from identify --out."),
     commands: Path = typer.Argument(..., help="Commands CSV (joint columns)."),
-    out: Path = typer.Option(..., "--out", help="Errors CSV to write: joint columns and ex, ey, ez (mm, table frame)."),
+    out: Path = typer.Option(
+        ..., "--out", help="Errors CSV to write: joint columns, ex, ey, ez and their standard uncertainties ux, uy, uz (mm, table frame)."
+    ),
     as_json: bool = JSON_OPTION,
 ) -> None:
     """Predict the volumetric error at given commands (Eq. 3.9)."""
-    from ..machine import load_calibration, load_machine, predict, read_commands
+    from ..machine import load_calibration, load_machine, predict, predict_uncertainty, read_commands
     from ..machine.observations import write_csv
 
     m = load_machine(machine_file)
@@ -180,7 +182,8 @@ def predict_cmd(
     cmds = read_commands(commands, m)
     with _warnings_to_stderr():
         err = predict(m, cal, cmds)
-    write_csv(out, m.joint_names + ["ex", "ey", "ez"], np.hstack([cmds, err]))
+    u = predict_uncertainty(m, cal, cmds)
+    write_csv(out, m.joint_names + ["ex", "ey", "ez", "ux", "uy", "uz"], np.hstack([cmds, err, u]))
     length = np.linalg.norm(err, axis=1) if len(err) else np.zeros(1)
     result = {"points": int(len(err)), "out": str(out), "mean": float(length.mean()), "max": float(length.max())}
     emit(result, as_json, lambda r: f"wrote {r['points']} predicted errors to {r['out']} (mean {r['mean']:.4f} mm, max {r['max']:.4f} mm)")

@@ -45,6 +45,7 @@ __all__ = [
     "Calibration",
     "identify",
     "predict",
+    "predict_uncertainty",
     "compensate",
     "load_calibration",
     "NOISE_FLOOR_FACTOR",
@@ -217,6 +218,9 @@ class Calibration:
     frame_step1: Optional[Frame] = None
     iterations: int = 1
     frame_std: Optional[dict] = None
+    #: Covariance (rank x rank) of the group values, in ``groups`` order (zero rows and columns
+    #: for groups the frame takes). Propagates to predictions (:func:`predict_uncertainty`).
+    covariance: Optional[np.ndarray] = field(default=None, repr=False, compare=False)
     units: dict = field(default_factory=lambda: {"length": "mm", "angle": "rad"})
     #: Per-point residual vectors (n, 3), table frame, mm: "nominal" and "model" for the
     #: identification set, "test_nominal" and "test_model" with a test set (Figure 3.12).
@@ -255,6 +259,8 @@ class Calibration:
         }
         if self.frame_std is not None:
             d["frame_std"] = dict(self.frame_std)
+        if self.covariance is not None:
+            d["covariance"] = np.asarray(self.covariance).tolist()
         if self.frame_step1 is not None:
             d["frame_step1"] = self.frame_step1.to_dict()
         if self.test is not None:
@@ -294,6 +300,7 @@ class Calibration:
                 frame_step1=Frame.from_dict(d["frame_step1"]) if d.get("frame_step1") else None,
                 iterations=int(d.get("iterations", 1)),
                 frame_std=d.get("frame_std"),
+                covariance=np.array(d["covariance"], dtype=np.float64) if d.get("covariance") is not None else None,
             )
         except (KeyError, TypeError, ValueError, AttributeError, StopIteration) as exc:
             raise FileFormatError(f"calibration: malformed ({type(exc).__name__}: {exc})") from None
@@ -449,6 +456,8 @@ def identify(
     cov = np.asarray(sol["cov_unscaled"]) * sigma**2
     std = np.full(n_groups, np.nan)
     std[cols] = np.sqrt(np.diag(cov)[: len(cols)])
+    gcov = np.zeros((n_groups, n_groups))
+    gcov[np.ix_(cols, cols)] = cov[: len(cols), : len(cols)]
     frame_std = None
     if method == "joint":
         fs = np.sqrt(np.diag(cov)[len(cols) :])
@@ -480,6 +489,7 @@ def identify(
         frame_step1=frame1,
         iterations=iterations,
         frame_std=frame_std,
+        covariance=gcov,
         point_residuals={"nominal": nominal_res.reshape(-1, 3), "model": model_res.reshape(-1, 3)},
     )
     if test is not None:
@@ -536,6 +546,24 @@ def predict(machine: Machine, calibration: Calibration, commands: Any, structure
     values = np.array([g.value for g in calibration.groups])
     p = np.linalg.pinv(c) @ values
     return machine.volumetric_error(commands, p)
+
+
+def predict_uncertainty(
+    machine: Machine, calibration: Calibration, commands: Any, structure: Optional[ModelStructure] = None
+) -> np.ndarray:
+    """Standard uncertainty (n, 3), mm, of each predicted error component from the group
+    covariance: sqrt(diag(M_L Sigma M_L^T)), with M_L the reduced design matrix (Eq. 3.14).
+    The uncertainty of the groups the frame takes is a rigid motion and is not included."""
+    st = structure if structure is not None else machine.structure()
+    _coefficients(machine, calibration, st)
+    if calibration.covariance is None:
+        raise ConfigError("calibration has no covariance (written by an older gagekit?): identify again")
+    cov = np.asarray(calibration.covariance, dtype=np.float64)
+    if cov.shape != (st.rank, st.rank):
+        raise ConfigError(f"calibration covariance is {cov.shape}, expected ({st.rank}, {st.rank})")
+    ml = machine.reduced_design_matrix(commands, st)
+    var = np.einsum("ij,jk,ik->i", ml, cov, ml)
+    return np.sqrt(np.clip(var, 0.0, None)).reshape(-1, 3)
 
 
 def compensate(
