@@ -21,6 +21,7 @@ translation (Eq. 5.17), and H = (C_L^S)^-1 brings the cloud into the part frame
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -141,12 +142,23 @@ def fit_321(groups: dict, centroid: np.ndarray) -> Alignment:
                                       "points; it needs at least 2")
     c = pts.mean(axis=0)
     q = allp - allp.mean(axis=0)
-    q = q - np.outer(q @ nz, nz)
-    _, sv, vt = np.linalg.svd(q, full_matrices=False)
-    if sv[0] <= 1e-9 * max(1.0, extent):
-        raise DegenerateGeometryError(f"alignment: the secondary datum points ({', '.join(names)}) lie on a line "
-                                      "parallel to the primary normal; they do not determine a plane")
-    ny0 = np.cross(nz, vt[0])
+    _, sv3, vt3 = np.linalg.svd(q, full_matrices=False)
+    if len(sv3) == 3 and sv3[1] > 1e-6 * max(1.0, extent):
+        # the points span a plane: it must stand across the primary
+        cosang = abs(vt3[2] @ nz)
+        if cosang > math.cos(math.radians(45.0)):
+            raise DegenerateGeometryError(
+                f"alignment: the secondary datum ({', '.join(names)}) is at {math.degrees(math.acos(min(1.0, cosang))):.1f} "
+                "deg to the primary; it must be roughly perpendicular to determine the y direction")
+        ny0 = vt3[2] - (vt3[2] @ nz) * nz
+    else:
+        # collinear points: the plane through their line perpendicular to the primary
+        qp = q - np.outer(q @ nz, nz)
+        _, sv, vt = np.linalg.svd(qp, full_matrices=False)
+        if sv[0] <= 1e-9 * max(1.0, extent):
+            raise DegenerateGeometryError(f"alignment: the secondary datum points ({', '.join(names)}) lie on a line "
+                                          "parallel to the primary normal; they do not determine a plane")
+        ny0 = np.cross(nz, vt[0])
     ny0 = _oriented(ny0 / np.linalg.norm(ny0), centroid - c)
     if abs(ny0 @ (centroid - c)) < 1e-9:
         raise DegenerateGeometryError("alignment: the secondary datum passes through the part's centroid; "
