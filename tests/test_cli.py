@@ -23,3 +23,24 @@ def test_help_lists_the_groups():
     out = run("--help").stdout
     for group in ("cloud", "form", "gage", "machine", "demo"):
         assert group in out
+
+
+def test_cloud_info_json(tmp_path):
+    import json
+
+    import numpy as np
+
+    f = tmp_path / "c.csv"
+    gagekit.write_points(f, np.array([[0.0, 0, 0], [1, 2, 3], [-1, 5, 2]]))
+    out = json.loads(run("cloud", "info", str(f), "--json").stdout)
+    assert out["count"] == 3 and out["min"] == [-1, 0, 0] and out["max"] == [1, 5, 3]
+    human = run("cloud", "info", str(f)).stdout
+    assert "3 points" in human
+
+
+def test_errors_are_one_line_on_stderr(tmp_path):
+    f = tmp_path / "bad.xyz"
+    f.write_text("1 2 3\n4 5\n")
+    proc = run("cloud", "info", str(f), "--json", check=False)
+    assert proc.returncode == 2 and proc.stdout == ""
+    assert proc.stderr.startswith("gagekit: error:") and "line 2" in proc.stderr
