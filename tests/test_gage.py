@@ -113,9 +113,7 @@ def test_independent_highs_relinearisation_matches(short):
         p[free] += delta
         if np.abs(delta).max() < 1e-10:
             break
-    T = np.array(_core.gage_solve(*prob.args(), groups=False)["matrix"])  # only for shape reference
     # exact evaluation of the HiGHS transform
-    from gagekit.gage.analysis import Transform  # noqa: F401
     ca, sa = np.cos(p[0]), np.sin(p[0])
     cb, sb = np.cos(p[1]), np.sin(p[1])
     cg, sg = np.cos(p[2]), np.sin(p[2])
@@ -147,14 +145,13 @@ def test_casting_short_names_the_conflicting_gages(short):
 
 def test_motion_bounds_that_limit_are_reported(ok):
     pts, spec, _, _ = ok
-    doc = spec.to_dict()
     tight = GageSpec(spec.regions, spec.gages, type(spec.motion)(spec.motion.free, 0.005, 20.0), spec.alignment)
     r = check_gages(pts, tight)
     assert r.limited_by_motion_bounds
     assert [(b.motion, b.side) for b in r.bound_limits] == [("beta", "lower")]
     assert r.transform.beta == pytest.approx(-0.005, abs=1e-12)
-    assert r.status == "nonconforming"
-    assert doc["motion"]["max_angle"] == 0.05
+    # the objective can only get worse when Omega shrinks
+    assert r.objective > ok[3].objective
 
 
 def test_result_to_dict_has_the_issue_keys(short):

@@ -288,11 +288,12 @@ def _parse(doc: Mapping[str, Any], source: str) -> GageSpec:
         if not isinstance(al, Mapping):
             raise ConfigError(f"{source}: [alignment] must be a table")
         _unknown(al.keys(), _ALIGN_KEYS, "[alignment]", source)
-        lists = []
         for key in ("primary", "secondary", "tertiary"):
             if key not in al:
                 raise ConfigError(f"{source}: [alignment] needs '{key}' (a list of region names); "
                                   "a 3-2-1 frame takes primary, secondary and tertiary datums")
+        lists = []
+        for key in ("primary", "secondary", "tertiary"):
             lst = _names(al[key], f"[alignment] {key}", source)
             for n in lst:
                 if n not in names:
