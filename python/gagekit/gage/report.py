@@ -14,6 +14,8 @@ from .analysis import GageCheckResult
 
 
 def _f(v: float, nd: int = 3) -> str:
+    if abs(v) < 0.5 * 10.0 ** -nd:
+        v = 0.0  # no "-0.000" for a face that touches its gage
     return f"{v:.{nd}f}"
 
 
@@ -102,10 +104,8 @@ def region_figure(result: GageCheckResult, region: str):
             s = np.linspace(*span, 2)
             av, ah, ac = a @ v, a @ h, a @ c0 + g.plane[3]
             if abs(av) > 1e-9:
-                ax.plot(s, -(ah * s + ac) / av, color=col, lw=1.2, label=g.name)
-            ax.annotate("", xy=(s.mean(), -(ah * s.mean() + ac) / av + 0.6 * np.sign(av)),
-                        xytext=(s.mean(), -(ah * s.mean() + ac) / av),
-                        arrowprops=dict(arrowstyle="->", color=col)) if abs(av) > 1e-9 else None
+                side = "above" if av > 0 else "below"
+                ax.plot(s, -(ah * s + ac) / av, color=col, lw=1.2, label=f"{g.name} (material {side})")
         ax.set_title(f"{region}: {title}")
         ax.set_xlabel("along the face (mm)")
         ax.grid(True, alpha=0.3)
@@ -142,7 +142,7 @@ def write_report(result: GageCheckResult, out: Union[str, Path]) -> list[Path]:
         for region in result.plot_data["regions"]:
             name = f"region-{region}"
             rep.figure(region_figure(result, region), name,
-                       f"{region}: points and gage planes before and after T* (arrows: material side)")
+                       f"{region}: points and gage planes before and after T*")
             written.append(out / (re.sub(r"[^a-z0-9]+", "-", name.lower()).strip("-") + ".png"))
     written.append(rep.write(out))
     return written
