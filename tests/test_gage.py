@@ -5,6 +5,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import given, settings, strategies as st
 from scipy.optimize import linprog
 from scipy.sparse import csc_matrix
 
@@ -182,3 +183,61 @@ def test_bad_input(ok):
     wrong = GageSpec(spec.regions, spec.gages, spec.motion, type(al)(al.primary, ("Z2",), al.tertiary))
     with pytest.raises(DegenerateGeometryError, match="secondary datum .* perpendicular"):
         check_gages(pts, wrong)
+
+
+# --------------------------------------------------------------------------- property
+
+
+def _rot(a, b, g):
+    ca, sa, cb, sb, cg, sg = np.cos(a), np.sin(a), np.cos(b), np.sin(b), np.cos(g), np.sin(g)
+    return (np.array([[ca, -sa, 0], [sa, ca, 0], [0, 0, 1]]) @ np.array([[cb, 0, sb], [0, 1, 0], [-sb, 0, cb]])
+            @ np.array([[1, 0, 0], [0, cg, -sg], [0, sg, cg]]))
+
+
+BLOCK_FACES = [  # (center, u, v, outward normal); a 100 x 80 x 50 block, 1.5 mm allowance on each gage
+    ((50, 40, 50), (80, 0, 0), (0, 60, 0), (0, 0, 1)),
+    ((100, 40, 25), (0, 60, 0), (0, 0, 30), (1, 0, 0)),
+    ((0, 40, 25), (0, 60, 0), (0, 0, 30), (-1, 0, 0)),
+    ((50, 80, 25), (80, 0, 0), (0, 0, 30), (0, 1, 0)),
+    ((50, 0, 25), (80, 0, 0), (0, 0, 30), (0, -1, 0)),
+]
+
+
+def _block_spec():
+    regions, gages = [], []
+    for k, (c, u, v, n) in enumerate(BLOCK_FACES):
+        size = np.abs(u) + np.abs(v) + 10 * np.abs(n)
+        regions.append({"name": f"f{k}", "center": list(map(float, c)), "size": list(map(float, size))})
+        n = np.asarray(n, dtype=float)
+        gages.append({"name": f"g{k}", "region": f"f{k}", "plane": [*n, float(-(n @ c) + 1.5)]})
+    return {"motion": {"free": ["alpha", "beta", "gamma", "dx", "dy", "dz"], "max_angle": 0.05, "max_shift": 5},
+            "region": regions, "gage": gages}
+
+
+angles = st.floats(-0.01, 0.01)
+shifts = st.floats(-1.0, 1.0)
+
+
+@settings(max_examples=12, deadline=None)
+@given(a=angles, b=angles, g=angles, t=st.tuples(shifts, shifts, shifts), seed=st.integers(0, 2**16))
+def test_misplaced_block_is_optimal_and_exact(a, b, g, t, seed):
+    rng = np.random.default_rng(seed)
+    pts = []
+    for c, u, v, n in BLOCK_FACES:
+        s, w = rng.random((2, 400)) - 0.5
+        form = 0.2 * np.sin(3 * s + seed) * np.cos(2 * w)        # raw-casting waviness, within the allowance
+        pts.append(np.asarray(c) + np.outer(s, u) + np.outer(w, v) + np.outer(form, n))
+    nominal = np.vstack(pts)
+    R, tv = _rot(a, b, g), np.asarray(t)
+    moved = nominal @ R.T + tv
+    prob = build_problem(moved, _block_spec())
+    r = solve_problem(prob)
+    assert r.status == "conforming" and r.last_step < 1e-10
+    ext = exact_extremes(prob, r.transform.as_array())
+    np.testing.assert_allclose([x.allowance_after for x in r.gages], ext[:, 0], atol=1e-12)
+    # the exact inverse of the misplacement is feasible: T* is at least as good
+    inv = np.eye(4)
+    inv[:3, :3], inv[:3, 3] = R.T, -R.T @ tv
+    e_inv = exact_extremes(prob, inv)
+    assert e_inv[:, 0].min() > 0
+    assert r.objective <= prob.f @ e_inv[:, 1] + 1e-9
