@@ -250,8 +250,7 @@ fn min_norm_solve(rows: &[Vec<f64>], rhs: &[f64], n: usize) -> (Vec<f64>, f64) {
 /// A x for the CSC matrix of `lp`.
 fn mat_vec(lp: &LpData, x: &[f64]) -> Vec<f64> {
     let mut out = vec![0.0; lp.nrows];
-    for col in 0..lp.nvars {
-        let xv = x[col];
+    for (col, &xv) in x.iter().enumerate() {
         if xv == 0.0 {
             continue;
         }
@@ -291,10 +290,10 @@ pub fn polish(lp: &LpData, sol: &LpSolution, p0: &[f64; 6], radius: f64) -> Opti
     // rows of A by row index, built on demand
     let row_of = |i: usize| -> Vec<f64> {
         let mut r = vec![0.0; n];
-        for col in 0..n {
+        for (col, rc) in r.iter_mut().enumerate() {
             let (lo, hi) = (lp.colptr[col], lp.colptr[col + 1]);
             if let Ok(k) = lp.rowval[lo..hi].binary_search(&i) {
-                r[col] = lp.nzval[lo + k];
+                *rc = lp.nzval[lo + k];
             }
         }
         r

@@ -100,9 +100,8 @@ impl<'a> GageSet<'a> {
                 )));
             }
         }
-        if !(motion.max_angle >= 0.0 && motion.max_angle.is_finite())
-            || !(motion.max_shift >= 0.0 && motion.max_shift.is_finite())
-        {
+        let bad = |v: f64| v < 0.0 || !v.is_finite();
+        if bad(motion.max_angle) || bad(motion.max_shift) {
             return Err(GkError::config(format!(
                 "motion bounds must be finite and non-negative, got max_angle = {}, max_shift = {}",
                 motion.max_angle, motion.max_shift

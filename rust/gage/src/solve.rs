@@ -95,8 +95,8 @@ pub fn solve_from(
             return Err(GkError::invalid(format!("gage index {k} out of range")));
         }
     }
-    for m in 0..6 {
-        if start[m].abs() > motion.bound(m) && motion.free[m] {
+    for (m, v) in start.iter().enumerate() {
+        if v.abs() > motion.bound(m) && motion.free[m] {
             return Err(GkError::invalid("start transform outside the motion bounds"));
         }
     }
