@@ -272,14 +272,27 @@ fn mat_vec(lp: &LpData, x: &[f64]) -> Vec<f64> {
 /// re-linearisation has a well-defined fixed point. Returns `None` when no
 /// consistent face is found (the caller keeps the interior-point solution).
 pub fn polish(lp: &LpData, sol: &LpSolution, p0: &[f64; 6], radius: f64) -> Option<Vec<f64>> {
-    let n = lp.nvars;
     let zmax = sol.z.iter().cloned().fold(0.0, f64::max).max(1.0);
     let ax = mat_vec(lp, &sol.x);
     let bscale = lp.b.iter().fold(1.0f64, |m, v| m.max(v.abs()));
+    // the optimal face: rows whose dual dominates their slack (strict
+    // complementarity); failing that, rows with a clearly positive dual
+    let dominant: Vec<usize> =
+        (0..lp.nrows).filter(|&i| sol.z[i] > 1e-7 * zmax && sol.z[i] > (lp.b[i] - ax[i])).collect();
+    let positive: Vec<usize> = (0..lp.nrows).filter(|&i| sol.z[i] > 1e-5 * zmax).collect();
+    polish_from(lp, sol, p0, radius, dominant, bscale).or_else(|| polish_from(lp, sol, p0, radius, positive, bscale))
+}
+
+fn polish_from(
+    lp: &LpData,
+    sol: &LpSolution,
+    p0: &[f64; 6],
+    radius: f64,
+    mut eq: Vec<usize>,
+    bscale: f64,
+) -> Option<Vec<f64>> {
+    let n = lp.nvars;
     let feas_tol = 1e-10 * bscale;
-    let mut eq: Vec<usize> = (0..lp.nrows)
-        .filter(|&i| sol.z[i] > 1e-7 * zmax && sol.z[i] > (lp.b[i] - ax[i]))
-        .collect();
     // weights and reference point: y = D (x - x_ref)
     let mut d = vec![1e-3; n];
     let mut x_ref = vec![0.0; n];
