@@ -97,8 +97,8 @@ def test_clarabel_lp_agrees_with_highs(case, request):
     t = r.transform
     for params in ([0.0] * 6, [t.alpha, t.beta, t.gamma, t.dx, t.dy, t.dz]):
         ref = highs(prob, params)
-        x, obj, status = _core.gage_lp_solve(*prob.args(), list(params))
-        assert status == "solved"
+        x, obj, status, rows = _core.gage_lp_solve(*prob.args(), list(params))
+        assert status == "solved" and rows == len(ref.slack)
         assert obj == pytest.approx(ref.fun, rel=1e-7, abs=1e-7)
     # linearised about T*, the LP optimum is the exact Eq. 5.11 objective at T*
     assert ref.fun == pytest.approx(r.objective, rel=1e-8, abs=1e-8)

@@ -52,36 +52,77 @@ impl LpData {
     }
 }
 
-/// Assemble the LP of Eq. 5.11 linearised about `p0` (exact transform).
+/// Exact distances e0 and their gradients J (in the free motions) at `p0`, per point.
+#[derive(Debug, Clone)]
+pub struct Linearisation {
+    pub e0: Vec<f64>,
+    /// row-major, `free.len()` values per point
+    pub jac: Vec<f64>,
+    pub free: Vec<usize>,
+}
+
+impl Linearisation {
+    /// Linearise the distances of every gage point about the exact transform at `p0`.
+    pub fn new(set: &GageSet, motion: &Motion, p0: &[f64; 6]) -> Self {
+        let k = set.len();
+        let free = motion.free_indices();
+        let nf = free.len();
+        let npts = set.offsets[k];
+        let (r0, dr) = rotation_and_derivatives(p0);
+        let mut e0 = vec![0.0; npts];
+        let mut jac = vec![0.0; npts * nf];
+        for i in 0..k {
+            let n = set.normal(i);
+            let m0 = pull_back(&r0, &n);
+            let dm: Vec<[f64; 3]> = (0..3).map(|a| pull_back(&dr[a], &n)).collect();
+            let c0 = n[0] * p0[3] + n[1] * p0[4] + n[2] * p0[5] + set.offset(i);
+            for j in set.offsets[i]..set.offsets[i + 1] {
+                let x = &set.points[3 * j..3 * j + 3];
+                e0[j] = m0[0] * x[0] + m0[1] * x[1] + m0[2] * x[2] + c0;
+                for (col, &m) in free.iter().enumerate() {
+                    jac[j * nf + col] =
+                        if m < 3 { dm[m][0] * x[0] + dm[m][1] * x[1] + dm[m][2] * x[2] } else { n[m - 3] };
+                }
+            }
+        }
+        Self { e0, jac, free }
+    }
+
+    /// Linearised distance of point `j` after the step `delta`.
+    pub fn distance(&self, j: usize, delta: &[f64]) -> f64 {
+        let nf = self.free.len();
+        self.e0[j] + self.jac[j * nf..(j + 1) * nf].iter().zip(delta).map(|(a, b)| a * b).sum::<f64>()
+    }
+}
+
+/// Assemble the LP of Eq. 5.11 linearised about `p0` (exact transform), all points.
 pub fn assemble(set: &GageSet, motion: &Motion, p0: &[f64; 6], forced_zero: Option<usize>) -> LpData {
-    let k = set.len();
-    let free = motion.free_indices();
+    let lin = Linearisation::new(set, motion, p0);
+    let sel: Vec<Vec<usize>> = (0..set.len()).map(|i| (set.offsets[i]..set.offsets[i + 1]).collect()).collect();
+    build(motion, p0, &lin, &sel, set.f, set.g, forced_zero)
+}
+
+/// The LP on the points `sel[i]` of each gage i (row pairs in that order).
+fn build(
+    motion: &Motion,
+    p0: &[f64; 6],
+    lin: &Linearisation,
+    sel: &[Vec<usize>],
+    f: &[f64],
+    g: &[f64],
+    forced_zero: Option<usize>,
+) -> LpData {
+    let k = sel.len();
+    let free = lin.free.clone();
     let nf = free.len();
-    let npts = set.offsets[k];
+    let npts: usize = sel.iter().map(|v| v.len()).sum();
     let nvars = nf + 2 * k + 1;
     let bound_row = 2 * npts + 2 * k;
     let nrows = bound_row + 2 * nf + usize::from(forced_zero.is_some());
-
-    // exact distances and gradients, point by point
-    let (r0, dr) = rotation_and_derivatives(p0);
-    let mut e0 = vec![0.0; npts];
-    let mut jac = vec![0.0; npts * nf];
+    // local point t of gage i: first[i] <= t < first[i + 1]
+    let mut first = vec![0usize; k + 1];
     for i in 0..k {
-        let n = set.normal(i);
-        let m0 = pull_back(&r0, &n);
-        let dm: Vec<[f64; 3]> = (0..3).map(|a| pull_back(&dr[a], &n)).collect();
-        let c0 = n[0] * p0[3] + n[1] * p0[4] + n[2] * p0[5] + set.offset(i);
-        for j in set.offsets[i]..set.offsets[i + 1] {
-            let x = &set.points[3 * j..3 * j + 3];
-            e0[j] = m0[0] * x[0] + m0[1] * x[1] + m0[2] * x[2] + c0;
-            for (col, &m) in free.iter().enumerate() {
-                jac[j * nf + col] = if m < 3 {
-                    dm[m][0] * x[0] + dm[m][1] * x[1] + dm[m][2] * x[2]
-                } else {
-                    n[m - 3]
-                };
-            }
-        }
+        first[i + 1] = first[i] + sel[i].len();
     }
 
     let nnz = 2 * npts * nf + 2 * nf + 2 * npts + 3 * k + 1;
@@ -90,11 +131,11 @@ pub fn assemble(set: &GageSet, motion: &Motion, p0: &[f64; 6], forced_zero: Opti
     let mut nzval = Vec::with_capacity(nnz);
     colptr.push(0);
     for col in 0..nf {
-        for j in 0..npts {
-            let v = jac[j * nf + col];
-            rowval.push(2 * j);
+        for (t, &j) in sel.iter().flatten().enumerate() {
+            let v = lin.jac[j * nf + col];
+            rowval.push(2 * t);
             nzval.push(v);
-            rowval.push(2 * j + 1);
+            rowval.push(2 * t + 1);
             nzval.push(-v);
         }
         rowval.push(bound_row + 2 * col);
@@ -104,15 +145,15 @@ pub fn assemble(set: &GageSet, motion: &Motion, p0: &[f64; 6], forced_zero: Opti
         colptr.push(rowval.len());
     }
     for i in 0..k {
-        for j in set.offsets[i]..set.offsets[i + 1] {
-            rowval.push(2 * j);
+        for t in first[i]..first[i + 1] {
+            rowval.push(2 * t);
             nzval.push(-1.0);
         }
         colptr.push(rowval.len());
     }
     for i in 0..k {
-        for j in set.offsets[i]..set.offsets[i + 1] {
-            rowval.push(2 * j + 1);
+        for t in first[i]..first[i + 1] {
+            rowval.push(2 * t + 1);
             nzval.push(-1.0);
         }
         rowval.push(2 * npts + 2 * i);
@@ -132,9 +173,9 @@ pub fn assemble(set: &GageSet, motion: &Motion, p0: &[f64; 6], forced_zero: Opti
     colptr.push(rowval.len());
 
     let mut b = vec![0.0; nrows];
-    for j in 0..npts {
-        b[2 * j] = -e0[j];
-        b[2 * j + 1] = e0[j];
+    for (t, &j) in sel.iter().flatten().enumerate() {
+        b[2 * t] = -lin.e0[j];
+        b[2 * t + 1] = lin.e0[j];
     }
     for (col, &m) in free.iter().enumerate() {
         let bound = motion.bound(m);
@@ -142,10 +183,110 @@ pub fn assemble(set: &GageSet, motion: &Motion, p0: &[f64; 6], forced_zero: Opti
         b[bound_row + 2 * col + 1] = bound + p0[m];
     }
     let mut c = vec![0.0; nvars];
-    c[nf..nf + k].copy_from_slice(set.f);
-    c[nf + k..nf + 2 * k].copy_from_slice(set.g);
+    c[nf..nf + k].copy_from_slice(f);
+    c[nf + k..nf + 2 * k].copy_from_slice(g);
     c[nvars - 1] = 1.0;
     LpData { nvars, nrows, colptr, rowval, nzval, b, c, free, ngages: k, bound_row }
+}
+
+/// Problems with more points than this are solved by constraint generation.
+pub const DIRECT_LIMIT: usize = 4000;
+
+/// Solve the LP of Eq. 5.11 linearised about `p0`.
+///
+/// Small problems are assembled whole. Larger ones (unfiltered point-sets) are
+/// solved by constraint generation: start from the extreme points of every gage
+/// in e0 and in each gradient direction, solve, add the points whose rows are
+/// violated, until none is. The final LP is a relaxation of the whole one whose
+/// solution is feasible for it, hence optimal for it. With `polish`, every
+/// solution is moved to the exact point of its optimal face (see [`polish`]).
+/// Returns the LP actually solved (a subset of the rows) and its solution.
+pub fn solve_linearised(
+    set: &GageSet,
+    motion: &Motion,
+    p0: &[f64; 6],
+    forced_zero: Option<usize>,
+    radius: f64,
+    polish_face: bool,
+) -> Result<(LpData, LpSolution)> {
+    let lin = Linearisation::new(set, motion, p0);
+    let k = set.len();
+    let nf = lin.free.len();
+    let npts = set.offsets[k];
+    let finish = |lp: &LpData, mut sol: LpSolution| -> LpSolution {
+        if polish_face {
+            if let Some(x) = polish(lp, &sol, p0, radius) {
+                sol.objective = lp.c.iter().zip(&x).map(|(c, v)| c * v).sum();
+                sol.x = x;
+            } else {
+                sol.status = "unpolished";
+            }
+        }
+        sol
+    };
+    let all: Vec<Vec<usize>> = (0..k).map(|i| (set.offsets[i]..set.offsets[i + 1]).collect()).collect();
+    if npts <= DIRECT_LIMIT {
+        let lp = build(motion, p0, &lin, &all, set.f, set.g, forced_zero);
+        let sol = solve_lp(&lp)?;
+        let sol = finish(&lp, sol);
+        return Ok((lp, sol));
+    }
+    // initial working set: extremes of e0 and of each gradient column, per gage
+    let mut sel: Vec<Vec<usize>> = all
+        .iter()
+        .map(|pts| {
+            let mut w = Vec::new();
+            let mut extremes = |key: &dyn Fn(usize) -> f64| {
+                let lo = pts.iter().copied().min_by(|&a, &b| key(a).total_cmp(&key(b)));
+                let hi = pts.iter().copied().max_by(|&a, &b| key(a).total_cmp(&key(b)));
+                w.extend(lo);
+                w.extend(hi);
+            };
+            extremes(&|j| lin.e0[j]);
+            for col in 0..nf {
+                extremes(&|j| lin.jac[j * nf + col]);
+            }
+            w.sort_unstable();
+            w.dedup();
+            w
+        })
+        .collect();
+    let scale = lin.e0.iter().fold(1.0f64, |m, v| m.max(v.abs()));
+    for _round in 0..200 {
+        let lp = build(motion, p0, &lin, &sel, set.f, set.g, forced_zero);
+        let sol = solve_lp(&lp)?;
+        let sol = finish(&lp, sol);
+        let delta = &sol.x[..nf];
+        let mut added = false;
+        for i in 0..k {
+            let (q, s) = (sol.x[nf + i], sol.x[nf + k + i]);
+            let tol = 1e-9 * scale;
+            let mut viol: Vec<(f64, usize)> = all[i]
+                .iter()
+                .filter_map(|&j| {
+                    let e = lin.distance(j, delta);
+                    let v = (e - q).max(-e - s);
+                    (v > tol).then_some((v, j))
+                })
+                .collect();
+            if viol.is_empty() {
+                continue;
+            }
+            viol.sort_unstable_by(|a, b| b.0.total_cmp(&a.0));
+            let mut grown = sel[i].clone();
+            grown.extend(viol.iter().take(32).map(|v| v.1));
+            grown.sort_unstable();
+            grown.dedup();
+            if grown.len() > sel[i].len() {
+                sel[i] = grown;
+                added = true;
+            }
+        }
+        if !added {
+            return Ok((lp, sol));
+        }
+    }
+    Err(GkError::numerical("constraint generation for the gage LP did not settle after 200 rounds"))
 }
 
 /// A solved LP: primal x, duals z (one per row), objective.

@@ -2,7 +2,7 @@
 //! infeasible groups (Eq. 5.10) and the motion bounds that limit the solution
 //! (Sec. 5.2.2).
 
-use crate::lp::{assemble, polish, solve_lp, LpSolution};
+use crate::lp::{solve_linearised, LpSolution};
 use crate::problem::{extremes, GageSet, Motion};
 use crate::transform::matrix;
 use gagekit_core::{GkError, Result};
@@ -110,14 +110,7 @@ pub fn solve_from(
     let mut iterations = 0;
     while iterations < opts.max_iter {
         iterations += 1;
-        let lp = assemble(set, motion, &p, forced_zero);
-        let mut sol = solve_lp(&lp)?;
-        if let Some(x) = polish(&lp, &sol, &p, radius) {
-            sol.objective = lp.c.iter().zip(&x).map(|(c, v)| c * v).sum();
-            sol.x = x;
-        } else {
-            sol.status = "unpolished";
-        }
+        let (lp, sol) = solve_linearised(set, motion, &p, forced_zero, radius, true)?;
         let delta = &sol.x[..lp.free.len()];
         step = step_size(delta, &lp.free, radius);
         for (d, &m) in delta.iter().zip(&lp.free) {

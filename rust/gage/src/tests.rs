@@ -176,3 +176,32 @@ fn forced_release_infeasible_within_bounds_gives_singleton_group() {
     assert_eq!(sol.active_bounds.len(), 1);
     assert_eq!(infeasible_groups(&set, &m, &opts, &sol).unwrap(), vec![vec![0]]);
 }
+
+#[test]
+fn constraint_generation_matches_the_whole_lp() {
+    // 4 faces x 1600 points: above the direct limit
+    let mut o = Owned::new();
+    let b = block(100.0, 1.0, 0.02, [3.0, 3.0, -1.0]);
+    let faces = [
+        (patch([50.0, 50.0, 101.0], [80.0, 0.0, 0.0], [0.0, 80.0, 0.0], 40, 0.05), 0),
+        (patch([100.0, 50.0, 60.0], [0.0, 80.0, 0.0], [0.0, 0.0, 60.0], 40, 0.05), 1),
+        (patch([0.0, 50.0, 60.0], [0.0, 80.0, 0.0], [0.0, 0.0, 60.0], 40, 0.05), 2),
+        (patch([50.0, 100.0, 60.0], [80.0, 0.0, 0.0], [0.0, 0.0, 60.0], 40, 0.05), 3),
+    ];
+    for (mut pts, i) in faces {
+        rotate_y(&mut pts, 0.02, [3.0, 3.0, -1.0]);
+        let plane: [f64; 4] = b.planes[4 * i..4 * i + 4].try_into().unwrap();
+        o.add(&pts, plane);
+    }
+    let set = o.set();
+    assert!(set.offsets[4] > lp::DIRECT_LIMIT);
+    let m = four_axis();
+    for p in [[0.0; 6], [0.0, -0.019, 0.0, -2.0, -3.0, 1.0]] {
+        let whole = solve_lp(&assemble(&set, &m, &p, None)).unwrap();
+        let (sub, cg) = solve_linearised(&set, &m, &p, None, set.radius(), false).unwrap();
+        assert!(sub.nrows < assemble(&set, &m, &p, None).nrows / 10, "{}", sub.nrows);
+        assert!((whole.objective - cg.objective).abs() < 1e-7 * (1.0 + whole.objective.abs()));
+    }
+    let sol = solve(&set, &m, &Options::default()).unwrap();
+    assert!(sol.conforming() && sol.last_step < 1e-10);
+}

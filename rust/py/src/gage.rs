@@ -122,9 +122,11 @@ fn gage_lp<'py>(
     Ok((lp.c, lp.colptr, lp.rowval, lp.nzval, lp.b, lp.nrows))
 }
 
-/// Solve the single LP of `gage_lp` with clarabel (no re-linearisation, no polish):
-/// returns (x, objective, status).
+/// Solve the single LP of `gage_lp` with clarabel (no re-linearisation, no polish),
+/// by constraint generation above 4000 points unless `generate` is false:
+/// returns (x, objective, status, rows of the LP solved).
 #[pyfunction]
+#[pyo3(signature = (points, offsets, planes, f, g, free, max_angle, max_shift, params, generate=true))]
 #[allow(clippy::too_many_arguments)]
 fn gage_lp_solve<'py>(
     py: Python<'py>,
@@ -137,13 +139,21 @@ fn gage_lp_solve<'py>(
     max_angle: f64,
     max_shift: f64,
     params: [f64; 6],
-) -> PyResult<(Vec<f64>, f64, String)> {
+    generate: bool,
+) -> PyResult<(Vec<f64>, f64, String, usize)> {
     let a = args(py, &points, offsets, &planes, &f, &g, free, max_angle, max_shift)?;
-    let sol = run(py, || {
-        a.set().validate(&a.motion)?;
-        gagekit_gage::solve_lp(&gagekit_gage::assemble(&a.set(), &a.motion, &params, None))
+    let (lp, sol) = run(py, || {
+        let set = a.set();
+        set.validate(&a.motion)?;
+        if generate {
+            gagekit_gage::solve_linearised(&set, &a.motion, &params, None, set.radius(), false)
+        } else {
+            let lp = gagekit_gage::assemble(&set, &a.motion, &params, None);
+            let sol = gagekit_gage::solve_lp(&lp)?;
+            Ok((lp, sol))
+        }
     })?;
-    Ok((sol.x, sol.objective, sol.status.to_string()))
+    Ok((sol.x, sol.objective, sol.status.to_string(), lp.nrows))
 }
 
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
