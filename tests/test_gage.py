@@ -241,3 +241,15 @@ def test_misplaced_block_is_optimal_and_exact(a, b, g, t, seed):
     e_inv = exact_extremes(prob, inv)
     assert e_inv[:, 0].min() > 0
     assert r.objective <= prob.f @ e_inv[:, 1] + 1e-9
+
+
+def test_without_motion_the_part_is_checked_as_placed(short):
+    pts, spec, _, _ = short
+    fixed = GageSpec(spec.regions, spec.gages, type(spec.motion)((), 0.05, 20.0), spec.alignment)
+    r = check_gages(pts, fixed)
+    assert r.transform.as_array().tolist() == np.eye(4).tolist()
+    for g in r.gages:
+        assert g.allowance_after == g.allowance_before
+        assert g.slack == pytest.approx(max(0.0, -g.allowance_before), abs=1e-12)
+    # a gage that no allowed motion can satisfy is a group of its own (Eq. 5.10)
+    assert r.infeasible_groups == (("inner wall 1",),)

@@ -87,3 +87,8 @@ def test_no_gages_and_alignment_checks(tmp_path):
 def test_duplicate_names(tmp_path):
     with pytest.raises(ConfigError, match="gage 'top min' is defined twice"):
         parse(BASE + BASE[BASE.index("[[gage]]"):], tmp_path)
+
+
+def test_no_free_motion_means_check_as_placed(tmp_path):
+    spec = parse(BASE.replace('free = ["beta", "dx", "dy", "dz"]', "free = []"), tmp_path)
+    assert spec.motion.free == () and spec.motion.flags() == [False] * 6

@@ -209,7 +209,8 @@ def _parse(doc: Mapping[str, Any], source: str) -> GageSpec:
     if not isinstance(mt, Mapping):
         raise ConfigError(f"{source}: [motion] must be a table")
     _unknown(mt.keys(), _MOTION_KEYS, "[motion]", source)
-    free = _names(mt.get("free", list(MOTIONS)), "[motion] free", source)
+    raw_free = mt.get("free", list(MOTIONS))
+    free = () if raw_free == [] else _names(raw_free, "[motion] free", source)  # [] = check as placed
     bad = [m for m in free if m not in MOTIONS]
     if bad:
         raise ConfigError(f"{source}: [motion] free: unknown motion(s) {', '.join(map(repr, bad))}; "
