@@ -115,6 +115,28 @@ def region_figure(result: GageCheckResult, region: str):
     return fig
 
 
+def add_to_report(rep, result: GageCheckResult, label: str = "") -> list[str]:
+    """Add the summary, the allowance table and the region pictures of ``result``
+    to a :class:`gagekit.report.Report` (for ``--report`` and the demo); returns
+    the PNG file names the report will write."""
+    prefix = f"{label}: " if label else ""
+    rep.section(f"{prefix}virtual gage result")
+    for line in summary_lines(result):
+        rep.text(line, "ok" if line == "status: conforming" else ("bad" if line.startswith("status") else None))
+    headers, rows = gage_table(result)
+    rep.table(headers, rows, "Allowances (mm): smallest signed distance to each gage plane; q the largest; "
+              "slack the release s_i (Tables 5.3-5.4)")
+    names = []
+    if result.plot_data:
+        rep.section(f"{prefix}regions before and after T*")
+        for region in result.plot_data["regions"]:
+            name = f"{label}-region-{region}" if label else f"region-{region}"
+            rep.figure(region_figure(result, region), name,
+                       f"{region}: points and gage planes before and after T*")
+            names.append(re.sub(r"[^a-z0-9]+", "-", name.lower()).strip("-") + ".png")
+    return names
+
+
 def write_report(result: GageCheckResult, out: Union[str, Path]) -> list[Path]:
     """Write into ``out``: ``result.json``, ``report.txt`` (the tables), ``report.html``
     and one PNG per region (``region-<name>.png``, before and after T*); returns the paths."""
@@ -131,18 +153,6 @@ def write_report(result: GageCheckResult, out: Union[str, Path]) -> list[Path]:
     written.append(p)
     rep = Report("Virtual gage analysis", "Allowances before and after the correction T* (Eq. 5.11); "
                  "every number was computed by this run.")
-    rep.section("Result")
-    for line in summary_lines(result):
-        rep.text(line, "ok" if line == "status: conforming" else ("bad" if line.startswith("status") else None))
-    headers, rows = gage_table(result)
-    rep.table(headers, rows, "Allowances (mm): smallest signed distance to each gage plane; q the largest; "
-              "slack the release s_i (Tables 5.3-5.4)")
-    if result.plot_data:
-        rep.section("Regions before and after T*")
-        for region in result.plot_data["regions"]:
-            name = f"region-{region}"
-            rep.figure(region_figure(result, region), name,
-                       f"{region}: points and gage planes before and after T*")
-            written.append(out / (re.sub(r"[^a-z0-9]+", "-", name.lower()).strip("-") + ".png"))
+    written += [out / n for n in add_to_report(rep, result)]
     written.append(rep.write(out))
     return written
