@@ -13,10 +13,9 @@ from .._util import dumps
 from .analysis import GageCheckResult
 
 
-def _f(v: float, nd: int = 3) -> str:
-    if abs(v) < 0.5 * 10.0 ** -nd:
-        v = 0.0  # no "-0.000" for a face that touches its gage
-    return f"{v:.{nd}f}"
+def _f(v: float, nd: int = 4) -> float:
+    """Rounded to 0.1 um, without a "-0" for a face that touches its gage."""
+    return round(float(v), nd) + 0.0
 
 
 def gage_table(result: GageCheckResult) -> tuple[list[str], list[list]]:
