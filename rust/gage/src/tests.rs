@@ -205,3 +205,29 @@ fn constraint_generation_matches_the_whole_lp() {
     let sol = solve(&set, &m, &Options::default()).unwrap();
     assert!(sol.conforming() && sol.last_step < 1e-10);
 }
+
+#[test]
+fn three_gages_that_conflict_only_together_form_one_group() {
+    // Fig. 5.7: gage 0 needs dx >= 0.5; gages 1 and 2 (normals (-1, +-1)/sqrt 2)
+    // together allow dx <= 0.141 only; any two of the three can be met.
+    let h = std::f64::consts::FRAC_1_SQRT_2;
+    let mut o = Owned::new();
+    o.add(&patch([0.0, 0.0, 0.0], [0.0, 2.0, 0.0], [0.0, 0.0, 2.0], 3, 0.0), [1.0, 0.0, 0.0, -0.5]);
+    let p1 = patch([5.0, 5.0, 0.0], [h, h, 0.0], [0.0, 0.0, 2.0], 3, 0.0);
+    let d1 = -(-h * 5.0 + h * 5.0) + 0.1;
+    o.add(&p1, [-h, h, 0.0, d1]);
+    let p2 = patch([5.0, -5.0, 0.0], [h, -h, 0.0], [0.0, 0.0, 2.0], 3, 0.0);
+    let d2 = -(-h * 5.0 + h * 5.0) + 0.1;
+    o.add(&p2, [-h, -h, 0.0, d2]);
+    let set = o.set();
+    let m = Motion { free: [false, false, false, true, true, false], max_angle: 0.0, max_shift: 5.0 };
+    let opts = Options::default();
+    let sol = solve(&set, &m, &opts).unwrap();
+    assert!(!sol.conforming());
+    // allowances before: gage 0 short by 0.5, gages 1 and 2 at +0.1
+    assert!((sol.allowance_before[0] + 0.5).abs() < 1e-12 && (sol.allowance_before[1] - 0.1).abs() < 1e-12);
+    let groups = infeasible_groups(&set, &m, &opts, &sol).unwrap();
+    assert!(groups.contains(&vec![0, 1, 2]), "{groups:?}");
+    // no group is a single gage: each one alone can be met
+    assert!(groups.iter().all(|g| g.len() >= 2), "{groups:?}");
+}
