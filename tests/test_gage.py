@@ -68,9 +68,15 @@ def test_casting_ok_conforms_only_after_correction(ok):
     assert sum(abs(a) < 1e-9 for a in after) >= 2
     # the hull filter keeps a small fraction (Table 5.2)
     assert all(g.filtered_points < g.points / 5 for g in r.gages)
-    # the alignment recovered the simulated scanner pose: rotation vector (0.03, -0.02, 0.55)
-    R = r.alignment.frame[:3, :3]
-    assert np.degrees(np.arccos((np.trace(R) - 1) / 2)) == pytest.approx(np.degrees(np.linalg.norm([0.03, -0.02, 0.55])), abs=0.2)
+    # the 3-2-1 alignment recovers the simulated scanner pose of the locators, to
+    # within the scanner noise (the support planes rest on the noise peaks)
+    from gagekit.data.make_castings import CASES, _rot
+
+    rv, t = CASES["casting_ok"]["pose"]
+    C = r.alignment.frame
+    assert np.abs(C[:3, :3] - _rot(rv)).max() < 1e-3
+    assert np.abs(C[:3, 3] - np.asarray(t)).max() < 0.2
+    np.testing.assert_allclose(r.alignment.H @ C, np.eye(4), atol=1e-12)
 
 
 def test_reported_distances_hold_for_the_exact_transform(ok, short):
