@@ -2,6 +2,44 @@
 
 from __future__ import annotations
 
+import warnings
+from pathlib import Path
+from typing import Optional
+
 import typer
 
+from ._common import JSON_OPTION, emit
+
 app = typer.Typer(help="Virtual gages: can a scanned casting be machined to print? (Ch. 5)", no_args_is_help=True)
+
+
+@app.command("check")
+def check(
+    cloud: Path = typer.Argument(..., help="Scanned cloud: XYZ/CSV/TXT, NIST .ds, PLY, .npy, LAS/LAZ, E57."),
+    gages: Path = typer.Argument(..., help="Gage file (TOML): [motion], [alignment], [[region]], [[gage]]."),
+    as_json: bool = JSON_OPTION,
+    report: Optional[Path] = typer.Option(None, "--report", help="Write tables, PNG pictures and an HTML page into DIR."),
+    out_cloud: Optional[Path] = typer.Option(None, "--out-cloud", help="Write the cloud in the part frame with T* applied."),
+    no_groups: bool = typer.Option(False, "--no-groups", help="Skip the infeasible-group LPs of Eq. 5.10."),
+) -> None:
+    """Find the correction T* of the machining frame (Eq. 5.11) and every gage's allowance.
+
+    Exit status 0 whether or not the part conforms; read `status` (conforming /
+    nonconforming). Errors in the files: one line on stderr, exit 2.
+    """
+    from ..cloud import read_points, write_points
+    from ..gage import GageSpec, check_gages, corrected_cloud
+    from ..gage.report import human, write_report
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        spec = GageSpec.load(gages)
+    for w in caught:
+        typer.echo(f"gagekit: warning: {w.message}", err=True)
+    pts = read_points(cloud)
+    result = check_gages(pts, spec, groups=not no_groups)
+    if report is not None:
+        write_report(result, report)
+    if out_cloud is not None:
+        write_points(out_cloud, corrected_cloud(pts, result))
+    emit(result, as_json, human)

@@ -1,3 +1,37 @@
-"""Virtual gages for scanned castings (Ch. 5)."""
+"""Virtual gages for scanned castings (Ch. 5): gage files, 3-2-1 alignment, the LP
+of Eq. 5.11 with slacks, infeasible groups and reports."""
 
-__all__: list[str] = []
+from .align import Alignment, DatumPlane
+from .analysis import (
+    BoundLimit,
+    GageCheckResult,
+    GageOutcome,
+    GageProblem,
+    Transform,
+    build_problem,
+    check_gages,
+    corrected_cloud,
+    solve_problem,
+)
+from .spec import AlignmentSpec, Gage, GageFileWarning, GageSpec, MotionSet, Region, load_gage_spec
+
+__all__ = [
+    "Alignment",
+    "AlignmentSpec",
+    "BoundLimit",
+    "DatumPlane",
+    "Gage",
+    "GageCheckResult",
+    "GageFileWarning",
+    "GageOutcome",
+    "GageProblem",
+    "GageSpec",
+    "MotionSet",
+    "Region",
+    "Transform",
+    "build_problem",
+    "check_gages",
+    "corrected_cloud",
+    "load_gage_spec",
+    "solve_problem",
+]

@@ -1,0 +1,203 @@
+"""The 3-2-1 datum frame of Sec. 5.4.1 (Eqs. 5.13-5.19).
+
+The locator surfaces are scanned in the scanner frame. Their support planes are
+found in sequence, each by the virtual-gage LP (Eq. 5.13 "can be reduced to the
+linear programming formulation given in Eq. 5.5") on the convex-hull vertices of
+its points, re-linearised about the exact rotation:
+
+* primary (z): min over the plane of the largest distance of its points, with all
+  points on the locator side (Eq. 5.13);
+* secondary (y): the same with the normal kept perpendicular to the primary normal
+  (Eq. 5.14);
+* tertiary (x): normal n_x = n_y x n_z, placed against its points (Eq. 5.15).
+
+Sign convention: each datum normal points from the locators towards the part
+(towards the centroid of the whole cloud), and the plane touches its locator
+points on the part side - where the part rests. The origin solves the three
+plane equations (Eq. 5.16); C_L^S has the normals as columns and the origin as
+translation (Eq. 5.17), and H = (C_L^S)^-1 brings the cloud into the part frame
+(Eqs. 5.18-5.19).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .. import _core
+from ..errors import DegenerateGeometryError, NumericalError
+
+
+@dataclass(frozen=True)
+class DatumPlane:
+    """A fitted datum plane n . r + d = 0 in the scanner frame (n towards the part)."""
+
+    name: str
+    regions: tuple[str, ...]
+    normal: tuple[float, float, float]
+    d: float
+    points: int
+    filtered_points: int
+    zone: float
+    """largest distance of a datum point from its plane (mm): the flatness of the support"""
+
+    def to_dict(self) -> dict:
+        return {"name": self.name, "regions": list(self.regions), "normal": list(self.normal), "d": self.d,
+                "points": self.points, "filtered_points": self.filtered_points, "zone": self.zone}
+
+
+@dataclass(frozen=True)
+class Alignment:
+    """The 3-2-1 frame: datum planes, the locator frame C_L^S (Eq. 5.17) and H (Eq. 5.19)."""
+
+    primary: DatumPlane
+    secondary: DatumPlane
+    tertiary: DatumPlane
+    origin: tuple[float, float, float]
+    frame: np.ndarray
+    """C_L^S, 4x4: part frame -> scanner frame"""
+    H: np.ndarray
+    """(C_L^S)^-1, 4x4: scanner frame -> part frame"""
+
+    def to_part(self, points: np.ndarray) -> np.ndarray:
+        """Scanner-frame points in the part frame (H applied)."""
+        return apply(self.H, points)
+
+    def to_dict(self) -> dict:
+        return {"primary": self.primary.to_dict(), "secondary": self.secondary.to_dict(),
+                "tertiary": self.tertiary.to_dict(), "origin": list(self.origin),
+                "C_LS": self.frame.tolist(), "H": self.H.tolist()}
+
+
+def apply(T: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """A 4x4 homogeneous transform applied to (n, 3) points."""
+    pts = np.asarray(points, dtype=np.float64)
+    return pts @ T[:3, :3].T + T[:3, 3]
+
+
+def _support(points: np.ndarray, basis: np.ndarray, axis: int, free: list[bool], extent: float):
+    """Support plane by the gage LP in a local frame whose columns are ``basis``.
+
+    In local coordinates the gage is -x_axis >= 0 (points behind the plane); the LP
+    moves the points (free motions of Eq. 5.2) to minimise their largest distance.
+    Returns the unit normal (scanner frame, towards the part) and d, and the zone.
+    """
+    c = points.mean(axis=0)
+    local = (points - c) @ basis
+    plane = np.zeros((1, 4))
+    plane[0, axis] = -1.0
+    sol = _core.gage_solve(np.ascontiguousarray(local), [0, len(local)], plane, np.ones(1), np.full(1, 10.0),
+                           free, 0.3, 2.0 * extent + 1.0, groups=False)
+    if sol["s"][0] > 0 or sol["active_bounds"]:
+        raise NumericalError("alignment: the support-plane fit of a datum did not settle within its search range")
+    M = np.asarray(sol["matrix"])
+    R, t = M[:3, :3], M[:3, 3]
+    e = np.zeros(3)
+    e[axis] = 1.0
+    n_local = R.T @ e          # plane in local coords: n_local . r' + t[axis] <= 0 for all points
+    n = basis @ n_local
+    d = float(t[axis] - n @ c)
+    return n, d, float(sol["q"][0])
+
+
+def _oriented(n: np.ndarray, towards: np.ndarray) -> np.ndarray:
+    return n if n @ towards >= 0 else -n
+
+
+def fit_321(groups: dict, centroid: np.ndarray) -> Alignment:
+    """Fit the 3-2-1 frame.
+
+    ``groups`` maps ``"primary"``, ``"secondary"``, ``"tertiary"`` to
+    ``(region names, all points, hull-vertex points)`` in the scanner frame;
+    ``centroid`` is a point on the part side of every datum (the cloud centroid).
+    """
+    fitted = {}
+    # primary: least-squares normal as the start, then Eq. 5.13
+    names, allp, pts = groups["primary"]
+    if len(pts) < 3:
+        raise DegenerateGeometryError(f"alignment: the primary datum ({', '.join(names)}) has {len(pts)} "
+                                      "points; a plane needs at least 3")
+    c = pts.mean(axis=0)
+    _, sv, vt = np.linalg.svd(allp - allp.mean(axis=0), full_matrices=False)
+    if len(sv) < 2 or sv[1] <= 1e-9 * max(sv[0], 1e-300):
+        raise DegenerateGeometryError(f"alignment: the primary datum points ({', '.join(names)}) are collinear; "
+                                      "they do not determine a plane")
+    extent = float(np.ptp(np.vstack([g[2] for g in groups.values() if len(g[2])]), axis=0).max())
+    nz0 = _oriented(vt[2], centroid - c)
+    e1 = np.cross([0.0, 1.0, 0.0], nz0)
+    if np.linalg.norm(e1) < 0.5:
+        e1 = np.cross([1.0, 0.0, 0.0], nz0)
+    e1 /= np.linalg.norm(e1)
+    basis = np.column_stack([e1, np.cross(nz0, e1), nz0])
+    nz, dz, zone = _support(pts, basis, 2, [False, True, True, False, False, True], extent)
+    fitted["primary"] = (nz, dz, zone)
+
+    # secondary: normal perpendicular to nz (Eq. 5.14); start: across the points'
+    # main direction in the plane perpendicular to nz
+    names, allp, pts = groups["secondary"]
+    if len(pts) < 2:
+        raise DegenerateGeometryError(f"alignment: the secondary datum ({', '.join(names)}) has {len(pts)} "
+                                      "points; it needs at least 2")
+    c = pts.mean(axis=0)
+    q = allp - allp.mean(axis=0)
+    _, sv3, vt3 = np.linalg.svd(q, full_matrices=False)
+    if len(sv3) == 3 and sv3[1] > 1e-6 * max(1.0, extent):
+        # the points span a plane: it must stand across the primary
+        cosang = abs(vt3[2] @ nz)
+        if cosang > math.cos(math.radians(45.0)):
+            raise DegenerateGeometryError(
+                f"alignment: the secondary datum ({', '.join(names)}) is at {math.degrees(math.acos(min(1.0, cosang))):.1f} "
+                "deg to the primary; it must be roughly perpendicular to determine the y direction")
+        ny0 = vt3[2] - (vt3[2] @ nz) * nz
+    else:
+        # collinear points: the plane through their line perpendicular to the primary
+        qp = q - np.outer(q @ nz, nz)
+        _, sv, vt = np.linalg.svd(qp, full_matrices=False)
+        if sv[0] <= 1e-9 * max(1.0, extent):
+            raise DegenerateGeometryError(f"alignment: the secondary datum points ({', '.join(names)}) lie on a line "
+                                          "parallel to the primary normal; they do not determine a plane")
+        ny0 = np.cross(nz, vt[0])
+    ny0 = _oriented(ny0 / np.linalg.norm(ny0), centroid - c)
+    if abs(ny0 @ (centroid - c)) < 1e-9:
+        raise DegenerateGeometryError("alignment: the secondary datum passes through the part's centroid; "
+                                      "cannot tell which side the part is on")
+    basis = np.column_stack([np.cross(ny0, nz), ny0, nz])
+    ny, dy, zone = _support(pts, basis, 1, [True, False, False, False, True, False], extent)
+    ny = ny - (ny @ nz) * nz
+    ny /= np.linalg.norm(ny)
+    fitted["secondary"] = (ny, dy, zone)
+
+    # tertiary: n_x = n_y x n_z, placed against its points (Eq. 5.15)
+    names, allp, pts = groups["tertiary"]
+    if len(pts) < 1:
+        raise DegenerateGeometryError(f"alignment: the tertiary datum ({', '.join(names)}) has no points")
+    nx = np.cross(ny, nz)
+    c = pts.mean(axis=0)
+    if nx @ (centroid - c) <= 0:
+        raise DegenerateGeometryError(
+            f"alignment: the part lies on the -x side of the tertiary datum ({', '.join(names)}); with the primary "
+            "(z) and secondary (y) datums given, x = y cross z must point into the part: check the datum regions")
+    h = pts @ nx
+    dx = float(-h.max())
+    fitted["tertiary"] = (nx, dx, float(h.max() - h.min()))
+
+    N = np.vstack([fitted[k][0] for k in ("tertiary", "secondary", "primary")])
+    dvec = np.array([fitted[k][1] for k in ("tertiary", "secondary", "primary")])
+    if abs(np.linalg.det(N)) < 1e-9:
+        raise DegenerateGeometryError("alignment: the datum planes do not determine a frame")
+    origin = -np.linalg.solve(N, dvec)                       # Eq. 5.16
+    C = np.eye(4)
+    C[:3, :3] = N.T                                          # columns n_x, n_y, n_z (Eq. 5.17)
+    C[:3, 3] = origin
+    H = np.eye(4)
+    H[:3, :3] = N                                            # (C_L^S)^-1 (Eq. 5.19)
+    H[:3, 3] = -N @ origin
+    planes = {}
+    for key, label in (("primary", "z"), ("secondary", "y"), ("tertiary", "x")):
+        n, d, zone = fitted[key]
+        planes[key] = DatumPlane(label, tuple(groups[key][0]), tuple(float(v) for v in n), float(d),
+                                 len(groups[key][1]), len(groups[key][2]), zone)
+    return Alignment(planes["primary"], planes["secondary"], planes["tertiary"],
+                     tuple(float(v) for v in origin), C, H)
