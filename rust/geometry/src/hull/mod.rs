@@ -34,11 +34,12 @@ pub fn convex_hull_indices(points: &[f64]) -> Result<Vec<usize>> {
     if n == 0 {
         return Ok(Vec::new());
     }
-    let candidates: Vec<usize> =
-        if n >= PREFILTER_MIN { prefilter::survivors(points) } else { (0..n).collect() };
-    let t0 = std::time::Instant::now();
+    let candidates: Vec<usize> = if n >= PREFILTER_MIN {
+        prefilter::survivors(points)
+    } else {
+        (0..n).collect()
+    };
     let mut out = hull_of(points, candidates)?;
-    if std::env::var("GK_HULL_DEBUG").is_ok() { eprintln!("final hull {:?}", t0.elapsed()); }
     out.sort_unstable();
     Ok(out)
 }
@@ -47,7 +48,10 @@ pub fn convex_hull_indices(points: &[f64]) -> Result<Vec<usize>> {
 /// (the lowest index of each group of duplicates).
 fn distinct(points: &[f64], mut ids: Vec<usize>) -> Vec<usize> {
     ids.sort_unstable_by(|&i, &j| {
-        pt(points, i).partial_cmp(&pt(points, j)).unwrap_or(std::cmp::Ordering::Equal).then(i.cmp(&j))
+        pt(points, i)
+            .partial_cmp(&pt(points, j))
+            .unwrap_or(std::cmp::Ordering::Equal)
+            .then(i.cmp(&j))
     });
     ids.dedup_by(|later, first| pt(points, *later) == pt(points, *first));
     ids
@@ -105,8 +109,11 @@ pub(crate) fn simplex(p: &[P3]) -> Simplex {
     match d.filter(|&d| height(d) != 0.0) {
         Some(d) => Simplex::Solid([a, b, c, d]),
         None => {
-            let area = |ax: usize| orient2d(project(p[a], ax), project(p[b], ax), project(p[c], ax)).abs();
-            let axis = (0..3).max_by(|&x, &y| area(x).total_cmp(&area(y))).unwrap_or(2);
+            let area =
+                |ax: usize| orient2d(project(p[a], ax), project(p[b], ax), project(p[c], ax)).abs();
+            let axis = (0..3)
+                .max_by(|&x, &y| area(x).total_cmp(&area(y)))
+                .unwrap_or(2);
             Simplex::Plane(axis)
         }
     }

@@ -10,6 +10,7 @@
 //!    face's plane, hence strictly inside `P` and not a vertex of the hull of
 //!    the input. Any doubt (failed location) keeps the point, so the filter is
 //!    exact whatever the floating-point heuristics do.
+//!
 //! Rounds repeat on the survivors with more directions while that pays off.
 
 use super::exact::{cross, dot, orient3d, pt, sub, P3};
@@ -31,8 +32,6 @@ const SAMPLE: usize = 16_384;
 /// Indices (ascending) of the points not discarded.
 pub fn survivors(points: &[f64]) -> Vec<usize> {
     let n = points.len() / 3;
-    let dbg = std::env::var("GK_HULL_DEBUG").is_ok();
-    let t0 = std::time::Instant::now();
     let (frame, sample) = Frame::new(points);
     // Round 1: a polytope from the extremes of the sample only (cheap), used on
     // every point. Later rounds: exact extremes of the survivors.
@@ -42,20 +41,22 @@ pub fn survivors(points: &[f64]) -> Vec<usize> {
         if len <= ENOUGH {
             break;
         }
-        let dirs: Vec<P3> = directions(k).into_iter().map(|u| frame.to_world_normal(u)).collect();
+        let dirs: Vec<P3> = directions(k)
+            .into_iter()
+            .map(|u| frame.to_world_normal(u))
+            .collect();
         let (ext, bbox) = if round == 0 {
-            (extremes(points, Some(&sample), &dirs).0, bounding_box(points))
+            (
+                extremes(points, Some(&sample), &dirs).0,
+                bounding_box(points),
+            )
         } else {
             extremes(points, ids.as_deref(), &dirs)
         };
-        if dbg {
-            eprintln!("round {round}: extremes {:?}", t0.elapsed());
-        }
-        let Some(poly) = Polytope::new(points, ext, &frame, bbox) else { break };
+        let Some(poly) = Polytope::new(points, ext, &frame, bbox) else {
+            break;
+        };
         let kept = poly.filter(points, ids.as_deref());
-        if dbg {
-            eprintln!("round {round}: {} faces, {len} -> {} points {:?}", poly.faces.len(), kept.len(), t0.elapsed());
-        }
         let done = round > 0 && kept.len() * 2 > len; // less than half removed: stop
         ids = Some(kept);
         if done {
@@ -66,7 +67,10 @@ pub fn survivors(points: &[f64]) -> Vec<usize> {
 }
 
 fn par_chunks<T: Send>(len: usize, f: impl Fn(Range<usize>) -> T + Sync + Send) -> Vec<T> {
-    (0..len.div_ceil(CHUNK)).into_par_iter().map(|c| f(c * CHUNK..((c + 1) * CHUNK).min(len))).collect()
+    (0..len.div_ceil(CHUNK))
+        .into_par_iter()
+        .map(|c| f(c * CHUNK..((c + 1) * CHUNK).min(len)))
+        .collect()
 }
 
 /// Unit directions: the 13 of a cube (axes, face and body diagonals) or a
@@ -153,18 +157,23 @@ impl Frame {
 
     fn mat_q(&self, a: P3) -> P3 {
         let q = &self.q;
-        [0, 1, 2].map(|r| q[0][r] * a[0] + q[1][r] * a[1] + q[2][r] * a[2])
+        [
+            q[0][0] * a[0] + q[1][0] * a[1] + q[2][0] * a[2],
+            q[0][1] * a[0] + q[1][1] * a[1] + q[2][1] * a[2],
+            q[0][2] * a[0] + q[1][2] * a[1] + q[2][2] * a[2],
+        ]
     }
 
     /// Whitened coordinates of a world vector.
     #[inline]
     fn whiten(&self, d: P3) -> P3 {
-        [0, 1, 2].map(|k| dot(self.qs[k], d))
+        [dot(self.qs[0], d), dot(self.qs[1], d), dot(self.qs[2], d)]
     }
 }
 
 /// Eigenvalues and eigenvectors (as rows = columns of Q) of a symmetric 3x3
 /// matrix by cyclic Jacobi rotations.
+#[allow(clippy::needless_range_loop)]
 pub(super) fn jacobi_eigen(mut a: [[f64; 3]; 3]) -> (P3, [P3; 3]) {
     let mut v = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
     for _ in 0..50 {
@@ -239,7 +248,13 @@ fn extremes(points: &[f64], ids: Option<&[usize]>, dirs: &[P3]) -> (Vec<usize>, 
             }
         }
     }
-    (best.into_iter().filter(|b| b.0 > f64::NEG_INFINITY).map(|b| b.1).collect(), bb)
+    (
+        best.into_iter()
+            .filter(|b| b.0 > f64::NEG_INFINITY)
+            .map(|b| b.1)
+            .collect(),
+        bb,
+    )
 }
 
 fn bounding_box(points: &[f64]) -> Bbox {
@@ -266,9 +281,13 @@ struct Bbox {
 
 impl Bbox {
     fn empty() -> Self {
-        Bbox { lo: [f64::INFINITY; 3], hi: [f64::NEG_INFINITY; 3] }
+        Bbox {
+            lo: [f64::INFINITY; 3],
+            hi: [f64::NEG_INFINITY; 3],
+        }
     }
     #[inline(always)]
+    #[allow(clippy::needless_range_loop)]
     fn add(&mut self, x: P3) {
         for k in 0..3 {
             self.lo[k] = self.lo[k].min(x[k]);
@@ -347,9 +366,15 @@ impl<'f> Polytope<'f> {
             return None;
         }
         let p: Vec<P3> = ids.iter().map(|&i| pt(points, i)).collect();
-        let Simplex::Solid(init) = simplex(&p) else { return None };
+        let Simplex::Solid(init) = simplex(&p) else {
+            return None;
+        };
         let hull = hull3d(&p, init).ok()?;
-        let faces: Vec<[P3; 3]> = hull.faces.iter().map(|f| f.map(|i| p[i as usize])).collect();
+        let faces: Vec<[P3; 3]> = hull
+            .faces
+            .iter()
+            .map(|f| f.map(|i| p[i as usize]))
+            .collect();
         let mut used: Vec<u32> = hull.faces.iter().flatten().copied().collect();
         used.sort_unstable();
         used.dedup();
@@ -360,35 +385,61 @@ impl<'f> Polytope<'f> {
             }
         }
         // The centre must be strictly inside (decided exactly).
-        if !faces.iter().all(|f| orient3d(f[0], f[1], f[2], centre) > 0.0) {
+        if !faces
+            .iter()
+            .all(|f| orient3d(f[0], f[1], f[2], centre) > 0.0)
+        {
             return None;
         }
         let planes = faces
             .iter()
             .map(|f| {
-                [(centre, f[0], f[1]), (centre, f[1], f[2]), (centre, f[2], f[0]), (f[0], f[1], f[2])]
-                    .map(|(a, b, c)| Plane::new(a, b, c, &bbox))
+                [
+                    (centre, f[0], f[1]),
+                    (centre, f[1], f[2]),
+                    (centre, f[2], f[0]),
+                    (f[0], f[1], f[2]),
+                ]
+                .map(|(a, b, c)| Plane::new(a, b, c, &bbox))
             })
             .collect();
-        let mut poly = Polytope { frame, centre, faces, nbrs: hull.nbrs, cells: Vec::new(), planes };
-        poly.cells = (0..6 * GRID * GRID).map(|c| poly.exit_face(poly.frame.to_world_dir(cell_dir(c)))).collect();
+        let mut poly = Polytope {
+            frame,
+            centre,
+            faces,
+            nbrs: hull.nbrs,
+            cells: Vec::new(),
+            planes,
+        };
+        poly.cells = poly.cell_table();
         Some(poly)
     }
 
-    /// Face through which the ray from the centre along `d` leaves (floating point).
-    fn exit_face(&self, d: P3) -> u32 {
-        let mut best = (f64::INFINITY, 0u32);
-        for (f, v) in self.faces.iter().enumerate() {
-            let n = cross(sub(v[1], v[0]), sub(v[2], v[0]));
-            let den = dot(n, d);
-            if den > 0.0 {
-                let t = dot(n, sub(v[0], self.centre)) / den;
-                if t < best.0 {
-                    best = (t, f as u32);
+    /// For each cube-map cell, the face through which the ray from the centre
+    /// along the cell's central direction leaves (floating point: a hint only).
+    fn cell_table(&self) -> Vec<u32> {
+        // outward normal n and n . (a - centre) of every face
+        let nh: Vec<(P3, f64)> = self
+            .faces
+            .iter()
+            .map(|v| {
+                let n = cross(sub(v[1], v[0]), sub(v[2], v[0]));
+                (n, dot(n, sub(v[0], self.centre)))
+            })
+            .collect();
+        (0..6 * GRID * GRID)
+            .map(|c| {
+                let d = self.frame.to_world_dir(cell_dir(c));
+                let mut best = (f64::INFINITY, 0u32);
+                for (f, &(n, h)) in nh.iter().enumerate() {
+                    let den = dot(n, d);
+                    if den > 0.0 && h < best.0 * den {
+                        best = (h / den, f as u32);
+                    }
                 }
-            }
-        }
-        best.1
+                best.1
+            })
+            .collect()
     }
 
     /// True only if `x` is strictly inside the polytope (exact).
@@ -400,10 +451,20 @@ impl<'f> Polytope<'f> {
         // Fast path, straight-line: all four filtered signs certain and right.
         let pl = &self.planes[f];
         let wa = sub(x, pl[3].a);
-        let d = [dot(wc, pl[0].n), dot(wc, pl[1].n), dot(wc, pl[2].n), dot(wa, pl[3].n)];
-        if (d[3] < -pl[3].bound) & (d[0] > pl[0].bound) & (d[1] > pl[1].bound) & (d[2] > pl[2].bound) {
+        let d = [
+            dot(wc, pl[0].n),
+            dot(wc, pl[1].n),
+            dot(wc, pl[2].n),
+            dot(wa, pl[3].n),
+        ];
+        if (d[3] < -pl[3].bound)
+            & (d[0] > pl[0].bound)
+            & (d[1] > pl[1].bound)
+            & (d[2] > pl[2].bound)
+        {
             return true;
         }
+
         'walk: for _ in 0..MAX_WALK {
             let [a, b, e] = self.faces[f];
             let pl = &self.planes[f];
@@ -439,8 +500,14 @@ impl<'f> Polytope<'f> {
 /// Cube-map cell of a (whitened) direction.
 #[inline]
 fn cell_of(w: P3) -> usize {
-    let ab = w.map(f64::abs);
-    let m = if ab[0] >= ab[1] && ab[0] >= ab[2] { 0 } else if ab[1] >= ab[2] { 1 } else { 2 };
+    let ab = [w[0].abs(), w[1].abs(), w[2].abs()];
+    let m = if ab[0] >= ab[1] && ab[0] >= ab[2] {
+        0
+    } else if ab[1] >= ab[2] {
+        1
+    } else {
+        2
+    };
     if ab[m] == 0.0 || !ab[m].is_finite() {
         return 0;
     }
