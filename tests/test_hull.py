@@ -199,7 +199,7 @@ def test_cube_grid_gives_corners():
     assert len(got) == 8 and set(map(tuple, got)) == {(a, b, c) for a in (0, 6) for b in (0, 6) for c in (0, 6)}
 
 
-@pytest.mark.parametrize("bad", [np.nan, np.inf, -np.inf])
+@pytest.mark.parametrize("bad", [np.nan, np.inf, -np.inf, 1e300, -1e-200])
 def test_non_finite_names_the_point(bad):
     pts = np.zeros((6, 3))
     pts[4, 1] = bad

@@ -17,7 +17,7 @@ mod prefilter;
 mod quickhull;
 
 use exact::{collinear, cross, dot, orient2d, orient3d, project, pt, sub, P3};
-use gagekit_core::{check_finite, Result};
+use gagekit_core::{check_finite, GkError, Result};
 
 /// Inputs at least this large go through the parallel prefilter first.
 const PREFILTER_MIN: usize = 4096;
@@ -27,9 +27,11 @@ const PREFILTER_MIN: usize = 4096;
 ///
 /// Degenerate input: no points gives no indices; exactly collinear points give
 /// the two end points; exactly coplanar points give the vertices of their 2-D
-/// hull. NaN or infinite coordinates are an `InvalidInput` error naming the point.
+/// hull. NaN or infinite coordinates, and magnitudes beyond 1e100 or below
+/// 1e-60 (other than 0), are an `InvalidInput` error naming the point.
 pub fn convex_hull_indices(points: &[f64]) -> Result<Vec<usize>> {
     check_finite(points, 3, "points")?;
+    check_range(points)?;
     let n = points.len() / 3;
     if n == 0 {
         return Ok(Vec::new());
@@ -42,6 +44,26 @@ pub fn convex_hull_indices(points: &[f64]) -> Result<Vec<usize>> {
     let mut out = hull_of(points, candidates)?;
     out.sort_unstable();
     Ok(out)
+}
+
+/// Largest and smallest non-zero coordinate magnitude for which the
+/// predicates' floating-point filters cannot overflow or underflow.
+const MAX_COORD: f64 = 1e100;
+const MIN_COORD: f64 = 1e-60;
+
+/// Exactness of the predicates needs products of coordinate differences to
+/// stay in the normal floating-point range.
+fn check_range(points: &[f64]) -> Result<()> {
+    let bad = |v: &f64| v.abs() > MAX_COORD || (*v != 0.0 && v.abs() < MIN_COORD);
+    match points.iter().position(bad) {
+        None => Ok(()),
+        Some(pos) => Err(GkError::invalid(format!(
+            "points: point {} has coordinate {:e}; the hull filter supports magnitudes \
+             between 1e-60 and 1e100 mm (or exactly 0)",
+            pos / 3,
+            points[pos]
+        ))),
+    }
 }
 
 /// Candidates sorted lexicographically by coordinates, one per distinct point

@@ -384,11 +384,15 @@ impl<'f> Polytope<'f> {
                 centre[k] += p[i as usize][k] / used.len() as f64;
             }
         }
-        // The centre must be strictly inside (decided exactly).
-        if !faces
-            .iter()
-            .all(|f| orient3d(f[0], f[1], f[2], centre) > 0.0)
-        {
+        // Safety net, decided exactly: the polytope is convex (no vertex above
+        // any face plane) and the centre strictly inside. Otherwise no filtering.
+        let below_all = |x: P3, strict: bool| {
+            faces.iter().all(|f| {
+                let o = orient3d(f[0], f[1], f[2], x);
+                o > 0.0 || (!strict && o == 0.0)
+            })
+        };
+        if !used.iter().all(|&i| below_all(p[i as usize], false)) || !below_all(centre, true) {
             return None;
         }
         let planes = faces

@@ -158,6 +158,13 @@ fn non_finite_points_are_named() {
     p[10] = f64::INFINITY;
     assert!(convex_hull_indices(&p).is_err());
     assert!(convex_hull_indices(&[1.0, 2.0]).is_err());
+    p[10] = 1e300;
+    assert!(convex_hull_indices(&p)
+        .unwrap_err()
+        .message
+        .contains("point 3"));
+    p[10] = 1e-310;
+    assert!(convex_hull_indices(&p).is_err());
 }
 
 /// Brute force for general position: i is a vertex iff some plane through i
