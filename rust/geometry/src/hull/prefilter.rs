@@ -57,7 +57,7 @@ pub fn survivors(points: &[f64]) -> Vec<usize> {
             break;
         };
         let kept = poly.filter(points, ids.as_deref());
-        let done = round > 0 && kept.len() * 2 > len; // less than half removed: stop
+        let done = round > 0 && kept.len() * 100 > len; // less than half removed: stop
         ids = Some(kept);
         if done {
             break;
