@@ -535,3 +535,47 @@ fn cell_dir(c: usize) -> P3 {
     w[(m + 2) % 3] = mid(j);
     w
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    /// The semi-static filter never contradicts the exact predicate, also for
+    /// points within rounding distance of the plane.
+    #[test]
+    fn plane_filter_agrees_with_exact_orientation() {
+        let mut rng = ChaCha8Rng::seed_from_u64(5);
+        let mut decided = 0;
+        for _ in 0..200 {
+            let scale = 10f64.powi(rng.random_range(-3..4));
+            let mut r = || [0, 1, 2].map(|_| (rng.random::<f64>() - 0.5) * scale);
+            let (a, b, c) = (r(), r(), r());
+            let xs: Vec<P3> = (0..200)
+                .map(|k| {
+                    let (s, t) = (rng.random::<f64>(), rng.random::<f64>());
+                    let off = if k % 2 == 0 {
+                        0.0
+                    } else {
+                        (rng.random::<f64>() - 0.5) * scale * 1e-13
+                    };
+                    [0, 1, 2].map(|i| a[i] + s * (b[i] - a[i]) + t * (c[i] - a[i]) + off)
+                })
+                .collect();
+            let mut bbox = Bbox::empty();
+            xs.iter().for_each(|&x| bbox.add(x));
+            let plane = Plane::new(a, b, c, &bbox);
+            for &x in &xs {
+                let exact = orient3d(a, b, c, x);
+                match plane.below(x) {
+                    Some(true) => assert!(exact > 0.0),
+                    Some(false) => assert!(exact < 0.0),
+                    None => continue,
+                }
+                decided += 1;
+            }
+        }
+        assert!(decided > 1000, "the filter decides most points ({decided})");
+    }
+}
