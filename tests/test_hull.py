@@ -124,8 +124,10 @@ def test_invariant_under_rigid_motion(seed, n, angles, shift):
         lambda r: r.uniform(-1, 1, size=(20000, 3)),
         lambda r: noisy_patch(50_000, int(r.integers(1 << 30))),
         lambda r: noisy_patch(20_664, 7) @ random_rotation((0.3, -1.1, 0.7)).T,
+        lambda r: noisy_patch(300_000, 8),
+        lambda r: r.normal(size=(300_000, 3)) * [50.0, 20.0, 3.0],
     ],
-    ids=["ball", "cube", "patch", "tilted-face"],
+    ids=["ball", "cube", "patch", "tilted-face", "patch-300k", "ellipsoid-300k"],
 )
 def test_agrees_with_qhull(make):
     pts = make(np.random.default_rng(42))

@@ -12,6 +12,7 @@
 //! ([`quickhull`]). Collinear and coplanar sets fall back to 1-D and 2-D hulls.
 
 mod exact;
+mod inner;
 mod planar;
 mod prefilter;
 mod quickhull;
