@@ -2,14 +2,18 @@
 //!
 //! 1. A frame from the covariance of a sample of the points (heuristic only),
 //!    so that directions adapt to thin sets such as a scanned face.
-//! 2. The extreme input points along a set of directions in that frame.
-//! 3. Their exact hull `P`; every point strictly inside `P` is discarded. A
-//!    point is located by a cube map from an interior centre `c` to the face of
-//!    `P` its ray `c -> x` crosses, then decided exactly: `x` lies in the cone
-//!    from `c` over that face (three `orient3d` signs) and strictly below the
-//!    face's plane, hence strictly inside `P` and not a vertex of the hull of
-//!    the input. Any doubt (failed location) keeps the point, so the filter is
-//!    exact whatever the floating-point heuristics do.
+//! 2. The extreme input points along a set of directions in that frame (first
+//!    round: extremes of the sample only, which is cheap).
+//! 3. Their exact hull `P` (checked convex, exactly); every point strictly
+//!    inside `P` is discarded. A point is first tried against boxes proven to
+//!    lie inside `P` ([`InnerGrid`]); otherwise it is located by a cube map
+//!    from an interior centre `c` to the face of `P` its ray `c -> x` crosses,
+//!    then decided exactly: `x` lies in the cone from `c` over that face (three
+//!    orientation signs) and strictly below the face's plane, hence strictly
+//!    inside `P` and not a vertex of the hull of the input. Signs come from a
+//!    semi-static floating-point filter with Shewchuk's error bound, falling
+//!    back to the adaptive exact predicate. Any doubt (failed location) keeps
+//!    the point, so the filter is exact whatever the heuristics do.
 //!
 //! Rounds repeat on the survivors with more directions while that pays off.
 
@@ -58,7 +62,7 @@ pub fn survivors(points: &[f64]) -> Vec<usize> {
             break;
         };
         let kept = poly.filter(points, ids.as_deref());
-        let done = round > 0 && kept.len() * 100 > len; // less than half removed: stop
+        let done = round > 0 && kept.len() * 2 > len; // less than half removed: stop
         ids = Some(kept);
         if done {
             break;
