@@ -30,8 +30,10 @@ def convex_hull_indices(points) -> np.ndarray:
     Raises
     ------
     InvalidInputError
-        Wrong shape, non-numeric values, or a NaN/inf coordinate (the message
-        names the point).
+        Wrong shape, non-numeric values, a NaN/inf coordinate, or a magnitude
+        beyond 1e100 or below 1e-60 other than 0 (the exact predicates need
+        products of coordinates in the normal floating-point range). The message
+        names the point.
 
     References
     ----------

@@ -13,7 +13,11 @@ pub fn pt(points: &[f64], i: usize) -> P3 {
 
 #[inline]
 fn c3(p: P3) -> Coord3D<f64> {
-    Coord3D { x: p[0], y: p[1], z: p[2] }
+    Coord3D {
+        x: p[0],
+        y: p[1],
+        z: p[2],
+    }
 }
 
 /// Positive when `d` lies below the plane of `a, b, c` (they appear
@@ -26,7 +30,11 @@ pub fn orient3d(a: P3, b: P3, c: P3, d: P3) -> f64 {
 /// Positive when `a, b, c` turn counter-clockwise, zero exactly when collinear.
 #[inline]
 pub fn orient2d(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> f64 {
-    robust::orient2d(Coord { x: a[0], y: a[1] }, Coord { x: b[0], y: b[1] }, Coord { x: c[0], y: c[1] })
+    robust::orient2d(
+        Coord { x: a[0], y: a[1] },
+        Coord { x: b[0], y: b[1] },
+        Coord { x: c[0], y: c[1] },
+    )
 }
 
 /// Drop coordinate `axis` (exact: no arithmetic).
@@ -52,7 +60,11 @@ pub fn sub(a: P3, b: P3) -> P3 {
 
 #[inline]
 pub fn cross(a: P3, b: P3) -> P3 {
-    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
 }
 
 #[inline]

@@ -12,12 +12,14 @@
 //! ([`quickhull`]). Collinear and coplanar sets fall back to 1-D and 2-D hulls.
 
 mod exact;
+mod inner;
 mod planar;
 mod prefilter;
 mod quickhull;
 
 use exact::{collinear, cross, dot, orient2d, orient3d, project, pt, sub, P3};
-use gagekit_core::{check_finite, Result};
+use gagekit_core::{check_finite, GkError, Result};
+use rayon::prelude::*;
 
 /// Inputs at least this large go through the parallel prefilter first.
 const PREFILTER_MIN: usize = 4096;
@@ -27,27 +29,67 @@ const PREFILTER_MIN: usize = 4096;
 ///
 /// Degenerate input: no points gives no indices; exactly collinear points give
 /// the two end points; exactly coplanar points give the vertices of their 2-D
-/// hull. NaN or infinite coordinates are an `InvalidInput` error naming the point.
+/// hull. NaN or infinite coordinates, and magnitudes beyond 1e100 or below
+/// 1e-60 (other than 0), are an `InvalidInput` error naming the point.
 pub fn convex_hull_indices(points: &[f64]) -> Result<Vec<usize>> {
-    check_finite(points, 3, "points")?;
+    validate(points)?;
     let n = points.len() / 3;
     if n == 0 {
         return Ok(Vec::new());
     }
-    let candidates: Vec<usize> =
-        if n >= PREFILTER_MIN { prefilter::survivors(points) } else { (0..n).collect() };
-    let t0 = std::time::Instant::now();
+    let candidates: Vec<usize> = if n >= PREFILTER_MIN {
+        prefilter::survivors(points)
+    } else {
+        (0..n).collect()
+    };
     let mut out = hull_of(points, candidates)?;
-    if std::env::var("GK_HULL_DEBUG").is_ok() { eprintln!("final hull {:?}", t0.elapsed()); }
     out.sort_unstable();
     Ok(out)
+}
+
+/// Largest and smallest non-zero coordinate magnitude for which the
+/// predicates' floating-point filters cannot overflow or underflow.
+const MAX_COORD: f64 = 1e100;
+const MIN_COORD: f64 = 1e-60;
+
+/// One parallel pass over the coordinates; the detailed (serial) checks that
+/// name the offending point run only when something is wrong.
+fn validate(points: &[f64]) -> Result<()> {
+    let fine = |v: &f64| {
+        let a = v.abs();
+        a <= MAX_COORD && (a >= MIN_COORD || a == 0.0)
+    };
+    let all_fine = points.par_chunks(1 << 16).all(|c| c.iter().all(fine));
+    if points.len() % 3 != 0 || !all_fine {
+        check_finite(points, 3, "points")?;
+        check_range(points)?;
+    }
+    Ok(())
+}
+
+/// Exactness of the predicates needs products of coordinate differences to
+/// stay in the normal floating-point range.
+fn check_range(points: &[f64]) -> Result<()> {
+    let bad = |v: &f64| v.abs() > MAX_COORD || (*v != 0.0 && v.abs() < MIN_COORD);
+    match points.iter().position(bad) {
+        None => Ok(()),
+        Some(pos) => Err(GkError::invalid(format!(
+            "points: point {} has coordinate {:e}; the hull filter supports magnitudes \
+             between 1e-60 and 1e100 mm (or exactly 0)",
+            pos / 3,
+            points[pos]
+        ))),
+    }
 }
 
 /// Candidates sorted lexicographically by coordinates, one per distinct point
 /// (the lowest index of each group of duplicates).
 fn distinct(points: &[f64], mut ids: Vec<usize>) -> Vec<usize> {
     ids.sort_unstable_by(|&i, &j| {
-        pt(points, i).partial_cmp(&pt(points, j)).unwrap_or(std::cmp::Ordering::Equal).then(i.cmp(&j))
+        pt(points, i)
+            .partial_cmp(&pt(points, j))
+            .unwrap_or(std::cmp::Ordering::Equal)
+            .then(i.cmp(&j))
     });
     ids.dedup_by(|later, first| pt(points, *later) == pt(points, *first));
     ids
@@ -105,8 +147,11 @@ pub(crate) fn simplex(p: &[P3]) -> Simplex {
     match d.filter(|&d| height(d) != 0.0) {
         Some(d) => Simplex::Solid([a, b, c, d]),
         None => {
-            let area = |ax: usize| orient2d(project(p[a], ax), project(p[b], ax), project(p[c], ax)).abs();
-            let axis = (0..3).max_by(|&x, &y| area(x).total_cmp(&area(y))).unwrap_or(2);
+            let area =
+                |ax: usize| orient2d(project(p[a], ax), project(p[b], ax), project(p[c], ax)).abs();
+            let axis = (0..3)
+                .max_by(|&x, &y| area(x).total_cmp(&area(y)))
+                .unwrap_or(2);
             Simplex::Plane(axis)
         }
     }

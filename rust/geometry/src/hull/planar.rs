@@ -13,8 +13,11 @@ pub fn hull2d(pts: &[P3], ids: &[usize], axis: usize) -> Vec<usize> {
     let mut hull: Vec<([f64; 2], usize)> = Vec::with_capacity(64);
     for pass in 0..2 {
         let start = hull.len();
-        let seq: Box<dyn Iterator<Item = &([f64; 2], usize)>> =
-            if pass == 0 { Box::new(q.iter()) } else { Box::new(q.iter().rev()) };
+        let seq: Box<dyn Iterator<Item = &([f64; 2], usize)>> = if pass == 0 {
+            Box::new(q.iter())
+        } else {
+            Box::new(q.iter().rev())
+        };
         for &p in seq {
             while hull.len() >= start + 2
                 && orient2d(hull[hull.len() - 2].0, hull[hull.len() - 1].0, p.0) <= 0.0

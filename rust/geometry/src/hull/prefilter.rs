@@ -2,17 +2,23 @@
 //!
 //! 1. A frame from the covariance of a sample of the points (heuristic only),
 //!    so that directions adapt to thin sets such as a scanned face.
-//! 2. The extreme input points along a set of directions in that frame.
-//! 3. Their exact hull `P`; every point strictly inside `P` is discarded. A
-//!    point is located by a cube map from an interior centre `c` to the face of
-//!    `P` its ray `c -> x` crosses, then decided exactly: `x` lies in the cone
-//!    from `c` over that face (three `orient3d` signs) and strictly below the
-//!    face's plane, hence strictly inside `P` and not a vertex of the hull of
-//!    the input. Any doubt (failed location) keeps the point, so the filter is
-//!    exact whatever the floating-point heuristics do.
+//! 2. The extreme input points along a set of directions in that frame (first
+//!    round: extremes of the sample only, which is cheap).
+//! 3. Their exact hull `P` (checked convex, exactly); every point strictly
+//!    inside `P` is discarded. A point is first tried against boxes proven to
+//!    lie inside `P` ([`InnerGrid`]); otherwise it is located by a cube map
+//!    from an interior centre `c` to the face of `P` its ray `c -> x` crosses,
+//!    then decided exactly: `x` lies in the cone from `c` over that face (three
+//!    orientation signs) and strictly below the face's plane, hence strictly
+//!    inside `P` and not a vertex of the hull of the input. Signs come from a
+//!    semi-static floating-point filter with Shewchuk's error bound, falling
+//!    back to the adaptive exact predicate. Any doubt (failed location) keeps
+//!    the point, so the filter is exact whatever the heuristics do.
+//!
 //! Rounds repeat on the survivors with more directions while that pays off.
 
 use super::exact::{cross, dot, orient3d, pt, sub, P3};
+use super::inner::{InnerGrid, MAX_SIDE};
 use super::quickhull::hull3d;
 use super::{distinct, simplex, Simplex};
 use rayon::prelude::*;
@@ -31,8 +37,6 @@ const SAMPLE: usize = 16_384;
 /// Indices (ascending) of the points not discarded.
 pub fn survivors(points: &[f64]) -> Vec<usize> {
     let n = points.len() / 3;
-    let dbg = std::env::var("GK_HULL_DEBUG").is_ok();
-    let t0 = std::time::Instant::now();
     let (frame, sample) = Frame::new(points);
     // Round 1: a polytope from the extremes of the sample only (cheap), used on
     // every point. Later rounds: exact extremes of the survivors.
@@ -42,20 +46,22 @@ pub fn survivors(points: &[f64]) -> Vec<usize> {
         if len <= ENOUGH {
             break;
         }
-        let dirs: Vec<P3> = directions(k).into_iter().map(|u| frame.to_world_normal(u)).collect();
+        let dirs: Vec<P3> = directions(k)
+            .into_iter()
+            .map(|u| frame.to_world_normal(u))
+            .collect();
         let (ext, bbox) = if round == 0 {
-            (extremes(points, Some(&sample), &dirs).0, bounding_box(points))
+            (
+                extremes(points, Some(&sample), &dirs).0,
+                bounding_box(points),
+            )
         } else {
             extremes(points, ids.as_deref(), &dirs)
         };
-        if dbg {
-            eprintln!("round {round}: extremes {:?}", t0.elapsed());
-        }
-        let Some(poly) = Polytope::new(points, ext, &frame, bbox) else { break };
+        let Some(poly) = Polytope::new(points, ext, &frame, bbox, inner_side(round, len)) else {
+            break;
+        };
         let kept = poly.filter(points, ids.as_deref());
-        if dbg {
-            eprintln!("round {round}: {} faces, {len} -> {} points {:?}", poly.faces.len(), kept.len(), t0.elapsed());
-        }
         let done = round > 0 && kept.len() * 2 > len; // less than half removed: stop
         ids = Some(kept);
         if done {
@@ -65,8 +71,23 @@ pub fn survivors(points: &[f64]) -> Vec<usize> {
     ids.unwrap_or_else(|| (0..n).collect())
 }
 
+/// Cells per side of the inner grid: about 1000 points per cell, worth its
+/// set-up from 16 x 16 cells on; first round only (later rounds test points
+/// near the boundary, which the grid misses).
+fn inner_side(round: usize, len: usize) -> usize {
+    let side = ((len as f64 / 1000.0).sqrt() as usize).min(MAX_SIDE);
+    if round == 0 && side >= 16 {
+        side
+    } else {
+        0
+    }
+}
+
 fn par_chunks<T: Send>(len: usize, f: impl Fn(Range<usize>) -> T + Sync + Send) -> Vec<T> {
-    (0..len.div_ceil(CHUNK)).into_par_iter().map(|c| f(c * CHUNK..((c + 1) * CHUNK).min(len))).collect()
+    (0..len.div_ceil(CHUNK))
+        .into_par_iter()
+        .map(|c| f(c * CHUNK..((c + 1) * CHUNK).min(len)))
+        .collect()
 }
 
 /// Unit directions: the 13 of a cube (axes, face and body diagonals) or a
@@ -140,6 +161,16 @@ impl Frame {
         (Frame { q, s, qs }, ids)
     }
 
+    /// The coordinate axis closest to the direction of least spread.
+    fn flat_axis(&self) -> usize {
+        let k = (0..3)
+            .min_by(|&a, &b| self.s[a].total_cmp(&self.s[b]))
+            .unwrap_or(2);
+        (0..3)
+            .max_by(|&a, &b| self.q[k][a].abs().total_cmp(&self.q[k][b].abs()))
+            .unwrap_or(2)
+    }
+
     /// World vector whose dot product with `x` ranks points as `u . w(x)` does.
     fn to_world_normal(&self, u: P3) -> P3 {
         let a = [u[0] / self.s[0], u[1] / self.s[1], u[2] / self.s[2]];
@@ -153,18 +184,23 @@ impl Frame {
 
     fn mat_q(&self, a: P3) -> P3 {
         let q = &self.q;
-        [0, 1, 2].map(|r| q[0][r] * a[0] + q[1][r] * a[1] + q[2][r] * a[2])
+        [
+            q[0][0] * a[0] + q[1][0] * a[1] + q[2][0] * a[2],
+            q[0][1] * a[0] + q[1][1] * a[1] + q[2][1] * a[2],
+            q[0][2] * a[0] + q[1][2] * a[1] + q[2][2] * a[2],
+        ]
     }
 
     /// Whitened coordinates of a world vector.
     #[inline]
     fn whiten(&self, d: P3) -> P3 {
-        [0, 1, 2].map(|k| dot(self.qs[k], d))
+        [dot(self.qs[0], d), dot(self.qs[1], d), dot(self.qs[2], d)]
     }
 }
 
 /// Eigenvalues and eigenvectors (as rows = columns of Q) of a symmetric 3x3
 /// matrix by cyclic Jacobi rotations.
+#[allow(clippy::needless_range_loop)]
 pub(super) fn jacobi_eigen(mut a: [[f64; 3]; 3]) -> (P3, [P3; 3]) {
     let mut v = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
     for _ in 0..50 {
@@ -239,7 +275,13 @@ fn extremes(points: &[f64], ids: Option<&[usize]>, dirs: &[P3]) -> (Vec<usize>, 
             }
         }
     }
-    (best.into_iter().filter(|b| b.0 > f64::NEG_INFINITY).map(|b| b.1).collect(), bb)
+    (
+        best.into_iter()
+            .filter(|b| b.0 > f64::NEG_INFINITY)
+            .map(|b| b.1)
+            .collect(),
+        bb,
+    )
 }
 
 fn bounding_box(points: &[f64]) -> Bbox {
@@ -266,9 +308,13 @@ struct Bbox {
 
 impl Bbox {
     fn empty() -> Self {
-        Bbox { lo: [f64::INFINITY; 3], hi: [f64::NEG_INFINITY; 3] }
+        Bbox {
+            lo: [f64::INFINITY; 3],
+            hi: [f64::NEG_INFINITY; 3],
+        }
     }
     #[inline(always)]
+    #[allow(clippy::needless_range_loop)]
     fn add(&mut self, x: P3) {
         for k in 0..3 {
             self.lo[k] = self.lo[k].min(x[k]);
@@ -286,6 +332,8 @@ struct Polytope<'f> {
     cells: Vec<u32>,
     /// Per face: the planes through the centre and each edge, then the face plane.
     planes: Vec<[Plane; 4]>,
+    /// Proven inner boxes (first round only).
+    inner: Option<InnerGrid>,
 }
 
 /// `orient3d` with three fixed points, `a` being the reference: the floating
@@ -341,15 +389,27 @@ impl Plane {
 }
 
 impl<'f> Polytope<'f> {
-    fn new(points: &[f64], ext: Vec<usize>, frame: &'f Frame, bbox: Bbox) -> Option<Self> {
+    fn new(
+        points: &[f64],
+        ext: Vec<usize>,
+        frame: &'f Frame,
+        bbox: Bbox,
+        inner_side: usize,
+    ) -> Option<Self> {
         let ids = distinct(points, ext);
         if ids.len() < 4 {
             return None;
         }
         let p: Vec<P3> = ids.iter().map(|&i| pt(points, i)).collect();
-        let Simplex::Solid(init) = simplex(&p) else { return None };
+        let Simplex::Solid(init) = simplex(&p) else {
+            return None;
+        };
         let hull = hull3d(&p, init).ok()?;
-        let faces: Vec<[P3; 3]> = hull.faces.iter().map(|f| f.map(|i| p[i as usize])).collect();
+        let faces: Vec<[P3; 3]> = hull
+            .faces
+            .iter()
+            .map(|f| f.map(|i| p[i as usize]))
+            .collect();
         let mut used: Vec<u32> = hull.faces.iter().flatten().copied().collect();
         used.sort_unstable();
         used.dedup();
@@ -359,51 +419,106 @@ impl<'f> Polytope<'f> {
                 centre[k] += p[i as usize][k] / used.len() as f64;
             }
         }
-        // The centre must be strictly inside (decided exactly).
-        if !faces.iter().all(|f| orient3d(f[0], f[1], f[2], centre) > 0.0) {
+        // Safety net, decided exactly: the polytope is convex (no vertex above
+        // any face plane) and the centre strictly inside. Otherwise no filtering.
+        let below_all = |x: P3, strict: bool| {
+            faces.iter().all(|f| {
+                let o = orient3d(f[0], f[1], f[2], x);
+                o > 0.0 || (!strict && o == 0.0)
+            })
+        };
+        if !used.iter().all(|&i| below_all(p[i as usize], false)) || !below_all(centre, true) {
             return None;
         }
         let planes = faces
             .iter()
             .map(|f| {
-                [(centre, f[0], f[1]), (centre, f[1], f[2]), (centre, f[2], f[0]), (f[0], f[1], f[2])]
-                    .map(|(a, b, c)| Plane::new(a, b, c, &bbox))
+                [
+                    (centre, f[0], f[1]),
+                    (centre, f[1], f[2]),
+                    (centre, f[2], f[0]),
+                    (f[0], f[1], f[2]),
+                ]
+                .map(|(a, b, c)| Plane::new(a, b, c, &bbox))
             })
             .collect();
-        let mut poly = Polytope { frame, centre, faces, nbrs: hull.nbrs, cells: Vec::new(), planes };
-        poly.cells = (0..6 * GRID * GRID).map(|c| poly.exit_face(poly.frame.to_world_dir(cell_dir(c)))).collect();
+        let mut poly = Polytope {
+            frame,
+            centre,
+            faces,
+            nbrs: hull.nbrs,
+            cells: Vec::new(),
+            planes,
+            inner: None,
+        };
+        poly.cells = poly.cell_table();
+        if inner_side > 0 {
+            let axis = frame.flat_axis();
+            let inside = |x: P3| {
+                poly.planes.iter().zip(&poly.faces).all(|(pl, f)| {
+                    pl[3]
+                        .below(x)
+                        .unwrap_or_else(|| orient3d(f[0], f[1], f[2], x) > 0.0)
+                })
+            };
+            poly.inner = InnerGrid::build(inner_side, &poly.faces, inside, axis, bbox.lo, bbox.hi);
+        }
         Some(poly)
     }
 
-    /// Face through which the ray from the centre along `d` leaves (floating point).
-    fn exit_face(&self, d: P3) -> u32 {
-        let mut best = (f64::INFINITY, 0u32);
-        for (f, v) in self.faces.iter().enumerate() {
-            let n = cross(sub(v[1], v[0]), sub(v[2], v[0]));
-            let den = dot(n, d);
-            if den > 0.0 {
-                let t = dot(n, sub(v[0], self.centre)) / den;
-                if t < best.0 {
-                    best = (t, f as u32);
+    /// For each cube-map cell, the face through which the ray from the centre
+    /// along the cell's central direction leaves (floating point: a hint only).
+    fn cell_table(&self) -> Vec<u32> {
+        // outward normal n and n . (a - centre) of every face
+        let nh: Vec<(P3, f64)> = self
+            .faces
+            .iter()
+            .map(|v| {
+                let n = cross(sub(v[1], v[0]), sub(v[2], v[0]));
+                (n, dot(n, sub(v[0], self.centre)))
+            })
+            .collect();
+        (0..6 * GRID * GRID)
+            .map(|c| {
+                let d = self.frame.to_world_dir(cell_dir(c));
+                let mut best = (f64::INFINITY, 0u32);
+                for (f, &(n, h)) in nh.iter().enumerate() {
+                    let den = dot(n, d);
+                    if den > 0.0 && h < best.0 * den {
+                        best = (h / den, f as u32);
+                    }
                 }
-            }
-        }
-        best.1
+                best.1
+            })
+            .collect()
     }
 
     /// True only if `x` is strictly inside the polytope (exact).
     #[inline]
     fn strictly_inside(&self, x: P3) -> bool {
+        if self.inner.as_ref().is_some_and(|g| g.contains(x)) {
+            return true;
+        }
         let c = self.centre;
         let wc = sub(x, c);
         let mut f = self.cells[cell_of(self.frame.whiten(wc))] as usize;
         // Fast path, straight-line: all four filtered signs certain and right.
         let pl = &self.planes[f];
         let wa = sub(x, pl[3].a);
-        let d = [dot(wc, pl[0].n), dot(wc, pl[1].n), dot(wc, pl[2].n), dot(wa, pl[3].n)];
-        if (d[3] < -pl[3].bound) & (d[0] > pl[0].bound) & (d[1] > pl[1].bound) & (d[2] > pl[2].bound) {
+        let d = [
+            dot(wc, pl[0].n),
+            dot(wc, pl[1].n),
+            dot(wc, pl[2].n),
+            dot(wa, pl[3].n),
+        ];
+        if (d[3] < -pl[3].bound)
+            & (d[0] > pl[0].bound)
+            & (d[1] > pl[1].bound)
+            & (d[2] > pl[2].bound)
+        {
             return true;
         }
+
         'walk: for _ in 0..MAX_WALK {
             let [a, b, e] = self.faces[f];
             let pl = &self.planes[f];
@@ -439,8 +554,14 @@ impl<'f> Polytope<'f> {
 /// Cube-map cell of a (whitened) direction.
 #[inline]
 fn cell_of(w: P3) -> usize {
-    let ab = w.map(f64::abs);
-    let m = if ab[0] >= ab[1] && ab[0] >= ab[2] { 0 } else if ab[1] >= ab[2] { 1 } else { 2 };
+    let ab = [w[0].abs(), w[1].abs(), w[2].abs()];
+    let m = if ab[0] >= ab[1] && ab[0] >= ab[2] {
+        0
+    } else if ab[1] >= ab[2] {
+        1
+    } else {
+        2
+    };
     if ab[m] == 0.0 || !ab[m].is_finite() {
         return 0;
     }
@@ -463,4 +584,92 @@ fn cell_dir(c: usize) -> P3 {
     w[(m + 1) % 3] = mid(i);
     w[(m + 2) % 3] = mid(j);
     w
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    /// The semi-static filter never contradicts the exact predicate, also for
+    /// points within rounding distance of the plane.
+    #[test]
+    fn plane_filter_agrees_with_exact_orientation() {
+        let mut rng = ChaCha8Rng::seed_from_u64(5);
+        let mut decided = 0;
+        for _ in 0..200 {
+            let scale = 10f64.powi(rng.random_range(-3..4));
+            let mut r = || [0, 1, 2].map(|_| (rng.random::<f64>() - 0.5) * scale);
+            let (a, b, c) = (r(), r(), r());
+            let xs: Vec<P3> = (0..200)
+                .map(|k| {
+                    let (s, t) = (rng.random::<f64>(), rng.random::<f64>());
+                    let off = if k % 2 == 0 {
+                        0.0
+                    } else {
+                        (rng.random::<f64>() - 0.5) * scale * 1e-13
+                    };
+                    [0, 1, 2].map(|i| a[i] + s * (b[i] - a[i]) + t * (c[i] - a[i]) + off)
+                })
+                .collect();
+            let mut bbox = Bbox::empty();
+            xs.iter().for_each(|&x| bbox.add(x));
+            let plane = Plane::new(a, b, c, &bbox);
+            for &x in &xs {
+                let exact = orient3d(a, b, c, x);
+                match plane.below(x) {
+                    Some(true) => assert!(exact > 0.0),
+                    Some(false) => assert!(exact < 0.0),
+                    None => continue,
+                }
+                decided += 1;
+            }
+        }
+        assert!(decided > 1000, "the filter decides most points ({decided})");
+    }
+
+    /// Every point the inner grid claims is strictly inside every face (exact),
+    /// for a flat patch and a ball.
+    #[test]
+    fn inner_grid_is_sound() {
+        let mut rng = ChaCha8Rng::seed_from_u64(9);
+        for flat in [true, false] {
+            let n = 40_000;
+            let points: Vec<f64> = (0..n)
+                .flat_map(|_| {
+                    let z = (rng.random::<f64>() - 0.5) * if flat { 0.05 } else { 100.0 };
+                    [rng.random::<f64>() * 200.0, rng.random::<f64>() * 150.0, z]
+                })
+                .collect();
+            let (frame, sample) = Frame::new(&points);
+            let dirs: Vec<P3> = directions(120)
+                .into_iter()
+                .map(|u| frame.to_world_normal(u))
+                .collect();
+            let ext = extremes(&points, Some(&sample), &dirs).0;
+            let poly =
+                Polytope::new(&points, ext, &frame, bounding_box(&points), 16).expect("polytope");
+            let grid = poly.inner.as_ref().expect("inner grid");
+            let mut claimed = 0;
+            for i in 0..n {
+                let x = pt(&points, i);
+                if grid.contains(x) {
+                    claimed += 1;
+                    assert!(poly
+                        .faces
+                        .iter()
+                        .all(|f| orient3d(f[0], f[1], f[2], x) > 0.0));
+                }
+                // and the whole filter agrees with brute force where it decides
+                if poly.strictly_inside(x) {
+                    assert!(poly
+                        .faces
+                        .iter()
+                        .all(|f| orient3d(f[0], f[1], f[2], x) > 0.0));
+                }
+            }
+            assert!(claimed > n / 10, "the grid covers a good share ({claimed})");
+        }
+    }
 }

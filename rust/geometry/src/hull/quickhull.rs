@@ -33,7 +33,13 @@ fn above(p: &[P3], v: [u32; 3], q: P3) -> bool {
 fn new_face(p: &[P3], v: [u32; 3], nb: [u32; 3]) -> Face {
     let a = p[v[0] as usize];
     let normal = cross(sub(p[v[1] as usize], a), sub(p[v[2] as usize], a));
-    Face { v, nb, alive: true, outside: Vec::new(), normal }
+    Face {
+        v,
+        nb,
+        alive: true,
+        outside: Vec::new(),
+        normal,
+    }
 }
 
 fn edge_slot(v: &[u32; 3], from: u32, to: u32) -> Option<usize> {
@@ -41,7 +47,9 @@ fn edge_slot(v: &[u32; 3], from: u32, to: u32) -> Option<usize> {
 }
 
 fn broken(what: &str) -> GkError {
-    GkError::numerical(format!("convex hull: inconsistent {what} (please report this input)"))
+    GkError::numerical(format!(
+        "convex hull: inconsistent {what} (please report this input)"
+    ))
 }
 
 /// Hull of the distinct points `p`, starting from the non-degenerate
@@ -59,7 +67,9 @@ pub fn hull3d(p: &[P3], init: [usize; 4]) -> Result<Hull> {
     for f in 0..4 {
         for i in 0..3 {
             let (u, w) = (faces[f].v[i], faces[f].v[(i + 1) % 3]);
-            let g = (0..4).find(|&g| edge_slot(&faces[g].v, w, u).is_some()).ok_or_else(|| broken("start"))?;
+            let g = (0..4)
+                .find(|&g| edge_slot(&faces[g].v, w, u).is_some())
+                .ok_or_else(|| broken("start"))?;
             faces[f].nb[i] = g as u32;
         }
     }
@@ -72,7 +82,9 @@ pub fn hull3d(p: &[P3], init: [usize; 4]) -> Result<Hull> {
         }
     }
 
-    let mut stack: Vec<u32> = (0..4u32).filter(|&f| !faces[f as usize].outside.is_empty()).collect();
+    let mut stack: Vec<u32> = (0..4u32)
+        .filter(|&f| !faces[f as usize].outside.is_empty())
+        .collect();
     let mut mark: Vec<u32> = vec![0; faces.len()];
     let mut stamp = 0u32;
     let mut visible: Vec<u32> = Vec::new();
@@ -138,12 +150,18 @@ pub fn hull3d(p: &[P3], init: [usize; 4]) -> Result<Hull> {
         let mut cur = 0usize;
         for k in 0..m {
             let (u, w, h) = horizon[cur];
-            let nb = [h, base + ((k + 1) % m) as u32, base + ((k + m - 1) % m) as u32];
+            let nb = [
+                h,
+                base + ((k + 1) % m) as u32,
+                base + ((k + m - 1) % m) as u32,
+            ];
             faces.push(new_face(p, [u, w, q], nb));
             let hf = &mut faces[h as usize];
             let j = edge_slot(&hf.v, w, u).ok_or_else(|| broken("neighbour"))?;
             hf.nb[j] = base + k as u32;
-            cur = horizon.binary_search_by_key(&w, |e| e.0).map_err(|_| broken("horizon cycle"))?;
+            cur = horizon
+                .binary_search_by_key(&w, |e| e.0)
+                .map_err(|_| broken("horizon cycle"))?;
             if (cur == 0) != (k + 1 == m) {
                 return Err(broken("horizon cycle"));
             }
@@ -166,15 +184,16 @@ pub fn hull3d(p: &[P3], init: [usize; 4]) -> Result<Hull> {
                 faces[nf].outside.push(o);
             }
         }
-        for nf in base as usize..faces.len() {
-            if !faces[nf].outside.is_empty() {
-                stack.push(nf as u32);
-            }
-        }
+        stack.extend(
+            (base..faces.len() as u32).filter(|&nf| !faces[nf as usize].outside.is_empty()),
+        );
     }
 
     let mut remap = vec![u32::MAX; faces.len()];
-    let mut out = Hull { faces: Vec::new(), nbrs: Vec::new() };
+    let mut out = Hull {
+        faces: Vec::new(),
+        nbrs: Vec::new(),
+    };
     for (f, face) in faces.iter().enumerate() {
         if face.alive {
             remap[f] = out.faces.len() as u32;

@@ -22,7 +22,9 @@ fn check_hull(points: &[f64], got: &[usize]) {
         match simplex(&p_sorted(&p)) {
             Simplex::Solid(_) => {
                 let q = p_sorted(&p);
-                let Simplex::Solid(init) = simplex(&q) else { unreachable!() };
+                let Simplex::Solid(init) = simplex(&q) else {
+                    unreachable!()
+                };
                 let h = quickhull::hull3d(&q, init).unwrap();
                 h.faces.iter().all(|f| {
                     orient3d(q[f[0] as usize], q[f[1] as usize], q[f[2] as usize], x) >= 0.0
@@ -34,11 +36,22 @@ fn check_hull(points: &[f64], got: &[usize]) {
     assert!(got.windows(2).all(|w| w[0] < w[1]), "ascending, no repeats");
     if got.len() >= 4 {
         for i in 0..n {
-            assert!(inside_all(got, pt(points, i)), "point {i} outside the hull of the result");
+            assert!(
+                inside_all(got, pt(points, i)),
+                "point {i} outside the hull of the result"
+            );
         }
         for (k, &v) in got.iter().enumerate() {
-            let rest: Vec<usize> = got.iter().enumerate().filter(|&(j, _)| j != k).map(|(_, &i)| i).collect();
-            assert!(!inside_all(&rest, pt(points, v)), "vertex {v} is not extreme");
+            let rest: Vec<usize> = got
+                .iter()
+                .enumerate()
+                .filter(|&(j, _)| j != k)
+                .map(|(_, &i)| i)
+                .collect();
+            assert!(
+                !inside_all(&rest, pt(points, v)),
+                "vertex {v} is not extreme"
+            );
         }
     }
 }
@@ -56,8 +69,14 @@ fn empty_and_tiny_inputs() {
     assert_eq!(hull(&[[1.0, 2.0, 3.0]]), vec![0]);
     assert_eq!(hull(&[[1.0, 2.0, 3.0], [1.0, 2.0, 3.0]]), vec![0]);
     assert_eq!(hull(&[[1.0, 2.0, 3.0], [0.0, 2.0, 3.0]]), vec![0, 1]);
-    assert_eq!(hull(&[[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]), vec![0, 1, 2]);
-    assert_eq!(hull(&[[0.0; 3], [2.0, 2.0, 2.0], [1.0, 1.0, 1.0]]), vec![0, 1]);
+    assert_eq!(
+        hull(&[[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]),
+        vec![0, 1, 2]
+    );
+    assert_eq!(
+        hull(&[[0.0; 3], [2.0, 2.0, 2.0], [1.0, 1.0, 1.0]]),
+        vec![0, 1]
+    );
     assert_eq!(hull(&[[5.0; 3], [5.0; 3], [5.0; 3]]), vec![0]);
 }
 
@@ -71,9 +90,19 @@ fn duplicates_report_lowest_index() {
 
 #[test]
 fn collinear_gives_end_points() {
-    let p: Vec<P3> = (0..50).map(|i| [(i * 7 % 50) as f64 * 0.5, 1.0 + (i * 7 % 50) as f64 * 3.0, -2.0]).collect();
+    let p: Vec<P3> = (0..50)
+        .map(|i| {
+            [
+                (i * 7 % 50) as f64 * 0.5,
+                1.0 + (i * 7 % 50) as f64 * 3.0,
+                -2.0,
+            ]
+        })
+        .collect();
     let got = hull(&p);
-    let ends: Vec<usize> = (0..50).filter(|&i| i * 7 % 50 == 0 || i * 7 % 50 == 49).collect();
+    let ends: Vec<usize> = (0..50)
+        .filter(|&i| i * 7 % 50 == 0 || i * 7 % 50 == 49)
+        .collect();
     assert_eq!(got, ends);
 }
 
@@ -107,7 +136,14 @@ fn cube_grid_gives_eight_corners() {
     }
     let got = hull(&p);
     let corner = |i: usize, j: usize, k: usize| i * 36 + j * 6 + k;
-    let mut want: Vec<usize> = [0, 5].iter().flat_map(|&i| [0, 5].iter().flat_map(move |&j| [0, 5].map(|k| corner(i, j, k)))).collect();
+    let mut want: Vec<usize> = [0, 5]
+        .iter()
+        .flat_map(|&i| {
+            [0, 5]
+                .iter()
+                .flat_map(move |&j| [0, 5].map(|k| corner(i, j, k)))
+        })
+        .collect();
     want.sort();
     assert_eq!(got, want);
 }
@@ -122,6 +158,13 @@ fn non_finite_points_are_named() {
     p[10] = f64::INFINITY;
     assert!(convex_hull_indices(&p).is_err());
     assert!(convex_hull_indices(&[1.0, 2.0]).is_err());
+    p[10] = 1e300;
+    assert!(convex_hull_indices(&p)
+        .unwrap_err()
+        .message
+        .contains("point 3"));
+    p[10] = 1e-310;
+    assert!(convex_hull_indices(&p).is_err());
 }
 
 /// Brute force for general position: i is a vertex iff some plane through i
@@ -135,7 +178,10 @@ fn brute_force(p: &[P3]) -> Vec<usize> {
                 if i == j || i == k {
                     continue;
                 }
-                let s: Vec<f64> = (0..n).filter(|&l| l != i && l != j && l != k).map(|l| orient3d(p[i], p[j], p[k], p[l])).collect();
+                let s: Vec<f64> = (0..n)
+                    .filter(|&l| l != i && l != j && l != k)
+                    .map(|l| orient3d(p[i], p[j], p[k], p[l]))
+                    .collect();
                 if s.iter().all(|&v| v > 0.0) || s.iter().all(|&v| v < 0.0) {
                     out.push(i);
                     continue 'points;
@@ -151,7 +197,15 @@ fn matches_brute_force_on_random_sets() {
     let mut rng = ChaCha8Rng::seed_from_u64(7);
     for trial in 0..40 {
         let n = 5 + trial % 30;
-        let p: Vec<P3> = (0..n).map(|_| [rng.random::<f64>(), rng.random::<f64>(), rng.random::<f64>() * if trial % 2 == 0 { 1.0 } else { 1e-6 }]).collect();
+        let p: Vec<P3> = (0..n)
+            .map(|_| {
+                [
+                    rng.random::<f64>(),
+                    rng.random::<f64>(),
+                    rng.random::<f64>() * if trial % 2 == 0 { 1.0 } else { 1e-6 },
+                ]
+            })
+            .collect();
         assert_eq!(hull(&p), brute_force(&p), "trial {trial}");
     }
 }
@@ -160,10 +214,10 @@ fn matches_brute_force_on_random_sets() {
 fn degenerate_integer_clouds_are_exact() {
     // Small integer coordinates: many coplanar faces, points on edges, duplicates.
     let mut rng = ChaCha8Rng::seed_from_u64(11);
-    for trial in 0..30 {
+    for trial in 0..30usize {
         let n = 10 + trial * 3;
-        let m = 2 + trial % 4;
-        let p: Vec<f64> = (0..3 * n).map(|_| rng.random_range(0..=m as i32) as f64).collect();
+        let m = 2 + (trial % 4) as i32;
+        let p: Vec<f64> = (0..3 * n).map(|_| rng.random_range(0..=m) as f64).collect();
         let got = convex_hull_indices(&p).unwrap();
         check_hull(&p, &got);
     }
@@ -206,10 +260,12 @@ fn prefilter_handles_a_ball_and_exact_plane() {
     slow.sort_unstable();
     assert_eq!(fast, slow);
     // exactly planar large input: the 2-D hull
-    let q: Vec<f64> = (0..10_000).flat_map(|i| {
-        let (x, y) = ((i % 100) as f64, (i / 100) as f64);
-        [x, y, 0.5 * x - y]
-    }).collect();
+    let q: Vec<f64> = (0..10_000)
+        .flat_map(|i| {
+            let (x, y) = ((i % 100) as f64, (i / 100) as f64);
+            [x, y, 0.5 * x - y]
+        })
+        .collect();
     assert_eq!(convex_hull_indices(&q).unwrap(), vec![0, 99, 9900, 9999]);
 }
 
