@@ -1,3 +1,8 @@
 """Form of lines, planes, circles, spheres and cylinders (Ch. 6)."""
 
-__all__: list[str] = []
+from .cylinder import *  # noqa: F401,F403
+from .cylinder import __all__ as _cylinder_all
+from .fits import *  # noqa: F401,F403
+from .fits import __all__ as _fits_all
+
+__all__: list[str] = [*_fits_all, *_cylinder_all]
