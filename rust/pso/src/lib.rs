@@ -14,6 +14,9 @@
 //! assert!(r.value < 1e-8);
 //! ```
 
+mod simplex;
+pub use simplex::{nelder_mead, Simplex};
+
 use gagekit_core::{GkError, Result};
 use rand_chacha::rand_core::{RngCore, SeedableRng};
 use rand_chacha::ChaCha8Rng;
