@@ -63,8 +63,11 @@ def normalize_criterion(criterion: str, allowed: tuple[str, ...], shape: str) ->
 
 
 def _points(points: Any, dims: tuple[int, ...], shape: str) -> np.ndarray:
-    arr = np.asarray(points, dtype=np.float64) if not isinstance(points, np.ndarray) else points
-    if getattr(arr, "ndim", 0) == 2 and arr.shape[1] in dims:
+    try:
+        arr = np.asarray(points, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise InvalidInputError(f"{shape}: points cannot be read as numbers ({exc})") from None
+    if arr.ndim == 2 and arr.shape[1] in dims:
         return as_points(arr, arr.shape[1], "points")
     want = " or ".join(f"(n, {d})" for d in dims)
     raise InvalidInputError(f"{shape}: expected points as an {want} array, got shape {np.shape(arr)}")

@@ -133,9 +133,21 @@ fn principal_axes(q: &[[f64; 3]]) -> ([f64; 3], [Vector3<f64>; 3]) {
     let eig = SymmetricEigen::new(s);
     let mut order = [0usize, 1, 2];
     order.sort_by(|&a, &b| eig.eigenvalues[b].total_cmp(&eig.eigenvalues[a]));
-    let sv = order.map(|k| eig.eigenvalues[k].max(0.0).sqrt());
     let vecs = order.map(|k| eig.eigenvectors.column(k).into_owned().normalize());
+    // spreads recomputed from the data (eigenvalues of the scatter matrix only
+    // resolve them to sqrt(eps) relative, too coarse to detect degeneracy)
+    let sv = vecs.map(|e| q.iter().map(|p| (p[0] * e[0] + p[1] * e[1] + p[2] * e[2]).powi(2)).sum::<f64>().sqrt());
     (sv, vecs)
+}
+
+/// The sign of an axis direction in the upper half sphere (z > 0, or z = 0 and
+/// y > 0, or z = y = 0 and x > 0), the convention of the angles (theta, phi).
+pub fn upper(a: [f64; 3]) -> [f64; 3] {
+    if a[2] < 0.0 || (a[2] == 0.0 && (a[1] < 0.0 || (a[1] == 0.0 && a[0] < 0.0))) {
+        [-a[0], -a[1], -a[2]]
+    } else {
+        a
+    }
 }
 
 fn arr(v: &Vector3<f64>) -> [f64; 3] {
@@ -504,7 +516,7 @@ pub fn cylinder(pts: &[f64], start_axis: Option<[f64; 3]>) -> Result<Cylinder> {
         last_err.unwrap_or_else(|| GkError::degenerate("cylinder: the points do not determine a cylinder"))
     })?;
     let p = vec3(&cyl.point) + vec3(&c);
-    Ok(Cylinder { point: arr(&p), ..cyl })
+    Ok(Cylinder { point: arr(&p), direction: upper(cyl.direction), ..cyl })
 }
 
 #[cfg(test)]
