@@ -100,6 +100,7 @@ class LineFit:
     direction: tuple[float, ...]
     form_error: float
     certificate: Certificate
+    control_points: tuple[int, ...] = ()
     shape: str = field(default="line", init=False)
 
     def to_dict(self) -> dict[str, Any]:
@@ -110,6 +111,7 @@ class LineFit:
             "form_error": self.form_error,
             "point": list(self.point),
             "direction": list(self.direction),
+            "control_points": list(self.control_points),
             "certificate": self.certificate.to_dict(),
         }
 
@@ -124,6 +126,7 @@ class PlaneFit:
     normal: tuple[float, float, float]
     form_error: float
     certificate: Certificate
+    control_points: tuple[int, ...] = ()
     shape: str = field(default="plane", init=False)
 
     def to_dict(self) -> dict[str, Any]:
@@ -134,6 +137,7 @@ class PlaneFit:
             "form_error": self.form_error,
             "point": list(self.point),
             "normal": list(self.normal),
+            "control_points": list(self.control_points),
             "certificate": self.certificate.to_dict(),
         }
 
@@ -199,8 +203,17 @@ def fit_line(points: Any, criterion: str = "least-squares") -> LineFit:
     The line passes through the centroid along the principal axis of the points.
     Raises :class:`DegenerateGeometryError` when all points coincide.
     """
-    crit = normalize_criterion(criterion, ("least-squares",), "line")
+    crit = normalize_criterion(criterion, ("least-squares", "minimum-zone"), "line")
     pts = _points(points, (2, 3), "line")
+    if crit == "minimum-zone":
+        if pts.shape[1] != 2:
+            raise ConfigError(
+                "line: the minimum-zone line is available for 2-D points; for 3-D straightness "
+                "use fit_cylinder(points, 'min-circumscribed') (the zone is its diameter)"
+            )
+        point, normal, direction, width, up, lo, _ = _core.form_min_zone_flat(pts)
+        cert = _cert(_core.form_line_extent(pts, point, direction))
+        return LineFit(crit, len(pts), _vec(point), _vec(direction), float(width), cert, tuple(sorted({*up, *lo})))
     point, direction, ext = _core.form_line_lsq(pts)
     cert = _cert(ext)
     form = cert.max_distance - cert.min_distance if pts.shape[1] == 2 else 2.0 * cert.max_distance
@@ -210,8 +223,12 @@ def fit_line(points: Any, criterion: str = "least-squares") -> LineFit:
 def fit_plane(points: Any, criterion: str = "least-squares") -> PlaneFit:
     """Least-squares plane of (n, 3) points: through the centroid, normal along the
     direction of least spread. ``form_error`` is the flatness about that plane."""
-    crit = normalize_criterion(criterion, ("least-squares",), "plane")
+    crit = normalize_criterion(criterion, ("least-squares", "minimum-zone"), "plane")
     pts = _points(points, (3,), "plane")
+    if crit == "minimum-zone":
+        point, normal, _, width, up, lo, _ = _core.form_min_zone_flat(pts)
+        cert = _cert(_core.form_plane_extent(pts, point, normal))
+        return PlaneFit(crit, len(pts), _vec(point), _vec(normal), float(width), cert, tuple(sorted({*up, *lo})))
     point, normal, ext = _core.form_plane_lsq(pts)
     cert = _cert(ext)
     return PlaneFit(crit, len(pts), _vec(point), _vec(normal), cert.max_distance - cert.min_distance, cert)

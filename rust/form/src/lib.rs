@@ -3,7 +3,9 @@
 //! - [`circle`]: 2-D circles: minimum circumscribed, maximum inscribed, minimum zone, least squares.
 //! - [`lsq`]: least-squares lines, planes, spheres, 3-D circles and cylinders.
 //! - [`cylinder`]: cylinders by the projection model and the parallel PSO.
+//! - [`minzone`]: minimum-zone planes (flatness) and 2-D lines (straightness) by LP.
 
 pub mod circle;
 pub mod cylinder;
 pub mod lsq;
+pub mod minzone;

@@ -93,7 +93,50 @@ fn form_cylinder_lsq(
     })
 }
 
+/// Minimum-zone plane (dim 3) or 2-D line (dim 2): (point, normal, direction, width,
+/// upper control points, lower control points, LP solves).
+#[pyfunction]
+#[allow(clippy::type_complexity)]
+fn form_min_zone_flat(
+    py: Python<'_>,
+    points: PyReadonlyArray2<'_, f64>,
+) -> PyResult<(Vec<f64>, Vec<f64>, Vec<f64>, f64, Vec<usize>, Vec<usize>, usize)> {
+    let (pts, dim) = rows23(py, &points)?;
+    run(py, || {
+        let z = if dim == 3 { gagekit_form::minzone::plane(pts)? } else { gagekit_form::minzone::line2(pts)? };
+        Ok((z.point, z.normal, z.direction, z.width, z.control_upper, z.control_lower, z.iterations))
+    })
+}
+
+/// Certificate of a plane: (min, max) signed distance of 3-D points to it.
+#[pyfunction]
+fn form_plane_extent(py: Python<'_>, points: PyReadonlyArray2<'_, f64>, point: [f64; 3], normal: [f64; 3]) -> PyResult<Ext> {
+    let pts = rows(py, &points, 3, "points")?;
+    Ok(ext(lsq::plane_extent(pts, &point, &normal)))
+}
+
+/// Certificate of a line: (min, max) signed (2-D) or unsigned (3-D) distance to it.
+#[pyfunction]
+fn form_line_extent(py: Python<'_>, points: PyReadonlyArray2<'_, f64>, point: Vec<f64>, direction: Vec<f64>) -> PyResult<Ext> {
+    let (pts, dim) = rows23(py, &points)?;
+    if point.len() != dim || direction.len() != dim {
+        return Err(gagekit_err(py, "InvalidInputError", format!("line: point and direction must have {dim} coordinates")));
+    }
+    Ok(ext(lsq::line_extent(pts, dim, &point, &direction)))
+}
+
+/// Certificate of a cylinder axis: (min, max) distance of 3-D points to it.
+#[pyfunction]
+fn form_axis_extent(py: Python<'_>, points: PyReadonlyArray2<'_, f64>, point: [f64; 3], direction: [f64; 3]) -> PyResult<Ext> {
+    let pts = rows(py, &points, 3, "points")?;
+    Ok(ext(lsq::axis_extent(pts, &point, &direction)))
+}
+
 fn register_3d(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(form_plane_extent, m)?)?;
+    m.add_function(wrap_pyfunction!(form_line_extent, m)?)?;
+    m.add_function(wrap_pyfunction!(form_axis_extent, m)?)?;
+    m.add_function(wrap_pyfunction!(form_min_zone_flat, m)?)?;
     m.add_function(wrap_pyfunction!(form_line_lsq, m)?)?;
     m.add_function(wrap_pyfunction!(form_plane_lsq, m)?)?;
     m.add_function(wrap_pyfunction!(form_sphere_lsq, m)?)?;
