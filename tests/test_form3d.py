@@ -186,3 +186,38 @@ def test_cli_errors(tmp_path):
     for args in (("fit", "plane", str(bad)), ("fit", "cone", str(bad)), ("cylinder", str(tmp_path / "none.csv"))):
         out = _cli(*args)
         assert out.returncode == 2 and out.stdout == "" and out.stderr.startswith("gagekit: error:")
+
+
+@settings(max_examples=20, deadline=None)
+@given(seeds, angles3, shifts)
+def test_min_zone_plane_is_minimal_and_invariant(seed, ang, shift):
+    rng = np.random.default_rng(seed)
+    p = np.column_stack([rng.uniform(-30, 30, (60, 2)), rng.normal(0, 0.02, 60)])
+    mz, ls = gagekit.fit_plane(p, "minimum-zone"), gagekit.fit_plane(p)
+    assert mz.form_error <= ls.form_error + 1e-12
+    c = mz.certificate
+    assert abs((c.max_distance - c.min_distance) - mz.form_error) < 1e-12
+    n = np.array(mz.normal)
+    u = np.cross(n, [1.0, 0, 0]) if abs(n[0]) < 0.9 else np.cross(n, [0, 1.0, 0])
+    u /= np.linalg.norm(u)
+    v = np.cross(n, u)
+    for e in (1e-6, 1e-4):
+        for d in (u, -u, v, -v):
+            m = (n + e * d) / np.linalg.norm(n + e * d)
+            h = p @ m
+            assert np.ptp(h) >= mz.form_error - 1e-12
+    R, t = rotation(ang), np.array(shift)
+    moved = gagekit.fit_plane(p[::-1] @ R.T + t, "mz")
+    assert abs(moved.form_error - mz.form_error) < 1e-9
+
+
+def test_min_zone_line_2d():
+    x = np.linspace(0, 100, 40)
+    y = 0.2 * x + 0.01 * np.sin(x)
+    y[7] += 0.5  # one bump pulls the least-squares line
+    pts = np.column_stack([x, y])
+    mz, ls = gagekit.fit_line(pts, "minimum-zone"), gagekit.fit_line(pts)
+    assert mz.form_error < ls.form_error
+    assert 7 in mz.control_points
+    with pytest.raises(ConfigError, match="2-D"):
+        gagekit.fit_line(np.column_stack([pts, x]), "minimum-zone")

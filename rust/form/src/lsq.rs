@@ -12,6 +12,7 @@
 
 use gagekit_core::{check_finite, GkError, Result};
 use nalgebra::{DMatrix, DVector, Matrix3, SymmetricEigen, Vector3};
+use rayon::prelude::*;
 
 /// Singular values below this fraction of the largest count as zero
 /// (degenerate spreads: coincident, collinear, coplanar points).
@@ -184,6 +185,7 @@ fn levenberg_marquardt<P: Clone>(
     mut params: P,
     p: usize,
     scale: f64,
+    max_iter: usize,
     eval: impl Fn(&P) -> (f64, DMatrix<f64>, DVector<f64>),
     cost: impl Fn(&P) -> f64,
     apply: impl Fn(&P, &DVector<f64>) -> P,
@@ -194,7 +196,7 @@ fn levenberg_marquardt<P: Clone>(
     let mut lambda = 1e-6;
     let mut iters = 0;
     let mut polish = 0;
-    while iters < 500 {
+    while iters < max_iter {
         iters += 1;
         let mut a = jtj.clone();
         for k in 0..p {
@@ -223,13 +225,16 @@ fn levenberg_marquardt<P: Clone>(
         let ft = cost(&trial);
         let tiny = size <= 1e-8 * scale;
         if ft < f || (tiny && ft <= f * (1.0 + 1e-12) + f64::MIN_POSITIVE && polish < 8) {
-            if ft >= f {
+            if tiny {
                 polish += 1;
             }
             params = trial;
             (f, jtj, jtr) = eval(&params);
             lambda = if tiny { 0.0 } else { (lambda / 10.0).max(1e-12) };
         } else {
+            if tiny && polish > 0 {
+                break; // a rejected step at rounding level after polishing: done
+            }
             lambda = if lambda == 0.0 { 1e-12 } else { lambda * 10.0 };
             if lambda > 1e12 {
                 break; // no descent direction left: at the minimum to rounding
@@ -237,6 +242,62 @@ fn levenberg_marquardt<P: Clone>(
         }
     }
     Ok((params, iters))
+}
+
+
+/// Points per chunk of the parallel sums: the chunks are fixed, and their
+/// partial sums are added in order, so the thread count never changes a result.
+const CHUNK: usize = 8192;
+
+/// Sum of `f` over the points, deterministic (fixed chunks, ordered reduction).
+fn det_sum(q: &[[f64; 3]], f: impl Fn(&[f64; 3]) -> f64 + Sync) -> f64 {
+    if q.len() <= CHUNK {
+        return q.iter().map(&f).sum();
+    }
+    let parts: Vec<f64> = q.par_chunks(CHUNK).map(|c| c.iter().map(&f).sum::<f64>()).collect();
+    parts.iter().sum()
+}
+
+/// Sum of squared residuals, J^T J and J^T r for residual rows `row(x) -> (r, J_row)`.
+fn normal_equations<const P: usize>(
+    q: &[[f64; 3]],
+    row: impl Fn(&[f64; 3]) -> (f64, [f64; P]) + Sync,
+) -> (f64, DMatrix<f64>, DVector<f64>) {
+    type Acc<const P: usize> = (f64, [[f64; P]; P], [f64; P]);
+    let part = |c: &[[f64; 3]]| -> Acc<P> {
+        let mut acc = (0.0, [[0.0; P]; P], [0.0; P]);
+        for x in c {
+            let (r, j) = row(x);
+            acc.0 += r * r;
+            for a in 0..P {
+                acc.2[a] += j[a] * r;
+                for b in a..P {
+                    acc.1[a][b] += j[a] * j[b];
+                }
+            }
+        }
+        acc
+    };
+    let parts: Vec<Acc<P>> =
+        if q.len() <= CHUNK { vec![part(q)] } else { q.par_chunks(CHUNK).map(part).collect() };
+    let mut jtj = DMatrix::zeros(P, P);
+    let mut jtr = DVector::zeros(P);
+    let mut f = 0.0;
+    for (pf, pm, pv) in &parts {
+        f += pf;
+        for a in 0..P {
+            jtr[a] += pv[a];
+            for b in a..P {
+                jtj[(a, b)] += pm[a][b];
+            }
+        }
+    }
+    for a in 0..P {
+        for b in 0..a {
+            jtj[(a, b)] = jtj[(b, a)];
+        }
+    }
+    (f, jtj, jtr)
 }
 
 // ---------------------------------------------------------------- lines and planes
@@ -304,29 +365,24 @@ fn geometric_sphere(q: &[[f64; 3]], dim: usize, what: &str) -> Result<(Vector3<f
         GkError::degenerate(format!("{what}: the points do not determine a {what}"))
     })?;
     let p = dim + 1;
-    let cost = |s: &(Vector3<f64>, f64)| q.iter().map(|x| ((vec3(x) - s.0).norm() - s.1).powi(2)).sum::<f64>();
+    let cost = |s: &(Vector3<f64>, f64)| det_sum(q, |x| ((vec3(x) - s.0).norm() - s.1).powi(2));
     let eval = |s: &(Vector3<f64>, f64)| {
-        let mut jtj = DMatrix::zeros(p, p);
-        let mut jtr = DVector::zeros(p);
-        let mut f = 0.0;
-        let mut row = vec![0.0; p];
-        for x in q {
+        let row = |x: &[f64; 3]| {
             let dv = vec3(x) - s.0;
             let rho = dv.norm();
-            let r = rho - s.1;
-            f += r * r;
-            for d in 0..dim {
-                row[d] = if rho > 0.0 { -dv[d] / rho } else { 0.0 };
-            }
-            row[dim] = -1.0;
-            for i in 0..p {
-                jtr[i] += row[i] * r;
-                for j in 0..p {
-                    jtj[(i, j)] += row[i] * row[j];
-                }
-            }
+            let g = |d: usize| if rho > 0.0 && d < dim { -dv[d] / rho } else { 0.0 };
+            (rho - s.1, [g(0), g(1), g(2), -1.0])
+        };
+        let (f, jtj, jtr) = normal_equations::<4>(q, row);
+        if dim == 2 {
+            // drop the z column: parameters (cx, cy, r)
+            let keep = [0usize, 1, 3];
+            let m = DMatrix::from_fn(3, 3, |i, j| jtj[(keep[i], keep[j])]);
+            let v = DVector::from_fn(3, |i, _| jtr[keep[i]]);
+            (f, m, v)
+        } else {
+            (f, jtj, jtr)
         }
-        (f, jtj, jtr)
     };
     let apply = |s: &(Vector3<f64>, f64), st: &DVector<f64>| {
         let mut c = s.0;
@@ -335,7 +391,7 @@ fn geometric_sphere(q: &[[f64; 3]], dim: usize, what: &str) -> Result<(Vector3<f
         }
         (c, s.1 + st[dim])
     };
-    let (s, _) = levenberg_marquardt(start, p, start.1, eval, cost, apply, what)?;
+    let (s, _) = levenberg_marquardt(start, p, start.1, 500, eval, cost, apply, what)?;
     Ok((s.0, s.1.abs()))
 }
 
@@ -430,34 +486,26 @@ pub fn circle3_extent(pts: &[f64], center: &[f64; 3], normal: &[f64; 3]) -> Exte
 
 /// Levenberg–Marquardt refinement of a cylinder from a starting axis, on
 /// centred points. Returns the cylinder (in centred coordinates) and its cost.
-fn refine_cylinder(q: &[[f64; 3]], l0: Vector3<f64>, a0: Vector3<f64>, r0: f64) -> Result<(Cylinder, f64)> {
+fn refine_cylinder(
+    q: &[[f64; 3]],
+    l0: Vector3<f64>,
+    a0: Vector3<f64>,
+    r0: f64,
+    max_iter: usize,
+) -> Result<(Cylinder, f64)> {
     type S = (Vector3<f64>, Vector3<f64>, f64);
-    let cost = |s: &S| {
-        q.iter().map(|x| ((vec3(x) - s.0).cross(&s.1).norm() - s.2).powi(2)).sum::<f64>()
-    };
+    let cost = |s: &S| det_sum(q, |x| ((vec3(x) - s.0).cross(&s.1).norm() - s.2).powi(2));
     // Step (x0, y0, alpha, beta, dr) in the frame (u, v, a) of the current axis:
     // point += x0 u + y0 v, direction = normalize(a + alpha u + beta v) (Forbes 1989).
     let eval = |s: &S| {
         let (u, v) = orthonormal_basis(&s.1);
-        let mut jtj = DMatrix::zeros(5, 5);
-        let mut jtr = DVector::zeros(5);
-        let mut f = 0.0;
-        for x in q {
+        normal_equations::<5>(q, |x| {
             let d = vec3(x) - s.0;
             let (xu, yv, z) = (d.dot(&u), d.dot(&v), d.dot(&s.1));
             let rho = xu.hypot(yv);
-            let r = rho - s.2;
-            f += r * r;
             let (cx, cy) = if rho > 0.0 { (xu / rho, yv / rho) } else { (0.0, 0.0) };
-            let row = [-cx, -cy, -cx * z, -cy * z, -1.0];
-            for i in 0..5 {
-                jtr[i] += row[i] * r;
-                for j in 0..5 {
-                    jtj[(i, j)] += row[i] * row[j];
-                }
-            }
-        }
-        (f, jtj, jtr)
+            (rho - s.2, [-cx, -cy, -cx * z, -cy * z, -1.0])
+        })
     };
     let apply = |s: &S, st: &DVector<f64>| {
         let (u, v) = orthonormal_basis(&s.1);
@@ -468,7 +516,7 @@ fn refine_cylinder(q: &[[f64; 3]], l0: Vector3<f64>, a0: Vector3<f64>, r0: f64) 
         (l, a, s.2 + st[4])
     };
     let l0 = l0 - a0 * l0.dot(&a0);
-    let (s, _) = levenberg_marquardt((l0, a0, r0), 5, r0, eval, cost, apply, "cylinder")?;
+    let (s, _) = levenberg_marquardt((l0, a0, r0), 5, r0, max_iter, eval, cost, apply, "cylinder")?;
     let f = cost(&s);
     Ok((Cylinder { point: arr(&s.0), direction: arr(&s.1), radius: s.2.abs() }, f))
 }
@@ -496,6 +544,7 @@ pub fn cylinder(pts: &[f64], start_axis: Option<[f64; 3]>) -> Result<Cylinder> {
             starts.insert(0, a.normalize());
         }
     }
+    // Phase 1: a few iterations from every start; phase 2: the best to convergence.
     let mut best: Option<(Cylinder, f64)> = None;
     let mut last_err = None;
     for a in starts {
@@ -503,7 +552,7 @@ pub fn cylinder(pts: &[f64], start_axis: Option<[f64; 3]>) -> Result<Cylinder> {
         let q2: Vec<[f64; 3]> = q.iter().map(|x| [vec3(x).dot(&u), vec3(x).dot(&v), 0.0]).collect();
         let Some((off, r)) = algebraic_sphere(&q2, 2) else { continue };
         let l0 = u * off[0] + v * off[1];
-        match refine_cylinder(&q, l0, a, r) {
+        match refine_cylinder(&q, l0, a, r, 6) {
             Ok((cyl, f)) => {
                 if best.as_ref().is_none_or(|b| f < b.1) {
                     best = Some((cyl, f));
@@ -511,6 +560,10 @@ pub fn cylinder(pts: &[f64], start_axis: Option<[f64; 3]>) -> Result<Cylinder> {
             }
             Err(e) => last_err = Some(e),
         }
+    }
+    if let Some((b, _)) = &best {
+        let (l, a) = (vec3(&b.point), vec3(&b.direction));
+        best = Some(refine_cylinder(&q, l, a, b.radius, 500)?);
     }
     let (cyl, _) = best.ok_or_else(|| {
         last_err.unwrap_or_else(|| GkError::degenerate("cylinder: the points do not determine a cylinder"))
