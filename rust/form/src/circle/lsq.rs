@@ -59,13 +59,13 @@ fn kasa(p: &[[f64; 2]]) -> Option<([f64; 2], f64)> {
     }
     // [sxx sxy; sxy syy] [a; b] = 0.5 [sxz; syz]  (centre offset from the centroid)
     let det = sxx * syy - sxy * sxy;
-    if !(det.abs() > 1e-300) {
+    if det.abs() <= 1e-300 || det.is_nan() {
         return None;
     }
     let a = 0.5 * (syy * sxz - sxy * syz) / det;
     let b = 0.5 * (sxx * syz - sxy * sxz) / det;
     let r2 = a * a + b * b + zbar;
-    if !(r2 > 0.0) || !a.is_finite() || !b.is_finite() {
+    if r2.is_nan() || r2 <= 0.0 || !a.is_finite() || !b.is_finite() {
         return None;
     }
     Some(([mx + a, my + b], r2.sqrt()))
@@ -83,7 +83,7 @@ fn levenberg_marquardt(
     let (mut c, mut r) = start;
     let mut f = cost(p, c, r);
     let mut lambda = 1e-6;
-    for _ in 0..200 {
+    for _ in 0..1000 {
         // normal equations J^T J dx = -J^T e for residuals e_i = |p_i - c| - r
         let mut jtj = [[0.0f64; 3]; 3];
         let mut jte = [0.0f64; 3];
@@ -114,20 +114,16 @@ fn levenberg_marquardt(
             let (c1, r1) = ([c[0] + dx[0], c[1] + dx[1]], r + dx[2]);
             let f1 = cost(p, c1, r1);
             let step = dx[0].abs().max(dx[1].abs()).max(dx[2].abs());
-            if f1 <= f {
+            if f1 <= f + 1e-13 * f {
                 c = c1;
                 r = r1;
-                let df = f - f1;
                 f = f1;
-                lambda = (lambda * 0.1).max(1e-12);
+                lambda = (lambda * 0.1).max(1e-15);
                 improved = true;
-                if step <= 1e-15 * (scale + r.abs()) || df <= 1e-30 * (1.0 + f) && step <= 1e-12 * (scale + r.abs()) {
+                if step <= 1e-14 * (scale + r.abs()) {
                     return finish(c, r);
                 }
                 break;
-            }
-            if step <= 1e-15 * (scale + r.abs()) {
-                return finish(c, r);
             }
             lambda *= 10.0;
         }
