@@ -17,6 +17,7 @@ from typing import Any, Optional
 import numpy as np
 
 from .. import _core
+from ..errors import ConfigError
 from .fits import Certificate, _points, _vec, normalize_criterion
 
 __all__ = ["CylinderFit", "fit_cylinder", "axis_angles"]
@@ -85,19 +86,104 @@ class CylinderFit:
         return d
 
 
-def fit_cylinder(points: Any, criterion: str = "least-squares", seed: int = 0) -> CylinderFit:
-    """Fit a cylinder to (n, 3) points.
+_CODES = {"min-circumscribed": "mcc", "max-inscribed": "mic", "minimum-zone": "mzc"}
 
-    criterion: ``least-squares`` (``lsq``; orthogonal distances, Levenberg-Marquardt from the
-    principal axes), ``min-circumscribed`` (``mcc``, Eq. 6.13), ``max-inscribed`` (``mic``,
-    Eq. 6.15) or ``minimum-zone`` (``mzc``, Eq. 6.14). ``seed`` fixes the particle swarm.
+
+def fit_cylinder(
+    points: Any,
+    criterion: str = "least-squares",
+    seed: int = 0,
+    *,
+    particles: int = 20,
+    iterations: int = 300,
+    stall_iterations: int = 50,
+    refine_starts: int = 4,
+    search_axis: Optional[Any] = None,
+    max_tilt: Optional[float] = None,
+) -> CylinderFit:
+    """Fit a cylinder to (n, 3) points (mm).
+
+    Parameters
+    ----------
+    criterion
+        ``least-squares`` (``lsq``): orthogonal distances, Levenberg-Marquardt from the
+        principal axes (matches the NIST reference fits).
+        ``min-circumscribed`` (``mcc``, Eq. 6.13), ``max-inscribed`` (``mic``, Eq. 6.15),
+        ``minimum-zone`` (``mzc``, cylindricity, Eq. 6.14): the projection model of
+        Sec. 6.3 -- the points are projected along the axis (theta, phi) by Eq. 6.12
+        (ERRATA item 1) and the 2-D set is fitted exactly (MC, MI within MC, MZ); a seeded
+        parallel PSO searches (theta, phi), Nelder-Mead refines the best axis (and the
+        least-squares axis) to double precision.
+    seed
+        Seed of the swarm: the same seed gives the same result on any number of threads.
+    particles, iterations, stall_iterations
+        Swarm size, maximum iterations and the number of iterations without improvement
+        after which the swarm stops (the dissertation uses 20 particles, 2000 iterations).
+    refine_starts
+        Nelder-Mead refinements from this many of the swarm's best distinct particles.
+    search_axis, max_tilt
+        Restrict the search to directions within ``max_tilt`` rad of ``search_axis`` (of the
+        least-squares axis when ``search_axis`` is None). Default: the upper half sphere
+        theta in [0, pi/2], phi in [-pi, pi] as in Sec. 6.4. A maximum inscribed cylinder is
+        only meaningful near the part's axis (Eq. 6.11 bounds the axis location): for parts
+        that are not long compared to their diameter pass e.g. ``max_tilt=0.2``.
+
+    Returns
+    -------
+    CylinderFit
+        With the certificate: min / max distance of the points to the reported axis,
+        recomputed in 3-D.
+
+    Raises
+    ------
+    InvalidInputError, DegenerateGeometryError, ConfigError
     """
     crit = normalize_criterion(criterion, _ALLOWED, "cylinder")
     pts = _points(points, (3,), "cylinder")
-    point, direction, radius, ext = _core.form_cylinder_lsq(pts)
-    cert = Certificate(float(ext[0]), float(ext[1]))
-    theta, phi = axis_angles(direction)
-    return CylinderFit(
-        crit, len(pts), _vec(point), _vec(direction), theta, phi, float(radius),
-        cert.max_distance - cert.min_distance, cert,
+    if crit == "least-squares":
+        point, direction, radius, ext = _core.form_cylinder_lsq(pts)
+        cert = Certificate(float(ext[0]), float(ext[1]))
+        theta, phi = axis_angles(direction)
+        return CylinderFit(
+            crit, len(pts), _vec(point), _vec(direction), theta, phi, float(radius),
+            cert.max_distance - cert.min_distance, cert,
+        )
+    for name, v in (("particles", particles), ("iterations", iterations), ("stall_iterations", stall_iterations), ("refine_starts", refine_starts)):
+        if int(v) < (1 if name == "particles" else 0):
+            raise ConfigError(f"cylinder: {name} must be a positive integer, got {v}")
+    if seed < 0:
+        raise ConfigError(f"cylinder: seed must be a non-negative integer, got {seed}")
+    axis = None if search_axis is None else tuple(float(x) for x in np.asarray(search_axis, dtype=float).ravel())
+    if axis is not None and len(axis) != 3:
+        raise ConfigError("cylinder: search_axis must have 3 components")
+    if axis is not None and max_tilt is None:
+        raise ConfigError("cylinder: give max_tilt (rad) together with search_axis")
+    d = _core.form_cylinder_fit(
+        pts, _CODES[crit], int(seed), int(particles), int(iterations), int(stall_iterations),
+        axis, None if max_tilt is None else float(max_tilt), int(refine_starts),
     )
+    cert = Certificate(float(d["min_distance"]), float(d["max_distance"]))
+    code = _CODES[crit]
+    if code == "mcc":
+        radius, form_error, control = d["r_out"], cert.max_distance - cert.min_distance, d["control_out"]
+        inner = outer = None
+    elif code == "mic":
+        radius, form_error, control = d["r_in"], cert.max_distance - cert.min_distance, d["control_in"]
+        inner = outer = None
+    else:
+        radius, inner, outer = d["radius"], d["r_in"], d["r_out"]
+        form_error = outer - inner
+        control = list(d["control_in"]) + [i for i in d["control_out"] if i not in d["control_in"]]
+    return CylinderFit(
+        crit, len(pts), _vec(d["point"]), _vec(d["direction"]), float(d["theta"]), float(d["phi"]),
+        float(radius), float(form_error), cert,
+        inner_radius=None if inner is None else float(inner),
+        outer_radius=None if outer is None else float(outer),
+        control_points=tuple(int(i) for i in control),
+        iterations=int(d["iterations"]),
+        evaluations=int(d["evaluations"]),
+    )
+
+
+def _minimax_available() -> bool:
+    return hasattr(_core, "form_cylinder_fit")

@@ -1,1 +1,325 @@
-//! See the crate documentation.
+//! Cylinders by the projection model (Sec. 6.3): minimum circumscribed (MCC,
+//! Eq. 6.13), maximum inscribed (MIC, Eq. 6.15) and minimum zone (MZC, Eq. 6.14).
+//!
+//! An axis direction a = (sin t cos f, sin t sin f, cos t) (polar angle t,
+//! azimuth f) projects the points onto the plane normal to it,
+//! q = [I2 0] Ry(-t) Rz(-f) p (Eq. 6.12 as corrected in ERRATA item 1), and
+//! the projected 2-D set is fitted exactly by the circle kernels
+//! ([`crate::circle`]). The seeded parallel PSO ([`gagekit_pso`]) searches the
+//! direction over the half sphere (or a cone around a given axis), and a
+//! Nelder–Mead search in local coordinates around the best direction refines
+//! it to double precision. The least-squares axis is one of the swarm's
+//! starting particles.
+//!
+//! Every result carries its certificate: min and max distance of the input
+//! points to the reported axis, recomputed in 3-D.
+
+use crate::circle;
+use crate::lsq::{self, centroid, orthonormal_basis, Extent};
+use gagekit_core::{check_finite, GkError, Result};
+use gagekit_pso::{minimize_from, nelder_mead, Settings};
+use nalgebra::Vector3;
+use std::f64::consts::{FRAC_PI_2, PI};
+
+/// Which cylinder to fit.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Criterion {
+    /// Minimum circumscribed cylinder (Eq. 6.13).
+    MinCircumscribed,
+    /// Maximum inscribed cylinder (Eq. 6.15).
+    MaxInscribed,
+    /// Minimum zone: two coaxial cylinders of least radial separation (Eq. 6.14).
+    MinZone,
+}
+
+/// Where the PSO looks for the axis direction.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Search {
+    /// The upper half sphere, t in [0, pi/2], f in [-pi, pi] (Sec. 6.4).
+    HalfSphere,
+    /// Directions within `half_angle` (rad) of `axis`.
+    Cone { axis: [f64; 3], half_angle: f64 },
+    /// Directions within `half_angle` of the least-squares axis.
+    AroundLeastSquares { half_angle: f64 },
+}
+
+/// Settings of a cylinder fit.
+#[derive(Debug, Clone)]
+pub struct Options {
+    pub seed: u64,
+    pub particles: usize,
+    pub max_iterations: usize,
+    pub stall_iterations: usize,
+    pub search: Search,
+    /// Local refinements from this many of the swarm's best distinct particles.
+    pub refine_starts: usize,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Self {
+            seed: 0,
+            particles: 20,
+            max_iterations: 300,
+            stall_iterations: 50,
+            search: Search::HalfSphere,
+            refine_starts: 4,
+        }
+    }
+}
+
+/// A fitted cylinder.
+#[derive(Debug, Clone)]
+pub struct CylinderFit {
+    pub criterion: Criterion,
+    /// Point on the axis: the foot of the centroid of the points.
+    pub point: [f64; 3],
+    /// Unit axis direction in the upper half sphere (z >= 0).
+    pub direction: [f64; 3],
+    /// Polar and azimuthal angle of `direction` (Tables 6.2, 6.4).
+    pub theta: f64,
+    pub phi: f64,
+    /// Radius of the MCC or MIC; for the MZC the mean of `r_in` and `r_out`.
+    pub radius: f64,
+    /// Inner and outer radius of the zone (MZC); both equal `radius` otherwise.
+    pub r_in: f64,
+    pub r_out: f64,
+    /// Points fixing the inner / outer cylinder (indices into the input).
+    pub control_in: Vec<usize>,
+    pub control_out: Vec<usize>,
+    /// Certificate: min and max 3-D distance of the points to the reported axis.
+    pub extent: Extent,
+    /// PSO iterations run and objective evaluations (PSO + refinement).
+    pub iterations: usize,
+    pub evaluations: usize,
+}
+
+impl CylinderFit {
+    /// Radial width of the zone about this axis (cylindricity for the MZC).
+    pub fn form_error(&self) -> f64 {
+        self.extent.max - self.extent.min
+    }
+}
+
+/// Axis direction of the polar angle `theta` and azimuth `phi`.
+pub fn axis(theta: f64, phi: f64) -> [f64; 3] {
+    [theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos()]
+}
+
+/// (theta, phi) of a direction, flipped into the upper half sphere.
+pub fn angles(direction: &[f64; 3]) -> (f64, f64) {
+    let a = Vector3::from(lsq::upper(*direction)).normalize();
+    (a[2].clamp(-1.0, 1.0).acos(), a[1].atan2(a[0]))
+}
+
+/// The two rows of [I2 0] Ry(-t) Rz(-f) (Eq. 6.12, ERRATA item 1).
+fn frame(theta: f64, phi: f64) -> ([f64; 3], [f64; 3]) {
+    let (st, ct, sf, cf) = (theta.sin(), theta.cos(), phi.sin(), phi.cos());
+    ([ct * cf, ct * sf, -st], [-sf, cf, 0.0])
+}
+
+/// Project 3-D points along the axis (theta, phi) to 2-D (Eq. 6.12, corrected).
+pub fn project(pts: &[f64], theta: f64, phi: f64) -> Vec<f64> {
+    let (u, v) = frame(theta, phi);
+    let mut out = Vec::with_capacity(pts.len() / 3 * 2);
+    for p in pts.chunks_exact(3) {
+        out.push(u[0] * p[0] + u[1] * p[1] + u[2] * p[2]);
+        out.push(v[0] * p[0] + v[1] * p[1] + v[2] * p[2]);
+    }
+    out
+}
+
+/// The exact 2-D fit of the projection along `a`, as a zone (MC and MI give
+/// r_in = r_out). Also returns the angles used.
+fn fit2d(q: &[f64], a: &Vector3<f64>, crit: Criterion) -> Result<(f64, f64, circle::Zone)> {
+    let (t, f) = angles(&[a[0], a[1], a[2]]);
+    let proj = project(q, t, f);
+    let zone = match crit {
+        Criterion::MinZone => circle::min_zone(&proj)?,
+        Criterion::MinCircumscribed | Criterion::MaxInscribed => {
+            let c = if crit == Criterion::MinCircumscribed {
+                circle::min_circumscribed(&proj)?
+            } else {
+                circle::max_inscribed(&proj)?
+            };
+            circle::Zone {
+                center: c.center,
+                r_in: c.radius,
+                r_out: c.radius,
+                control_in: c.control.clone(),
+                control_out: c.control,
+            }
+        }
+    };
+    Ok((t, f, zone))
+}
+
+/// The value minimised: MCC radius, minus the MIC radius, MZC width. A
+/// projection whose fitted centre lies farther than 100 part sizes from the
+/// points is no cylinder section (a strip: the zone degenerates to parallel
+/// lines) and is rejected.
+fn objective(q: &[f64], a: &Vector3<f64>, crit: Criterion, size: f64) -> f64 {
+    match fit2d(q, a, crit) {
+        Ok((_, _, z)) if z.center[0].hypot(z.center[1]) <= 100.0 * size && z.r_out.is_finite() => match crit {
+            Criterion::MinCircumscribed => z.r_out,
+            Criterion::MaxInscribed => -z.r_in,
+            Criterion::MinZone => z.r_out - z.r_in,
+        },
+        _ => f64::INFINITY,
+    }
+}
+
+/// Direction in the cone of half-angle `s_max` about `w` (basis u, v, w).
+type Basis = (Vector3<f64>, Vector3<f64>, Vector3<f64>);
+
+fn cone_dir(basis: &Basis, s: f64, g: f64) -> Vector3<f64> {
+    (basis.0 * (s.sin() * g.cos()) + basis.1 * (s.sin() * g.sin()) + basis.2 * s.cos()).normalize()
+}
+
+/// Fit a cylinder of the given criterion to 3-D points (flat, row-major).
+pub fn fit(pts: &[f64], crit: Criterion, opts: &Options) -> Result<CylinderFit> {
+    check_finite(pts, 3, "points")?;
+    let n = pts.len() / 3;
+    let min_n = 5;
+    if n < min_n {
+        return Err(GkError::invalid(format!("cylinder: needs at least {min_n} points, got {n}")));
+    }
+    // centred copy: the projection and the 2-D kernels then work near the origin
+    let c = centroid(pts, 3);
+    let q: Vec<f64> = pts.chunks_exact(3).flat_map(|p| [p[0] - c[0], p[1] - c[1], p[2] - c[2]]).collect();
+    let lsq_axis = lsq::cylinder(pts, None).ok().map(|cy| Vector3::from(cy.direction));
+
+    let cone = |w: Option<Vector3<f64>>, half_angle: f64| -> Result<(Basis, f64)> {
+        if !(half_angle > 0.0 && half_angle.is_finite()) {
+            return Err(GkError::config("cylinder: the search cone's half angle must be positive"));
+        }
+        let w = match w {
+            Some(w) if w.norm() > 0.0 && w.iter().all(|v| v.is_finite()) => w.normalize(),
+            Some(_) => return Err(GkError::config("cylinder: the search axis must be a non-zero finite vector")),
+            None => lsq_axis
+                .ok_or_else(|| GkError::degenerate("cylinder: no least-squares axis to search around"))?,
+        };
+        let (u, v) = orthonormal_basis(&w);
+        Ok(((u, v, w), half_angle.min(FRAC_PI_2)))
+    };
+    let (basis, s_max) = match opts.search {
+        Search::HalfSphere => ((Vector3::x(), Vector3::y(), Vector3::z()), FRAC_PI_2),
+        Search::Cone { axis, half_angle } => cone(Some(Vector3::from(axis)), half_angle)?,
+        Search::AroundLeastSquares { half_angle } => cone(None, half_angle)?,
+    };
+
+    // the swarm stops after `stall_iterations` without a gain of 1e-10 of the part's size
+    let size = q.chunks_exact(3).map(|p| (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt()).fold(0.0, f64::max);
+    let settings = Settings {
+        particles: opts.particles,
+        max_iterations: opts.max_iterations,
+        stall_iterations: opts.stall_iterations,
+        seed: opts.seed,
+        tolerance: 1e-10 * size,
+        ..Settings::default()
+    };
+    // the least-squares axis joins the swarm as the first particle
+    let mut seeds = Vec::new();
+    if let Some(a) = lsq_axis {
+        let a = if a.dot(&basis.2) < 0.0 { -a } else { a };
+        let s = a.dot(&basis.2).clamp(-1.0, 1.0).acos();
+        if s <= s_max {
+            seeds.push(vec![s, a.dot(&basis.1).atan2(a.dot(&basis.0))]);
+        }
+    }
+    let swarm = minimize_from(
+        |x: &[f64]| objective(&q, &cone_dir(&basis, x[0], x[1]), crit, size),
+        &[0.0, -PI],
+        &[s_max, PI],
+        &settings,
+        &seeds,
+    )?;
+    let mut evaluations = swarm.evaluations;
+    if !swarm.value.is_finite() {
+        return Err(GkError::degenerate(
+            "cylinder: the points do not determine a cylinder (every projection is degenerate)",
+        ));
+    }
+
+    // Local refinement in coordinates (alpha, beta) about each start direction.
+    let in_region = |a: &Vector3<f64>| a.dot(&basis.2).abs() >= s_max.cos() - 1e-12;
+    // Nelder–Mead from the best personal bests (distinct directions), best first.
+    let mut cands: Vec<(f64, Vector3<f64>)> = swarm
+        .personal_best
+        .iter()
+        .filter(|(_, v)| v.is_finite())
+        .map(|(x, v)| (*v, cone_dir(&basis, x[0], x[1])))
+        .collect();
+    cands.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut starts: Vec<Vector3<f64>> = Vec::new();
+    for (_, a) in cands {
+        if starts.len() >= opts.refine_starts.max(1) {
+            break;
+        }
+        if starts.iter().all(|b| a.cross(b).norm() > 1e-6) {
+            starts.push(a);
+        }
+    }
+    let mut best = (swarm.value, cone_dir(&basis, swarm.position[0], swarm.position[1]));
+    for a0 in starts {
+        let (u, v) = orthonormal_basis(&a0);
+        let dir = |x: &[f64]| (a0 + u * x[0] + v * x[1]).normalize();
+        let nm = nelder_mead(
+            |x: &[f64]| {
+                let a = dir(x);
+                if in_region(&a) {
+                    objective(&q, &a, crit, size)
+                } else {
+                    f64::INFINITY
+                }
+            },
+            &[0.0, 0.0],
+            1e-3,
+            1e-14,
+        );
+        evaluations += nm.evaluations;
+        if nm.value < best.0 {
+            best = (nm.value, dir(&nm.position));
+        }
+    }
+    let a = best.1;
+    let (theta, phi, zone) = fit2d(&q, &a, crit)?;
+    let dir = axis(theta, phi);
+    let (u, v) = frame(theta, phi);
+    let point = [
+        c[0] + u[0] * zone.center[0] + v[0] * zone.center[1],
+        c[1] + u[1] * zone.center[0] + v[1] * zone.center[1],
+        c[2] + u[2] * zone.center[0] + v[2] * zone.center[1],
+    ];
+    let extent = lsq::axis_extent(pts, &point, &dir);
+    Ok(CylinderFit {
+        criterion: crit,
+        point,
+        direction: dir,
+        theta,
+        phi,
+        radius: 0.5 * (zone.r_in + zone.r_out),
+        r_in: zone.r_in,
+        r_out: zone.r_out,
+        control_in: zone.control_in,
+        control_out: zone.control_out,
+        extent,
+        iterations: swarm.iterations,
+        evaluations,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn projection_follows_the_errata() {
+        let (t, f) = (0.4, -2.1);
+        let a = axis(t, f);
+        let q = project(&a, t, f);
+        assert!(q[0].abs() < 1e-15 && q[1].abs() < 1e-15);
+        let (t2, f2) = angles(&[-a[0], -a[1], -a[2]]);
+        assert!((t2 - t).abs() < 1e-15 && (f2 - f).abs() < 1e-15);
+    }
+}

@@ -77,6 +77,9 @@ pub struct Outcome {
     /// Best value after the initial evaluation and after each iteration
     /// (`iterations + 1` entries, non-increasing).
     pub history: Vec<f64>,
+    /// Every particle's best position and value, in particle order (for
+    /// multi-start local refinement).
+    pub personal_best: Vec<(Vec<f64>, f64)>,
 }
 
 struct Particle {
@@ -144,7 +147,25 @@ pub fn minimize<F>(f: F, lower: &[f64], upper: &[f64], settings: &Settings) -> R
 where
     F: Fn(&[f64]) -> f64 + Sync,
 {
+    minimize_from(f, lower, upper, settings, &[])
+}
+
+/// As [`minimize`], with the first particles started at `starts` (clamped to
+/// the box; e.g. a least-squares solution) instead of random positions.
+pub fn minimize_from<F>(
+    f: F,
+    lower: &[f64],
+    upper: &[f64],
+    settings: &Settings,
+    starts: &[Vec<f64>],
+) -> Result<Outcome>
+where
+    F: Fn(&[f64]) -> f64 + Sync,
+{
     check(lower, upper, settings)?;
+    if starts.iter().any(|s| s.len() != lower.len() || s.iter().any(|v| !v.is_finite())) {
+        return Err(GkError::config("PSO: every start must be a finite point of the search space"));
+    }
     let dim = lower.len();
     let width: Vec<f64> = lower.iter().zip(upper).map(|(l, u)| u - l).collect();
     let vmax: Vec<f64> = width.iter().map(|w| w * settings.max_velocity).collect();
@@ -154,7 +175,10 @@ where
         .map(|i| {
             let mut rng = ChaCha8Rng::seed_from_u64(settings.seed);
             rng.set_stream(i as u64);
-            let x: Vec<f64> = (0..dim).map(|d| lower[d] + width[d] * uniform(&mut rng)).collect();
+            let mut x: Vec<f64> = (0..dim).map(|d| lower[d] + width[d] * uniform(&mut rng)).collect();
+            if let Some(s) = starts.get(i) {
+                x = (0..dim).map(|d| s[d].clamp(lower[d], upper[d])).collect();
+            }
             let v: Vec<f64> = (0..dim).map(|d| vmax[d] * (2.0 * uniform(&mut rng) - 1.0)).collect();
             let fx = eval(&f, &x);
             Particle { best_x: x.clone(), x, v, best_f: fx, rng }
@@ -209,7 +233,8 @@ where
             break;
         }
     }
-    Ok(Outcome { position: g_x, value: g_f, iterations, evaluations, history })
+    let personal_best = swarm.into_iter().map(|p| (p.best_x, p.best_f)).collect();
+    Ok(Outcome { position: g_x, value: g_f, iterations, evaluations, history, personal_best })
 }
 
 #[cfg(test)]
@@ -257,6 +282,15 @@ mod tests {
         let f = |x: &[f64]| if x[0] > 0.5 { f64::NAN } else { -x[0] };
         let r = minimize(f, &[0.0], &[1.0], &Settings::default()).unwrap();
         assert!(r.position[0] <= 0.5 && r.position[0] > 0.49);
+    }
+
+    #[test]
+    fn starts_are_used() {
+        let f = |x: &[f64]| (x[0] - 0.123).abs();
+        let s = Settings { max_iterations: 0, ..Settings::default() };
+        let r = minimize_from(f, &[-1.0], &[1.0], &s, &[vec![0.123]]).unwrap();
+        assert_eq!(r.value, 0.0);
+        assert!(minimize_from(f, &[-1.0], &[1.0], &s, &[vec![0.1, 0.2]]).is_err());
     }
 
     #[test]

@@ -1,18 +1,85 @@
 //! Bindings of gagekit-form.
 
+use crate::arrays::{indices, rows};
+use crate::errors::run;
+use numpy::{PyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 
+// circles ------------------------------------------------------------------------------
+
+use gagekit_form::circle;
+
+type CircleOut<'py> = ((f64, f64), f64, Bound<'py, PyArray1<i64>>);
+type ZoneOut<'py> = ((f64, f64), f64, f64, Bound<'py, PyArray1<i64>>, Bound<'py, PyArray1<i64>>);
+
+fn circle_out(py: Python<'_>, c: circle::Circle) -> CircleOut<'_> {
+    ((c.center[0], c.center[1]), c.radius, indices(py, c.control))
+}
+
+/// Minimum circumscribed circle of (n, 2) points: (center, radius, control indices).
+#[pyfunction]
+fn form_circle_mc<'py>(py: Python<'py>, points: PyReadonlyArray2<'py, f64>) -> PyResult<CircleOut<'py>> {
+    let pts = rows(py, &points, 2, "points")?;
+    Ok(circle_out(py, run(py, || circle::min_circumscribed(pts))?))
+}
+
+/// Maximum inscribed circle within MC (Eq. 6.2): (center, radius, control indices).
+#[pyfunction]
+fn form_circle_mi<'py>(py: Python<'py>, points: PyReadonlyArray2<'py, f64>) -> PyResult<CircleOut<'py>> {
+    let pts = rows(py, &points, 2, "points")?;
+    Ok(circle_out(py, run(py, || circle::max_inscribed(pts))?))
+}
+
+/// Geometric least-squares circle: (center, radius, control indices).
+#[pyfunction]
+fn form_circle_lsq<'py>(py: Python<'py>, points: PyReadonlyArray2<'py, f64>) -> PyResult<CircleOut<'py>> {
+    let pts = rows(py, &points, 2, "points")?;
+    Ok(circle_out(py, run(py, || circle::least_squares(pts))?))
+}
+
+/// Minimum zone circle: (center, r_in, r_out, control_in, control_out).
+#[pyfunction]
+fn form_circle_mz<'py>(py: Python<'py>, points: PyReadonlyArray2<'py, f64>) -> PyResult<ZoneOut<'py>> {
+    let pts = rows(py, &points, 2, "points")?;
+    let z = run(py, || circle::min_zone(pts))?;
+    Ok((
+        (z.center[0], z.center[1]),
+        z.r_in,
+        z.r_out,
+        indices(py, z.control_in),
+        indices(py, z.control_out),
+    ))
+}
+
+/// Largest angular gap (rad) of the points seen from `center`.
+#[pyfunction]
+fn form_circle_angular_gap(py: Python<'_>, points: PyReadonlyArray2<'_, f64>, center: (f64, f64)) -> PyResult<f64> {
+    let pts = rows(py, &points, 2, "points")?;
+    run(py, || Ok(circle::max_angular_gap(pts, [center.0, center.1])))
+}
+
+fn register_circles(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(form_circle_mc, m)?)?;
+    m.add_function(wrap_pyfunction!(form_circle_mi, m)?)?;
+    m.add_function(wrap_pyfunction!(form_circle_lsq, m)?)?;
+    m.add_function(wrap_pyfunction!(form_circle_mz, m)?)?;
+    m.add_function(wrap_pyfunction!(form_circle_angular_gap, m)?)?;
+    Ok(())
+}
+
+// end circles --------------------------------------------------------------------------
+
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    register_circles(m)?;
     register_3d(m)?;
     Ok(())
 }
 
 // 3-D fits (lines, planes, spheres, 3-D circles, cylinders) ------------------
 
-use crate::arrays::rows;
-use crate::errors::{gagekit_err, run};
+use crate::errors::gagekit_err;
 use gagekit_form::lsq;
-use numpy::{PyReadonlyArray2, PyUntypedArrayMethods};
+use numpy::PyUntypedArrayMethods;
 
 type Ext = (f64, f64);
 
@@ -132,7 +199,92 @@ fn form_axis_extent(py: Python<'_>, points: PyReadonlyArray2<'_, f64>, point: [f
     Ok(ext(lsq::axis_extent(pts, &point, &direction)))
 }
 
+fn config_err(py: Python<'_>, msg: String) -> PyErr {
+    gagekit_err(py, "ConfigError", msg)
+}
+
+/// Minimax cylinder by the projection model + PSO (Sec. 6.3). `criterion` is "mcc",
+/// "mic" or "mzc"; `half_angle` (rad) restricts the search to a cone around `axis`
+/// (or around the least-squares axis when `axis` is None); no `half_angle`: the
+/// half sphere. Returns a dict of the fit.
+#[pyfunction]
+#[pyo3(signature = (points, criterion, seed=0, particles=20, max_iterations=300, stall_iterations=50, axis=None, half_angle=None, refine_starts=4))]
+#[allow(clippy::too_many_arguments)]
+fn form_cylinder_fit<'py>(
+    py: Python<'py>,
+    points: PyReadonlyArray2<'py, f64>,
+    criterion: &str,
+    seed: u64,
+    particles: usize,
+    max_iterations: usize,
+    stall_iterations: usize,
+    axis: Option<[f64; 3]>,
+    half_angle: Option<f64>,
+    refine_starts: usize,
+) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
+    use gagekit_form::cylinder::{fit, Criterion, Options, Search};
+    let pts = rows(py, &points, 3, "points")?;
+    let crit = match criterion {
+        "mcc" => Criterion::MinCircumscribed,
+        "mic" => Criterion::MaxInscribed,
+        "mzc" => Criterion::MinZone,
+        other => return Err(config_err(py, format!("cylinder: unknown criterion {other:?} (mcc, mic, mzc)"))),
+    };
+    let search = match (axis, half_angle) {
+        (_, None) => Search::HalfSphere,
+        (Some(a), Some(h)) => Search::Cone { axis: a, half_angle: h },
+        (None, Some(h)) => Search::AroundLeastSquares { half_angle: h },
+    };
+    let opts = Options { seed, particles, max_iterations, stall_iterations, search, refine_starts };
+    let r = run(py, || fit(pts, crit, &opts))?;
+    let d = pyo3::types::PyDict::new(py);
+    d.set_item("point", r.point)?;
+    d.set_item("direction", r.direction)?;
+    d.set_item("theta", r.theta)?;
+    d.set_item("phi", r.phi)?;
+    d.set_item("radius", r.radius)?;
+    d.set_item("r_in", r.r_in)?;
+    d.set_item("r_out", r.r_out)?;
+    d.set_item("control_in", r.control_in)?;
+    d.set_item("control_out", r.control_out)?;
+    d.set_item("min_distance", r.extent.min)?;
+    d.set_item("max_distance", r.extent.max)?;
+    d.set_item("iterations", r.iterations)?;
+    d.set_item("evaluations", r.evaluations)?;
+    Ok(d)
+}
+
+/// 2-D circle by the PSO over the centre (Eqs. 6.1, 6.4, 6.5; cross-check of the
+/// exact kernels): (center, r_in, r_out, control_in, control_out, iterations, evaluations).
+#[pyfunction]
+#[pyo3(signature = (points, criterion, seed=0, particles=20, max_iterations=2000, stall_iterations=100))]
+#[allow(clippy::type_complexity)]
+fn form_circle_pso(
+    py: Python<'_>,
+    points: PyReadonlyArray2<'_, f64>,
+    criterion: &str,
+    seed: u64,
+    particles: usize,
+    max_iterations: usize,
+    stall_iterations: usize,
+) -> PyResult<((f64, f64), f64, f64, Vec<usize>, Vec<usize>, usize, usize)> {
+    use gagekit_form::circle_pso::{fit, Kind};
+    let pts = rows(py, &points, 2, "points")?;
+    let kind = match criterion {
+        "mc" => Kind::MinCircumscribed,
+        "mi" => Kind::MaxInscribed,
+        "mz" => Kind::MinZone,
+        other => return Err(config_err(py, format!("circle (PSO): no swarm fit for criterion {other:?} (mc, mi, mz)"))),
+    };
+    let settings = gagekit_pso::Settings { seed, particles, max_iterations, stall_iterations, ..Default::default() };
+    let r = run(py, || fit(pts, kind, &settings))?;
+    let z = r.zone;
+    Ok(((z.center[0], z.center[1]), z.r_in, z.r_out, z.control_in, z.control_out, r.iterations, r.evaluations))
+}
+
 fn register_3d(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(form_cylinder_fit, m)?)?;
+    m.add_function(wrap_pyfunction!(form_circle_pso, m)?)?;
     m.add_function(wrap_pyfunction!(form_plane_extent, m)?)?;
     m.add_function(wrap_pyfunction!(form_line_extent, m)?)?;
     m.add_function(wrap_pyfunction!(form_axis_extent, m)?)?;
