@@ -106,8 +106,11 @@ def fit_circle(points: Any, criterion: str = "lsq", method: str = "exact", **opt
           Voronoi vertices plus the MC-tangent cases I and II of Sec. 6.2.2, exact).
         - ``mz``: minimum zone (roundness), Eq. 6.5, exact over cases 3+1, 1+3 and 2+2
           (Eqs. 6.6-6.8).
-    method : "exact"
-        The computational-geometry solvers above.
+    method : "exact" or "pso"
+        The computational-geometry solvers above, or the seeded particle swarm over the
+        centre followed by Nelder-Mead (Eqs. 6.1, 6.4, 6.5; mc, mi, mz only), a
+        cross-check of the exact solvers. Options for "pso": ``seed`` (0), ``particles``
+        (20), ``iterations`` (2000), ``stall_iterations`` (100).
 
     Raises
     ------
@@ -123,14 +126,34 @@ def fit_circle(points: Any, criterion: str = "lsq", method: str = "exact", **opt
     Dissertation Sec. 6.2, Eqs. 6.1, 6.2, 6.5-6.8.
     """
     crit = _criterion(criterion)
-    if method != "exact":
-        raise ConfigError(f"unknown circle fit method {method!r}; available: 'exact'")
-    if options:
+    if method not in ("exact", "pso"):
+        raise ConfigError(f"unknown circle fit method {method!r}; available: 'exact', 'pso'")
+    if method == "exact" and options:
         raise ConfigError(f"unexpected options for method 'exact': {', '.join(sorted(options))}")
     pts = as_points(points, dim=2)
     n = int(pts.shape[0])
     control_in: tuple[int, ...] = ()
     control_out: tuple[int, ...] = ()
+    if method == "pso":
+        # 3-D fits helper: PSO over the centre (Eqs. 6.1, 6.4, 6.5) as a cross-check
+        allowed = {"seed", "particles", "iterations", "stall_iterations"}
+        if set(options) - allowed or crit == "lsq":
+            raise ConfigError(
+                "method 'pso' fits mc, mi and mz and takes the options seed, particles, "
+                "iterations, stall_iterations"
+            )
+        center, r_in, r_out, cin, cout, _, _ = _core.form_circle_pso(
+            pts, crit, int(options.get("seed", 0)), int(options.get("particles", 20)),
+            int(options.get("iterations", 2000)), int(options.get("stall_iterations", 100)),
+        )
+        control_in, control_out = tuple(cin), tuple(cout)
+        control = {"mc": control_out, "mi": control_in}.get(crit, control_in + tuple(i for i in control_out if i not in control_in))
+        radius = {"mc": r_out, "mi": r_in}.get(crit, 0.5 * (r_in + r_out))
+        if crit != "mz":
+            control_in = control_out = ()
+            d = np.hypot(pts[:, 0] - center[0], pts[:, 1] - center[1])
+            r_in, r_out = float(d.min()), float(d.max())
+        return _result(crit, method, pts, center, radius, r_in, r_out, control, control_in, control_out)
     if crit == "mz":
         center, r_in, r_out, cin, cout = _core.form_circle_mz(pts)
         control_in, control_out = tuple(int(i) for i in cin), tuple(int(i) for i in cout)

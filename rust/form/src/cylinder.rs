@@ -184,6 +184,13 @@ pub fn fit(pts: &[f64], crit: Criterion, opts: &Options) -> Result<CylinderFit> 
     if n < min_n {
         return Err(GkError::invalid(format!("cylinder: needs at least {min_n} points, got {n}")));
     }
+    let sv = lsq::principal_spread(pts);
+    if sv[0] == 0.0 {
+        return Err(GkError::degenerate("cylinder: all points coincide"));
+    }
+    if lsq::negligible(sv[1], sv[0]) {
+        return Err(GkError::degenerate("cylinder: the points are collinear; no cylinder is determined"));
+    }
     // centred copy: the projection and the 2-D kernels then work near the origin
     let c = centroid(pts, 3);
     let q: Vec<f64> = pts.chunks_exact(3).flat_map(|p| [p[0] - c[0], p[1] - c[1], p[2] - c[2]]).collect();

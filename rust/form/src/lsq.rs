@@ -300,6 +300,19 @@ fn normal_equations<const P: usize>(
     (f, jtj, jtr)
 }
 
+/// Spread of 3-D points along their principal axes (root sum of squares of the
+/// centred coordinates), largest first: zero entries mean coincident,
+/// collinear or coplanar points.
+pub fn principal_spread(pts: &[f64]) -> [f64; 3] {
+    let c = centroid(pts, 3);
+    principal_axes(&centred3(pts, 3, &c)).0
+}
+
+/// Whether a spread counts as zero relative to the largest one.
+pub fn negligible(spread: f64, largest: f64) -> bool {
+    spread <= DEGENERATE * largest
+}
+
 // ---------------------------------------------------------------- lines and planes
 
 /// Least-squares line through 2-D or 3-D points (total least squares: the
