@@ -219,5 +219,10 @@ def test_min_zone_line_2d():
     mz, ls = gagekit.fit_line(pts, "minimum-zone"), gagekit.fit_line(pts)
     assert mz.form_error < ls.form_error
     assert 7 in mz.control_points
-    with pytest.raises(ConfigError, match="2-D"):
-        gagekit.fit_line(np.column_stack([pts, x]), "minimum-zone")
+    # in space: the thinnest enclosing cylinder around a bent 3-D line
+    rng = np.random.default_rng(2)
+    t = np.linspace(0, 50, 60)
+    p3 = np.outer(t, [0.6, 0.0, 0.8]) + rng.normal(0, 0.005, (60, 3)) + [1e6, 0, 0]
+    z3, l3 = gagekit.fit_line(p3, "minimum-zone"), gagekit.fit_line(p3)
+    assert z3.form_error <= l3.form_error + 1e-12
+    assert abs(z3.form_error - 2 * z3.certificate.max_distance) < 1e-12

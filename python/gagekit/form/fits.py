@@ -197,20 +197,29 @@ def _cert(ext: tuple[float, float]) -> Certificate:
     return Certificate(float(ext[0]), float(ext[1]))
 
 
-def fit_line(points: Any, criterion: str = "least-squares") -> LineFit:
-    """Least-squares line through (n, 2) or (n, 3) points (orthogonal distances).
+def fit_line(points: Any, criterion: str = "least-squares", seed: int = 0) -> LineFit:
+    """Line through (n, 2) or (n, 3) points.
 
-    The line passes through the centroid along the principal axis of the points.
+    ``least-squares``: orthogonal distances; the line passes through the centroid along
+    the principal axis. ``minimum-zone`` (straightness): in 2-D the two parallel lines of
+    least separation (LP, then exact active-set solve); in 3-D the thinnest enclosing
+    cylinder (MCC of Sec. 6.3 searched near the least-squares direction with the seeded
+    PSO), whose diameter is the ``form_error``.
     Raises :class:`DegenerateGeometryError` when all points coincide.
     """
     crit = normalize_criterion(criterion, ("least-squares", "minimum-zone"), "line")
     pts = _points(points, (2, 3), "line")
+    if crit == "minimum-zone" and pts.shape[1] == 3:
+        # straightness in space: the thinnest cylinder around the points (MCC, Eq. 6.13),
+        # searched within 0.2 rad of the least-squares direction; the zone is its diameter
+        _, ls_dir, _ = _core.form_line_lsq(pts)
+        d = _core.form_cylinder_fit(pts, "mcc", seed, 20, 300, 50, tuple(ls_dir), 0.2, 4)
+        cert = _cert(_core.form_line_extent(pts, list(d["point"]), list(d["direction"])))
+        return LineFit(
+            crit, len(pts), _vec(d["point"]), _vec(d["direction"]), 2.0 * cert.max_distance, cert,
+            tuple(int(i) for i in d["control_out"]),
+        )
     if crit == "minimum-zone":
-        if pts.shape[1] != 2:
-            raise ConfigError(
-                "line: the minimum-zone line is available for 2-D points; for 3-D straightness "
-                "use fit_cylinder(points, 'min-circumscribed') (the zone is its diameter)"
-            )
         point, normal, direction, width, up, lo, _ = _core.form_min_zone_flat(pts)
         cert = _cert(_core.form_line_extent(pts, point, direction))
         return LineFit(crit, len(pts), _vec(point), _vec(direction), float(width), cert, tuple(sorted({*up, *lo})))
@@ -221,8 +230,14 @@ def fit_line(points: Any, criterion: str = "least-squares") -> LineFit:
 
 
 def fit_plane(points: Any, criterion: str = "least-squares") -> PlaneFit:
-    """Least-squares plane of (n, 3) points: through the centroid, normal along the
-    direction of least spread. ``form_error`` is the flatness about that plane."""
+    """Plane of (n, 3) points.
+
+    ``least-squares``: through the centroid, normal along the direction of least spread;
+    ``form_error`` is the peak-to-valley about that plane. ``minimum-zone`` (flatness): the
+    two parallel planes of least separation, by LP in the least-squares frame (clarabel),
+    an exact solve of the active constraints and re-linearisation until the tilt vanishes;
+    the mid-plane is reported and ``form_error`` is recomputed from its normal.
+    """
     crit = normalize_criterion(criterion, ("least-squares", "minimum-zone"), "plane")
     pts = _points(points, (3,), "plane")
     if crit == "minimum-zone":
