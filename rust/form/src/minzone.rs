@@ -9,12 +9,17 @@
 //! orthogonal one. The reported width is always recomputed from the reported
 //! normal, max - min of the signed distances, so it is a valid zone whatever
 //! the solver's accuracy. The least-squares plane (line) is the first frame.
+//! Large point sets are reduced to their convex-hull vertices first (exact:
+//! a set and its hull have the same width).
 
 use crate::lsq;
 use clarabel::algebra::CscMatrix;
 use clarabel::solver::{DefaultSettingsBuilder, DefaultSolver, IPSolver, SolverStatus, SupportedConeT};
 use gagekit_core::{GkError, Result};
 use nalgebra::{DMatrix, DVector};
+
+/// Planes of more points are fitted on their convex-hull vertices.
+const HULL_ABOVE: usize = 1000;
 
 /// A minimum zone: the mid-plane (mid-line) and the zone width.
 #[derive(Debug, Clone, PartialEq)]
@@ -141,8 +146,14 @@ fn min_zone(pts: &[f64], dim: usize) -> Result<MinZone> {
         let p = lsq::plane(pts)?;
         (p.normal.to_vec(), p.point.to_vec())
     };
-    let q: Vec<Vec<f64>> = pts.chunks_exact(dim).map(|p| p.iter().zip(&c).map(|(a, b)| a - b).collect()).collect();
-    let scale = q.iter().map(|p| dot(p, p).sqrt()).fold(0.0, f64::max).max(f64::MIN_POSITIVE);
+    let all: Vec<Vec<f64>> = pts.chunks_exact(dim).map(|p| p.iter().zip(&c).map(|(a, b)| a - b).collect()).collect();
+    // the width of a set is that of its convex hull (Eq. 5.21): the LP needs the hull vertices only
+    let q: Vec<Vec<f64>> = if dim == 3 && all.len() > HULL_ABOVE {
+        gagekit_geometry::convex_hull_indices(pts)?.into_iter().map(|i| all[i].clone()).collect()
+    } else {
+        all.clone()
+    };
+    let scale = all.iter().map(|p| dot(p, p).sqrt()).fold(0.0, f64::max).max(f64::MIN_POSITIVE);
     let mut iterations = 0;
     for _ in 0..8 {
         // tangent basis of the current normal
@@ -175,7 +186,7 @@ fn min_zone(pts: &[f64], dim: usize) -> Result<MinZone> {
     if !normal.iter().all(|v| v.is_finite()) {
         return Err(GkError::numerical(format!("{what}: the iteration lost the normal")));
     }
-    let dist: Vec<f64> = q.iter().map(|p| dot(p, &normal)).collect();
+    let dist: Vec<f64> = all.iter().map(|p| dot(p, &normal)).collect();
     let (lo, hi) = dist.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
     let width = hi - lo;
     let tol = 1e-9 * scale.max(width);
