@@ -14,6 +14,7 @@ Run: python benches/bench_form3d.py [--quick]
 
 from __future__ import annotations
 
+import os
 import sys
 import time
 from pathlib import Path
@@ -24,10 +25,7 @@ from scipy.optimize import least_squares, minimize
 import gagekit
 
 ROOT = Path(__file__).resolve().parents[1]
-REF = next(
-    (p for p in (ROOT.parent / "shared" / "reference-data", Path("/work/shared/reference-data")) if p.is_dir()),
-    ROOT.parent / "shared" / "reference-data",
-) / "seed-cylinders"
+REF = Path(os.environ.get("GAGEKIT_SHARED", ROOT.parent / "shared")) / "reference-data" / "seed-cylinders"
 
 
 def timed(fn, repeat=3):

@@ -9,6 +9,7 @@ certificate consistent with the reported radii to 1e-9 mm.
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -27,8 +28,7 @@ except ModuleNotFoundError:  # Python < 3.11
     import tomli as tomllib
 
 ROOT = Path(__file__).resolve().parents[1]
-_CANDIDATES = [ROOT.parent / "shared" / "reference-data", Path("/work/shared/reference-data")]
-SEED = next((p for p in _CANDIDATES if p.is_dir()), _CANDIDATES[0]) / "seed-cylinders"
+SEED = Path(os.environ.get("GAGEKIT_SHARED", ROOT.parent / "shared")) / "reference-data" / "seed-cylinders"
 ROUNDING = 5e-8  # half a unit of the 7th decimal printed in Tables 6.2 and 6.4
 CERT_TOL = 1e-9
 

@@ -15,8 +15,7 @@ import pytest
 import gagekit
 
 ROOT = Path(__file__).resolve().parents[1]
-_CANDIDATES = [ROOT.parent / "shared" / "reference-data", Path("/work/shared/reference-data")]
-REF = next((p for p in _CANDIDATES if p.is_dir()), _CANDIDATES[0]) / "nist-l2"
+REF = Path(os.environ.get("GAGEKIT_SHARED", ROOT.parent / "shared")) / "reference-data" / "nist-l2"
 
 POS_TOL = 1e-7
 DIA_TOL = 1e-7
