@@ -190,3 +190,14 @@ def test_cli_cylinder_json():
     assert d["criterion"] == "minimum-zone" and d["n_points"] == 24
     assert d["form_error"] <= 0.0027883 + ROUNDING
     assert abs(d["certificate"]["max_distance"] - d["outer_radius"]) < CERT_TOL
+
+
+def test_partial_cylinder_mic_is_flagged_ill_posed():
+    rng = np.random.default_rng(4)
+    t = rng.uniform(0, np.radians(60), 80)
+    z = rng.uniform(0, 40, 80)
+    pts = np.column_stack([15 * np.cos(t), 15 * np.sin(t), z]) + rng.normal(0, 0.001, (80, 3))
+    r = gagekit.fit_cylinder(pts, "mic", max_tilt=0.1)
+    assert r.ill_posed and r.arc_deg < 90 and "ill-posed" in r.warnings[0]
+    full = gagekit.fit_cylinder(load_set("set3"), "mic")
+    assert not full.ill_posed and full.arc_deg > 300 and full.to_dict()["warnings"] == []

@@ -11,7 +11,7 @@ corrected in ERRATA item 1), and the projected 2-D set is fitted exactly
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any, Optional
 
 import numpy as np
@@ -38,6 +38,10 @@ def axis_angles(direction: Any) -> tuple[float, float]:
 class CylinderFit:
     """A fitted cylinder.
 
+    ``arc_deg`` is the angle the points cover around the axis; ``warnings`` says when the
+    fit is poorly determined (``ill_posed`` for a maximum inscribed cylinder of an arc
+    below 90 degrees, Sec. 6.2.2).
+
     ``radius`` is the fitted radius (least squares, circumscribed, inscribed); for the
     minimum zone ``inner_radius`` / ``outer_radius`` bound the zone and ``radius`` is their
     mean. ``form_error`` is the cylindricity about this axis (max - min distance to the
@@ -59,6 +63,9 @@ class CylinderFit:
     control_points: tuple[int, ...] = ()
     iterations: int = 0
     evaluations: int = 0
+    arc_deg: float = 360.0
+    ill_posed: bool = False
+    warnings: tuple[str, ...] = ()
     shape: str = field(default="cylinder", init=False)
 
     def to_dict(self) -> dict[str, Any]:
@@ -83,6 +90,9 @@ class CylinderFit:
         if self.criterion != "least-squares":
             d["iterations"] = self.iterations
             d["evaluations"] = self.evaluations
+        d["arc_deg"] = self.arc_deg
+        d["ill_posed"] = self.ill_posed
+        d["warnings"] = list(self.warnings)
         return d
 
 
@@ -144,10 +154,10 @@ def fit_cylinder(
         point, direction, radius, ext = _core.form_cylinder_lsq(pts)
         cert = Certificate(float(ext[0]), float(ext[1]))
         theta, phi = axis_angles(direction)
-        return CylinderFit(
+        return _with_arc(pts, CylinderFit(
             crit, len(pts), _vec(point), _vec(direction), theta, phi, float(radius),
             cert.max_distance - cert.min_distance, cert,
-        )
+        ))
     for name, v in (("particles", particles), ("iterations", iterations), ("stall_iterations", stall_iterations), ("refine_starts", refine_starts)):
         if int(v) < (1 if name == "particles" else 0):
             raise ConfigError(f"cylinder: {name} must be a positive integer, got {v}")
@@ -174,7 +184,7 @@ def fit_cylinder(
         radius, inner, outer = d["radius"], d["r_in"], d["r_out"]
         form_error = outer - inner
         control = list(d["control_in"]) + [i for i in d["control_out"] if i not in d["control_in"]]
-    return CylinderFit(
+    return _with_arc(pts, CylinderFit(
         crit, len(pts), _vec(d["point"]), _vec(d["direction"]), float(d["theta"]), float(d["phi"]),
         float(radius), float(form_error), cert,
         inner_radius=None if inner is None else float(inner),
@@ -182,7 +192,32 @@ def fit_cylinder(
         control_points=tuple(int(i) for i in control),
         iterations=int(d["iterations"]),
         evaluations=int(d["evaluations"]),
-    )
+    ))
+
+
+#: Below this arc (degrees) around the axis a maximum inscribed cylinder is ill-posed.
+MIN_ARC_DEG = 90.0
+
+
+def _with_arc(pts: np.ndarray, r: CylinderFit) -> CylinderFit:
+    # judged about the least-squares axis for MIC (its own axis can sit anywhere inside a
+    # short arc), about the fitted axis otherwise -- as for circles
+    point, direction = r.axis_point, r.axis_direction
+    if r.criterion == "max-inscribed":
+        point, direction, _, _ = _core.form_cylinder_lsq(pts)
+    arc = math.degrees(_core.form_cylinder_arc(pts, point, direction))
+    warnings: list[str] = []
+    ill = False
+    if arc < MIN_ARC_DEG:
+        if r.criterion == "max-inscribed":
+            ill = True
+            warnings.append(
+                f"the points cover only {arc:.1f} degrees around the axis (< {MIN_ARC_DEG:.0f}): the "
+                "maximum inscribed cylinder is ill-posed and its radius is not a meaningful size"
+            )
+        else:
+            warnings.append(f"the points cover only {arc:.1f} degrees around the axis: axis and radius are poorly determined")
+    return replace(r, arc_deg=float(arc), ill_posed=ill, warnings=tuple(warnings))
 
 
 def _minimax_available() -> bool:

@@ -135,6 +135,15 @@ pub fn project(pts: &[f64], theta: f64, phi: f64) -> Vec<f64> {
     out
 }
 
+/// Angle (rad) the points cover around an axis: 2 pi minus the largest
+/// angular gap of their projections seen from the axis. Below pi/2 a maximum
+/// inscribed cylinder is ill-posed (Sec. 6.2.2).
+pub fn arc(pts: &[f64], point: &[f64; 3], direction: &[f64; 3]) -> f64 {
+    let (t, f) = angles(direction);
+    let rel: Vec<f64> = pts.chunks_exact(3).flat_map(|p| [p[0] - point[0], p[1] - point[1], p[2] - point[2]]).collect();
+    2.0 * PI - circle::max_angular_gap(&project(&rel, t, f), [0.0, 0.0])
+}
+
 /// The exact 2-D fit of the projection along `a`, as a zone (MC and MI give
 /// r_in = r_out). Also returns the angles used.
 fn fit2d(q: &[f64], a: &Vector3<f64>, crit: Criterion) -> Result<(f64, f64, circle::Zone)> {

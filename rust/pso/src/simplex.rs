@@ -118,13 +118,16 @@ pub fn nelder_mead<F: Fn(&[f64]) -> f64>(f: F, x0: &[f64], step: f64, xtol: f64)
         evaluations += e;
         restarts += 1;
         let moved = y.iter().zip(&x).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+        let gain = fx - fy;
         if fy < fx {
             x = y;
             fx = fy;
+        }
+        if gain > 1e-12 * fx.abs() {
             // restart around the new point with a simplex the size of the last move
-            h = (moved * 2.0).min(h).max(h * 0.1);
+            h = (moved * 2.0).min(h).max(h * 0.01);
         } else {
-            h *= 0.1;
+            h *= 0.01;
         }
     }
     Simplex { position: x, value: fx, evaluations, restarts }

@@ -282,7 +282,15 @@ fn form_circle_pso(
     Ok(((z.center[0], z.center[1]), z.r_in, z.r_out, z.control_in, z.control_out, r.iterations, r.evaluations))
 }
 
+/// Angle (rad) the points cover around an axis (2 pi minus the largest angular gap).
+#[pyfunction]
+fn form_cylinder_arc(py: Python<'_>, points: PyReadonlyArray2<'_, f64>, point: [f64; 3], direction: [f64; 3]) -> PyResult<f64> {
+    let pts = rows(py, &points, 3, "points")?;
+    run(py, || Ok(gagekit_form::cylinder::arc(pts, &point, &direction)))
+}
+
 fn register_3d(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(form_cylinder_arc, m)?)?;
     m.add_function(wrap_pyfunction!(form_cylinder_fit, m)?)?;
     m.add_function(wrap_pyfunction!(form_circle_pso, m)?)?;
     m.add_function(wrap_pyfunction!(form_plane_extent, m)?)?;
