@@ -20,7 +20,7 @@ import time
 from pathlib import Path
 
 import numpy as np
-from scipy.optimize import least_squares, minimize
+from scipy.optimize import least_squares, linprog, minimize
 
 import gagekit
 
@@ -84,6 +84,28 @@ def scipy_minimax(pts, crit, starts=8, seed=0, maxfev=20000):
     return val, nfev
 
 
+def scipy_flatness(pts):
+    """Vertical Chebyshev zone in the least-squares frame by linprog (HiGHS): min w s.t.
+    0 <= h - a x - b y - c <= w, reported as the orthogonal width w / sqrt(1 + a^2 + b^2)."""
+    q = pts - pts.mean(0)
+    _, v = np.linalg.eigh(q.T @ q)
+    x, y, h = q @ v[:, 2], q @ v[:, 1], q @ v[:, 0]
+    n = len(q)
+    A = np.block([[-np.column_stack([x, y]), -np.ones((n, 1)), -np.ones((n, 1))],
+                  [np.column_stack([x, y]), np.ones((n, 1)), np.zeros((n, 1))]])
+    b = np.concatenate([-h, h])
+    r = linprog([0, 0, 0, 1], A_ub=A, b_ub=b, bounds=[(None, None)] * 4, method="highs")
+    a_, b_ = r.x[:2]
+    return r.x[3] / np.sqrt(1 + a_ * a_ + b_ * b_), r.nit
+
+
+def noisy_plane(n, seed=0):
+    rng = np.random.default_rng(seed)
+    xy = rng.uniform(-100, 100, (n, 2))
+    z = 0.01 * np.sin(xy[:, 0] / 20) + rng.normal(0, 0.003, n)
+    return np.column_stack([xy, z + 0.01 * xy[:, 0]]) + [500.0, -200.0, 50.0]
+
+
 def noisy_cylinder(n, seed=0):
     rng = np.random.default_rng(seed)
     t = rng.uniform(0, 2 * np.pi, n)
@@ -121,6 +143,15 @@ def main() -> None:
                 f"{name + ' ' + crit:<22} {g_t:>10.5f} {p_t:>10.5f} {p_t / g_t:>8.1f}  "
                 f"{gv:.10f} (PSO it {g.iterations}, evals {g.evaluations}) / {p_v:.10f} (NM nfev {p_n})"
             )
+    flatness_cases(quick)
+
+
+def flatness_cases(quick: bool) -> None:
+    for n in (10**4,) if quick else (10**4, 10**5):
+        pts = noisy_plane(n)
+        g_t, g = timed(lambda: gagekit.fit_plane(pts, "minimum-zone"))
+        p_t, (p_w, p_it) = timed(lambda: scipy_flatness(pts), repeat=1)
+        print(f"{'flatness ' + str(n):<22} {g_t:>10.5f} {p_t:>10.5f} {p_t / g_t:>8.1f}  {g.form_error:.10f} / {p_w:.10f} (HiGHS it {p_it})")
 
 
 if __name__ == "__main__":

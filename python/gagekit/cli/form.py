@@ -144,7 +144,7 @@ def _human(r: Any) -> str:
 
 @app.command("fit")
 def fit(
-    shape: str = typer.Argument(..., help="line, plane, sphere, circle3d or cylinder"),
+    shape: str = typer.Argument(..., help="circle, line, plane, sphere, circle3d or cylinder"),
     file: Path = typer.Argument(..., help="Point file (.npy, NIST .ds, CSV, text)"),
     criterion: str = typer.Option("least-squares", "--criterion", "-c", help="Fit criterion"),
     seed: int = typer.Option(0, "--seed", help="Seed of the particle swarm (cylinders)"),
@@ -154,6 +154,9 @@ def fit(
     from .. import form
 
     name = shape.strip().lower().replace("-", "").replace("_", "")
+    if name == "circle":  # 2-D circles: the circle reader drops a constant coordinate
+        emit(form.fit_circle(_read_xy(file), criterion), as_json, _human)
+        return
     pts = _load_points(file)
     if name == "line":
         r = form.fit_line(pts, criterion)
@@ -165,12 +168,10 @@ def fit(
         r = form.fit_circle_3d(pts, criterion)
     elif name == "cylinder":
         r = form.fit_cylinder(pts, criterion, seed=seed)
-    elif name == "circle" and hasattr(form, "fit_circle"):
-        r = form.fit_circle(pts, criterion)
     else:
         from ..errors import ConfigError
 
-        raise ConfigError(f"unknown shape {shape!r}; choose one of {', '.join(_SHAPES_3D)}")
+        raise ConfigError(f"unknown shape {shape!r}; choose one of circle, {', '.join(_SHAPES_3D)}")
     emit(r, as_json, _human)
 
 
