@@ -201,3 +201,18 @@ def test_partial_cylinder_mic_is_flagged_ill_posed():
     assert r.ill_posed and r.arc_deg < 90 and "ill-posed" in r.warnings[0]
     full = gagekit.fit_cylinder(load_set("set3"), "mic")
     assert not full.ill_posed and full.arc_deg > 270 and full.to_dict()["warnings"] == []
+
+
+def test_thread_count_does_not_change_the_result():
+    code = (
+        "import json, numpy as np, gagekit; "
+        f"p = np.loadtxt({str(SEED / 'set3.csv')!r}, delimiter=',', skiprows=1); "
+        "print(json.dumps(gagekit.fit_cylinder(p, 'mzc', seed=5).to_dict()))"
+    )
+    outs = []
+    for threads in ("1", "3"):
+        env = {**os.environ, "RAYON_NUM_THREADS": threads}
+        proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=120)
+        assert proc.returncode == 0, proc.stderr
+        outs.append(json.loads(proc.stdout))
+    assert outs[0] == outs[1]
