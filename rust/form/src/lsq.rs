@@ -181,6 +181,7 @@ pub fn orthonormal_basis(a: &Vector3<f64>) -> (Vector3<f64>, Vector3<f64>) {
 /// are tiny the plain Gauss–Newton step is taken as long as the cost does not
 /// grow beyond rounding, until the step itself is at rounding level: the
 /// result is then the stationary point to full double precision.
+#[allow(clippy::too_many_arguments)]
 fn levenberg_marquardt<P: Clone>(
     mut params: P,
     p: usize,
