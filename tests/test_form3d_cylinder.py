@@ -216,3 +216,35 @@ def test_thread_count_does_not_change_the_result():
         assert proc.returncode == 0, proc.stderr
         outs.append(json.loads(proc.stdout))
     assert outs[0] == outs[1]
+
+
+def _project(pts, direction):
+    """Eq. 6.12 (ERRATA item 1): q = [I2 0] Ry(-t) Rz(-f) p for the axis (t, f)."""
+    d = np.asarray(direction, float) / np.linalg.norm(direction)
+    t, f = np.arccos(d[2]), np.arctan2(d[1], d[0])
+    u = np.array([np.cos(t) * np.cos(f), np.cos(t) * np.sin(f), -np.sin(t)])
+    v = np.array([-np.sin(f), np.cos(f), 0.0])
+    q = pts - pts.mean(0)
+    return np.ascontiguousarray(np.column_stack([q @ u, q @ v]))
+
+
+@pytest.mark.parametrize("name", ["set1", "set3"])
+@pytest.mark.parametrize("crit, circ", [("mcc", "mc"), ("mic", "mi"), ("mzc", "mz")])
+def test_no_nearby_axis_is_better(name, crit, circ):
+    pts = load_set(name)
+    r = gagekit.fit_cylinder(pts, crit, seed=1)
+    a = np.array(r.axis_direction)
+    # the projection along the reported axis reproduces the reported fit exactly
+    c0 = gagekit.fit_circle(_project(pts, a), circ)
+    value = {"mc": c0.radius, "mi": -c0.radius, "mz": c0.width}
+    reported = {"mcc": r.radius, "mic": -r.radius, "mzc": r.form_error}[crit]
+    assert abs(value[circ] - reported) < 1e-10
+    u = np.cross(a, [1.0, 0, 0])
+    u /= np.linalg.norm(u)
+    v = np.cross(a, u)
+    for eps in (1e-7, 1e-5, 1e-3):
+        for k in range(8):
+            th = np.pi * k / 4
+            c = gagekit.fit_circle(_project(pts, a + eps * (np.cos(th) * u + np.sin(th) * v)), circ)
+            val = {"mc": c.radius, "mi": -c.radius, "mz": c.width}[circ]
+            assert val >= reported - 1e-11, (eps, k, val, reported)
