@@ -24,7 +24,7 @@ use std::f64::consts::{FRAC_PI_2, PI};
 
 /// Initial simplex edge (rad) and final resolution of the axis refinement: 1e-12
 /// rad moves a point 100 mm along the axis by 1e-10 mm.
-const NM_STEP: f64 = 1e-3;
+const NM_STEP: f64 = 1e-4;
 const NM_XTOL: f64 = 1e-12;
 
 /// Which cylinder to fit.
