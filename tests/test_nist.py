@@ -53,7 +53,7 @@ def _drop_constant(pts: np.ndarray) -> tuple[np.ndarray, int]:
 
 
 def test_reference_data_present():
-    counts = {k: len(_pairs(k)) for k in ("line2d", "line3d", "plane", "circle2d", "circle3d", "sphere", "cylinder")}
+    counts = {k: len(_pairs(k)) for k in ("line2d", "line3d", "plane", "circle2d", "circle3d", "sphere", "cylinder", "cone")}
     assert all(counts.values()), counts
 
 
@@ -120,3 +120,16 @@ def test_cylinder_translated_1e6(name):
     assert abs(2 * r.radius - ref[6]) < DIA_TOL
     assert angle(r.axis_direction, ref[3:6]) < ANG_TOL
     assert point_line_distance(ref[:3] + shift, r.axis_point, r.axis_direction) < POS_TOL
+
+
+@pytest.mark.parametrize("name", _pairs("cone"))
+def test_cone(name):
+    pts, ref = _load("cone", name)
+    r = gagekit.fit_cone(pts)
+    assert angle(r.direction, ref[3:6]) < ANG_TOL
+    assert point_line_distance(ref[:3], r.point, r.direction) < POS_TOL
+    assert abs(np.degrees(r.apex_angle) - ref[7]) < ANG_TOL * 180 / np.pi
+    # distance to the surface from the reference point (moved onto our axis)
+    z = (ref[:3] - np.array(r.point)) @ np.array(r.direction)
+    d_ref = r.distance + z * np.sin(r.apex_angle / 2)
+    assert abs(abs(d_ref) - abs(ref[6])) < POS_TOL

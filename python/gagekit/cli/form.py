@@ -88,7 +88,7 @@ def circle(
 
 # 3-D fits ------------------------------------------------------------------
 
-_SHAPES_3D = ("line", "plane", "sphere", "circle3d", "cylinder")
+_SHAPES_3D = ("line", "plane", "sphere", "circle3d", "cylinder", "cone")
 
 
 def _load_points(path: Path) -> np.ndarray:
@@ -127,7 +127,7 @@ def _fmt_vec(v: Any) -> str:
 def _human(r: Any) -> str:
     d = r.to_dict()
     rows = []
-    for key in ("radius", "inner_radius", "outer_radius", "form_error", "theta", "phi"):
+    for key in ("radius", "inner_radius", "outer_radius", "form_error", "theta", "phi", "distance", "apex_angle"):
         if d.get(key) is not None:
             rows.append([key, f"{d[key]:.9f}"])
     for key in ("center", "normal", "point", "direction", "axis_point", "axis_direction"):
@@ -144,7 +144,7 @@ def _human(r: Any) -> str:
 
 @app.command("fit")
 def fit(
-    shape: str = typer.Argument(..., help="circle, line, plane, sphere, circle3d or cylinder"),
+    shape: str = typer.Argument(..., help="circle, line, plane, sphere, circle3d, cylinder or cone"),
     file: Path = typer.Argument(..., help="Point file (.npy, NIST .ds, CSV, text)"),
     criterion: str = typer.Option("least-squares", "--criterion", "-c", help="Fit criterion"),
     seed: int = typer.Option(0, "--seed", help="Seed of the particle swarm (cylinders)"),
@@ -168,6 +168,8 @@ def fit(
         r = form.fit_circle_3d(pts, criterion)
     elif name == "cylinder":
         r = form.fit_cylinder(pts, criterion, seed=seed)
+    elif name == "cone":
+        r = form.fit_cone(pts, criterion)
     else:
         from ..errors import ConfigError
 

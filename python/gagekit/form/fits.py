@@ -28,6 +28,8 @@ __all__ = [
     "PlaneFit",
     "SphereFit",
     "Circle3DFit",
+    "ConeFit",
+    "fit_cone",
     "fit_line",
     "fit_plane",
     "fit_sphere",
@@ -270,4 +272,49 @@ def fit_circle_3d(points: Any, criterion: str = "least-squares") -> Circle3DFit:
     cert = _cert(ext)
     return Circle3DFit(
         crit, len(pts), _vec(center), _vec(normal), float(radius), cert.max_distance - cert.min_distance, cert
+    )
+
+
+@dataclass(frozen=True)
+class ConeFit:
+    """A least-squares cone: ``point`` on the axis (nearest the centroid), ``direction``
+    (the radius grows along it), ``distance`` from ``point`` to the surface, ``apex_angle``
+    (full, rad). ``certificate``: signed orthogonal distances to the surface (positive
+    outside); ``form_error`` = max - min."""
+
+    criterion: str
+    n_points: int
+    point: tuple[float, float, float]
+    direction: tuple[float, float, float]
+    distance: float
+    apex_angle: float
+    form_error: float
+    certificate: Certificate
+    shape: str = field(default="cone", init=False)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "shape": self.shape,
+            "criterion": self.criterion,
+            "n_points": self.n_points,
+            "form_error": self.form_error,
+            "axis_point": list(self.point),
+            "axis_direction": list(self.direction),
+            "distance": self.distance,
+            "apex_angle": self.apex_angle,
+            "certificate": self.certificate.to_dict(),
+        }
+
+
+def fit_cone(points: Any, criterion: str = "least-squares") -> ConeFit:
+    """Least-squares cone of (n, 3) points: orthogonal distances
+    d = rho cos(psi) - z sin(psi) - D (Levenberg-Marquardt from algebraic cones about the
+    principal axes); as the NIST reference fits define it."""
+    crit = normalize_criterion(criterion, ("least-squares",), "cone")
+    pts = _points(points, (3,), "cone")
+    point, direction, distance, half, ext = _core.form_cone_lsq(pts)
+    cert = _cert(ext)
+    return ConeFit(
+        crit, len(pts), _vec(point), _vec(direction), float(distance), 2.0 * float(half),
+        cert.max_distance - cert.min_distance, cert,
     )

@@ -13,6 +13,7 @@
 use gagekit_core::{check_finite, GkError, Result};
 use nalgebra::{DMatrix, DVector, Matrix3, SymmetricEigen, Vector3};
 use rayon::prelude::*;
+use std::f64::consts::{FRAC_PI_2, PI};
 
 /// Singular values below this fraction of the largest count as zero
 /// (degenerate spreads: coincident, collinear, coplanar points).
@@ -584,6 +585,135 @@ pub fn cylinder(pts: &[f64], start_axis: Option<[f64; 3]>) -> Result<Cylinder> {
     })?;
     let p = vec3(&cyl.point) + vec3(&c);
     Ok(Cylinder { point: arr(&p), direction: upper(cyl.direction), ..cyl })
+}
+
+// ---------------------------------------------------------------- cones
+
+/// A cone: a point on the axis, the unit axis direction, the signed
+/// orthogonal distance from that point to the surface (positive inside) and
+/// the half apex angle (rad; the radius grows along `direction`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Cone {
+    pub point: [f64; 3],
+    pub direction: [f64; 3],
+    pub distance: f64,
+    pub half_angle: f64,
+}
+
+/// Min and max signed orthogonal distance of 3-D points to a cone (positive outside).
+pub fn cone_extent(pts: &[f64], c: &Cone) -> Extent {
+    let (l, a) = (vec3(&c.point), vec3(&c.direction).normalize());
+    let (cp, sp) = (c.half_angle.cos(), c.half_angle.sin());
+    Extent::of(pts.chunks_exact(3).map(|p| {
+        let d = vec3(p) - l;
+        let z = d.dot(&a);
+        (d - a * z).norm() * cp - z * sp - c.distance
+    }))
+}
+
+/// Algebraic cone for a known axis direction `a` (centred points): with
+/// rho = s + t z about the axis through (x0, y0), x^2 + y^2 is linear in
+/// (1, z, z^2, x, y). Returns the axis point offset, s and t.
+fn algebraic_cone(q: &[[f64; 3]], a: &Vector3<f64>) -> Option<(Vector3<f64>, f64, f64)> {
+    let (u, v) = orthonormal_basis(a);
+    let mut m = DMatrix::<f64>::zeros(5, 5);
+    let mut b = DVector::<f64>::zeros(5);
+    for p in q {
+        let pv = vec3(p);
+        let (x, y, z) = (pv.dot(&u), pv.dot(&v), pv.dot(a));
+        let row = [1.0, z, z * z, x, y];
+        let rhs = x * x + y * y;
+        for i in 0..5 {
+            b[i] += row[i] * rhs;
+            for j in 0..5 {
+                m[(i, j)] += row[i] * row[j];
+            }
+        }
+    }
+    let c = m.lu().solve(&b)?;
+    if !(c[2] > 0.0) {
+        return None;
+    }
+    let (x0, y0) = (0.5 * c[3], 0.5 * c[4]);
+    let t = c[2].sqrt();
+    let s = c[1] / (2.0 * t);
+    (s.is_finite() && t.is_finite()).then(|| (u * x0 + v * y0, s, t))
+}
+
+/// Least-squares cone, minimising the squared orthogonal distances
+/// d = rho cos(psi) - z sin(psi) - D (Forbes' parametrisation), from
+/// algebraic starts about each principal axis.
+pub fn cone(pts: &[f64]) -> Result<Cone> {
+    check_points(pts, 3, 6, "cone")?;
+    let c = centroid(pts, 3);
+    let q = centred3(pts, 3, &c);
+    let (sv, axes) = principal_axes(&q);
+    if sv[0] == 0.0 || sv[1] <= DEGENERATE * sv[0] {
+        return Err(GkError::degenerate("cone: the points are coincident or collinear; no cone is determined"));
+    }
+    type S = (Vector3<f64>, Vector3<f64>, f64, f64); // point, direction, D, psi
+    let cost = |s: &S| {
+        let (cp, sp) = (s.3.cos(), s.3.sin());
+        det_sum(&q, |x| {
+            let d = vec3(x) - s.0;
+            let z = d.dot(&s.1);
+            ((d - s.1 * z).norm() * cp - z * sp - s.2).powi(2)
+        })
+    };
+    let eval = |s: &S| {
+        let (u, v) = orthonormal_basis(&s.1);
+        let (cp, sp) = (s.3.cos(), s.3.sin());
+        normal_equations::<6>(&q, |x| {
+            let d = vec3(x) - s.0;
+            let (xu, yv, z) = (d.dot(&u), d.dot(&v), d.dot(&s.1));
+            let rho = xu.hypot(yv);
+            let (cx, cy) = if rho > 0.0 { (xu / rho, yv / rho) } else { (0.0, 0.0) };
+            let r = rho * cp - z * sp - s.2;
+            // step (x0, y0, alpha, beta, dD, dpsi); a' = a + alpha u + beta v
+            (r, [-cp * cx, -cp * cy, -cp * cx * z - sp * xu, -cp * cy * z - sp * yv, -1.0, -rho * sp - z * cp])
+        })
+    };
+    let apply = |s: &S, st: &DVector<f64>| {
+        let (u, v) = orthonormal_basis(&s.1);
+        let l = s.0 + u * st[0] + v * st[1];
+        let a = (s.1 + u * st[2] + v * st[3]).normalize();
+        (l, a, s.2 + st[4], s.3 + st[5])
+    };
+    let mut best: Option<(S, f64)> = None;
+    for a in axes {
+        let Some((l0, s0, t0)) = algebraic_cone(&q, &a) else { continue };
+        // the algebraic fit gives rho = s0 + t0 z (up to the sign of t0)
+        for sign in [1.0, -1.0] {
+            let psi = (sign * t0).atan();
+            let start: S = (l0, a, s0 * psi.cos(), psi);
+            if let Ok((sol, _)) = levenberg_marquardt(start, 6, sv[0] / (q.len() as f64).sqrt(), 500, eval, cost, apply, "cone") {
+                let f = cost(&sol);
+                if f.is_finite() && best.as_ref().is_none_or(|b| f < b.1) {
+                    best = Some((sol, f));
+                }
+            }
+        }
+    }
+    let ((l, a, mut dd, mut psi), _) =
+        best.ok_or_else(|| GkError::degenerate("cone: the points do not determine a cone"))?;
+    // (psi, D) and (psi - pi, -D) give the same residuals up to sign: bring psi into [-pi/2, pi/2]
+    psi = psi.rem_euclid(2.0 * PI);
+    if psi > PI {
+        psi -= 2.0 * PI;
+    }
+    if psi > FRAC_PI_2 {
+        psi -= PI;
+        dd = -dd;
+    } else if psi < -FRAC_PI_2 {
+        psi += PI;
+        dd = -dd;
+    }
+    // report the point on the axis nearest the centroid; D moves with it
+    let z = -l.dot(&a);
+    let l = l + a * z;
+    let dd = dd + z * psi.sin();
+    let (a, psi) = if psi < 0.0 { (-a, -psi) } else { (a, psi) };
+    Ok(Cone { point: arr(&(l + vec3(&c))), direction: arr(&a), distance: dd, half_angle: psi })
 }
 
 #[cfg(test)]

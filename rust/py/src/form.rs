@@ -289,7 +289,20 @@ fn form_cylinder_arc(py: Python<'_>, points: PyReadonlyArray2<'_, f64>, point: [
     run(py, || Ok(gagekit_form::cylinder::arc(pts, &point, &direction)))
 }
 
+/// Least-squares cone: (axis point, axis direction, distance from the point to the
+/// surface, half apex angle (rad), (min, max) signed orthogonal distance of the points).
+#[pyfunction]
+fn form_cone_lsq(py: Python<'_>, points: PyReadonlyArray2<'_, f64>) -> PyResult<([f64; 3], [f64; 3], f64, f64, Ext)> {
+    let pts = rows(py, &points, 3, "points")?;
+    run(py, || {
+        let c = lsq::cone(pts)?;
+        let e = lsq::cone_extent(pts, &c);
+        Ok((c.point, c.direction, c.distance, c.half_angle, ext(e)))
+    })
+}
+
 fn register_3d(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(form_cone_lsq, m)?)?;
     m.add_function(wrap_pyfunction!(form_cylinder_arc, m)?)?;
     m.add_function(wrap_pyfunction!(form_cylinder_fit, m)?)?;
     m.add_function(wrap_pyfunction!(form_circle_pso, m)?)?;
