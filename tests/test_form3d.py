@@ -136,6 +136,8 @@ def test_line_2d_and_certificates():
         (gagekit.fit_cylinder, np.zeros((9, 2)), InvalidInputError),
         (gagekit.fit_plane, [[1, 2, "x"]] * 3, InvalidInputError),
         (gagekit.fit_line, np.zeros((0, 3)), InvalidInputError),
+        (gagekit.fit_cone, np.outer(np.arange(9.0), [1, 2, 3]), DegenerateGeometryError),
+        (gagekit.fit_cone, np.random.default_rng(0).normal(size=(5, 3)), InvalidInputError),
     ],
 )
 def test_bad_input_raises_gagekit_errors(fn, pts, err):
