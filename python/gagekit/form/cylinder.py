@@ -108,6 +108,7 @@ def fit_cylinder(
     iterations: int = 300,
     stall_iterations: int = 50,
     refine_starts: int = 4,
+    hop_rounds: int = 3,
     search_axis: Optional[Any] = None,
     max_tilt: Optional[float] = None,
 ) -> CylinderFit:
@@ -131,6 +132,10 @@ def fit_cylinder(
         after which the swarm stops (the dissertation uses 20 particles, 2000 iterations).
     refine_starts
         Nelder-Mead refinements from this many of the swarm's best distinct particles.
+    hop_rounds
+        Rounds of basin hopping: 8 refinements restarted 1e-4 rad around the best axis,
+        repeated while they improve it (minimum-zone landscapes have long narrow valleys
+        with several local minima some 1e-5 rad apart). 0 disables.
     search_axis, max_tilt
         Restrict the search to directions within ``max_tilt`` rad of ``search_axis`` (of the
         least-squares axis when ``search_axis`` is None). Default: the upper half sphere
@@ -158,7 +163,7 @@ def fit_cylinder(
             crit, len(pts), _vec(point), _vec(direction), theta, phi, float(radius),
             cert.max_distance - cert.min_distance, cert,
         ))
-    for name, v in (("particles", particles), ("iterations", iterations), ("stall_iterations", stall_iterations), ("refine_starts", refine_starts)):
+    for name, v in (("particles", particles), ("iterations", iterations), ("stall_iterations", stall_iterations), ("refine_starts", refine_starts), ("hop_rounds", hop_rounds)):
         if int(v) < (1 if name == "particles" else 0):
             raise ConfigError(f"cylinder: {name} must be a positive integer, got {v}")
     if seed < 0:
@@ -170,7 +175,7 @@ def fit_cylinder(
         raise ConfigError("cylinder: give max_tilt (rad) together with search_axis")
     d = _core.form_cylinder_fit(
         pts, _CODES[crit], int(seed), int(particles), int(iterations), int(stall_iterations),
-        axis, None if max_tilt is None else float(max_tilt), int(refine_starts),
+        axis, None if max_tilt is None else float(max_tilt), int(refine_starts), int(hop_rounds),
     )
     cert = Certificate(float(d["min_distance"]), float(d["max_distance"]))
     code = _CODES[crit]

@@ -26,6 +26,9 @@ use std::f64::consts::{FRAC_PI_2, PI};
 /// rad moves a point 100 mm along the axis by 1e-10 mm.
 const NM_STEP: f64 = 1e-4;
 const NM_XTOL: f64 = 1e-12;
+/// Basin hopping: restarts per round and their distance (rad) from the best axis.
+const HOPS: usize = 8;
+const HOP_RADIUS: f64 = 1e-4;
 
 /// Which cylinder to fit.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -59,6 +62,9 @@ pub struct Options {
     pub search: Search,
     /// Local refinements from this many of the swarm's best distinct particles.
     pub refine_starts: usize,
+    /// Rounds of basin hopping around the best axis (0: none); a round that
+    /// does not improve ends the hopping.
+    pub hop_rounds: usize,
 }
 
 impl Default for Options {
@@ -70,6 +76,7 @@ impl Default for Options {
             stall_iterations: 50,
             search: Search::HalfSphere,
             refine_starts: 4,
+            hop_rounds: 3,
         }
     }
 }
@@ -369,6 +376,46 @@ fn fit_direct(pts: &[f64], crit: Criterion, opts: &Options, lsq_axis: Option<Vec
         evaluations += evals;
         if value < best.0 {
             best = (value, a);
+        }
+    }
+    // Basin hopping: minimum-zone landscapes have long narrow valleys holding
+    // several local minima some 1e-5 rad apart (set 3: two minima 4.6e-5 rad and
+    // 6e-9 mm apart); restart the refinement from HOPS points around the best.
+    for _ in 0..opts.hop_rounds {
+        let (u, v) = orthonormal_basis(&best.1);
+        let a0 = best.1;
+        let hops: Vec<(f64, Vector3<f64>, usize)> = (0..HOPS)
+            .into_par_iter()
+            .map(|k| {
+                let th = 0.3 + 2.0 * PI * k as f64 / HOPS as f64;
+                let s0 = (a0 + (u * th.cos() + v * th.sin()) * HOP_RADIUS).normalize();
+                let (u2, v2) = orthonormal_basis(&s0);
+                let dir = |x: &[f64]| (s0 + u2 * x[0] + v2 * x[1]).normalize();
+                let nm = nelder_mead(
+                    |x: &[f64]| {
+                        let a = dir(x);
+                        if in_region(&a) {
+                            objective(&q, &a, crit, size)
+                        } else {
+                            f64::INFINITY
+                        }
+                    },
+                    &[0.0, 0.0],
+                    0.2 * HOP_RADIUS,
+                    NM_XTOL,
+                );
+                (nm.value, dir(&nm.position), nm.evaluations)
+            })
+            .collect();
+        let before = best.0;
+        for (value, a, evals) in hops {
+            evaluations += evals;
+            if value < best.0 {
+                best = (value, a);
+            }
+        }
+        if best.0 >= before - 1e-9 * before.abs() {
+            break; // no new basin (gains at rounding level do not count)
         }
     }
     let a = best.1;

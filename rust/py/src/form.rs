@@ -208,7 +208,7 @@ fn config_err(py: Python<'_>, msg: String) -> PyErr {
 /// (or around the least-squares axis when `axis` is None); no `half_angle`: the
 /// half sphere. Returns a dict of the fit.
 #[pyfunction]
-#[pyo3(signature = (points, criterion, seed=0, particles=20, max_iterations=300, stall_iterations=50, axis=None, half_angle=None, refine_starts=4))]
+#[pyo3(signature = (points, criterion, seed=0, particles=20, max_iterations=300, stall_iterations=50, axis=None, half_angle=None, refine_starts=4, hop_rounds=3))]
 #[allow(clippy::too_many_arguments)]
 fn form_cylinder_fit<'py>(
     py: Python<'py>,
@@ -221,6 +221,7 @@ fn form_cylinder_fit<'py>(
     axis: Option<[f64; 3]>,
     half_angle: Option<f64>,
     refine_starts: usize,
+    hop_rounds: usize,
 ) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
     use gagekit_form::cylinder::{fit, Criterion, Options, Search};
     let pts = rows(py, &points, 3, "points")?;
@@ -235,7 +236,7 @@ fn form_cylinder_fit<'py>(
         (Some(a), Some(h)) => Search::Cone { axis: a, half_angle: h },
         (None, Some(h)) => Search::AroundLeastSquares { half_angle: h },
     };
-    let opts = Options { seed, particles, max_iterations, stall_iterations, search, refine_starts };
+    let opts = Options { seed, particles, max_iterations, stall_iterations, search, refine_starts, hop_rounds };
     let r = run(py, || fit(pts, crit, &opts))?;
     let d = pyo3::types::PyDict::new(py);
     d.set_item("point", r.point)?;
