@@ -29,6 +29,8 @@ const NM_XTOL: f64 = 1e-12;
 /// Basin hopping: restarts per round and their distance (rad) from the best axis.
 const HOPS: usize = 8;
 const HOP_RADIUS: f64 = 1e-4;
+/// Resolution of the hops' searches (the best hop is then polished to NM_XTOL).
+const HOP_XTOL: f64 = 1e-9;
 
 /// Which cylinder to fit.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -402,7 +404,7 @@ fn fit_direct(pts: &[f64], crit: Criterion, opts: &Options, lsq_axis: Option<Vec
                     },
                     &[0.0, 0.0],
                     0.2 * HOP_RADIUS,
-                    NM_XTOL,
+                    HOP_XTOL,
                 );
                 (nm.value, dir(&nm.position), nm.evaluations)
             })
@@ -416,6 +418,27 @@ fn fit_direct(pts: &[f64], crit: Criterion, opts: &Options, lsq_axis: Option<Vec
         }
         if best.0 >= before - 1e-9 * before.abs() {
             break; // no new basin (gains at rounding level do not count)
+        }
+        // polish the new basin's minimum to full resolution
+        let a0 = best.1;
+        let (u2, v2) = orthonormal_basis(&a0);
+        let dir = |x: &[f64]| (a0 + u2 * x[0] + v2 * x[1]).normalize();
+        let nm = nelder_mead(
+            |x: &[f64]| {
+                let a = dir(x);
+                if in_region(&a) {
+                    objective(&q, &a, crit, size)
+                } else {
+                    f64::INFINITY
+                }
+            },
+            &[0.0, 0.0],
+            100.0 * HOP_XTOL,
+            NM_XTOL,
+        );
+        evaluations += nm.evaluations;
+        if nm.value < best.0 {
+            best = (nm.value, dir(&nm.position));
         }
     }
     let a = best.1;
