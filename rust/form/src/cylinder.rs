@@ -5,14 +5,19 @@
 //! azimuth f) projects the points onto the plane normal to it,
 //! q = [I2 0] Ry(-t) Rz(-f) p (Eq. 6.12 as corrected in ERRATA item 1), and
 //! the projected 2-D set is fitted exactly by the circle kernels
-//! ([`crate::circle`]). The seeded parallel PSO ([`gagekit_pso`]) searches the
-//! direction over the half sphere (or a cone around a given axis), and a
-//! Nelder–Mead search in local coordinates around the best direction refines
-//! it to double precision. The least-squares axis is one of the swarm's
-//! starting particles.
+//! ([`crate::circle`]). The search over directions:
 //!
-//! Every result carries its certificate: min and max distance of the input
-//! points to the reported axis, recomputed in 3-D.
+//! 1. the seeded parallel PSO ([`gagekit_pso`]) over the half sphere (or a cone
+//!    around a given axis), with the least-squares axis as one particle;
+//! 2. Nelder–Mead in local coordinates (alpha, beta) from the best distinct
+//!    particles, to 1e-12 rad;
+//! 3. basin hopping: Nelder–Mead restarted 1e-4 rad around the best axis while
+//!    that finds a lower basin (minimax landscapes have long narrow valleys with
+//!    several local minima some 1e-5 rad apart).
+//!
+//! Large inputs are fitted on an active subset (see [`fit`]). Every result
+//! carries its certificate: min and max distance of the input points to the
+//! reported axis, recomputed in 3-D.
 
 use crate::circle;
 use crate::lsq::{self, centroid, orthonormal_basis, Extent};
