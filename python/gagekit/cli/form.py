@@ -2,6 +2,191 @@
 
 from __future__ import annotations
 
+from enum import Enum
+from pathlib import Path
+from typing import Any
+
+import numpy as np
 import typer
 
+from ..errors import FileFormatError
+from ._common import JSON_OPTION, emit, table
+
 app = typer.Typer(help="Form of lines, planes, circles, spheres and cylinders (Ch. 6).", no_args_is_help=True)
+
+
+# circles ------------------------------------------------------------------------------
+
+
+class _CircleCriterion(str, Enum):
+    lsq = "lsq"
+    mc = "mc"
+    mi = "mi"
+    mz = "mz"
+    all = "all"
+
+
+def _read_xy(path: Path) -> np.ndarray:
+    """(n, 2) points from a text file of (n, 2) or (n, 3) rows, or a NIST .ds file.
+
+    Temporary reader until ``gagekit.read_points`` lands. A 3-column file must lie in a
+    plane parallel to a coordinate plane; the constant coordinate is dropped.
+    """
+    from ..errors import FileFormatError, InvalidInputError
+
+    if not path.is_file():
+        raise FileFormatError(f"{path}: no such file")
+    try:
+        if path.suffix.lower() == ".npy":
+            arr = np.load(path, allow_pickle=False)
+        else:
+            arr = np.loadtxt(path, skiprows=1 if path.suffix.lower() == ".ds" else 0, ndmin=2,
+                             delimiter="," if path.suffix.lower() == ".csv" else None)
+    except (ValueError, OSError) as exc:
+        raise FileFormatError(f"{path}: cannot read points ({exc})") from None
+    arr = np.asarray(arr, dtype=np.float64)
+    if arr.ndim != 2 or arr.shape[1] not in (2, 3):
+        raise FileFormatError(f"{path}: expected 2 or 3 columns, got shape {arr.shape}")
+    if arr.shape[1] == 3:
+        const = [k for k in range(3) if np.ptp(arr[:, k]) == 0.0] if len(arr) else [2]
+        if not const:
+            raise InvalidInputError(
+                f"{path}: 3-D points do not lie in a plane parallel to a coordinate plane; "
+                "a 2-D circle fit needs planar points"
+            )
+        arr = np.delete(arr, const[-1], axis=1)
+    return np.ascontiguousarray(arr)
+
+
+@app.command("circle")
+def circle(
+    file: Path = typer.Argument(..., help="Points: (n, 2) or planar (n, 3) text/.npy file, or NIST .ds."),
+    criterion: _CircleCriterion = typer.Option(_CircleCriterion.lsq, "--criterion", "-c",
+                                               help="lsq, mc (min circumscribed), mi (max inscribed), mz (min zone), or all."),
+    as_json: bool = JSON_OPTION,
+) -> None:
+    """Fit a 2-D circle (Sec. 6.2): least squares, MC, MI or minimum zone (roundness)."""
+    from ..form.circle import fit_circle
+
+    pts = _read_xy(file)
+    crits = ["lsq", "mc", "mi", "mz"] if criterion.value == "all" else [criterion.value]
+    fits = [fit_circle(pts, c) for c in crits]
+    result = fits[0] if len(fits) == 1 else {f.to_dict()["criterion"]: f for f in fits}
+
+    def human(_: object) -> str:
+        rows = [[f.to_dict()["criterion"], f.center[0], f.center[1], f.radius, f.width,
+                 " ".join(map(str, f.control_points))] for f in fits]
+        text = table(["criterion", "x", "y", "radius", "form error", "control points"], rows)
+        notes = [w for f in fits for w in f.warnings]
+        return "\n".join([f"{file}: {fits[0].n_points} points", text, *[f"warning: {w}" for w in notes]])
+
+    emit(result, as_json, human)
+
+
+# end circles --------------------------------------------------------------------------
+
+
+# 3-D fits ------------------------------------------------------------------
+
+_SHAPES_3D = ("line", "plane", "sphere", "circle3d", "cylinder", "cone")
+
+
+def _load_points(path: Path) -> np.ndarray:
+    """Read an (n, d) point file: .npy, NIST .ds (count on the first line), CSV or
+    whitespace text (a non-numeric header line is skipped).
+
+    Private stop-gap until the CLI switches to ``gagekit.read_points``.
+    """
+    if not path.is_file():
+        raise FileFormatError(f"{path}: no such file")
+    try:
+        if path.suffix.lower() == ".npy":
+            arr = np.load(path, allow_pickle=False)
+        else:
+            lines = path.read_text().splitlines()
+            skip = 1 if path.suffix.lower() == ".ds" else 0
+            first = lines[skip].replace(",", " ").split() if len(lines) > skip else []
+            try:
+                [float(v) for v in first]
+            except ValueError:
+                skip += 1
+            delim = "," if "," in "".join(lines[skip : skip + 2]) else None
+            arr = np.loadtxt(path, delimiter=delim, skiprows=skip, ndmin=2, dtype=np.float64)
+    except (OSError, ValueError, IndexError) as exc:
+        raise FileFormatError(f"{path}: cannot read points ({exc})") from None
+    arr = np.asarray(arr, dtype=np.float64)
+    if arr.ndim != 2 or arr.shape[0] == 0 or arr.shape[1] not in (2, 3):
+        raise FileFormatError(f"{path}: expected rows of 2 or 3 coordinates, got an array of shape {arr.shape}")
+    return np.ascontiguousarray(arr)
+
+
+def _fmt_vec(v: Any) -> str:
+    return "(" + ", ".join(f"{x:.9g}" for x in v) + ")"
+
+
+def _human(r: Any) -> str:
+    d = r.to_dict()
+    rows = []
+    for key in ("radius", "inner_radius", "outer_radius", "form_error", "theta", "phi", "distance", "apex_angle"):
+        if d.get(key) is not None:
+            rows.append([key, f"{d[key]:.9f}"])
+    for key in ("center", "normal", "point", "direction", "axis_point", "axis_direction"):
+        if key in d:
+            rows.append([key, _fmt_vec(d[key])])
+    if d.get("control_points"):
+        rows.append(["control_points", " ".join(str(i) for i in d["control_points"])])
+    cert = d["certificate"]
+    rows.append(["min_distance", f"{cert['min_distance']:.9f}"])
+    rows.append(["max_distance", f"{cert['max_distance']:.9f}"])
+    head = f"{d['shape']} ({d['criterion']}), {d['n_points']} points"
+    return head + "\n" + table(["quantity", "value (mm, rad)"], rows)
+
+
+@app.command("fit")
+def fit(
+    shape: str = typer.Argument(..., help="circle, line, plane, sphere, circle3d, cylinder or cone"),
+    file: Path = typer.Argument(..., help="Point file (.npy, NIST .ds, CSV, text)"),
+    criterion: str = typer.Option("least-squares", "--criterion", "-c", help="Fit criterion"),
+    seed: int = typer.Option(0, "--seed", help="Seed of the particle swarm (cylinders)"),
+    as_json: bool = JSON_OPTION,
+) -> None:
+    """Fit a feature to the points of FILE and report its form error and certificate."""
+    from .. import form
+
+    name = shape.strip().lower().replace("-", "").replace("_", "")
+    if name == "circle":  # 2-D circles: the circle reader drops a constant coordinate
+        emit(form.fit_circle(_read_xy(file), criterion), as_json, _human)
+        return
+    pts = _load_points(file)
+    if name == "line":
+        r = form.fit_line(pts, criterion)
+    elif name == "plane":
+        r = form.fit_plane(pts, criterion)
+    elif name == "sphere":
+        r = form.fit_sphere(pts, criterion)
+    elif name in ("circle3d", "circle3"):
+        r = form.fit_circle_3d(pts, criterion)
+    elif name == "cylinder":
+        r = form.fit_cylinder(pts, criterion, seed=seed)
+    elif name == "cone":
+        r = form.fit_cone(pts, criterion)
+    else:
+        from ..errors import ConfigError
+
+        raise ConfigError(f"unknown shape {shape!r}; choose one of circle, {', '.join(_SHAPES_3D)}")
+    emit(r, as_json, _human)
+
+
+@app.command("cylinder")
+def cylinder(
+    file: Path = typer.Argument(..., help="Point file (.npy, NIST .ds, CSV, text)"),
+    criterion: str = typer.Option(
+        "least-squares", "--criterion", "-c", help="least-squares (lsq), mcc, mic or mzc"
+    ),
+    seed: int = typer.Option(0, "--seed", help="Seed of the particle swarm"),
+    as_json: bool = JSON_OPTION,
+) -> None:
+    """Fit a cylinder (least squares, min circumscribed, max inscribed, minimum zone)."""
+    from .. import form
+
+    emit(form.fit_cylinder(_load_points(file), criterion, seed=seed), as_json, _human)

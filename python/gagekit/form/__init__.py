@@ -1,3 +1,20 @@
 """Form of lines, planes, circles, spheres and cylinders (Ch. 6)."""
 
-__all__: list[str] = []
+# circles
+from .circle import CIRCLE_CRITERIA, CircleFit, fit_circle
+
+# 3-D fits
+from .cylinder import *  # noqa: F401,F403
+from .cylinder import __all__ as _cylinder_all
+from .fits import *  # noqa: F401,F403
+from .fits import __all__ as _fits_all
+
+__all__: list[str] = [
+    # circles
+    "CircleFit",
+    "fit_circle",
+    "CIRCLE_CRITERIA",
+    # 3-D fits
+    *_fits_all,
+    *_cylinder_all,
+]

@@ -1,9 +1,13 @@
 //! Form fitting of circles, cylinders, lines, planes and spheres (Ch. 6).
 //!
 //! - [`circle`]: 2-D circles: minimum circumscribed, maximum inscribed, minimum zone, least squares.
+//! - [`circle_pso`]: 2-D circles by the particle swarm (cross-check of [`circle`]).
 //! - [`lsq`]: least-squares lines, planes, spheres, 3-D circles and cylinders.
 //! - [`cylinder`]: cylinders by the projection model and the parallel PSO.
+//! - [`minzone`]: minimum-zone planes (flatness) and 2-D lines (straightness) by LP.
 
 pub mod circle;
+pub mod circle_pso;
 pub mod cylinder;
 pub mod lsq;
+pub mod minzone;

@@ -1,0 +1,110 @@
+//! Maximum inscribed circle (MI) constrained to lie within the minimum circumscribed
+//! circle (Eq. 6.2, Sec. 6.2.2).
+
+use super::voronoi::Nearest;
+use super::{dist, mc, Centered, Circle};
+use gagekit_core::Result;
+
+/// Maximum inscribed circle of `pts` (flat (n, 2), n >= 3, not collinear).
+///
+/// Maximises `g(c) = min(r_MC - |c - c_MC|, min_i |c - p_i|)` (Eq. 6.2). The optimum is
+/// one of the candidates of Sec. 6.2.2:
+/// - a nearest-Voronoi vertex inside MC (three control points);
+/// - Case I: a point of a nearest-Voronoi edge whose circle through the edge's two
+///   sites is internally tangent to MC (two control points);
+/// - Case II: a circle through one point, tangent to MC at the far end of the MC
+///   diameter through that point (one control point), if no point lies inside it.
+///
+/// Every candidate is scored by `g`, so a candidate is only accepted as far as it is
+/// feasible. The reported radius is recomputed against all points and MC.
+pub fn max_inscribed(pts: &[f64]) -> Result<Circle> {
+    const WHAT: &str = "maximum inscribed circle";
+    let data = Centered::new(pts, WHAT, 3)?;
+    data.require_not_collinear(WHAT)?;
+    let p = &data.pts;
+    let (cmc, _) = mc::welzl(p, data.scale);
+    let (r0, rmc) = super::mz::radii(p, cmc);
+    // the MC centre is feasible with radius r0: only larger empty circles matter
+    let nvd = Nearest::new(p, WHAT, r0 - 1e-9 * data.scale)?;
+    let tol = 1e-12 * data.scale;
+    let g_mc = |c: [f64; 2]| rmc - dist(c, cmc);
+
+    let mut best_r = f64::NEG_INFINITY;
+    let mut best_c = cmc;
+    let mut best_ctrl = Vec::new();
+
+    // three points: nearest-Voronoi vertices inside MC
+    for v in &nvd.verts {
+        if v.rad > best_r && v.rad <= g_mc(v.c) + tol {
+            best_r = v.rad;
+            best_c = v.c;
+            best_ctrl = v.sites.to_vec();
+        }
+    }
+    // Case I: two points and internal tangency with MC, on a nearest-Voronoi edge
+    for e in &nvd.edges {
+        if e.rad_max() <= best_r {
+            continue;
+        }
+        // |c(t) - p_a| = s, |c(t) - c_MC| = R - s with c(t) = m + t n:
+        // s = alpha + beta t and (1 - beta^2) t^2 - 2 alpha beta t + h^2 - alpha^2 = 0
+        let q = [e.m[0] - cmc[0], e.m[1] - cmc[1]];
+        let qq = q[0] * q[0] + q[1] * q[1];
+        let qn = q[0] * e.n[0] + q[1] * e.n[1];
+        let alpha = (rmc * rmc + e.h * e.h - qq) / (2.0 * rmc);
+        let beta = -qn / rmc;
+        let (a2, b2, c2) = (1.0 - beta * beta, -2.0 * alpha * beta, e.h * e.h - alpha * alpha);
+        for t in quadratic_roots(a2, b2, c2) {
+            let s = alpha + beta * t;
+            if s <= best_r || s > rmc || !e.contains(t, tol) {
+                continue;
+            }
+            let c = e.at(t);
+            let g = g_mc(c).min(e.rad(t));
+            if g > best_r {
+                best_r = g;
+                best_c = c;
+                best_ctrl = vec![e.a, e.b];
+            }
+        }
+    }
+    // Case II: one point; the circle with diameter from the point to the far end of the
+    // MC diameter through it
+    for (i, pi) in p.iter().enumerate() {
+        let d = dist(*pi, cmc);
+        let r = 0.5 * (rmc + d);
+        if d == 0.0 || r <= best_r {
+            continue;
+        }
+        let c = [pi[0] + (cmc[0] - pi[0]) / d * r, pi[1] + (cmc[1] - pi[1]) / d * r];
+        let (_, dn) = nvd.nearest(p, c);
+        let g = g_mc(c).min(dn);
+        if g > best_r && dn >= dist(*pi, c) - tol {
+            best_r = g;
+            best_c = c;
+            best_ctrl = vec![i];
+        }
+    }
+    let r_near = p.iter().map(|q| dist(*q, best_c)).fold(f64::INFINITY, f64::min);
+    let radius = r_near.min(g_mc(best_c)).max(0.0);
+    best_ctrl.sort_unstable();
+    best_ctrl.dedup();
+    Ok(Circle { center: data.uncenter(best_c), radius, control: best_ctrl })
+}
+
+/// Real roots of a t^2 + b t + c = 0 (a may be ~0).
+pub(crate) fn quadratic_roots(a: f64, b: f64, c: f64) -> Vec<f64> {
+    if a.abs() < 1e-15 * (b.abs() + c.abs()).max(f64::MIN_POSITIVE) {
+        return if b != 0.0 { vec![-c / b] } else { vec![] };
+    }
+    let disc = b * b - 4.0 * a * c;
+    if disc < 0.0 {
+        return vec![];
+    }
+    let sq = disc.sqrt();
+    let qv = -0.5 * (b + b.signum() * sq);
+    if qv == 0.0 {
+        return vec![0.0];
+    }
+    vec![qv / a, c / qv]
+}

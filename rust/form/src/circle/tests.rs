@@ -1,0 +1,247 @@
+//! Brute-force cross-checks of the circle fits on small random sets.
+
+use super::voronoi::farthest_delaunay;
+use super::*;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+fn random_set(seed: u64, n: usize, kind: u8) -> Vec<f64> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut v = Vec::with_capacity(2 * n);
+    for _ in 0..n {
+        let (x, y) = match kind {
+            // noisy circle
+            0 => {
+                let a: f64 = rng.random_range(0.0..std::f64::consts::TAU);
+                let r = 10.0 + rng.random_range(-0.3..0.3);
+                (3.0 + r * a.cos(), -2.0 + r * a.sin())
+            }
+            // noisy arc of 120 degrees
+            1 => {
+                let a: f64 = rng.random_range(0.0..2.1);
+                let r = 5.0 + rng.random_range(-0.2..0.2);
+                (r * a.cos(), r * a.sin())
+            }
+            // uniform in a square
+            _ => (rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0)),
+        };
+        v.push(x);
+        v.push(y);
+    }
+    v
+}
+
+fn pts2(v: &[f64]) -> Vec<[f64; 2]> {
+    v.chunks_exact(2).map(|p| [p[0], p[1]]).collect()
+}
+
+fn f_r(p: &[[f64; 2]], c: [f64; 2]) -> f64 {
+    let (lo, hi) = mz::radii(p, c);
+    hi - lo
+}
+
+#[test]
+fn mc_matches_all_two_and_three_point_circles() {
+    for seed in 0..30 {
+        let v = random_set(seed, 5 + (seed as usize % 20), (seed % 3) as u8);
+        let p = pts2(&v);
+        let mc = min_circumscribed(&v).unwrap();
+        for q in &p {
+            assert!(dist(*q, mc.center) <= mc.radius + 1e-12);
+        }
+        let contains = |c: [f64; 2], r: f64| p.iter().all(|q| dist(*q, c) <= r * (1.0 + 1e-12));
+        let mut best = f64::INFINITY;
+        for i in 0..p.len() {
+            for j in i + 1..p.len() {
+                let c = [(p[i][0] + p[j][0]) / 2.0, (p[i][1] + p[j][1]) / 2.0];
+                let r = dist(c, p[i]);
+                if contains(c, r) {
+                    best = best.min(r);
+                }
+                for k in j + 1..p.len() {
+                    if let Some(c) = circumcenter(p[i], p[j], p[k]) {
+                        let r = dist(c, p[i]);
+                        if contains(c, r) {
+                            best = best.min(r);
+                        }
+                    }
+                }
+            }
+        }
+        assert!((mc.radius - best).abs() < 1e-9, "seed {seed}: {} vs {best}", mc.radius);
+        for &k in &mc.control {
+            assert!((dist(p[k], mc.center) - mc.radius).abs() < 1e-9);
+        }
+    }
+}
+
+#[test]
+fn mc_small_and_degenerate() {
+    let one = min_circumscribed(&[1.0, 2.0]).unwrap();
+    assert_eq!((one.center, one.radius), ([1.0, 2.0], 0.0));
+    let two = min_circumscribed(&[0.0, 0.0, 2.0, 0.0]).unwrap();
+    assert!((two.radius - 1.0).abs() < 1e-15 && two.control == vec![0, 1]);
+    let line = min_circumscribed(&[0.0, 0.0, 1.0, 0.0, 4.0, 0.0]).unwrap();
+    assert!((line.radius - 2.0).abs() < 1e-15);
+    assert!(min_circumscribed(&[]).is_err());
+    let e = min_circumscribed(&[0.0, 0.0, f64::NAN, 1.0]).unwrap_err();
+    assert!(e.message.contains("point 1"), "{}", e.message);
+}
+
+/// max over a grid (then refined) of g(c) = min(r_MC - |c - c_MC|, min_i |c - p_i|)
+fn mi_brute(p: &[[f64; 2]], cmc: [f64; 2], rmc: f64) -> f64 {
+    let g = |c: [f64; 2]| {
+        let near = p.iter().map(|q| dist(*q, c)).fold(f64::INFINITY, f64::min);
+        near.min(rmc - dist(c, cmc))
+    };
+    let mut best = ([0.0, 0.0], f64::NEG_INFINITY);
+    let m = 200;
+    for i in 0..=m {
+        for j in 0..=m {
+            let c = [cmc[0] + rmc * (2.0 * i as f64 / m as f64 - 1.0), cmc[1] + rmc * (2.0 * j as f64 / m as f64 - 1.0)];
+            let v = g(c);
+            if v > best.1 {
+                best = (c, v);
+            }
+        }
+    }
+    // pattern search refinement
+    let mut step = rmc / m as f64;
+    while step > 1e-12 * rmc {
+        let mut moved = false;
+        for d in [[1.0, 0.0], [-1.0, 0.0], [0.0, 1.0], [0.0, -1.0], [0.7, 0.7], [-0.7, 0.7], [0.7, -0.7], [-0.7, -0.7]] {
+            let c = [best.0[0] + step * d[0], best.0[1] + step * d[1]];
+            let v = g(c);
+            if v > best.1 {
+                best = (c, v);
+                moved = true;
+            }
+        }
+        if !moved {
+            step *= 0.5;
+        }
+    }
+    best.1
+}
+
+#[test]
+fn mi_matches_grid_search() {
+    for seed in 0..24 {
+        let v = random_set(100 + seed, 6 + (seed as usize % 30), (seed % 3) as u8);
+        let p = pts2(&v);
+        let mc = min_circumscribed(&v).unwrap();
+        let mi = max_inscribed(&v).unwrap();
+        let brute = mi_brute(&p, mc.center, mc.radius);
+        // no point strictly inside, inside MC
+        for q in &p {
+            assert!(dist(*q, mi.center) >= mi.radius - 1e-12);
+        }
+        assert!(dist(mi.center, mc.center) + mi.radius <= mc.radius + 1e-9);
+        assert!(mi.radius >= brute - 1e-9, "seed {seed}: MI {} < brute {brute}", mi.radius);
+    }
+}
+
+/// min over a grid of centres (then refined by pattern search from the best few)
+fn mz_brute(p: &[[f64; 2]], c0: [f64; 2], span: f64) -> f64 {
+    let m = 120;
+    let mut cands = Vec::new();
+    for i in 0..=m {
+        for j in 0..=m {
+            let c = [c0[0] + span * (2.0 * i as f64 / m as f64 - 1.0), c0[1] + span * (2.0 * j as f64 / m as f64 - 1.0)];
+            cands.push((f_r(p, c), c));
+        }
+    }
+    cands.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut best = f64::INFINITY;
+    for &(v0, c0) in cands.iter().take(12) {
+        let (mut c, mut v) = (c0, v0);
+        let mut step = span / m as f64;
+        while step > 1e-13 * span {
+            let mut moved = false;
+            for k in 0..16 {
+                let a = k as f64 * std::f64::consts::TAU / 16.0;
+                let cc = [c[0] + step * a.cos(), c[1] + step * a.sin()];
+                let vv = f_r(p, cc);
+                if vv < v {
+                    (c, v) = (cc, vv);
+                    moved = true;
+                }
+            }
+            if !moved {
+                step *= 0.5;
+            }
+        }
+        best = best.min(v);
+    }
+    best
+}
+
+#[test]
+fn mz_matches_grid_search() {
+    for seed in 0..24 {
+        let v = random_set(200 + seed, 5 + (seed as usize % 40), (seed % 3) as u8);
+        let p = pts2(&v);
+        let z = min_zone(&v).unwrap();
+        let w = z.width();
+        assert!((f_r(&p, z.center) - w).abs() < 1e-12);
+        let mc = min_circumscribed(&v).unwrap();
+        let brute = mz_brute(&p, mc.center, 2.0 * mc.radius);
+        assert!(w <= brute + 1e-9, "seed {seed}: MZ {w} > brute {brute}");
+        for &k in &z.control_in {
+            assert!((dist(p[k], z.center) - z.r_in).abs() < 1e-9, "seed {seed}");
+        }
+        for &k in &z.control_out {
+            assert!((dist(p[k], z.center) - z.r_out).abs() < 1e-9, "seed {seed}");
+        }
+    }
+}
+
+#[test]
+fn farthest_delaunay_circles_contain_all() {
+    for seed in 0..20 {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let k = 3 + (seed as usize * 7) % 40;
+        let mut ang: Vec<f64> = (0..k).map(|_| rng.random_range(0.0..std::f64::consts::TAU)).collect();
+        ang.sort_by(f64::total_cmp);
+        let q: Vec<[f64; 2]> = ang.iter().map(|a| [3.0 * a.cos(), 2.0 * a.sin()]).collect();
+        let tris = farthest_delaunay(&q);
+        assert_eq!(tris.len(), k - 2);
+        for t in tris {
+            let c = circumcenter(q[t[0]], q[t[1]], q[t[2]]).unwrap();
+            let r = dist(c, q[t[0]]);
+            for x in &q {
+                assert!(dist(*x, c) <= r * (1.0 + 1e-12), "seed {seed}");
+            }
+        }
+    }
+}
+
+#[test]
+fn lsq_perfect_circle_and_errors() {
+    let v: Vec<f64> = (0..7)
+        .flat_map(|k| {
+            let a = k as f64 * 0.9;
+            [1e6 + 3.0 + 2.0 * a.cos(), -1e6 + 2.0 * a.sin()]
+        })
+        .collect();
+    let c = least_squares(&v).unwrap();
+    assert!((c.center[0] - (1e6 + 3.0)).abs() < 1e-8 && (c.center[1] + 1e6).abs() < 1e-8);
+    assert!((c.radius - 2.0).abs() < 1e-9);
+    for f in [least_squares, |v: &[f64]| max_inscribed(v).map(|c| c)] {
+        assert!(f(&[0.0, 0.0, 1.0, 1.0, 2.0, 2.0]).is_err());
+        assert!(f(&[0.0, 0.0, 1.0, 1.0]).is_err());
+    }
+    assert!(min_zone(&[0.0, 0.0, 1.0, 1.0, 2.0, 2.0, 3.0, 3.0]).is_err());
+    let z = min_zone(&[1.0, 0.0, 0.0, 1.0, -1.0, 0.0, 0.0, -1.0]).unwrap();
+    assert!(z.width().abs() < 1e-15 && z.center[0].abs() < 1e-15);
+}
+
+#[test]
+fn angular_gap() {
+    let v: Vec<f64> = (0..10).flat_map(|k| {
+        let a = k as f64 * 0.1;
+        [a.cos(), a.sin()]
+    }).collect();
+    let g = max_angular_gap(&v, [0.0, 0.0]);
+    assert!((g - (std::f64::consts::TAU - 0.9)).abs() < 1e-12);
+}
