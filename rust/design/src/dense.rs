@@ -137,6 +137,54 @@ pub fn lu_inverse(lu: &[f64], piv: &[usize], n: usize, out: &mut [f64]) {
     }
 }
 
+/// Cholesky inverse and log-determinant of a small (r <= MAX_R) SPD matrix into `inv`;
+/// `None` when a pivot is not positive.
+pub fn small_spd_inverse(a: &[f64], r: usize, inv: &mut [f64]) -> Option<f64> {
+    let mut l = [0.0f64; MAX_R * MAX_R];
+    let mut logdet = 0.0;
+    for j in 0..r {
+        let mut s = a[j * r + j];
+        for p in 0..j {
+            s -= l[j * r + p] * l[j * r + p];
+        }
+        if !(s > 0.0) {
+            return None;
+        }
+        let d = s.sqrt();
+        logdet += 2.0 * d.ln();
+        l[j * r + j] = d;
+        for i in j + 1..r {
+            let mut s = a[i * r + j];
+            for p in 0..j {
+                s -= l[i * r + p] * l[j * r + p];
+            }
+            l[i * r + j] = s / d;
+        }
+    }
+    let mut li = [0.0f64; MAX_R * MAX_R];
+    for j in 0..r {
+        li[j * r + j] = 1.0 / l[j * r + j];
+        for i in j + 1..r {
+            let mut s = 0.0;
+            for p in j..i {
+                s -= l[i * r + p] * li[p * r + j];
+            }
+            li[i * r + j] = s / l[i * r + i];
+        }
+    }
+    for i in 0..r {
+        for j in 0..=i {
+            let mut s = 0.0;
+            for p in i..r {
+                s += li[p * r + i] * li[p * r + j];
+            }
+            inv[i * r + j] = s;
+            inv[j * r + i] = s;
+        }
+    }
+    Some(logdet)
+}
+
 /// Largest number of rows a design point may contribute.
 pub const MAX_R: usize = 8;
 /// Largest size of an exchange capacitance matrix (2 * MAX_R).

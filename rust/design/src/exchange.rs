@@ -14,7 +14,7 @@
 //! perturbation of the extreme eigenvalues and the best few evaluated exactly.
 
 use crate::criteria::{information, metrics, Criterion, Metrics};
-use crate::dense::{dot, gram_add, lu_in_place, lu_inverse, mul_ab, mul_abt, spd_inverse, sym_eig, sym_eigenvalues, MAX_P, MAX_R};
+use crate::dense::{small_spd_inverse, dot, gram_add, lu_in_place, lu_inverse, mul_ab, mul_abt, spd_inverse, sym_eig, sym_eigenvalues, MAX_P, MAX_R};
 use gagekit_core::{GkError, Result};
 use rand::seq::{index::sample, SliceRandom};
 use rand::SeedableRng;
@@ -74,6 +74,8 @@ pub struct Outcome {
 
 /// Candidates screened exactly per visit for K and E.
 const EXACT_TOP: usize = 16;
+/// Low-rank updates of the per-candidate blocks before they are recomputed exactly.
+const REFRESH_AFTER: usize = 40;
 /// Candidates sampled per point when building a greedy start.
 const GREEDY_SAMPLE: usize = 64;
 
@@ -217,6 +219,13 @@ struct Run<'p, 'a> {
     /// Per candidate r x r: B F^-1 W F^-1 B^T (A and I).
     e: Vec<f64>,
     value: f64,
+}
+
+/// The visited point's removal, shared by all candidates of a visit.
+struct Removal {
+    qi: [f64; MAX_R * MAX_R],
+    qeq: [f64; MAX_R * MAX_R],
+    value_minus: f64,
 }
 
 /// Scratch of one candidate evaluation (A, D, I).
@@ -416,6 +425,195 @@ impl<'p, 'a> Run<'p, 'a> {
         }
     }
 
+    /// Removing the visited block O first: F_- = F - O^T O, with Q = I - O F^-1 O^T.
+    /// `None` when Q is too close to singular for the two-step formulas.
+    fn removal(&self, d_o: &[f64], e_o: &[f64]) -> Option<Removal> {
+        let r = self.p.r;
+        let mut q = [0.0; MAX_R * MAX_R];
+        for a in 0..r {
+            for b in 0..r {
+                q[a * r + b] = if a == b { 1.0 } else { 0.0 } - d_o[a * r + b];
+            }
+        }
+        let mut rm = Removal { qi: [0.0; MAX_R * MAX_R], qeq: [0.0; MAX_R * MAX_R], value_minus: 0.0 };
+        let logdet_q = small_spd_inverse(&q, r, &mut rm.qi)?;
+        if logdet_q < -18.0 {
+            return None; // removing O nearly loses rank: use the joint 2r formula
+        }
+        rm.value_minus = match self.c {
+            Criterion::D => self.value - logdet_q,
+            _ => {
+                let mut t = [0.0; MAX_R * MAX_R];
+                mul_ab(&rm.qi, e_o, r, r, &mut t); // Qi e_O
+                mul_ab(&t, &rm.qi, r, r, &mut rm.qeq); // Qi e_O Qi (e_O symmetric)
+                self.value + (0..r).map(|a| t[a * r + a]).sum::<f64>()
+            }
+        };
+        Some(rm)
+    }
+
+    /// Criterion after exchanging the visited point for candidate j, as a removal
+    /// (prepared in `rm`) followed by a rank-r addition.
+    fn exchange_value_fast(&self, s: &mut Scratch, j: usize, rm: &Removal, a_t: &[f64], b_t: &[f64]) -> f64 {
+        match self.p.r {
+            1 => self.fast_r::<1>(j, rm, a_t, b_t),
+            2 => self.fast_r::<2>(j, rm, a_t, b_t),
+            3 => self.fast_r::<3>(j, rm, a_t, b_t),
+            _ => self.fast_dyn(s, j, rm, a_t, b_t),
+        }
+    }
+
+    /// [`Self::exchange_value_fast`] for a fixed block height R (unrolled small algebra).
+    fn fast_r<const R: usize>(&self, j: usize, rm: &Removal, a_t: &[f64], b_t: &[f64]) -> f64 {
+        let k = self.p.k;
+        let b = self.p.block(j);
+        let mut c = [[0.0; R]; R]; // c = B F^-1 O^T
+        for a in 0..R {
+            for q in 0..R {
+                c[a][q] = dot(&b[a * k..(a + 1) * k], &a_t[q * k..(q + 1) * k]);
+            }
+        }
+        let qi = |a: usize, q: usize| rm.qi[a * R + q];
+        let mut cq = [[0.0; R]; R]; // c Qi
+        for a in 0..R {
+            for q in 0..R {
+                cq[a][q] = (0..R).map(|t| c[a][t] * qi(t, q)).sum();
+            }
+        }
+        let dj = &self.d[j * R * R..(j + 1) * R * R];
+        let mut pm = [[0.0; R]; R]; // I + B F_-^-1 B^T
+        for a in 0..R {
+            for q in 0..=a {
+                let v = dj[a * R + q] + (0..R).map(|t| cq[a][t] * c[q][t]).sum::<f64>();
+                pm[a][q] = v + if a == q { 1.0 } else { 0.0 };
+            }
+        }
+        // Cholesky of pm in place (lower triangle).
+        let mut det = 1.0;
+        for a in 0..R {
+            let mut v = pm[a][a];
+            for t in 0..a {
+                v -= pm[a][t] * pm[a][t];
+            }
+            if !(v > 0.0) {
+                return f64::INFINITY;
+            }
+            det *= v;
+            let l = v.sqrt();
+            pm[a][a] = l;
+            for q in a + 1..R {
+                let mut w = pm[q][a];
+                for t in 0..a {
+                    w -= pm[q][t] * pm[a][t];
+                }
+                pm[q][a] = w / l;
+            }
+        }
+        if self.c == Criterion::D {
+            return rm.value_minus - det.ln();
+        }
+        let mut f = [[0.0; R]; R]; // f = B F^-1 W F^-1 O^T
+        for a in 0..R {
+            for q in 0..R {
+                f[a][q] = dot(&b[a * k..(a + 1) * k], &b_t[q * k..(q + 1) * k]);
+            }
+        }
+        let qeq = |a: usize, q: usize| rm.qeq[a * R + q];
+        let mut cqe = [[0.0; R]; R];
+        for a in 0..R {
+            for q in 0..R {
+                cqe[a][q] = (0..R).map(|t| c[a][t] * qeq(t, q)).sum();
+            }
+        }
+        // e- = B F_-^-1 W F_-^-1 B^T = e_j + f cQ^T + cQ f^T + c (Qi e_O Qi) c^T
+        let ej = &self.e[j * R * R..(j + 1) * R * R];
+        let mut em = [[0.0; R]; R];
+        for a in 0..R {
+            for q in 0..R {
+                em[a][q] = ej[a * R + q]
+                    + (0..R)
+                        .map(|t| f[a][t] * cq[q][t] + cq[a][t] * f[q][t] + cqe[a][t] * c[q][t])
+                        .sum::<f64>();
+            }
+        }
+        // tr(P^-1 e-) with P = L L^T: solve L X = e-, then tr(L^-T X) = sum ||L^-1 e-^(1/2)||..
+        // computed column by column: x = L^-T L^-1 e-[:, q], accumulate x[q].
+        let mut t = 0.0;
+        for q in 0..R {
+            let mut y = [0.0; R];
+            for a in 0..R {
+                let mut v = em[a][q];
+                for u in 0..a {
+                    v -= pm[a][u] * y[u];
+                }
+                y[a] = v / pm[a][a];
+            }
+            for a in (0..R).rev() {
+                let mut v = y[a];
+                for u in a + 1..R {
+                    v -= pm[u][a] * y[u];
+                }
+                y[a] = v / pm[a][a];
+            }
+            t += y[q];
+        }
+        let v = rm.value_minus - t;
+        if v > 0.0 {
+            v
+        } else {
+            f64::INFINITY
+        }
+    }
+
+    /// [`Self::exchange_value_fast`] for any block height.
+    fn fast_dyn(&self, s: &mut Scratch, j: usize, rm: &Removal, a_t: &[f64], b_t: &[f64]) -> f64 {
+        let (r, k) = (self.p.r, self.p.k);
+        let rr = r * r;
+        let b = self.p.block(j);
+        mul_abt(b, a_t, r, k, r, &mut s.c); // c = B F^-1 O^T
+        let mut cq = [0.0; MAX_R * MAX_R];
+        mul_ab(&s.c, &rm.qi, r, r, &mut cq); // c Qi
+        let dj = &self.d[j * rr..(j + 1) * rr];
+        let mut pm = [0.0; MAX_R * MAX_R];
+        for a in 0..r {
+            for bb in 0..r {
+                let mut v = dj[a * r + bb];
+                for q in 0..r {
+                    v += cq[a * r + q] * s.c[bb * r + q];
+                }
+                pm[a * r + bb] = v + if a == bb { 1.0 } else { 0.0 };
+            }
+        }
+        let mut pinv = [0.0; MAX_R * MAX_R];
+        let Some(logdet_p) = small_spd_inverse(&pm, r, &mut pinv) else {
+            return f64::INFINITY;
+        };
+        if self.c == Criterion::D {
+            return rm.value_minus - logdet_p;
+        }
+        mul_abt(b, b_t, r, k, r, &mut s.fx); // f = B F^-1 W F^-1 O^T
+        let ej = &self.e[j * rr..(j + 1) * rr];
+        // e- = B F_-^-1 W F_-^-1 B^T = e_j + f cQ^T + cQ f^T + c (Qi e_O Qi) c^T
+        let mut cqe = [0.0; MAX_R * MAX_R];
+        mul_ab(&s.c, &rm.qeq, r, r, &mut cqe);
+        let mut t = 0.0;
+        for a in 0..r {
+            for bb in 0..r {
+                let mut v = ej[a * r + bb];
+                for q in 0..r {
+                    v += s.fx[a * r + q] * cq[bb * r + q] + cq[a * r + q] * s.fx[bb * r + q] + cqe[a * r + q] * s.c[bb * r + q];
+                }
+                t += pinv[bb * r + a] * v;
+            }
+        }
+        let v = rm.value_minus - t;
+        if v > 0.0 {
+            v
+        } else {
+            f64::INFINITY
+        }
+    }
+
     /// Visit point i (A, D, I); returns whether it moved.
     fn visit_algebraic(&mut self, i: usize) -> bool {
         let (r, k) = (self.p.r, self.p.k);
@@ -433,14 +631,18 @@ impl<'p, 'a> Run<'p, 'a> {
         }
         let cands = &self.p.groups[self.p.point_group[i]];
         let this = &*self;
+        let removal = self.removal(&d_o, &e_o);
         let best = cands
             .par_iter()
             .with_min_len(256)
             .filter(|&&j| j != o)
-            .map_init(
-                || Scratch::new(),
-                |s, &j| (sane(this.exchange_value(s, j, &a_t, &d_o, &b_t, &e_o)), j),
-            )
+            .map_init(|| Box::new(Scratch::new()), |s, &j| {
+                let v = match &removal {
+                    Some(rm) => this.exchange_value_fast(s, j, rm, &a_t, &b_t),
+                    None => this.exchange_value(s, j, &a_t, &d_o, &b_t, &e_o),
+                };
+                (sane(v), j)
+            })
             .reduce(|| (f64::INFINITY, usize::MAX), total_min);
         if !(best.0 < self.value - self.tol()) {
             return false;
@@ -605,9 +807,11 @@ impl<'p, 'a> Run<'p, 'a> {
         let n = self.p.n();
         let mut order: Vec<usize> = (0..n).collect();
         let mut moves = 0;
+        let mut stale = usize::MAX; // exchanges since the per-candidate blocks were refreshed
         for _ in 0..max_sweeps {
-            if !self.c.is_spectral() {
+            if !self.c.is_spectral() && stale >= REFRESH_AFTER {
                 self.refresh();
+                stale = 0;
             }
             order.shuffle(rng);
             let mut moved = false;
@@ -615,6 +819,7 @@ impl<'p, 'a> Run<'p, 'a> {
                 let m = if self.c.is_spectral() { self.visit_spectral(i) } else { self.visit_algebraic(i) };
                 if m {
                     moves += 1;
+                    stale = stale.saturating_add(1);
                     moved = true;
                 }
             }
