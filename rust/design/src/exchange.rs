@@ -169,7 +169,7 @@ impl Problem<'_> {
         if m.rank < self.k {
             return Err(GkError::degenerate(format!(
                 "the model has {} parameters but only {} independent combinations can be observed \
-                 anywhere in the design space; remove dependent columns or widen the bounds",
+                 anywhere in the design space; remove dependent columns, rescale badly scaled ones, or widen the bounds",
                 self.k, m.rank
             )));
         }
