@@ -243,7 +243,7 @@ pub fn mul_ab(a: &[f64], s: &[f64], m: usize, n: usize, out: &mut [f64]) {
     }
 }
 
-#[inline]
+#[inline(always)]
 pub fn dot(a: &[f64], b: &[f64]) -> f64 {
     let mut s = [0.0f64; 4];
     let chunks = a.len() / 4;

@@ -74,6 +74,8 @@ pub struct Outcome {
 
 /// Candidates screened exactly per visit for K and E.
 const EXACT_TOP: usize = 16;
+/// Candidates evaluated together between checks of the improvement bound.
+const PRUNE_CHUNK: usize = 512;
 /// Low-rank updates of the per-candidate blocks before they are recomputed exactly.
 const REFRESH_AFTER: usize = 40;
 /// Candidates sampled per point when building a greedy start.
@@ -178,6 +180,55 @@ impl Problem<'_> {
     }
 }
 
+/// Candidates per blocked matrix product.
+const GEMM_CHUNK: usize = 256;
+
+/// `out (m x q) = a (m x k) * w (k x q)`, all row-major.
+fn gemm(a: &[f64], m: usize, k: usize, w: &[f64], q: usize, out: &mut [f64]) {
+    assert!(a.len() >= m * k && w.len() >= k * q && out.len() >= m * q);
+    // SAFETY: the slices hold the m x k, k x q and m x q row-major matrices (checked above).
+    unsafe {
+        matrixmultiply::dgemm(
+            m, k, q, 1.0, a.as_ptr(), k as isize, 1, w.as_ptr(), q as isize, 1, 0.0, out.as_mut_ptr(), q as isize, 1,
+        );
+    }
+}
+
+impl Problem<'_> {
+    /// `body(j, B_j W)` for every candidate j of `members` (B_j W is r x q), in
+    /// parallel chunks of blocked products; results in the order of `members`.
+    fn products<T, F>(&self, members: &[usize], w: &[f64], q: usize, body: F) -> Vec<T>
+    where
+        T: Send,
+        F: Fn(usize, &[f64]) -> T + Sync,
+    {
+        let (r, k) = (self.r, self.k);
+        let sz = r * k;
+        members
+            .par_chunks(GEMM_CHUNK)
+            .flat_map_iter(|chunk| {
+                let first = chunk[0];
+                let contiguous = chunk[chunk.len() - 1] == first + chunk.len() - 1
+                    && chunk.windows(2).all(|p| p[1] == p[0] + 1);
+                let gathered;
+                let a: &[f64] = if contiguous {
+                    &self.blocks[first * sz..(first + chunk.len()) * sz]
+                } else {
+                    gathered = chunk.iter().flat_map(|&j| self.block(j).iter().copied()).collect::<Vec<f64>>();
+                    &gathered
+                };
+                let mut out = vec![0.0; chunk.len() * r * q];
+                gemm(a, chunk.len() * r, k, w, q, &mut out);
+                chunk
+                    .iter()
+                    .enumerate()
+                    .map(|(t, &j)| body(j, &out[t * r * q..(t + 1) * r * q]))
+                    .collect::<Vec<T>>()
+            })
+            .collect()
+    }
+}
+
 fn total_min(a: (f64, usize), b: (f64, usize)) -> (f64, usize) {
     match a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)) {
         std::cmp::Ordering::Greater => b,
@@ -226,6 +277,8 @@ struct Removal {
     qi: [f64; MAX_R * MAX_R],
     qeq: [f64; MAX_R * MAX_R],
     value_minus: f64,
+    /// Constant of the improvement bound (see [`Run::improvement_bound`]); infinite: no pruning.
+    bound_c: f64,
 }
 
 /// Scratch of one candidate evaluation (A, D, I).
@@ -323,32 +376,61 @@ impl<'p, 'a> Run<'p, 'a> {
     /// Recompute every candidate's B F^-1 B^T (and B F^-1 W F^-1 B^T) exactly.
     fn refresh(&mut self) {
         let (r, k) = (self.p.r, self.p.k);
-        let p = self.p;
-        let finv = &self.finv;
-        let fwf = &self.fwf;
+        let needs_e = self.needs_e();
+        let q = if needs_e { 2 * k } else { k };
+        let mut w = vec![0.0; k * q]; // [F^-1, F^-1 W F^-1]
+        for t in 0..k {
+            w[t * q..t * q + k].copy_from_slice(&self.finv[t * k..(t + 1) * k]);
+            if needs_e {
+                w[t * q + k..t * q + 2 * k].copy_from_slice(&self.fwf[t * k..(t + 1) * k]);
+            }
+        }
+        self.for_candidate_products(&w, q, |prod, b, dm, em| {
+            for a in 0..r {
+                for c in 0..r {
+                    dm[a * r + c] = dot(&prod[a * q..a * q + k], &b[c * k..(c + 1) * k]);
+                }
+            }
+            if let Some(em) = em {
+                for a in 0..r {
+                    for c in 0..r {
+                        em[a * r + c] = dot(&prod[a * q + k..a * q + 2 * k], &b[c * k..(c + 1) * k]);
+                    }
+                }
+            }
+        });
+    }
+
+    /// For every candidate m, in parallel chunks of blocked products:
+    /// `f(B_m W (r x q), B_m, d_m, e_m)`.
+    fn for_candidate_products<F>(&mut self, w: &[f64], q: usize, f: F)
+    where
+        F: Fn(&[f64], &[f64], &mut [f64], Option<&mut [f64]>) + Sync,
+    {
+        let (r, k) = (self.p.r, self.p.k);
         let rr = r * r;
-        let kernel = |g: &mut Vec<f64>, j: usize, dj: &mut [f64], ej: Option<&mut [f64]>| {
-            let b = p.block(j);
-            mul_ab(b, finv, r, k, &mut g[..r * k]);
-            mul_abt(&g[..r * k], b, r, k, r, dj);
-            if let Some(ej) = ej {
-                mul_ab(b, fwf, r, k, &mut g[..r * k]);
-                mul_abt(&g[..r * k], b, r, k, r, ej);
+        let sz = r * k;
+        let blocks = self.p.blocks;
+        let run_chunk = |ci: usize, dch: &mut [f64], ech: Option<&mut [f64]>| {
+            let n = dch.len() / rr;
+            let first = ci * GEMM_CHUNK;
+            let mut prod = vec![0.0; n * r * q];
+            gemm(&blocks[first * sz..(first + n) * sz], n * r, k, w, q, &mut prod);
+            let mut ech = ech;
+            for t in 0..n {
+                let b = &blocks[(first + t) * sz..(first + t + 1) * sz];
+                let em = ech.as_deref_mut().map(|e| &mut e[t * rr..(t + 1) * rr]);
+                f(&prod[t * r * q..(t + 1) * r * q], b, &mut dch[t * rr..(t + 1) * rr], em);
             }
         };
         if self.needs_e() {
             self.d
-                .par_chunks_mut(rr)
-                .zip(self.e.par_chunks_mut(rr))
+                .par_chunks_mut(rr * GEMM_CHUNK)
+                .zip(self.e.par_chunks_mut(rr * GEMM_CHUNK))
                 .enumerate()
-                .with_min_len(64)
-                .for_each_init(|| vec![0.0; r * k], |g, (j, (dj, ej))| kernel(g, j, dj, Some(ej)));
+                .for_each(|(ci, (dch, ech))| run_chunk(ci, dch, Some(ech)));
         } else {
-            self.d
-                .par_chunks_mut(rr)
-                .enumerate()
-                .with_min_len(64)
-                .for_each_init(|| vec![0.0; r * k], |g, (j, dj)| kernel(g, j, dj, None));
+            self.d.par_chunks_mut(rr * GEMM_CHUNK).enumerate().for_each(|(ci, dch)| run_chunk(ci, dch, None));
         }
     }
 
@@ -435,7 +517,7 @@ impl<'p, 'a> Run<'p, 'a> {
                 q[a * r + b] = if a == b { 1.0 } else { 0.0 } - d_o[a * r + b];
             }
         }
-        let mut rm = Removal { qi: [0.0; MAX_R * MAX_R], qeq: [0.0; MAX_R * MAX_R], value_minus: 0.0 };
+        let mut rm = Removal { qi: [0.0; MAX_R * MAX_R], qeq: [0.0; MAX_R * MAX_R], value_minus: 0.0, bound_c: f64::INFINITY };
         let logdet_q = small_spd_inverse(&q, r, &mut rm.qi)?;
         if logdet_q < -18.0 {
             return None; // removing O nearly loses rank: use the joint 2r formula
@@ -449,28 +531,71 @@ impl<'p, 'a> Run<'p, 'a> {
                 self.value + (0..r).map(|a| t[a * r + a]).sum::<f64>()
             }
         };
+        let tr_do: f64 = (0..r).map(|a| d_o[a * r + a]).sum();
+        rm.bound_c = match self.c {
+            Criterion::D => {
+                let mu = sym_eigenvalues(&d_o[..r * r], r)[r - 1];
+                if mu < 1.0 {
+                    1.0 / (r as f64 * (1.0 - mu))
+                } else {
+                    f64::INFINITY
+                }
+            }
+            _ => sym_eigenvalues(&rm.qeq[..r * r], r)[r - 1].max(0.0) * tr_do,
+        };
         Some(rm)
+    }
+
+    /// Upper bound on the improvement (current value minus value after the exchange)
+    /// from candidate j, from its stored blocks alone.
+    ///
+    /// D: F_- >= (1 - mu) F with mu = l_max(O F^-1 O^T), so B F_-^-1 B^T <= d_j / (1 - mu)
+    /// and det(I + B F_-^-1 B^T) <= (1 + tr d_j / (r (1 - mu)))^r.
+    /// A, I: tr(P^-1 e-) <= tr(e-) and, by Cauchy-Schwarz on c = B F^-1 O^T
+    /// (|c|_F^2 <= tr d_j tr d_O), tr(e-) <= (sqrt(tr e_j) + sqrt(l_max(Qi e_O Qi) tr d_O tr d_j))^2.
+    fn improvement_bound(&self, rm: &Removal, j: usize) -> f64 {
+        let r = self.p.r;
+        let rr = r * r;
+        let tr_d: f64 = (0..r).map(|a| self.d[j * rr + a * r + a]).sum::<f64>().max(0.0);
+        let base = self.value - rm.value_minus;
+        match self.c {
+            Criterion::D => base + r as f64 * (tr_d * rm.bound_c).ln_1p(),
+            _ => {
+                let tr_e: f64 = (0..r).map(|a| self.e[j * rr + a * r + a]).sum::<f64>().max(0.0);
+                let s = tr_e.sqrt() + (rm.bound_c * tr_d).sqrt();
+                base + s * s
+            }
+        }
     }
 
     /// Criterion after exchanging the visited point for candidate j, as a removal
     /// (prepared in `rm`) followed by a rank-r addition.
     fn exchange_value_fast(&self, s: &mut Scratch, j: usize, rm: &Removal, a_t: &[f64], b_t: &[f64]) -> f64 {
+        self.exchange_value_cf(s, j, rm, a_t, b_t, None)
+    }
+
+    /// As [`Self::exchange_value_fast`]; `cf` (r x 2r) may hold B [F^-1 O^T, F^-1 W F^-1 O^T]
+    /// computed beforehand (by a blocked matrix product over many candidates).
+    fn exchange_value_cf(&self, s: &mut Scratch, j: usize, rm: &Removal, a_t: &[f64], b_t: &[f64], cf: Option<&[f64]>) -> f64 {
         match self.p.r {
-            1 => self.fast_r::<1>(j, rm, a_t, b_t),
-            2 => self.fast_r::<2>(j, rm, a_t, b_t),
-            3 => self.fast_r::<3>(j, rm, a_t, b_t),
+            1 => self.fast_r::<1>(j, rm, a_t, b_t, cf),
+            2 => self.fast_r::<2>(j, rm, a_t, b_t, cf),
+            3 => self.fast_r::<3>(j, rm, a_t, b_t, cf),
             _ => self.fast_dyn(s, j, rm, a_t, b_t),
         }
     }
 
     /// [`Self::exchange_value_fast`] for a fixed block height R (unrolled small algebra).
-    fn fast_r<const R: usize>(&self, j: usize, rm: &Removal, a_t: &[f64], b_t: &[f64]) -> f64 {
+    fn fast_r<const R: usize>(&self, j: usize, rm: &Removal, a_t: &[f64], b_t: &[f64], cf: Option<&[f64]>) -> f64 {
         let k = self.p.k;
         let b = self.p.block(j);
         let mut c = [[0.0; R]; R]; // c = B F^-1 O^T
         for a in 0..R {
             for q in 0..R {
-                c[a][q] = dot(&b[a * k..(a + 1) * k], &a_t[q * k..(q + 1) * k]);
+                c[a][q] = match cf {
+                    Some(cf) => cf[a * 2 * R + q],
+                    None => dot(&b[a * k..(a + 1) * k], &a_t[q * k..(q + 1) * k]),
+                };
             }
         }
         let qi = |a: usize, q: usize| rm.qi[a * R + q];
@@ -515,7 +640,10 @@ impl<'p, 'a> Run<'p, 'a> {
         let mut f = [[0.0; R]; R]; // f = B F^-1 W F^-1 O^T
         for a in 0..R {
             for q in 0..R {
-                f[a][q] = dot(&b[a * k..(a + 1) * k], &b_t[q * k..(q + 1) * k]);
+                f[a][q] = match cf {
+                    Some(cf) => cf[a * 2 * R + R + q],
+                    None => dot(&b[a * k..(a + 1) * k], &b_t[q * k..(q + 1) * k]),
+                };
             }
         }
         let qeq = |a: usize, q: usize| rm.qeq[a * R + q];
@@ -632,18 +760,71 @@ impl<'p, 'a> Run<'p, 'a> {
         let cands = &self.p.groups[self.p.point_group[i]];
         let this = &*self;
         let removal = self.removal(&d_o, &e_o);
-        let best = cands
-            .par_iter()
-            .with_min_len(256)
-            .filter(|&&j| j != o)
-            .map_init(|| Box::new(Scratch::new()), |s, &j| {
-                let v = match &removal {
-                    Some(rm) => this.exchange_value_fast(s, j, rm, &a_t, &b_t),
-                    None => this.exchange_value(s, j, &a_t, &d_o, &b_t, &e_o),
-                };
-                (sane(v), j)
-            })
-            .reduce(|| (f64::INFINITY, usize::MAX), total_min);
+        let best = match &removal {
+            None => cands
+                .par_iter()
+                .with_min_len(256)
+                .filter(|&&j| j != o)
+                .map_init(|| Box::new(Scratch::new()), |s, &j| {
+                    (sane(this.exchange_value(s, j, &a_t, &d_o, &b_t, &e_o)), j)
+                })
+                .reduce(|| (f64::INFINITY, usize::MAX), total_min),
+            Some(rm) if self.c != Criterion::D => {
+                // A, I: the bound prunes little; one blocked product B [F^-1 O^T, F^-1 W F^-1 O^T]
+                // over all candidates, then the small r x r algebra per candidate.
+                let mut w = vec![0.0; k * 2 * r];
+                for t in 0..k {
+                    for q in 0..r {
+                        w[t * 2 * r + q] = a_t[q * k + t];
+                        w[t * 2 * r + r + q] = b_t[q * k + t];
+                    }
+                }
+                self.p
+                    .products(cands, &w, 2 * r, |j, cf| {
+                        if j == o {
+                            return (f64::INFINITY, usize::MAX);
+                        }
+                        let v = match r {
+                            1 => this.fast_r::<1>(j, rm, &a_t, &b_t, Some(cf)),
+                            2 => this.fast_r::<2>(j, rm, &a_t, &b_t, Some(cf)),
+                            3 => this.fast_r::<3>(j, rm, &a_t, &b_t, Some(cf)),
+                            _ => this.fast_dyn(&mut Scratch::new(), j, rm, &a_t, &b_t),
+                        };
+                        (sane(v), j)
+                    })
+                    .into_iter()
+                    .fold((f64::INFINITY, usize::MAX), total_min)
+            }
+            Some(rm) => {
+                // Evaluate in order of decreasing improvement bound; stop when no
+                // remaining candidate can beat the best found (exact, not a heuristic).
+                let tol = self.tol();
+                let mut order: Vec<(f64, usize)> = cands
+                    .par_iter()
+                    .with_min_len(1024)
+                    .filter(|&&j| j != o)
+                    .map(|&j| (this.improvement_bound(rm, j), j))
+                    .filter(|&(b, _)| !(b <= tol))
+                    .collect();
+                order.sort_unstable_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+                let mut best = (f64::INFINITY, usize::MAX);
+                for chunk in order.chunks(PRUNE_CHUNK) {
+                    let gain = self.value - best.0;
+                    if best.1 != usize::MAX && !(chunk[0].0 > gain) {
+                        break;
+                    }
+                    let b = chunk
+                        .par_iter()
+                        .with_min_len(128)
+                        .map_init(|| Box::new(Scratch::new()), |s, &(_, j)| {
+                            (sane(this.exchange_value_fast(s, j, rm, &a_t, &b_t)), j)
+                        })
+                        .reduce(|| (f64::INFINITY, usize::MAX), total_min);
+                    best = total_min(best, b);
+                }
+                best
+            }
+        };
         if !(best.0 < self.value - self.tol()) {
             return false;
         }
@@ -668,47 +849,41 @@ impl<'p, 'a> Run<'p, 'a> {
             qt[r * k..].copy_from_slice(&b_t);
         }
         let needs_e = self.needs_e();
-        let pr = self.p;
-        let rr = r * r;
-        let update = |buf: &mut Vec<f64>, m: usize, dm: &mut [f64], em: Option<&mut [f64]>| {
-            let (y, rest) = buf.split_at_mut(r * p);
-            let (yx, rest) = rest.split_at_mut(r * p);
-            let (z, rest) = rest.split_at_mut(r * p);
-            let t = &mut rest[..r * p];
-            let b = pr.block(m);
-            mul_abt(b, &pt, r, k, p, y);
-            mul_ab(y, &x, r, p, yx); // Y = y S^-1 (S^-1 symmetric)
+        let q = if needs_e { 2 * p } else { p };
+        let mut w = vec![0.0; k * q]; // [P, Q] = [F^-1 U, F^-1 W F^-1 U]
+        for t in 0..k {
+            for c in 0..p {
+                w[t * q + c] = pt[c * k + t];
+                if needs_e {
+                    w[t * q + p + c] = qt[c * k + t];
+                }
+            }
+        }
+        self.for_candidate_products(&w, q, |prod, _b, dm, em| {
+            let mut yx = [0.0; MAX_R * MAX_P];
+            let y = |a: usize| &prod[a * q..a * q + p];
+            for a in 0..r {
+                for c in 0..p {
+                    yx[a * p + c] = (0..p).map(|u| prod[a * q + u] * x[u * p + c]).sum(); // Y = y S^-1
+                }
+            }
             for a in 0..r {
                 for c in 0..r {
-                    dm[a * r + c] -= dot(&yx[a * p..(a + 1) * p], &y[c * p..(c + 1) * p]);
+                    dm[a * r + c] -= dot(&yx[a * p..(a + 1) * p], y(c));
                 }
             }
             if let Some(em) = em {
-                mul_abt(b, &qt, r, k, p, z);
-                mul_ab(yx, &e_pair, r, p, t); // Y R
+                let z = |a: usize| &prod[a * q + p..a * q + 2 * p];
+                let mut t = [0.0; MAX_R * MAX_P];
+                mul_ab(&yx[..r * p], &e_pair, r, p, &mut t[..r * p]); // Y R
                 for a in 0..r {
                     for c in 0..r {
-                        em[a * r + c] -= dot(&z[a * p..(a + 1) * p], &yx[c * p..(c + 1) * p])
-                            + dot(&yx[a * p..(a + 1) * p], &z[c * p..(c + 1) * p])
+                        em[a * r + c] -= dot(z(a), &yx[c * p..(c + 1) * p]) + dot(&yx[a * p..(a + 1) * p], z(c))
                             - dot(&t[a * p..(a + 1) * p], &yx[c * p..(c + 1) * p]);
                     }
                 }
             }
-        };
-        if needs_e {
-            self.d
-                .par_chunks_mut(rr)
-                .zip(self.e.par_chunks_mut(rr))
-                .enumerate()
-                .with_min_len(128)
-                .for_each_init(|| vec![0.0; 4 * r * p], |buf, (m, (dm, em))| update(buf, m, dm, Some(em)));
-        } else {
-            self.d
-                .par_chunks_mut(rr)
-                .enumerate()
-                .with_min_len(128)
-                .for_each_init(|| vec![0.0; 4 * r * p], |buf, (m, dm)| update(buf, m, dm, None));
-        }
+        });
         let old = self.design[i];
         self.design[i] = j;
         if self.recompute().is_err() {
@@ -902,12 +1077,24 @@ pub fn search(p: &Problem, o: &Options) -> Result<Outcome> {
         .map(|s| {
             let mut rng = ChaCha8Rng::seed_from_u64(o.seed);
             rng.set_stream(s as u64);
+            let mut moves = 0;
             let design = match &o.initial {
                 Some(d) => d.clone(),
-                None => greedy_start(p, 1e-6 * scale, &mut rng),
+                None => {
+                    let d = greedy_start(p, 1e-6 * scale, &mut rng);
+                    if matches!(c, Criterion::A | Criterion::I) {
+                        // A- and I-optimal designs are usually close to the D-optimal one,
+                        // whose exchanges are much cheaper: polish that instead.
+                        let mut pre = Run::new(p, Criterion::D, ridge, d)?;
+                        moves += pre.optimise(o.max_sweeps.max(1), &mut rng);
+                        pre.design
+                    } else {
+                        d
+                    }
+                }
             };
             let mut run = Run::new(p, c, ridge, design)?;
-            let moves = run.optimise(o.max_sweeps.max(1), &mut rng);
+            moves += run.optimise(o.max_sweeps.max(1), &mut rng);
             Ok((run.design, moves))
         })
         .collect();
