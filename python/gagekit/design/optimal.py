@@ -236,8 +236,12 @@ def _zones(zones: Any, lo: np.ndarray, hi: np.ndarray, n: int) -> list[tuple[np.
     out = []
     total = 0
     for z, spec in enumerate(zones):
+        hole = None
         try:
-            zl, zu, cnt = spec
+            if len(spec) == 4:  # internal: (lower, upper, count, (hole_lower, hole_upper))
+                zl, zu, cnt, hole = spec
+            else:
+                zl, zu, cnt = spec
         except (TypeError, ValueError):
             raise InvalidInputError(f"zone {z}: expected (lower, upper, count), got {spec!r}") from None
         try:
@@ -256,7 +260,9 @@ def _zones(zones: Any, lo: np.ndarray, hi: np.ndarray, n: int) -> list[tuple[np.
                 f"zone {z} [{_fmt(zl)}, {_fmt(zu)}] does not overlap the design space [{_fmt(lo)}, {_fmt(hi)}]"
             )
         total += cnt
-        out.append((cl, cu, cnt))
+        if hole is not None:
+            hole = (np.asarray(hole[0], dtype=np.float64), np.asarray(hole[1], dtype=np.float64))
+        out.append((cl, cu, cnt, hole))
     if total > n:
         raise InvalidInputError(f"the zones ask for {total} points but the plan has only {n}")
     return out
@@ -311,7 +317,7 @@ def _generate(lo, hi, zone_boxes, n_cand, seed) -> tuple[np.ndarray, np.ndarray]
     parts = [_scaled(n_cand, lo, hi, seed + 1), _corners(lo, hi)]
     used = sum(1 for z in zone_boxes if z[2] > 0)
     per_zone = max(256, n_cand // max(1, 2 * used))
-    for z, (zl, zu, cnt) in enumerate(zone_boxes):
+    for z, (zl, zu, cnt, _) in enumerate(zone_boxes):
         if cnt == 0:
             continue
         parts.append(_scaled(per_zone, zl, zu, seed + 2 + z))
@@ -349,12 +355,21 @@ def _inside(X: np.ndarray, zl: np.ndarray, zu: np.ndarray) -> np.ndarray:
     return ((X >= zl - tol) & (X <= zu + tol)).all(axis=1)
 
 
+def _in_zone(X: np.ndarray, zone) -> np.ndarray:
+    """Inside the zone's box and not strictly inside its hole (if any)."""
+    zl, zu, _, hole = zone
+    m = _inside(X, zl, zu)
+    if hole is not None:
+        m &= ~((X > hole[0]) & (X < hole[1])).all(axis=1)
+    return m
+
+
 def _groups(cand: np.ndarray, zone_boxes, n: int):
     groups, point_group, zone_of_point = [], [], []
-    for z, (zl, zu, cnt) in enumerate(zone_boxes):
+    for z, (zl, zu, cnt, hole) in enumerate(zone_boxes):
         if cnt == 0:
             continue
-        members = np.nonzero(_inside(cand, zl, zu))[0].astype(np.int64)
+        members = np.nonzero(_in_zone(cand, zone_boxes[z]))[0].astype(np.int64)
         if len(members) == 0:
             raise InfeasibleError(f"zone {z} [{_fmt(zl)}, {_fmt(zu)}] contains no usable candidate point")
         groups.append(members)
@@ -392,6 +407,10 @@ def _refine(rows, points, blocks, zone_of_point, zone_boxes, lo, hi, crit, weigh
         owner = np.repeat(np.arange(n), 2 * d)
         prop = prop.reshape(-1, d)
         keep = (np.abs(prop - points[owner]) > 0).any(axis=1)
+        for z, zone in enumerate(zone_boxes):
+            if zone[3] is not None:
+                sel = keep & (zone_of_point[owner] == z)
+                keep[sel] = _in_zone(prop[sel], zone)
         if feasible is not None and keep.any():
             keep[keep] = np.asarray(feasible(prop[keep]), bool)
         prop, owner = prop[keep], owner[keep]
