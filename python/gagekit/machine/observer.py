@@ -417,7 +417,8 @@ def design_observer(
         space.rows, space.bounds, int(points), crit, zones=zone_list or None, candidates=u_all, seed=seed,
         starts=starts, feasible=ok, refine=True,
     )
-    commands = space.to_commands(res.points)
+    r = machine.ranges
+    commands = np.clip(space.to_commands(res.points), r[:, 0], r[:, 1])  # round-off of Z = (Z+W) - W
     zone_counts = [
         {"zone": z, "count": int((res.zone == z).sum()), "required": int(zone_list[z][2])}
         for z in range(len(zone_list))
@@ -493,9 +494,9 @@ def evaluate_plan(
     if isinstance(seeds, bool) or not isinstance(seeds, int) or seeds < 1:
         raise InvalidInputError(f"--seeds must be a positive integer, got {seeds!r}")
     st = machine.structure()
-    if len(cmds) * 3 < st.rank:
+    if len(cmds) < st.rank:
         raise InvalidInputError(
-            f"the plan has {len(cmds)} points; identifying {st.rank} groups needs at least {-(-st.rank // 3)}"
+            f"the plan has {len(cmds)} points; identification of the {st.rank} groups needs at least {st.rank} points"
         )
     test = machine.sample_commands(int(test_points), seed=seed + 101)
     truths = [Truth.random(machine, seed=seed + 1000 + s) for s in range(seeds)]
