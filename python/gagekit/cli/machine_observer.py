@@ -99,3 +99,98 @@ def evaluate_plan_cmd(
         return head + "\n\n" + table(["plan", "points", "RMS um", "std", "max"], rows)
 
     emit(ev, as_json, human)
+
+
+def _track_text(r) -> str:
+    rows = []
+    for c in r.cycles:
+        rows.append([c["cycle"], f"{c['observed']['mean'] * 1000:.1f}", f"{c['observed']['max'] * 1000:.1f}"]
+                    + [f"{c[k]['mean'] * 1000:.1f} / {c[k]['max'] * 1000:.1f}" for k in ("full", "static", "drift_only")])
+    text = "residuals at the plan's points, um (mean / max)\n\n" + table(
+        ["cycle", "observed mean", "observed max", "full (Table 4.4)", "static (Table 4.5)", "drift only (Table 4.6)"], rows)
+    tm = r.temperature_model
+    if tm and tm.get("fitted"):
+        text += (f"\n\ntemperature model over {', '.join(tm['sensors'])}: leave-one-cycle-out mean residual "
+                 f"{tm['leave_one_cycle_out_mean'] * 1000:.1f} um")
+    return text
+
+
+@app.command("track")
+def track_cmd(
+    machine_file: Path = MACHINE_ARG,
+    cycles_csv: Path = typer.Argument(..., help="Observations of repeated cycles: cycle, joints, x, y, z [, time, temp_*]."),
+    history: Optional[Path] = typer.Option(None, "--history", help="SQLite history of this machine to append the run to."),
+    report: Optional[Path] = typer.Option(None, "--report", help="Directory for track.json and the drift plot (Fig. 4.8)."),
+    as_json: bool = JSON_OPTION,
+) -> None:
+    """Track the error model cycle by cycle against static and drift-only calibrations (Tables 4.4-4.6)."""
+    from .._util import dumps
+    from ..machine import load_machine
+    from ..machine.tracking import History, plot_drift, read_cycles, track
+
+    m = load_machine(machine_file)
+    with _warnings_to_stderr():
+        cyc = read_cycles(cycles_csv, m)
+        res = track(m, cyc)
+    out = res.to_dict()
+    if history is not None:
+        h = History(history, m)
+        try:
+            out["history_run"] = h.append(cyc, res)
+        finally:
+            h.close()
+    if report is not None:
+        report.mkdir(parents=True, exist_ok=True)
+        (report / "track.json").write_text(dumps(out))
+        plot_drift(res, report / "drift.png")
+        out["report"] = str(report)
+    emit(out, as_json, lambda _: _track_text(res))
+
+
+@app.command("history")
+def history_cmd(
+    history_file: Path = typer.Argument(..., help="SQLite history written by `machine track --history`."),
+    as_json: bool = JSON_OPTION,
+) -> None:
+    """List the tracking runs stored in a history file."""
+    from ..machine.tracking import read_history
+
+    s = read_history(history_file)
+
+    def human(_) -> str:
+        lines = [f"history of machine {s['machine']} (created {s['created']}), {len(s['runs'])} run(s)"]
+        for run in s["runs"]:
+            lines.append(f"\nrun {run['run']} ({run['created']}, {run['points']} points, {run['source']})")
+            lines.append(table(["cycle", "observed um", "full um", "static um", "drift only um"],
+                               [[c["cycle"], f"{c['observed_mean'] * 1000:.1f}", f"{c['full_mean'] * 1000:.1f}",
+                                 f"{c['static_mean'] * 1000:.1f}", f"{c['drift_only_mean'] * 1000:.1f}"] for c in run["cycles"]]))
+        return "\n".join(lines)
+
+    emit(s, as_json, human)
+
+
+@app.command("simulate-cycles")
+def simulate_cycles_cmd(
+    machine_file: Path = MACHINE_ARG,
+    plan: Path = typer.Argument(..., help="PLAN.csv (joint columns) measured in every cycle."),
+    out: Path = typer.Option(..., "--out", help="Cycles CSV to write (cycle, joints, x, y, z, time, temp_*)."),
+    cycles: int = typer.Option(6, "--cycles", help="Measurement cycles (Fig. 4.4: 4 heating, 1 cooling after the first)."),
+    noise: float = typer.Option(0.0089, "--noise", help="Tracker noise sigma per coordinate, mm."),
+    drift_scale: float = typer.Option(1.0, "--drift-scale", help="Scale of the W- and Y-axis thermal drift."),
+    seed: int = typer.Option(0, "--seed", help="Seed of the truth, drift signs and noise."),
+    as_json: bool = JSON_OPTION,
+) -> None:
+    """Thermal mode of the simulator: the same plan measured over heating and cooling cycles."""
+    import numpy as np
+
+    from ..machine import Truth, load_machine, read_commands
+    from ..machine.observations import write_csv
+    from ..machine.tracking import simulate_cycles
+
+    m = load_machine(machine_file)
+    cmds = read_commands(plan, m)
+    blocks, info = simulate_cycles(m, Truth.random(m, seed=seed), cmds, cycles=cycles, noise=noise,
+                                   drift_scale=drift_scale, seed=seed)
+    write_csv(out, info["header"], np.concatenate(blocks))
+    result = {"cycles": cycles, "points": int(len(cmds)), "out": str(out), "drift_per_cycle": info["drift"]}
+    emit(result, as_json, lambda r: f"wrote {r['cycles']} cycles of {r['points']} points to {r['out']}")
