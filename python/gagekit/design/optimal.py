@@ -143,13 +143,16 @@ def search_design(
     n_candidates: int = DEFAULT_CANDIDATES,
     feasible: Optional[Callable[[np.ndarray], np.ndarray]] = None,
     refine: Optional[bool] = None,
+    average_over: Optional[np.ndarray] = None,
 ) -> DesignResult:
     """:func:`optimal_design` with the search settings exposed.
 
     ``feasible(X)`` returns a boolean mask of usable points (for instance to keep
     a plan away from commands a tracker cannot reach); it filters the candidates
     and the refinement moves. ``refine`` defaults to True for generated
-    candidates and False for given ones.
+    candidates and False for given ones. ``average_over``: a boolean mask of the
+    candidates whose mean B^T B defines the I criterion (default: the quasi-random
+    sample over the whole design space, or all given candidates).
     """
     crit = _criterion(criterion)
     lo, hi = _bounds(bounds)
@@ -167,6 +170,10 @@ def search_design(
         cand = _user_candidates(candidates, lo, hi)
         global_mask = np.ones(len(cand), bool)
         do_refine = bool(refine)
+    if average_over is not None:
+        global_mask = np.asarray(average_over, bool).copy()
+        if global_mask.shape != (len(cand),):
+            raise InvalidInputError("average_over must be a boolean mask of the candidates")
     if feasible is not None:
         keep = np.asarray(feasible(cand), bool)
         cand, global_mask = cand[keep], global_mask[keep]

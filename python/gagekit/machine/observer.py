@@ -412,10 +412,12 @@ def design_observer(
             f"the exclusions leave {int(keep[: len(u_cand)].sum())} of {n_cand} candidate commands: "
             "too few to design from"
         )
-    u_all = u_all[keep]
+    spread = np.zeros(len(u_all), bool)
+    spread[: len(u_cand)] = True  # the I criterion averages over the workspace, not the zones' extras
+    u_all, spread = u_all[keep], spread[keep]
     res = search_design(
         space.rows, space.bounds, int(points), crit, zones=zone_list or None, candidates=u_all, seed=seed,
-        starts=starts, feasible=ok, refine=True,
+        starts=starts, feasible=ok, refine=True, average_over=spread,
     )
     r = machine.ranges
     commands = np.clip(space.to_commands(res.points), r[:, 0], r[:, 1])  # round-off of Z = (Z+W) - W
