@@ -23,7 +23,7 @@ def _sci(v: float) -> str:
 def design_cmd(
     machine_file: Path = MACHINE_ARG,
     points: int = typer.Option(80, "--points", help="Measurement points in the plan (Sec. 4.2: 80)."),
-    criterion: str = typer.Option("A", "--criterion", help="A, D, K, E or I (default A: it predicted best in simulation)."),
+    criterion: str = typer.Option("I", "--criterion", help="A, D, K, E or I (default I: it predicted best in simulation; see README)."),
     zones: str = typer.Option("none", "--zones", help="none, dissertation-8 (Fig. 4.3) or a zones TOML file."),
     exclude: Optional[Path] = typer.Option(None, "--exclude", help="Exclusions TOML: [[box]] tables and/or commands to avoid."),
     candidates: int = typer.Option(20000, "--candidates", help="Quasi-random candidate commands."),
