@@ -100,11 +100,22 @@ pub fn metrics(f: &[f64], k: usize, weights: Option<&[f64]>) -> Metrics {
 pub fn from_eigen(vals: &[f64], vecs: &[f64], k: usize, weights: Option<&[f64]>) -> Metrics {
     let lmax = vals[k - 1].max(0.0);
     let lmin = vals[0].max(0.0);
-    let rank = vals.iter().filter(|&&l| l > RANK_TOL * lmax && l > 0.0).count();
+    let rank = vals
+        .iter()
+        .filter(|&&l| l > RANK_TOL * lmax && l > 0.0)
+        .count();
     let singular = rank < k;
     let inf = f64::INFINITY;
-    let trace = if singular { inf } else { vals.iter().map(|l| 1.0 / l).sum() };
-    let log_det = if singular { inf } else { -vals.iter().map(|l| l.ln()).sum::<f64>() };
+    let trace = if singular {
+        inf
+    } else {
+        vals.iter().map(|l| 1.0 / l).sum()
+    };
+    let log_det = if singular {
+        inf
+    } else {
+        -vals.iter().map(|l| l.ln()).sum::<f64>()
+    };
     let condition_number = if singular { inf } else { (lmax / lmin).sqrt() };
     let i_value = weights.map(|w| {
         if singular {
@@ -123,7 +134,15 @@ pub fn from_eigen(vals: &[f64], vecs: &[f64], k: usize, weights: Option<&[f64]>)
             })
             .sum()
     });
-    Metrics { trace, log_det, condition_number, lambda_min: lmin, lambda_max: lmax, i_value, rank }
+    Metrics {
+        trace,
+        log_det,
+        condition_number,
+        lambda_min: lmin,
+        lambda_max: lmax,
+        i_value,
+        rank,
+    }
 }
 
 #[cfg(test)]
@@ -156,7 +175,11 @@ mod tests {
     #[test]
     fn singular_is_infinite() {
         let b = line_blocks(&[0.5, 0.5]);
-        let m = metrics(&information(&b, &[0, 1], 1, 2), 2, Some(&[1.0, 0.0, 0.0, 1.0]));
+        let m = metrics(
+            &information(&b, &[0, 1], 1, 2),
+            2,
+            Some(&[1.0, 0.0, 0.0, 1.0]),
+        );
         assert_eq!(m.rank, 1);
         assert!(m.trace.is_infinite() && m.condition_number.is_infinite());
         assert!(m.objective(Criterion::I).is_infinite());

@@ -14,7 +14,10 @@
 //! perturbation of the extreme eigenvalues and the best few evaluated exactly.
 
 use crate::criteria::{information, metrics, Criterion, Metrics};
-use crate::dense::{small_spd_inverse, dot, gram_add, lu_in_place, lu_inverse, mul_ab, mul_abt, spd_inverse, sym_eig, sym_eigenvalues, MAX_P, MAX_R};
+use crate::dense::{
+    dot, gram_add, lu_in_place, lu_inverse, mul_ab, mul_abt, small_spd_inverse, spd_inverse,
+    sym_eig, sym_eigenvalues, MAX_P, MAX_R,
+};
 use gagekit_core::{GkError, Result};
 use rand::seq::{index::sample, SliceRandom};
 use rand::SeedableRng;
@@ -54,7 +57,13 @@ pub struct Options {
 
 impl Default for Options {
     fn default() -> Self {
-        Self { criterion: Criterion::D, starts: 8, max_sweeps: 50, seed: 0, initial: None }
+        Self {
+            criterion: Criterion::D,
+            starts: 8,
+            max_sweeps: 50,
+            seed: 0,
+            initial: None,
+        }
     }
 }
 
@@ -130,7 +139,9 @@ impl Problem<'_> {
         }
         for (g, members) in self.groups.iter().enumerate() {
             if members.is_empty() && self.point_group.contains(&g) {
-                return Err(GkError::infeasible(format!("zone {g} contains no candidate point")));
+                return Err(GkError::infeasible(format!(
+                    "zone {g} contains no candidate point"
+                )));
             }
             if let Some(&bad) = members.iter().find(|&&j| j >= self.n_cand) {
                 return Err(GkError::invalid(format!(
@@ -149,7 +160,9 @@ impl Problem<'_> {
             match self.weights {
                 None => return Err(GkError::invalid("the I criterion needs a weight matrix")),
                 Some(w) if w.len() != k * k || w.iter().any(|v| !v.is_finite()) => {
-                    return Err(GkError::invalid(format!("the I weight matrix must be {k} x {k} and finite")))
+                    return Err(GkError::invalid(format!(
+                        "the I weight matrix must be {k} x {k} and finite"
+                    )))
                 }
                 _ => {}
             }
@@ -189,7 +202,20 @@ fn gemm(a: &[f64], m: usize, k: usize, w: &[f64], q: usize, out: &mut [f64]) {
     // SAFETY: the slices hold the m x k, k x q and m x q row-major matrices (checked above).
     unsafe {
         matrixmultiply::dgemm(
-            m, k, q, 1.0, a.as_ptr(), k as isize, 1, w.as_ptr(), q as isize, 1, 0.0, out.as_mut_ptr(), q as isize, 1,
+            m,
+            k,
+            q,
+            1.0,
+            a.as_ptr(),
+            k as isize,
+            1,
+            w.as_ptr(),
+            q as isize,
+            1,
+            0.0,
+            out.as_mut_ptr(),
+            q as isize,
+            1,
         );
     }
 }
@@ -214,7 +240,10 @@ impl Problem<'_> {
                 let a: &[f64] = if contiguous {
                     &self.blocks[first * sz..(first + chunk.len()) * sz]
                 } else {
-                    gathered = chunk.iter().flat_map(|&j| self.block(j).iter().copied()).collect::<Vec<f64>>();
+                    gathered = chunk
+                        .iter()
+                        .flat_map(|&j| self.block(j).iter().copied())
+                        .collect::<Vec<f64>>();
                     &gathered
                 };
                 let mut out = vec![0.0; chunk.len() * r * q];
@@ -336,8 +365,9 @@ impl<'p, 'a> Run<'p, 'a> {
         for a in 0..k {
             f[a * k + a] += self.ridge;
         }
-        let (finv, logdet) = spd_inverse(&f, k)
-            .ok_or_else(|| GkError::numerical("the information matrix lost positive definiteness"))?;
+        let (finv, logdet) = spd_inverse(&f, k).ok_or_else(|| {
+            GkError::numerical("the information matrix lost positive definiteness")
+        })?;
         self.value = match self.c {
             Criterion::A => (0..k).map(|a| finv[a * k + a]).sum(),
             Criterion::D => -logdet,
@@ -394,7 +424,8 @@ impl<'p, 'a> Run<'p, 'a> {
             if let Some(em) = em {
                 for a in 0..r {
                     for c in 0..r {
-                        em[a * r + c] = dot(&prod[a * q + k..a * q + 2 * k], &b[c * k..(c + 1) * k]);
+                        em[a * r + c] =
+                            dot(&prod[a * q + k..a * q + 2 * k], &b[c * k..(c + 1) * k]);
                     }
                 }
             }
@@ -415,12 +446,24 @@ impl<'p, 'a> Run<'p, 'a> {
             let n = dch.len() / rr;
             let first = ci * GEMM_CHUNK;
             let mut prod = vec![0.0; n * r * q];
-            gemm(&blocks[first * sz..(first + n) * sz], n * r, k, w, q, &mut prod);
+            gemm(
+                &blocks[first * sz..(first + n) * sz],
+                n * r,
+                k,
+                w,
+                q,
+                &mut prod,
+            );
             let mut ech = ech;
             for t in 0..n {
                 let b = &blocks[(first + t) * sz..(first + t + 1) * sz];
                 let em = ech.as_deref_mut().map(|e| &mut e[t * rr..(t + 1) * rr]);
-                f(&prod[t * r * q..(t + 1) * r * q], b, &mut dch[t * rr..(t + 1) * rr], em);
+                f(
+                    &prod[t * r * q..(t + 1) * r * q],
+                    b,
+                    &mut dch[t * rr..(t + 1) * rr],
+                    em,
+                );
             }
         };
         if self.needs_e() {
@@ -430,7 +473,10 @@ impl<'p, 'a> Run<'p, 'a> {
                 .enumerate()
                 .for_each(|(ci, (dch, ech))| run_chunk(ci, dch, Some(ech)));
         } else {
-            self.d.par_chunks_mut(rr * GEMM_CHUNK).enumerate().for_each(|(ci, dch)| run_chunk(ci, dch, None));
+            self.d
+                .par_chunks_mut(rr * GEMM_CHUNK)
+                .enumerate()
+                .for_each(|(ci, dch)| run_chunk(ci, dch, None));
         }
     }
 
@@ -443,7 +489,15 @@ impl<'p, 'a> Run<'p, 'a> {
 
     /// Build S = C + U^T F^-1 U for exchanging O (point) with B (candidate j),
     /// and (A, I) the matrix E = U^T F^-1 W F^-1 U, into the scratch.
-    fn capacitance(&self, s: &mut Scratch, j: usize, a_t: &[f64], d_o: &[f64], b_t: &[f64], e_o: &[f64]) {
+    fn capacitance(
+        &self,
+        s: &mut Scratch,
+        j: usize,
+        a_t: &[f64],
+        d_o: &[f64],
+        b_t: &[f64],
+        e_o: &[f64],
+    ) {
         let (r, k) = (self.p.r, self.p.k);
         let p = 2 * r;
         let b = self.p.block(j);
@@ -475,7 +529,15 @@ impl<'p, 'a> Run<'p, 'a> {
     }
 
     /// Criterion after exchanging point (a_t, d_o, ...) for candidate j; INFINITY if singular.
-    fn exchange_value(&self, s: &mut Scratch, j: usize, a_t: &[f64], d_o: &[f64], b_t: &[f64], e_o: &[f64]) -> f64 {
+    fn exchange_value(
+        &self,
+        s: &mut Scratch,
+        j: usize,
+        a_t: &[f64],
+        d_o: &[f64],
+        b_t: &[f64],
+        e_o: &[f64],
+    ) -> f64 {
         let r = self.p.r;
         let p = 2 * r;
         self.capacitance(s, j, a_t, d_o, b_t, e_o);
@@ -517,7 +579,12 @@ impl<'p, 'a> Run<'p, 'a> {
                 q[a * r + b] = if a == b { 1.0 } else { 0.0 } - d_o[a * r + b];
             }
         }
-        let mut rm = Removal { qi: [0.0; MAX_R * MAX_R], qeq: [0.0; MAX_R * MAX_R], value_minus: 0.0, bound_c: f64::INFINITY };
+        let mut rm = Removal {
+            qi: [0.0; MAX_R * MAX_R],
+            qeq: [0.0; MAX_R * MAX_R],
+            value_minus: 0.0,
+            bound_c: f64::INFINITY,
+        };
         let logdet_q = small_spd_inverse(&q, r, &mut rm.qi)?;
         if logdet_q < -18.0 {
             return None; // removing O nearly loses rank: use the joint 2r formula
@@ -556,12 +623,18 @@ impl<'p, 'a> Run<'p, 'a> {
     fn improvement_bound(&self, rm: &Removal, j: usize) -> f64 {
         let r = self.p.r;
         let rr = r * r;
-        let tr_d: f64 = (0..r).map(|a| self.d[j * rr + a * r + a]).sum::<f64>().max(0.0);
+        let tr_d: f64 = (0..r)
+            .map(|a| self.d[j * rr + a * r + a])
+            .sum::<f64>()
+            .max(0.0);
         let base = self.value - rm.value_minus;
         match self.c {
             Criterion::D => base + r as f64 * (tr_d * rm.bound_c).ln_1p(),
             _ => {
-                let tr_e: f64 = (0..r).map(|a| self.e[j * rr + a * r + a]).sum::<f64>().max(0.0);
+                let tr_e: f64 = (0..r)
+                    .map(|a| self.e[j * rr + a * r + a])
+                    .sum::<f64>()
+                    .max(0.0);
                 let s = tr_e.sqrt() + (rm.bound_c * tr_d).sqrt();
                 base + s * s
             }
@@ -570,13 +643,28 @@ impl<'p, 'a> Run<'p, 'a> {
 
     /// Criterion after exchanging the visited point for candidate j, as a removal
     /// (prepared in `rm`) followed by a rank-r addition.
-    fn exchange_value_fast(&self, s: &mut Scratch, j: usize, rm: &Removal, a_t: &[f64], b_t: &[f64]) -> f64 {
+    fn exchange_value_fast(
+        &self,
+        s: &mut Scratch,
+        j: usize,
+        rm: &Removal,
+        a_t: &[f64],
+        b_t: &[f64],
+    ) -> f64 {
         self.exchange_value_cf(s, j, rm, a_t, b_t, None)
     }
 
     /// As [`Self::exchange_value_fast`]; `cf` (r x 2r) may hold B [F^-1 O^T, F^-1 W F^-1 O^T]
     /// computed beforehand (by a blocked matrix product over many candidates).
-    fn exchange_value_cf(&self, s: &mut Scratch, j: usize, rm: &Removal, a_t: &[f64], b_t: &[f64], cf: Option<&[f64]>) -> f64 {
+    fn exchange_value_cf(
+        &self,
+        s: &mut Scratch,
+        j: usize,
+        rm: &Removal,
+        a_t: &[f64],
+        b_t: &[f64],
+        cf: Option<&[f64]>,
+    ) -> f64 {
         match self.p.r {
             1 => self.fast_r::<1>(j, rm, a_t, b_t, cf),
             2 => self.fast_r::<2>(j, rm, a_t, b_t, cf),
@@ -586,7 +674,14 @@ impl<'p, 'a> Run<'p, 'a> {
     }
 
     /// [`Self::exchange_value_fast`] for a fixed block height R (unrolled small algebra).
-    fn fast_r<const R: usize>(&self, j: usize, rm: &Removal, a_t: &[f64], b_t: &[f64], cf: Option<&[f64]>) -> f64 {
+    fn fast_r<const R: usize>(
+        &self,
+        j: usize,
+        rm: &Removal,
+        a_t: &[f64],
+        b_t: &[f64],
+        cf: Option<&[f64]>,
+    ) -> f64 {
         let k = self.p.k;
         let b = self.p.block(j);
         let mut c = [[0.0; R]; R]; // c = B F^-1 O^T
@@ -729,7 +824,9 @@ impl<'p, 'a> Run<'p, 'a> {
             for bb in 0..r {
                 let mut v = ej[a * r + bb];
                 for q in 0..r {
-                    v += s.fx[a * r + q] * cq[bb * r + q] + cq[a * r + q] * s.fx[bb * r + q] + cqe[a * r + q] * s.c[bb * r + q];
+                    v += s.fx[a * r + q] * cq[bb * r + q]
+                        + cq[a * r + q] * s.fx[bb * r + q]
+                        + cqe[a * r + q] * s.c[bb * r + q];
                 }
                 t += pinv[bb * r + a] * v;
             }
@@ -765,9 +862,10 @@ impl<'p, 'a> Run<'p, 'a> {
                 .par_iter()
                 .with_min_len(256)
                 .filter(|&&j| j != o)
-                .map_init(|| Box::new(Scratch::new()), |s, &j| {
-                    (sane(this.exchange_value(s, j, &a_t, &d_o, &b_t, &e_o)), j)
-                })
+                .map_init(
+                    || Box::new(Scratch::new()),
+                    |s, &j| (sane(this.exchange_value(s, j, &a_t, &d_o, &b_t, &e_o)), j),
+                )
                 .reduce(|| (f64::INFINITY, usize::MAX), total_min),
             Some(rm) if self.c != Criterion::D => {
                 // A, I: the bound prunes little; one blocked product B [F^-1 O^T, F^-1 W F^-1 O^T]
@@ -816,9 +914,10 @@ impl<'p, 'a> Run<'p, 'a> {
                     let b = chunk
                         .par_iter()
                         .with_min_len(128)
-                        .map_init(|| Box::new(Scratch::new()), |s, &(_, j)| {
-                            (sane(this.exchange_value_fast(s, j, rm, &a_t, &b_t)), j)
-                        })
+                        .map_init(
+                            || Box::new(Scratch::new()),
+                            |s, &(_, j)| (sane(this.exchange_value_fast(s, j, rm, &a_t, &b_t)), j),
+                        )
                         .reduce(|| (f64::INFINITY, usize::MAX), total_min);
                     best = total_min(best, b);
                 }
@@ -864,7 +963,8 @@ impl<'p, 'a> Run<'p, 'a> {
             let y = |a: usize| &prod[a * q..a * q + p];
             for a in 0..r {
                 for c in 0..p {
-                    yx[a * p + c] = (0..p).map(|u| prod[a * q + u] * x[u * p + c]).sum(); // Y = y S^-1
+                    yx[a * p + c] = (0..p).map(|u| prod[a * q + u] * x[u * p + c]).sum();
+                    // Y = y S^-1
                 }
             }
             for a in 0..r {
@@ -878,7 +978,8 @@ impl<'p, 'a> Run<'p, 'a> {
                 mul_ab(&yx[..r * p], &e_pair, r, p, &mut t[..r * p]); // Y R
                 for a in 0..r {
                     for c in 0..r {
-                        em[a * r + c] -= dot(z(a), &yx[c * p..(c + 1) * p]) + dot(&yx[a * p..(a + 1) * p], z(c))
+                        em[a * r + c] -= dot(z(a), &yx[c * p..(c + 1) * p])
+                            + dot(&yx[a * p..(a + 1) * p], z(c))
                             - dot(&t[a * p..(a + 1) * p], &yx[c * p..(c + 1) * p]);
                     }
                 }
@@ -991,7 +1092,11 @@ impl<'p, 'a> Run<'p, 'a> {
             order.shuffle(rng);
             let mut moved = false;
             for &i in &order {
-                let m = if self.c.is_spectral() { self.visit_spectral(i) } else { self.visit_algebraic(i) };
+                let m = if self.c.is_spectral() {
+                    self.visit_spectral(i)
+                } else {
+                    self.visit_algebraic(i)
+                };
                 if m {
                     moves += 1;
                     stale = stale.saturating_add(1);
@@ -1071,7 +1176,11 @@ pub fn search(p: &Problem, o: &Options) -> Result<Outcome> {
             }
         }
     }
-    let starts = if o.initial.is_some() { 1 } else { o.starts.max(1) };
+    let starts = if o.initial.is_some() {
+        1
+    } else {
+        o.starts.max(1)
+    };
     let runs: Vec<Result<(Vec<usize>, usize)>> = (0..starts)
         .into_par_iter()
         .map(|s| {
@@ -1119,5 +1228,11 @@ pub fn search(p: &Problem, o: &Options) -> Result<Outcome> {
             metrics.rank
         )));
     }
-    Ok(Outcome { design, metrics, objective, start_objectives, exchanges })
+    Ok(Outcome {
+        design,
+        metrics,
+        objective,
+        start_objectives,
+        exchanges,
+    })
 }

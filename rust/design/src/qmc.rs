@@ -33,7 +33,9 @@ fn radical_inverse(mut i: u64, base: u64) -> f64 {
 /// `seed = 0` gives the unshifted sequence (starting at index 1, not the origin).
 pub fn halton(n: usize, d: usize, seed: u64) -> Result<Vec<f64>> {
     if d == 0 || d > 64 {
-        return Err(GkError::invalid(format!("quasi-random points need 1 to 64 dimensions, got {d}")));
+        return Err(GkError::invalid(format!(
+            "quasi-random points need 1 to 64 dimensions, got {d}"
+        )));
     }
     let bases = primes(d);
     let shift: Vec<f64> = if seed == 0 {

@@ -10,21 +10,45 @@ fn grid(step: f64) -> (Vec<f64>, Vec<f64>) {
 }
 
 fn members(xs: &[f64], lo: f64, hi: f64) -> Vec<usize> {
-    (0..xs.len()).filter(|&i| xs[i] >= lo - 1e-12 && xs[i] <= hi + 1e-12).collect()
+    (0..xs.len())
+        .filter(|&i| xs[i] >= lo - 1e-12 && xs[i] <= hi + 1e-12)
+        .collect()
 }
 
 fn design(c: Criterion, zoned: bool, seed: u64) -> (Vec<f64>, gagekit_design::Outcome) {
     let (xs, blocks) = grid(0.05);
     let (groups, point_group) = if zoned {
         (
-            vec![members(&xs, 0.0, 0.25), members(&xs, 0.25, 0.75), members(&xs, 0.75, 1.0)],
+            vec![
+                members(&xs, 0.0, 0.25),
+                members(&xs, 0.25, 0.75),
+                members(&xs, 0.75, 1.0),
+            ],
             vec![0, 1, 1, 2],
         )
     } else {
         (vec![(0..xs.len()).collect()], vec![0; 4])
     };
-    let p = Problem { blocks: &blocks, n_cand: xs.len(), r: 1, k: 2, groups, point_group, weights: None };
-    let out = search(&p, &Options { criterion: c, starts: 6, max_sweeps: 50, seed, initial: None }).unwrap();
+    let p = Problem {
+        blocks: &blocks,
+        n_cand: xs.len(),
+        r: 1,
+        k: 2,
+        groups,
+        point_group,
+        weights: None,
+    };
+    let out = search(
+        &p,
+        &Options {
+            criterion: c,
+            starts: 6,
+            max_sweeps: 50,
+            seed,
+            initial: None,
+        },
+    )
+    .unwrap();
     let mut x: Vec<f64> = out.design.iter().map(|&j| xs[j]).collect();
     x.sort_by(f64::total_cmp);
     (x, out)
@@ -69,17 +93,56 @@ fn same_seed_same_design() {
 #[test]
 fn bad_problems_are_errors() {
     let (xs, blocks) = grid(0.5);
-    let base = Problem { blocks: &blocks, n_cand: xs.len(), r: 1, k: 2, groups: vec![vec![0, 1, 2]], point_group: vec![0], weights: None };
+    let base = Problem {
+        blocks: &blocks,
+        n_cand: xs.len(),
+        r: 1,
+        k: 2,
+        groups: vec![vec![0, 1, 2]],
+        point_group: vec![0],
+        weights: None,
+    };
     let e = search(&base, &Options::default()).unwrap_err();
     assert!(e.message.contains("at least 2 points"), "{}", e.message);
-    let empty = Problem { groups: vec![vec![]], point_group: vec![0, 0], ..base.clone() };
-    assert!(search(&empty, &Options::default()).unwrap_err().message.contains("no candidate"));
-    let one = Problem { groups: vec![vec![1]], point_group: vec![0, 0, 0], ..base.clone() };
-    assert!(search(&one, &Options::default()).unwrap_err().message.contains("only 1 independent"));
+    let empty = Problem {
+        groups: vec![vec![]],
+        point_group: vec![0, 0],
+        ..base.clone()
+    };
+    assert!(search(&empty, &Options::default())
+        .unwrap_err()
+        .message
+        .contains("no candidate"));
+    let one = Problem {
+        groups: vec![vec![1]],
+        point_group: vec![0, 0, 0],
+        ..base.clone()
+    };
+    assert!(search(&one, &Options::default())
+        .unwrap_err()
+        .message
+        .contains("only 1 independent"));
     let mut nan = blocks.clone();
     nan[3] = f64::NAN;
-    let bad = Problem { blocks: &nan, point_group: vec![0, 0], ..base.clone() };
-    assert!(search(&bad, &Options::default()).unwrap_err().message.contains("candidate 1"));
-    let i = Problem { point_group: vec![0, 0], ..base };
-    assert!(search(&i, &Options { criterion: Criterion::I, ..Options::default() }).is_err());
+    let bad = Problem {
+        blocks: &nan,
+        point_group: vec![0, 0],
+        ..base.clone()
+    };
+    assert!(search(&bad, &Options::default())
+        .unwrap_err()
+        .message
+        .contains("candidate 1"));
+    let i = Problem {
+        point_group: vec![0, 0],
+        ..base
+    };
+    assert!(search(
+        &i,
+        &Options {
+            criterion: Criterion::I,
+            ..Options::default()
+        }
+    )
+    .is_err());
 }

@@ -19,7 +19,10 @@ fn blocks<'a>(
         return Err(gagekit_err(
             py,
             "InvalidInputError",
-            format!("design-matrix rows: {} rows do not split into blocks of {r}", shape[0]),
+            format!(
+                "design-matrix rows: {} rows do not split into blocks of {r}",
+                shape[0]
+            ),
         ));
     }
     Ok((rows(py, arr, k, "design-matrix rows")?, shape[0] / r, k))
@@ -38,7 +41,8 @@ fn metrics_dict<'py>(py: Python<'py>, m: &Metrics) -> PyResult<Bound<'py, PyDict
 }
 
 fn criterion(py: Python<'_>, name: &str) -> PyResult<Criterion> {
-    name.parse::<Criterion>().map_err(|e| crate::errors::to_pyerr(py, e))
+    name.parse::<Criterion>()
+        .map_err(|e| crate::errors::to_pyerr(py, e))
 }
 
 /// Multistart point-exchange search (Eqs. 4.7, 4.8).
@@ -65,9 +69,19 @@ fn design_search<'py>(
     let (flat, n_cand, k) = self::blocks(py, &blocks, r)?;
     let mut gs = Vec::with_capacity(groups.len());
     for g in &groups {
-        let s = g.as_slice().map_err(|_| gagekit_err(py, "InvalidInputError", "zone members must be contiguous".into()))?;
+        let s = g.as_slice().map_err(|_| {
+            gagekit_err(
+                py,
+                "InvalidInputError",
+                "zone members must be contiguous".into(),
+            )
+        })?;
         if s.iter().any(|&j| j < 0) {
-            return Err(gagekit_err(py, "InvalidInputError", "negative candidate index in a zone".into()));
+            return Err(gagekit_err(
+                py,
+                "InvalidInputError",
+                "negative candidate index in a zone".into(),
+            ));
         }
         gs.push(s.iter().map(|&j| j as usize).collect());
     }
@@ -75,8 +89,22 @@ fn design_search<'py>(
         Some(w) => Some(rows(py, w, k, "weight matrix")?),
         None => None,
     };
-    let problem = Problem { blocks: flat, n_cand, r, k, groups: gs, point_group, weights: w };
-    let opts = Options { criterion: c, starts, max_sweeps, seed, initial };
+    let problem = Problem {
+        blocks: flat,
+        n_cand,
+        r,
+        k,
+        groups: gs,
+        point_group,
+        weights: w,
+    };
+    let opts = Options {
+        criterion: c,
+        starts,
+        max_sweeps,
+        seed,
+        initial,
+    };
     let out = run(py, || gagekit_design::search(&problem, &opts))?;
     let d = PyDict::new(py);
     d.set_item("design", indices(py, out.design))?;
@@ -102,11 +130,17 @@ fn design_metrics<'py>(
     };
     let m = run(py, || {
         if n == 0 || k == 0 {
-            return Err(gagekit_core::GkError::invalid("an empty design matrix has no figures"));
+            return Err(gagekit_core::GkError::invalid(
+                "an empty design matrix has no figures",
+            ));
         }
         gagekit_core::check_finite(flat, k, "design-matrix rows")?;
         let idx: Vec<usize> = (0..n).collect();
-        Ok(gagekit_design::metrics(&gagekit_design::information(flat, &idx, 1, k), k, w))
+        Ok(gagekit_design::metrics(
+            &gagekit_design::information(flat, &idx, 1, k),
+            k,
+            w,
+        ))
     })?;
     metrics_dict(py, &m)
 }
@@ -114,7 +148,12 @@ fn design_metrics<'py>(
 /// `n` shifted-Halton points in [0, 1)^d as an (n, d) array.
 #[pyfunction]
 #[pyo3(signature = (n, d, seed=0))]
-fn design_halton<'py>(py: Python<'py>, n: usize, d: usize, seed: u64) -> PyResult<Bound<'py, PyAny>> {
+fn design_halton<'py>(
+    py: Python<'py>,
+    n: usize,
+    d: usize,
+    seed: u64,
+) -> PyResult<Bound<'py, PyAny>> {
     let v = run(py, || gagekit_design::halton(n, d, seed))?;
     Ok(PyArray1::from_vec(py, v).reshape([n, d])?.into_any())
 }
