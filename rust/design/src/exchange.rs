@@ -82,7 +82,7 @@ pub struct Outcome {
 }
 
 /// Candidates screened exactly per visit for K and E.
-const EXACT_TOP: usize = 16;
+const EXACT_TOP: usize = 32;
 /// Candidates evaluated together between checks of the improvement bound.
 const PRUNE_CHUNK: usize = 512;
 /// Low-rank updates of the per-candidate blocks before they are recomputed exactly.
