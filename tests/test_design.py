@@ -161,3 +161,18 @@ def test_bad_input(kwargs, exc, msg):
 def test_public_api():
     assert gagekit.optimal_design is optimal_design
     assert "optimal_design" in gagekit.__all__ and "DesignResult" in gagekit.__all__
+
+
+def test_feasible_mask_and_average_over():
+    # keep the plan out of the middle third; the I criterion averages over given points only
+    feasible = lambda X: np.abs(X[:, 0] - 0.5) > 1 / 6
+    r = search_design(quadratic, [[0.0, 1.0]], 6, "D", feasible=feasible, n_candidates=200)
+    assert (np.abs(r.points[:, 0] - 0.5) > 1 / 6).all()
+    cand = np.linspace(0, 1, 41)[:, None]
+    left = (cand[:, 0] <= 0.5)
+    a = search_design(quadratic, [[0.0, 1.0]], 6, "I", candidates=cand, average_over=left)
+    b = search_design(quadratic, [[0.0, 1.0]], 6, "I", candidates=cand)
+    # averaging the prediction variance over [0, 0.5] only pulls the plan to the left
+    assert a.points.mean() < b.points.mean()
+    with pytest.raises(InvalidInputError, match="average_over"):
+        search_design(quadratic, [[0.0, 1.0]], 6, "I", candidates=cand, average_over=[True])
