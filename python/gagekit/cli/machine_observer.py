@@ -55,7 +55,8 @@ def design_cmd(
 
     def human(r: dict) -> str:
         f, q = plan.figures, plan.quasi_random
-        rows = [[f"{plan.criterion}-optimal ({plan.zones} zones)", len(plan.commands), _sci(f["trace"]), _sci(f["det"]), _sci(f["condition_number"])]]
+        label = f"{plan.criterion}-optimal" + ("" if plan.zones == "none" else f" ({zones} zones)")
+        rows = [[label, len(plan.commands), _sci(f["trace"]), _sci(f["det"]), _sci(f["condition_number"])]]
         for key, label in (("same_size", "quasi-random"), ("full_290", "quasi-random")):
             rows.append([label, q[key]["points"], _sci(q[key]["trace"]), _sci(q[key]["det"]), _sci(q[key]["condition_number"])])
         lines = [
