@@ -260,6 +260,8 @@ class History:
         self.path = Path(path)
         if not create and not self.path.exists():
             raise FileFormatError(f"{self.path}: history file not found")
+        if not self.path.parent.is_dir():
+            raise FileFormatError(f"{self.path}: the folder {self.path.parent} does not exist")
         try:
             self.conn = sqlite3.connect(self.path)
             with self.conn:
