@@ -54,7 +54,9 @@ def test_identify_json_has_the_issue_keys(files):
 
 
 def test_identify_human_table(files):
-    out = gk("identify", EXAMPLE, files / "obs.csv", "--test", files / "test.csv").stdout
+    out = gk("identify", EXAMPLE, files / "obs.csv", "--test", files / "test.csv", "--residuals", files / "res.csv").stdout
+    res = (files / "res.csv").read_text().splitlines()
+    assert res[0] == "test,B,X,Z,Y,W,nx,ny,nz,nominal,mx,my,mz,model" and len(res) == 1 + 290 + 50
     assert "T1.dx + T2.dx + T3.dx + 450*T4.beta + T4.dx - 312.035*T5.beta + T5.dx" in out
     assert "% decrease" in out and "test set (50 points)" in out
 
@@ -63,7 +65,7 @@ def test_predict_and_compensate(files):
     gk("identify", EXAMPLE, files / "obs.csv", "--out", files / "cal2.json")
     gk("predict", EXAMPLE, files / "cal2.json", files / "test.csv", "--out", files / "err.csv")
     lines = (files / "err.csv").read_text().splitlines()
-    assert lines[0] == "B,X,Z,Y,W,ex,ey,ez" and len(lines) == 51
+    assert lines[0] == "B,X,Z,Y,W,ex,ey,ez,ux,uy,uz" and len(lines) == 51
     d = json.loads(gk("compensate", EXAMPLE, files / "cal2.json", files / "test.csv", "--out", files / "comp.csv", "--json").stdout)
     assert d["points"] == 50 and d["remaining_max"] < 1e-9
 

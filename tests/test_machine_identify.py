@@ -54,6 +54,16 @@ def test_joint_residuals_reach_the_noise_floor(case):
     assert joint.rank == 32 and joint.dof == 3 * 290 - 36
 
 
+def test_test_set_residual_matches_the_realised_noise(case, machine):
+    """A 50-point mean of noise lengths scatters by ~6 % (1 sigma) around 1.60 sigma; against the
+    noise actually drawn, the test-set residual (noise + prediction uncertainty) must agree to
+    10 % for every seed (0.98 to 1.07 over 30 seeds), not only on average."""
+    truth, _, test, res = case
+    clean = gagekit.simulate(machine, truth, test.commands, noise=0.0)
+    realised = np.linalg.norm(test.measured - clean.measured, axis=1).mean()
+    assert abs(res["joint"].test.model_mean / realised - 1) < 0.10
+
+
 def test_joint_groups_within_4_std_of_truth(case, machine, structure):
     truth, _, _, res = case
     joint = res["joint"]
@@ -259,3 +269,31 @@ def test_design_matrix_independent_of_thread_count(machine):
 
     here = hashlib.sha256(machine.design_matrix(machine.sample_commands(5000, seed=3)).tobytes()).hexdigest()
     assert one == here
+
+
+def test_wrong_units_are_flagged(machine, structure):
+    truth = gagekit.Truth.random(machine, seed=2)
+    c = machine.sample_commands(60, seed=2)
+    obs = gagekit.simulate(machine, truth, c)
+    as_rad = gagekit.Observations(np.c_[np.radians(c[:, :1]), c[:, 1:]], obs.measured, obs.joint_names)
+    with pytest.warns(UserWarning) as rec:
+        gagekit.identify(machine, as_rad, structure=structure)
+    messages = " | ".join(str(w.message) for w in rec)
+    assert "fits the observations to only" in messages and "did not settle" in messages
+
+
+def test_prediction_uncertainty_is_calibrated(machine, structure):
+    """Over repeated simulated calibrations, the spread of the predicted error at fixed commands
+    matches the propagated standard uncertainty (sqrt(diag(M_L Sigma M_L^T)))."""
+    truth = gagekit.Truth.random(machine, seed=11)
+    cmds = machine.sample_commands(290, seed=11)
+    probe = machine.sample_commands(8, seed=12)
+    preds, us = [], []
+    for k in range(40):
+        obs = gagekit.simulate(machine, truth, cmds, noise=SIGMA, seed=1000 + k)
+        cal = gagekit.identify(machine, obs, structure=structure)
+        preds.append(gagekit.predict(machine, cal, probe, structure=structure))
+        us.append(gagekit.predict_uncertainty(machine, cal, probe, structure=structure))
+    spread = np.std(np.array(preds), axis=0, ddof=1)
+    ratio = spread / np.mean(np.array(us), axis=0)
+    assert 0.7 < np.median(ratio) < 1.3, np.median(ratio)

@@ -187,3 +187,103 @@ def test_bundled_example_is_the_shared_one():
     assert gagekit.load_machine(bundled).n_parameters == 52
     if SHARED.exists():
         assert bundled.read_bytes() == SHARED.read_bytes()
+
+
+def test_rotary_error_about_its_own_axis_adds_to_the_joint_angle(machine):
+    """Eq. 3.5: beta (about the B axis) shifts the angle by beta sin(B/2) (Eq. 3.6), exactly."""
+    cmds = machine.sample_commands(30, seed=4)
+    b = 2e-4
+    p = np.zeros(52)
+    p[machine.parameter_names.index("B.beta.1")] = b
+    shifted = cmds.copy()
+    shifted[:, 0] += np.degrees(b * np.sin(np.radians(cmds[:, 0]) / 2))
+    assert np.allclose(machine.positions(cmds, p), machine.nominal(shifted), atol=1e-9)
+
+
+def test_rotary_tilts_and_shifts_enter_in_the_fixed_frame(machine):
+    """Eq. 3.5: alpha, gamma and dx, dy, dz of B act in the table frame, scaled by sin(B/2)."""
+    cmds = machine.sample_commands(30, seed=5)
+    p_nom = machine.nominal(cmds)
+    w = np.sin(np.radians(cmds[:, 0]) / 2)[:, None]
+    names = machine.parameter_names
+    m = machine.design_matrix(cmds).reshape(-1, 3, 52)
+    for name, axis in (("B.alpha.1", 2), ("B.gamma.1", 0)):
+        e = np.zeros(3)
+        e[axis] = 1.0
+        assert np.allclose(m[:, :, names.index(name)], w * np.cross(e, p_nom), atol=1e-9)
+    for name, axis in (("B.dx.1", 0), ("B.dy.1", 1), ("B.dz.1", 2)):
+        e = np.zeros(3)
+        e[axis] = 1.0
+        assert np.allclose(m[:, :, names.index(name)], w * e, atol=1e-12)
+
+
+def test_prismatic_joint_of_eq_3_3(machine):
+    """X.delta scales the X travel; X.dalpha bends it by (x^2/2) dalpha along y (Eq. 3.3)."""
+    cmds = machine.sample_commands(10, seed=6)
+    cmds[:, 0] = 0.0  # B = 0: table and machine frames coincide
+    names = machine.parameter_names
+    m = machine.design_matrix(cmds).reshape(-1, 3, 52)
+    x = cmds[:, 1]
+    assert np.allclose(m[:, :, names.index("X.delta")], np.c_[x, 0 * x, 0 * x])
+    col = m[:, :, names.index("X.dalpha")]
+    # rotation x*dalpha about z of the point beyond X, plus the straightness x^2/2 along y
+    beyond = machine.nominal(cmds) - np.c_[x, 0 * x, 0 * x]
+    assert np.allclose(col, x[:, None] * np.cross([0, 0, 1.0], beyond) + np.c_[0 * x, x**2 / 2, 0 * x])
+
+
+@st.composite
+def random_machines(draw):
+    """Chains of 1-6 elements: shapes with offsets, prismatic and rotary joints on any axes."""
+    n = draw(st.integers(1, 6))
+    kinds = draw(st.lists(st.sampled_from(["shape", "prismatic", "rotary"]), min_size=n, max_size=n))
+    if all(k == "shape" for k in kinds):
+        kinds[0] = "prismatic"
+    coord = st.floats(-500, 500, allow_nan=False)
+    lines, chain = ['angle_unit = "rad"'], []
+    body = []
+    for i, k in enumerate(kinds):
+        name = f"E{i}"
+        chain.append(name)
+        if k == "shape":
+            body.append(f"[shapes.{name}]\noffset = {[draw(coord) for _ in range(3)]}")
+        else:
+            v = np.array([draw(st.floats(-1, 1)) for _ in range(3)])
+            if np.linalg.norm(v) < 0.1:
+                v = np.array([0.0, 0.0, 1.0])
+            v = (v / np.linalg.norm(v)).tolist()
+            rng = "[-3.0, 3.0]" if k == "rotary" else "[-800.0, 800.0]"
+            extra = f"\nfourier_terms = {draw(st.integers(1, 3))}" if k == "rotary" else ""
+            body.append(f'[joints.{name}]\ntype = "{k}"\naxis = {v}\nrange = {rng}{extra}')
+    lines.append(f"chain = {chain}".replace("'", '"'))
+    lines += body
+    lines.append(f"[tool]\noffset = {[draw(coord) for _ in range(3)]}")
+    return gagekit.parse_machine("\n".join(lines) + "\n")
+
+
+@settings(max_examples=20, deadline=None)
+@given(random_machines(), st.integers(0, 1000))
+def test_any_chain_design_matrix_matches_central_differences(m, seed):
+    cmds = m.sample_commands(4, seed=seed)
+    d = m.design_matrix(cmds)
+    for j, power in enumerate(m.parameter_length_powers):
+        h = {0: 1e-1, 1: 1e-5, 2: 1e-7}[power]
+        p = np.zeros(m.n_parameters)
+        p[j] = h
+        plus = m.positions(cmds, p)
+        p[j] = -h
+        fd = ((plus - m.positions(cmds, p)) / (2 * h)).reshape(-1)
+        # central differences: O(h^2) truncation (relative to the column) plus the round-off
+        # of positions of size |p| divided by 2h
+        tol = 1e-7 * np.abs(d[:, j]).max() + 50 * np.finfo(float).eps * (np.abs(plus).max() + 1.0) / h
+        assert np.abs(d[:, j] - fd).max() < tol, m.parameter_names[j]
+
+
+@settings(max_examples=25, deadline=None)
+@given(random_machines())
+def test_any_chain_groups_reproduce_the_design_matrix(m):
+    s = m.structure(n=300)
+    assert len(s.groups) == s.rank <= m.n_parameters - len(s.no_effect)
+    d = m.design_matrix(m.sample_commands(40, seed=3))
+    assert np.abs(s.reduce(d) @ s.coefficients - d).max() <= 1e-6 * (np.abs(d).max() + 1)
+    for g in s.groups:
+        assert g.terms[g.leader] == 1.0

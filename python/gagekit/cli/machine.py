@@ -66,7 +66,12 @@ def simulate_cmd(
     noise: float = typer.Option(0.0089, "--noise", help="Tracker noise sigma per coordinate, mm."),
     seed: int = typer.Option(0, "--seed", help="Seed for commands, noise and (without --params) the truth."),
     truth: Optional[Path] = typer.Option(None, "--truth", help="Write the true parameters, groups and frame (JSON)."),
-    params: Optional[Path] = typer.Option(None, "--params", help="Use this truth JSON (e.g. from --truth) instead of random errors."),
+    params: Optional[Path] = typer.Option(
+        None,
+        "--params",
+        help='Truth JSON to use instead of random errors (e.g. written by --truth): {"parameters": {name: value}, '
+        '"frame": {"rotation": 3x3, "translation": 3}}; parameters left out are zero.',
+    ),
     scale: float = typer.Option(1.0, "--scale", help="Scale of the random errors (1 = Table 3.3's magnitudes)."),
     as_json: bool = JSON_OPTION,
 ) -> None:
@@ -96,9 +101,10 @@ def _identify_text(cal) -> str:
         f"no effect: {', '.join(cal.unidentifiable) or 'none'}",
     ]
     if cal.frame_confounded:
+        how = "taken by the tracker frame" if cal.method == "joint" else "estimated relative to the step-1 frame"
         lines.append(
-            "taken by the tracker frame (a rigid motion of the table frame, not separable from the tracker "
-            f"placement): {'; '.join(cal.frame_confounded)}"
+            f"(frame): a rigid motion of the table frame, not separable from the tracker placement; {how}: "
+            f"{'; '.join(cal.frame_confounded)}"
         )
     lines.append("")
     for label, st in (("identification", cal.residuals), ("test", cal.test)):
@@ -120,6 +126,9 @@ def identify_cmd(
     method: str = typer.Option("joint", "--method", help="joint (frame correction estimated with the groups) or two-step (dissertation)."),
     test_frame: str = typer.Option("same", "--test-frame", help="same (test set measured in the same tracker set-up) or refit."),
     out: Optional[Path] = typer.Option(None, "--out", help="Write the calibration JSON (input of predict and compensate)."),
+    residuals: Optional[Path] = typer.Option(
+        None, "--residuals", help="Write per-point residuals (CSV: set, joints, nominal and model residual vectors and lengths, mm)."
+    ),
     as_json: bool = JSON_OPTION,
 ) -> None:
     """Identify the error model's groups from tracker observations (Sec. 3.1.5, Tables 3.2-3.5)."""
@@ -134,7 +143,24 @@ def identify_cmd(
         cal = identify(m, obs, test=tobs, method=method, test_frame=test_frame)
     if out is not None:
         cal.save(out)
+    if residuals is not None:
+        _write_residuals(residuals, m, cal, obs, tobs)
     emit(cal, as_json, _identify_text)
+
+
+def _write_residuals(path: Path, m, cal, obs, tobs) -> None:
+    from ..machine.observations import write_csv
+
+    pr = cal.point_residuals
+    blocks = [(0.0, obs.commands, pr["nominal"], pr["model"])]
+    if tobs is not None:
+        blocks.append((1.0, tobs.commands, pr["test_nominal"], pr["test_model"]))
+    rows = [
+        np.hstack([np.full((len(c), 1), k), c, a, np.linalg.norm(a, axis=1)[:, None], b, np.linalg.norm(b, axis=1)[:, None]])
+        for k, c, a, b in blocks
+    ]
+    header = ["test"] + m.joint_names + ["nx", "ny", "nz", "nominal", "mx", "my", "mz", "model"]
+    write_csv(path, header, np.vstack(rows))
 
 
 @app.command("predict")
@@ -142,11 +168,13 @@ def predict_cmd(
     machine_file: Path = MACHINE_ARG,
     calibration: Path = typer.Argument(..., help="Calibration JSON from identify --out."),
     commands: Path = typer.Argument(..., help="Commands CSV (joint columns)."),
-    out: Path = typer.Option(..., "--out", help="Errors CSV to write: joint columns and ex, ey, ez (mm, table frame)."),
+    out: Path = typer.Option(
+        ..., "--out", help="Errors CSV to write: joint columns, ex, ey, ez and their standard uncertainties ux, uy, uz (mm, table frame)."
+    ),
     as_json: bool = JSON_OPTION,
 ) -> None:
     """Predict the volumetric error at given commands (Eq. 3.9)."""
-    from ..machine import load_calibration, load_machine, predict, read_commands
+    from ..machine import load_calibration, load_machine, predict, predict_uncertainty, read_commands
     from ..machine.observations import write_csv
 
     m = load_machine(machine_file)
@@ -154,7 +182,8 @@ def predict_cmd(
     cmds = read_commands(commands, m)
     with _warnings_to_stderr():
         err = predict(m, cal, cmds)
-    write_csv(out, m.joint_names + ["ex", "ey", "ez"], np.hstack([cmds, err]))
+    u = predict_uncertainty(m, cal, cmds)
+    write_csv(out, m.joint_names + ["ex", "ey", "ez", "ux", "uy", "uz"], np.hstack([cmds, err, u]))
     length = np.linalg.norm(err, axis=1) if len(err) else np.zeros(1)
     result = {"points": int(len(err)), "out": str(out), "mean": float(length.mean()), "max": float(length.max())}
     emit(result, as_json, lambda r: f"wrote {r['points']} predicted errors to {r['out']} (mean {r['mean']:.4f} mm, max {r['max']:.4f} mm)")

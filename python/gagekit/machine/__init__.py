@@ -17,6 +17,7 @@ from .identify import (
     identify,
     load_calibration,
     predict,
+    predict_uncertainty,
 )
 from .model import (
     Group,
@@ -51,6 +52,7 @@ __all__: list[str] = [
     "Calibration",
     "identify",
     "predict",
+    "predict_uncertainty",
     "compensate",
     "load_calibration",
     "Truth",

@@ -17,7 +17,8 @@ Methods:
   so the frame takes them and the groups concerned are reported as ``frame_confounded``
   (value 0, no uncertainty). Volumetric errors differ only by that rigid motion, which part
   set-up (work offsets) takes up anyway.
-- ``"two-step"``: the dissertation's procedure, frame fixed after step 1, all groups fitted.
+- ``"two-step"``: the dissertation's procedure, frame fixed after step 1, all groups fitted;
+  the frame-confounded groups are then estimated relative to the step-1 frame (and flagged).
 """
 
 from __future__ import annotations
@@ -44,6 +45,7 @@ __all__ = [
     "Calibration",
     "identify",
     "predict",
+    "predict_uncertainty",
     "compensate",
     "load_calibration",
     "NOISE_FLOOR_FACTOR",
@@ -53,6 +55,8 @@ METHODS = ("joint", "two-step")
 #: Mean length of a 3-D vector of independent N(0, sigma) coordinates, in sigma: 2 sqrt(2/pi).
 NOISE_FLOOR_FACTOR = 2.0 * math.sqrt(2.0 / math.pi)
 _MAX_ITER = 10
+#: Mean nominal error (mm) beyond which the data are more likely wrong than the machine.
+_SUSPICIOUS_MM = 2.0
 
 
 def rotation_from_vector(v: Sequence[float]) -> np.ndarray:
@@ -195,6 +199,9 @@ class Calibration:
     the standard uncertainties of its small-angle correction (alpha0, beta0, gamma0 rad,
     x0, y0, z0 mm; joint method). ``sigma`` is the estimated noise per coordinate and
     ``noise_floor`` = 1.596 sigma the mean residual length that noise alone leaves.
+    ``condition_number`` is s_max / s_min (ERRATA item 2) of the column-equilibrated
+    least-squares matrix: the groups, plus the frame correction for the joint method.
+    ``rank`` is the model's (Eq. 3.14); ``dof`` = 3n minus the unknowns actually fitted.
     """
 
     machine: str
@@ -211,7 +218,14 @@ class Calibration:
     frame_step1: Optional[Frame] = None
     iterations: int = 1
     frame_std: Optional[dict] = None
+    #: Covariance (rank x rank) of the group values, in ``groups`` order (zero rows and columns
+    #: for groups the frame takes). Propagates to predictions (:func:`predict_uncertainty`).
+    covariance: Optional[np.ndarray] = field(default=None, repr=False, compare=False)
     units: dict = field(default_factory=lambda: {"length": "mm", "angle": "rad"})
+    #: Per-point residual vectors (n, 3), table frame, mm: "nominal" and "model" for the
+    #: identification set, "test_nominal" and "test_model" with a test set (Figure 3.12).
+    #: Not part of the JSON.
+    point_residuals: Optional[dict] = field(default=None, repr=False, compare=False)
 
     @property
     def values(self) -> dict:
@@ -245,6 +259,8 @@ class Calibration:
         }
         if self.frame_std is not None:
             d["frame_std"] = dict(self.frame_std)
+        if self.covariance is not None:
+            d["covariance"] = np.asarray(self.covariance).tolist()
         if self.frame_step1 is not None:
             d["frame_step1"] = self.frame_step1.to_dict()
         if self.test is not None:
@@ -284,6 +300,7 @@ class Calibration:
                 frame_step1=Frame.from_dict(d["frame_step1"]) if d.get("frame_step1") else None,
                 iterations=int(d.get("iterations", 1)),
                 frame_std=d.get("frame_std"),
+                covariance=np.array(d["covariance"], dtype=np.float64) if d.get("covariance") is not None else None,
             )
         except (KeyError, TypeError, ValueError, AttributeError, StopIteration) as exc:
             raise FileFormatError(f"calibration: malformed ({type(exc).__name__}: {exc})") from None
@@ -385,9 +402,17 @@ def identify(
     m_red = st.reduce(machine.design_matrix(obs.commands))
     frame1 = _rigid(p_nom, obs.measured)  # Step 1 (Eq. 3.10 - 3.12)
     nominal_res = frame1.to_table(obs.measured) - p_nom
+    fit = float(np.linalg.norm(nominal_res, axis=1).mean())
+    if fit > _SUSPICIOUS_MM:
+        warnings.warn(
+            f"the ideal machine fits the observations to only {fit:.3g} mm on average: check the units "
+            f"(mm, angle_unit = {machine.angle_unit!r}), the column names and the tool offset",
+            UserWarning,
+            stacklevel=2,
+        )
     group_names = [g.name for g in st.groups]
     frame_names = ["frame.alpha0", "frame.beta0", "frame.gamma0", "frame.x0", "frame.y0", "frame.z0"]
-    conf: list[int] = []
+    conf = _confounded(machine, st)
     if method == "two-step":
         sol = _solve(m_red, nominal_res.reshape(-1), group_names)
         frame, iterations, cols = frame1, 1, list(range(n_groups))
@@ -396,11 +421,10 @@ def identify(
         model_res = nominal_res.reshape(-1) - m_red @ x
         k = n_groups
     else:
-        conf = _confounded(machine, st)
         cols = [c for c in range(n_groups) if c not in conf]
         a = np.hstack([m_red[:, cols], frame_columns(p_nom)])
         names = [group_names[c] for c in cols] + frame_names
-        frame, iterations = frame1, 0
+        frame, iterations, converged = frame1, 0, False
         for iterations in range(1, _MAX_ITER + 1):
             r = (frame.to_table(obs.measured) - p_nom).reshape(-1)
             sol = _solve(a, r, names)
@@ -408,14 +432,22 @@ def identify(
             small = x[len(cols) :]
             frame = frame.corrected(small)
             if np.abs(small[:3]).max() < 1e-13 and np.abs(small[3:]).max() < 1e-10:
+                converged = True
                 break
+        if not converged:
+            warnings.warn(
+                f"the frame correction did not settle in {_MAX_ITER} iterations (last step {np.abs(small).max():.1e}): "
+                "errors this large are beyond the first-order model",
+                UserWarning,
+                stacklevel=2,
+            )
         r = (frame.to_table(obs.measured) - p_nom).reshape(-1)
         sol = _solve(a, r, names)
         x = np.asarray(sol["x"])
         frame = frame.corrected(x[len(cols) :])
-        model_res = r - a @ x
         values = np.zeros(n_groups)
         values[cols] = x[: len(cols)]
+        model_res = (frame.to_table(obs.measured) - p_nom).reshape(-1) - m_red @ values
         k = a.shape[1]
     dof = 3 * n - k
     if dof <= 0:
@@ -424,10 +456,12 @@ def identify(
     cov = np.asarray(sol["cov_unscaled"]) * sigma**2
     std = np.full(n_groups, np.nan)
     std[cols] = np.sqrt(np.diag(cov)[: len(cols)])
+    gcov = np.zeros((n_groups, n_groups))
+    gcov[np.ix_(cols, cols)] = cov[: len(cols), : len(cols)]
     frame_std = None
     if method == "joint":
         fs = np.sqrt(np.diag(cov)[len(cols) :])
-        frame_std = {n.split(".")[1]: float(v) for n, v in zip(frame_names, fs)}
+        frame_std = {name.split(".")[1]: float(v) for name, v in zip(frame_names, fs)}
     units = machine.parameter_units()
     groups = tuple(
         GroupEstimate(
@@ -435,7 +469,7 @@ def identify(
             leader=g.leader,
             terms=dict(g.terms),
             value=float(values[i]),
-            std=None if i in conf else float(std[i]),
+            std=None if (method == "joint" and i in conf) else float(std[i]),
             unit=units[st.leaders[i]],
             frame_confounded=i in conf,
         )
@@ -455,6 +489,8 @@ def identify(
         frame_step1=frame1,
         iterations=iterations,
         frame_std=frame_std,
+        covariance=gcov,
+        point_residuals={"nominal": nominal_res.reshape(-1, 3), "model": model_res.reshape(-1, 3)},
     )
     if test is not None:
         tobs = _as_obs(machine, test, "test observations")
@@ -472,7 +508,8 @@ def _with_test(machine: Machine, cal: Calibration, tobs: Observations, test_fram
     predicted = p + predict(machine, cal, tobs.commands, structure=st)
     frame = cal.frame if test_frame == "same" else _rigid(predicted, tobs.measured)
     model = frame.to_table(tobs.measured) - predicted
-    return Calibration(**{**cal.__dict__, "test": ResidualStats.of(nominal, model)})
+    points = {**(cal.point_residuals or {}), "test_nominal": nominal, "test_model": model}
+    return Calibration(**{**cal.__dict__, "test": ResidualStats.of(nominal, model), "point_residuals": points})
 
 
 def _coefficients(machine: Machine, cal: Calibration, st: ModelStructure) -> np.ndarray:
@@ -509,6 +546,24 @@ def predict(machine: Machine, calibration: Calibration, commands: Any, structure
     values = np.array([g.value for g in calibration.groups])
     p = np.linalg.pinv(c) @ values
     return machine.volumetric_error(commands, p)
+
+
+def predict_uncertainty(
+    machine: Machine, calibration: Calibration, commands: Any, structure: Optional[ModelStructure] = None
+) -> np.ndarray:
+    """Standard uncertainty (n, 3), mm, of each predicted error component from the group
+    covariance: sqrt(diag(M_L Sigma M_L^T)), with M_L the reduced design matrix (Eq. 3.14).
+    The uncertainty of the groups the frame takes is a rigid motion and is not included."""
+    st = structure if structure is not None else machine.structure()
+    _coefficients(machine, calibration, st)
+    if calibration.covariance is None:
+        raise ConfigError("calibration has no covariance (written by an older gagekit?): identify again")
+    cov = np.asarray(calibration.covariance, dtype=np.float64)
+    if cov.shape != (st.rank, st.rank):
+        raise ConfigError(f"calibration covariance is {cov.shape}, expected ({st.rank}, {st.rank})")
+    ml = machine.reduced_design_matrix(commands, st)
+    var = np.einsum("ij,jk,ik->i", ml, cov, ml)
+    return np.sqrt(np.clip(var, 0.0, None)).reshape(-1, 3)
 
 
 def compensate(

@@ -12,6 +12,12 @@ Parameter names (Eq. 3.2, 3.3, 3.5): shape ``T.alpha T.beta T.gamma T.dx T.dy T.
 prismatic joint ``J.dalpha J.dbeta J.dgamma J.delta``; rotary joint ``J.alpha.n J.beta.n
 J.gamma.n J.dx.n J.dy.n J.dz.n`` for n = 1..fourier_terms. The kernels (exact chain, analytic
 design matrix, identifiability) are in Rust (``gagekit-kinematics``).
+
+Readings of the text: a rotary joint's error about its own axis adds to the joint angle; its
+two tilts and its translations act in the joint's fixed frame (Eq. 3.5 as printed adds the
+tilt to R(B) unrotated, which is rigid only at B = 0). The groups follow from the machine's
+own offsets: with the example's T4 offset of -450 mm, T4.beta = T3.beta + 450 dx, so the
+dx group of Eq. 3.14 also holds 450 T4.beta.
 """
 
 from __future__ import annotations
@@ -22,7 +28,7 @@ import sys
 import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Optional, Sequence, Union
+from typing import Any, Optional, Union
 
 import numpy as np
 

@@ -13,8 +13,8 @@ pub struct Identifiability {
     pub singular_values: Vec<f64>,
     /// Parameters without any effect (column zero at working precision).
     pub no_effect: Vec<usize>,
-    /// One leader parameter per group: the first column, in chain order, that is independent
-    /// of the columns before it. The reduced design matrix is M[:, leaders].
+    /// One leader parameter per group, in chain order: the first columns that are independent
+    /// of those before them (clearly, not by round-off). The reduced design matrix is M[:, leaders].
     pub leaders: Vec<usize>,
     /// Group coefficients, rank x P row-major, in the parameters' own units: group k is
     /// g_k = sum_j C[k, j] p_j with C[k, leaders[k]] = 1, and M = M[:, leaders] C exactly.
@@ -29,9 +29,9 @@ pub struct Identifiability {
 /// `length_scale` is a characteristic length of the workspace and `length_power[j]` the power
 /// of length by which parameter j's effect scales; column j divided by length_scale^power is a
 /// dimensionless column, and a column whose dimensionless norm per row is below `no_effect_tol`
-/// has no effect. The rank is taken from the SVD of the column-equilibrated matrix with the
-/// relative tolerance `rtol`; the leaders from a Gram-Schmidt pass in column order (pivoted QR
-/// with the pivot order fixed to the chain's), and both must agree.
+/// has no effect. The rank is that of the SVD of the column-equilibrated matrix at relative
+/// tolerance `rtol`; the leaders are chosen in the row space of that SVD by a Gram-Schmidt pass
+/// in column order (a QR whose pivots prefer the chain's order), so rank and groups always agree.
 pub fn identifiability(
     m: &[f64],
     nrows: usize,
@@ -68,64 +68,42 @@ pub fn identifiability(
     for (c, &j) in active.iter().enumerate() {
         eq.set_column(c, &(full.column(j) / norms[j]));
     }
-    let sv = eq
+    let svd = eq
         .clone()
-        .try_svd(false, false, f64::EPSILON, 0)
-        .ok_or_else(|| GkError::numerical("identifiability: the SVD did not converge"))?
-        .singular_values;
-    let mut singular_values: Vec<f64> = sv.iter().copied().collect();
-    singular_values.sort_by(|a, b| b.partial_cmp(a).unwrap());
+        .try_svd(false, true, f64::EPSILON, 0)
+        .ok_or_else(|| GkError::numerical("identifiability: the SVD did not converge"))?;
+    let singular_values: Vec<f64> = svd.singular_values.iter().copied().collect();
     let smax = singular_values[0];
     let rank = singular_values.iter().filter(|&&s| s > rtol * smax).count();
-
-    // Ordered Gram-Schmidt (twice, for orthogonality) over the equilibrated columns.
-    let mut basis: Vec<DVector<f64>> = Vec::new();
-    let mut leaders = Vec::new();
-    let gs_tol = rtol.sqrt().max(rtol * 10.0).min(1e-4);
-    for (c, &j) in active.iter().enumerate() {
-        let mut r = eq.column(c).into_owned();
-        for _ in 0..2 {
-            for q in &basis {
-                let d = q.dot(&r);
-                r.axpy(-d, q, 1.0);
-            }
-        }
-        let nr = r.norm();
-        if nr > gs_tol {
-            basis.push(r / nr);
-            leaders.push(j);
+    // Row space of the equilibrated matrix: W = V_r^T (rank x active). Column c of W is what
+    // parameter active[c] contributes to the identifiable directions.
+    let vt = svd.v_t.as_ref().unwrap();
+    let w = vt.rows(0, rank).into_owned();
+    let picked = pick_leaders(&w);
+    let leaders: Vec<usize> = picked.iter().map(|&c| active[c]).collect();
+    // Coefficients in equilibrated units: W = W_L C_s, so A_r = A_r[:, L] C_s.
+    let mut wl = DMatrix::zeros(rank, rank);
+    for (k, &c) in picked.iter().enumerate() {
+        wl.set_column(k, &w.column(c));
+    }
+    let cs = wl.clone().lu().solve(&w).ok_or_else(|| GkError::numerical("identifiability: singular leader block"))?;
+    let mut coefficients = vec![0.0; rank * ncols];
+    for k in 0..rank {
+        for (c, &j) in active.iter().enumerate() {
+            let v = if picked[k] == c {
+                1.0
+            } else if picked.contains(&c) || cs[(k, c)].abs() < 1e-9 {
+                0.0
+            } else {
+                cs[(k, c)]
+            };
+            // back to the parameters' own units: M_j = n_j a_j = sum_k (n_j / n_Lk) C_s[k, j] M_Lk
+            coefficients[k * ncols + j] = v * norms[j] / norms[leaders[k]];
         }
     }
-    if leaders.len() != rank {
-        return Err(GkError::numerical(format!(
-            "identifiability is ambiguous on these commands: the SVD gives rank {rank} but the ordered \
-             QR finds {} independent columns; use more, better spread commands",
-            leaders.len()
-        )));
-    }
-    // Coefficients: least squares of every column on the leader columns.
     let mut lead = DMatrix::zeros(nrows, rank);
     for (k, &j) in leaders.iter().enumerate() {
         lead.set_column(k, &full.column(j));
-    }
-    let svd = lead.clone().try_svd(true, true, f64::EPSILON, 0).ok_or_else(|| GkError::numerical("SVD failed"))?;
-    let coef = svd.solve(&full, 0.0).map_err(|e| GkError::numerical(e.to_string()))?;
-    let mut coefficients = vec![0.0; rank * ncols];
-    for k in 0..rank {
-        for j in 0..ncols {
-            let v = if no_effect.contains(&j) {
-                0.0
-            } else if j == leaders[k] {
-                1.0
-            } else if leaders.contains(&j) {
-                0.0
-            } else {
-                coef[(k, j)]
-            };
-            // coefficient in equilibrated units: drop round-off
-            let scaled = v * norms[leaders[k]] / norms[j].max(f64::MIN_POSITIVE);
-            coefficients[k * ncols + j] = if scaled.abs() < 1e-9 { 0.0 } else { v };
-        }
     }
     let cm = DMatrix::from_row_slice(rank, ncols, &coefficients);
     let recon = &lead * &cm - &full;
@@ -136,10 +114,56 @@ pub fn identifiability(
     }
     if reconstruction_error > 1e-6 {
         return Err(GkError::numerical(format!(
-            "identifiability: the groups do not reproduce the design matrix (relative error {reconstruction_error:.1e})"
+            "identifiability: the groups do not reproduce the design matrix (relative error {reconstruction_error:.1e}); \
+             some effects are barely distinguishable (nearly parallel axes?)"
         )));
     }
     Ok(Identifiability { rank, singular_values, no_effect, leaders, coefficients, reconstruction_error })
+}
+
+/// Leaders: columns of W (rank x a, rank <= a, full row rank) forming a well-conditioned basis,
+/// preferring earlier columns. An ordered Gram-Schmidt pass takes each column whose part
+/// outside the span of those before it exceeds `ORDERED_TOL` of the largest remaining; if that
+/// leaves the basis incomplete, column pivoting (largest residual first) completes it.
+fn pick_leaders(w: &DMatrix<f64>) -> Vec<usize> {
+    const ORDERED_TOL: f64 = 1e-3;
+    let (r, a) = w.shape();
+    let mut basis: Vec<DVector<f64>> = Vec::new();
+    let mut picked: Vec<usize> = Vec::new();
+    let residual = |basis: &Vec<DVector<f64>>, c: usize| {
+        let mut v = w.column(c).into_owned();
+        for _ in 0..2 {
+            for q in basis {
+                let d = q.dot(&v);
+                v.axpy(-d, q, 1.0);
+            }
+        }
+        v
+    };
+    let scale = (0..a).map(|c| w.column(c).norm()).fold(0.0, f64::max);
+    for c in 0..a {
+        if picked.len() == r {
+            break;
+        }
+        let v = residual(&basis, c);
+        let nv = v.norm();
+        if nv > ORDERED_TOL * scale {
+            basis.push(v / nv);
+            picked.push(c);
+        }
+    }
+    while picked.len() < r {
+        let (c, v) = (0..a)
+            .filter(|c| !picked.contains(c))
+            .map(|c| (c, residual(&basis, c)))
+            .max_by(|x, y| x.1.norm().partial_cmp(&y.1.norm()).unwrap())
+            .unwrap();
+        let nv = v.norm();
+        basis.push(v / nv);
+        picked.push(c);
+    }
+    picked.sort_unstable();
+    picked
 }
 
 /// A least-squares solution with what is needed for its uncertainty.
@@ -182,8 +206,8 @@ pub fn lstsq(a: &[f64], nrows: usize, ncols: usize, b: &[f64]) -> Result<Lstsq> 
         return Err(GkError::degenerate(format!("least squares: column {j} is zero")));
     }
     let mut eq = am.clone();
-    for j in 0..ncols {
-        eq.column_mut(j).scale_mut(1.0 / norms[j]);
+    for (j, nj) in norms.iter().enumerate() {
+        eq.column_mut(j).scale_mut(1.0 / nj);
     }
     let svd = eq.try_svd(true, true, f64::EPSILON, 0).ok_or_else(|| GkError::numerical("least squares: SVD failed"))?;
     let s = &svd.singular_values;
@@ -194,7 +218,7 @@ pub fn lstsq(a: &[f64], nrows: usize, ncols: usize, b: &[f64]) -> Result<Lstsq> 
     let mut singular_values: Vec<f64> = s.iter().copied().collect();
     singular_values.sort_by(|a, b| b.partial_cmp(a).unwrap());
     let condition_number = smax / smin;
-    if !(smin > 1e-12 * smax) {
+    if smin.is_nan() || smin <= 1e-12 * smax {
         return Err(GkError::degenerate(format!(
             "least squares: the design matrix is rank deficient (condition number {condition_number:.3e})"
         )));
