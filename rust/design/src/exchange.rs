@@ -697,14 +697,21 @@ impl<'p, 'a> Run<'p, 'a> {
         let mut cq = [[0.0; R]; R]; // c Qi
         for a in 0..R {
             for q in 0..R {
-                cq[a][q] = (0..R).map(|t| c[a][t] * qi(t, q)).sum();
+                let mut v = 0.0;
+                for t in 0..R {
+                    v += c[a][t] * qi(t, q);
+                }
+                cq[a][q] = v;
             }
         }
         let dj = &self.d[j * R * R..(j + 1) * R * R];
         let mut pm = [[0.0; R]; R]; // I + B F_-^-1 B^T
         for a in 0..R {
             for q in 0..=a {
-                let v = dj[a * R + q] + (0..R).map(|t| cq[a][t] * c[q][t]).sum::<f64>();
+                let mut v = dj[a * R + q];
+                for t in 0..R {
+                    v += cq[a][t] * c[q][t];
+                }
                 pm[a][q] = v + if a == q { 1.0 } else { 0.0 };
             }
         }
@@ -745,7 +752,11 @@ impl<'p, 'a> Run<'p, 'a> {
         let mut cqe = [[0.0; R]; R];
         for a in 0..R {
             for q in 0..R {
-                cqe[a][q] = (0..R).map(|t| c[a][t] * qeq(t, q)).sum();
+                let mut v = 0.0;
+                for t in 0..R {
+                    v += c[a][t] * qeq(t, q);
+                }
+                cqe[a][q] = v;
             }
         }
         // e- = B F_-^-1 W F_-^-1 B^T = e_j + f cQ^T + cQ f^T + c (Qi e_O Qi) c^T
@@ -753,10 +764,11 @@ impl<'p, 'a> Run<'p, 'a> {
         let mut em = [[0.0; R]; R];
         for a in 0..R {
             for q in 0..R {
-                em[a][q] = ej[a * R + q]
-                    + (0..R)
-                        .map(|t| f[a][t] * cq[q][t] + cq[a][t] * f[q][t] + cqe[a][t] * c[q][t])
-                        .sum::<f64>();
+                let mut v = ej[a * R + q];
+                for t in 0..R {
+                    v += f[a][t] * cq[q][t] + cq[a][t] * f[q][t] + cqe[a][t] * c[q][t];
+                }
+                em[a][q] = v;
             }
         }
         // tr(P^-1 e-) with P = L L^T: solve L X = e-, then tr(L^-T X) = sum ||L^-1 e-^(1/2)||..
@@ -963,7 +975,11 @@ impl<'p, 'a> Run<'p, 'a> {
             let y = |a: usize| &prod[a * q..a * q + p];
             for a in 0..r {
                 for c in 0..p {
-                    yx[a * p + c] = (0..p).map(|u| prod[a * q + u] * x[u * p + c]).sum();
+                    let mut v = 0.0;
+                    for u in 0..p {
+                        v += prod[a * q + u] * x[u * p + c];
+                    }
+                    yx[a * p + c] = v;
                     // Y = y S^-1
                 }
             }
@@ -1084,14 +1100,24 @@ impl<'p, 'a> Run<'p, 'a> {
         let mut order: Vec<usize> = (0..n).collect();
         let mut moves = 0;
         let mut stale = usize::MAX; // exchanges since the per-candidate blocks were refreshed
+                                    // A and I (k-exchange): cheap sweeps visit only the quarter of the points whose removal
+                                    // costs least; when they stop improving, a sweep over every point confirms (so the
+                                    // result is a local optimum for single exchanges either way).
+        let k_exchange = self.needs_e() && n >= 16;
+        let mut full = !k_exchange;
         for _ in 0..max_sweeps {
             if !self.c.is_spectral() && stale >= REFRESH_AFTER {
                 self.refresh();
                 stale = 0;
             }
-            order.shuffle(rng);
+            let visit: Vec<usize> = if full {
+                order.shuffle(rng);
+                order.clone()
+            } else {
+                self.cheapest_points(n.div_ceil(4))
+            };
             let mut moved = false;
-            for &i in &order {
+            for &i in &visit {
                 let m = if self.c.is_spectral() {
                     self.visit_spectral(i)
                 } else {
@@ -1104,10 +1130,41 @@ impl<'p, 'a> Run<'p, 'a> {
                 }
             }
             if !moved {
-                break;
+                if full {
+                    break;
+                }
+                full = true;
+            } else if k_exchange {
+                full = false;
             }
         }
         moves
+    }
+
+    /// The `m` design points whose removal raises the criterion least: tr(Q^-1 e_O)
+    /// with Q = I - O F^-1 O^T (A, I), from the stored per-candidate blocks.
+    fn cheapest_points(&self, m: usize) -> Vec<usize> {
+        let r = self.p.r;
+        let rr = r * r;
+        let mut loss: Vec<(f64, usize)> = (0..self.p.n())
+            .map(|i| {
+                let o = self.design[i];
+                let mut q = [0.0; MAX_R * MAX_R];
+                for a in 0..r {
+                    for b in 0..r {
+                        q[a * r + b] = if a == b { 1.0 } else { 0.0 } - self.d[o * rr + a * r + b];
+                    }
+                }
+                let mut qi = [0.0; MAX_R * MAX_R];
+                let v = match small_spd_inverse(&q, r, &mut qi) {
+                    Some(_) => (0..rr).map(|t| qi[t] * self.e[o * rr + t]).sum(),
+                    None => f64::INFINITY,
+                };
+                (sane(v), i)
+            })
+            .collect();
+        loss.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        loss.into_iter().take(m).map(|x| x.1).collect()
     }
 }
 
