@@ -272,7 +272,10 @@ def read_exclusions(path: Union[str, Path], space: ObserverSpace) -> Exclusions:
     margin of ``tolerance`` (fraction of every joint range, default 0.01)."""
     doc = _toml(path, "exclusions")
     boxes = []
-    for k, bx in enumerate(doc.get("box", []) or []):
+    items = doc.get("box", []) or []
+    if isinstance(items, dict):  # a single [box] table
+        items = [items]
+    for k, bx in enumerate(items):
         if not isinstance(bx, dict) or not bx:
             raise ConfigError(f"{path}: box {k + 1} is empty")
         spec = {}
