@@ -1,0 +1,197 @@
+"""`gagekit machine design | evaluate-plan`: optimal error observers (Ch. 4).
+
+Registered on the ``machine`` sub-application by the import at the end of ``cli/machine.py``.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Optional
+
+import typer
+
+from ..errors import InvalidInputError
+from ._common import JSON_OPTION, emit, table
+from .machine import MACHINE_ARG, _warnings_to_stderr, app
+
+
+def _sci(v: float) -> str:
+    return f"{v:.4g}"
+
+
+@app.command("design")
+def design_cmd(
+    machine_file: Path = MACHINE_ARG,
+    points: int = typer.Option(80, "--points", help="Measurement points in the plan (Sec. 4.2: 80)."),
+    criterion: str = typer.Option("I", "--criterion", help="A, D, K, E or I (default I: it predicted best in simulation; see README)."),
+    zones: str = typer.Option("none", "--zones", help="none, dissertation-8 (Fig. 4.3) or a zones TOML file."),
+    exclude: Optional[Path] = typer.Option(None, "--exclude", help="Exclusions TOML: [[box]] tables and/or commands to avoid."),
+    candidates: int = typer.Option(20000, "--candidates", help="Quasi-random candidate commands."),
+    seed: int = typer.Option(0, "--seed", help="Seed of candidates and search (same seed, same plan)."),
+    starts: int = typer.Option(4, "--starts", help="Independent starts of the exchange search."),
+    out: Path = typer.Option(..., "--out", help="PLAN.csv to write: one column per joint."),
+    as_json: bool = JSON_OPTION,
+) -> None:
+    """Design an optimal observer plan (Eqs. 4.3-4.8) for the machine's identifiable groups."""
+    from ..machine import load_machine
+    from ..machine.observer import ObserverSpace, design_observer, read_exclusions, read_zones
+
+    m = load_machine(machine_file)
+    space = ObserverSpace.of(m)
+    zone_arg = zones
+    if zones not in ("none", "dissertation-8"):
+        zp = Path(zones)
+        if not zp.suffix.lower() == ".toml" and not zp.exists():
+            raise InvalidInputError(f"--zones: use none, dissertation-8 or a zones TOML file (got {zones!r})")
+        zone_arg = read_zones(zp, space)
+    excl = read_exclusions(exclude, space) if exclude is not None else None
+    with _warnings_to_stderr():
+        plan = design_observer(m, points, criterion, zone_arg, exclude=excl, candidates=candidates, seed=seed,
+                               starts=starts, structure=space.structure)
+    plan.write(out)
+    result = {**plan.to_dict(), "out": str(out)}
+    if zones not in ("none", "dissertation-8"):
+        result["zones"] = str(zones)
+
+    def human(r: dict) -> str:
+        f, q = plan.figures, plan.quasi_random
+        label = f"{plan.criterion}-optimal" + ("" if plan.zones == "none" else f" ({zones} zones)")
+        rows = [[label, len(plan.commands), _sci(f["trace"]), _sci(f["det"]), _sci(f["condition_number"])]]
+        for key, label in (("same_size", "quasi-random"), ("full_290", "quasi-random")):
+            rows.append([label, q[key]["points"], _sci(q[key]["trace"]), _sci(q[key]["det"]), _sci(q[key]["condition_number"])])
+        lines = [
+            table(["plan", "points", "tr((M^T M)^-1)", "|(M^T M)^-1|", "kappa(M)"], rows),
+            "",
+            f"columns: {plan.scaling['groups']} identifiable groups, each divided by L^p (L = {plan.scaling['length_scale_mm']:.1f} mm; "
+            "p = 0 mm, 1 rad, 2 rad/mm)",
+        ]
+        if plan.zone_counts:
+            lines.append("zone counts: " + ", ".join(f"{z['zone'] + 1}: {z['count']}" for z in plan.zone_counts))
+        lines.append(f"wrote {len(plan.commands)} commands to {out}")
+        return "\n".join(lines)
+
+    emit(result, as_json, human)
+
+
+@app.command("evaluate-plan")
+def evaluate_plan_cmd(
+    machine_file: Path = MACHINE_ARG,
+    plan: Path = typer.Argument(..., help="PLAN.csv (joint columns), e.g. from `machine design`."),
+    seeds: int = typer.Option(20, "--seeds", help="Random machines simulated."),
+    noise: float = typer.Option(0.0089, "--noise", help="Tracker noise sigma per coordinate, mm."),
+    test_points: int = typer.Option(2000, "--test-points", help="Quasi-random commands where predictions are compared."),
+    seed: int = typer.Option(0, "--seed", help="Seed of machines, noise and test commands."),
+    compare: bool = typer.Option(True, "--compare/--no-compare", help="Also evaluate quasi-random plans of the same size and of 290 points."),
+    as_json: bool = JSON_OPTION,
+) -> None:
+    """Simulate identification from the plan and report the RMS prediction error over the workspace."""
+    from ..machine import load_machine, read_commands
+    from ..machine.observer import evaluate_plan
+
+    m = load_machine(machine_file)
+    with _warnings_to_stderr():
+        cmds = read_commands(plan, m, warn_range=True)
+        ev = evaluate_plan(m, cmds, seeds=seeds, noise=noise, test_points=test_points, seed=seed, compare=compare)
+
+    def human(_) -> str:
+        rows = [[p["label"], p["points"], f"{p['rms_um']:.2f}", f"{p['rms_um_std']:.2f}", f"{p['rms_um_max']:.2f}"] for p in ev.plans.values()]
+        head = (f"RMS prediction error of the volumetric error over {ev.test_points} commands, "
+                f"{ev.seeds} simulated machines, tracker noise {ev.noise * 1000:.1f} um (rigid motion removed)")
+        return head + "\n\n" + table(["plan", "points", "RMS um", "std", "max"], rows)
+
+    emit(ev, as_json, human)
+
+
+def _track_text(r) -> str:
+    rows = []
+    for c in r.cycles:
+        rows.append([c["cycle"], f"{c['observed']['mean'] * 1000:.1f}", f"{c['observed']['max'] * 1000:.1f}"]
+                    + [f"{c[k]['mean'] * 1000:.1f} / {c[k]['max'] * 1000:.1f}" for k in ("full", "static", "drift_only")])
+    text = "residuals at the plan's points, um (mean / max)\n\n" + table(
+        ["cycle", "observed mean", "observed max", "full (Table 4.4)", "static (Table 4.5)", "drift only (Table 4.6)"], rows)
+    tm = r.temperature_model
+    if tm and tm.get("fitted"):
+        text += (f"\n\ntemperature model over {', '.join(tm['sensors'])}: leave-one-cycle-out mean residual "
+                 f"{tm['leave_one_cycle_out_mean'] * 1000:.1f} um")
+    return text
+
+
+@app.command("track")
+def track_cmd(
+    machine_file: Path = MACHINE_ARG,
+    cycles_csv: Path = typer.Argument(..., help="Observations of repeated cycles: cycle, joints, x, y, z [, time, temp_*]."),
+    history: Optional[Path] = typer.Option(None, "--history", help="SQLite history of this machine to append the run to."),
+    report: Optional[Path] = typer.Option(None, "--report", help="Directory for track.json and the drift plot (Fig. 4.8)."),
+    as_json: bool = JSON_OPTION,
+) -> None:
+    """Track the error model cycle by cycle against static and drift-only calibrations (Tables 4.4-4.6)."""
+    from .._util import dumps
+    from ..machine import load_machine
+    from ..machine.tracking import History, plot_drift, read_cycles, track
+
+    m = load_machine(machine_file)
+    with _warnings_to_stderr():
+        cyc = read_cycles(cycles_csv, m)
+        res = track(m, cyc)
+    out = res.to_dict()
+    if history is not None:
+        h = History(history, m)
+        try:
+            out["history_run"] = h.append(cyc, res)
+        finally:
+            h.close()
+    if report is not None:
+        report.mkdir(parents=True, exist_ok=True)
+        (report / "track.json").write_text(dumps(out))
+        plot_drift(res, report / "drift.png")
+        out["report"] = str(report)
+    emit(out, as_json, lambda _: _track_text(res))
+
+
+@app.command("history")
+def history_cmd(
+    history_file: Path = typer.Argument(..., help="SQLite history written by `machine track --history`."),
+    as_json: bool = JSON_OPTION,
+) -> None:
+    """List the tracking runs stored in a history file."""
+    from ..machine.tracking import read_history
+
+    s = read_history(history_file)
+
+    def human(_) -> str:
+        lines = [f"history of machine {s['machine']} (created {s['created']}), {len(s['runs'])} run(s)"]
+        for run in s["runs"]:
+            lines.append(f"\nrun {run['run']} ({run['created']}, {run['points']} points, {run['source']})")
+            lines.append(table(["cycle", "observed um", "full um", "static um", "drift only um"],
+                               [[c["cycle"], f"{c['observed_mean'] * 1000:.1f}", f"{c['full_mean'] * 1000:.1f}",
+                                 f"{c['static_mean'] * 1000:.1f}", f"{c['drift_only_mean'] * 1000:.1f}"] for c in run["cycles"]]))
+        return "\n".join(lines)
+
+    emit(s, as_json, human)
+
+
+@app.command("simulate-cycles")
+def simulate_cycles_cmd(
+    machine_file: Path = MACHINE_ARG,
+    plan: Path = typer.Argument(..., help="PLAN.csv (joint columns) measured in every cycle."),
+    out: Path = typer.Option(..., "--out", help="Cycles CSV to write (cycle, joints, x, y, z, time, temp_*)."),
+    cycles: int = typer.Option(6, "--cycles", help="Measurement cycles (Fig. 4.4: 4 heating, 1 cooling after the first)."),
+    noise: float = typer.Option(0.0089, "--noise", help="Tracker noise sigma per coordinate, mm."),
+    drift_scale: float = typer.Option(1.0, "--drift-scale", help="Scale of the W- and Y-axis thermal drift."),
+    seed: int = typer.Option(0, "--seed", help="Seed of the truth, drift signs and noise."),
+    as_json: bool = JSON_OPTION,
+) -> None:
+    """Thermal mode of the simulator: the same plan measured over heating and cooling cycles."""
+    import numpy as np
+
+    from ..machine import Truth, load_machine, read_commands
+    from ..machine.observations import write_csv
+    from ..machine.tracking import simulate_cycles
+
+    m = load_machine(machine_file)
+    cmds = read_commands(plan, m)
+    blocks, info = simulate_cycles(m, Truth.random(m, seed=seed), cmds, cycles=cycles, noise=noise,
+                                   drift_scale=drift_scale, seed=seed)
+    write_csv(out, info["header"], np.concatenate(blocks))
+    result = {"cycles": cycles, "points": int(len(cmds)), "out": str(out), "drift_per_cycle": info["drift"]}
+    emit(result, as_json, lambda r: f"wrote {r['cycles']} cycles of {r['points']} points to {r['out']}")

@@ -1,0 +1,299 @@
+//! Small dense linear algebra on row-major slices: the k x k information matrix
+//! and the (2r) x (2r) capacitance matrices of the low-rank updates.
+
+use nalgebra::{DMatrix, SymmetricEigen};
+
+/// `f += sign * b^T b` for an r x k block `b` (row-major) and a k x k matrix `f`.
+pub fn gram_add(f: &mut [f64], b: &[f64], r: usize, k: usize, sign: f64) {
+    for row in b.chunks_exact(k).take(r) {
+        for a in 0..k {
+            let ra = sign * row[a];
+            if ra == 0.0 {
+                continue;
+            }
+            let fa = &mut f[a * k..(a + 1) * k];
+            for (fb, &rb) in fa.iter_mut().zip(row) {
+                *fb += ra * rb;
+            }
+        }
+    }
+}
+
+/// Inverse and log-determinant of a symmetric positive definite k x k matrix
+/// (Cholesky); `None` when it is not numerically positive definite.
+pub fn spd_inverse(a: &[f64], k: usize) -> Option<(Vec<f64>, f64)> {
+    let mut l = vec![0.0; k * k];
+    let mut logdet = 0.0;
+    for j in 0..k {
+        let mut s = a[j * k + j];
+        for p in 0..j {
+            s -= l[j * k + p] * l[j * k + p];
+        }
+        if !(s > 0.0) || !s.is_finite() {
+            return None;
+        }
+        let d = s.sqrt();
+        logdet += 2.0 * d.ln();
+        l[j * k + j] = d;
+        for i in j + 1..k {
+            let mut s = a[i * k + j];
+            for p in 0..j {
+                s -= l[i * k + p] * l[j * k + p];
+            }
+            l[i * k + j] = s / d;
+        }
+    }
+    // Invert L (lower triangular), then A^-1 = L^-T L^-1.
+    let mut li = vec![0.0; k * k];
+    for j in 0..k {
+        li[j * k + j] = 1.0 / l[j * k + j];
+        for i in j + 1..k {
+            let mut s = 0.0;
+            for p in j..i {
+                s -= l[i * k + p] * li[p * k + j];
+            }
+            li[i * k + j] = s / l[i * k + i];
+        }
+    }
+    let mut inv = vec![0.0; k * k];
+    for i in 0..k {
+        for j in 0..=i {
+            let mut s = 0.0;
+            for p in i..k {
+                s += li[p * k + i] * li[p * k + j];
+            }
+            inv[i * k + j] = s;
+            inv[j * k + i] = s;
+        }
+    }
+    Some((inv, logdet))
+}
+
+/// LU factorisation with partial pivoting of an n x n matrix in place.
+/// Returns the determinant, or `None` for an exactly singular pivot.
+pub fn lu_in_place(a: &mut [f64], piv: &mut [usize], n: usize) -> Option<f64> {
+    let mut det = 1.0;
+    for (i, p) in piv.iter_mut().enumerate().take(n) {
+        *p = i;
+    }
+    for c in 0..n {
+        let mut best = c;
+        let mut big = a[c * n + c].abs();
+        for r in c + 1..n {
+            let v = a[r * n + c].abs();
+            if v > big {
+                big = v;
+                best = r;
+            }
+        }
+        if big == 0.0 || !big.is_finite() {
+            return None;
+        }
+        if best != c {
+            for j in 0..n {
+                a.swap(c * n + j, best * n + j);
+            }
+            piv.swap(c, best);
+            det = -det;
+        }
+        let d = a[c * n + c];
+        det *= d;
+        for r in c + 1..n {
+            let f = a[r * n + c] / d;
+            a[r * n + c] = f;
+            if f != 0.0 {
+                for j in c + 1..n {
+                    a[r * n + j] -= f * a[c * n + j];
+                }
+            }
+        }
+    }
+    Some(det)
+}
+
+/// Inverse from an LU factorisation made by [`lu_in_place`].
+pub fn lu_inverse(lu: &[f64], piv: &[usize], n: usize, out: &mut [f64]) {
+    for col in 0..n {
+        // Solve A x = e_col: P A = L U, so L U x = P e_col.
+        let x = &mut out[..];
+        let mut y = [0.0f64; MAX_P];
+        for i in 0..n {
+            let mut s = if piv[i] == col { 1.0 } else { 0.0 };
+            for j in 0..i {
+                s -= lu[i * n + j] * y[j];
+            }
+            y[i] = s;
+        }
+        for i in (0..n).rev() {
+            let mut s = y[i];
+            for j in i + 1..n {
+                s -= lu[i * n + j] * y[j];
+            }
+            y[i] = s / lu[i * n + i];
+        }
+        for i in 0..n {
+            x[i * n + col] = y[i];
+        }
+    }
+}
+
+/// Cholesky inverse and log-determinant of a small (r <= MAX_R) SPD matrix into `inv`;
+/// `None` when a pivot is not positive.
+pub fn small_spd_inverse(a: &[f64], r: usize, inv: &mut [f64]) -> Option<f64> {
+    let mut l = [0.0f64; MAX_R * MAX_R];
+    let mut logdet = 0.0;
+    for j in 0..r {
+        let mut s = a[j * r + j];
+        for p in 0..j {
+            s -= l[j * r + p] * l[j * r + p];
+        }
+        if !(s > 0.0) {
+            return None;
+        }
+        let d = s.sqrt();
+        logdet += 2.0 * d.ln();
+        l[j * r + j] = d;
+        for i in j + 1..r {
+            let mut s = a[i * r + j];
+            for p in 0..j {
+                s -= l[i * r + p] * l[j * r + p];
+            }
+            l[i * r + j] = s / d;
+        }
+    }
+    let mut li = [0.0f64; MAX_R * MAX_R];
+    for j in 0..r {
+        li[j * r + j] = 1.0 / l[j * r + j];
+        for i in j + 1..r {
+            let mut s = 0.0;
+            for p in j..i {
+                s -= l[i * r + p] * li[p * r + j];
+            }
+            li[i * r + j] = s / l[i * r + i];
+        }
+    }
+    for i in 0..r {
+        for j in 0..=i {
+            let mut s = 0.0;
+            for p in i..r {
+                s += li[p * r + i] * li[p * r + j];
+            }
+            inv[i * r + j] = s;
+            inv[j * r + i] = s;
+        }
+    }
+    Some(logdet)
+}
+
+/// Largest number of rows a design point may contribute.
+pub const MAX_R: usize = 8;
+/// Largest size of an exchange capacitance matrix (2 * MAX_R).
+pub const MAX_P: usize = 2 * MAX_R;
+
+/// Eigenvalues (ascending) and eigenvectors (column j of the k x k row-major
+/// result belongs to eigenvalue j) of a symmetric matrix.
+pub fn sym_eig(a: &[f64], k: usize) -> (Vec<f64>, Vec<f64>) {
+    let m = DMatrix::from_row_slice(k, k, a);
+    let eig = SymmetricEigen::new(m);
+    let mut order: Vec<usize> = (0..k).collect();
+    order.sort_by(|&i, &j| eig.eigenvalues[i].total_cmp(&eig.eigenvalues[j]));
+    let vals = order.iter().map(|&i| eig.eigenvalues[i]).collect();
+    let mut vecs = vec![0.0; k * k];
+    for (c, &i) in order.iter().enumerate() {
+        for r in 0..k {
+            vecs[r * k + c] = eig.eigenvectors[(r, i)];
+        }
+    }
+    (vals, vecs)
+}
+
+/// Eigenvalues of a symmetric matrix, ascending.
+pub fn sym_eigenvalues(a: &[f64], k: usize) -> Vec<f64> {
+    let m = DMatrix::from_row_slice(k, k, a);
+    let mut v: Vec<f64> = m.symmetric_eigenvalues().iter().copied().collect();
+    v.sort_by(|a, b| a.total_cmp(b));
+    v
+}
+
+/// `out (m x p) = a (m x n) * b^T` where `b` is p x n; all row-major.
+pub fn mul_abt(a: &[f64], b: &[f64], m: usize, n: usize, p: usize, out: &mut [f64]) {
+    for i in 0..m {
+        let ai = &a[i * n..(i + 1) * n];
+        for j in 0..p {
+            let bj = &b[j * n..(j + 1) * n];
+            out[i * p + j] = dot(ai, bj);
+        }
+    }
+}
+
+/// `out (m x n) = a (m x n) * s` for a symmetric n x n matrix `s`.
+pub fn mul_ab(a: &[f64], s: &[f64], m: usize, n: usize, out: &mut [f64]) {
+    for i in 0..m {
+        let ai = &a[i * n..(i + 1) * n];
+        let oi = &mut out[i * n..(i + 1) * n];
+        oi.iter_mut().for_each(|v| *v = 0.0);
+        for (q, &aq) in ai.iter().enumerate() {
+            if aq == 0.0 {
+                continue;
+            }
+            for (o, &sv) in oi.iter_mut().zip(&s[q * n..(q + 1) * n]) {
+                *o += aq * sv;
+            }
+        }
+    }
+}
+
+#[inline(always)]
+pub fn dot(a: &[f64], b: &[f64]) -> f64 {
+    let mut s = [0.0f64; 4];
+    let chunks = a.len() / 4;
+    for c in 0..chunks {
+        let i = 4 * c;
+        s[0] += a[i] * b[i];
+        s[1] += a[i + 1] * b[i + 1];
+        s[2] += a[i + 2] * b[i + 2];
+        s[3] += a[i + 3] * b[i + 3];
+    }
+    let mut t = (s[0] + s[1]) + (s[2] + s[3]);
+    for i in 4 * chunks..a.len() {
+        t += a[i] * b[i];
+    }
+    t
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn spd_inverse_and_logdet() {
+        let a = [4.0, 2.0, 0.6, 2.0, 5.0, 1.0, 0.6, 1.0, 3.0];
+        let (inv, logdet) = spd_inverse(&a, 3).unwrap();
+        let mut prod = [0.0; 9];
+        mul_ab(&a, &inv, 3, 3, &mut prod);
+        for i in 0..3 {
+            for j in 0..3 {
+                let want = if i == j { 1.0 } else { 0.0 };
+                assert!((prod[i * 3 + j] - want).abs() < 1e-12);
+            }
+        }
+        let mut lu = a;
+        let mut piv = [0; 3];
+        let det = lu_in_place(&mut lu, &mut piv, 3).unwrap();
+        assert!((det.ln() - logdet).abs() < 1e-12);
+        let mut inv2 = [0.0; 9];
+        lu_inverse(&lu, &piv, 3, &mut inv2);
+        for i in 0..9 {
+            assert!((inv[i] - inv2[i]).abs() < 1e-12);
+        }
+        assert!(spd_inverse(&[1.0, 2.0, 2.0, 1.0], 2).is_none());
+    }
+
+    #[test]
+    fn eigen_sorted() {
+        let (vals, vecs) = sym_eig(&[2.0, 1.0, 1.0, 2.0], 2);
+        assert!((vals[0] - 1.0).abs() < 1e-12 && (vals[1] - 3.0).abs() < 1e-12);
+        // first eigenvector ~ (1, -1)/sqrt 2
+        assert!((vecs[0] + vecs[2]).abs() < 1e-12);
+    }
+}

@@ -1,0 +1,1295 @@
+//! Point-exchange search over a candidate set (Fedorov exchange, Sec. 4.1-4.2).
+//!
+//! A design is n candidate indices (repeats allowed); design point i may only
+//! take candidates of its group (its zone, Eq. 4.8). Each start builds a
+//! randomised greedy D-optimal design, then sweeps over the points in random
+//! order and moves each to the allowed candidate that improves the criterion most.
+//!
+//! Exchanging block O for block B is the rank-2r update F' = F + U C U^T with
+//! U = [B^T O^T] and C = diag(I, -I). With S = C + U^T F^-1 U (2r x 2r):
+//! det F' / det F = (-1)^r det S and tr(W F'^-1) = tr(W F^-1) - tr(S^-1 U^T F^-1 W F^-1 U),
+//! so A, D and I are exact from the per-candidate r x r blocks B F^-1 B^T and
+//! B F^-1 W F^-1 B^T, which are kept current by the same update (refreshed each
+//! sweep). K and E have no such formula: candidates are screened by first-order
+//! perturbation of the extreme eigenvalues and the best few evaluated exactly.
+
+use crate::criteria::{information, metrics, Criterion, Metrics};
+use crate::dense::{
+    dot, gram_add, lu_in_place, lu_inverse, mul_ab, mul_abt, small_spd_inverse, spd_inverse,
+    sym_eig, sym_eigenvalues, MAX_P, MAX_R,
+};
+use gagekit_core::{GkError, Result};
+use rand::seq::{index::sample, SliceRandom};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
+
+/// The design problem: stacked candidate blocks and the zone structure.
+#[derive(Debug, Clone)]
+pub struct Problem<'a> {
+    /// Candidate blocks, (n_cand, r, k) row-major: the design-matrix rows each candidate adds.
+    pub blocks: &'a [f64],
+    pub n_cand: usize,
+    /// Rows per design point (3 for a tracker point).
+    pub r: usize,
+    /// Model parameters (columns of M).
+    pub k: usize,
+    /// Allowed candidates of each group (zone).
+    pub groups: Vec<Vec<usize>>,
+    /// Group of each design point; its length is the number of points n.
+    pub point_group: Vec<usize>,
+    /// W (k x k, row-major) for the I criterion.
+    pub weights: Option<&'a [f64]>,
+}
+
+/// Search settings.
+#[derive(Debug, Clone)]
+pub struct Options {
+    pub criterion: Criterion,
+    /// Independent random starts (run in parallel).
+    pub starts: usize,
+    /// Upper bound on exchange sweeps per start.
+    pub max_sweeps: usize,
+    pub seed: u64,
+    /// Start from this design instead of random starts (a single start).
+    pub initial: Option<Vec<usize>>,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Self {
+            criterion: Criterion::D,
+            starts: 8,
+            max_sweeps: 50,
+            seed: 0,
+            initial: None,
+        }
+    }
+}
+
+/// The best design found.
+#[derive(Debug, Clone)]
+pub struct Outcome {
+    /// Candidate index of each design point.
+    pub design: Vec<usize>,
+    pub metrics: Metrics,
+    /// The criterion value of `design` (exact, Metrics::objective).
+    pub objective: f64,
+    /// The objective reached by each start.
+    pub start_objectives: Vec<f64>,
+    /// Exchanges made by the best start.
+    pub exchanges: usize,
+}
+
+/// Candidates screened exactly per visit for K and E.
+const EXACT_TOP: usize = 32;
+/// Candidates evaluated together between checks of the improvement bound.
+const PRUNE_CHUNK: usize = 512;
+/// Low-rank updates of the per-candidate blocks before they are recomputed exactly.
+const REFRESH_AFTER: usize = 40;
+/// Candidates sampled per point when building a greedy start.
+const GREEDY_SAMPLE: usize = 64;
+
+impl Problem<'_> {
+    fn n(&self) -> usize {
+        self.point_group.len()
+    }
+
+    fn block(&self, j: usize) -> &[f64] {
+        let sz = self.r * self.k;
+        &self.blocks[j * sz..(j + 1) * sz]
+    }
+
+    fn validate(&self, c: Criterion) -> Result<()> {
+        let (r, k) = (self.r, self.k);
+        if r == 0 || r > MAX_R {
+            return Err(GkError::invalid(format!(
+                "each design point must give 1 to {MAX_R} rows of the design matrix, got {r}"
+            )));
+        }
+        if k == 0 {
+            return Err(GkError::invalid("the model has no parameters (0 columns)"));
+        }
+        if self.n_cand == 0 {
+            return Err(GkError::invalid("no candidate points to design from"));
+        }
+        if self.blocks.len() != self.n_cand * r * k {
+            return Err(GkError::invalid(format!(
+                "expected {} x {r} x {k} design-matrix values, got {}",
+                self.n_cand,
+                self.blocks.len()
+            )));
+        }
+        if let Some(pos) = self.blocks.iter().position(|v| !v.is_finite()) {
+            return Err(GkError::invalid(format!(
+                "the design-matrix rows of candidate {} contain NaN or inf",
+                pos / (r * k)
+            )));
+        }
+        let n = self.n();
+        if n == 0 {
+            return Err(GkError::invalid("a plan needs at least one point"));
+        }
+        if n * r < k {
+            return Err(GkError::invalid(format!(
+                "{n} points give {} equations for {k} parameters: a plan needs at least {} points",
+                n * r,
+                k.div_ceil(r)
+            )));
+        }
+        for (g, members) in self.groups.iter().enumerate() {
+            if members.is_empty() && self.point_group.contains(&g) {
+                return Err(GkError::infeasible(format!(
+                    "zone {g} contains no candidate point"
+                )));
+            }
+            if let Some(&bad) = members.iter().find(|&&j| j >= self.n_cand) {
+                return Err(GkError::invalid(format!(
+                    "zone {g} refers to candidate {bad}, but there are only {}",
+                    self.n_cand
+                )));
+            }
+        }
+        if let Some(&g) = self.point_group.iter().find(|&&g| g >= self.groups.len()) {
+            return Err(GkError::invalid(format!(
+                "a design point belongs to zone {g}, but there are only {} zones",
+                self.groups.len()
+            )));
+        }
+        if c == Criterion::I {
+            match self.weights {
+                None => return Err(GkError::invalid("the I criterion needs a weight matrix")),
+                Some(w) if w.len() != k * k || w.iter().any(|v| !v.is_finite()) => {
+                    return Err(GkError::invalid(format!(
+                        "the I weight matrix must be {k} x {k} and finite"
+                    )))
+                }
+                _ => {}
+            }
+        }
+        Ok(())
+    }
+
+    /// Information of all usable candidates: identifiability check and scale.
+    fn pooled(&self) -> Result<f64> {
+        let mut used = vec![false; self.n_cand];
+        for &g in &self.point_group {
+            for &j in &self.groups[g] {
+                used[j] = true;
+            }
+        }
+        let idx: Vec<usize> = (0..self.n_cand).filter(|&j| used[j]).collect();
+        let f = information(self.blocks, &idx, self.r, self.k);
+        let m = metrics(&f, self.k, None);
+        if m.rank < self.k {
+            return Err(GkError::degenerate(format!(
+                "the model has {} parameters but only {} independent combinations can be observed \
+                 anywhere in the design space; remove dependent columns, rescale badly scaled ones, or widen the bounds",
+                self.k, m.rank
+            )));
+        }
+        let tr: f64 = (0..self.k).map(|a| f[a * self.k + a]).sum();
+        Ok(tr / idx.len() as f64 * self.n() as f64 / self.k as f64)
+    }
+}
+
+/// Candidates per blocked matrix product.
+const GEMM_CHUNK: usize = 256;
+
+/// `out (m x q) = a (m x k) * w (k x q)`, all row-major.
+fn gemm(a: &[f64], m: usize, k: usize, w: &[f64], q: usize, out: &mut [f64]) {
+    assert!(a.len() >= m * k && w.len() >= k * q && out.len() >= m * q);
+    // SAFETY: the slices hold the m x k, k x q and m x q row-major matrices (checked above).
+    unsafe {
+        matrixmultiply::dgemm(
+            m,
+            k,
+            q,
+            1.0,
+            a.as_ptr(),
+            k as isize,
+            1,
+            w.as_ptr(),
+            q as isize,
+            1,
+            0.0,
+            out.as_mut_ptr(),
+            q as isize,
+            1,
+        );
+    }
+}
+
+impl Problem<'_> {
+    /// `body(j, B_j W)` for every candidate j of `members` (B_j W is r x q), in
+    /// parallel chunks of blocked products; results in the order of `members`.
+    fn products<T, F>(&self, members: &[usize], w: &[f64], q: usize, body: F) -> Vec<T>
+    where
+        T: Send,
+        F: Fn(usize, &[f64]) -> T + Sync,
+    {
+        let (r, k) = (self.r, self.k);
+        let sz = r * k;
+        members
+            .par_chunks(GEMM_CHUNK)
+            .flat_map_iter(|chunk| {
+                let first = chunk[0];
+                let contiguous = chunk[chunk.len() - 1] == first + chunk.len() - 1
+                    && chunk.windows(2).all(|p| p[1] == p[0] + 1);
+                let gathered;
+                let a: &[f64] = if contiguous {
+                    &self.blocks[first * sz..(first + chunk.len()) * sz]
+                } else {
+                    gathered = chunk
+                        .iter()
+                        .flat_map(|&j| self.block(j).iter().copied())
+                        .collect::<Vec<f64>>();
+                    &gathered
+                };
+                let mut out = vec![0.0; chunk.len() * r * q];
+                gemm(a, chunk.len() * r, k, w, q, &mut out);
+                chunk
+                    .iter()
+                    .enumerate()
+                    .map(|(t, &j)| body(j, &out[t * r * q..(t + 1) * r * q]))
+                    .collect::<Vec<T>>()
+            })
+            .collect()
+    }
+}
+
+fn total_min(a: (f64, usize), b: (f64, usize)) -> (f64, usize) {
+    match a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)) {
+        std::cmp::Ordering::Greater => b,
+        _ => a,
+    }
+}
+
+fn sane(v: f64) -> f64 {
+    if v.is_nan() {
+        f64::INFINITY
+    } else {
+        v
+    }
+}
+
+/// Spectral objective from ascending eigenvalues.
+fn spectral_value(c: Criterion, lmin: f64, lmax: f64) -> f64 {
+    if !(lmin > 0.0) {
+        return f64::INFINITY;
+    }
+    match c {
+        Criterion::K => (lmax / lmin).sqrt(),
+        _ => 1.0 / lmin,
+    }
+}
+
+/// One start's mutable state.
+struct Run<'p, 'a> {
+    p: &'p Problem<'a>,
+    c: Criterion,
+    ridge: f64,
+    design: Vec<usize>,
+    f: Vec<f64>,
+    finv: Vec<f64>,
+    /// F^-1 W F^-1 (A: W = I), for A and I.
+    fwf: Vec<f64>,
+    /// Per candidate r x r: B F^-1 B^T.
+    d: Vec<f64>,
+    /// Per candidate r x r: B F^-1 W F^-1 B^T (A and I).
+    e: Vec<f64>,
+    value: f64,
+}
+
+/// The visited point's removal, shared by all candidates of a visit.
+struct Removal {
+    qi: [f64; MAX_R * MAX_R],
+    qeq: [f64; MAX_R * MAX_R],
+    value_minus: f64,
+    /// Constant of the improvement bound (see [`Run::improvement_bound`]); infinite: no pruning.
+    bound_c: f64,
+}
+
+/// Scratch of one candidate evaluation (A, D, I).
+struct Scratch {
+    c: [f64; MAX_R * MAX_R],
+    fx: [f64; MAX_R * MAX_R],
+    s: [f64; MAX_P * MAX_P],
+    sinv: [f64; MAX_P * MAX_P],
+    piv: [usize; MAX_P],
+    g: Vec<f64>,
+}
+
+impl Scratch {
+    fn new() -> Self {
+        Self {
+            c: [0.0; MAX_R * MAX_R],
+            fx: [0.0; MAX_R * MAX_R],
+            s: [0.0; MAX_P * MAX_P],
+            sinv: [0.0; MAX_P * MAX_P],
+            piv: [0; MAX_P],
+            g: vec![0.0; MAX_P * MAX_P],
+        }
+    }
+}
+
+impl<'p, 'a> Run<'p, 'a> {
+    fn new(p: &'p Problem<'a>, c: Criterion, ridge: f64, design: Vec<usize>) -> Result<Self> {
+        let r = p.r;
+        let needs_e = matches!(c, Criterion::A | Criterion::I);
+        let blocks_d = if c.is_spectral() { 0 } else { p.n_cand * r * r };
+        let mut run = Self {
+            p,
+            c,
+            ridge,
+            design,
+            f: vec![],
+            finv: vec![],
+            fwf: vec![],
+            d: vec![0.0; blocks_d],
+            e: vec![0.0; if needs_e { blocks_d } else { 0 }],
+            value: f64::INFINITY,
+        };
+        run.recompute()?;
+        Ok(run)
+    }
+
+    fn needs_e(&self) -> bool {
+        matches!(self.c, Criterion::A | Criterion::I)
+    }
+
+    /// F, F^-1, F^-1 W F^-1 and the criterion value from the design, exactly.
+    fn recompute(&mut self) -> Result<()> {
+        let k = self.p.k;
+        let mut f = information(self.p.blocks, &self.design, self.p.r, k);
+        for a in 0..k {
+            f[a * k + a] += self.ridge;
+        }
+        let (finv, logdet) = spd_inverse(&f, k).ok_or_else(|| {
+            GkError::numerical("the information matrix lost positive definiteness")
+        })?;
+        self.value = match self.c {
+            Criterion::A => (0..k).map(|a| finv[a * k + a]).sum(),
+            Criterion::D => -logdet,
+            Criterion::I => {
+                let w = self.p.weights.unwrap_or(&[]);
+                (0..k * k).map(|q| w[q] * finv[q]).sum() // tr(W F^-1), both symmetric
+            }
+            _ => {
+                let ev = sym_eigenvalues(&f, k);
+                spectral_value(self.c, ev[0], ev[k - 1])
+            }
+        };
+        if self.needs_e() {
+            let mut tmp = vec![0.0; k * k];
+            match self.p.weights {
+                Some(w) if self.c == Criterion::I => mul_ab(w, &finv, k, k, &mut tmp),
+                _ => tmp.copy_from_slice(&finv),
+            }
+            let mut fwf = vec![0.0; k * k];
+            mul_ab(&finv, &tmp, k, k, &mut fwf);
+            // symmetrise against round-off
+            for a in 0..k {
+                for b in 0..a {
+                    let v = 0.5 * (fwf[a * k + b] + fwf[b * k + a]);
+                    fwf[a * k + b] = v;
+                    fwf[b * k + a] = v;
+                }
+            }
+            self.fwf = fwf;
+        }
+        self.f = f;
+        self.finv = finv;
+        Ok(())
+    }
+
+    /// Recompute every candidate's B F^-1 B^T (and B F^-1 W F^-1 B^T) exactly.
+    fn refresh(&mut self) {
+        let (r, k) = (self.p.r, self.p.k);
+        let needs_e = self.needs_e();
+        let q = if needs_e { 2 * k } else { k };
+        let mut w = vec![0.0; k * q]; // [F^-1, F^-1 W F^-1]
+        for t in 0..k {
+            w[t * q..t * q + k].copy_from_slice(&self.finv[t * k..(t + 1) * k]);
+            if needs_e {
+                w[t * q + k..t * q + 2 * k].copy_from_slice(&self.fwf[t * k..(t + 1) * k]);
+            }
+        }
+        self.for_candidate_products(&w, q, |prod, b, dm, em| {
+            for a in 0..r {
+                for c in 0..r {
+                    dm[a * r + c] = dot(&prod[a * q..a * q + k], &b[c * k..(c + 1) * k]);
+                }
+            }
+            if let Some(em) = em {
+                for a in 0..r {
+                    for c in 0..r {
+                        em[a * r + c] =
+                            dot(&prod[a * q + k..a * q + 2 * k], &b[c * k..(c + 1) * k]);
+                    }
+                }
+            }
+        });
+    }
+
+    /// For every candidate m, in parallel chunks of blocked products:
+    /// `f(B_m W (r x q), B_m, d_m, e_m)`.
+    fn for_candidate_products<F>(&mut self, w: &[f64], q: usize, f: F)
+    where
+        F: Fn(&[f64], &[f64], &mut [f64], Option<&mut [f64]>) + Sync,
+    {
+        let (r, k) = (self.p.r, self.p.k);
+        let rr = r * r;
+        let sz = r * k;
+        let blocks = self.p.blocks;
+        let run_chunk = |ci: usize, dch: &mut [f64], ech: Option<&mut [f64]>| {
+            let n = dch.len() / rr;
+            let first = ci * GEMM_CHUNK;
+            let mut prod = vec![0.0; n * r * q];
+            gemm(
+                &blocks[first * sz..(first + n) * sz],
+                n * r,
+                k,
+                w,
+                q,
+                &mut prod,
+            );
+            let mut ech = ech;
+            for t in 0..n {
+                let b = &blocks[(first + t) * sz..(first + t + 1) * sz];
+                let em = ech.as_deref_mut().map(|e| &mut e[t * rr..(t + 1) * rr]);
+                f(
+                    &prod[t * r * q..(t + 1) * r * q],
+                    b,
+                    &mut dch[t * rr..(t + 1) * rr],
+                    em,
+                );
+            }
+        };
+        if self.needs_e() {
+            self.d
+                .par_chunks_mut(rr * GEMM_CHUNK)
+                .zip(self.e.par_chunks_mut(rr * GEMM_CHUNK))
+                .enumerate()
+                .for_each(|(ci, (dch, ech))| run_chunk(ci, dch, Some(ech)));
+        } else {
+            self.d
+                .par_chunks_mut(rr * GEMM_CHUNK)
+                .enumerate()
+                .for_each(|(ci, dch)| run_chunk(ci, dch, None));
+        }
+    }
+
+    fn tol(&self) -> f64 {
+        match self.c {
+            Criterion::D => 1e-10 * (self.value.abs() + 1.0),
+            _ => 1e-10 * self.value.abs(),
+        }
+    }
+
+    /// Build S = C + U^T F^-1 U for exchanging O (point) with B (candidate j),
+    /// and (A, I) the matrix E = U^T F^-1 W F^-1 U, into the scratch.
+    fn capacitance(
+        &self,
+        s: &mut Scratch,
+        j: usize,
+        a_t: &[f64],
+        d_o: &[f64],
+        b_t: &[f64],
+        e_o: &[f64],
+    ) {
+        let (r, k) = (self.p.r, self.p.k);
+        let p = 2 * r;
+        let b = self.p.block(j);
+        mul_abt(b, a_t, r, k, r, &mut s.c); // B F^-1 O^T
+        let dj = &self.d[j * r * r..(j + 1) * r * r];
+        for x in 0..r {
+            for y in 0..r {
+                let id = if x == y { 1.0 } else { 0.0 };
+                s.s[x * p + y] = id + dj[x * r + y];
+                s.s[x * p + r + y] = s.c[x * r + y];
+                s.s[(r + y) * p + x] = s.c[x * r + y];
+                s.s[(r + x) * p + r + y] = d_o[x * r + y] - id;
+            }
+        }
+        if self.needs_e() {
+            mul_abt(b, b_t, r, k, r, &mut s.fx); // B F^-1 W F^-1 O^T
+            let ej = &self.e[j * r * r..(j + 1) * r * r];
+            // E is stored in sinv's buffer until the inverse overwrites it: keep it in g.
+            let eb = &mut s.g[..p * p];
+            for x in 0..r {
+                for y in 0..r {
+                    eb[x * p + y] = ej[x * r + y];
+                    eb[x * p + r + y] = s.fx[x * r + y];
+                    eb[(r + y) * p + x] = s.fx[x * r + y];
+                    eb[(r + x) * p + r + y] = e_o[x * r + y];
+                }
+            }
+        }
+    }
+
+    /// Criterion after exchanging point (a_t, d_o, ...) for candidate j; INFINITY if singular.
+    fn exchange_value(
+        &self,
+        s: &mut Scratch,
+        j: usize,
+        a_t: &[f64],
+        d_o: &[f64],
+        b_t: &[f64],
+        e_o: &[f64],
+    ) -> f64 {
+        let r = self.p.r;
+        let p = 2 * r;
+        self.capacitance(s, j, a_t, d_o, b_t, e_o);
+        let Some(det) = lu_in_place(&mut s.s[..p * p], &mut s.piv[..p], p) else {
+            return f64::INFINITY;
+        };
+        let ratio = if r % 2 == 0 { det } else { -det };
+        if !(ratio > 1e-300) {
+            return f64::INFINITY;
+        }
+        match self.c {
+            Criterion::D => self.value - ratio.ln(),
+            _ => {
+                lu_inverse(&s.s[..p * p], &s.piv[..p], p, &mut s.sinv[..p * p]);
+                let eb = &s.g[..p * p];
+                let mut t = 0.0;
+                for x in 0..p {
+                    for y in 0..p {
+                        t += s.sinv[x * p + y] * eb[y * p + x];
+                    }
+                }
+                let v = self.value - t;
+                if v > 0.0 {
+                    v
+                } else {
+                    f64::INFINITY
+                }
+            }
+        }
+    }
+
+    /// Removing the visited block O first: F_- = F - O^T O, with Q = I - O F^-1 O^T.
+    /// `None` when Q is too close to singular for the two-step formulas.
+    fn removal(&self, d_o: &[f64], e_o: &[f64]) -> Option<Removal> {
+        let r = self.p.r;
+        let mut q = [0.0; MAX_R * MAX_R];
+        for a in 0..r {
+            for b in 0..r {
+                q[a * r + b] = if a == b { 1.0 } else { 0.0 } - d_o[a * r + b];
+            }
+        }
+        let mut rm = Removal {
+            qi: [0.0; MAX_R * MAX_R],
+            qeq: [0.0; MAX_R * MAX_R],
+            value_minus: 0.0,
+            bound_c: f64::INFINITY,
+        };
+        let logdet_q = small_spd_inverse(&q, r, &mut rm.qi)?;
+        if logdet_q < -18.0 {
+            return None; // removing O nearly loses rank: use the joint 2r formula
+        }
+        rm.value_minus = match self.c {
+            Criterion::D => self.value - logdet_q,
+            _ => {
+                let mut t = [0.0; MAX_R * MAX_R];
+                mul_ab(&rm.qi, e_o, r, r, &mut t); // Qi e_O
+                mul_ab(&t, &rm.qi, r, r, &mut rm.qeq); // Qi e_O Qi (e_O symmetric)
+                self.value + (0..r).map(|a| t[a * r + a]).sum::<f64>()
+            }
+        };
+        let tr_do: f64 = (0..r).map(|a| d_o[a * r + a]).sum();
+        rm.bound_c = match self.c {
+            Criterion::D => {
+                let mu = sym_eigenvalues(&d_o[..r * r], r)[r - 1];
+                if mu < 1.0 {
+                    1.0 / (r as f64 * (1.0 - mu))
+                } else {
+                    f64::INFINITY
+                }
+            }
+            _ => sym_eigenvalues(&rm.qeq[..r * r], r)[r - 1].max(0.0) * tr_do,
+        };
+        Some(rm)
+    }
+
+    /// Upper bound on the improvement (current value minus value after the exchange)
+    /// from candidate j, from its stored blocks alone.
+    ///
+    /// D: F_- >= (1 - mu) F with mu = l_max(O F^-1 O^T), so B F_-^-1 B^T <= d_j / (1 - mu)
+    /// and det(I + B F_-^-1 B^T) <= (1 + tr d_j / (r (1 - mu)))^r.
+    /// A, I: tr(P^-1 e-) <= tr(e-) and, by Cauchy-Schwarz on c = B F^-1 O^T
+    /// (|c|_F^2 <= tr d_j tr d_O), tr(e-) <= (sqrt(tr e_j) + sqrt(l_max(Qi e_O Qi) tr d_O tr d_j))^2.
+    fn improvement_bound(&self, rm: &Removal, j: usize) -> f64 {
+        let r = self.p.r;
+        let rr = r * r;
+        let tr_d: f64 = (0..r)
+            .map(|a| self.d[j * rr + a * r + a])
+            .sum::<f64>()
+            .max(0.0);
+        let base = self.value - rm.value_minus;
+        match self.c {
+            Criterion::D => base + r as f64 * (tr_d * rm.bound_c).ln_1p(),
+            _ => {
+                let tr_e: f64 = (0..r)
+                    .map(|a| self.e[j * rr + a * r + a])
+                    .sum::<f64>()
+                    .max(0.0);
+                let s = tr_e.sqrt() + (rm.bound_c * tr_d).sqrt();
+                base + s * s
+            }
+        }
+    }
+
+    /// Criterion after exchanging the visited point for candidate j, as a removal
+    /// (prepared in `rm`) followed by a rank-r addition.
+    fn exchange_value_fast(
+        &self,
+        s: &mut Scratch,
+        j: usize,
+        rm: &Removal,
+        a_t: &[f64],
+        b_t: &[f64],
+    ) -> f64 {
+        self.exchange_value_cf(s, j, rm, a_t, b_t, None)
+    }
+
+    /// As [`Self::exchange_value_fast`]; `cf` (r x 2r) may hold B [F^-1 O^T, F^-1 W F^-1 O^T]
+    /// computed beforehand (by a blocked matrix product over many candidates).
+    fn exchange_value_cf(
+        &self,
+        s: &mut Scratch,
+        j: usize,
+        rm: &Removal,
+        a_t: &[f64],
+        b_t: &[f64],
+        cf: Option<&[f64]>,
+    ) -> f64 {
+        match self.p.r {
+            1 => self.fast_r::<1>(j, rm, a_t, b_t, cf),
+            2 => self.fast_r::<2>(j, rm, a_t, b_t, cf),
+            3 => self.fast_r::<3>(j, rm, a_t, b_t, cf),
+            _ => self.fast_dyn(s, j, rm, a_t, b_t),
+        }
+    }
+
+    /// [`Self::exchange_value_fast`] for a fixed block height R (unrolled small algebra).
+    fn fast_r<const R: usize>(
+        &self,
+        j: usize,
+        rm: &Removal,
+        a_t: &[f64],
+        b_t: &[f64],
+        cf: Option<&[f64]>,
+    ) -> f64 {
+        let k = self.p.k;
+        let b = self.p.block(j);
+        let mut c = [[0.0; R]; R]; // c = B F^-1 O^T
+        for a in 0..R {
+            for q in 0..R {
+                c[a][q] = match cf {
+                    Some(cf) => cf[a * 2 * R + q],
+                    None => dot(&b[a * k..(a + 1) * k], &a_t[q * k..(q + 1) * k]),
+                };
+            }
+        }
+        let qi = |a: usize, q: usize| rm.qi[a * R + q];
+        let mut cq = [[0.0; R]; R]; // c Qi
+        for a in 0..R {
+            for q in 0..R {
+                let mut v = 0.0;
+                for t in 0..R {
+                    v += c[a][t] * qi(t, q);
+                }
+                cq[a][q] = v;
+            }
+        }
+        let dj = &self.d[j * R * R..(j + 1) * R * R];
+        let mut pm = [[0.0; R]; R]; // I + B F_-^-1 B^T
+        for a in 0..R {
+            for q in 0..=a {
+                let mut v = dj[a * R + q];
+                for t in 0..R {
+                    v += cq[a][t] * c[q][t];
+                }
+                pm[a][q] = v + if a == q { 1.0 } else { 0.0 };
+            }
+        }
+        // Cholesky of pm in place (lower triangle).
+        let mut det = 1.0;
+        for a in 0..R {
+            let mut v = pm[a][a];
+            for t in 0..a {
+                v -= pm[a][t] * pm[a][t];
+            }
+            if !(v > 0.0) {
+                return f64::INFINITY;
+            }
+            det *= v;
+            let l = v.sqrt();
+            pm[a][a] = l;
+            for q in a + 1..R {
+                let mut w = pm[q][a];
+                for t in 0..a {
+                    w -= pm[q][t] * pm[a][t];
+                }
+                pm[q][a] = w / l;
+            }
+        }
+        if self.c == Criterion::D {
+            return rm.value_minus - det.ln();
+        }
+        let mut f = [[0.0; R]; R]; // f = B F^-1 W F^-1 O^T
+        for a in 0..R {
+            for q in 0..R {
+                f[a][q] = match cf {
+                    Some(cf) => cf[a * 2 * R + R + q],
+                    None => dot(&b[a * k..(a + 1) * k], &b_t[q * k..(q + 1) * k]),
+                };
+            }
+        }
+        let qeq = |a: usize, q: usize| rm.qeq[a * R + q];
+        let mut cqe = [[0.0; R]; R];
+        for a in 0..R {
+            for q in 0..R {
+                let mut v = 0.0;
+                for t in 0..R {
+                    v += c[a][t] * qeq(t, q);
+                }
+                cqe[a][q] = v;
+            }
+        }
+        // e- = B F_-^-1 W F_-^-1 B^T = e_j + f cQ^T + cQ f^T + c (Qi e_O Qi) c^T
+        let ej = &self.e[j * R * R..(j + 1) * R * R];
+        let mut em = [[0.0; R]; R];
+        for a in 0..R {
+            for q in 0..R {
+                let mut v = ej[a * R + q];
+                for t in 0..R {
+                    v += f[a][t] * cq[q][t] + cq[a][t] * f[q][t] + cqe[a][t] * c[q][t];
+                }
+                em[a][q] = v;
+            }
+        }
+        // tr(P^-1 e-) with P = L L^T: solve L X = e-, then tr(L^-T X) = sum ||L^-1 e-^(1/2)||..
+        // computed column by column: x = L^-T L^-1 e-[:, q], accumulate x[q].
+        let mut t = 0.0;
+        for q in 0..R {
+            let mut y = [0.0; R];
+            for a in 0..R {
+                let mut v = em[a][q];
+                for u in 0..a {
+                    v -= pm[a][u] * y[u];
+                }
+                y[a] = v / pm[a][a];
+            }
+            for a in (0..R).rev() {
+                let mut v = y[a];
+                for u in a + 1..R {
+                    v -= pm[u][a] * y[u];
+                }
+                y[a] = v / pm[a][a];
+            }
+            t += y[q];
+        }
+        let v = rm.value_minus - t;
+        if v > 0.0 {
+            v
+        } else {
+            f64::INFINITY
+        }
+    }
+
+    /// [`Self::exchange_value_fast`] for any block height.
+    fn fast_dyn(&self, s: &mut Scratch, j: usize, rm: &Removal, a_t: &[f64], b_t: &[f64]) -> f64 {
+        let (r, k) = (self.p.r, self.p.k);
+        let rr = r * r;
+        let b = self.p.block(j);
+        mul_abt(b, a_t, r, k, r, &mut s.c); // c = B F^-1 O^T
+        let mut cq = [0.0; MAX_R * MAX_R];
+        mul_ab(&s.c, &rm.qi, r, r, &mut cq); // c Qi
+        let dj = &self.d[j * rr..(j + 1) * rr];
+        let mut pm = [0.0; MAX_R * MAX_R];
+        for a in 0..r {
+            for bb in 0..r {
+                let mut v = dj[a * r + bb];
+                for q in 0..r {
+                    v += cq[a * r + q] * s.c[bb * r + q];
+                }
+                pm[a * r + bb] = v + if a == bb { 1.0 } else { 0.0 };
+            }
+        }
+        let mut pinv = [0.0; MAX_R * MAX_R];
+        let Some(logdet_p) = small_spd_inverse(&pm, r, &mut pinv) else {
+            return f64::INFINITY;
+        };
+        if self.c == Criterion::D {
+            return rm.value_minus - logdet_p;
+        }
+        mul_abt(b, b_t, r, k, r, &mut s.fx); // f = B F^-1 W F^-1 O^T
+        let ej = &self.e[j * rr..(j + 1) * rr];
+        // e- = B F_-^-1 W F_-^-1 B^T = e_j + f cQ^T + cQ f^T + c (Qi e_O Qi) c^T
+        let mut cqe = [0.0; MAX_R * MAX_R];
+        mul_ab(&s.c, &rm.qeq, r, r, &mut cqe);
+        let mut t = 0.0;
+        for a in 0..r {
+            for bb in 0..r {
+                let mut v = ej[a * r + bb];
+                for q in 0..r {
+                    v += s.fx[a * r + q] * cq[bb * r + q]
+                        + cq[a * r + q] * s.fx[bb * r + q]
+                        + cqe[a * r + q] * s.c[bb * r + q];
+                }
+                t += pinv[bb * r + a] * v;
+            }
+        }
+        let v = rm.value_minus - t;
+        if v > 0.0 {
+            v
+        } else {
+            f64::INFINITY
+        }
+    }
+
+    /// Visit point i (A, D, I); returns whether it moved.
+    fn visit_algebraic(&mut self, i: usize) -> bool {
+        let (r, k) = (self.p.r, self.p.k);
+        let o = self.design[i];
+        let ob = self.p.block(o);
+        let mut a_t = vec![0.0; r * k];
+        mul_ab(ob, &self.finv, r, k, &mut a_t); // O F^-1
+        let mut d_o = vec![0.0; r * r];
+        mul_abt(&a_t, ob, r, k, r, &mut d_o);
+        let mut b_t = vec![0.0; r * k];
+        let mut e_o = vec![0.0; r * r];
+        if self.needs_e() {
+            mul_ab(ob, &self.fwf, r, k, &mut b_t);
+            mul_abt(&b_t, ob, r, k, r, &mut e_o);
+        }
+        let cands = &self.p.groups[self.p.point_group[i]];
+        let this = &*self;
+        let removal = self.removal(&d_o, &e_o);
+        let best = match &removal {
+            None => cands
+                .par_iter()
+                .with_min_len(256)
+                .filter(|&&j| j != o)
+                .map_init(
+                    || Box::new(Scratch::new()),
+                    |s, &j| (sane(this.exchange_value(s, j, &a_t, &d_o, &b_t, &e_o)), j),
+                )
+                .reduce(|| (f64::INFINITY, usize::MAX), total_min),
+            Some(rm) if self.c != Criterion::D => {
+                // A, I: the bound prunes little; one blocked product B [F^-1 O^T, F^-1 W F^-1 O^T]
+                // over all candidates, then the small r x r algebra per candidate.
+                let mut w = vec![0.0; k * 2 * r];
+                for t in 0..k {
+                    for q in 0..r {
+                        w[t * 2 * r + q] = a_t[q * k + t];
+                        w[t * 2 * r + r + q] = b_t[q * k + t];
+                    }
+                }
+                self.p
+                    .products(cands, &w, 2 * r, |j, cf| {
+                        if j == o {
+                            return (f64::INFINITY, usize::MAX);
+                        }
+                        let v = match r {
+                            1 => this.fast_r::<1>(j, rm, &a_t, &b_t, Some(cf)),
+                            2 => this.fast_r::<2>(j, rm, &a_t, &b_t, Some(cf)),
+                            3 => this.fast_r::<3>(j, rm, &a_t, &b_t, Some(cf)),
+                            _ => this.fast_dyn(&mut Scratch::new(), j, rm, &a_t, &b_t),
+                        };
+                        (sane(v), j)
+                    })
+                    .into_iter()
+                    .fold((f64::INFINITY, usize::MAX), total_min)
+            }
+            Some(rm) => {
+                // Evaluate in order of decreasing improvement bound; stop when no
+                // remaining candidate can beat the best found (exact, not a heuristic).
+                let tol = self.tol();
+                let mut order: Vec<(f64, usize)> = cands
+                    .par_iter()
+                    .with_min_len(1024)
+                    .filter(|&&j| j != o)
+                    .map(|&j| (this.improvement_bound(rm, j), j))
+                    .filter(|&(b, _)| !(b <= tol))
+                    .collect();
+                order.sort_unstable_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+                let mut best = (f64::INFINITY, usize::MAX);
+                for chunk in order.chunks(PRUNE_CHUNK) {
+                    let gain = self.value - best.0;
+                    if best.1 != usize::MAX && !(chunk[0].0 > gain) {
+                        break;
+                    }
+                    let b = chunk
+                        .par_iter()
+                        .with_min_len(128)
+                        .map_init(
+                            || Box::new(Scratch::new()),
+                            |s, &(_, j)| (sane(this.exchange_value_fast(s, j, rm, &a_t, &b_t)), j),
+                        )
+                        .reduce(|| (f64::INFINITY, usize::MAX), total_min);
+                    best = total_min(best, b);
+                }
+                best
+            }
+        };
+        if !(best.0 < self.value - self.tol()) {
+            return false;
+        }
+        let j = best.1;
+        // Low-rank update of the per-candidate blocks, with the old F^-1.
+        let p = 2 * r;
+        let mut s = Scratch::new();
+        self.capacitance(&mut s, j, &a_t, &d_o, &b_t, &e_o);
+        let e_pair: Vec<f64> = s.g[..p * p].to_vec();
+        let Some(_) = lu_in_place(&mut s.s[..p * p], &mut s.piv[..p], p) else {
+            return false;
+        };
+        let mut x = vec![0.0; p * p];
+        lu_inverse(&s.s[..p * p], &s.piv[..p], p, &mut x);
+        let bj = self.p.block(j);
+        let mut pt = vec![0.0; p * k]; // U^T F^-1
+        mul_ab(bj, &self.finv, r, k, &mut pt[..r * k]);
+        pt[r * k..].copy_from_slice(&a_t);
+        let mut qt = vec![0.0; p * k]; // U^T F^-1 W F^-1
+        if self.needs_e() {
+            mul_ab(bj, &self.fwf, r, k, &mut qt[..r * k]);
+            qt[r * k..].copy_from_slice(&b_t);
+        }
+        let needs_e = self.needs_e();
+        let q = if needs_e { 2 * p } else { p };
+        let mut w = vec![0.0; k * q]; // [P, Q] = [F^-1 U, F^-1 W F^-1 U]
+        for t in 0..k {
+            for c in 0..p {
+                w[t * q + c] = pt[c * k + t];
+                if needs_e {
+                    w[t * q + p + c] = qt[c * k + t];
+                }
+            }
+        }
+        self.for_candidate_products(&w, q, |prod, _b, dm, em| {
+            let mut yx = [0.0; MAX_R * MAX_P];
+            let y = |a: usize| &prod[a * q..a * q + p];
+            for a in 0..r {
+                for c in 0..p {
+                    let mut v = 0.0;
+                    for u in 0..p {
+                        v += prod[a * q + u] * x[u * p + c];
+                    }
+                    yx[a * p + c] = v;
+                    // Y = y S^-1
+                }
+            }
+            for a in 0..r {
+                for c in 0..r {
+                    dm[a * r + c] -= dot(&yx[a * p..(a + 1) * p], y(c));
+                }
+            }
+            if let Some(em) = em {
+                let z = |a: usize| &prod[a * q + p..a * q + 2 * p];
+                let mut t = [0.0; MAX_R * MAX_P];
+                mul_ab(&yx[..r * p], &e_pair, r, p, &mut t[..r * p]); // Y R
+                for a in 0..r {
+                    for c in 0..r {
+                        em[a * r + c] -= dot(z(a), &yx[c * p..(c + 1) * p])
+                            + dot(&yx[a * p..(a + 1) * p], z(c))
+                            - dot(&t[a * p..(a + 1) * p], &yx[c * p..(c + 1) * p]);
+                    }
+                }
+            }
+        });
+        let old = self.design[i];
+        self.design[i] = j;
+        if self.recompute().is_err() {
+            self.design[i] = old;
+            let _ = self.recompute();
+            self.refresh();
+            return false;
+        }
+        true
+    }
+
+    /// Visit point i (K, E): screen by first-order eigenvalue perturbation, then exact.
+    fn visit_spectral(&mut self, i: usize) -> bool {
+        let (r, k) = (self.p.r, self.p.k);
+        let (vals, vecs) = sym_eig(&self.f, k);
+        let s_lo = k.min(4);
+        let s_hi = if self.c == Criterion::K { k.min(2) } else { 0 };
+        let idx: Vec<usize> = (0..s_lo).chain((k - s_hi)..k).collect();
+        let s = idx.len();
+        let mut vsub = vec![0.0; s * k];
+        for (q, &m) in idx.iter().enumerate() {
+            for a in 0..k {
+                vsub[q * k + a] = vecs[a * k + m];
+            }
+        }
+        let proj = |b: &[f64], out: &mut [f64]| {
+            // out[q] = sum over rows of (row . v_q)^2
+            for (q, o) in out.iter_mut().enumerate().take(s) {
+                let v = &vsub[q * k..(q + 1) * k];
+                *o = b.chunks_exact(k).map(|row| dot(row, v).powi(2)).sum();
+            }
+        };
+        let o = self.design[i];
+        let mut h_o = vec![0.0; s];
+        proj(self.p.block(o), &mut h_o);
+        let c = self.c;
+        let cands = &self.p.groups[self.p.point_group[i]];
+        let mut screened: Vec<(f64, usize)> = cands
+            .par_iter()
+            .with_min_len(256)
+            .filter(|&&j| j != o)
+            .map_init(
+                || vec![0.0; s],
+                |h, &j| {
+                    proj(self.p.block(j), h);
+                    let mut lo = f64::INFINITY;
+                    let mut hi = vals[k - 1];
+                    for q in 0..s {
+                        let est = vals[idx[q]] + h[q] - h_o[q];
+                        if q < s_lo {
+                            lo = lo.min(est);
+                        } else {
+                            hi = hi.max(est);
+                        }
+                    }
+                    (sane(spectral_value(c, lo, hi)), j)
+                },
+            )
+            .collect();
+        let top = EXACT_TOP.min(screened.len());
+        if top == 0 {
+            return false;
+        }
+        let cmp = |a: &(f64, usize), b: &(f64, usize)| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1));
+        if screened.len() > top {
+            screened.select_nth_unstable_by(top - 1, cmp);
+            screened.truncate(top);
+        }
+        let ob = self.p.block(o);
+        let f = &self.f;
+        let best = screened
+            .par_iter()
+            .map(|&(_, j)| {
+                let mut g = f.clone();
+                gram_add(&mut g, ob, r, k, -1.0);
+                gram_add(&mut g, self.p.block(j), r, k, 1.0);
+                let ev = sym_eigenvalues(&g, k);
+                (sane(spectral_value(c, ev[0], ev[k - 1])), j)
+            })
+            .reduce(|| (f64::INFINITY, usize::MAX), total_min);
+        if !(best.0 < self.value - self.tol()) {
+            return false;
+        }
+        let old = self.design[i];
+        self.design[i] = best.1;
+        if self.recompute().is_err() {
+            self.design[i] = old;
+            let _ = self.recompute();
+            return false;
+        }
+        true
+    }
+
+    /// Sweep until no point moves; returns the number of exchanges.
+    fn optimise(&mut self, max_sweeps: usize, rng: &mut ChaCha8Rng) -> usize {
+        let n = self.p.n();
+        let mut order: Vec<usize> = (0..n).collect();
+        let mut moves = 0;
+        let mut stale = usize::MAX; // exchanges since the per-candidate blocks were refreshed
+                                    // A and I (k-exchange): cheap sweeps visit only the quarter of the points whose removal
+                                    // costs least; when they stop improving, a sweep over every point confirms (so the
+                                    // result is a local optimum for single exchanges either way).
+        let k_exchange = self.needs_e() && n >= 16;
+        let mut full = !k_exchange;
+        for _ in 0..max_sweeps {
+            if !self.c.is_spectral() && stale >= REFRESH_AFTER {
+                self.refresh();
+                stale = 0;
+            }
+            let visit: Vec<usize> = if full {
+                order.shuffle(rng);
+                order.clone()
+            } else {
+                self.cheapest_points(n.div_ceil(4))
+            };
+            let mut moved = false;
+            for &i in &visit {
+                let m = if self.c.is_spectral() {
+                    self.visit_spectral(i)
+                } else {
+                    self.visit_algebraic(i)
+                };
+                if m {
+                    moves += 1;
+                    stale = stale.saturating_add(1);
+                    moved = true;
+                }
+            }
+            if !moved {
+                if full {
+                    break;
+                }
+                full = true;
+            } else if k_exchange {
+                full = false;
+            }
+        }
+        moves
+    }
+
+    /// The `m` design points whose removal raises the criterion least: tr(Q^-1 e_O)
+    /// with Q = I - O F^-1 O^T (A, I), from the stored per-candidate blocks.
+    fn cheapest_points(&self, m: usize) -> Vec<usize> {
+        let r = self.p.r;
+        let rr = r * r;
+        let mut loss: Vec<(f64, usize)> = (0..self.p.n())
+            .map(|i| {
+                let o = self.design[i];
+                let mut q = [0.0; MAX_R * MAX_R];
+                for a in 0..r {
+                    for b in 0..r {
+                        q[a * r + b] = if a == b { 1.0 } else { 0.0 } - self.d[o * rr + a * r + b];
+                    }
+                }
+                let mut qi = [0.0; MAX_R * MAX_R];
+                let v = match small_spd_inverse(&q, r, &mut qi) {
+                    Some(_) => (0..rr).map(|t| qi[t] * self.e[o * rr + t]).sum(),
+                    None => f64::INFINITY,
+                };
+                (sane(v), i)
+            })
+            .collect();
+        loss.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        loss.into_iter().take(m).map(|x| x.1).collect()
+    }
+}
+
+/// Randomised greedy D-optimal construction: each point (random order) takes the
+/// best of a random sample of its zone's candidates.
+fn greedy_start(p: &Problem, ridge0: f64, rng: &mut ChaCha8Rng) -> Vec<usize> {
+    let (r, k, n) = (p.r, p.k, p.n());
+    let mut f = vec![0.0; k * k];
+    for a in 0..k {
+        f[a * k + a] = ridge0;
+    }
+    let mut finv = spd_inverse(&f, k).map(|x| x.0).unwrap_or_else(|| f.clone());
+    let mut order: Vec<usize> = (0..n).collect();
+    order.shuffle(rng);
+    let mut design = vec![0; n];
+    let mut g = vec![0.0; r * k];
+    let mut m = [0.0; MAX_R * MAX_R];
+    let mut piv = [0; MAX_R];
+    for &i in &order {
+        let members = &p.groups[p.point_group[i]];
+        let take = GREEDY_SAMPLE.min(members.len());
+        let picks = sample(rng, members.len(), take);
+        let mut best = (f64::NEG_INFINITY, members[picks.index(0)]);
+        for q in picks.iter() {
+            let j = members[q];
+            let b = p.block(j);
+            mul_ab(b, &finv, r, k, &mut g);
+            mul_abt(&g, b, r, k, r, &mut m);
+            for a in 0..r {
+                m[a * r + a] += 1.0;
+            }
+            let det = lu_in_place(&mut m[..r * r], &mut piv[..r], r).unwrap_or(0.0);
+            if det > best.0 {
+                best = (det, j);
+            }
+        }
+        design[i] = best.1;
+        gram_add(&mut f, p.block(best.1), r, k, 1.0);
+        if let Some((inv, _)) = spd_inverse(&f, k) {
+            finv = inv;
+        }
+    }
+    design
+}
+
+/// Multistart exchange search (Eqs. 4.7, 4.8). Deterministic for a seed: each
+/// start has its own ChaCha stream, and ties break on the lowest index.
+pub fn search(p: &Problem, o: &Options) -> Result<Outcome> {
+    let c = o.criterion;
+    p.validate(c)?;
+    let scale = p.pooled()?;
+    let ridge = 1e-11 * scale;
+    if let Some(init) = &o.initial {
+        if init.len() != p.n() {
+            return Err(GkError::invalid(format!(
+                "the initial design has {} points, expected {}",
+                init.len(),
+                p.n()
+            )));
+        }
+        for (i, &j) in init.iter().enumerate() {
+            if !p.groups[p.point_group[i]].contains(&j) {
+                return Err(GkError::invalid(format!(
+                    "initial point {i} (candidate {j}) is outside its zone"
+                )));
+            }
+        }
+    }
+    let starts = if o.initial.is_some() {
+        1
+    } else {
+        o.starts.max(1)
+    };
+    let runs: Vec<Result<(Vec<usize>, usize)>> = (0..starts)
+        .into_par_iter()
+        .map(|s| {
+            let mut rng = ChaCha8Rng::seed_from_u64(o.seed);
+            rng.set_stream(s as u64);
+            let mut moves = 0;
+            let design = match &o.initial {
+                Some(d) => d.clone(),
+                None => {
+                    let d = greedy_start(p, 1e-6 * scale, &mut rng);
+                    if matches!(c, Criterion::A | Criterion::I) {
+                        // A- and I-optimal designs are usually close to the D-optimal one,
+                        // whose exchanges are much cheaper: polish that instead.
+                        let mut pre = Run::new(p, Criterion::D, ridge, d)?;
+                        moves += pre.optimise(o.max_sweeps.max(1), &mut rng);
+                        pre.design
+                    } else {
+                        d
+                    }
+                }
+            };
+            let mut run = Run::new(p, c, ridge, design)?;
+            moves += run.optimise(o.max_sweeps.max(1), &mut rng);
+            Ok((run.design, moves))
+        })
+        .collect();
+    let mut best: Option<(f64, usize, Vec<usize>, Metrics, usize)> = None;
+    let mut start_objectives = Vec::with_capacity(starts);
+    for (s, res) in runs.into_iter().enumerate() {
+        let (design, moves) = res?;
+        let m = metrics(&information(p.blocks, &design, p.r, p.k), p.k, p.weights);
+        let v = sane(m.objective(c));
+        start_objectives.push(v);
+        if best.as_ref().is_none_or(|b| v < b.0) {
+            best = Some((v, s, design, m, moves));
+        }
+    }
+    let (objective, _, design, metrics, exchanges) = best.expect("at least one start");
+    if metrics.rank < p.k {
+        return Err(GkError::degenerate(format!(
+            "no plan of {} points found that identifies all {} parameters (rank {}); \
+             use more points or widen the zones",
+            p.n(),
+            p.k,
+            metrics.rank
+        )));
+    }
+    Ok(Outcome {
+        design,
+        metrics,
+        objective,
+        start_objectives,
+        exchanges,
+    })
+}
