@@ -22,10 +22,17 @@ pub fn max_inscribed(pts: &[f64]) -> Result<Circle> {
     let data = Centered::new(pts, WHAT, 3)?;
     data.require_not_collinear(WHAT)?;
     let p = &data.pts;
-    let (cmc, _) = mc::welzl(p, data.scale);
-    let (r0, rmc) = super::mz::radii(p, cmc);
+    let ((cmc, r0, rmc), nvd) = rayon::join(
+        || {
+            let (cmc, _) = mc::welzl(p, data.scale);
+            let (r0, rmc) = super::mz::radii(p, cmc);
+            (cmc, r0, rmc)
+        },
+        || Nearest::build(p, WHAT),
+    );
+    let mut nvd = nvd?;
     // the MC centre is feasible with radius r0: only larger empty circles matter
-    let nvd = Nearest::new(p, WHAT, r0 - 1e-9 * data.scale)?;
+    nvd.extract(p, r0 - 1e-9 * data.scale);
     let tol = 1e-12 * data.scale;
     let g_mc = |c: [f64; 2]| rmc - dist(c, cmc);
 
@@ -70,6 +77,9 @@ pub fn max_inscribed(pts: &[f64]) -> Result<Circle> {
     }
     // Case II: one point; the circle with diameter from the point to the far end of the
     // MC diameter through it
+    // a few recent "witness" points that put a candidate's circle over a point reject
+    // most candidates without a nearest-neighbour query
+    let mut witness: Vec<usize> = best_ctrl.clone();
     for (i, pi) in p.iter().enumerate() {
         let d = dist(*pi, cmc);
         let r = 0.5 * (rmc + d);
@@ -77,9 +87,19 @@ pub fn max_inscribed(pts: &[f64]) -> Result<Circle> {
             continue;
         }
         let c = [pi[0] + (cmc[0] - pi[0]) / d * r, pi[1] + (cmc[1] - pi[1]) / d * r];
-        let (_, dn) = nvd.nearest(p, c);
+        if witness.iter().any(|&k| dist(p[k], c) < r - tol) {
+            continue;
+        }
+        let (k, dn) = nvd.nearest(p, c);
+        if dn < r - tol {
+            if witness.len() >= 8 {
+                witness.remove(0);
+            }
+            witness.push(k);
+            continue;
+        }
         let g = g_mc(c).min(dn);
-        if g > best_r && dn >= dist(*pi, c) - tol {
+        if g > best_r {
             best_r = g;
             best_c = c;
             best_ctrl = vec![i];

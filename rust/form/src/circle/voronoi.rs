@@ -15,8 +15,10 @@ use super::{circumcenter, coord, dist};
 use gagekit_core::{GkError, Result};
 use rand::seq::SliceRandom;
 use rand::SeedableRng;
+use rayon::prelude::*;
+use spade::handles::{FixedFaceHandle, FixedVertexHandle, InnerTag};
 use spade::{DelaunayTriangulation, HasPosition, Point2, Triangulation};
-use std::collections::HashMap;
+use rustc_hash::FxHashMap as HashMap;
 
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Site {
@@ -93,6 +95,46 @@ impl VEdge {
     pub fn rad_min(&self) -> f64 {
         self.h.hypot(0f64.clamp(self.tlo, self.thi))
     }
+    /// Restrict the edge to where `psi(t) = A t + B - 2 w sqrt(t^2 + 2 beta t + gamma) < 0`
+    /// can hold (`|A| > 2w` makes psi strictly monotone, so that set is a half-line),
+    /// widened by `margin`. Returns false if nothing is left.
+    pub fn clip(&mut self, a: f64, b: f64, w: f64, beta: f64, gamma: f64, margin: f64) -> bool {
+        if a.abs() <= 2.0 * w * (1.0 + 1e-9) {
+            return true;
+        }
+        let qa = a * a - 4.0 * w * w;
+        let qb = 2.0 * a * b - 8.0 * w * w * beta;
+        let qc = b * b - 4.0 * w * w * gamma;
+        let psi = |t: f64| a * t + b - 2.0 * w * (t * t + 2.0 * beta * t + gamma).max(0.0).sqrt();
+        let roots = super::mi::quadratic_roots(qa, qb, qc);
+        let Some(root) = roots.into_iter().min_by(|x, y| psi(*x).abs().total_cmp(&psi(*y).abs())) else {
+            return true;
+        };
+        if a > 0.0 {
+            self.thi = self.thi.min(root + margin);
+        } else {
+            self.tlo = self.tlo.max(root - margin);
+        }
+        self.tlo <= self.thi
+    }
+
+    /// Clip a nearest-Voronoi edge (sites at `rad(t)`) to where
+    /// `|c(t) - q| - rad(t) < w`, a necessary condition for a zone narrower than `w` when
+    /// `q` is any input point (the farthest point is at least that far).
+    pub fn clip_nearest(&mut self, q: [f64; 2], w: f64, margin: f64) -> bool {
+        let d = [self.m[0] - q[0], self.m[1] - q[1]];
+        let (qq, qn) = (d[0] * d[0] + d[1] * d[1], d[0] * self.n[0] + d[1] * self.n[1]);
+        self.clip(2.0 * qn, qq - self.h * self.h - w * w, w, 0.0, self.h * self.h, margin)
+    }
+
+    /// Clip a farthest-Voronoi edge (sites at `rad(t)`) to where
+    /// `rad(t) - |c(t) - q| < w` (the nearest point is at most that far).
+    pub fn clip_farthest(&mut self, q: [f64; 2], w: f64, margin: f64) -> bool {
+        let d = [self.m[0] - q[0], self.m[1] - q[1]];
+        let (qq, qn) = (d[0] * d[0] + d[1] * d[1], d[0] * self.n[0] + d[1] * self.n[1]);
+        self.clip(-2.0 * qn, self.h * self.h - qq - w * w, w, qn, qq, margin)
+    }
+
     pub fn contains(&self, t: f64, tol: f64) -> bool {
         t >= self.tlo - tol && t <= self.thi + tol
     }
@@ -114,17 +156,16 @@ pub(crate) fn intersect(e: &VEdge, f: &VEdge) -> Option<(f64, f64)> {
 /// Nearest-point Voronoi diagram (and the Delaunay triangulation for queries).
 pub(crate) struct Nearest {
     dt: DelaunayTriangulation<Site>,
+    /// Triangulation vertex of each input point (None for merged duplicates).
+    handle_of: Vec<Option<FixedVertexHandle>>,
     pub verts: Vec<VVert>,
     pub edges: Vec<VEdge>,
 }
 
 impl Nearest {
-    /// Build from centred points; errors if they are collinear or coincident.
-    ///
-    /// Only the part of the diagram where the empty circle is at least `thr` is kept:
-    /// the vertices of radius >= `thr`, the edges reaching such a vertex, and all rays
-    /// (every other edge has its sites closer than `thr` all along).
-    pub fn new(p: &[[f64; 2]], what: &str, thr: f64) -> Result<Self> {
+    /// Delaunay triangulation of centred points; errors if they are collinear or
+    /// coincide. The diagram itself is filled in by [`Nearest::extract`].
+    pub fn build(p: &[[f64; 2]], what: &str) -> Result<Self> {
         let sites: Vec<Site> = p
             .iter()
             .enumerate()
@@ -138,20 +179,36 @@ impl Nearest {
                 "{what}: the points are collinear or coincide; no circle fits them"
             )));
         }
-        let center = |f: spade::handles::FaceHandle<'_, spade::handles::InnerTag, Site, (), (), ()>| {
+        let mut handle_of = vec![None; p.len()];
+        for v in dt.vertices() {
+            handle_of[v.data().idx] = Some(v.fix());
+        }
+        Ok(Self { dt, handle_of, verts: Vec::new(), edges: Vec::new() })
+    }
+
+    /// Keep the part of the diagram where the empty circle is at least `thr`: the
+    /// vertices of radius >= `thr`, the edges reaching such a vertex, and all rays
+    /// (every other edge has its sites closer than `thr` all along).
+    pub fn extract(&mut self, p: &[[f64; 2]], thr: f64) {
+        let dt = &self.dt;
+        let center = |f: spade::handles::FaceHandle<'_, InnerTag, Site, (), (), ()>| {
             let [a, b, c] = f.positions().map(|q| [q.x, q.y]);
             circumcenter(a, b, c).map(|u| (u, dist(u, a)))
         };
+        let faces: Vec<FixedFaceHandle<InnerTag>> = dt.fixed_inner_faces().collect();
+        let big: Vec<(FixedFaceHandle<InnerTag>, [f64; 2], f64)> = faces
+            .into_par_iter()
+            .with_min_len(4096)
+            .filter_map(|h| {
+                let (u, rad) = center(dt.face(h))?;
+                (rad >= thr).then_some((h, u, rad))
+            })
+            .collect();
         let mut face_vert = vec![usize::MAX; dt.num_all_faces()];
-        let mut verts = Vec::new();
-        let mut big = Vec::new();
-        for f in dt.inner_faces() {
-            let Some((u, rad)) = center(f) else { continue };
-            if rad < thr {
-                continue;
-            }
-            face_vert[f.fix().index()] = verts.len();
-            big.push(f.fix());
+        let mut verts = Vec::with_capacity(big.len());
+        for &(h, u, rad) in &big {
+            face_vert[h.index()] = verts.len();
+            let f = dt.face(h);
             verts.push(VVert { c: u, sites: f.vertices().map(|v| v.data().idx), rad });
         }
         let mut edges = Vec::new();
@@ -168,13 +225,13 @@ impl Nearest {
                 }
             });
         };
-        for (fi, &fh) in big.iter().enumerate() {
-            let f = dt.face(fh);
+        for (fi, &(h, _, _)) in big.iter().enumerate() {
+            let (f, i) = (dt.face(h), h.index());
             for e in f.adjacent_edges() {
                 let Some(g) = e.rev().face().as_inner() else { continue };
                 let gi = face_vert[g.fix().index()];
                 if gi != usize::MAX {
-                    if g.fix().index() > f.fix().index() {
+                    if g.fix().index() > i {
                         push(e, verts[fi].c, Some(verts[gi].c));
                     }
                 } else if let Some((u, _)) = center(g) {
@@ -188,7 +245,33 @@ impl Nearest {
                 push(e, u, None);
             }
         }
-        Ok(Self { dt, verts, edges })
+        self.verts = verts;
+        self.edges = edges;
+    }
+
+    /// Nearest input point to `c` by a greedy walk on the Delaunay graph from input point
+    /// `start` (exact: a vertex with no neighbour closer to `c` is the nearest).
+    pub fn walk(&self, p: &[[f64; 2]], start: usize, c: [f64; 2]) -> (usize, f64) {
+        let Some(mut v) = self.handle_of.get(start).copied().flatten() else {
+            return self.nearest(p, c);
+        };
+        let mut best = super::dist2(p[self.dt.vertex(v).data().idx], c);
+        loop {
+            let mut next = None;
+            for e in self.dt.vertex(v).out_edges() {
+                let w = e.to();
+                let d = super::dist2(p[w.data().idx], c);
+                if d < best {
+                    best = d;
+                    next = Some(w.fix());
+                }
+            }
+            match next {
+                Some(w) => v = w,
+                None => break,
+            }
+        }
+        (self.dt.vertex(v).data().idx, best.sqrt())
     }
 
     /// Index of and distance to the input point nearest to `c`.
@@ -198,12 +281,32 @@ impl Nearest {
         (i, dist(p[i], c))
     }
 
-    /// Vertices of the convex hull in counter-clockwise order, strictly convex ones only.
-    pub fn hull(&self) -> Vec<usize> {
-        let mut h: Vec<usize> = self.dt.convex_hull().map(|e| e.from().data().idx).collect();
-        h.reverse(); // spade lists the hull clockwise
-        h
+}
+
+/// Strictly convex vertices of the convex hull, counter-clockwise (Andrew's monotone
+/// chain with the exact orientation predicate).
+pub(crate) fn convex_hull(p: &[[f64; 2]]) -> Vec<usize> {
+    let mut idx: Vec<usize> = (0..p.len()).collect();
+    idx.sort_unstable_by(|&a, &b| p[a][0].total_cmp(&p[b][0]).then(p[a][1].total_cmp(&p[b][1])));
+    idx.dedup_by(|a, b| p[*a] == p[*b]);
+    if idx.len() < 3 {
+        return idx;
     }
+    let turn = |a: usize, b: usize, c: usize| robust::orient2d(coord(p[a]), coord(p[b]), coord(p[c]));
+    let mut hull: Vec<usize> = Vec::with_capacity(2 * idx.len());
+    for pass in 0..2 {
+        let start = hull.len();
+        let it: Box<dyn Iterator<Item = &usize>> =
+            if pass == 0 { Box::new(idx.iter()) } else { Box::new(idx.iter().rev()) };
+        for &i in it {
+            while hull.len() >= start + 2 && turn(hull[hull.len() - 2], hull[hull.len() - 1], i) <= 0.0 {
+                hull.pop();
+            }
+            hull.push(i);
+        }
+        hull.pop();
+    }
+    hull
 }
 
 /// Farthest-point Voronoi diagram.
@@ -227,7 +330,7 @@ impl Farthest {
         let q: Vec<[f64; 2]> = hull.iter().map(|&i| p[i]).collect();
         let tris = farthest_delaunay(&q);
         let mut verts = Vec::with_capacity(tris.len());
-        let mut edge_tri: HashMap<(usize, usize), usize> = HashMap::with_capacity(3 * tris.len());
+        let mut edge_tri: HashMap<(usize, usize), usize> = HashMap::with_capacity_and_hasher(3 * tris.len(), Default::default());
         for (t, tri) in tris.iter().enumerate() {
             let [a, b, c] = tri.map(|i| q[i]);
             let u = circumcenter(a, b, c).unwrap_or([
@@ -295,7 +398,7 @@ pub(crate) fn farthest_delaunay(q: &[[f64; 2]]) -> Vec<[usize; 3]> {
     let t0 = [first, next[first], next[next[first]]];
     let mut tris: Vec<[usize; 3]> = vec![t0];
     let mut alive = vec![true];
-    let mut edge: HashMap<(usize, usize), usize> = HashMap::with_capacity(6 * k);
+    let mut edge: HashMap<(usize, usize), usize> = HashMap::with_capacity_and_hasher(6 * k, Default::default());
     for e in 0..3 {
         edge.insert((t0[e], t0[(e + 1) % 3]), 0);
     }
