@@ -3,6 +3,7 @@
 
 use super::{circumcenter, dist, dist2, Centered, Circle};
 use gagekit_core::Result;
+use rayon::prelude::*;
 use rand::seq::SliceRandom;
 use rand::SeedableRng;
 
@@ -26,7 +27,7 @@ struct Disk {
 pub fn min_circumscribed(pts: &[f64]) -> Result<Circle> {
     let data = Centered::new(pts, "minimum circumscribed circle", 1)?;
     let (c, control) = welzl(&data.pts, data.scale);
-    let r = data.pts.iter().map(|p| dist(*p, c)).fold(0.0, f64::max);
+    let r = data.pts.par_iter().map(|p| dist(*p, c)).reduce(|| 0.0, f64::max);
     Ok(Circle { center: data.uncenter(c), radius: r, control })
 }
 

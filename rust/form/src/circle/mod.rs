@@ -11,6 +11,7 @@ mod lsq;
 mod mc;
 mod mi;
 mod mz;
+mod subset;
 mod voronoi;
 
 #[cfg(test)]

@@ -1,7 +1,7 @@
 //! Minimum zone circle (MZ, roundness; Eqs. 6.5-6.8, Sec. 6.2.3).
 
 use super::voronoi::{convex_hull, intersect, Farthest, Nearest, VEdge};
-use super::{circumcenter, dist, mc, Centered, Zone};
+use super::{circumcenter, dist, mc, subset, Centered, Zone};
 use gagekit_core::Result;
 use rayon::prelude::*;
 
@@ -36,10 +36,45 @@ pub fn min_zone(pts: &[f64]) -> Result<Zone> {
     let data = Centered::new(pts, WHAT, 3)?;
     data.require_not_collinear(WHAT)?;
     let p = &data.pts;
+    let tol = 1e-13 * data.scale;
+    let z = if p.len() <= subset::SMALL {
+        exact(p, data.scale)?
+    } else {
+        // constraint generation: exact MZ of a subset, checked against all points
+        let (cmc, mc_ctrl) = mc::welzl(p, data.scale);
+        let mut s = subset::initial(p, cmc, &mc_ctrl, true, true);
+        let mut found = None;
+        for _ in 0..subset::MAX_ROUNDS {
+            let q: Vec<[f64; 2]> = s.iter().map(|&i| p[i]).collect();
+            let zs = exact(&q, data.scale)?;
+            let (add, lo, hi) = subset::violators(p, zs.center, Some(zs.r_in), Some(zs.r_out), tol);
+            if add.is_empty() {
+                let map = |v: Vec<usize>| v.into_iter().map(|k| s[k]).collect();
+                found = Some(Zone { center: zs.center, r_in: lo, r_out: hi, control_in: map(zs.control_in), control_out: map(zs.control_out) });
+                break;
+            }
+            s.extend(add);
+            s.sort_unstable();
+            s.dedup();
+            if 4 * s.len() > p.len() {
+                break;
+            }
+        }
+        match found {
+            Some(z) => z,
+            None => exact(p, data.scale)?,
+        }
+    };
+    Ok(Zone { center: data.uncenter(z.center), ..z })
+}
+
+/// Exact MZ of centred points (all of them), in centred coordinates.
+pub(crate) fn exact(p: &[[f64; 2]], scale: f64) -> Result<Zone> {
+    const WHAT: &str = "minimum zone circle";
     // MC and the farthest diagram on one core while the other triangulates
     let (side, nvd) = rayon::join(
         || {
-            let (cmc, mc_ctrl) = mc::welzl(p, data.scale);
+            let (cmc, mc_ctrl) = mc::welzl(p, scale);
             let (r0, rmc) = radii(p, cmc);
             (cmc, mc_ctrl, r0, rmc, Farthest::new(p, &convex_hull(p)))
         },
@@ -49,8 +84,8 @@ pub fn min_zone(pts: &[f64]) -> Result<Zone> {
     let mut nvd = nvd?;
     // the MC centre bounds the width: w <= rmc - r0, so only empty circles of radius
     // >= r0 can be inner circles of a better zone
-    nvd.extract(p, r0 - 1e-9 * data.scale);
-    let top = solve(p, &nvd, &fvd, data.scale, (cmc, mc_ctrl, rmc));
+    nvd.extract(p, r0 - 1e-9 * scale);
+    let top = solve(p, &nvd, &fvd, scale, (cmc, mc_ctrl, rmc));
     // verify: exact width over all points at each candidate and at its polished centre
     let checked: Vec<(f64, [f64; 2], f64, f64, usize)> = top
         .par_iter()
@@ -67,11 +102,18 @@ pub fn min_zone(pts: &[f64]) -> Result<Zone> {
         .reduce(|x, y| if y.0 < x.0 { y } else { x })
         .expect("at least the MC centre is a candidate");
     let (mut control_in, mut control_out) = (top[k].inner.clone(), top[k].outer.clone());
+    let (mut c, mut r_in, mut r_out) = (c, r_in, r_out);
+    if let Some(b) = local_polish(p, c) {
+        if b.w < r_out - r_in {
+            (c, control_in, control_out) = (b.c, b.inner, b.outer);
+            (r_in, r_out) = radii(p, c);
+        }
+    }
     for v in [&mut control_in, &mut control_out] {
         v.sort_unstable();
         v.dedup();
     }
-    Ok(Zone { center: data.uncenter(c), r_in, r_out, control_in, control_out })
+    Ok(Zone { center: c, r_in, r_out, control_in, control_out })
 }
 
 type Mc = ([f64; 2], Vec<usize>, f64);
@@ -220,6 +262,55 @@ fn witnesses(p: &[[f64; 2]], cmc: [f64; 2], mc_ctrl: &[usize], best: &Cand) -> (
     (outer, inner)
 }
 
+/// Re-solve the equal-distance equations for every 1+3, 3+1 and 2+2 choice among the
+/// few points nearest to the inner and outer circle at `c`, and return the narrowest
+/// zone found (exact width over all points). Repairs the last digits when rounding in
+/// the Voronoi geometry picked a neighbouring combination (points within ~1e-11 of a
+/// perfect circle).
+fn local_polish(p: &[[f64; 2]], c: [f64; 2]) -> Option<Cand> {
+    const K: usize = 6;
+    let mut order: Vec<(f64, usize)> = p.iter().enumerate().map(|(i, q)| (dist(*q, c), i)).collect();
+    if order.len() < 2 * K {
+        return None;
+    }
+    order.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    let inner: Vec<usize> = order[..K].iter().map(|e| e.1).collect();
+    let outer: Vec<usize> = order[order.len() - K..].iter().map(|e| e.1).collect();
+    type Choice = (Option<[f64; 2]>, Vec<usize>, Vec<usize>);
+    let mut cands: Vec<Choice> = Vec::new();
+    for a in 0..K {
+        for b in a + 1..K {
+            for d in b + 1..K {
+                let (i3, o3) = ([inner[a], inner[b], inner[d]], [outer[a], outer[b], outer[d]]);
+                cands.push((circumcenter(p[i3[0]], p[i3[1]], p[i3[2]]), i3.to_vec(), vec![]));
+                cands.push((circumcenter(p[o3[0]], p[o3[1]], p[o3[2]]), vec![], o3.to_vec()));
+            }
+            for x in 0..K {
+                for y in x + 1..K {
+                    let (ia, ib, oa, ob) = (inner[a], inner[b], outer[x], outer[y]);
+                    cands.push((bisector_crossing(p[ia], p[ib], p[oa], p[ob]), vec![ia, ib], vec![oa, ob]));
+                }
+            }
+        }
+    }
+    cands
+        .into_par_iter()
+        .filter_map(|(c, mut inn, mut out)| {
+            let c = c?;
+            let (lo, hi) = radii(p, c);
+            // the controls of a 1+3 / 3+1 choice: complete with the extreme point
+            let extreme = |want: f64| p.iter().position(|q| dist(*q, c) == want);
+            if inn.is_empty() {
+                inn = extreme(lo).into_iter().collect();
+            }
+            if out.is_empty() {
+                out = extreme(hi).into_iter().collect();
+            }
+            Some(Cand { c, w: hi - lo, inner: inn, outer: out })
+        })
+        .reduce_with(|x, y| if y.w < x.w { y } else { x })
+}
+
 /// Recompute the winning centre from its control points (equal-distance equations).
 fn polish(p: &[[f64; 2]], b: &Cand) -> Option<[f64; 2]> {
     match (b.inner.len(), b.outer.len()) {
@@ -235,10 +326,16 @@ fn polish(p: &[[f64; 2]], b: &Cand) -> Option<[f64; 2]> {
 
 /// Smallest and largest distance of the points from `c`.
 pub(crate) fn radii(p: &[[f64; 2]], c: [f64; 2]) -> (f64, f64) {
-    p.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), q| {
+    let fold = |(lo, hi): (f64, f64), q: &[f64; 2]| {
         let d = dist(*q, c);
         (lo.min(d), hi.max(d))
-    })
+    };
+    if p.len() < 50_000 {
+        return p.iter().fold((f64::INFINITY, 0.0f64), fold);
+    }
+    p.par_iter()
+        .fold(|| (f64::INFINITY, 0.0f64), fold)
+        .reduce(|| (f64::INFINITY, 0.0f64), |a, b| (a.0.min(b.0), a.1.max(b.1)))
 }
 
 /// Point equidistant from a and b and from i and l (two linear equations), solved

@@ -102,14 +102,23 @@ impl VEdge {
         if a.abs() <= 2.0 * w * (1.0 + 1e-9) {
             return true;
         }
-        let qa = a * a - 4.0 * w * w;
-        let qb = 2.0 * a * b - 8.0 * w * w * beta;
-        let qc = b * b - 4.0 * w * w * gamma;
-        let psi = |t: f64| a * t + b - 2.0 * w * (t * t + 2.0 * beta * t + gamma).max(0.0).sqrt();
-        let roots = super::mi::quadratic_roots(qa, qb, qc);
-        let Some(root) = roots.into_iter().min_by(|x, y| psi(*x).abs().total_cmp(&psi(*y).abs())) else {
+        // psi is strictly monotone and nearly linear: Newton from the linear root
+        // (solving the squared equation instead loses half the digits when w is tiny)
+        let sq = |t: f64| (t * t + 2.0 * beta * t + gamma).max(0.0).sqrt();
+        let mut root = -b / a;
+        for _ in 0..8 {
+            let r = sq(root);
+            let psi = a * root + b - 2.0 * w * r;
+            let dpsi = a - if r > 0.0 { 2.0 * w * (root + beta) / r } else { 0.0 };
+            let step = psi / dpsi;
+            root -= step;
+            if step.is_nan() || step.abs() <= 1e-16 * (1.0 + root.abs()) {
+                break;
+            }
+        }
+        if !root.is_finite() {
             return true;
-        };
+        }
         if a > 0.0 {
             self.thi = self.thi.min(root + margin);
         } else {
