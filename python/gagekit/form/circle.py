@@ -91,7 +91,7 @@ def _criterion(criterion: str) -> str:
     return key
 
 
-def fit_circle(points: Any, criterion: str = "lsq", method: str = "exact", **options: Any) -> CircleFit:
+def fit_circle(points: Any, criterion: str = "lsq", method: str = "exact", seed: int = 0, **options: Any) -> CircleFit:
     """Fit a circle to (n, 2) points.
 
     Parameters
@@ -107,7 +107,10 @@ def fit_circle(points: Any, criterion: str = "lsq", method: str = "exact", **opt
         - ``mz``: minimum zone (roundness), Eq. 6.5, exact over cases 3+1, 1+3 and 2+2
           (Eqs. 6.6-6.8).
     method : "exact"
-        The computational-geometry solvers above.
+        The computational-geometry solvers above (deterministic: MC's Welzl order comes
+        from a fixed seed).
+    seed : int
+        Seed of randomized methods; the exact methods do not use it.
 
     Raises
     ------

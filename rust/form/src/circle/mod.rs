@@ -154,8 +154,10 @@ pub(crate) fn circumcenter(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> Option<[f64
 /// Largest angular gap (rad) of the points seen from `center`; `2 pi - gap` is the arc
 /// the points cover. Linear time (bucket maximum-gap).
 pub fn max_angular_gap(pts: &[f64], center: [f64; 2]) -> f64 {
+    use rayon::prelude::*;
     let ang: Vec<f64> = pts
-        .chunks_exact(2)
+        .par_chunks_exact(2)
+        .with_min_len(8192)
         .filter(|p| p[0] != center[0] || p[1] != center[1])
         .map(|p| (p[1] - center[1]).atan2(p[0] - center[0]))
         .collect();
