@@ -57,3 +57,24 @@ def to_jsonable(obj: Any) -> Any:
 def dumps(obj: Any) -> str:
     """JSON text of a result, strict (no NaN), stable key order as produced."""
     return json.dumps(to_jsonable(obj), indent=2, allow_nan=False)
+
+
+def load_toml(path) -> dict:
+    """Parse a TOML file; :class:`ConfigError` names the file and the problem."""
+    import sys
+    from pathlib import Path
+
+    from .errors import ConfigError
+
+    if sys.version_info >= (3, 11):
+        import tomllib
+    else:  # pragma: no cover
+        import tomli as tomllib
+    p = Path(path)
+    try:
+        with p.open("rb") as fh:
+            return tomllib.load(fh)
+    except FileNotFoundError:
+        raise ConfigError(f"{p}: no such file") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"{p}: not valid TOML ({exc})") from None

@@ -60,3 +60,35 @@ def classify(points, regions: Sequence[Box]) -> list[np.ndarray]:
 def select(points, region: Box) -> np.ndarray:
     """Indices (ascending, int64) of the points inside ``region``."""
     return classify(points, [region])[0]
+
+
+def regions_from_tables(tables: Sequence[dict], source: str = "regions") -> list[Box]:
+    """Boxes from ``[[region]]`` tables (``name``, ``center``, ``size``, optional
+    ``rotation``; other keys such as ``frame`` are left to the caller).
+
+    Raises :class:`ConfigError` naming the file and the region for a missing or
+    malformed key, a non-positive size or a repeated name.
+    """
+    boxes: list[Box] = []
+    seen: set[str] = set()
+    for k, t in enumerate(tables):
+        if not isinstance(t, dict):
+            raise ConfigError(f"{source}: region #{k + 1} must be a table")
+        name = t.get("name")
+        if not isinstance(name, str) or not name:
+            raise ConfigError(f"{source}: region #{k + 1} needs a name")
+        if name in seen:
+            raise ConfigError(f"{source}: region '{name}' is defined twice")
+        seen.add(name)
+        for key in ("center", "size"):
+            if key not in t:
+                raise ConfigError(f"{source}: region '{name}' has no '{key}'")
+        boxes.append(Box(t["center"], t["size"], t.get("rotation", (0.0, 0.0, 0.0)), name=name))
+    return boxes
+
+
+def load_regions(path) -> list[Box]:
+    """Read the ``[[region]]`` tables of a TOML file (a gage file or a regions file)."""
+    from .._util import load_toml
+
+    return regions_from_tables(load_toml(path).get("region", []), str(path))

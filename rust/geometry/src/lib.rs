@@ -1,6 +1,8 @@
 //! Point-set kernels: sampling regions (oriented boxes, Sec. 5.4.1) and the
 //! convex-hull filter (Eq. 5.21).
 
+pub mod hull;
 pub mod region;
 
+pub use hull::convex_hull_indices;
 pub use region::{classify, rotation_matrix, select, OrientedBox};

@@ -31,7 +31,16 @@ fn classify_boxes<'py>(
     Ok(out.into_iter().map(|v| indices(py, v)).collect())
 }
 
+/// Ascending indices of the convex-hull vertices of an (n, 3) point array (Eq. 5.21).
+#[pyfunction]
+fn hull_indices<'py>(py: Python<'py>, points: PyReadonlyArray2<'py, f64>) -> PyResult<Bound<'py, PyArray1<i64>>> {
+    let pts = rows(py, &points, 3, "points")?;
+    let out = run(py, || gagekit_geometry::convex_hull_indices(pts))?;
+    Ok(indices(py, out))
+}
+
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(classify_boxes, m)?)?;
+    m.add_function(wrap_pyfunction!(hull_indices, m)?)?;
     Ok(())
 }

@@ -3,6 +3,7 @@
 //! the exception classes of `gagekit.errors`. No algorithm lives here.
 
 mod arrays;
+mod cloudio;
 mod errors;
 mod design;
 mod form;
@@ -15,6 +16,7 @@ use pyo3::prelude::*;
 #[pymodule]
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    cloudio::register(m)?;
     geometry::register(m)?;
     form::register(m)?;
     kinematics::register(m)?;

@@ -1,0 +1,59 @@
+"""Report sections for machine calibrations (Sec. 3.2, Fig. 3.12, Tables 3.4-3.5)."""
+
+from __future__ import annotations
+
+from typing import Sequence
+
+import numpy as np
+
+from .html import Report
+
+
+def _plt():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def residual_table(cals: Sequence) -> tuple[list[str], list[list]]:
+    """Rows of Tables 3.4/3.5: mean and max residual (um) before and after the model."""
+    headers = ["method", "set", "points", "nominal mean (um)", "nominal max (um)", "model mean (um)", "model max (um)", "decrease of mean (%)"]
+    rows = []
+    for cal in cals:
+        for label, st in (("identification", cal.residuals), ("test", cal.test)):
+            if st is None:
+                continue
+            rows.append([cal.method, label, st.n_points, 1e3 * st.nominal_mean, 1e3 * st.nominal_max,
+                         1e3 * st.model_mean, 1e3 * st.model_max, st.decrease_mean_pct])
+    return headers, rows
+
+
+def add_calibrations(report: Report, cals: Sequence) -> None:
+    """Residual table and the per-point residuals before and after the model (Fig. 3.12)."""
+    headers, rows = residual_table(cals)
+    report.table(headers, rows, caption="Residual vector lengths before (nominal machine) and after the identified model")
+    plt = _plt()
+    fig, axes = plt.subplots(len(cals), 1, figsize=(10, 3.2 * len(cals)), squeeze=False)
+    for ax, cal in zip(axes[:, 0], cals):
+        pr = cal.point_residuals or {}
+        for key, label, color in (("nominal", "nominal machine", "#b3261e"), ("model", "identified model", "#2a5d9f")):
+            if key in pr:
+                r = 1e3 * np.linalg.norm(np.asarray(pr[key]), axis=1)
+                ax.plot(np.arange(1, len(r) + 1), r, ".-", ms=3, lw=0.6, color=color, label=f"{label} (mean {r.mean():.1f} um)")
+        ax.set_title(f"method {cal.method}: residual per calibration point")
+        ax.set_xlabel("measured point")
+        ax.set_ylabel("|residual| (um)")
+        ax.set_yscale("log")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8)
+    fig.tight_layout()
+    report.figure(fig, "machine-residuals", "Residuals per point before and after the model (cf. Fig. 3.12)")
+    g = cals[0]
+    report.table(
+        ["group (identifiable combination)", "value", "standard uncertainty", "unit"],
+        [[e.name, e.value, e.std if e.std is not None else "absorbed by the tracker frame", e.unit] for e in g.groups],
+        caption=f"Identified groups ({g.method}; rank {g.rank}, condition number {g.condition_number:.3g})",
+    )

@@ -1,0 +1,321 @@
+//! ASCII point-cloud parser (parallel over line-aligned chunks) and writer.
+
+use gagekit_core::{GkError, Result};
+use rayon::prelude::*;
+
+/// Options of [`parse_ascii`].
+#[derive(Debug, Clone)]
+pub struct AsciiOptions {
+    /// Number of coordinates per point to return (2 or 3).
+    pub dim: usize,
+    /// Lines to skip unconditionally at the top (NIST `.ds`: the count line).
+    pub skip_lines: usize,
+}
+
+impl Default for AsciiOptions {
+    fn default() -> Self {
+        Self { dim: 3, skip_lines: 0 }
+    }
+}
+
+/// Result of [`parse_ascii`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct Parsed {
+    /// Row-major coordinates, `dim` per point.
+    pub coords: Vec<f64>,
+    /// Number of header lines recognised (after `skip_lines`).
+    pub header_lines: usize,
+    /// Columns (0-based) the coordinates were taken from.
+    pub columns: Vec<usize>,
+    /// Number of columns of the first data line.
+    pub ncols: usize,
+}
+
+fn is_sep(b: u8) -> bool {
+    matches!(b, b',' | b';' | b' ' | b'\t' | b'\r')
+}
+
+fn is_skipped(line: &[u8]) -> bool {
+    let t = trim(line);
+    t.is_empty() || t[0] == b'#' || t.starts_with(b"//")
+}
+
+fn trim(mut s: &[u8]) -> &[u8] {
+    while let Some((&f, rest)) = s.split_first() {
+        if f.is_ascii_whitespace() {
+            s = rest;
+        } else {
+            break;
+        }
+    }
+    while let Some((&l, rest)) = s.split_last() {
+        if l.is_ascii_whitespace() {
+            s = rest;
+        } else {
+            break;
+        }
+    }
+    s
+}
+
+/// Split a line into fields: runs of separators count as one, except that
+/// a comma or semicolon always separates (so `1,,2` has an empty field).
+fn fields(line: &[u8]) -> Vec<&[u8]> {
+    let line = trim(line);
+    let mut out = Vec::new();
+    let mut start = 0;
+    let mut i = 0;
+    while i < line.len() {
+        if is_sep(line[i]) {
+            out.push(&line[start..i]);
+            // swallow surrounding whitespace and at most one hard separator
+            let mut hard = matches!(line[i], b',' | b';');
+            i += 1;
+            while i < line.len() && is_sep(line[i]) {
+                if matches!(line[i], b',' | b';') {
+                    if hard {
+                        out.push(&line[i..i]); // empty field between two hard separators
+                    }
+                    hard = true;
+                }
+                i += 1;
+            }
+            start = i;
+        } else {
+            i += 1;
+        }
+    }
+    if start < line.len() || line.is_empty() {
+        out.push(&line[start..]);
+    }
+    out
+}
+
+fn parse_f64(s: &[u8]) -> Option<f64> {
+    fast_float2::parse::<f64, _>(s).ok()
+}
+
+/// Column indices named x, y, z (case-insensitive, units in brackets allowed)
+/// in a header line, if all the needed ones are present.
+fn header_columns(line: &[u8], dim: usize) -> Option<Vec<usize>> {
+    let names: Vec<String> = fields(line)
+        .iter()
+        .map(|f| {
+            let s = String::from_utf8_lossy(f).to_ascii_lowercase();
+            let s = s.trim_matches(|c: char| c == '"' || c == '\'');
+            s.split(|c: char| c == '(' || c == '[' || c == ' ').next().unwrap_or("").to_string()
+        })
+        .collect();
+    ["x", "y", "z"][..dim]
+        .iter()
+        .map(|want| names.iter().position(|n| n == want))
+        .collect()
+}
+
+/// Find `\n`-terminated lines. Returns the byte offsets of the line starts.
+fn line_starts(bytes: &[u8]) -> Vec<usize> {
+    let mut starts = vec![0];
+    starts.extend(memchr::memchr_iter(b'\n', bytes).map(|i| i + 1).filter(|&i| i < bytes.len()));
+    starts
+}
+
+fn line_at<'a>(bytes: &'a [u8], starts: &[usize], k: usize) -> &'a [u8] {
+    let end = starts.get(k + 1).copied().unwrap_or(bytes.len());
+    &bytes[starts[k]..end]
+}
+
+/// Parse an ASCII point cloud. `what` names the file in error messages.
+pub fn parse_ascii(bytes: &[u8], opts: &AsciiOptions, what: &str) -> Result<Parsed> {
+    let dim = opts.dim;
+    if !(2..=3).contains(&dim) {
+        return Err(GkError::invalid(format!("{what}: dim must be 2 or 3, got {dim}")));
+    }
+    if bytes.contains(&0) {
+        return Err(GkError::invalid(format!(
+            "{what}: this is a binary file, not an ASCII point list (XYZ/CSV/TXT)"
+        )));
+    }
+    let starts = line_starts(bytes);
+    let nlines = if bytes.is_empty() { 0 } else { starts.len() };
+
+    // Header: leading non-skipped lines whose first `dim` fields are not all numbers.
+    let mut k = opts.skip_lines.min(nlines);
+    let mut header: Option<&[u8]> = None;
+    let mut header_lines = 0;
+    let mut first_data = None;
+    while k < nlines {
+        let line = line_at(bytes, &starts, k);
+        if !is_skipped(line) {
+            let f = fields(line);
+            if f.len() >= dim && f[..dim].iter().all(|x| parse_f64(x).is_some()) {
+                first_data = Some((k, f.len()));
+                break;
+            }
+            if header_lines >= 50 {
+                return Err(GkError::invalid(format!(
+                    "{what}: line {}: expected numbers (x y z), found {:?}",
+                    k + 1,
+                    String::from_utf8_lossy(trim(line))
+                )));
+            }
+            header = Some(line);
+            header_lines += 1;
+        }
+        k += 1;
+    }
+    let Some((first, ncols)) = first_data else {
+        return Err(GkError::invalid(format!("{what}: no points found (the file is empty or has only header lines)")));
+    };
+    // A header with one name per data column may name the x, y, z columns.
+    let columns = header
+        .filter(|h| fields(h).len() == ncols)
+        .and_then(|h| header_columns(h, dim))
+        .unwrap_or_else(|| (0..dim).collect());
+    let need = columns.iter().max().copied().unwrap_or(0) + 1;
+    if ncols < need {
+        return Err(GkError::invalid(format!(
+            "{what}: line {}: expected at least {need} columns, found {ncols}",
+            first + 1
+        )));
+    }
+
+    // Parallel parse of lines first..nlines in chunks.
+    let data_lines = nlines - first;
+    let chunk = (data_lines / (rayon::current_num_threads() * 8)).clamp(4096, 1 << 20);
+    let parts: Vec<Result<Vec<f64>>> = (first..nlines)
+        .step_by(chunk)
+        .collect::<Vec<_>>()
+        .into_par_iter()
+        .map(|lo| {
+            let hi = (lo + chunk).min(nlines);
+            let mut out = Vec::with_capacity((hi - lo) * dim);
+            for k in lo..hi {
+                let line = line_at(bytes, &starts, k);
+                if is_skipped(line) {
+                    continue;
+                }
+                let f = fields(line);
+                for &c in &columns {
+                    let v = f.get(c).and_then(|x| parse_f64(x)).ok_or_else(|| {
+                        GkError::invalid(format!(
+                            "{what}: line {}: expected {} numbers, found {:?}",
+                            k + 1,
+                            need,
+                            String::from_utf8_lossy(trim(line))
+                        ))
+                    })?;
+                    if !v.is_finite() {
+                        return Err(GkError::invalid(format!(
+                            "{what}: line {}: non-finite coordinate ({v}); remove NaN/inf values",
+                            k + 1
+                        )));
+                    }
+                    out.push(v);
+                }
+            }
+            Ok(out)
+        })
+        .collect();
+    let mut coords = Vec::with_capacity(data_lines * dim);
+    for p in parts {
+        coords.extend(p?);
+    }
+    Ok(Parsed { coords, header_lines, columns, ncols })
+}
+
+/// Write points as ASCII, one per line, values separated by `sep`, with an
+/// optional header line. Shortest round-trip representation (ryu).
+pub fn write_ascii(coords: &[f64], dim: usize, sep: u8, header: Option<&str>) -> Result<Vec<u8>> {
+    gagekit_core::check_finite(coords, dim, "points to write")?;
+    let rows: Vec<Vec<u8>> = coords
+        .par_chunks(dim * 65536)
+        .map(|block| {
+            let mut out = Vec::with_capacity(block.len() * 12);
+            let mut buf = ryu::Buffer::new();
+            for p in block.chunks_exact(dim) {
+                for (i, v) in p.iter().enumerate() {
+                    if i > 0 {
+                        out.push(sep);
+                    }
+                    let s = buf.format_finite(*v);
+                    out.extend_from_slice(s.strip_suffix(".0").unwrap_or(s).as_bytes());
+                }
+                out.push(b'\n');
+            }
+            out
+        })
+        .collect();
+    let mut out = Vec::with_capacity(rows.iter().map(Vec::len).sum::<usize>() + 64);
+    if let Some(h) = header {
+        out.extend_from_slice(h.as_bytes());
+        out.push(b'\n');
+    }
+    for r in rows {
+        out.extend(r);
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(s: &str) -> Result<Parsed> {
+        parse_ascii(s.as_bytes(), &AsciiOptions::default(), "t.xyz")
+    }
+
+    #[test]
+    fn separators_and_extra_columns() {
+        let p = parse("1 2 3\n4,5,6,7\n7\t8\t9 10 11\r\n\n# c\n1e3;-2.5;+3\n").unwrap();
+        assert_eq!(p.coords, vec![1., 2., 3., 4., 5., 6., 7., 8., 9., 1e3, -2.5, 3.]);
+        assert_eq!(p.header_lines, 0);
+    }
+
+    #[test]
+    fn header_names_columns() {
+        let p = parse("id,Z,Y,X\n1,3,2,1\n2,6,5,4\n").unwrap();
+        assert_eq!(p.header_lines, 1);
+        assert_eq!(p.columns, vec![3, 2, 1]);
+        assert_eq!(p.coords, vec![1., 2., 3., 4., 5., 6.]);
+        let q = parse("X[mm],Y[mm],Z[mm],intensity\n1,2,3,0.5\n").unwrap();
+        assert_eq!(q.coords, vec![1., 2., 3.]);
+        let r = parse("X (mm) Y (mm) Z (mm)\n1 2 3\n").unwrap();
+        assert_eq!((r.header_lines, r.coords), (1, vec![1., 2., 3.]));
+    }
+
+    #[test]
+    fn errors_name_the_line() {
+        let e = parse("1 2 3\n4 5\n").unwrap_err();
+        assert!(e.message.contains("line 2"), "{}", e.message);
+        let e = parse("1 2 3\n4 nan 6\n").unwrap_err();
+        assert!(e.message.contains("line 2") && e.message.contains("non-finite"), "{}", e.message);
+        let e = parse("1 2 x\n").unwrap_err();
+        assert!(e.message.contains("no points"), "{}", e.message);
+        assert!(parse("").is_err());
+        assert!(parse("\n\n").is_err());
+        assert!(parse_ascii(b"\x00\x01", &AsciiOptions::default(), "b").is_err());
+    }
+
+    #[test]
+    fn skip_lines_for_nist_ds() {
+        let opts = AsciiOptions { dim: 3, skip_lines: 1 };
+        let p = parse_ascii(b"2\n1 2 3\n4 5 6", &opts, "a.ds").unwrap();
+        assert_eq!(p.coords.len(), 6);
+    }
+
+    #[test]
+    fn many_lines_parallel_roundtrip() {
+        let n = 50_000;
+        let coords: Vec<f64> = (0..3 * n).map(|i| (i as f64) * 0.001 - 17.25).collect();
+        let text = write_ascii(&coords, 3, b' ', Some("x y z")).unwrap();
+        let p = parse_ascii(&text, &AsciiOptions::default(), "big").unwrap();
+        assert_eq!(p.coords, coords);
+    }
+
+    #[test]
+    fn two_d() {
+        let opts = AsciiOptions { dim: 2, skip_lines: 0 };
+        let p = parse_ascii(b"1 2\n3 4\n", &opts, "c").unwrap();
+        assert_eq!(p.coords, vec![1., 2., 3., 4.]);
+    }
+}

@@ -1,0 +1,55 @@
+//! Bindings of gagekit-cloudio: ASCII point-cloud reading and writing.
+
+use crate::arrays::rows;
+use crate::errors::{gagekit_err, run};
+use gagekit_cloudio::{parse_ascii, write_ascii, AsciiOptions};
+use gagekit_core::GkError;
+use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray2};
+use pyo3::prelude::*;
+
+/// Read an ASCII point file: returns (points (n, dim), header_lines, columns).
+#[pyfunction]
+#[pyo3(signature = (path, dim=3, skip_lines=0))]
+fn cloud_read_ascii<'py>(
+    py: Python<'py>,
+    path: String,
+    dim: usize,
+    skip_lines: usize,
+) -> PyResult<(Bound<'py, PyAny>, usize, Vec<usize>)> {
+    let parsed = run(py, || {
+        let bytes = std::fs::read(&path)
+            .map_err(|e| GkError::invalid(format!("{path}: cannot be read ({e})")))?;
+        parse_ascii(&bytes, &AsciiOptions { dim, skip_lines }, &path)
+    })?;
+    let n = parsed.coords.len() / dim;
+    let arr = PyArray1::from_vec(py, parsed.coords).reshape([n, dim])?;
+    Ok((arr.into_any(), parsed.header_lines, parsed.columns))
+}
+
+/// Write points (n, d) as ASCII with separator `sep` and an optional header line.
+#[pyfunction]
+#[pyo3(signature = (path, points, sep=",", header=None))]
+fn cloud_write_ascii(
+    py: Python<'_>,
+    path: String,
+    points: PyReadonlyArray2<'_, f64>,
+    sep: &str,
+    header: Option<String>,
+) -> PyResult<()> {
+    let dim = points.as_array().ncols();
+    let flat = rows(py, &points, dim, "points")?;
+    let sep = match sep.as_bytes() {
+        [b] => *b,
+        _ => return Err(gagekit_err(py, "InvalidInputError", format!("separator must be one character, got {sep:?}"))),
+    };
+    run(py, || {
+        let text = write_ascii(flat, dim, sep, header.as_deref())?;
+        std::fs::write(&path, text).map_err(|e| GkError::invalid(format!("{path}: cannot be written ({e})")))
+    })
+}
+
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(cloud_read_ascii, m)?)?;
+    m.add_function(wrap_pyfunction!(cloud_write_ascii, m)?)?;
+    Ok(())
+}
