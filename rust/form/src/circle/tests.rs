@@ -340,3 +340,24 @@ fn subset_iteration_matches_exact_on_all_points() {
         assert!((m.radius - rf).abs() < 1e-12, "seed {seed}: MI {} vs {rf}", m.radius);
     }
 }
+
+#[test]
+fn extreme_coordinates_give_results_or_clear_errors() {
+    // tiny and huge coordinates: a result, or an InvalidInput error, never a panic
+    let tiny = [0.0, 0.0, 1e-300, 0.0, 0.0, 1e-300, 1e-300, 1e-300, 5e-301, 2e-300];
+    for r in [min_zone(&tiny).map(|z| z.width()), max_inscribed(&tiny).map(|c| c.radius)] {
+        match r {
+            Ok(w) => assert!(w.is_finite()),
+            Err(e) => assert!(!e.message.is_empty()),
+        }
+    }
+    let huge = [1e200, 0.0, -1e200, 0.0, 0.0, 1e200, 3e199, -2e199];
+    for r in [min_zone(&huge).map(|z| z.width()), max_inscribed(&huge).map(|c| c.radius)] {
+        if let Err(e) = r {
+            assert!(e.message.contains("too large") || e.message.contains("collinear"), "{}", e.message);
+        }
+    }
+    let square = [1.0, 1.0, -1.0, 1.0, -1.0, -1.0, 1.0, -1.0, 1.0, 1.0];
+    let z = min_zone(&square).unwrap();
+    assert!(z.width().abs() < 1e-15);
+}

@@ -175,13 +175,19 @@ impl Nearest {
     /// Delaunay triangulation of centred points; errors if they are collinear or
     /// coincide. The diagram itself is filled in by [`Nearest::extract`].
     pub fn build(p: &[[f64; 2]], what: &str) -> Result<Self> {
+        // spade rejects non-zero coordinates below ~1e-43; such values are zero for any
+        // measurement
+        let snap = |x: f64| if x.abs() < 1e-40 { 0.0 } else { x };
         let sites: Vec<Site> = p
             .iter()
             .enumerate()
-            .map(|(idx, q)| Site { pos: Point2::new(q[0], q[1]), idx })
+            .map(|(idx, q)| Site { pos: Point2::new(snap(q[0]), snap(q[1])), idx })
             .collect();
-        let dt = DelaunayTriangulation::<Site>::bulk_load(sites).map_err(|e| {
-            GkError::invalid(format!("{what}: cannot triangulate the points ({e:?})"))
+        let dt = DelaunayTriangulation::<Site>::bulk_load(sites).map_err(|e| match e {
+            spade::InsertionError::TooLarge => GkError::invalid(format!(
+                "{what}: coordinates too large to triangulate (the points span more than 1e60 mm)"
+            )),
+            e => GkError::invalid(format!("{what}: cannot triangulate the points ({e:?})")),
         })?;
         if dt.num_inner_faces() == 0 {
             return Err(GkError::degenerate(format!(
