@@ -33,7 +33,11 @@ pub fn least_squares(pts: &[f64]) -> Result<Circle> {
     }
     let mut control = vec![imax, imin];
     control.dedup();
-    Ok(Circle { center: data.uncenter(c), radius: r, control })
+    Ok(Circle {
+        center: data.uncenter(c),
+        radius: r,
+        control,
+    })
 }
 
 /// Algebraic fit: minimise sum (x^2 + y^2 + D x + E y + F)^2 (linear least squares),

@@ -3,8 +3,8 @@
 
 use super::voronoi::Nearest;
 use super::{dist, mc, subset, Centered, Circle};
-use rayon::prelude::*;
 use gagekit_core::Result;
+use rayon::prelude::*;
 
 /// Maximum inscribed circle of `pts` (flat (n, 2), n >= 3, not collinear).
 ///
@@ -18,6 +18,10 @@ use gagekit_core::Result;
 ///
 /// Every candidate is scored by `g`, so a candidate is only accepted as far as it is
 /// feasible. The reported radius is recomputed against all points and MC.
+///
+/// Above a few thousand points the candidates come from a subset that grows by the
+/// points falling inside its circle; the subset radius bounds the true one from above,
+/// so a subset circle with no input point inside it is the global optimum.
 pub fn max_inscribed(pts: &[f64]) -> Result<Circle> {
     let data = Centered::new(pts, WHAT, 3)?;
     data.require_not_collinear(WHAT)?;
@@ -48,20 +52,35 @@ pub fn max_inscribed(pts: &[f64]) -> Result<Circle> {
         let (c, _, ctrl) = exact(p, cmc, rmc, data.scale)?;
         (c, ctrl)
     };
-    let r_near = p.par_iter().map(|q| dist(*q, c)).reduce(|| f64::INFINITY, f64::min);
+    let r_near = p
+        .par_iter()
+        .map(|q| dist(*q, c))
+        .reduce(|| f64::INFINITY, f64::min);
     let radius = r_near.min(rmc - dist(c, cmc)).max(0.0);
     control.sort_unstable();
     control.dedup();
-    Ok(Circle { center: data.uncenter(c), radius, control })
+    Ok(Circle {
+        center: data.uncenter(c),
+        radius,
+        control,
+    })
 }
 
 const WHAT: &str = "maximum inscribed circle";
 
 /// Exact MI of centred points `p` inside the circle (`cmc`, `rmc`): centre, radius and
 /// control points (indices into `p`).
-pub(crate) fn exact(p: &[[f64; 2]], cmc: [f64; 2], rmc: f64, scale: f64) -> Result<([f64; 2], f64, Vec<usize>)> {
+pub(crate) fn exact(
+    p: &[[f64; 2]],
+    cmc: [f64; 2],
+    rmc: f64,
+    scale: f64,
+) -> Result<([f64; 2], f64, Vec<usize>)> {
     let mut nvd = Nearest::build(p, WHAT)?;
-    let r0 = p.iter().map(|q| dist(*q, cmc)).fold(f64::INFINITY, f64::min);
+    let r0 = p
+        .iter()
+        .map(|q| dist(*q, cmc))
+        .fold(f64::INFINITY, f64::min);
     // the MC centre is feasible with radius r0: only larger empty circles matter
     nvd.extract(p, r0 - 1e-9 * scale);
     let tol = 1e-12 * scale;
@@ -91,7 +110,11 @@ pub(crate) fn exact(p: &[[f64; 2]], cmc: [f64; 2], rmc: f64, scale: f64) -> Resu
         let qn = q[0] * e.n[0] + q[1] * e.n[1];
         let alpha = (rmc * rmc + e.h * e.h - qq) / (2.0 * rmc);
         let beta = -qn / rmc;
-        let (a2, b2, c2) = (1.0 - beta * beta, -2.0 * alpha * beta, e.h * e.h - alpha * alpha);
+        let (a2, b2, c2) = (
+            1.0 - beta * beta,
+            -2.0 * alpha * beta,
+            e.h * e.h - alpha * alpha,
+        );
         for t in quadratic_roots(a2, b2, c2) {
             let s = alpha + beta * t;
             if s <= best_r || s > rmc || !e.contains(t, tol) {
@@ -117,7 +140,10 @@ pub(crate) fn exact(p: &[[f64; 2]], cmc: [f64; 2], rmc: f64, scale: f64) -> Resu
         if d == 0.0 || r <= best_r {
             continue;
         }
-        let c = [pi[0] + (cmc[0] - pi[0]) / d * r, pi[1] + (cmc[1] - pi[1]) / d * r];
+        let c = [
+            pi[0] + (cmc[0] - pi[0]) / d * r,
+            pi[1] + (cmc[1] - pi[1]) / d * r,
+        ];
         if witness.iter().any(|&k| dist(p[k], c) < r - tol) {
             continue;
         }
@@ -136,7 +162,11 @@ pub(crate) fn exact(p: &[[f64; 2]], cmc: [f64; 2], rmc: f64, scale: f64) -> Resu
             best_ctrl = vec![i];
         }
     }
-    let r = p.iter().map(|q| dist(*q, best_c)).fold(f64::INFINITY, f64::min).min(g_mc(best_c));
+    let r = p
+        .iter()
+        .map(|q| dist(*q, best_c))
+        .fold(f64::INFINITY, f64::min)
+        .min(g_mc(best_c));
     Ok((best_c, r, best_ctrl))
 }
 

@@ -79,7 +79,10 @@ impl Centered {
         }
         let shift = [0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1])];
         let scale = 0.5 * (hi[0] - lo[0]).hypot(hi[1] - lo[1]);
-        let pts = pts.chunks_exact(2).map(|p| [p[0] - shift[0], p[1] - shift[1]]).collect();
+        let pts = pts
+            .chunks_exact(2)
+            .map(|p| [p[0] - shift[0], p[1] - shift[1]])
+            .collect();
         Ok(Self { pts, shift, scale })
     }
 
@@ -105,7 +108,11 @@ impl Centered {
             )));
         }
         let (a, b) = (coord(p0), coord(self.pts[far]));
-        if self.pts.iter().all(|p| robust::orient2d(a, b, coord(*p)) == 0.0) {
+        if self
+            .pts
+            .iter()
+            .all(|p| robust::orient2d(a, b, coord(*p)) == 0.0)
+        {
             return Err(GkError::degenerate(format!(
                 "{what}: all {} points lie on one straight line; no circle fits them",
                 self.pts.len()
@@ -165,7 +172,11 @@ pub fn max_angular_gap(pts: &[f64], center: [f64; 2]) -> f64 {
     if n < 2 {
         return std::f64::consts::TAU;
     }
-    let (lo, hi) = ang.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &a| (l.min(a), h.max(a)));
+    let (lo, hi) = ang
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &a| {
+            (l.min(a), h.max(a))
+        });
     let mut gap = lo + std::f64::consts::TAU - hi;
     if hi > lo {
         let nb = n + 1;

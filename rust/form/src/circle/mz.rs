@@ -31,6 +31,11 @@ const TOP: usize = 8;
 /// edge is clipped to where a narrower zone is still possible. The best few candidates
 /// are polished from their control points (equal-distance equations) and verified
 /// against all points; the reported radii are recomputed from the reported centre.
+///
+/// Above a few thousand points the exact solver runs on a subset (extreme points and
+/// points nearest the MC centre by direction) that grows by the points violating its
+/// zone. The subset width is a lower bound of the true width, so a subset zone that
+/// holds all points (to 1e-13 of the part size) is the global optimum: a certificate.
 pub fn min_zone(pts: &[f64]) -> Result<Zone> {
     const WHAT: &str = "minimum zone circle";
     let data = Centered::new(pts, WHAT, 3)?;
@@ -50,7 +55,13 @@ pub fn min_zone(pts: &[f64]) -> Result<Zone> {
             let (add, lo, hi) = subset::violators(p, zs.center, Some(zs.r_in), Some(zs.r_out), tol);
             if add.is_empty() {
                 let map = |v: Vec<usize>| v.into_iter().map(|k| s[k]).collect();
-                found = Some(Zone { center: zs.center, r_in: lo, r_out: hi, control_in: map(zs.control_in), control_out: map(zs.control_out) });
+                found = Some(Zone {
+                    center: zs.center,
+                    r_in: lo,
+                    r_out: hi,
+                    control_in: map(zs.control_in),
+                    control_out: map(zs.control_out),
+                });
                 break;
             }
             s.extend(add);
@@ -65,7 +76,10 @@ pub fn min_zone(pts: &[f64]) -> Result<Zone> {
             None => exact(p, data.scale)?,
         }
     };
-    Ok(Zone { center: data.uncenter(z.center), ..z })
+    Ok(Zone {
+        center: data.uncenter(z.center),
+        ..z
+    })
 }
 
 /// Exact MZ of centred points (all of them), in centred coordinates.
@@ -91,10 +105,12 @@ pub(crate) fn exact(p: &[[f64; 2]], scale: f64) -> Result<Zone> {
         .par_iter()
         .enumerate()
         .flat_map_iter(|(k, cand)| {
-            std::iter::once(cand.c).chain(polish(p, cand)).map(move |c| {
-                let (a, b) = radii(p, c);
-                (b - a, c, a, b, k)
-            })
+            std::iter::once(cand.c)
+                .chain(polish(p, cand))
+                .map(move |c| {
+                    let (a, b) = radii(p, c);
+                    (b - a, c, a, b, k)
+                })
         })
         .collect();
     let (_, c, r_in, r_out, k) = checked
@@ -113,7 +129,13 @@ pub(crate) fn exact(p: &[[f64; 2]], scale: f64) -> Result<Zone> {
         v.sort_unstable();
         v.dedup();
     }
-    Ok(Zone { center: c, r_in, r_out, control_in, control_out })
+    Ok(Zone {
+        center: c,
+        r_in,
+        r_out,
+        control_in,
+        control_out,
+    })
 }
 
 type Mc = ([f64; 2], Vec<usize>, f64);
@@ -128,18 +150,32 @@ fn merge(mut a: Vec<Cand>, b: Vec<Cand>) -> Vec<Cand> {
 
 /// Width at `c` claimed by its control points (exact if they are the nearest/farthest).
 fn claimed(p: &[[f64; 2]], c: [f64; 2], inner: &[usize], outer: &[usize]) -> f64 {
-    let r = inner.iter().map(|&j| dist(p[j], c)).fold(f64::INFINITY, f64::min);
+    let r = inner
+        .iter()
+        .map(|&j| dist(p[j], c))
+        .fold(f64::INFINITY, f64::min);
     let big_r = outer.iter().map(|&i| dist(p[i], c)).fold(0.0, f64::max);
     big_r - r
 }
 
-fn solve(p: &[[f64; 2]], nvd: &Nearest, fvd: &Farthest, scale: f64, (cmc, mc_ctrl, rmc): Mc) -> Vec<Cand> {
+fn solve(
+    p: &[[f64; 2]],
+    nvd: &Nearest,
+    fvd: &Farthest,
+    scale: f64,
+    (cmc, mc_ctrl, rmc): Mc,
+) -> Vec<Cand> {
     let tol = 1e-12 * scale;
     // lower bound of max_i |c - p_i|
     let r_lb = |c: [f64; 2]| mc_ctrl.iter().map(|&k| dist(p[k], c)).fold(rmc, f64::max);
 
     let (j0, r0) = nvd.nearest(p, cmc);
-    let mut top = vec![Cand { c: cmc, w: rmc - r0, inner: vec![j0], outer: mc_ctrl.clone() }];
+    let mut top = vec![Cand {
+        c: cmc,
+        w: rmc - r0,
+        inner: vec![j0],
+        outer: mc_ctrl.clone(),
+    }];
 
     // case 1+3 (Eq. 6.6): nearest-Voronoi vertices
     let w = top[0].w;
@@ -150,7 +186,12 @@ fn solve(p: &[[f64; 2]], nvd: &Nearest, fvd: &Farthest, scale: f64, (cmc, mc_ctr
         .map(|v| {
             let (i, _) = fvd.farthest(p, v.c);
             let (inner, outer) = (v.sites.to_vec(), vec![i]);
-            vec![Cand { c: v.c, w: claimed(p, v.c, &inner, &outer), inner, outer }]
+            vec![Cand {
+                c: v.c,
+                w: claimed(p, v.c, &inner, &outer),
+                inner,
+                outer,
+            }]
         })
         .reduce_with(merge);
     top = merge(top, c13.unwrap_or_default());
@@ -174,7 +215,12 @@ fn solve(p: &[[f64; 2]], nvd: &Nearest, fvd: &Farthest, scale: f64, (cmc, mc_ctr
         let (j, _) = nvd.walk(p, prev, u.c);
         prev = j;
         let (inner, outer) = (vec![j], u.sites.to_vec());
-        let cand = Cand { c: u.c, w: claimed(p, u.c, &inner, &outer), inner, outer };
+        let cand = Cand {
+            c: u.c,
+            w: claimed(p, u.c, &inner, &outer),
+            inner,
+            outer,
+        };
         top = merge(top, vec![cand]);
     }
 
@@ -189,7 +235,10 @@ fn solve(p: &[[f64; 2]], nvd: &Nearest, fvd: &Farthest, scale: f64, (cmc, mc_ctr
         .par_iter()
         .filter_map(|f0| {
             let mut f = *f0;
-            inner_w.iter().all(|&j| f.clip_farthest(p[j], w, margin)).then_some(f)
+            inner_w
+                .iter()
+                .all(|&j| f.clip_farthest(p[j], w, margin))
+                .then_some(f)
         })
         .collect();
     fe.sort_by(|a, b| a.rad_min().total_cmp(&b.rad_min()));
@@ -211,13 +260,20 @@ fn solve(p: &[[f64; 2]], nvd: &Nearest, fvd: &Farthest, scale: f64, (cmc, mc_ctr
                 if rmin - rmax >= w {
                     break;
                 }
-                let Some((t, s)) = intersect(&e, f) else { continue };
+                let Some((t, s)) = intersect(&e, f) else {
+                    continue;
+                };
                 if !e.contains(t, tol) || !f.contains(s, tol) || f.rad(s) - e.rad(t) >= w {
                     continue;
                 }
                 let c = e.at(t);
                 let (inner, outer) = (vec![e.a, e.b], vec![f.a, f.b]);
-                local.push(Cand { c, w: claimed(p, c, &inner, &outer), inner, outer });
+                local.push(Cand {
+                    c,
+                    w: claimed(p, c, &inner, &outer),
+                    inner,
+                    outer,
+                });
             }
             (!local.is_empty()).then(|| merge(Vec::new(), local))
         })
@@ -228,7 +284,12 @@ fn solve(p: &[[f64; 2]], nvd: &Nearest, fvd: &Farthest, scale: f64, (cmc, mc_ctr
 /// Witness points for clipping: outer ones (far from the centre: the MC control points,
 /// the best zone's outer points and the extreme points in 16 directions) and inner ones
 /// (the best zone's inner points and the points nearest to the MC centre in 16 sectors).
-fn witnesses(p: &[[f64; 2]], cmc: [f64; 2], mc_ctrl: &[usize], best: &Cand) -> (Vec<usize>, Vec<usize>) {
+fn witnesses(
+    p: &[[f64; 2]],
+    cmc: [f64; 2],
+    mc_ctrl: &[usize],
+    best: &Cand,
+) -> (Vec<usize>, Vec<usize>) {
     const K: usize = 16;
     let dirs: Vec<[f64; 2]> = (0..K)
         .map(|k| {
@@ -253,8 +314,18 @@ fn witnesses(p: &[[f64; 2]], cmc: [f64; 2], mc_ctrl: &[usize], best: &Cand) -> (
             near[k] = (r, i);
         }
     }
-    let mut outer: Vec<usize> = mc_ctrl.iter().chain(&best.outer).copied().chain(ext.iter().map(|e| e.1)).collect();
-    let mut inner: Vec<usize> = best.inner.iter().copied().chain(near.iter().filter(|e| e.1 != usize::MAX).map(|e| e.1)).collect();
+    let mut outer: Vec<usize> = mc_ctrl
+        .iter()
+        .chain(&best.outer)
+        .copied()
+        .chain(ext.iter().map(|e| e.1))
+        .collect();
+    let mut inner: Vec<usize> = best
+        .inner
+        .iter()
+        .copied()
+        .chain(near.iter().filter(|e| e.1 != usize::MAX).map(|e| e.1))
+        .collect();
     for v in [&mut outer, &mut inner] {
         v.sort_unstable();
         v.dedup();
@@ -269,7 +340,11 @@ fn witnesses(p: &[[f64; 2]], cmc: [f64; 2], mc_ctrl: &[usize], best: &Cand) -> (
 /// perfect circle).
 fn local_polish(p: &[[f64; 2]], c: [f64; 2]) -> Option<Cand> {
     const K: usize = 6;
-    let mut order: Vec<(f64, usize)> = p.iter().enumerate().map(|(i, q)| (dist(*q, c), i)).collect();
+    let mut order: Vec<(f64, usize)> = p
+        .iter()
+        .enumerate()
+        .map(|(i, q)| (dist(*q, c), i))
+        .collect();
     if order.len() < 2 * K {
         return None;
     }
@@ -281,14 +356,29 @@ fn local_polish(p: &[[f64; 2]], c: [f64; 2]) -> Option<Cand> {
     for a in 0..K {
         for b in a + 1..K {
             for d in b + 1..K {
-                let (i3, o3) = ([inner[a], inner[b], inner[d]], [outer[a], outer[b], outer[d]]);
-                cands.push((circumcenter(p[i3[0]], p[i3[1]], p[i3[2]]), i3.to_vec(), vec![]));
-                cands.push((circumcenter(p[o3[0]], p[o3[1]], p[o3[2]]), vec![], o3.to_vec()));
+                let (i3, o3) = (
+                    [inner[a], inner[b], inner[d]],
+                    [outer[a], outer[b], outer[d]],
+                );
+                cands.push((
+                    circumcenter(p[i3[0]], p[i3[1]], p[i3[2]]),
+                    i3.to_vec(),
+                    vec![],
+                ));
+                cands.push((
+                    circumcenter(p[o3[0]], p[o3[1]], p[o3[2]]),
+                    vec![],
+                    o3.to_vec(),
+                ));
             }
             for x in 0..K {
                 for y in x + 1..K {
                     let (ia, ib, oa, ob) = (inner[a], inner[b], outer[x], outer[y]);
-                    cands.push((bisector_crossing(p[ia], p[ib], p[oa], p[ob]), vec![ia, ib], vec![oa, ob]));
+                    cands.push((
+                        bisector_crossing(p[ia], p[ib], p[oa], p[ob]),
+                        vec![ia, ib],
+                        vec![oa, ob],
+                    ));
                 }
             }
         }
@@ -306,7 +396,12 @@ fn local_polish(p: &[[f64; 2]], c: [f64; 2]) -> Option<Cand> {
             if out.is_empty() {
                 out = extreme(hi).into_iter().collect();
             }
-            Some(Cand { c, w: hi - lo, inner: inn, outer: out })
+            Some(Cand {
+                c,
+                w: hi - lo,
+                inner: inn,
+                outer: out,
+            })
         })
         .reduce_with(|x, y| if y.w < x.w { y } else { x })
 }
@@ -333,15 +428,19 @@ pub(crate) fn radii(p: &[[f64; 2]], c: [f64; 2]) -> (f64, f64) {
     if p.len() < 50_000 {
         return p.iter().fold((f64::INFINITY, 0.0f64), fold);
     }
-    p.par_iter()
-        .fold(|| (f64::INFINITY, 0.0f64), fold)
-        .reduce(|| (f64::INFINITY, 0.0f64), |a, b| (a.0.min(b.0), a.1.max(b.1)))
+    p.par_iter().fold(|| (f64::INFINITY, 0.0f64), fold).reduce(
+        || (f64::INFINITY, 0.0f64),
+        |a, b| (a.0.min(b.0), a.1.max(b.1)),
+    )
 }
 
 /// Point equidistant from a and b and from i and l (two linear equations), solved
 /// relative to the centroid of the four points.
 fn bisector_crossing(a: [f64; 2], b: [f64; 2], i: [f64; 2], l: [f64; 2]) -> Option<[f64; 2]> {
-    let o = [(a[0] + b[0] + i[0] + l[0]) / 4.0, (a[1] + b[1] + i[1] + l[1]) / 4.0];
+    let o = [
+        (a[0] + b[0] + i[0] + l[0]) / 4.0,
+        (a[1] + b[1] + i[1] + l[1]) / 4.0,
+    ];
     let sh = |q: [f64; 2]| [q[0] - o[0], q[1] - o[1]];
     let (a, b, i, l) = (sh(a), sh(b), sh(i), sh(l));
     // 2 (b - a) . c = |b|^2 - |a|^2

@@ -21,7 +21,13 @@ pub(crate) const SMALL: usize = 3000;
 
 /// Starting subset: the given points, the extreme points in `SECTORS` directions and the
 /// points nearest to `o` in `SECTORS` angular sectors around it.
-pub(crate) fn initial(p: &[[f64; 2]], o: [f64; 2], seed: &[usize], outer: bool, inner: bool) -> Vec<usize> {
+pub(crate) fn initial(
+    p: &[[f64; 2]],
+    o: [f64; 2],
+    seed: &[usize],
+    outer: bool,
+    inner: bool,
+) -> Vec<usize> {
     const K: usize = SECTORS;
     let dirs: Vec<[f64; 2]> = (0..K)
         .map(|k| {
@@ -30,7 +36,12 @@ pub(crate) fn initial(p: &[[f64; 2]], o: [f64; 2], seed: &[usize], outer: bool, 
         })
         .collect();
     type Acc = (Vec<(f64, usize)>, Vec<(f64, usize)>);
-    let empty = || -> Acc { (vec![(f64::NEG_INFINITY, usize::MAX); K], vec![(f64::INFINITY, usize::MAX); K]) };
+    let empty = || -> Acc {
+        (
+            vec![(f64::NEG_INFINITY, usize::MAX); K],
+            vec![(f64::INFINITY, usize::MAX); K],
+        )
+    };
     let (ext, near) = p
         .par_iter()
         .enumerate()
@@ -70,7 +81,12 @@ pub(crate) fn initial(p: &[[f64; 2]], o: [f64; 2], seed: &[usize], outer: bool, 
     let mut s: Vec<usize> = seed
         .iter()
         .copied()
-        .chain(ext.iter().chain(&near).map(|e| e.1).filter(|&i| i != usize::MAX))
+        .chain(
+            ext.iter()
+                .chain(&near)
+                .map(|e| e.1)
+                .filter(|&i| i != usize::MAX),
+        )
         .collect();
     s.sort_unstable();
     s.dedup();
@@ -80,8 +96,18 @@ pub(crate) fn initial(p: &[[f64; 2]], o: [f64; 2], seed: &[usize], outer: bool, 
 /// Points violating `lo <= |p - c| <= hi` by more than `tol`: up to `ADD` most violating
 /// below `lo` and `ADD` above `hi` (None for an unused side), plus the min and max
 /// distance over all points.
-pub(crate) fn violators(p: &[[f64; 2]], c: [f64; 2], lo: Option<f64>, hi: Option<f64>, tol: f64) -> (Vec<usize>, f64, f64) {
-    let d: Vec<f64> = p.par_iter().with_min_len(8192).map(|q| (q[0] - c[0]).hypot(q[1] - c[1])).collect();
+pub(crate) fn violators(
+    p: &[[f64; 2]],
+    c: [f64; 2],
+    lo: Option<f64>,
+    hi: Option<f64>,
+    tol: f64,
+) -> (Vec<usize>, f64, f64) {
+    let d: Vec<f64> = p
+        .par_iter()
+        .with_min_len(8192)
+        .map(|q| (q[0] - c[0]).hypot(q[1] - c[1]))
+        .collect();
     let dmin = d.par_iter().copied().reduce(|| f64::INFINITY, f64::min);
     let dmax = d.par_iter().copied().reduce(|| 0.0, f64::max);
     let mut out = Vec::new();

@@ -16,9 +16,9 @@ use gagekit_core::{GkError, Result};
 use rand::seq::SliceRandom;
 use rand::SeedableRng;
 use rayon::prelude::*;
+use rustc_hash::FxHashMap as HashMap;
 use spade::handles::{FixedFaceHandle, FixedVertexHandle, InnerTag};
 use spade::{DelaunayTriangulation, HasPosition, Point2, Triangulation};
-use rustc_hash::FxHashMap as HashMap;
 
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Site {
@@ -58,7 +58,15 @@ impl VEdge {
         let m = [0.5 * (pa[0] + pb[0]), 0.5 * (pa[1] + pb[1])];
         let len = dist(pa, pb);
         let n = [-(pb[1] - pa[1]) / len, (pb[0] - pa[0]) / len];
-        Self { a, b, m, n, h: 0.5 * len, tlo: f64::NEG_INFINITY, thi: f64::INFINITY }
+        Self {
+            a,
+            b,
+            m,
+            n,
+            h: 0.5 * len,
+            tlo: f64::NEG_INFINITY,
+            thi: f64::INFINITY,
+        }
     }
     fn param(&self, c: [f64; 2]) -> f64 {
         (c[0] - self.m[0]) * self.n[0] + (c[1] - self.m[1]) * self.n[1]
@@ -109,7 +117,11 @@ impl VEdge {
         for _ in 0..8 {
             let r = sq(root);
             let psi = a * root + b - 2.0 * w * r;
-            let dpsi = a - if r > 0.0 { 2.0 * w * (root + beta) / r } else { 0.0 };
+            let dpsi = a - if r > 0.0 {
+                2.0 * w * (root + beta) / r
+            } else {
+                0.0
+            };
             let step = psi / dpsi;
             root -= step;
             if step.is_nan() || step.abs() <= 1e-16 * (1.0 + root.abs()) {
@@ -132,15 +144,28 @@ impl VEdge {
     /// `q` is any input point (the farthest point is at least that far).
     pub fn clip_nearest(&mut self, q: [f64; 2], w: f64, margin: f64) -> bool {
         let d = [self.m[0] - q[0], self.m[1] - q[1]];
-        let (qq, qn) = (d[0] * d[0] + d[1] * d[1], d[0] * self.n[0] + d[1] * self.n[1]);
-        self.clip(2.0 * qn, qq - self.h * self.h - w * w, w, 0.0, self.h * self.h, margin)
+        let (qq, qn) = (
+            d[0] * d[0] + d[1] * d[1],
+            d[0] * self.n[0] + d[1] * self.n[1],
+        );
+        self.clip(
+            2.0 * qn,
+            qq - self.h * self.h - w * w,
+            w,
+            0.0,
+            self.h * self.h,
+            margin,
+        )
     }
 
     /// Clip a farthest-Voronoi edge (sites at `rad(t)`) to where
     /// `rad(t) - |c(t) - q| < w` (the nearest point is at most that far).
     pub fn clip_farthest(&mut self, q: [f64; 2], w: f64, margin: f64) -> bool {
         let d = [self.m[0] - q[0], self.m[1] - q[1]];
-        let (qq, qn) = (d[0] * d[0] + d[1] * d[1], d[0] * self.n[0] + d[1] * self.n[1]);
+        let (qq, qn) = (
+            d[0] * d[0] + d[1] * d[1],
+            d[0] * self.n[0] + d[1] * self.n[1],
+        );
         self.clip(-2.0 * qn, self.h * self.h - qq - w * w, w, qn, qq, margin)
     }
 
@@ -181,7 +206,10 @@ impl Nearest {
         let sites: Vec<Site> = p
             .iter()
             .enumerate()
-            .map(|(idx, q)| Site { pos: Point2::new(snap(q[0]), snap(q[1])), idx })
+            .map(|(idx, q)| Site {
+                pos: Point2::new(snap(q[0]), snap(q[1])),
+                idx,
+            })
             .collect();
         let dt = DelaunayTriangulation::<Site>::bulk_load(sites).map_err(|e| match e {
             spade::InsertionError::TooLarge => GkError::invalid(format!(
@@ -198,7 +226,12 @@ impl Nearest {
         for v in dt.vertices() {
             handle_of[v.data().idx] = Some(v.fix());
         }
-        Ok(Self { dt, handle_of, verts: Vec::new(), edges: Vec::new() })
+        Ok(Self {
+            dt,
+            handle_of,
+            verts: Vec::new(),
+            edges: Vec::new(),
+        })
     }
 
     /// Keep the part of the diagram where the empty circle is at least `thr`: the
@@ -224,10 +257,16 @@ impl Nearest {
         for &(h, u, rad) in &big {
             face_vert[h.index()] = verts.len();
             let f = dt.face(h);
-            verts.push(VVert { c: u, sites: f.vertices().map(|v| v.data().idx), rad });
+            verts.push(VVert {
+                c: u,
+                sites: f.vertices().map(|v| v.data().idx),
+                rad,
+            });
         }
         let mut edges = Vec::new();
-        let mut push = |e: spade::handles::DirectedEdgeHandle<'_, Site, (), (), ()>, c0: [f64; 2], other: Option<[f64; 2]>| {
+        let mut push = |e: spade::handles::DirectedEdgeHandle<'_, Site, (), (), ()>,
+                        c0: [f64; 2],
+                        other: Option<[f64; 2]>| {
             let (ia, ib) = (e.from().data().idx, e.to().data().idx);
             let base = VEdge::new(ia, ib, p[ia], p[ib]);
             edges.push(match other {
@@ -243,7 +282,9 @@ impl Nearest {
         for (fi, &(h, _, _)) in big.iter().enumerate() {
             let (f, i) = (dt.face(h), h.index());
             for e in f.adjacent_edges() {
-                let Some(g) = e.rev().face().as_inner() else { continue };
+                let Some(g) = e.rev().face().as_inner() else {
+                    continue;
+                };
                 let gi = face_vert[g.fix().index()];
                 if gi != usize::MAX {
                     if g.fix().index() > i {
@@ -291,30 +332,42 @@ impl Nearest {
 
     /// Index of and distance to the input point nearest to `c`.
     pub fn nearest(&self, p: &[[f64; 2]], c: [f64; 2]) -> (usize, f64) {
-        let v = self.dt.nearest_neighbor(Point2::new(c[0], c[1])).expect("non-empty");
+        let v = self
+            .dt
+            .nearest_neighbor(Point2::new(c[0], c[1]))
+            .expect("non-empty");
         let i = v.data().idx;
         (i, dist(p[i], c))
     }
-
 }
 
 /// Strictly convex vertices of the convex hull, counter-clockwise (Andrew's monotone
 /// chain with the exact orientation predicate).
 pub(crate) fn convex_hull(p: &[[f64; 2]]) -> Vec<usize> {
     let mut idx: Vec<usize> = (0..p.len()).collect();
-    idx.sort_unstable_by(|&a, &b| p[a][0].total_cmp(&p[b][0]).then(p[a][1].total_cmp(&p[b][1])));
+    idx.sort_unstable_by(|&a, &b| {
+        p[a][0]
+            .total_cmp(&p[b][0])
+            .then(p[a][1].total_cmp(&p[b][1]))
+    });
     idx.dedup_by(|a, b| p[*a] == p[*b]);
     if idx.len() < 3 {
         return idx;
     }
-    let turn = |a: usize, b: usize, c: usize| robust::orient2d(coord(p[a]), coord(p[b]), coord(p[c]));
+    let turn =
+        |a: usize, b: usize, c: usize| robust::orient2d(coord(p[a]), coord(p[b]), coord(p[c]));
     let mut hull: Vec<usize> = Vec::with_capacity(2 * idx.len());
     for pass in 0..2 {
         let start = hull.len();
-        let it: Box<dyn Iterator<Item = &usize>> =
-            if pass == 0 { Box::new(idx.iter()) } else { Box::new(idx.iter().rev()) };
+        let it: Box<dyn Iterator<Item = &usize>> = if pass == 0 {
+            Box::new(idx.iter())
+        } else {
+            Box::new(idx.iter().rev())
+        };
         for &i in it {
-            while hull.len() >= start + 2 && turn(hull[hull.len() - 2], hull[hull.len() - 1], i) <= 0.0 {
+            while hull.len() >= start + 2
+                && turn(hull[hull.len() - 2], hull[hull.len() - 1], i) <= 0.0
+            {
                 hull.pop();
             }
             hull.push(i);
@@ -337,7 +390,11 @@ impl Farthest {
         let k = hull_ccw.len();
         let hull: Vec<usize> = (0..k)
             .filter(|&i| {
-                let (a, b, c) = (hull_ccw[(i + k - 1) % k], hull_ccw[i], hull_ccw[(i + 1) % k]);
+                let (a, b, c) = (
+                    hull_ccw[(i + k - 1) % k],
+                    hull_ccw[i],
+                    hull_ccw[(i + 1) % k],
+                );
                 robust::orient2d(coord(p[a]), coord(p[b]), coord(p[c])) > 0.0
             })
             .map(|i| hull_ccw[i])
@@ -345,14 +402,17 @@ impl Farthest {
         let q: Vec<[f64; 2]> = hull.iter().map(|&i| p[i]).collect();
         let tris = farthest_delaunay(&q);
         let mut verts = Vec::with_capacity(tris.len());
-        let mut edge_tri: HashMap<(usize, usize), usize> = HashMap::with_capacity_and_hasher(3 * tris.len(), Default::default());
+        let mut edge_tri: HashMap<(usize, usize), usize> =
+            HashMap::with_capacity_and_hasher(3 * tris.len(), Default::default());
         for (t, tri) in tris.iter().enumerate() {
             let [a, b, c] = tri.map(|i| q[i]);
-            let u = circumcenter(a, b, c).unwrap_or([
-                (a[0] + b[0] + c[0]) / 3.0,
-                (a[1] + b[1] + c[1]) / 3.0,
-            ]);
-            verts.push(VVert { c: u, sites: tri.map(|i| hull[i]), rad: dist(u, a) });
+            let u = circumcenter(a, b, c)
+                .unwrap_or([(a[0] + b[0] + c[0]) / 3.0, (a[1] + b[1] + c[1]) / 3.0]);
+            verts.push(VVert {
+                c: u,
+                sites: tri.map(|i| hull[i]),
+                rad: dist(u, a),
+            });
             for e in 0..3 {
                 edge_tri.insert((tri[e], tri[(e + 1) % 3]), t);
             }
@@ -413,11 +473,15 @@ pub(crate) fn farthest_delaunay(q: &[[f64; 2]]) -> Vec<[usize; 3]> {
     let t0 = [first, next[first], next[next[first]]];
     let mut tris: Vec<[usize; 3]> = vec![t0];
     let mut alive = vec![true];
-    let mut edge: HashMap<(usize, usize), usize> = HashMap::with_capacity_and_hasher(6 * k, Default::default());
+    let mut edge: HashMap<(usize, usize), usize> =
+        HashMap::with_capacity_and_hasher(6 * k, Default::default());
     for e in 0..3 {
         edge.insert((t0[e], t0[(e + 1) % 3]), 0);
     }
-    let add = |tris: &mut Vec<[usize; 3]>, alive: &mut Vec<bool>, edge: &mut HashMap<(usize, usize), usize>, t: [usize; 3]| {
+    let add = |tris: &mut Vec<[usize; 3]>,
+               alive: &mut Vec<bool>,
+               edge: &mut HashMap<(usize, usize), usize>,
+               t: [usize; 3]| {
         let id = tris.len();
         tris.push(t);
         alive.push(true);
@@ -431,11 +495,15 @@ pub(crate) fn farthest_delaunay(q: &[[f64; 2]]) -> Vec<[usize; 3]> {
         let mut stack = vec![(b, a, v)];
         while let Some((x, y, pv)) = stack.pop() {
             // triangle (x, y, pv) CCW; neighbour across x -> y is (y, x, s)
-            let Some(&tn) = edge.get(&(y, x)) else { continue };
+            let Some(&tn) = edge.get(&(y, x)) else {
+                continue;
+            };
             if !alive[tn] {
                 continue;
             }
-            let Some(&tc) = edge.get(&(x, y)) else { continue };
+            let Some(&tc) = edge.get(&(x, y)) else {
+                continue;
+            };
             let t = tris[tn];
             let s = t[(t.iter().position(|&w| w == y).unwrap() + 2) % 3];
             let inc = robust::incircle(coord(q[x]), coord(q[y]), coord(q[pv]), coord(q[s]));
@@ -452,5 +520,9 @@ pub(crate) fn farthest_delaunay(q: &[[f64; 2]]) -> Vec<[usize; 3]> {
             }
         }
     }
-    tris.into_iter().zip(alive).filter(|(_, a)| *a).map(|(t, _)| t).collect()
+    tris.into_iter()
+        .zip(alive)
+        .filter(|(_, a)| *a)
+        .map(|(t, _)| t)
+        .collect()
 }
