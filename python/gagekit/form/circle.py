@@ -149,11 +149,13 @@ def fit_circle(points: Any, criterion: str = "lsq", method: str = "exact", seed:
 
 
 def _result(crit, method, pts, center, radius, r_in, r_out, control, control_in, control_out) -> CircleFit:
-    # the arc is judged about the least-squares centre for MI (its own centre can sit
-    # anywhere inside a short arc), about the fitted centre otherwise
-    ref = _core.form_circle_lsq(pts)[0] if crit == "mi" else center
-    gap = _core.form_circle_angular_gap(pts, (float(ref[0]), float(ref[1])))
+    gap = _core.form_circle_angular_gap(pts, (float(center[0]), float(center[1])))
     arc = math.degrees(2.0 * math.pi - gap)
+    if crit == "mi" and arc < 270.0:
+        # MI's own centre can sit anywhere inside a short arc: judge the arc about the
+        # least-squares centre instead
+        ref = _core.form_circle_lsq(pts)[0]
+        arc = math.degrees(2.0 * math.pi - _core.form_circle_angular_gap(pts, (float(ref[0]), float(ref[1]))))
     warnings: list[str] = []
     ill_posed = False
     if crit == "mi" and arc < MIN_ARC_DEG:
