@@ -70,6 +70,13 @@ impl Centered {
                 "{what}: need at least {min_points} points, got {n}"
             )));
         }
+        if let Some(pos) = pts.iter().position(|v| v.abs() > MAX_COORD) {
+            return Err(GkError::invalid(format!(
+                "{what}: point {} has a coordinate beyond 1e150 mm ({:e}); check the units",
+                pos / 2,
+                pts[pos]
+            )));
+        }
         let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
         for p in pts.chunks_exact(2) {
             for k in 0..2 {
@@ -135,8 +142,13 @@ pub(crate) fn dist2(a: [f64; 2], b: [f64; 2]) -> f64 {
 
 #[inline]
 pub(crate) fn dist(a: [f64; 2], b: [f64; 2]) -> f64 {
-    (a[0] - b[0]).hypot(a[1] - b[1])
+    // plain sqrt (libm's hypot is several times slower); coordinates are bounded by
+    // MAX_COORD, so the squares cannot overflow
+    dist2(a, b).sqrt()
 }
+
+/// Largest accepted coordinate magnitude (mm): squares of distances stay finite.
+pub(crate) const MAX_COORD: f64 = 1e150;
 
 /// Centre of the circle through three points, or `None` if they are collinear.
 /// Computed relative to `a` for accuracy.

@@ -103,6 +103,7 @@ pub(crate) fn exact(p: &[[f64; 2]], scale: f64) -> Result<Zone> {
     // verify: exact width over all points at each candidate and at its polished centre
     let checked: Vec<(f64, [f64; 2], f64, f64, usize)> = top
         .par_iter()
+        .with_min_len(if p.len() > 20_000 { 1 } else { TOP })
         .enumerate()
         .flat_map_iter(|(k, cand)| {
             std::iter::once(cand.c)
@@ -182,6 +183,7 @@ fn solve(
     let c13 = nvd
         .verts
         .par_iter()
+        .with_min_len(512)
         .filter(|v| r_lb(v.c) - v.rad < w + tol)
         .map(|v| {
             let (i, _) = fvd.farthest(p, v.c);
@@ -233,6 +235,7 @@ fn solve(
     let mut fe: Vec<VEdge> = fvd
         .edges
         .par_iter()
+        .with_min_len(512)
         .filter_map(|f0| {
             let mut f = *f0;
             inner_w
@@ -246,6 +249,7 @@ fn solve(
     let c22 = nvd
         .edges
         .par_iter()
+        .with_min_len(512)
         .filter_map(|e0| {
             let mut e = *e0;
             if !outer_w.iter().all(|&k| e.clip_nearest(p[k], w, margin)) {
@@ -309,7 +313,7 @@ fn witnesses(
         }
         let a = d[1].atan2(d[0]).rem_euclid(std::f64::consts::TAU);
         let k = ((a / std::f64::consts::TAU * K as f64) as usize).min(K - 1);
-        let r = d[0].hypot(d[1]);
+        let r = (d[0] * d[0] + d[1] * d[1]).sqrt();
         if r < near[k].0 {
             near[k] = (r, i);
         }
@@ -383,9 +387,20 @@ fn local_polish(p: &[[f64; 2]], c: [f64; 2]) -> Option<Cand> {
             }
         }
     }
-    cands
-        .into_par_iter()
-        .filter_map(|(c, mut inn, mut out)| {
+    // rank the choices by their width over the near-active points, then check the best
+    // few against all points
+    let near: Vec<[f64; 2]> = inner.iter().chain(&outer).map(|&i| p[i]).collect();
+    let mut ranked: Vec<(f64, usize)> = cands
+        .iter()
+        .enumerate()
+        .filter_map(|(k, (c, _, _))| c.map(|c| radii(&near, c)).map(|(lo, hi)| (hi - lo, k)))
+        .collect();
+    ranked.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    ranked
+        .iter()
+        .take(4)
+        .filter_map(|&(_, k)| {
+            let (c, mut inn, mut out) = cands[k].clone();
             let c = c?;
             let (lo, hi) = radii(p, c);
             // the controls of a 1+3 / 3+1 choice: complete with the extreme point
@@ -403,7 +418,7 @@ fn local_polish(p: &[[f64; 2]], c: [f64; 2]) -> Option<Cand> {
                 outer: out,
             })
         })
-        .reduce_with(|x, y| if y.w < x.w { y } else { x })
+        .reduce(|x, y| if y.w < x.w { y } else { x })
 }
 
 /// Recompute the winning centre from its control points (equal-distance equations).

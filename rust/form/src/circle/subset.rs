@@ -59,7 +59,7 @@ pub(crate) fn initial(
             if inner {
                 let a = d[1].atan2(d[0]).rem_euclid(std::f64::consts::TAU);
                 let k = ((a / std::f64::consts::TAU * K as f64) as usize).min(K - 1);
-                let r = d[0].hypot(d[1]);
+                let r = (d[0] * d[0] + d[1] * d[1]).sqrt();
                 if r < near[k].0 {
                     near[k] = (r, i);
                 }
@@ -106,7 +106,7 @@ pub(crate) fn violators(
     let d: Vec<f64> = p
         .par_iter()
         .with_min_len(8192)
-        .map(|q| (q[0] - c[0]).hypot(q[1] - c[1]))
+        .map(|q| super::dist(*q, c))
         .collect();
     let dmin = d.par_iter().copied().reduce(|| f64::INFINITY, f64::min);
     let dmax = d.par_iter().copied().reduce(|| 0.0, f64::max);

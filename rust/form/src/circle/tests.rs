@@ -409,13 +409,16 @@ fn extreme_coordinates_give_results_or_clear_errors() {
         }
     }
     let huge = [1e200, 0.0, -1e200, 0.0, 0.0, 1e200, 3e199, -2e199];
+    let big = [1e100, 0.0, -1e100, 0.0, 0.0, 1e100, 3e99, -2e99];
+    assert!(min_circumscribed(&huge).is_err() && least_squares(&huge).is_err());
+    assert!((min_circumscribed(&big).unwrap().radius - 1e100).abs() < 1e88);
     for r in [
         min_zone(&huge).map(|z| z.width()),
         max_inscribed(&huge).map(|c| c.radius),
     ] {
         if let Err(e) = r {
             assert!(
-                e.message.contains("too large") || e.message.contains("collinear"),
+                e.message.contains("beyond 1e150") || e.message.contains("too large"),
                 "{}",
                 e.message
             );

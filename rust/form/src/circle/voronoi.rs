@@ -93,7 +93,7 @@ impl VEdge {
     }
     /// Distance of the sites from the point at parameter t.
     pub fn rad(&self, t: f64) -> f64 {
-        self.h.hypot(t)
+        (self.h * self.h + t * t).sqrt()
     }
     /// Largest site distance over the edge (infinite for rays).
     pub fn rad_max(&self) -> f64 {
