@@ -18,6 +18,7 @@ pub fn least_squares(pts: &[f64]) -> Result<Circle> {
         GkError::degenerate("least-squares circle: the points are (numerically) collinear")
     })?;
     let (c, r) = levenberg_marquardt(p, start, data.scale)?;
+    let (c, r) = gauss_newton_polish(p, c, r, data.scale);
     let (mut imin, mut imax) = (0, 0);
     let (mut dmin, mut dmax) = (f64::INFINITY, f64::NEG_INFINITY);
     for (i, q) in p.iter().enumerate() {
@@ -167,6 +168,29 @@ fn levenberg_marquardt(
         }
     }
     finish(c, r)
+}
+
+/// Plain Gauss-Newton steps from the LM solution while they contract: the cost cannot
+/// resolve the last digits of a flat minimum (clustered points), the gradient can.
+fn gauss_newton_polish(p: &[[f64; 2]], mut c: [f64; 2], mut r: f64, scale: f64) -> ([f64; 2], f64) {
+    let mut last = f64::INFINITY;
+    for _ in 0..20 {
+        let (jtj, jte) = normal_equations(p, c, r);
+        let Some(dx) = solve3(jtj, [-jte[0], -jte[1], -jte[2]]) else {
+            break;
+        };
+        let step = dx[0].abs().max(dx[1].abs()).max(dx[2].abs());
+        if step.is_nan() || step >= 0.5 * last || step > 1e-6 * (scale + r.abs()) {
+            break; // not contracting, or not in the final (quadratic) phase
+        }
+        c = [c[0] + dx[0], c[1] + dx[1]];
+        r += dx[2];
+        last = step;
+        if step <= 1e-16 * (scale + r.abs()) {
+            break;
+        }
+    }
+    (c, r)
 }
 
 fn finish(c: [f64; 2], r: f64) -> Result<([f64; 2], f64)> {
