@@ -27,40 +27,53 @@ class _CircleCriterion(str, Enum):
 
 
 def _read_xy(path: Path) -> np.ndarray:
-    """(n, 2) points from a text file of (n, 2) or (n, 3) rows, or a NIST .ds file.
-
-    Temporary reader until ``gagekit.read_points`` lands. A 3-column file must lie in a
-    plane parallel to a coordinate plane; the constant coordinate is dropped.
-    """
+    """(n, 2) points from any file ``read_points`` reads: 3-D points must lie in a plane
+    parallel to a coordinate plane (as NIST's 2-D sets do); the constant coordinate is
+    dropped. ASCII files of 2 columns are read as 2-D points."""
+    from ..cloud import read_points
     from ..errors import FileFormatError, InvalidInputError
 
-    if not path.is_file():
-        raise FileFormatError(f"{path}: no such file")
     try:
-        if path.suffix.lower() == ".npy":
-            arr = np.load(path, allow_pickle=False)
-        else:
-            arr = np.loadtxt(path, skiprows=1 if path.suffix.lower() == ".ds" else 0, ndmin=2,
-                             delimiter="," if path.suffix.lower() == ".csv" else None)
-    except (ValueError, OSError) as exc:
-        raise FileFormatError(f"{path}: cannot read points ({exc})") from None
-    arr = np.asarray(arr, dtype=np.float64)
-    if arr.ndim != 2 or arr.shape[1] not in (2, 3):
-        raise FileFormatError(f"{path}: expected 2 or 3 columns, got shape {arr.shape}")
-    if arr.shape[1] == 3:
-        const = [k for k in range(3) if np.ptp(arr[:, k]) == 0.0] if len(arr) else [2]
-        if not const:
-            raise InvalidInputError(
-                f"{path}: 3-D points do not lie in a plane parallel to a coordinate plane; "
-                "a 2-D circle fit needs planar points"
-            )
-        arr = np.delete(arr, const[-1], axis=1)
-    return np.ascontiguousarray(arr)
+        arr = read_points(path, dim=3)
+    except FileFormatError as exc3:
+        if _text_columns(path) != 2:
+            raise
+        try:
+            return read_points(path, dim=2)
+        except (FileFormatError, InvalidInputError):
+            raise exc3 from None
+    const = [k for k in range(3) if np.ptp(arr[:, k]) == 0.0]
+    if not const:
+        raise InvalidInputError(
+            f"{path}: 3-D points do not lie in a plane parallel to a coordinate plane; "
+            "a 2-D circle fit needs planar points"
+        )
+    return np.ascontiguousarray(np.delete(arr, const[-1], axis=1))
+
+
+def _text_columns(path: Path) -> int:
+    """Number of numeric fields on the first data line of a text file (0 if none)."""
+    import re
+
+    try:
+        with open(path, encoding="utf-8", errors="replace") as fh:
+            for _, line in zip(range(1000), fh):
+                fields = [f for f in re.split(r"[,;\s]+", line.strip()) if f]
+                if not fields or fields[0].startswith("#"):
+                    continue
+                try:
+                    [float(f) for f in fields]
+                except ValueError:
+                    continue  # a header line
+                return len(fields)
+    except OSError:
+        return 0
+    return 0
 
 
 @app.command("circle")
 def circle(
-    file: Path = typer.Argument(..., help="Points: (n, 2) or planar (n, 3) text/.npy file, or NIST .ds."),
+    file: Path = typer.Argument(..., help="Points: any file read_points reads (NIST .ds too); 2 columns or planar 3-D."),
     criterion: _CircleCriterion = typer.Option(_CircleCriterion.lsq, "--criterion", "-c",
                                                help="lsq, mc (min circumscribed), mi (max inscribed), mz (min zone), or all."),
     as_json: bool = JSON_OPTION,

@@ -91,7 +91,7 @@ def _criterion(criterion: str) -> str:
     return key
 
 
-def fit_circle(points: Any, criterion: str = "lsq", method: str = "exact", **options: Any) -> CircleFit:
+def fit_circle(points: Any, criterion: str = "lsq", method: str = "exact", seed: int = 0, **options: Any) -> CircleFit:
     """Fit a circle to (n, 2) points.
 
     Parameters
@@ -111,6 +111,8 @@ def fit_circle(points: Any, criterion: str = "lsq", method: str = "exact", **opt
         centre followed by Nelder-Mead (Eqs. 6.1, 6.4, 6.5; mc, mi, mz only), a
         cross-check of the exact solvers. Options for "pso": ``seed`` (0), ``particles``
         (20), ``iterations`` (2000), ``stall_iterations`` (100).
+    seed : int
+        Seed of the "pso" method; the exact methods do not use it.
 
     Raises
     ------
@@ -169,11 +171,13 @@ def fit_circle(points: Any, criterion: str = "lsq", method: str = "exact", **opt
 
 
 def _result(crit, method, pts, center, radius, r_in, r_out, control, control_in, control_out) -> CircleFit:
-    # the arc is judged about the least-squares centre for MI (its own centre can sit
-    # anywhere inside a short arc), about the fitted centre otherwise
-    ref = _core.form_circle_lsq(pts)[0] if crit == "mi" else center
-    gap = _core.form_circle_angular_gap(pts, (float(ref[0]), float(ref[1])))
+    gap = _core.form_circle_angular_gap(pts, (float(center[0]), float(center[1])))
     arc = math.degrees(2.0 * math.pi - gap)
+    if crit == "mi" and arc < 270.0:
+        # MI's own centre can sit anywhere inside a short arc: judge the arc about the
+        # least-squares centre instead
+        ref = _core.form_circle_lsq(pts)[0]
+        arc = math.degrees(2.0 * math.pi - _core.form_circle_angular_gap(pts, (float(ref[0]), float(ref[1]))))
     warnings: list[str] = []
     ill_posed = False
     if crit == "mi" and arc < MIN_ARC_DEG:

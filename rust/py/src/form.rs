@@ -10,7 +10,13 @@ use pyo3::prelude::*;
 use gagekit_form::circle;
 
 type CircleOut<'py> = ((f64, f64), f64, Bound<'py, PyArray1<i64>>);
-type ZoneOut<'py> = ((f64, f64), f64, f64, Bound<'py, PyArray1<i64>>, Bound<'py, PyArray1<i64>>);
+type ZoneOut<'py> = (
+    (f64, f64),
+    f64,
+    f64,
+    Bound<'py, PyArray1<i64>>,
+    Bound<'py, PyArray1<i64>>,
+);
 
 fn circle_out(py: Python<'_>, c: circle::Circle) -> CircleOut<'_> {
     ((c.center[0], c.center[1]), c.radius, indices(py, c.control))
@@ -18,28 +24,40 @@ fn circle_out(py: Python<'_>, c: circle::Circle) -> CircleOut<'_> {
 
 /// Minimum circumscribed circle of (n, 2) points: (center, radius, control indices).
 #[pyfunction]
-fn form_circle_mc<'py>(py: Python<'py>, points: PyReadonlyArray2<'py, f64>) -> PyResult<CircleOut<'py>> {
+fn form_circle_mc<'py>(
+    py: Python<'py>,
+    points: PyReadonlyArray2<'py, f64>,
+) -> PyResult<CircleOut<'py>> {
     let pts = rows(py, &points, 2, "points")?;
     Ok(circle_out(py, run(py, || circle::min_circumscribed(pts))?))
 }
 
 /// Maximum inscribed circle within MC (Eq. 6.2): (center, radius, control indices).
 #[pyfunction]
-fn form_circle_mi<'py>(py: Python<'py>, points: PyReadonlyArray2<'py, f64>) -> PyResult<CircleOut<'py>> {
+fn form_circle_mi<'py>(
+    py: Python<'py>,
+    points: PyReadonlyArray2<'py, f64>,
+) -> PyResult<CircleOut<'py>> {
     let pts = rows(py, &points, 2, "points")?;
     Ok(circle_out(py, run(py, || circle::max_inscribed(pts))?))
 }
 
 /// Geometric least-squares circle: (center, radius, control indices).
 #[pyfunction]
-fn form_circle_lsq<'py>(py: Python<'py>, points: PyReadonlyArray2<'py, f64>) -> PyResult<CircleOut<'py>> {
+fn form_circle_lsq<'py>(
+    py: Python<'py>,
+    points: PyReadonlyArray2<'py, f64>,
+) -> PyResult<CircleOut<'py>> {
     let pts = rows(py, &points, 2, "points")?;
     Ok(circle_out(py, run(py, || circle::least_squares(pts))?))
 }
 
 /// Minimum zone circle: (center, r_in, r_out, control_in, control_out).
 #[pyfunction]
-fn form_circle_mz<'py>(py: Python<'py>, points: PyReadonlyArray2<'py, f64>) -> PyResult<ZoneOut<'py>> {
+fn form_circle_mz<'py>(
+    py: Python<'py>,
+    points: PyReadonlyArray2<'py, f64>,
+) -> PyResult<ZoneOut<'py>> {
     let pts = rows(py, &points, 2, "points")?;
     let z = run(py, || circle::min_zone(pts))?;
     Ok((
@@ -53,9 +71,15 @@ fn form_circle_mz<'py>(py: Python<'py>, points: PyReadonlyArray2<'py, f64>) -> P
 
 /// Largest angular gap (rad) of the points seen from `center`.
 #[pyfunction]
-fn form_circle_angular_gap(py: Python<'_>, points: PyReadonlyArray2<'_, f64>, center: (f64, f64)) -> PyResult<f64> {
+fn form_circle_angular_gap(
+    py: Python<'_>,
+    points: PyReadonlyArray2<'_, f64>,
+    center: (f64, f64),
+) -> PyResult<f64> {
     let pts = rows(py, &points, 2, "points")?;
-    run(py, || Ok(circle::max_angular_gap(pts, [center.0, center.1])))
+    run(py, || {
+        Ok(circle::max_angular_gap(pts, [center.0, center.1]))
+    })
 }
 
 fn register_circles(m: &Bound<'_, PyModule>) -> PyResult<()> {

@@ -2,6 +2,7 @@
 
 use super::{dist, Centered, Circle};
 use gagekit_core::{GkError, Result};
+use rayon::prelude::*;
 
 /// Least-squares circle minimising the sum of squared orthogonal distances
 /// `sum_i (|p_i - c| - r)^2`.
@@ -17,6 +18,7 @@ pub fn least_squares(pts: &[f64]) -> Result<Circle> {
         GkError::degenerate("least-squares circle: the points are (numerically) collinear")
     })?;
     let (c, r) = levenberg_marquardt(p, start, data.scale)?;
+    let (c, r) = gauss_newton_polish(p, c, r, data.scale);
     let (mut imin, mut imax) = (0, 0);
     let (mut dmin, mut dmax) = (f64::INFINITY, f64::NEG_INFINITY);
     for (i, q) in p.iter().enumerate() {
@@ -32,7 +34,11 @@ pub fn least_squares(pts: &[f64]) -> Result<Circle> {
     }
     let mut control = vec![imax, imin];
     control.dedup();
-    Ok(Circle { center: data.uncenter(c), radius: r, control })
+    Ok(Circle {
+        center: data.uncenter(c),
+        radius: r,
+        control,
+    })
 }
 
 /// Algebraic fit: minimise sum (x^2 + y^2 + D x + E y + F)^2 (linear least squares),
@@ -71,8 +77,53 @@ fn kasa(p: &[[f64; 2]]) -> Option<([f64; 2], f64)> {
     Some(([mx + a, my + b], r2.sqrt()))
 }
 
+/// Points per chunk of the parallel sums; partial sums are added in chunk order, so the
+/// result does not depend on the number of threads.
+const CHUNK: usize = 8192;
+
 fn cost(p: &[[f64; 2]], c: [f64; 2], r: f64) -> f64 {
-    p.iter().map(|q| (dist(*q, c) - r).powi(2)).sum()
+    let parts: Vec<f64> = p
+        .par_chunks(CHUNK)
+        .map(|ch| ch.iter().map(|q| (dist(*q, c) - r).powi(2)).sum())
+        .collect();
+    parts.iter().sum()
+}
+
+/// J^T J and J^T e of the orthogonal residuals e_i = |p_i - c| - r.
+fn normal_equations(p: &[[f64; 2]], c: [f64; 2], r: f64) -> ([[f64; 3]; 3], [f64; 3]) {
+    let parts: Vec<([[f64; 3]; 3], [f64; 3])> = p
+        .par_chunks(CHUNK)
+        .map(|ch| {
+            let mut jtj = [[0.0f64; 3]; 3];
+            let mut jte = [0.0f64; 3];
+            for q in ch {
+                let d = dist(*q, c);
+                if d == 0.0 {
+                    continue;
+                }
+                let row = [(c[0] - q[0]) / d, (c[1] - q[1]) / d, -1.0];
+                let e = d - r;
+                for a in 0..3 {
+                    jte[a] += row[a] * e;
+                    for b in 0..3 {
+                        jtj[a][b] += row[a] * row[b];
+                    }
+                }
+            }
+            (jtj, jte)
+        })
+        .collect();
+    let mut jtj = [[0.0f64; 3]; 3];
+    let mut jte = [0.0f64; 3];
+    for (m, v) in parts {
+        for a in 0..3 {
+            jte[a] += v[a];
+            for b in 0..3 {
+                jtj[a][b] += m[a][b];
+            }
+        }
+    }
+    (jtj, jte)
 }
 
 fn levenberg_marquardt(
@@ -84,23 +135,8 @@ fn levenberg_marquardt(
     let mut f = cost(p, c, r);
     let mut lambda = 1e-6;
     for _ in 0..1000 {
-        // normal equations J^T J dx = -J^T e for residuals e_i = |p_i - c| - r
-        let mut jtj = [[0.0f64; 3]; 3];
-        let mut jte = [0.0f64; 3];
-        for q in p {
-            let d = dist(*q, c);
-            if d == 0.0 {
-                continue;
-            }
-            let row = [(c[0] - q[0]) / d, (c[1] - q[1]) / d, -1.0];
-            let e = d - r;
-            for a in 0..3 {
-                jte[a] += row[a] * e;
-                for b in 0..3 {
-                    jtj[a][b] += row[a] * row[b];
-                }
-            }
-        }
+        // normal equations J^T J dx = -J^T e
+        let (jtj, jte) = normal_equations(p, c, r);
         let mut improved = false;
         for _ in 0..30 {
             let mut m = jtj;
@@ -134,6 +170,29 @@ fn levenberg_marquardt(
     finish(c, r)
 }
 
+/// Plain Gauss-Newton steps from the LM solution while they contract: the cost cannot
+/// resolve the last digits of a flat minimum (clustered points), the gradient can.
+fn gauss_newton_polish(p: &[[f64; 2]], mut c: [f64; 2], mut r: f64, scale: f64) -> ([f64; 2], f64) {
+    let mut last = f64::INFINITY;
+    for _ in 0..20 {
+        let (jtj, jte) = normal_equations(p, c, r);
+        let Some(dx) = solve3(jtj, [-jte[0], -jte[1], -jte[2]]) else {
+            break;
+        };
+        let step = dx[0].abs().max(dx[1].abs()).max(dx[2].abs());
+        if step.is_nan() || step >= 0.5 * last || step > 1e-6 * (scale + r.abs()) {
+            break; // not contracting, or not in the final (quadratic) phase
+        }
+        c = [c[0] + dx[0], c[1] + dx[1]];
+        r += dx[2];
+        last = step;
+        if step <= 1e-16 * (scale + r.abs()) {
+            break;
+        }
+    }
+    (c, r)
+}
+
 fn finish(c: [f64; 2], r: f64) -> Result<([f64; 2], f64)> {
     if c[0].is_finite() && c[1].is_finite() && r.is_finite() && r > 0.0 {
         Ok((c, r))
@@ -144,6 +203,7 @@ fn finish(c: [f64; 2], r: f64) -> Result<([f64; 2], f64)> {
     }
 }
 
+#[allow(clippy::needless_range_loop)]
 fn solve3(m: [[f64; 3]; 3], b: [f64; 3]) -> Option<[f64; 3]> {
     // Gaussian elimination with partial pivoting
     let mut a = [[0.0; 4]; 3];

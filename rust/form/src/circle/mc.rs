@@ -5,6 +5,7 @@ use super::{circumcenter, dist, dist2, Centered, Circle};
 use gagekit_core::Result;
 use rand::seq::SliceRandom;
 use rand::SeedableRng;
+use rayon::prelude::*;
 
 /// Seed of the fixed shuffle: the result never depends on the run.
 const SEED: u64 = 0x6a6b_636d;
@@ -26,8 +27,16 @@ struct Disk {
 pub fn min_circumscribed(pts: &[f64]) -> Result<Circle> {
     let data = Centered::new(pts, "minimum circumscribed circle", 1)?;
     let (c, control) = welzl(&data.pts, data.scale);
-    let r = data.pts.iter().map(|p| dist(*p, c)).fold(0.0, f64::max);
-    Ok(Circle { center: data.uncenter(c), radius: r, control })
+    let r = data
+        .pts
+        .par_iter()
+        .map(|p| dist(*p, c))
+        .reduce(|| 0.0, f64::max);
+    Ok(Circle {
+        center: data.uncenter(c),
+        radius: r,
+        control,
+    })
 }
 
 /// Welzl on centred points; returns the centre (centred coordinates) and the control
@@ -42,7 +51,10 @@ pub(crate) fn welzl(p: &[[f64; 2]], scale: f64) -> ([f64; 2], Vec<usize>) {
         let dd = dist2(q, d.c);
         dd > d.r2 && dd.sqrt() > d.r2.sqrt() + tol
     };
-    let mut disk = Disk { c: p[order[0]], r2: 0.0 };
+    let mut disk = Disk {
+        c: p[order[0]],
+        r2: 0.0,
+    };
     let mut ctrl = vec![order[0]];
     for i in 1..n {
         let pi = p[order[i]];
@@ -76,7 +88,10 @@ pub(crate) fn welzl(p: &[[f64; 2]], scale: f64) -> ([f64; 2], Vec<usize>) {
 
 fn diametral(a: [f64; 2], b: [f64; 2]) -> Disk {
     let c = [0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1])];
-    Disk { c, r2: dist2(a, c).max(dist2(b, c)) }
+    Disk {
+        c,
+        r2: dist2(a, c).max(dist2(b, c)),
+    }
 }
 
 /// Circle through three points (the smallest one containing them if they are

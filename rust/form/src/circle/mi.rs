@@ -2,8 +2,9 @@
 //! circle (Eq. 6.2, Sec. 6.2.2).
 
 use super::voronoi::Nearest;
-use super::{dist, mc, Centered, Circle};
+use super::{dist, mc, subset, Centered, Circle};
 use gagekit_core::Result;
+use rayon::prelude::*;
 
 /// Maximum inscribed circle of `pts` (flat (n, 2), n >= 3, not collinear).
 ///
@@ -17,16 +18,72 @@ use gagekit_core::Result;
 ///
 /// Every candidate is scored by `g`, so a candidate is only accepted as far as it is
 /// feasible. The reported radius is recomputed against all points and MC.
+///
+/// Above a few thousand points the candidates come from a subset that grows by the
+/// points falling inside its circle; the subset radius bounds the true one from above,
+/// so a subset circle with no input point inside it is the global optimum.
 pub fn max_inscribed(pts: &[f64]) -> Result<Circle> {
-    const WHAT: &str = "maximum inscribed circle";
     let data = Centered::new(pts, WHAT, 3)?;
     data.require_not_collinear(WHAT)?;
     let p = &data.pts;
     let (cmc, _) = mc::welzl(p, data.scale);
-    let (r0, rmc) = super::mz::radii(p, cmc);
+    let rmc = p.iter().map(|q| dist(*q, cmc)).fold(0.0, f64::max);
+    let tol = 1e-13 * data.scale;
+    let (c, mut control) = 'fit: {
+        if p.len() > subset::SMALL {
+            // constraint generation: exact MI of a subset (an upper bound), accepted once
+            // no point lies inside it
+            let mut s = subset::initial(p, cmc, &[], false, true);
+            for _ in 0..subset::MAX_ROUNDS {
+                let q: Vec<[f64; 2]> = s.iter().map(|&i| p[i]).collect();
+                let (c, r, ctrl) = exact(&q, cmc, rmc, data.scale)?;
+                let (add, _, _) = subset::violators(p, c, Some(r), None, tol);
+                if add.is_empty() {
+                    break 'fit (c, ctrl.into_iter().map(|k| s[k]).collect::<Vec<_>>());
+                }
+                s.extend(add);
+                s.sort_unstable();
+                s.dedup();
+                if 4 * s.len() > p.len() {
+                    break;
+                }
+            }
+        }
+        let (c, _, ctrl) = exact(p, cmc, rmc, data.scale)?;
+        (c, ctrl)
+    };
+    let r_near = p
+        .par_iter()
+        .map(|q| dist(*q, c))
+        .reduce(|| f64::INFINITY, f64::min);
+    let radius = r_near.min(rmc - dist(c, cmc)).max(0.0);
+    control.sort_unstable();
+    control.dedup();
+    Ok(Circle {
+        center: data.uncenter(c),
+        radius,
+        control,
+    })
+}
+
+const WHAT: &str = "maximum inscribed circle";
+
+/// Exact MI of centred points `p` inside the circle (`cmc`, `rmc`): centre, radius and
+/// control points (indices into `p`).
+pub(crate) fn exact(
+    p: &[[f64; 2]],
+    cmc: [f64; 2],
+    rmc: f64,
+    scale: f64,
+) -> Result<([f64; 2], f64, Vec<usize>)> {
+    let mut nvd = Nearest::build(p, WHAT)?;
+    let r0 = p
+        .iter()
+        .map(|q| dist(*q, cmc))
+        .fold(f64::INFINITY, f64::min);
     // the MC centre is feasible with radius r0: only larger empty circles matter
-    let nvd = Nearest::new(p, WHAT, r0 - 1e-9 * data.scale)?;
-    let tol = 1e-12 * data.scale;
+    nvd.extract(p, r0 - 1e-9 * scale);
+    let tol = 1e-12 * scale;
     let g_mc = |c: [f64; 2]| rmc - dist(c, cmc);
 
     let mut best_r = f64::NEG_INFINITY;
@@ -53,7 +110,11 @@ pub fn max_inscribed(pts: &[f64]) -> Result<Circle> {
         let qn = q[0] * e.n[0] + q[1] * e.n[1];
         let alpha = (rmc * rmc + e.h * e.h - qq) / (2.0 * rmc);
         let beta = -qn / rmc;
-        let (a2, b2, c2) = (1.0 - beta * beta, -2.0 * alpha * beta, e.h * e.h - alpha * alpha);
+        let (a2, b2, c2) = (
+            1.0 - beta * beta,
+            -2.0 * alpha * beta,
+            e.h * e.h - alpha * alpha,
+        );
         for t in quadratic_roots(a2, b2, c2) {
             let s = alpha + beta * t;
             if s <= best_r || s > rmc || !e.contains(t, tol) {
@@ -70,26 +131,43 @@ pub fn max_inscribed(pts: &[f64]) -> Result<Circle> {
     }
     // Case II: one point; the circle with diameter from the point to the far end of the
     // MC diameter through it
+    // a few recent "witness" points that put a candidate's circle over a point reject
+    // most candidates without a nearest-neighbour query
+    let mut witness: Vec<usize> = best_ctrl.clone();
     for (i, pi) in p.iter().enumerate() {
         let d = dist(*pi, cmc);
         let r = 0.5 * (rmc + d);
         if d == 0.0 || r <= best_r {
             continue;
         }
-        let c = [pi[0] + (cmc[0] - pi[0]) / d * r, pi[1] + (cmc[1] - pi[1]) / d * r];
-        let (_, dn) = nvd.nearest(p, c);
+        let c = [
+            pi[0] + (cmc[0] - pi[0]) / d * r,
+            pi[1] + (cmc[1] - pi[1]) / d * r,
+        ];
+        if witness.iter().any(|&k| dist(p[k], c) < r - tol) {
+            continue;
+        }
+        let (k, dn) = nvd.nearest(p, c);
+        if dn < r - tol {
+            if witness.len() >= 8 {
+                witness.remove(0);
+            }
+            witness.push(k);
+            continue;
+        }
         let g = g_mc(c).min(dn);
-        if g > best_r && dn >= dist(*pi, c) - tol {
+        if g > best_r {
             best_r = g;
             best_c = c;
             best_ctrl = vec![i];
         }
     }
-    let r_near = p.iter().map(|q| dist(*q, best_c)).fold(f64::INFINITY, f64::min);
-    let radius = r_near.min(g_mc(best_c)).max(0.0);
-    best_ctrl.sort_unstable();
-    best_ctrl.dedup();
-    Ok(Circle { center: data.uncenter(best_c), radius, control: best_ctrl })
+    let r = p
+        .iter()
+        .map(|q| dist(*q, best_c))
+        .fold(f64::INFINITY, f64::min)
+        .min(g_mc(best_c));
+    Ok((best_c, r, best_ctrl))
 }
 
 /// Real roots of a t^2 + b t + c = 0 (a may be ~0).

@@ -11,6 +11,7 @@ mod lsq;
 mod mc;
 mod mi;
 mod mz;
+mod subset;
 mod voronoi;
 
 #[cfg(test)]
@@ -69,6 +70,13 @@ impl Centered {
                 "{what}: need at least {min_points} points, got {n}"
             )));
         }
+        if let Some(pos) = pts.iter().position(|v| v.abs() > MAX_COORD) {
+            return Err(GkError::invalid(format!(
+                "{what}: point {} has a coordinate beyond 1e150 mm ({:e}); check the units",
+                pos / 2,
+                pts[pos]
+            )));
+        }
         let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
         for p in pts.chunks_exact(2) {
             for k in 0..2 {
@@ -78,7 +86,10 @@ impl Centered {
         }
         let shift = [0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1])];
         let scale = 0.5 * (hi[0] - lo[0]).hypot(hi[1] - lo[1]);
-        let pts = pts.chunks_exact(2).map(|p| [p[0] - shift[0], p[1] - shift[1]]).collect();
+        let pts = pts
+            .chunks_exact(2)
+            .map(|p| [p[0] - shift[0], p[1] - shift[1]])
+            .collect();
         Ok(Self { pts, shift, scale })
     }
 
@@ -104,7 +115,11 @@ impl Centered {
             )));
         }
         let (a, b) = (coord(p0), coord(self.pts[far]));
-        if self.pts.iter().all(|p| robust::orient2d(a, b, coord(*p)) == 0.0) {
+        if self
+            .pts
+            .iter()
+            .all(|p| robust::orient2d(a, b, coord(*p)) == 0.0)
+        {
             return Err(GkError::degenerate(format!(
                 "{what}: all {} points lie on one straight line; no circle fits them",
                 self.pts.len()
@@ -127,8 +142,13 @@ pub(crate) fn dist2(a: [f64; 2], b: [f64; 2]) -> f64 {
 
 #[inline]
 pub(crate) fn dist(a: [f64; 2], b: [f64; 2]) -> f64 {
-    (a[0] - b[0]).hypot(a[1] - b[1])
+    // plain sqrt (libm's hypot is several times slower); coordinates are bounded by
+    // MAX_COORD, so the squares cannot overflow
+    dist2(a, b).sqrt()
 }
+
+/// Largest accepted coordinate magnitude (mm): squares of distances stay finite.
+pub(crate) const MAX_COORD: f64 = 1e150;
 
 /// Centre of the circle through three points, or `None` if they are collinear.
 /// Computed relative to `a` for accuracy.
@@ -153,8 +173,10 @@ pub(crate) fn circumcenter(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> Option<[f64
 /// Largest angular gap (rad) of the points seen from `center`; `2 pi - gap` is the arc
 /// the points cover. Linear time (bucket maximum-gap).
 pub fn max_angular_gap(pts: &[f64], center: [f64; 2]) -> f64 {
+    use rayon::prelude::*;
     let ang: Vec<f64> = pts
-        .chunks_exact(2)
+        .par_chunks_exact(2)
+        .with_min_len(8192)
         .filter(|p| p[0] != center[0] || p[1] != center[1])
         .map(|p| (p[1] - center[1]).atan2(p[0] - center[0]))
         .collect();
@@ -162,7 +184,11 @@ pub fn max_angular_gap(pts: &[f64], center: [f64; 2]) -> f64 {
     if n < 2 {
         return std::f64::consts::TAU;
     }
-    let (lo, hi) = ang.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &a| (l.min(a), h.max(a)));
+    let (lo, hi) = ang
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &a| {
+            (l.min(a), h.max(a))
+        });
     let mut gap = lo + std::f64::consts::TAU - hi;
     if hi > lo {
         let nb = n + 1;

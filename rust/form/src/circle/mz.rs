@@ -1,9 +1,11 @@
 //! Minimum zone circle (MZ, roundness; Eqs. 6.5-6.8, Sec. 6.2.3).
 
-use super::voronoi::{intersect, Farthest, Nearest};
-use super::{circumcenter, dist, mc, Centered, Zone};
+use super::voronoi::{convex_hull, intersect, Farthest, Nearest, VEdge};
+use super::{circumcenter, dist, mc, subset, Centered, Zone};
 use gagekit_core::Result;
+use rayon::prelude::*;
 
+/// A candidate centre with the width its control points give there.
 #[derive(Clone, Debug)]
 struct Cand {
     c: [f64; 2],
@@ -12,119 +14,411 @@ struct Cand {
     outer: Vec<usize>,
 }
 
+/// How many of the best candidates are verified against all points at the end.
+const TOP: usize = 8;
+
 /// Minimum zone circle of `pts` (flat (n, 2), n >= 3, not collinear).
 ///
 /// Minimises `f_r(c) = max_i |c - p_i| - min_j |c - p_j|` (Eq. 6.5) exactly. `f_r` has
-/// no local minimum with fewer than four active points, so the optimum is one of
+/// no local minimum with fewer than four active points (its gradient `u_i - u_j`, with
+/// unit vectors `u`, cannot vanish on a convex combination of fewer), so the optimum is
 /// - case 1+3: a nearest-Voronoi vertex (Eq. 6.6),
-/// - case 3+1: a farthest-Voronoi vertex (Eq. 6.7),
+/// - case 3+1: a farthest-Voronoi vertex (Eq. 6.7), or
 /// - case 2+2: a crossing of a nearest- and a farthest-Voronoi edge (Eq. 6.8).
 ///
-/// Candidates are pruned by lower bounds (`max_i |c - p_i| >= r_MC`, the site distance
-/// along an edge) against the best width so far, starting from the MC centre; only
-/// survivors need a nearest/farthest query. The winner's width is recomputed against all
-/// points.
+/// Candidates are pruned by lower bounds against the best width so far (starting from the
+/// MC centre): `max_i |c - p_i| >= r_MC`, distances to witness points, and each Voronoi
+/// edge is clipped to where a narrower zone is still possible. The best few candidates
+/// are polished from their control points (equal-distance equations) and verified
+/// against all points; the reported radii are recomputed from the reported centre.
+///
+/// Above a few thousand points the exact solver runs on a subset (extreme points and
+/// points nearest the MC centre by direction) that grows by the points violating its
+/// zone. The subset width is a lower bound of the true width, so a subset zone that
+/// holds all points (to 1e-13 of the part size) is the global optimum: a certificate.
 pub fn min_zone(pts: &[f64]) -> Result<Zone> {
     const WHAT: &str = "minimum zone circle";
     let data = Centered::new(pts, WHAT, 3)?;
     data.require_not_collinear(WHAT)?;
     let p = &data.pts;
-    let (cmc, mc_ctrl) = mc::welzl(p, data.scale);
-    let (r0, rmc) = radii(p, cmc);
+    let tol = 1e-13 * data.scale;
+    let z = if p.len() <= subset::SMALL {
+        exact(p, data.scale)?
+    } else {
+        // constraint generation: exact MZ of a subset, checked against all points
+        let (cmc, mc_ctrl) = mc::welzl(p, data.scale);
+        let mut s = subset::initial(p, cmc, &mc_ctrl, true, true);
+        let mut found = None;
+        for _ in 0..subset::MAX_ROUNDS {
+            let q: Vec<[f64; 2]> = s.iter().map(|&i| p[i]).collect();
+            let zs = exact(&q, data.scale)?;
+            let (add, lo, hi) = subset::violators(p, zs.center, Some(zs.r_in), Some(zs.r_out), tol);
+            if add.is_empty() {
+                let map = |v: Vec<usize>| v.into_iter().map(|k| s[k]).collect();
+                found = Some(Zone {
+                    center: zs.center,
+                    r_in: lo,
+                    r_out: hi,
+                    control_in: map(zs.control_in),
+                    control_out: map(zs.control_out),
+                });
+                break;
+            }
+            s.extend(add);
+            s.sort_unstable();
+            s.dedup();
+            if 4 * s.len() > p.len() {
+                break;
+            }
+        }
+        match found {
+            Some(z) => z,
+            None => exact(p, data.scale)?,
+        }
+    };
+    Ok(Zone {
+        center: data.uncenter(z.center),
+        ..z
+    })
+}
+
+/// Exact MZ of centred points (all of them), in centred coordinates.
+pub(crate) fn exact(p: &[[f64; 2]], scale: f64) -> Result<Zone> {
+    const WHAT: &str = "minimum zone circle";
+    // MC and the farthest diagram on one core while the other triangulates
+    let (side, nvd) = rayon::join(
+        || {
+            let (cmc, mc_ctrl) = mc::welzl(p, scale);
+            let (r0, rmc) = radii(p, cmc);
+            (cmc, mc_ctrl, r0, rmc, Farthest::new(p, &convex_hull(p)))
+        },
+        || Nearest::build(p, WHAT),
+    );
+    let (cmc, mc_ctrl, r0, rmc, fvd) = side;
+    let mut nvd = nvd?;
     // the MC centre bounds the width: w <= rmc - r0, so only empty circles of radius
     // >= r0 can be inner circles of a better zone
-    let nvd = Nearest::new(p, WHAT, r0 - 1e-9 * data.scale)?;
-    let fvd = Farthest::new(p, &nvd.hull());
-    let best = solve(p, &nvd, &fvd, data.scale, (cmc, mc_ctrl, rmc));
-    // polish from the control points; keep it only if it is no worse over all points
-    let (mut c, (mut r_in, mut r_out)) = (best.c, radii(p, best.c));
-    if let Some(c2) = polish(p, &best) {
-        let (a, b) = radii(p, c2);
-        if b - a <= r_out - r_in {
-            (c, r_in, r_out) = (c2, a, b);
+    nvd.extract(p, r0 - 1e-9 * scale);
+    let top = solve(p, &nvd, &fvd, scale, (cmc, mc_ctrl, rmc));
+    // verify: exact width over all points at each candidate and at its polished centre
+    let checked: Vec<(f64, [f64; 2], f64, f64, usize)> = top
+        .par_iter()
+        .with_min_len(if p.len() > 20_000 { 1 } else { TOP })
+        .enumerate()
+        .flat_map_iter(|(k, cand)| {
+            std::iter::once(cand.c)
+                .chain(polish(p, cand))
+                .map(move |c| {
+                    let (a, b) = radii(p, c);
+                    (b - a, c, a, b, k)
+                })
+        })
+        .collect();
+    let (_, c, r_in, r_out, k) = checked
+        .into_iter()
+        .reduce(|x, y| if y.0 < x.0 { y } else { x })
+        .expect("at least the MC centre is a candidate");
+    let (mut control_in, mut control_out) = (top[k].inner.clone(), top[k].outer.clone());
+    let (mut c, mut r_in, mut r_out) = (c, r_in, r_out);
+    if let Some(b) = local_polish(p, c) {
+        if b.w < r_out - r_in {
+            (c, control_in, control_out) = (b.c, b.inner, b.outer);
+            (r_in, r_out) = radii(p, c);
         }
     }
-    let (mut control_in, mut control_out) = (best.inner, best.outer);
     for v in [&mut control_in, &mut control_out] {
         v.sort_unstable();
         v.dedup();
     }
-    Ok(Zone { center: data.uncenter(c), r_in, r_out, control_in, control_out })
+    Ok(Zone {
+        center: c,
+        r_in,
+        r_out,
+        control_in,
+        control_out,
+    })
 }
 
 type Mc = ([f64; 2], Vec<usize>, f64);
 
-fn solve(p: &[[f64; 2]], nvd: &Nearest, fvd: &Farthest, scale: f64, (cmc, mc_ctrl, rmc): Mc) -> Cand {
+/// Keep the `TOP` narrowest candidates (stable: deterministic under parallel merging).
+fn merge(mut a: Vec<Cand>, b: Vec<Cand>) -> Vec<Cand> {
+    a.extend(b);
+    a.sort_by(|x, y| x.w.total_cmp(&y.w));
+    a.truncate(TOP);
+    a
+}
+
+/// Width at `c` claimed by its control points (exact if they are the nearest/farthest).
+fn claimed(p: &[[f64; 2]], c: [f64; 2], inner: &[usize], outer: &[usize]) -> f64 {
+    let r = inner
+        .iter()
+        .map(|&j| dist(p[j], c))
+        .fold(f64::INFINITY, f64::min);
+    let big_r = outer.iter().map(|&i| dist(p[i], c)).fold(0.0, f64::max);
+    big_r - r
+}
+
+fn solve(
+    p: &[[f64; 2]],
+    nvd: &Nearest,
+    fvd: &Farthest,
+    scale: f64,
+    (cmc, mc_ctrl, rmc): Mc,
+) -> Vec<Cand> {
     let tol = 1e-12 * scale;
     // lower bound of max_i |c - p_i|
     let r_lb = |c: [f64; 2]| mc_ctrl.iter().map(|&k| dist(p[k], c)).fold(rmc, f64::max);
 
     let (j0, r0) = nvd.nearest(p, cmc);
-    let mut best = Cand { c: cmc, w: rmc - r0, inner: vec![j0], outer: mc_ctrl.clone() };
+    let mut top = vec![Cand {
+        c: cmc,
+        w: rmc - r0,
+        inner: vec![j0],
+        outer: mc_ctrl.clone(),
+    }];
 
     // case 1+3 (Eq. 6.6): nearest-Voronoi vertices
-    for v in &nvd.verts {
-        if r_lb(v.c) - v.rad >= best.w - tol {
+    let w = top[0].w;
+    let c13 = nvd
+        .verts
+        .par_iter()
+        .with_min_len(512)
+        .filter(|v| r_lb(v.c) - v.rad < w + tol)
+        .map(|v| {
+            let (i, _) = fvd.farthest(p, v.c);
+            let (inner, outer) = (v.sites.to_vec(), vec![i]);
+            vec![Cand {
+                c: v.c,
+                w: claimed(p, v.c, &inner, &outer),
+                inner,
+                outer,
+            }]
+        })
+        .reduce_with(merge);
+    top = merge(top, c13.unwrap_or_default());
+
+    // case 3+1 (Eq. 6.7): farthest-Voronoi vertices, visited around the MC centre so
+    // that the previous nearest point is both a close start for the walk and a witness
+    // (r(u) <= |u - p_prev|) that rules most vertices out without any walk
+    let mut order: Vec<usize> = (0..fvd.verts.len()).collect();
+    let ang = |k: &usize| {
+        let c = fvd.verts[*k].c;
+        (c[1] - cmc[1]).atan2(c[0] - cmc[0])
+    };
+    order.sort_by(|a, b| ang(a).total_cmp(&ang(b)));
+    let mut prev = j0;
+    for k in order {
+        let u = &fvd.verts[k];
+        let bound = top.last().map_or(f64::INFINITY, |c| c.w);
+        if top.len() == TOP && u.rad - dist(p[prev], u.c) >= bound + tol {
             continue;
         }
-        let (i, r) = fvd.farthest(p, v.c);
-        if r - v.rad < best.w {
-            best = Cand { c: v.c, w: r - v.rad, inner: v.sites.to_vec(), outer: vec![i] };
-        }
+        let (j, _) = nvd.walk(p, prev, u.c);
+        prev = j;
+        let (inner, outer) = (vec![j], u.sites.to_vec());
+        let cand = Cand {
+            c: u.c,
+            w: claimed(p, u.c, &inner, &outer),
+            inner,
+            outer,
+        };
+        top = merge(top, vec![cand]);
     }
-    // case 3+1 (Eq. 6.7): farthest-Voronoi vertices
-    for u in &fvd.verts {
-        let (j, r) = nvd.nearest(p, u.c);
-        if u.rad - r < best.w {
-            best = Cand { c: u.c, w: u.rad - r, inner: vec![j], outer: u.sites.to_vec() };
-        }
-    }
-    // case 2+2 (Eq. 6.8): crossings of nearest and farthest Voronoi edges
-    let mut fe: Vec<(f64, usize)> = fvd.edges.iter().enumerate().map(|(k, e)| (e.rad_min(), k)).collect();
-    fe.sort_by(|a, b| a.0.total_cmp(&b.0));
-    for e0 in &nvd.edges {
-        let mut e = *e0;
-        if !e.tlo.is_finite() || !e.thi.is_finite() {
-            // a ray beyond the hull edge (a, b): for c there, max |c - p| >= s + W and
-            // |c - p_a| <= s + h (s = distance beyond the edge, W = depth of the set
-            // behind the edge), so f_r >= W - h. Drop that part when it cannot win.
-            let out = if e.thi.is_finite() { -1.0 } else { 1.0 };
-            let depth = mc_ctrl
+
+    // case 2+2 (Eq. 6.8): crossings of nearest and farthest Voronoi edges. Each edge is
+    // first clipped to where a zone narrower than the best so far is still possible,
+    // judged against witness points (f_r >= |c - p_k| - |c - p_j| for any k, j).
+    let w = top[0].w + tol;
+    let margin = 1e-9 * scale;
+    let (outer_w, inner_w) = witnesses(p, cmc, &mc_ctrl, &top[0]);
+    let mut fe: Vec<VEdge> = fvd
+        .edges
+        .par_iter()
+        .with_min_len(512)
+        .filter_map(|f0| {
+            let mut f = *f0;
+            inner_w
                 .iter()
-                .map(|&k| out * ((e.m[0] - p[k][0]) * e.n[0] + (e.m[1] - p[k][1]) * e.n[1]))
-                .fold(0.0, f64::max);
-            if depth - e.h >= best.w - tol {
-                if out > 0.0 {
-                    e.thi = 0.0;
-                } else {
-                    e.tlo = 0.0;
+                .all(|&j| f.clip_farthest(p[j], w, margin))
+                .then_some(f)
+        })
+        .collect();
+    fe.sort_by(|a, b| a.rad_min().total_cmp(&b.rad_min()));
+    let fe_rmin: Vec<f64> = fe.iter().map(|f| f.rad_min()).collect();
+    let c22 = nvd
+        .edges
+        .par_iter()
+        .with_min_len(512)
+        .filter_map(|e0| {
+            let mut e = *e0;
+            if !outer_w.iter().all(|&k| e.clip_nearest(p[k], w, margin)) {
+                return None;
+            }
+            let rmax = e.rad_max();
+            if rmax <= rmc - w {
+                return None;
+            }
+            let mut local = Vec::new();
+            for (f, &rmin) in fe.iter().zip(&fe_rmin) {
+                if rmin - rmax >= w {
+                    break;
                 }
-                if e.tlo > e.thi {
+                let Some((t, s)) = intersect(&e, f) else {
+                    continue;
+                };
+                if !e.contains(t, tol) || !f.contains(s, tol) || f.rad(s) - e.rad(t) >= w {
                     continue;
                 }
-            }
-        }
-        let rmax = e.rad_max();
-        if rmax <= rmc - best.w + tol {
-            continue;
-        }
-        for &(rmin, k) in &fe {
-            if rmin - rmax >= best.w - tol {
-                break;
-            }
-            let f = &fvd.edges[k];
-            let Some((t, s)) = intersect(&e, f) else { continue };
-            if !e.contains(t, tol) || !f.contains(s, tol) {
-                continue;
-            }
-            let w = f.rad(s) - e.rad(t);
-            if w < best.w {
                 let c = e.at(t);
-                best = Cand { c, w, inner: vec![e.a, e.b], outer: vec![f.a, f.b] };
+                let (inner, outer) = (vec![e.a, e.b], vec![f.a, f.b]);
+                local.push(Cand {
+                    c,
+                    w: claimed(p, c, &inner, &outer),
+                    inner,
+                    outer,
+                });
+            }
+            (!local.is_empty()).then(|| merge(Vec::new(), local))
+        })
+        .reduce_with(merge);
+    merge(top, c22.unwrap_or_default())
+}
+
+/// Witness points for clipping: outer ones (far from the centre: the MC control points,
+/// the best zone's outer points and the extreme points in 16 directions) and inner ones
+/// (the best zone's inner points and the points nearest to the MC centre in 16 sectors).
+fn witnesses(
+    p: &[[f64; 2]],
+    cmc: [f64; 2],
+    mc_ctrl: &[usize],
+    best: &Cand,
+) -> (Vec<usize>, Vec<usize>) {
+    const K: usize = 16;
+    let dirs: Vec<[f64; 2]> = (0..K)
+        .map(|k| {
+            let a = k as f64 * std::f64::consts::TAU / K as f64;
+            [a.cos(), a.sin()]
+        })
+        .collect();
+    let mut ext = [(f64::NEG_INFINITY, 0usize); K];
+    let mut near = [(f64::INFINITY, usize::MAX); K];
+    for (i, q) in p.iter().enumerate() {
+        let d = [q[0] - cmc[0], q[1] - cmc[1]];
+        for (k, u) in dirs.iter().enumerate() {
+            let x = d[0] * u[0] + d[1] * u[1];
+            if x > ext[k].0 {
+                ext[k] = (x, i);
+            }
+        }
+        let a = d[1].atan2(d[0]).rem_euclid(std::f64::consts::TAU);
+        let k = ((a / std::f64::consts::TAU * K as f64) as usize).min(K - 1);
+        let r = (d[0] * d[0] + d[1] * d[1]).sqrt();
+        if r < near[k].0 {
+            near[k] = (r, i);
+        }
+    }
+    let mut outer: Vec<usize> = mc_ctrl
+        .iter()
+        .chain(&best.outer)
+        .copied()
+        .chain(ext.iter().map(|e| e.1))
+        .collect();
+    let mut inner: Vec<usize> = best
+        .inner
+        .iter()
+        .copied()
+        .chain(near.iter().filter(|e| e.1 != usize::MAX).map(|e| e.1))
+        .collect();
+    for v in [&mut outer, &mut inner] {
+        v.sort_unstable();
+        v.dedup();
+    }
+    (outer, inner)
+}
+
+/// Re-solve the equal-distance equations for every 1+3, 3+1 and 2+2 choice among the
+/// few points nearest to the inner and outer circle at `c`, and return the narrowest
+/// zone found (exact width over all points). Repairs the last digits when rounding in
+/// the Voronoi geometry picked a neighbouring combination (points within ~1e-11 of a
+/// perfect circle).
+fn local_polish(p: &[[f64; 2]], c: [f64; 2]) -> Option<Cand> {
+    const K: usize = 6;
+    let mut order: Vec<(f64, usize)> = p
+        .iter()
+        .enumerate()
+        .map(|(i, q)| (dist(*q, c), i))
+        .collect();
+    if order.len() < 2 * K {
+        return None;
+    }
+    order.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    let inner: Vec<usize> = order[..K].iter().map(|e| e.1).collect();
+    let outer: Vec<usize> = order[order.len() - K..].iter().map(|e| e.1).collect();
+    type Choice = (Option<[f64; 2]>, Vec<usize>, Vec<usize>);
+    let mut cands: Vec<Choice> = Vec::new();
+    for a in 0..K {
+        for b in a + 1..K {
+            for d in b + 1..K {
+                let (i3, o3) = (
+                    [inner[a], inner[b], inner[d]],
+                    [outer[a], outer[b], outer[d]],
+                );
+                cands.push((
+                    circumcenter(p[i3[0]], p[i3[1]], p[i3[2]]),
+                    i3.to_vec(),
+                    vec![],
+                ));
+                cands.push((
+                    circumcenter(p[o3[0]], p[o3[1]], p[o3[2]]),
+                    vec![],
+                    o3.to_vec(),
+                ));
+            }
+            for x in 0..K {
+                for y in x + 1..K {
+                    let (ia, ib, oa, ob) = (inner[a], inner[b], outer[x], outer[y]);
+                    cands.push((
+                        bisector_crossing(p[ia], p[ib], p[oa], p[ob]),
+                        vec![ia, ib],
+                        vec![oa, ob],
+                    ));
+                }
             }
         }
     }
-    best
+    // rank the choices by their width over the near-active points, then check the best
+    // few against all points
+    let near: Vec<[f64; 2]> = inner.iter().chain(&outer).map(|&i| p[i]).collect();
+    let mut ranked: Vec<(f64, usize)> = cands
+        .iter()
+        .enumerate()
+        .filter_map(|(k, (c, _, _))| c.map(|c| radii(&near, c)).map(|(lo, hi)| (hi - lo, k)))
+        .collect();
+    ranked.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    ranked
+        .iter()
+        .take(4)
+        .filter_map(|&(_, k)| {
+            let (c, mut inn, mut out) = cands[k].clone();
+            let c = c?;
+            let (lo, hi) = radii(p, c);
+            // the controls of a 1+3 / 3+1 choice: complete with the extreme point
+            let extreme = |want: f64| p.iter().position(|q| dist(*q, c) == want);
+            if inn.is_empty() {
+                inn = extreme(lo).into_iter().collect();
+            }
+            if out.is_empty() {
+                out = extreme(hi).into_iter().collect();
+            }
+            Some(Cand {
+                c,
+                w: hi - lo,
+                inner: inn,
+                outer: out,
+            })
+        })
+        .reduce(|x, y| if y.w < x.w { y } else { x })
 }
 
 /// Recompute the winning centre from its control points (equal-distance equations).
@@ -142,16 +436,26 @@ fn polish(p: &[[f64; 2]], b: &Cand) -> Option<[f64; 2]> {
 
 /// Smallest and largest distance of the points from `c`.
 pub(crate) fn radii(p: &[[f64; 2]], c: [f64; 2]) -> (f64, f64) {
-    p.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), q| {
+    let fold = |(lo, hi): (f64, f64), q: &[f64; 2]| {
         let d = dist(*q, c);
         (lo.min(d), hi.max(d))
-    })
+    };
+    if p.len() < 50_000 {
+        return p.iter().fold((f64::INFINITY, 0.0f64), fold);
+    }
+    p.par_iter().fold(|| (f64::INFINITY, 0.0f64), fold).reduce(
+        || (f64::INFINITY, 0.0f64),
+        |a, b| (a.0.min(b.0), a.1.max(b.1)),
+    )
 }
 
 /// Point equidistant from a and b and from i and l (two linear equations), solved
 /// relative to the centroid of the four points.
 fn bisector_crossing(a: [f64; 2], b: [f64; 2], i: [f64; 2], l: [f64; 2]) -> Option<[f64; 2]> {
-    let o = [(a[0] + b[0] + i[0] + l[0]) / 4.0, (a[1] + b[1] + i[1] + l[1]) / 4.0];
+    let o = [
+        (a[0] + b[0] + i[0] + l[0]) / 4.0,
+        (a[1] + b[1] + i[1] + l[1]) / 4.0,
+    ];
     let sh = |q: [f64; 2]| [q[0] - o[0], q[1] - o[1]];
     let (a, b, i, l) = (sh(a), sh(b), sh(i), sh(l));
     // 2 (b - a) . c = |b|^2 - |a|^2

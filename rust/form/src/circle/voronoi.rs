@@ -15,8 +15,10 @@ use super::{circumcenter, coord, dist};
 use gagekit_core::{GkError, Result};
 use rand::seq::SliceRandom;
 use rand::SeedableRng;
+use rayon::prelude::*;
+use rustc_hash::FxHashMap as HashMap;
+use spade::handles::{FixedFaceHandle, FixedVertexHandle, InnerTag};
 use spade::{DelaunayTriangulation, HasPosition, Point2, Triangulation};
-use std::collections::HashMap;
 
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Site {
@@ -56,7 +58,15 @@ impl VEdge {
         let m = [0.5 * (pa[0] + pb[0]), 0.5 * (pa[1] + pb[1])];
         let len = dist(pa, pb);
         let n = [-(pb[1] - pa[1]) / len, (pb[0] - pa[0]) / len];
-        Self { a, b, m, n, h: 0.5 * len, tlo: f64::NEG_INFINITY, thi: f64::INFINITY }
+        Self {
+            a,
+            b,
+            m,
+            n,
+            h: 0.5 * len,
+            tlo: f64::NEG_INFINITY,
+            thi: f64::INFINITY,
+        }
     }
     fn param(&self, c: [f64; 2]) -> f64 {
         (c[0] - self.m[0]) * self.n[0] + (c[1] - self.m[1]) * self.n[1]
@@ -83,7 +93,7 @@ impl VEdge {
     }
     /// Distance of the sites from the point at parameter t.
     pub fn rad(&self, t: f64) -> f64 {
-        self.h.hypot(t)
+        (self.h * self.h + t * t).sqrt()
     }
     /// Largest site distance over the edge (infinite for rays).
     pub fn rad_max(&self) -> f64 {
@@ -93,6 +103,72 @@ impl VEdge {
     pub fn rad_min(&self) -> f64 {
         self.h.hypot(0f64.clamp(self.tlo, self.thi))
     }
+    /// Restrict the edge to where `psi(t) = A t + B - 2 w sqrt(t^2 + 2 beta t + gamma) < 0`
+    /// can hold (`|A| > 2w` makes psi strictly monotone, so that set is a half-line),
+    /// widened by `margin`. Returns false if nothing is left.
+    pub fn clip(&mut self, a: f64, b: f64, w: f64, beta: f64, gamma: f64, margin: f64) -> bool {
+        if a.abs() <= 2.0 * w * (1.0 + 1e-9) {
+            return true;
+        }
+        // psi is strictly monotone and nearly linear: Newton from the linear root
+        // (solving the squared equation instead loses half the digits when w is tiny)
+        let sq = |t: f64| (t * t + 2.0 * beta * t + gamma).max(0.0).sqrt();
+        let mut root = -b / a;
+        for _ in 0..8 {
+            let r = sq(root);
+            let psi = a * root + b - 2.0 * w * r;
+            let dpsi = a - if r > 0.0 {
+                2.0 * w * (root + beta) / r
+            } else {
+                0.0
+            };
+            let step = psi / dpsi;
+            root -= step;
+            if step.is_nan() || step.abs() <= 1e-16 * (1.0 + root.abs()) {
+                break;
+            }
+        }
+        if !root.is_finite() {
+            return true;
+        }
+        if a > 0.0 {
+            self.thi = self.thi.min(root + margin);
+        } else {
+            self.tlo = self.tlo.max(root - margin);
+        }
+        self.tlo <= self.thi
+    }
+
+    /// Clip a nearest-Voronoi edge (sites at `rad(t)`) to where
+    /// `|c(t) - q| - rad(t) < w`, a necessary condition for a zone narrower than `w` when
+    /// `q` is any input point (the farthest point is at least that far).
+    pub fn clip_nearest(&mut self, q: [f64; 2], w: f64, margin: f64) -> bool {
+        let d = [self.m[0] - q[0], self.m[1] - q[1]];
+        let (qq, qn) = (
+            d[0] * d[0] + d[1] * d[1],
+            d[0] * self.n[0] + d[1] * self.n[1],
+        );
+        self.clip(
+            2.0 * qn,
+            qq - self.h * self.h - w * w,
+            w,
+            0.0,
+            self.h * self.h,
+            margin,
+        )
+    }
+
+    /// Clip a farthest-Voronoi edge (sites at `rad(t)`) to where
+    /// `rad(t) - |c(t) - q| < w` (the nearest point is at most that far).
+    pub fn clip_farthest(&mut self, q: [f64; 2], w: f64, margin: f64) -> bool {
+        let d = [self.m[0] - q[0], self.m[1] - q[1]];
+        let (qq, qn) = (
+            d[0] * d[0] + d[1] * d[1],
+            d[0] * self.n[0] + d[1] * self.n[1],
+        );
+        self.clip(-2.0 * qn, self.h * self.h - qq - w * w, w, qn, qq, margin)
+    }
+
     pub fn contains(&self, t: f64, tol: f64) -> bool {
         t >= self.tlo - tol && t <= self.thi + tol
     }
@@ -114,48 +190,83 @@ pub(crate) fn intersect(e: &VEdge, f: &VEdge) -> Option<(f64, f64)> {
 /// Nearest-point Voronoi diagram (and the Delaunay triangulation for queries).
 pub(crate) struct Nearest {
     dt: DelaunayTriangulation<Site>,
+    /// Triangulation vertex of each input point (None for merged duplicates).
+    handle_of: Vec<Option<FixedVertexHandle>>,
     pub verts: Vec<VVert>,
     pub edges: Vec<VEdge>,
 }
 
 impl Nearest {
-    /// Build from centred points; errors if they are collinear or coincident.
-    ///
-    /// Only the part of the diagram where the empty circle is at least `thr` is kept:
-    /// the vertices of radius >= `thr`, the edges reaching such a vertex, and all rays
-    /// (every other edge has its sites closer than `thr` all along).
-    pub fn new(p: &[[f64; 2]], what: &str, thr: f64) -> Result<Self> {
+    /// Delaunay triangulation of centred points; errors if they are collinear or
+    /// coincide. The diagram itself is filled in by [`Nearest::extract`].
+    pub fn build(p: &[[f64; 2]], what: &str) -> Result<Self> {
+        // spade rejects non-zero coordinates below ~1e-43; such values are zero for any
+        // measurement
+        let snap = |x: f64| if x.abs() < 1e-40 { 0.0 } else { x };
         let sites: Vec<Site> = p
             .iter()
             .enumerate()
-            .map(|(idx, q)| Site { pos: Point2::new(q[0], q[1]), idx })
+            .map(|(idx, q)| Site {
+                pos: Point2::new(snap(q[0]), snap(q[1])),
+                idx,
+            })
             .collect();
-        let dt = DelaunayTriangulation::<Site>::bulk_load(sites).map_err(|e| {
-            GkError::invalid(format!("{what}: cannot triangulate the points ({e:?})"))
+        let dt = DelaunayTriangulation::<Site>::bulk_load(sites).map_err(|e| match e {
+            spade::InsertionError::TooLarge => GkError::invalid(format!(
+                "{what}: coordinates too large to triangulate (the points span more than 1e60 mm)"
+            )),
+            e => GkError::invalid(format!("{what}: cannot triangulate the points ({e:?})")),
         })?;
         if dt.num_inner_faces() == 0 {
             return Err(GkError::degenerate(format!(
                 "{what}: the points are collinear or coincide; no circle fits them"
             )));
         }
-        let center = |f: spade::handles::FaceHandle<'_, spade::handles::InnerTag, Site, (), (), ()>| {
+        let mut handle_of = vec![None; p.len()];
+        for v in dt.vertices() {
+            handle_of[v.data().idx] = Some(v.fix());
+        }
+        Ok(Self {
+            dt,
+            handle_of,
+            verts: Vec::new(),
+            edges: Vec::new(),
+        })
+    }
+
+    /// Keep the part of the diagram where the empty circle is at least `thr`: the
+    /// vertices of radius >= `thr`, the edges reaching such a vertex, and all rays
+    /// (every other edge has its sites closer than `thr` all along).
+    pub fn extract(&mut self, p: &[[f64; 2]], thr: f64) {
+        let dt = &self.dt;
+        let center = |f: spade::handles::FaceHandle<'_, InnerTag, Site, (), (), ()>| {
             let [a, b, c] = f.positions().map(|q| [q.x, q.y]);
             circumcenter(a, b, c).map(|u| (u, dist(u, a)))
         };
+        let faces: Vec<FixedFaceHandle<InnerTag>> = dt.fixed_inner_faces().collect();
+        let big: Vec<(FixedFaceHandle<InnerTag>, [f64; 2], f64)> = faces
+            .into_par_iter()
+            .with_min_len(4096)
+            .filter_map(|h| {
+                let (u, rad) = center(dt.face(h))?;
+                (rad >= thr).then_some((h, u, rad))
+            })
+            .collect();
         let mut face_vert = vec![usize::MAX; dt.num_all_faces()];
-        let mut verts = Vec::new();
-        let mut big = Vec::new();
-        for f in dt.inner_faces() {
-            let Some((u, rad)) = center(f) else { continue };
-            if rad < thr {
-                continue;
-            }
-            face_vert[f.fix().index()] = verts.len();
-            big.push(f.fix());
-            verts.push(VVert { c: u, sites: f.vertices().map(|v| v.data().idx), rad });
+        let mut verts = Vec::with_capacity(big.len());
+        for &(h, u, rad) in &big {
+            face_vert[h.index()] = verts.len();
+            let f = dt.face(h);
+            verts.push(VVert {
+                c: u,
+                sites: f.vertices().map(|v| v.data().idx),
+                rad,
+            });
         }
         let mut edges = Vec::new();
-        let mut push = |e: spade::handles::DirectedEdgeHandle<'_, Site, (), (), ()>, c0: [f64; 2], other: Option<[f64; 2]>| {
+        let mut push = |e: spade::handles::DirectedEdgeHandle<'_, Site, (), (), ()>,
+                        c0: [f64; 2],
+                        other: Option<[f64; 2]>| {
             let (ia, ib) = (e.from().data().idx, e.to().data().idx);
             let base = VEdge::new(ia, ib, p[ia], p[ib]);
             edges.push(match other {
@@ -168,13 +279,15 @@ impl Nearest {
                 }
             });
         };
-        for (fi, &fh) in big.iter().enumerate() {
-            let f = dt.face(fh);
+        for (fi, &(h, _, _)) in big.iter().enumerate() {
+            let (f, i) = (dt.face(h), h.index());
             for e in f.adjacent_edges() {
-                let Some(g) = e.rev().face().as_inner() else { continue };
+                let Some(g) = e.rev().face().as_inner() else {
+                    continue;
+                };
                 let gi = face_vert[g.fix().index()];
                 if gi != usize::MAX {
-                    if g.fix().index() > f.fix().index() {
+                    if g.fix().index() > i {
                         push(e, verts[fi].c, Some(verts[gi].c));
                     }
                 } else if let Some((u, _)) = center(g) {
@@ -188,22 +301,80 @@ impl Nearest {
                 push(e, u, None);
             }
         }
-        Ok(Self { dt, verts, edges })
+        self.verts = verts;
+        self.edges = edges;
+    }
+
+    /// Nearest input point to `c` by a greedy walk on the Delaunay graph from input point
+    /// `start` (exact: a vertex with no neighbour closer to `c` is the nearest).
+    pub fn walk(&self, p: &[[f64; 2]], start: usize, c: [f64; 2]) -> (usize, f64) {
+        let Some(mut v) = self.handle_of.get(start).copied().flatten() else {
+            return self.nearest(p, c);
+        };
+        let mut best = super::dist2(p[self.dt.vertex(v).data().idx], c);
+        loop {
+            let mut next = None;
+            for e in self.dt.vertex(v).out_edges() {
+                let w = e.to();
+                let d = super::dist2(p[w.data().idx], c);
+                if d < best {
+                    best = d;
+                    next = Some(w.fix());
+                }
+            }
+            match next {
+                Some(w) => v = w,
+                None => break,
+            }
+        }
+        (self.dt.vertex(v).data().idx, best.sqrt())
     }
 
     /// Index of and distance to the input point nearest to `c`.
     pub fn nearest(&self, p: &[[f64; 2]], c: [f64; 2]) -> (usize, f64) {
-        let v = self.dt.nearest_neighbor(Point2::new(c[0], c[1])).expect("non-empty");
+        let v = self
+            .dt
+            .nearest_neighbor(Point2::new(c[0], c[1]))
+            .expect("non-empty");
         let i = v.data().idx;
         (i, dist(p[i], c))
     }
+}
 
-    /// Vertices of the convex hull in counter-clockwise order, strictly convex ones only.
-    pub fn hull(&self) -> Vec<usize> {
-        let mut h: Vec<usize> = self.dt.convex_hull().map(|e| e.from().data().idx).collect();
-        h.reverse(); // spade lists the hull clockwise
-        h
+/// Strictly convex vertices of the convex hull, counter-clockwise (Andrew's monotone
+/// chain with the exact orientation predicate).
+pub(crate) fn convex_hull(p: &[[f64; 2]]) -> Vec<usize> {
+    let mut idx: Vec<usize> = (0..p.len()).collect();
+    idx.sort_unstable_by(|&a, &b| {
+        p[a][0]
+            .total_cmp(&p[b][0])
+            .then(p[a][1].total_cmp(&p[b][1]))
+    });
+    idx.dedup_by(|a, b| p[*a] == p[*b]);
+    if idx.len() < 3 {
+        return idx;
     }
+    let turn =
+        |a: usize, b: usize, c: usize| robust::orient2d(coord(p[a]), coord(p[b]), coord(p[c]));
+    let mut hull: Vec<usize> = Vec::with_capacity(2 * idx.len());
+    for pass in 0..2 {
+        let start = hull.len();
+        let it: Box<dyn Iterator<Item = &usize>> = if pass == 0 {
+            Box::new(idx.iter())
+        } else {
+            Box::new(idx.iter().rev())
+        };
+        for &i in it {
+            while hull.len() >= start + 2
+                && turn(hull[hull.len() - 2], hull[hull.len() - 1], i) <= 0.0
+            {
+                hull.pop();
+            }
+            hull.push(i);
+        }
+        hull.pop();
+    }
+    hull
 }
 
 /// Farthest-point Voronoi diagram.
@@ -219,7 +390,11 @@ impl Farthest {
         let k = hull_ccw.len();
         let hull: Vec<usize> = (0..k)
             .filter(|&i| {
-                let (a, b, c) = (hull_ccw[(i + k - 1) % k], hull_ccw[i], hull_ccw[(i + 1) % k]);
+                let (a, b, c) = (
+                    hull_ccw[(i + k - 1) % k],
+                    hull_ccw[i],
+                    hull_ccw[(i + 1) % k],
+                );
                 robust::orient2d(coord(p[a]), coord(p[b]), coord(p[c])) > 0.0
             })
             .map(|i| hull_ccw[i])
@@ -227,14 +402,17 @@ impl Farthest {
         let q: Vec<[f64; 2]> = hull.iter().map(|&i| p[i]).collect();
         let tris = farthest_delaunay(&q);
         let mut verts = Vec::with_capacity(tris.len());
-        let mut edge_tri: HashMap<(usize, usize), usize> = HashMap::with_capacity(3 * tris.len());
+        let mut edge_tri: HashMap<(usize, usize), usize> =
+            HashMap::with_capacity_and_hasher(3 * tris.len(), Default::default());
         for (t, tri) in tris.iter().enumerate() {
             let [a, b, c] = tri.map(|i| q[i]);
-            let u = circumcenter(a, b, c).unwrap_or([
-                (a[0] + b[0] + c[0]) / 3.0,
-                (a[1] + b[1] + c[1]) / 3.0,
-            ]);
-            verts.push(VVert { c: u, sites: tri.map(|i| hull[i]), rad: dist(u, a) });
+            let u = circumcenter(a, b, c)
+                .unwrap_or([(a[0] + b[0] + c[0]) / 3.0, (a[1] + b[1] + c[1]) / 3.0]);
+            verts.push(VVert {
+                c: u,
+                sites: tri.map(|i| hull[i]),
+                rad: dist(u, a),
+            });
             for e in 0..3 {
                 edge_tri.insert((tri[e], tri[(e + 1) % 3]), t);
             }
@@ -295,11 +473,15 @@ pub(crate) fn farthest_delaunay(q: &[[f64; 2]]) -> Vec<[usize; 3]> {
     let t0 = [first, next[first], next[next[first]]];
     let mut tris: Vec<[usize; 3]> = vec![t0];
     let mut alive = vec![true];
-    let mut edge: HashMap<(usize, usize), usize> = HashMap::with_capacity(6 * k);
+    let mut edge: HashMap<(usize, usize), usize> =
+        HashMap::with_capacity_and_hasher(6 * k, Default::default());
     for e in 0..3 {
         edge.insert((t0[e], t0[(e + 1) % 3]), 0);
     }
-    let add = |tris: &mut Vec<[usize; 3]>, alive: &mut Vec<bool>, edge: &mut HashMap<(usize, usize), usize>, t: [usize; 3]| {
+    let add = |tris: &mut Vec<[usize; 3]>,
+               alive: &mut Vec<bool>,
+               edge: &mut HashMap<(usize, usize), usize>,
+               t: [usize; 3]| {
         let id = tris.len();
         tris.push(t);
         alive.push(true);
@@ -313,11 +495,15 @@ pub(crate) fn farthest_delaunay(q: &[[f64; 2]]) -> Vec<[usize; 3]> {
         let mut stack = vec![(b, a, v)];
         while let Some((x, y, pv)) = stack.pop() {
             // triangle (x, y, pv) CCW; neighbour across x -> y is (y, x, s)
-            let Some(&tn) = edge.get(&(y, x)) else { continue };
+            let Some(&tn) = edge.get(&(y, x)) else {
+                continue;
+            };
             if !alive[tn] {
                 continue;
             }
-            let Some(&tc) = edge.get(&(x, y)) else { continue };
+            let Some(&tc) = edge.get(&(x, y)) else {
+                continue;
+            };
             let t = tris[tn];
             let s = t[(t.iter().position(|&w| w == y).unwrap() + 2) % 3];
             let inc = robust::incircle(coord(q[x]), coord(q[y]), coord(q[pv]), coord(q[s]));
@@ -334,5 +520,9 @@ pub(crate) fn farthest_delaunay(q: &[[f64; 2]]) -> Vec<[usize; 3]> {
             }
         }
     }
-    tris.into_iter().zip(alive).filter(|(_, a)| *a).map(|(t, _)| t).collect()
+    tris.into_iter()
+        .zip(alive)
+        .filter(|(_, a)| *a)
+        .map(|(t, _)| t)
+        .collect()
 }
