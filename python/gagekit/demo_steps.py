@@ -30,6 +30,185 @@ def machine_step(ctx) -> tuple[dict, str]:
     return to_jsonable(data), table(headers, rows)
 
 
+def cloud_step(ctx) -> tuple[dict, str]:
+    """Point-set manipulation (Sec. 5.4.1): read the bundled scan of a casting, cut its
+    locator regions (scanner frame) and keep the vertices of each region's convex hull."""
+    import time
+
+    from .cloud import cut_and_filter, read_points, regions_from_tables
+    from ._util import load_toml
+    from .demo import data_path
+
+    t0 = time.perf_counter()
+    pts = read_points(data_path("casting_ok.ply"))
+    t_read = time.perf_counter() - t0
+    spec = load_toml(data_path("casting_ok.toml"))
+    boxes = regions_from_tables([r for r in spec["region"] if r.get("frame") == "scanner"], "casting_ok.toml")
+    t0 = time.perf_counter()
+    cut = cut_and_filter(pts, boxes)
+    t_cut = time.perf_counter() - t0
+    rows = [[r["name"], r["points"], r["hull_vertices"], f"{r['reduction']:.0f}x"] for r in cut.to_dict()["regions"]]
+    headers = ["region", "points", "hull vertices", "reduction"]
+    ctx.report.text(f"casting_ok.ply: {len(pts)} points read in {1e3 * t_read:.0f} ms; "
+                    f"{len(boxes)} locator regions cut and hull-filtered in {1e3 * t_cut:.0f} ms (cf. Table 5.2).")
+    ctx.report.table(headers, rows, "Points per region and the hull vertices kept for the LP (Eq. 5.21)")
+    data = {**cut.to_dict(), "read_seconds": t_read, "cut_and_filter_seconds": t_cut}
+    return data, f"{len(pts)} points, read in {t_read:.2f} s, cut + hull in {1e3 * t_cut:.0f} ms\n" + table(headers, rows)
+
+
+def observer_step(ctx) -> tuple[dict, str]:
+    """An 80-point K-optimal plan with the dissertation-8 zones (Sec. 4.2), compared with
+    quasi-random plans by the figures of Tables 4.2-4.3 and by a simulation study."""
+    from . import machine as mc
+    from .machine.observer import design_observer, evaluate_plan
+
+    m = mc.load_machine(mc.example_machine_path())
+    n = 40 if ctx.quick else 80
+    plan = design_observer(m, n, "K", zones="dissertation-8", candidates=1000 if ctx.quick else 3000,
+                           starts=1, seed=0)
+    ev = evaluate_plan(m, plan.commands, seeds=3 if ctx.quick else 8, test_points=300 if ctx.quick else 1000, seed=0)
+    ctx.plan = plan
+    f, q = plan.figures, plan.quasi_random
+    headers = ["plan", "points", "tr((M^T M)^-1)", "log det((M^T M)^-1)", "kappa(M)"]
+    rows = [[f"K-optimal, dissertation-8 zones", n, f["trace"], f["log_det"], f["condition_number"]]]
+    for key in ("same_size", "full_290"):
+        rows.append(["quasi-random", q[key]["points"], q[key]["trace"], q[key]["log_det"], q[key]["condition_number"]])
+    ctx.report.table(headers, rows, "Design figures with columns scaled by L^p (Tables 4.2-4.3)")
+    ev_rows = [[p["label"].replace("plan", f"{plan.criterion}-optimal plan", 1) if p["label"] == "plan" else p["label"], p["points"], p["rms_um"], p["rms_um_std"]] for p in ev.plans.values()]
+    ctx.report.table(["plan", "points", "RMS prediction error (um)", "std (um)"], ev_rows,
+                     f"Simulation study: {ev.seeds} random machines, identification from each plan, "
+                     "volumetric error predicted over the workspace")
+    _plan_figure(ctx, m, plan)
+    data = {"plan": plan.to_dict(), "evaluation": ev}
+    text = table(headers, [[r[0], r[1], f"{r[2]:.4g}", f"{r[3]:.4g}", f"{r[4]:.4g}"] for r in rows])
+    text += "\n\n" + table(["plan", "points", "RMS um", "std um"], [[a, b, f"{c:.2f}", f"{d:.2f}"] for a, b, c, d in ev_rows])
+    return to_jsonable(data), text
+
+
+def _plan_figure(ctx, m, plan) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    names = list(m.joint_names)
+    c = plan.commands
+    x, y = c[:, names.index("X")], c[:, names.index("Y")]
+    zw = c[:, names.index("Z")] + c[:, names.index("W")]
+    fig = plt.figure(figsize=(7, 5.5))
+    ax = fig.add_subplot(projection="3d")
+    sc = ax.scatter(x, zw, y, c=c[:, names.index("B")], cmap="viridis", s=18)
+    ax.set_xlabel("X (mm)")
+    ax.set_ylabel("Z + W (mm)")
+    ax.set_zlabel("Y (mm)")
+    fig.colorbar(sc, ax=ax, shrink=0.6, label="B (deg)")
+    ax.set_title(f"{len(c)}-point {plan.criterion}-optimal plan ({plan.zones} zones)")
+    ctx.report.figure(fig, "observer-plan", "The plan in the workspace (cf. Fig. 4.2)")
+
+
+def tracking_step(ctx) -> tuple[dict, str]:
+    """Six simulated thermal cycles (four heating, then cooling) measured with the plan,
+    tracked cycle by cycle against static and drift-only models (Tables 4.4-4.6, Fig. 4.8)."""
+    import numpy as np
+
+    from . import machine as mc
+    from .machine.observations import write_csv
+    from .machine.tracking import plot_drift, read_cycles, simulate_cycles, track
+
+    m = mc.load_machine(mc.example_machine_path())
+    plan = getattr(ctx, "plan", None)
+    cmds = plan.commands if plan is not None else m.sample_commands(80, seed=3)
+    blocks, info = simulate_cycles(m, mc.Truth.random(m, seed=5), cmds, cycles=6, seed=5)
+    path = ctx.out / "cycles.csv"
+    write_csv(path, info["header"], np.concatenate(blocks))
+    res = track(m, read_cycles(path, m))
+    headers = ["cycle", "observed mean (um)", "full mean (um)", "static mean (um)", "drift only mean (um)",
+               "full max (um)", "static max (um)"]
+    rows = [[c["cycle"], 1e3 * c["observed"]["mean"], 1e3 * c["full"]["mean"], 1e3 * c["static"]["mean"],
+             1e3 * c["drift_only"]["mean"], 1e3 * c["full"]["max"], 1e3 * c["static"]["max"]] for c in res.cycles]
+    ctx.report.text(f"{len(cmds)} points measured in each of 6 cycles; simulated drift of the W and Y axes "
+                    f"with heating and cooling. 'full': identified anew each cycle; 'static': the first cycle's model "
+                    f"kept; 'drift only': observed minus the first cycle's observation.")
+    ctx.report.table(headers, rows, "Residuals per cycle for the three strategies (Tables 4.4-4.6)")
+    png = ctx.out / "_drift.png"
+    plot_drift(res, png)
+    _embed_png(ctx, png, "parameter-drift", "Drift of the identified groups over the cycles (cf. Fig. 4.8)")
+    text = table(headers[:5], [[r[0], f"{r[1]:.1f}", f"{r[2]:.1f}", f"{r[3]:.1f}", f"{r[4]:.1f}"] for r in rows])
+    return to_jsonable(res.to_dict()), text
+
+
+def _embed_png(ctx, png, name, caption) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.image as mpimg
+    import matplotlib.pyplot as plt
+
+    img = mpimg.imread(png)
+    fig, ax = plt.subplots(figsize=(img.shape[1] / 110, img.shape[0] / 110))
+    ax.imshow(img)
+    ax.axis("off")
+    png.unlink()
+    ctx.report.figure(fig, name, caption)
+
+
+def castings_step(ctx) -> tuple[dict, str]:
+    """Virtual gages (Ch. 5) on the two bundled castings: 3-2-1 alignment, regions, hull
+    filter, the LP of Eq. 5.11 with slacks; pictures of each region before and after T*."""
+    from .cloud import read_points
+    from .demo import data_path
+    from .gage import check_gages
+    from .gage.report import add_to_report
+
+    data, lines = {}, []
+    for name in ("casting_ok", "casting_short"):
+        res = check_gages(read_points(data_path(f"{name}.ply")), data_path(f"{name}.toml"))
+        add_to_report(ctx.report, res, name)
+        data[name] = res.to_dict()
+        worst = min(g.allowance_after for g in res.gages)
+        short = [g.name for g in res.gages if g.slack > 0]
+        lines.append([name, res.status, f"{res.objective:.4f}", f"{worst:.4f}", ", ".join(short) or "-",
+                      "; ".join(" + ".join(g) for g in res.infeasible_groups) or "-"])
+    return to_jsonable(data), table(["casting", "status", "objective", "min allowance after (mm)", "short of material", "infeasible groups"], lines)
+
+
+def cylinders_step(ctx) -> tuple[dict, str]:
+    """The dissertation's cylinder data sets 1 and 3 (Sec. 6.4) by every criterion,
+    compared with the values it reports (Tables 6.2-6.4)."""
+    from ._util import load_toml
+    from .cloud import read_points
+    from .demo import data_path
+    from .form import fit_cylinder
+    from .report.form import add_cylinder_fits
+
+    expected = load_toml(data_path("cylinders/expected.toml"))
+    headers = ["set", "criterion", "radius / width (mm)", "reported (mm)", "theta", "phi", "seconds"]
+    rows, data = [], {}
+    import time
+
+    for s in ("set1", "set3"):
+        pts = read_points(data_path(f"cylinders/{s}.csv"))
+        fits = []
+        for crit, key, field in (("least-squares", None, "radius"), ("min-circumscribed", "min_circumscribed", "radius"),
+                                 ("max-inscribed", "max_inscribed", "radius"), ("minimum-zone", "minimum_zone", "width")):
+            t0 = time.perf_counter()
+            fit = fit_cylinder(pts, crit, seed=0)
+            dt = time.perf_counter() - t0
+            fits.append(fit)
+            value = fit.form_error if field == "width" else fit.radius
+            reported = repr(expected[s][key][field]) if key else "-"
+            rows.append([s, crit, f"{value:.10f}", reported, f"{fit.theta:.6f}", f"{fit.phi:.6f}", f"{dt:.3f}"])
+        data[s] = [f.to_dict() for f in fits]
+        add_cylinder_fits(ctx.report, s, pts, fits)
+    ctx.report.table(headers, rows, "Cylinder fits; reported values are the dissertation's (bounds, not targets)")
+    return to_jsonable(data), table(headers, rows)
+
+
 STEPS = [
+    ("cloud", "Point cloud: regions and convex-hull filter (Sec. 5.4.1)", cloud_step),
     ("machine", "Machine calibration (Ch. 3)", machine_step),
+    ("observer", "Optimal error observer (Ch. 4)", observer_step),
+    ("tracking", "Thermal error tracking (Sec. 4.3.3)", tracking_step),
+    ("castings", "Virtual gages on two castings (Ch. 5)", castings_step),
+    ("cylinders", "Form of cylinders (Ch. 6)", cylinders_step),
 ]

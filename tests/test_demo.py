@@ -1,0 +1,45 @@
+"""`gagekit demo`: every step runs on the bundled data and the report shows them all."""
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+import browser
+
+SECTIONS = ["Point cloud", "Machine calibration", "Optimal error observer", "Thermal error tracking",
+            "Virtual gages on two castings", "casting_ok: virtual gage result", "casting_short: virtual gage result",
+            "Form of cylinders"]
+
+
+@pytest.fixture(scope="module")
+def demo_dir(tmp_path_factory):
+    out = tmp_path_factory.mktemp("demo")
+    proc = subprocess.run([sys.executable, "-m", "gagekit", "demo", "--quick", "--out", str(out), "--json"],
+                          capture_output=True, text=True, timeout=900)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    summary = json.loads(proc.stdout)  # --json: nothing else on stdout
+    assert [s["name"] for s in summary["steps"]] == ["cloud", "machine", "observer", "tracking", "castings", "cylinders"]
+    return out
+
+
+def test_report_has_every_section_and_step_json(demo_dir):
+    html = (demo_dir / "report.html").read_text()
+    for title in SECTIONS:
+        assert title in html, title
+    castings = json.loads((demo_dir / "castings.json").read_text())
+    assert castings["casting_ok"]["status"] == "conforming"
+    assert castings["casting_short"]["status"] == "nonconforming"
+    cyl = json.loads((demo_dir / "cylinders.json").read_text())
+    assert {f["criterion"] for f in cyl["set3"]} == {"least-squares", "min-circumscribed", "max-inscribed", "minimum-zone"}
+    machine = json.loads((demo_dir / "machine.json").read_text())
+    assert set(machine["calibrations"]) == {"joint", "two-step"}
+
+
+@pytest.mark.skipif(browser.chromium() is None, reason="Chromium is not installed (Debian package 'chromium'); .ci/run installs it")
+def test_demo_report_renders_in_chromium(demo_dir):
+    found = browser.inspect(demo_dir / "report.html", demo_dir / "screenshot.png")
+    assert found["errors"] == [] and found["console"] == []
+    assert len(found["images"]) >= 8 and all(i["w"] > 0 for i in found["images"]), found["images"]
+    assert (demo_dir / "screenshot.png").stat().st_size > 10_000
