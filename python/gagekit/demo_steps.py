@@ -70,7 +70,7 @@ def observer_step(ctx) -> tuple[dict, str]:
     ctx.plan = plan
     f, q = plan.figures, plan.quasi_random
     headers = ["plan", "points", "tr((M^T M)^-1)", "log det((M^T M)^-1)", "kappa(M)"]
-    rows = [[f"K-optimal, dissertation-8 zones", n, f["trace"], f["log_det"], f["condition_number"]]]
+    rows = [[f"{plan.criterion}-optimal, {plan.zones} zones", n, f["trace"], f["log_det"], f["condition_number"]]]
     for key in ("same_size", "full_290"):
         rows.append(["quasi-random", q[key]["points"], q[key]["trace"], q[key]["log_det"], q[key]["condition_number"]])
     ctx.report.table(headers, rows, "Design figures with columns scaled by L^p (Tables 4.2-4.3)")

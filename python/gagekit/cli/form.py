@@ -105,32 +105,10 @@ _SHAPES_3D = ("line", "plane", "sphere", "circle3d", "cylinder", "cone")
 
 
 def _load_points(path: Path) -> np.ndarray:
-    """Read an (n, d) point file: .npy, NIST .ds (count on the first line), CSV or
-    whitespace text (a non-numeric header line is skipped).
+    """Points from any file ``read_points`` reads; ASCII files of 2 columns as 2-D points."""
+    from ..cloud import read_points
 
-    Private stop-gap until the CLI switches to ``gagekit.read_points``.
-    """
-    if not path.is_file():
-        raise FileFormatError(f"{path}: no such file")
-    try:
-        if path.suffix.lower() == ".npy":
-            arr = np.load(path, allow_pickle=False)
-        else:
-            lines = path.read_text().splitlines()
-            skip = 1 if path.suffix.lower() == ".ds" else 0
-            first = lines[skip].replace(",", " ").split() if len(lines) > skip else []
-            try:
-                [float(v) for v in first]
-            except ValueError:
-                skip += 1
-            delim = "," if "," in "".join(lines[skip : skip + 2]) else None
-            arr = np.loadtxt(path, delimiter=delim, skiprows=skip, ndmin=2, dtype=np.float64)
-    except (OSError, ValueError, IndexError) as exc:
-        raise FileFormatError(f"{path}: cannot read points ({exc})") from None
-    arr = np.asarray(arr, dtype=np.float64)
-    if arr.ndim != 2 or arr.shape[0] == 0 or arr.shape[1] not in (2, 3):
-        raise FileFormatError(f"{path}: expected rows of 2 or 3 coordinates, got an array of shape {arr.shape}")
-    return np.ascontiguousarray(arr)
+    return read_points(path, dim=2) if _text_columns(path) == 2 else read_points(path)
 
 
 def _fmt_vec(v: Any) -> str:
@@ -158,7 +136,7 @@ def _human(r: Any) -> str:
 @app.command("fit")
 def fit(
     shape: str = typer.Argument(..., help="circle, line, plane, sphere, circle3d, cylinder or cone"),
-    file: Path = typer.Argument(..., help="Point file (.npy, NIST .ds, CSV, text)"),
+    file: Path = typer.Argument(..., help="Points: any file read_points reads (XYZ/CSV/TXT, NIST .ds, PLY, .npy, ...)"),
     criterion: str = typer.Option("least-squares", "--criterion", "-c", help="Fit criterion"),
     seed: int = typer.Option(0, "--seed", help="Seed of the particle swarm (cylinders)"),
     as_json: bool = JSON_OPTION,
@@ -192,7 +170,7 @@ def fit(
 
 @app.command("cylinder")
 def cylinder(
-    file: Path = typer.Argument(..., help="Point file (.npy, NIST .ds, CSV, text)"),
+    file: Path = typer.Argument(..., help="Points: any file read_points reads (XYZ/CSV/TXT, NIST .ds, PLY, .npy, ...)"),
     criterion: str = typer.Option(
         "least-squares", "--criterion", "-c", help="least-squares (lsq), mcc, mic or mzc"
     ),

@@ -31,7 +31,9 @@ from .model import (
     parse_machine,
 )
 from .observations import Observations, read_commands, read_observations
+from .observer import ObserverPlan, PlanEvaluation, design_observer, evaluate_plan
 from .simulate import TRACKER_SIGMA, Truth, simulate
+from .tracking import History, TrackResult, read_cycles, simulate_cycles, track
 
 __all__: list[str] = [
     "Machine",
@@ -58,4 +60,13 @@ __all__: list[str] = [
     "Truth",
     "simulate",
     "TRACKER_SIGMA",
+    "ObserverPlan",
+    "PlanEvaluation",
+    "design_observer",
+    "evaluate_plan",
+    "History",
+    "TrackResult",
+    "read_cycles",
+    "simulate_cycles",
+    "track",
 ]
