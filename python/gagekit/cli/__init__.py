@@ -42,8 +42,13 @@ def _root(
     version: Optional[bool] = typer.Option(
         None, "--version", callback=_version_callback, is_eager=True, help="Print the version and exit."
     ),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bars (they go to stderr, and only on a terminal)."),
 ) -> None:
     """Machining accuracy: machine-tool error models and virtual gages for scanned parts."""
+    from .. import _progress
+
+    if quiet or "--json" in sys.argv:
+        _progress.set_quiet()
 
 
 def main(argv: Optional[list[str]] = None) -> None:

@@ -33,7 +33,7 @@ from typing import Union
 
 import numpy as np
 
-from .. import _core
+from .. import _core, _progress
 from .._util import as_points
 from ..errors import FileFormatError, InvalidInputError
 
@@ -58,14 +58,15 @@ def read_points(path: PathLike, dim: int = 3) -> np.ndarray:
     suffix = p.suffix.lower()
     if suffix not in ASCII_SUFFIXES | {".ply", ".npy", ".las", ".laz", ".e57"}:
         suffix = _sniff(p)
-    if suffix in ASCII_SUFFIXES:
-        pts = _read_ascii(p, dim, nist=suffix == ".ds")
-    else:
-        if dim != 3:
-            raise InvalidInputError(f"{p}: dim=2 is only for ASCII files")
-        reader = {".ply": _read_ply, ".npy": _read_npy, ".las": _read_las, ".laz": _read_las, ".e57": _read_e57}
-        pts = reader[suffix](p)
-        _check_finite(pts, p)
+    with _progress.status(f"reading {p.name} ({p.stat().st_size / 1e6:.0f} MB)"):
+        if suffix in ASCII_SUFFIXES:
+            pts = _read_ascii(p, dim, nist=suffix == ".ds")
+        else:
+            if dim != 3:
+                raise InvalidInputError(f"{p}: dim=2 is only for ASCII files")
+            reader = {".ply": _read_ply, ".npy": _read_npy, ".las": _read_las, ".laz": _read_las, ".e57": _read_e57}
+            pts = reader[suffix](p)
+            _check_finite(pts, p)
     if len(pts) == 0:
         raise FileFormatError(f"{p}: the file holds no points")
     return pts

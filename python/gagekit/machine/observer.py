@@ -25,7 +25,7 @@ from typing import Any, Optional, Sequence, Union
 
 import numpy as np
 
-from .. import _core
+from .. import _core, _progress
 from ..design.optimal import CRITERIA, search_design
 from ..errors import ConfigError, DegenerateGeometryError, FileFormatError, InvalidInputError
 from .identify import frame_columns, identify, predict
@@ -419,10 +419,11 @@ def design_observer(
     spread = np.zeros(len(u_all), bool)
     spread[: len(u_cand)] = True  # the I criterion averages over the workspace, not the zones' extras
     u_all, spread = u_all[keep], spread[keep]
-    res = search_design(
-        space.rows, space.bounds, int(points), crit, zones=zone_list or None, candidates=u_all, seed=seed,
-        starts=starts, feasible=ok, refine=True, average_over=spread,
-    )
+    with _progress.status(f"searching a {points}-point {crit}-optimal plan over {len(u_all)} candidates"):
+        res = search_design(
+            space.rows, space.bounds, int(points), crit, zones=zone_list or None, candidates=u_all, seed=seed,
+            starts=starts, feasible=ok, refine=True, average_over=spread,
+        )
     r = machine.ranges
     commands = np.clip(space.to_commands(res.points), r[:, 0], r[:, 1])  # round-off of Z = (Z+W) - W
     zone_counts = [

@@ -26,6 +26,8 @@ from typing import Any, Optional, Sequence, Union
 
 import numpy as np
 
+from .. import _progress
+
 from ..errors import ConfigError, DegenerateGeometryError, FileFormatError, InvalidInputError
 from .identify import identify
 from .model import Machine, ModelStructure
@@ -151,7 +153,7 @@ def track(machine: Machine, cycles: Cycles, structure: Optional[ModelStructure] 
     params = [pinv @ r.reshape(-1) for r in resid]  # Eqs. 4.12, 4.13
     p1 = params[0]
     rows, modes = [], {"full": [], "static": [], "drift_only": []}
-    for j, (cid, r) in enumerate(zip(cycles.cycle_ids, resid)):
+    for j, (cid, r) in enumerate(_progress.track(list(zip(cycles.cycle_ids, resid)), "tracking cycles")):
         obs = _stats(r, {})
         full = r - (m @ params[j]).reshape(-1, 3)  # Eq. 4.14
         static = r - (m @ p1).reshape(-1, 3)  # Eq. 4.15
