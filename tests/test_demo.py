@@ -43,3 +43,30 @@ def test_demo_report_renders_in_chromium(demo_dir):
     assert found["errors"] == [] and found["console"] == []
     assert len(found["images"]) >= 8 and all(i["w"] > 0 for i in found["images"]), found["images"]
     assert (demo_dir / "screenshot.png").stat().st_size > 10_000
+
+
+def test_readme_first_command_in_a_fresh_venv(tmp_path):
+    """`pip install . && gagekit demo` in a new virtual environment (no system packages):
+    the declared dependencies alone are enough to produce the full report."""
+    import os
+    import shutil
+    import venv
+    from pathlib import Path
+
+    from conftest import ROOT
+
+    env_dir = tmp_path / "venv"
+    venv.EnvBuilder(with_pip=True).create(env_dir)
+    bindir = env_dir / ("Scripts" if os.name == "nt" else "bin")
+    # copy the checkout (without its build artefacts) so the test never writes into it
+    src = tmp_path / "src"
+    shutil.copytree(ROOT, src, ignore=shutil.ignore_patterns("target", ".git", "__pycache__", "*.so", ".pytest_cache", ".hypothesis"))
+    env = {**os.environ, "CARGO_TARGET_DIR": str(ROOT / "target"), "PATH": f"{bindir}{os.pathsep}{os.environ['PATH']}"}
+    env.pop("PYTHONPATH", None)
+    out = tmp_path / "demo"
+    cmd = f"pip install -q . && gagekit demo --quick --quiet --out {out}"
+    proc = subprocess.run(["bash", "-c", cmd], cwd=src, env=env, capture_output=True, text=True, timeout=1500)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    html = Path(out / "report.html").read_text()
+    for title in SECTIONS:
+        assert title in html, title

@@ -418,7 +418,7 @@ impl Machine {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     /// The example machine of the dissertation (B X Z Y W with shapes between, Eq. 3.1).

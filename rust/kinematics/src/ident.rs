@@ -317,28 +317,8 @@ pub fn rigid_fit(src: &[f64], dst: &[f64]) -> Result<RigidFit> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::chain::{Element, Machine};
 
-    fn example() -> Machine {
-        let s = |z: f64| Element::Shape { offset: [0.0, 0.0, z] };
-        let pj = |a: [f64; 3]| Element::Prismatic { axis: a };
-        Machine::new(
-            vec![
-                Element::Rotary { axis: [0.0, 1.0, 0.0], terms: 1 },
-                s(0.0),
-                pj([1.0, 0.0, 0.0]),
-                s(0.0),
-                pj([0.0, 0.0, 1.0]),
-                s(0.0),
-                pj([0.0, 1.0, 0.0]),
-                s(-450.0),
-                pj([0.0, 0.0, 1.0]),
-                s(0.0),
-            ],
-            [0.0, 0.0, -312.035],
-        )
-        .unwrap()
-    }
+    use crate::chain::tests::example;
 
     /// Halton-like low-discrepancy commands over the example's ranges (Table 3.1).
     fn rich(n: usize) -> Vec<f64> {
