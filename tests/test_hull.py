@@ -15,9 +15,9 @@ from scipy.spatial import ConvexHull
 import gagekit
 from gagekit.errors import InvalidInputError
 
-REF = Path("/work/shared/reference-data/nist-l2")
-if not REF.exists():
-    REF = Path(__file__).resolve().parents[1] / "reference-data" / "nist-l2"
+from conftest import REFERENCE
+
+REF = REFERENCE / "nist-l2"
 
 
 def hull_idx(points) -> np.ndarray:

@@ -111,3 +111,25 @@ def test_bad_files(tmp_path):
         gagekit.read_points(ds)
     with pytest.raises(GagekitError, match="cannot write"):
         gagekit.write_points(tmp_path / "a.stl", PTS)
+
+
+def test_las_round_trip(tmp_path):
+    laspy = pytest.importorskip("laspy")
+    header = laspy.LasHeader(point_format=3, version="1.2")
+    header.scales = np.array([1e-4, 1e-4, 1e-4])
+    header.offsets = np.array([0.0, 0.0, 0.0])
+    las = laspy.LasData(header)
+    pts = np.round(PTS, 4)
+    las.x, las.y, las.z = pts[:, 0], pts[:, 1], pts[:, 2]
+    f = tmp_path / "scan.las"
+    las.write(str(f))
+    np.testing.assert_allclose(gagekit.read_points(f), pts, atol=1e-9)
+
+
+def test_e57_round_trip(tmp_path):
+    pye57 = pytest.importorskip("pye57")
+    f = tmp_path / "scan.e57"
+    e57 = pye57.E57(str(f), mode="w")
+    e57.write_scan_raw({"cartesianX": PTS[:, 0], "cartesianY": PTS[:, 1], "cartesianZ": PTS[:, 2]})
+    e57.close()
+    np.testing.assert_allclose(gagekit.read_points(f), PTS, atol=1e-9)

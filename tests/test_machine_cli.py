@@ -9,8 +9,10 @@ import pytest
 
 import gagekit
 
-SHARED = Path("/work/shared/examples/dissertation-5axis.toml")
-EXAMPLE = SHARED if SHARED.exists() else gagekit.machine.example_machine_path()
+from conftest import SHARED as _SHARED_DIR
+
+SHARED = _SHARED_DIR / "examples" / "dissertation-5axis.toml"
+EXAMPLE = SHARED
 
 
 def gk(*args, ok=True):

@@ -10,8 +10,10 @@ import gagekit
 from gagekit.errors import ConfigError, DegenerateGeometryError, FileFormatError, InvalidInputError
 from gagekit.machine.identify import NOISE_FLOOR_FACTOR, rotation_from_vector
 
-SHARED = Path("/work/shared/examples/dissertation-5axis.toml")
-EXAMPLE = SHARED if SHARED.exists() else gagekit.machine.example_machine_path()
+from conftest import SHARED as _SHARED_DIR
+
+SHARED = _SHARED_DIR / "examples" / "dissertation-5axis.toml"
+EXAMPLE = SHARED
 SIGMA = 0.0089
 
 

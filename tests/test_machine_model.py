@@ -9,8 +9,10 @@ from hypothesis import given, settings, strategies as st
 import gagekit
 from gagekit.errors import ConfigError, FileFormatError, InvalidInputError
 
-SHARED = Path("/work/shared/examples/dissertation-5axis.toml")
-EXAMPLE = SHARED if SHARED.exists() else gagekit.machine.example_machine_path()
+from conftest import SHARED as _SHARED_DIR
+
+SHARED = _SHARED_DIR / "examples" / "dissertation-5axis.toml"
+EXAMPLE = SHARED
 
 
 @pytest.fixture(scope="module")

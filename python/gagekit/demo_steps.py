@@ -113,7 +113,8 @@ def tracking_step(ctx) -> tuple[dict, str]:
 
     from . import machine as mc
     from .machine.observations import write_csv
-    from .machine.tracking import plot_drift, read_cycles, simulate_cycles, track
+    from .machine.tracking import read_cycles, simulate_cycles, track
+    from .report.machine import add_tracking, tracking_table
 
     m = mc.load_machine(mc.example_machine_path())
     plan = getattr(ctx, "plan", None)
@@ -122,34 +123,12 @@ def tracking_step(ctx) -> tuple[dict, str]:
     path = ctx.out / "cycles.csv"
     write_csv(path, info["header"], np.concatenate(blocks))
     res = track(m, read_cycles(path, m))
-    headers = ["cycle", "observed mean (um)", "full mean (um)", "static mean (um)", "drift only mean (um)",
-               "full max (um)", "static max (um)"]
-    rows = [[c["cycle"], 1e3 * c["observed"]["mean"], 1e3 * c["full"]["mean"], 1e3 * c["static"]["mean"],
-             1e3 * c["drift_only"]["mean"], 1e3 * c["full"]["max"], 1e3 * c["static"]["max"]] for c in res.cycles]
     ctx.report.text(f"{len(cmds)} points measured in each of 6 cycles; simulated drift of the W and Y axes "
-                    f"with heating and cooling. 'full': identified anew each cycle; 'static': the first cycle's model "
-                    f"kept; 'drift only': observed minus the first cycle's observation.")
-    ctx.report.table(headers, rows, "Residuals per cycle for the three strategies (Tables 4.4-4.6)")
-    png = ctx.out / "_drift.png"
-    plot_drift(res, png)
-    _embed_png(ctx, png, "parameter-drift", "Drift of the identified groups over the cycles (cf. Fig. 4.8)")
+                    f"with heating and cooling.")
+    add_tracking(ctx.report, res)
+    headers, rows = tracking_table(res)
     text = table(headers[:5], [[r[0], f"{r[1]:.1f}", f"{r[2]:.1f}", f"{r[3]:.1f}", f"{r[4]:.1f}"] for r in rows])
     return to_jsonable(res.to_dict()), text
-
-
-def _embed_png(ctx, png, name, caption) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.image as mpimg
-    import matplotlib.pyplot as plt
-
-    img = mpimg.imread(png)
-    fig, ax = plt.subplots(figsize=(img.shape[1] / 110, img.shape[0] / 110))
-    ax.imshow(img)
-    ax.axis("off")
-    png.unlink()
-    ctx.report.figure(fig, name, caption)
 
 
 def castings_step(ctx) -> tuple[dict, str]:

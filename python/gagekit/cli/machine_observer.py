@@ -144,7 +144,13 @@ def track_cmd(
         report.mkdir(parents=True, exist_ok=True)
         (report / "track.json").write_text(dumps(out))
         plot_drift(res, report / "drift.png")
-        out["report"] = str(report)
+        from ..report import Report
+        from ..report.machine import add_tracking
+
+        rep = Report(f"Thermal tracking of {m.name}", f"{cycles_csv}: {len(res.cycles)} cycles")
+        rep.section("Residuals and drift per cycle (Sec. 4.3.3)")
+        add_tracking(rep, res)
+        out["report"] = str(rep.write(report))
     emit(out, as_json, lambda _: _track_text(res))
 
 

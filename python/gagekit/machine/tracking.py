@@ -34,7 +34,7 @@ from .model import Machine, ModelStructure
 from .observations import Observations, _read_table, write_csv
 from .simulate import TRACKER_SIGMA, Truth, simulate
 
-__all__ = ["Cycles", "TrackResult", "read_cycles", "track", "History", "read_history", "simulate_cycles", "plot_drift"]
+__all__ = ["Cycles", "TrackResult", "read_cycles", "track", "History", "read_history", "simulate_cycles", "plot_drift", "drift_figure"]
 
 _XYZ = ("x", "y", "z")
 
@@ -218,6 +218,15 @@ def _temperature_model(cycles: Cycles, params, names, m, resid) -> dict:
 
 
 def plot_drift(result: TrackResult, path: Union[str, Path], top: int = 8) -> None:
+    """Write :func:`drift_figure` as a PNG."""
+    import matplotlib.pyplot as plt
+
+    fig = drift_figure(result, top)
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def drift_figure(result: TrackResult, top: int = 8):
     """Fig. 4.8: how much each group's change since the first cycle moves the target, RMS
     over the plan's points (um), for the ``top`` groups that move it most."""
     import matplotlib
@@ -239,8 +248,7 @@ def plot_drift(result: TrackResult, path: Union[str, Path], top: int = 8) -> Non
     ax.legend(fontsize=7, ncol=2)
     ax.grid(alpha=0.3)
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    return fig
 
 
 # --------------------------------------------------------------------------------- history

@@ -57,3 +57,27 @@ def add_calibrations(report: Report, cals: Sequence) -> None:
         [[e.name, e.value, e.std if e.std is not None else "absorbed by the tracker frame", e.unit] for e in g.groups],
         caption=f"Identified groups ({g.method}; rank {g.rank}, condition number {g.condition_number:.3g})",
     )
+
+
+def tracking_table(result) -> tuple[list[str], list[list]]:
+    """Rows of Tables 4.4-4.6: mean and max residual (um) per cycle for each strategy."""
+    headers = ["cycle", "observed mean (um)", "full mean (um)", "static mean (um)", "drift only mean (um)",
+               "full max (um)", "static max (um)", "drift only max (um)"]
+    rows = [[c["cycle"], 1e3 * c["observed"]["mean"], 1e3 * c["full"]["mean"], 1e3 * c["static"]["mean"],
+             1e3 * c["drift_only"]["mean"], 1e3 * c["full"]["max"], 1e3 * c["static"]["max"],
+             1e3 * c["drift_only"]["max"]] for c in result.cycles]
+    return headers, rows
+
+
+def add_tracking(report: Report, result) -> None:
+    """Residuals per cycle for the three strategies and the parameter drift (Fig. 4.8)."""
+    from ..machine.tracking import drift_figure
+
+    headers, rows = tracking_table(result)
+    report.table(headers, rows, "Residuals per cycle: identified anew each cycle (full, Table 4.4), first cycle's "
+                 "model kept (static, Table 4.5), observed change only (drift only, Table 4.6)")
+    tm = result.temperature_model
+    if tm and tm.get("fitted"):
+        report.text(f"Temperature model over {', '.join(tm['sensors'])}: leave-one-cycle-out mean residual "
+                    f"{tm['leave_one_cycle_out_mean'] * 1000:.1f} um.")
+    report.figure(drift_figure(result), "parameter-drift", "Drift of the identified groups over the cycles (cf. Fig. 4.8)")
