@@ -13,9 +13,17 @@ mod kinematics;
 
 use pyo3::prelude::*;
 
+/// Panics inside a kernel call: lets the tests check that a panic arrives as
+/// `gagekit.errors.InternalError` and never aborts the interpreter.
+#[pyfunction]
+fn _panic_for_test(py: Python<'_>) -> PyResult<()> {
+    errors::run(py, || -> gagekit_core::Result<()> { panic!("deliberate test panic") })
+}
+
 #[pymodule]
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    m.add_function(wrap_pyfunction!(_panic_for_test, m)?)?;
     cloudio::register(m)?;
     geometry::register(m)?;
     form::register(m)?;
