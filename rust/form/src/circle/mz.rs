@@ -76,6 +76,14 @@ pub fn min_zone(pts: &[f64]) -> Result<Zone> {
             None => exact(p, data.scale)?,
         }
     };
+    if z.center[0].hypot(z.center[1]) > STRAIGHT * data.scale {
+        return Err(gagekit_core::GkError::degenerate(format!(
+            "{WHAT}: the {} points lie almost on a straight line (the narrowest zone's \
+             circles would have a radius above 10^4 times the points' extent); no roundness \
+             zone is determined; fit a straightness zone (two parallel lines) instead",
+            p.len()
+        )));
+    }
     Ok(Zone {
         center: data.uncenter(z.center),
         ..z
@@ -109,19 +117,19 @@ pub(crate) fn exact(p: &[[f64; 2]], scale: f64) -> Result<Zone> {
             std::iter::once(cand.c)
                 .chain(polish(p, cand))
                 .map(move |c| {
-                    let (a, b) = radii(p, c);
-                    (b - a, c, a, b, k)
+                    let (a, b, w) = spread(p, c);
+                    (w, c, a, b, k)
                 })
         })
         .collect();
-    let (_, c, r_in, r_out, k) = checked
+    let (w, c, r_in, r_out, k) = checked
         .into_iter()
         .reduce(|x, y| if y.0 < x.0 { y } else { x })
         .expect("at least the MC centre is a candidate");
     let (mut control_in, mut control_out) = (top[k].inner.clone(), top[k].outer.clone());
     let (mut c, mut r_in, mut r_out) = (c, r_in, r_out);
     if let Some(b) = local_polish(p, c) {
-        if b.w < r_out - r_in {
+        if b.w < w {
             (c, control_in, control_out) = (b.c, b.inner, b.outer);
             (r_in, r_out) = radii(p, c);
         }
@@ -151,12 +159,51 @@ fn merge(mut a: Vec<Cand>, b: Vec<Cand>) -> Vec<Cand> {
 
 /// Width at `c` claimed by its control points (exact if they are the nearest/farthest).
 fn claimed(p: &[[f64; 2]], c: [f64; 2], inner: &[usize], outer: &[usize]) -> f64 {
-    let r = inner
-        .iter()
-        .map(|&j| dist(p[j], c))
-        .fold(f64::INFINITY, f64::min);
-    let big_r = outer.iter().map(|&i| dist(p[i], c)).fold(0.0, f64::max);
-    big_r - r
+    let size = inner.iter().chain(outer).map(|&k| p[k][0].abs().max(p[k][1].abs())).fold(0.0, f64::max);
+    if !is_far(c, size) {
+        let r = inner.iter().map(|&j| dist(p[j], c)).fold(f64::INFINITY, f64::min);
+        let big_r = outer.iter().map(|&i| dist(p[i], c)).fold(0.0, f64::max);
+        return big_r - r;
+    }
+    // far centre: distance differences from the difference of squares (see `offset`)
+    let k = inner.first().or(outer.first()).map_or(p[0], |&k| p[k]);
+    let dk = dist(k, c);
+    let lo = inner.iter().map(|&j| offset(p[j], k, c, dk)).fold(f64::INFINITY, f64::min);
+    let hi = outer.iter().map(|&i| offset(p[i], k, c, dk)).fold(f64::NEG_INFINITY, f64::max);
+    hi - lo
+}
+
+/// Centres farther than this many times the points' extent from them are "far": there
+/// |c - p_i| - |c - p_j| loses digits to rounding (about 1e-16 |c|) and is computed
+/// from the difference of squares instead.
+const FAR: f64 = 1e3;
+
+/// A zone whose centre lies farther than this many times the points' extent is no
+/// circle for metrology: the points are all but straight, the zone tends to two
+/// parallel lines (a straightness zone), and radii of 1e4 extents keep only about
+/// 1e-12 of the extent in their difference.
+const STRAIGHT: f64 = 1e4;
+
+/// Is `c` far (see [`FAR`]) from centred points whose coordinates are at most `size`?
+#[inline]
+fn is_far(c: [f64; 2], size: f64) -> bool {
+    c[0].abs().max(c[1].abs()) > FAR * size.max(f64::MIN_POSITIVE)
+}
+
+/// `|c - q| - |c - k|` accurate to rounding of the points' coordinates even for a
+/// centre `c` far away: `(|q|^2 - |k|^2 - 2 c . (q - k)) / (|c - q| + |c - k|)`;
+/// `dk = |c - k|`.
+#[inline]
+fn offset(q: [f64; 2], k: [f64; 2], c: [f64; 2], dk: f64) -> f64 {
+    let dq = dist(q, c);
+    let (d0, d1) = (q[0] - k[0], q[1] - k[1]);
+    let num = (q[0] + k[0]) * d0 + (q[1] + k[1]) * d1 - 2.0 * (c[0] * d0 + c[1] * d1);
+    let den = dq + dk;
+    if den > 0.0 {
+        num / den
+    } else {
+        0.0
+    }
 }
 
 fn solve(
@@ -393,7 +440,7 @@ fn local_polish(p: &[[f64; 2]], c: [f64; 2]) -> Option<Cand> {
     let mut ranked: Vec<(f64, usize)> = cands
         .iter()
         .enumerate()
-        .filter_map(|(k, (c, _, _))| c.map(|c| radii(&near, c)).map(|(lo, hi)| (hi - lo, k)))
+        .filter_map(|(k, (c, _, _))| c.map(|c| (spread(&near, c).2, k)))
         .collect();
     ranked.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
     ranked
@@ -402,7 +449,7 @@ fn local_polish(p: &[[f64; 2]], c: [f64; 2]) -> Option<Cand> {
         .filter_map(|&(_, k)| {
             let (c, mut inn, mut out) = cands[k].clone();
             let c = c?;
-            let (lo, hi) = radii(p, c);
+            let (lo, hi, w) = spread(p, c);
             // the controls of a 1+3 / 3+1 choice: complete with the extreme point
             let extreme = |want: f64| p.iter().position(|q| dist(*q, c) == want);
             if inn.is_empty() {
@@ -413,7 +460,7 @@ fn local_polish(p: &[[f64; 2]], c: [f64; 2]) -> Option<Cand> {
             }
             Some(Cand {
                 c,
-                w: hi - lo,
+                w,
                 inner: inn,
                 outer: out,
             })
@@ -434,8 +481,33 @@ fn polish(p: &[[f64; 2]], b: &Cand) -> Option<[f64; 2]> {
     }
 }
 
-/// Smallest and largest distance of the points from `c`.
+/// Smallest and largest distance of the points from `c` (for a far centre, see [`FAR`],
+/// from differences of squares relative to the first point: the width `hi - lo` keeps
+/// its digits however far the centre is).
 pub(crate) fn radii(p: &[[f64; 2]], c: [f64; 2]) -> (f64, f64) {
+    let (lo, hi, _) = spread(p, c);
+    (lo, hi)
+}
+
+/// Smallest and largest distance of the points from `c` and the width between them,
+/// accurate also for a far centre (see [`FAR`]): there the distances are taken relative
+/// to the first point from differences of squares.
+fn spread(p: &[[f64; 2]], c: [f64; 2]) -> (f64, f64, f64) {
+    let size = p.iter().map(|q| q[0].abs().max(q[1].abs())).fold(0.0, f64::max);
+    if is_far(c, size) {
+        let k = p[0];
+        let dk = dist(k, c);
+        let (lo, hi) = p.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), q| {
+            let e = offset(*q, k, c, dk);
+            (lo.min(e), hi.max(e))
+        });
+        return (dk + lo, dk + hi, hi - lo);
+    }
+    let (lo, hi) = near_radii(p, c);
+    (lo, hi, hi - lo)
+}
+
+fn near_radii(p: &[[f64; 2]], c: [f64; 2]) -> (f64, f64) {
     let fold = |(lo, hi): (f64, f64), q: &[f64; 2]| {
         let d = dist(*q, c);
         (lo.min(d), hi.max(d))
