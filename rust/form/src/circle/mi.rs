@@ -54,6 +54,7 @@ pub fn max_inscribed(pts: &[f64]) -> Result<Circle> {
     };
     let r_near = p
         .par_iter()
+        .with_min_len(8192)
         .map(|q| dist(*q, c))
         .reduce(|| f64::INFINITY, f64::min);
     let radius = r_near.min(rmc - dist(c, cmc)).max(0.0);

@@ -17,6 +17,9 @@ struct Cand {
 /// How many of the best candidates are verified against all points at the end.
 const TOP: usize = 8;
 
+/// Below this many points the solver runs on the calling thread only.
+const SEQUENTIAL: usize = 256;
+
 /// Minimum zone circle of `pts` (flat (n, 2), n >= 3, not collinear).
 ///
 /// Minimises `f_r(c) = max_i |c - p_i| - min_j |c - p_j|` (Eq. 6.5) exactly. `f_r` has
@@ -93,15 +96,18 @@ pub fn min_zone(pts: &[f64]) -> Result<Zone> {
 /// Exact MZ of centred points (all of them), in centred coordinates.
 pub(crate) fn exact(p: &[[f64; 2]], scale: f64) -> Result<Zone> {
     const WHAT: &str = "minimum zone circle";
-    // MC and the farthest diagram on one core while the other triangulates
-    let (side, nvd) = rayon::join(
-        || {
-            let (cmc, mc_ctrl) = mc::welzl(p, scale);
-            let (r0, rmc) = radii(p, cmc);
-            (cmc, mc_ctrl, r0, rmc, Farthest::new(p, &convex_hull(p)))
-        },
-        || Nearest::build(p, WHAT),
-    );
+    // MC and the farthest diagram on one core while the other triangulates (small
+    // sets in sequence: a task hand-off costs more than either half)
+    let side = || {
+        let (cmc, mc_ctrl) = mc::welzl(p, scale);
+        let (r0, rmc) = radii(p, cmc);
+        (cmc, mc_ctrl, r0, rmc, Farthest::new(p, &convex_hull(p)))
+    };
+    let (side, nvd) = if p.len() < SEQUENTIAL {
+        (side(), Nearest::build(p, WHAT))
+    } else {
+        rayon::join(side, || Nearest::build(p, WHAT))
+    };
     let (cmc, mc_ctrl, r0, rmc, fvd) = side;
     let mut nvd = nvd?;
     // the MC centre bounds the width: w <= rmc - r0, so only empty circles of radius
@@ -402,8 +408,11 @@ fn local_polish(p: &[[f64; 2]], c: [f64; 2]) -> Option<Cand> {
     order.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
     let inner: Vec<usize> = order[..K].iter().map(|e| e.1).collect();
     let outer: Vec<usize> = order[order.len() - K..].iter().map(|e| e.1).collect();
-    type Choice = (Option<[f64; 2]>, Vec<usize>, Vec<usize>);
-    let mut cands: Vec<Choice> = Vec::new();
+    // (centre, inner controls, outer controls), without allocating per choice
+    type Ids = ([usize; 3], usize);
+    type Choice = (Option<[f64; 2]>, Ids, Ids);
+    const NONE: Ids = ([0; 3], 0);
+    let mut cands: Vec<Choice> = Vec::with_capacity(2 * 20 + 15 * 15);
     for a in 0..K {
         for b in a + 1..K {
             for d in b + 1..K {
@@ -411,24 +420,16 @@ fn local_polish(p: &[[f64; 2]], c: [f64; 2]) -> Option<Cand> {
                     [inner[a], inner[b], inner[d]],
                     [outer[a], outer[b], outer[d]],
                 );
-                cands.push((
-                    circumcenter(p[i3[0]], p[i3[1]], p[i3[2]]),
-                    i3.to_vec(),
-                    vec![],
-                ));
-                cands.push((
-                    circumcenter(p[o3[0]], p[o3[1]], p[o3[2]]),
-                    vec![],
-                    o3.to_vec(),
-                ));
+                cands.push((circumcenter(p[i3[0]], p[i3[1]], p[i3[2]]), (i3, 3), NONE));
+                cands.push((circumcenter(p[o3[0]], p[o3[1]], p[o3[2]]), NONE, (o3, 3)));
             }
             for x in 0..K {
                 for y in x + 1..K {
                     let (ia, ib, oa, ob) = (inner[a], inner[b], outer[x], outer[y]);
                     cands.push((
                         bisector_crossing(p[ia], p[ib], p[oa], p[ob]),
-                        vec![ia, ib],
-                        vec![oa, ob],
+                        ([ia, ib, 0], 2),
+                        ([oa, ob, 0], 2),
                     ));
                 }
             }
@@ -437,17 +438,19 @@ fn local_polish(p: &[[f64; 2]], c: [f64; 2]) -> Option<Cand> {
     // rank the choices by their width over the near-active points, then check the best
     // few against all points
     let near: Vec<[f64; 2]> = inner.iter().chain(&outer).map(|&i| p[i]).collect();
+    let near_size = extent(&near);
     let mut ranked: Vec<(f64, usize)> = cands
         .iter()
         .enumerate()
-        .filter_map(|(k, (c, _, _))| c.map(|c| (spread(&near, c).2, k)))
+        .filter_map(|(k, (c, _, _))| c.map(|c| (spread_in(&near, c, near_size).2, k)))
         .collect();
     ranked.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
     ranked
         .iter()
         .take(4)
         .filter_map(|&(_, k)| {
-            let (c, mut inn, mut out) = cands[k].clone();
+            let (c, (ia, ni), (oa, no)) = cands[k];
+            let (mut inn, mut out) = (ia[..ni].to_vec(), oa[..no].to_vec());
             let c = c?;
             let (lo, hi, w) = spread(p, c);
             // the controls of a 1+3 / 3+1 choice: complete with the extreme point
@@ -493,7 +496,16 @@ pub(crate) fn radii(p: &[[f64; 2]], c: [f64; 2]) -> (f64, f64) {
 /// accurate also for a far centre (see [`FAR`]): there the distances are taken relative
 /// to the first point from differences of squares.
 fn spread(p: &[[f64; 2]], c: [f64; 2]) -> (f64, f64, f64) {
-    let size = p.iter().map(|q| q[0].abs().max(q[1].abs())).fold(0.0, f64::max);
+    spread_in(p, c, extent(p))
+}
+
+/// Largest coordinate magnitude of centred points.
+fn extent(p: &[[f64; 2]]) -> f64 {
+    p.iter().map(|q| q[0].abs().max(q[1].abs())).fold(0.0, f64::max)
+}
+
+/// [`spread`] of points of the given [`extent`].
+fn spread_in(p: &[[f64; 2]], c: [f64; 2], size: f64) -> (f64, f64, f64) {
     if is_far(c, size) {
         let k = p[0];
         let dk = dist(k, c);
