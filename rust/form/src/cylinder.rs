@@ -10,7 +10,8 @@
 //! 1. the seeded parallel PSO ([`gagekit_pso`]) over the half sphere (or a cone
 //!    around a given axis), with the least-squares axis as one particle;
 //! 2. Nelder–Mead in local coordinates (alpha, beta) from the best distinct
-//!    particles, to 1e-12 rad;
+//!    particles, to 1e-12 rad (for the minimum zone with a warm-started 2-D
+//!    evaluation, see `Warm`);
 //! 3. basin hopping: Nelder–Mead restarted 1e-4 rad around the best axis while
 //!    that finds a lower basin (minimax landscapes have long narrow valleys with
 //!    several local minima some 1e-5 rad apart).
@@ -198,6 +199,59 @@ fn objective(q: &[f64], a: &Vector3<f64>, crit: Criterion, size: f64) -> f64 {
     }
 }
 
+/// The objective for one local search (a sequence of nearby axes), warm-started for
+/// the minimum zone: around the previous axis's zone centre, the equal-distance
+/// solutions among the points nearest the inner and outer circle
+/// ([`circle::min_zone_near`]) are tried first. Their narrowest zone is accepted only
+/// when its control points are an active set the exact kernel has already returned in
+/// this search (near the optimum the projections cycle through a few active sets);
+/// otherwise the exact kernel runs, and its zone becomes the warm start. Each search
+/// owns its state and is sequential, so results do not depend on threads.
+struct Warm<'a> {
+    q: &'a [f64],
+    crit: Criterion,
+    size: f64,
+    /// Centre of the last zone and the control points of every exact fit so far.
+    state: std::cell::RefCell<(Option<[f64; 2]>, Vec<(Vec<usize>, Vec<usize>)>)>,
+}
+
+impl<'a> Warm<'a> {
+    fn new(q: &'a [f64], crit: Criterion, size: f64) -> Self {
+        Self { q, crit, size, state: Default::default() }
+    }
+
+    fn eval(&self, a: &Vector3<f64>) -> f64 {
+        if self.crit != Criterion::MinZone {
+            return objective(self.q, a, self.crit, self.size);
+        }
+        let (t, f) = angles(&[a[0], a[1], a[2]]);
+        let proj = project(self.q, t, f);
+        let accept = |z: &circle::Zone| z.center[0].hypot(z.center[1]) <= 100.0 * self.size && z.r_out.is_finite();
+        let mut state = self.state.borrow_mut();
+        let (center, seen) = &mut *state;
+        if let Some(c) = *center {
+            if let Ok(Some(z)) = circle::min_zone_near(&proj, c) {
+                let known = seen.iter().any(|(i, o)| *i == z.control_in && *o == z.control_out);
+                if known && accept(&z) {
+                    *center = Some(z.center);
+                    return z.r_out - z.r_in;
+                }
+            }
+        }
+        match circle::min_zone(&proj) {
+            Ok(z) if accept(&z) => {
+                *center = Some(z.center);
+                let key = (z.control_in, z.control_out);
+                if !seen.contains(&key) {
+                    seen.push(key);
+                }
+                z.r_out - z.r_in
+            }
+            _ => f64::INFINITY,
+        }
+    }
+}
+
 /// Direction in the cone of half-angle `s_max` about `w` (basis u, v, w).
 type Basis = (Vector3<f64>, Vector3<f64>, Vector3<f64>);
 
@@ -363,11 +417,12 @@ fn fit_direct(pts: &[f64], crit: Criterion, opts: &Options, lsq_axis: Option<Vec
         .map(|a0| {
             let (u, v) = orthonormal_basis(a0);
             let dir = |x: &[f64]| (a0 + u * x[0] + v * x[1]).normalize();
+            let warm = Warm::new(&q, crit, size);
             let nm = nelder_mead(
                 |x: &[f64]| {
                     let a = dir(x);
                     if in_region(&a) {
-                        objective(&q, &a, crit, size)
+                        warm.eval(&a)
                     } else {
                         f64::INFINITY
                     }
@@ -398,11 +453,12 @@ fn fit_direct(pts: &[f64], crit: Criterion, opts: &Options, lsq_axis: Option<Vec
                 let s0 = (a0 + (u * th.cos() + v * th.sin()) * HOP_RADIUS).normalize();
                 let (u2, v2) = orthonormal_basis(&s0);
                 let dir = |x: &[f64]| (s0 + u2 * x[0] + v2 * x[1]).normalize();
+                let warm = Warm::new(&q, crit, size);
                 let nm = nelder_mead(
                     |x: &[f64]| {
                         let a = dir(x);
                         if in_region(&a) {
-                            objective(&q, &a, crit, size)
+                            warm.eval(&a)
                         } else {
                             f64::INFINITY
                         }
@@ -428,11 +484,12 @@ fn fit_direct(pts: &[f64], crit: Criterion, opts: &Options, lsq_axis: Option<Vec
         let a0 = best.1;
         let (u2, v2) = orthonormal_basis(&a0);
         let dir = |x: &[f64]| (a0 + u2 * x[0] + v2 * x[1]).normalize();
+        let warm = Warm::new(&q, crit, size);
         let nm = nelder_mead(
             |x: &[f64]| {
                 let a = dir(x);
                 if in_region(&a) {
-                    objective(&q, &a, crit, size)
+                    warm.eval(&a)
                 } else {
                     f64::INFINITY
                 }

@@ -1,7 +1,7 @@
 //! Minimum zone circle (MZ, roundness; Eqs. 6.5-6.8, Sec. 6.2.3).
 
 use super::voronoi::{convex_hull, intersect, Farthest, Nearest, VEdge};
-use super::{circumcenter, dist, mc, subset, Centered, Zone};
+use super::{circumcenter, dist, dist2, mc, subset, Centered, Zone};
 use gagekit_core::Result;
 use rayon::prelude::*;
 
@@ -91,6 +91,36 @@ pub fn min_zone(pts: &[f64]) -> Result<Zone> {
         center: data.uncenter(z.center),
         ..z
     })
+}
+
+/// Narrowest zone among the equal-distance solutions (1+3, 3+1, 2+2) of the six points
+/// nearest to and the six farthest from `center` (input coordinates): a local minimum
+/// of Eq. 6.5 near `center`, its radii taken over all points. Cheap (no Voronoi
+/// diagrams), for warm starts of a search in which the points move little between
+/// calls; not a global optimum. `None` for fewer than 12 points or a far centre.
+pub fn min_zone_near(pts: &[f64], center: [f64; 2]) -> Result<Option<Zone>> {
+    const WHAT: &str = "minimum zone circle";
+    let data = Centered::new(pts, WHAT, 3)?;
+    let p = &data.pts;
+    let c = [center[0] - data.shift[0], center[1] - data.shift[1]];
+    let Some(mut b) = local_polish(p, c) else {
+        return Ok(None);
+    };
+    if b.c[0].hypot(b.c[1]) > FAR * data.scale {
+        return Ok(None);
+    }
+    let (r_in, r_out) = radii(p, b.c);
+    for v in [&mut b.inner, &mut b.outer] {
+        v.sort_unstable();
+        v.dedup();
+    }
+    Ok(Some(Zone {
+        center: data.uncenter(b.c),
+        r_in,
+        r_out,
+        control_in: b.inner,
+        control_out: b.outer,
+    }))
 }
 
 /// Exact MZ of centred points (all of them), in centred coordinates.
@@ -444,7 +474,13 @@ fn local_polish(p: &[[f64; 2]], c: [f64; 2]) -> Option<Cand> {
         .enumerate()
         .filter_map(|(k, (c, _, _))| c.map(|c| (spread_in(&near, c, near_size).2, k)))
         .collect();
-    ranked.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    // the four best in order (the key is total: same as sorting all of them)
+    let key = |a: &(f64, usize), b: &(f64, usize)| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1));
+    if ranked.len() > 4 {
+        ranked.select_nth_unstable_by(3, key);
+        ranked.truncate(4);
+    }
+    ranked.sort_by(key);
     ranked
         .iter()
         .take(4)
@@ -520,17 +556,21 @@ fn spread_in(p: &[[f64; 2]], c: [f64; 2], size: f64) -> (f64, f64, f64) {
 }
 
 fn near_radii(p: &[[f64; 2]], c: [f64; 2]) -> (f64, f64) {
+    // extremes of the squared distances, then two roots: sqrt is monotone and
+    // correctly rounded, so this equals the extremes of `dist`
     let fold = |(lo, hi): (f64, f64), q: &[f64; 2]| {
-        let d = dist(*q, c);
+        let d = dist2(*q, c);
         (lo.min(d), hi.max(d))
     };
-    if p.len() < 50_000 {
-        return p.iter().fold((f64::INFINITY, 0.0f64), fold);
-    }
-    p.par_iter().fold(|| (f64::INFINITY, 0.0f64), fold).reduce(
-        || (f64::INFINITY, 0.0f64),
-        |a, b| (a.0.min(b.0), a.1.max(b.1)),
-    )
+    let (lo, hi) = if p.len() < 50_000 {
+        p.iter().fold((f64::INFINITY, 0.0f64), fold)
+    } else {
+        p.par_iter().fold(|| (f64::INFINITY, 0.0f64), fold).reduce(
+            || (f64::INFINITY, 0.0f64),
+            |a, b| (a.0.min(b.0), a.1.max(b.1)),
+        )
+    };
+    (lo.sqrt(), hi.sqrt())
 }
 
 /// Point equidistant from a and b and from i and l (two linear equations), solved
