@@ -10,8 +10,8 @@
 //! 1. the seeded parallel PSO ([`gagekit_pso`]) over the half sphere (or a cone
 //!    around a given axis), with the least-squares axis as one particle;
 //! 2. Nelder–Mead in local coordinates (alpha, beta) from the best distinct
-//!    particles, to 1e-12 rad (for the minimum zone with a warm-started 2-D
-//!    evaluation, see `Warm`);
+//!    particles, to 1e-12 rad (MIC and MZC with a warm-started 2-D evaluation,
+//!    see `Warm`);
 //! 3. basin hopping: Nelder–Mead restarted 1e-4 rad around the best axis while
 //!    that finds a lower basin (minimax landscapes have long narrow valleys with
 //!    several local minima some 1e-5 rad apart).
@@ -200,9 +200,10 @@ fn objective(q: &[f64], a: &Vector3<f64>, crit: Criterion, size: f64) -> f64 {
 }
 
 /// The objective for one local search (a sequence of nearby axes), warm-started for
-/// the minimum zone: around the previous axis's zone centre, the equal-distance
-/// solutions among the points nearest the inner and outer circle
-/// ([`circle::min_zone_near`]) are tried first. Their narrowest zone is accepted only
+/// the minimum zone and the maximum inscribed cylinder: around the previous axis's
+/// centre, the candidates built from the points nearest the circles
+/// ([`circle::min_zone_near`], [`circle::max_inscribed_near`]) are tried first. Their
+/// best is accepted only
 /// when its control points are an active set the exact kernel has already returned in
 /// this search (near the optimum the projections cycle through a few active sets);
 /// otherwise the exact kernel runs, and its zone becomes the warm start. Each search
@@ -221,35 +222,52 @@ impl<'a> Warm<'a> {
     }
 
     fn eval(&self, a: &Vector3<f64>) -> f64 {
-        if self.crit != Criterion::MinZone {
+        if self.crit == Criterion::MinCircumscribed {
             return objective(self.q, a, self.crit, self.size);
         }
         let (t, f) = angles(&[a[0], a[1], a[2]]);
         let proj = project(self.q, t, f);
+        let near = |c: [f64; 2]| -> Option<circle::Zone> {
+            match self.crit {
+                Criterion::MinZone => circle::min_zone_near(&proj, c).ok().flatten(),
+                _ => circle::max_inscribed_near(&proj, c).ok().flatten().map(zone_of),
+            }
+        };
+        let exact = || -> Result<circle::Zone> {
+            match self.crit {
+                Criterion::MinZone => circle::min_zone(&proj),
+                _ => circle::max_inscribed(&proj).map(zone_of),
+            }
+        };
+        let value = |z: &circle::Zone| if self.crit == Criterion::MinZone { z.r_out - z.r_in } else { -z.r_in };
         let accept = |z: &circle::Zone| z.center[0].hypot(z.center[1]) <= 100.0 * self.size && z.r_out.is_finite();
         let mut state = self.state.borrow_mut();
         let (center, seen) = &mut *state;
-        if let Some(c) = *center {
-            if let Ok(Some(z)) = circle::min_zone_near(&proj, c) {
-                let known = seen.iter().any(|(i, o)| *i == z.control_in && *o == z.control_out);
-                if known && accept(&z) {
-                    *center = Some(z.center);
-                    return z.r_out - z.r_in;
-                }
+        if let Some(z) = center.and_then(near) {
+            let known = seen.iter().any(|(i, o)| *i == z.control_in && *o == z.control_out);
+            if known && accept(&z) {
+                *center = Some(z.center);
+                return value(&z);
             }
         }
-        match circle::min_zone(&proj) {
+        match exact() {
             Ok(z) if accept(&z) => {
                 *center = Some(z.center);
+                let v = value(&z);
                 let key = (z.control_in, z.control_out);
                 if !seen.contains(&key) {
                     seen.push(key);
                 }
-                z.r_out - z.r_in
+                v
             }
             _ => f64::INFINITY,
         }
     }
+}
+
+/// A single circle as a zone of width 0.
+fn zone_of(c: circle::Circle) -> circle::Zone {
+    circle::Zone { center: c.center, r_in: c.radius, r_out: c.radius, control_in: c.control.clone(), control_out: c.control }
 }
 
 /// Direction in the cone of half-angle `s_max` about `w` (basis u, v, w).
