@@ -23,7 +23,7 @@
 use crate::circle;
 use crate::lsq::{self, centroid, orthonormal_basis, Extent};
 use gagekit_core::{check_finite, GkError, Result};
-use gagekit_pso::{minimize_from, nelder_mead, Settings};
+use gagekit_pso::{minimize_particles, nelder_mead, Settings};
 use nalgebra::Vector3;
 use rayon::prelude::*;
 use std::f64::consts::{FRAC_PI_2, PI};
@@ -213,7 +213,7 @@ struct Warm<'a> {
     crit: Criterion,
     size: f64,
     /// Centre of the last zone and the control points of every exact fit so far.
-    state: std::cell::RefCell<(Option<[f64; 2]>, Vec<(Vec<usize>, Vec<usize>)>)>,
+    state: std::sync::Mutex<(Option<[f64; 2]>, Vec<(Vec<usize>, Vec<usize>)>)>,
 }
 
 impl<'a> Warm<'a> {
@@ -241,7 +241,7 @@ impl<'a> Warm<'a> {
         };
         let value = |z: &circle::Zone| if self.crit == Criterion::MinZone { z.r_out - z.r_in } else { -z.r_in };
         let accept = |z: &circle::Zone| z.center[0].hypot(z.center[1]) <= 100.0 * self.size && z.r_out.is_finite();
-        let mut state = self.state.borrow_mut();
+        let mut state = self.state.lock().unwrap_or_else(|e| e.into_inner());
         let (center, seen) = &mut *state;
         if let Some(z) = center.and_then(near) {
             let known = seen.iter().any(|(i, o)| *i == z.control_in && *o == z.control_out);
@@ -394,8 +394,10 @@ fn fit_direct(pts: &[f64], crit: Criterion, opts: &Options, lsq_axis: Option<Vec
             seeds.push(vec![s, a.dot(&basis.1).atan2(a.dot(&basis.0))]);
         }
     }
-    let swarm = minimize_from(
-        |x: &[f64]| objective(&q, &cone_dir(&basis, x[0], x[1]), crit, size),
+    // every particle keeps its own warm start (its positions come in order)
+    let warm: Vec<Warm> = (0..opts.particles).map(|_| Warm::new(&q, crit, size)).collect();
+    let swarm = minimize_particles(
+        |i: usize, x: &[f64]| warm[i].eval(&cone_dir(&basis, x[0], x[1])),
         &[0.0, -PI],
         &[s_max, PI],
         &settings,

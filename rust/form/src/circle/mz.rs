@@ -93,17 +93,19 @@ pub fn min_zone(pts: &[f64]) -> Result<Zone> {
     })
 }
 
-/// Narrowest zone among the equal-distance solutions (1+3, 3+1, 2+2) of the six points
-/// nearest to and the six farthest from `center` (input coordinates): a local minimum
+/// Narrowest zone among the equal-distance solutions (1+3, 3+1, 2+2) of the four points
+/// nearest to and the four farthest from `center` (input coordinates): a local minimum
 /// of Eq. 6.5 near `center`, its radii taken over all points. Cheap (no Voronoi
 /// diagrams), for warm starts of a search in which the points move little between
-/// calls; not a global optimum. `None` for fewer than 12 points or a far centre.
+/// calls; not a global optimum. `None` for fewer than 8 points or a far centre.
 pub fn min_zone_near(pts: &[f64], center: [f64; 2]) -> Result<Option<Zone>> {
     const WHAT: &str = "minimum zone circle";
     let data = Centered::new(pts, WHAT, 3)?;
     let p = &data.pts;
     let c = [center[0] - data.shift[0], center[1] - data.shift[1]];
-    let Some(mut b) = local_polish(p, c) else {
+    // the four points nearest to / farthest from the previous centre hold the
+    // active set of a zone that moved little
+    let Some(mut b) = local_choices::<4>(p, c) else {
         return Ok(None);
     };
     if b.c[0].hypot(b.c[1]) > FAR * data.scale {
@@ -426,7 +428,11 @@ fn witnesses(
 /// the Voronoi geometry picked a neighbouring combination (points within ~1e-11 of a
 /// perfect circle).
 fn local_polish(p: &[[f64; 2]], c: [f64; 2]) -> Option<Cand> {
-    const K: usize = 6;
+    local_choices::<6>(p, c)
+}
+
+/// [`local_polish`] among the `K` points nearest to and farthest from `c`.
+fn local_choices<const K: usize>(p: &[[f64; 2]], c: [f64; 2]) -> Option<Cand> {
     let mut order: Vec<(f64, usize)> = p
         .iter()
         .enumerate()
@@ -442,7 +448,7 @@ fn local_polish(p: &[[f64; 2]], c: [f64; 2]) -> Option<Cand> {
     type Ids = ([usize; 3], usize);
     type Choice = (Option<[f64; 2]>, Ids, Ids);
     const NONE: Ids = ([0; 3], 0);
-    let mut cands: Vec<Choice> = Vec::with_capacity(2 * 20 + 15 * 15);
+    let mut cands: Vec<Choice> = Vec::with_capacity(2 * K * K * K + K * K * K * K);
     for a in 0..K {
         for b in a + 1..K {
             for d in b + 1..K {
