@@ -188,15 +188,15 @@ pub(crate) fn quadratic_roots(a: f64, b: f64, c: f64) -> Vec<f64> {
     vec![qv / a, c / qv]
 }
 
-/// Largest circle among the Sec. 6.2.2 candidates built from the six points nearest to
+/// Largest circle among the Sec. 6.2.2 candidates built from the five points nearest to
 /// `center` (input coordinates): circles through three of them, circles through two
 /// internally tangent to MC (Case I) and circles through one tangent to MC at the far
 /// end of its diameter (Case II), each scored by `g` (Eq. 6.2) over all points. A local
 /// maximum near `center`, cheap (no Voronoi diagram), for warm starts of a search in
 /// which the points move little between calls; not a global optimum. `None` for fewer
-/// than 6 points.
+/// than 5 points.
 pub fn max_inscribed_near(pts: &[f64], center: [f64; 2]) -> Result<Option<Circle>> {
-    const K: usize = 6;
+    const K: usize = 5;
     let data = Centered::new(pts, WHAT, 3)?;
     let p = &data.pts;
     if p.len() < K {
@@ -209,15 +209,24 @@ pub fn max_inscribed_near(pts: &[f64], center: [f64; 2]) -> Result<Option<Circle
     order.select_nth_unstable_by(K - 1, |a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
     let mut near: Vec<usize> = order[..K].iter().map(|e| e.1).collect();
     near.sort_unstable();
-    // g over all points: min distance (squared, one root) and the MC constraint
-    let g = |c: [f64; 2]| {
-        let d2 = p.iter().map(|q| super::dist2(*q, c)).fold(f64::INFINITY, f64::min);
-        d2.sqrt().min(rmc - dist(c, cmc))
-    };
-    let mut best: Option<(f64, [f64; 2], Vec<usize>)> = None;
-    let mut consider = |c: [f64; 2], ctrl: Vec<usize>| {
-        let v = g(c);
-        if v.is_finite() && best.as_ref().is_none_or(|b| v > b.0) {
+    // g over all points (Eq. 6.2); a candidate stops as soon as a point rules it out
+    let mut best: Option<(f64, [f64; 2], ([usize; 3], usize))> = None;
+    let mut consider = |c: [f64; 2], ctrl: ([usize; 3], usize)| {
+        let floor = best.as_ref().map_or(f64::NEG_INFINITY, |b| b.0);
+        let g_mc = rmc - dist(c, cmc);
+        if !(g_mc > floor) {
+            return;
+        }
+        let floor2 = if floor > 0.0 { floor * floor } else { 0.0 };
+        let mut d2 = f64::INFINITY;
+        for q in p {
+            d2 = d2.min(super::dist2(*q, c));
+            if d2 <= floor2 {
+                return;
+            }
+        }
+        let v = d2.sqrt().min(g_mc);
+        if v.is_finite() && v > floor {
             best = Some((v, c, ctrl));
         }
     };
@@ -227,7 +236,7 @@ pub fn max_inscribed_near(pts: &[f64], center: [f64; 2]) -> Result<Option<Circle
         let d = dist(pa, cmc);
         if d > 0.0 {
             let r = 0.5 * (rmc + d);
-            consider([pa[0] + (cmc[0] - pa[0]) / d * r, pa[1] + (cmc[1] - pa[1]) / d * r], vec![near[a]]);
+            consider([pa[0] + (cmc[0] - pa[0]) / d * r, pa[1] + (cmc[1] - pa[1]) / d * r], ([near[a], 0, 0], 1));
         }
         for b in a + 1..K {
             let pb = p[near[b]];
@@ -244,20 +253,21 @@ pub fn max_inscribed_near(pts: &[f64], center: [f64; 2]) -> Result<Option<Circle
                 let beta = -qn / rmc;
                 for t in quadratic_roots(1.0 - beta * beta, -2.0 * alpha * beta, h * h - alpha * alpha) {
                     if alpha + beta * t > 0.0 {
-                        consider([m[0] + t * n[0], m[1] + t * n[1]], vec![near[a], near[b]]);
+                        consider([m[0] + t * n[0], m[1] + t * n[1]], ([near[a], near[b], 0], 2));
                     }
                 }
             }
             for e in b + 1..K {
                 if let Some(c) = super::circumcenter(pa, pb, p[near[e]]) {
-                    consider(c, vec![near[a], near[b], near[e]]);
+                    consider(c, ([near[a], near[b], near[e]], 3));
                 }
             }
         }
     }
-    let Some((_, c, control)) = best else {
+    let Some((_, c, (ids, k))) = best else {
         return Ok(None);
     };
+    let control = ids[..k].to_vec();
     let r_near = p.iter().map(|q| dist(*q, c)).fold(f64::INFINITY, f64::min);
     let radius = r_near.min(rmc - dist(c, cmc)).max(0.0);
     Ok(Some(Circle { center: data.uncenter(c), radius, control }))
