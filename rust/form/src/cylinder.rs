@@ -81,7 +81,10 @@ impl Default for Options {
             seed: 0,
             particles: 20,
             max_iterations: 300,
-            stall_iterations: 50,
+            // the exact local refinement and basin hopping follow, so the swarm only
+            // has to find the right valley (25: same results for seeds 0..7 on data
+            // sets 1 and 3 as 50, at two thirds of the evaluations)
+            stall_iterations: 25,
             search: Search::HalfSphere,
             refine_starts: 4,
             hop_rounds: 3,
