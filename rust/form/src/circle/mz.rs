@@ -291,7 +291,8 @@ fn solve(
         let c = fvd.verts[*k].c;
         (c[1] - cmc[1]).atan2(c[0] - cmc[0])
     };
-    order.sort_by(|a, b| ang(a).total_cmp(&ang(b)));
+    let keys: Vec<f64> = order.iter().map(ang).collect();
+    order.sort_by(|a, b| keys[*a].total_cmp(&keys[*b]));
     let mut prev = j0;
     for k in order {
         let u = &fvd.verts[k];
