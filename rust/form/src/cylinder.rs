@@ -216,12 +216,34 @@ struct Warm<'a> {
     crit: Criterion,
     size: f64,
     /// Centre of the last zone and the control points of every exact fit so far.
-    state: std::sync::Mutex<(Option<[f64; 2]>, Vec<(Vec<usize>, Vec<usize>)>)>,
+    state: std::sync::Mutex<(Option<[f64; 2]>, ActiveSets)>,
+}
+
+/// Control points (inner, outer) of exact 2-D fits.
+type ActiveSets = Vec<(Vec<usize>, Vec<usize>)>;
+
+/// Union of active sets, in order (deterministic).
+fn merge_sets(into: &mut ActiveSets, more: ActiveSets) {
+    for k in more {
+        if !into.contains(&k) {
+            into.push(k);
+        }
+    }
 }
 
 impl<'a> Warm<'a> {
     fn new(q: &'a [f64], crit: Criterion, size: f64) -> Self {
-        Self { q, crit, size, state: Default::default() }
+        Self::knowing(q, crit, size, Vec::new())
+    }
+
+    /// A search that starts knowing the active sets other searches met.
+    fn knowing(q: &'a [f64], crit: Criterion, size: f64, known: ActiveSets) -> Self {
+        Self { q, crit, size, state: std::sync::Mutex::new((None, known)) }
+    }
+
+    /// The active sets the exact kernel returned so far.
+    fn active_sets(self) -> ActiveSets {
+        self.state.into_inner().unwrap_or_else(|e| e.into_inner()).1
     }
 
     fn eval(&self, a: &Vector3<f64>) -> f64 {
@@ -435,7 +457,7 @@ fn fit_direct(pts: &[f64], crit: Criterion, opts: &Options, lsq_axis: Option<Vec
     let mut best = (swarm.value, cone_dir(&basis, swarm.position[0], swarm.position[1]));
     // refinements run in parallel; each is deterministic and the best is taken
     // in start order, so the thread count never changes the result
-    let refined: Vec<(f64, Vector3<f64>, usize)> = starts
+    let refined: Vec<(f64, Vector3<f64>, usize, ActiveSets)> = starts
         .par_iter()
         .map(|a0| {
             let (u, v) = orthonormal_basis(a0);
@@ -454,10 +476,13 @@ fn fit_direct(pts: &[f64], crit: Criterion, opts: &Options, lsq_axis: Option<Vec
                 NM_STEP,
                 NM_XTOL,
             );
-            (nm.value, dir(&nm.position), nm.evaluations)
+            (nm.value, dir(&nm.position), nm.evaluations, warm.active_sets())
         })
         .collect();
-    for (value, a, evals) in refined {
+    // the active sets met near the optimum: later searches there start knowing them
+    let mut known = ActiveSets::new();
+    for (value, a, evals, sets) in refined {
+        merge_sets(&mut known, sets);
         evaluations += evals;
         if value < best.0 {
             best = (value, a);
@@ -469,14 +494,14 @@ fn fit_direct(pts: &[f64], crit: Criterion, opts: &Options, lsq_axis: Option<Vec
     for _ in 0..opts.hop_rounds {
         let (u, v) = orthonormal_basis(&best.1);
         let a0 = best.1;
-        let hops: Vec<(f64, Vector3<f64>, usize)> = (0..HOPS)
+        let hops: Vec<(f64, Vector3<f64>, usize, ActiveSets)> = (0..HOPS)
             .into_par_iter()
             .map(|k| {
                 let th = 0.3 + 2.0 * PI * k as f64 / HOPS as f64;
                 let s0 = (a0 + (u * th.cos() + v * th.sin()) * HOP_RADIUS).normalize();
                 let (u2, v2) = orthonormal_basis(&s0);
                 let dir = |x: &[f64]| (s0 + u2 * x[0] + v2 * x[1]).normalize();
-                let warm = Warm::new(&q, crit, size);
+                let warm = Warm::knowing(&q, crit, size, known.clone());
                 let nm = nelder_mead(
                     |x: &[f64]| {
                         let a = dir(x);
@@ -490,11 +515,12 @@ fn fit_direct(pts: &[f64], crit: Criterion, opts: &Options, lsq_axis: Option<Vec
                     0.2 * HOP_RADIUS,
                     HOP_XTOL,
                 );
-                (nm.value, dir(&nm.position), nm.evaluations)
+                (nm.value, dir(&nm.position), nm.evaluations, warm.active_sets())
             })
             .collect();
         let before = best.0;
-        for (value, a, evals) in hops {
+        for (value, a, evals, sets) in hops {
+            merge_sets(&mut known, sets);
             evaluations += evals;
             if value < best.0 {
                 best = (value, a);
@@ -507,7 +533,7 @@ fn fit_direct(pts: &[f64], crit: Criterion, opts: &Options, lsq_axis: Option<Vec
         let a0 = best.1;
         let (u2, v2) = orthonormal_basis(&a0);
         let dir = |x: &[f64]| (a0 + u2 * x[0] + v2 * x[1]).normalize();
-        let warm = Warm::new(&q, crit, size);
+        let warm = Warm::knowing(&q, crit, size, known.clone());
         let nm = nelder_mead(
             |x: &[f64]| {
                 let a = dir(x);
