@@ -210,11 +210,13 @@ pub fn max_inscribed_near(pts: &[f64], center: [f64; 2]) -> Result<Option<Circle
     let mut near: Vec<usize> = order[..K].iter().map(|e| e.1).collect();
     near.sort_unstable();
     // g over all points (Eq. 6.2); a candidate stops as soon as a point rules it out
-    let mut best: Option<(f64, [f64; 2], ([usize; 3], usize))> = None;
+    // (g, centre, (control points, how many))
+    type Best = (f64, [f64; 2], ([usize; 3], usize));
+    let mut best: Option<Best> = None;
     let mut consider = |c: [f64; 2], ctrl: ([usize; 3], usize)| {
         let floor = best.as_ref().map_or(f64::NEG_INFINITY, |b| b.0);
         let g_mc = rmc - dist(c, cmc);
-        if !(g_mc > floor) {
+        if g_mc.is_nan() || g_mc <= floor {
             return;
         }
         let floor2 = if floor > 0.0 { floor * floor } else { 0.0 };
