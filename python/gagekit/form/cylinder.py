@@ -106,7 +106,7 @@ def fit_cylinder(
     *,
     particles: int = 20,
     iterations: int = 300,
-    stall_iterations: int = 50,
+    stall_iterations: int = 25,
     refine_starts: int = 4,
     hop_rounds: int = 3,
     search_axis: Optional[Any] = None,

@@ -94,8 +94,8 @@ fn uniform(rng: &mut ChaCha8Rng) -> f64 {
     (rng.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
 }
 
-fn eval<F: Fn(&[f64]) -> f64>(f: &F, x: &[f64]) -> f64 {
-    let v = f(x);
+fn eval<F: Fn(usize, &[f64]) -> f64>(f: &F, i: usize, x: &[f64]) -> f64 {
+    let v = f(i, x);
     if v.is_nan() {
         f64::INFINITY
     } else {
@@ -162,6 +162,23 @@ pub fn minimize_from<F>(
 where
     F: Fn(&[f64]) -> f64 + Sync,
 {
+    minimize_particles(|_, x| f(x), lower, upper, settings, starts)
+}
+
+/// As [`minimize_from`], with an objective `f(particle, x)` that is told which
+/// particle asks. Each particle's positions reach `f` in order (one per
+/// iteration, never two at once), so per-particle state in `f` (a warm start)
+/// keeps the result independent of the thread count.
+pub fn minimize_particles<F>(
+    f: F,
+    lower: &[f64],
+    upper: &[f64],
+    settings: &Settings,
+    starts: &[Vec<f64>],
+) -> Result<Outcome>
+where
+    F: Fn(usize, &[f64]) -> f64 + Sync,
+{
     check(lower, upper, settings)?;
     if starts.iter().any(|s| s.len() != lower.len() || s.iter().any(|v| !v.is_finite())) {
         return Err(GkError::config("PSO: every start must be a finite point of the search space"));
@@ -180,7 +197,7 @@ where
                 x = (0..dim).map(|d| s[d].clamp(lower[d], upper[d])).collect();
             }
             let v: Vec<f64> = (0..dim).map(|d| vmax[d] * (2.0 * uniform(&mut rng) - 1.0)).collect();
-            let fx = eval(&f, &x);
+            let fx = eval(&f, i, &x);
             Particle { best_x: x.clone(), x, v, best_f: fx, rng }
         })
         .collect();
@@ -195,7 +212,7 @@ where
     while iterations < settings.max_iterations {
         iterations += 1;
         let gx = &g_x;
-        swarm.par_iter_mut().for_each(|p| {
+        swarm.par_iter_mut().enumerate().for_each(|(i, p)| {
             for d in 0..dim {
                 let r1 = uniform(&mut p.rng);
                 let r2 = uniform(&mut p.rng);
@@ -214,7 +231,7 @@ where
                 p.v[d] = v;
                 p.x[d] = x;
             }
-            let fx = eval(&f, &p.x);
+            let fx = eval(&f, i, &p.x);
             if fx < p.best_f {
                 p.best_f = fx;
                 p.best_x.copy_from_slice(&p.x);
@@ -301,5 +318,32 @@ mod tests {
         assert!(minimize(f, &[f64::NAN], &[0.0], &Settings::default()).is_err());
         let s = Settings { particles: 0, ..Settings::default() };
         assert!(minimize(f, &[0.0], &[1.0], &s).is_err());
+    }
+
+    #[test]
+    fn per_particle_state_is_thread_independent() {
+        // an objective whose value depends on the particle's own history
+        let s = Settings { seed: 9, max_iterations: 60, ..Settings::default() };
+        let run = |threads: usize| {
+            let calls: Vec<std::sync::Mutex<usize>> = (0..s.particles).map(|_| Default::default()).collect();
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            pool.install(|| {
+                minimize_particles(
+                    |i, x| {
+                        let mut n = calls[i].lock().unwrap();
+                        *n += 1;
+                        rastrigin(x) + 1e-3 * (*n % 7) as f64
+                    },
+                    &[-5.12; 2],
+                    &[5.12; 2],
+                    &s,
+                    &[],
+                )
+                .unwrap()
+            })
+        };
+        let (a, b) = (run(1), run(3));
+        assert_eq!(a.position, b.position);
+        assert_eq!(a.value, b.value);
     }
 }

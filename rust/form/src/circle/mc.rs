@@ -30,6 +30,7 @@ pub fn min_circumscribed(pts: &[f64]) -> Result<Circle> {
     let r = data
         .pts
         .par_iter()
+        .with_min_len(8192)
         .map(|p| dist(*p, c))
         .reduce(|| 0.0, f64::max);
     Ok(Circle {

@@ -54,6 +54,7 @@ pub fn max_inscribed(pts: &[f64]) -> Result<Circle> {
     };
     let r_near = p
         .par_iter()
+        .with_min_len(8192)
         .map(|q| dist(*q, c))
         .reduce(|| f64::INFINITY, f64::min);
     let radius = r_near.min(rmc - dist(c, cmc)).max(0.0);
@@ -185,4 +186,91 @@ pub(crate) fn quadratic_roots(a: f64, b: f64, c: f64) -> Vec<f64> {
         return vec![0.0];
     }
     vec![qv / a, c / qv]
+}
+
+/// Largest circle among the Sec. 6.2.2 candidates built from the five points nearest to
+/// `center` (input coordinates): circles through three of them, circles through two
+/// internally tangent to MC (Case I) and circles through one tangent to MC at the far
+/// end of its diameter (Case II), each scored by `g` (Eq. 6.2) over all points. A local
+/// maximum near `center`, cheap (no Voronoi diagram), for warm starts of a search in
+/// which the points move little between calls; not a global optimum. `None` for fewer
+/// than 5 points.
+pub fn max_inscribed_near(pts: &[f64], center: [f64; 2]) -> Result<Option<Circle>> {
+    const K: usize = 5;
+    let data = Centered::new(pts, WHAT, 3)?;
+    let p = &data.pts;
+    if p.len() < K {
+        return Ok(None);
+    }
+    let (cmc, _) = mc::welzl(p, data.scale);
+    let rmc = p.iter().map(|q| dist(*q, cmc)).fold(0.0, f64::max);
+    let c0 = [center[0] - data.shift[0], center[1] - data.shift[1]];
+    let mut order: Vec<(f64, usize)> = p.iter().enumerate().map(|(i, q)| (super::dist2(*q, c0), i)).collect();
+    order.select_nth_unstable_by(K - 1, |a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    let mut near: Vec<usize> = order[..K].iter().map(|e| e.1).collect();
+    near.sort_unstable();
+    // g over all points (Eq. 6.2); a candidate stops as soon as a point rules it out
+    // (g, centre, (control points, how many))
+    type Best = (f64, [f64; 2], ([usize; 3], usize));
+    let mut best: Option<Best> = None;
+    let mut consider = |c: [f64; 2], ctrl: ([usize; 3], usize)| {
+        let floor = best.as_ref().map_or(f64::NEG_INFINITY, |b| b.0);
+        let g_mc = rmc - dist(c, cmc);
+        if g_mc.is_nan() || g_mc <= floor {
+            return;
+        }
+        let floor2 = if floor > 0.0 { floor * floor } else { 0.0 };
+        let mut d2 = f64::INFINITY;
+        for q in p {
+            d2 = d2.min(super::dist2(*q, c));
+            if d2 <= floor2 {
+                return;
+            }
+        }
+        let v = d2.sqrt().min(g_mc);
+        if v.is_finite() && v > floor {
+            best = Some((v, c, ctrl));
+        }
+    };
+    for a in 0..K {
+        let pa = p[near[a]];
+        // Case II
+        let d = dist(pa, cmc);
+        if d > 0.0 {
+            let r = 0.5 * (rmc + d);
+            consider([pa[0] + (cmc[0] - pa[0]) / d * r, pa[1] + (cmc[1] - pa[1]) / d * r], ([near[a], 0, 0], 1));
+        }
+        for b in a + 1..K {
+            let pb = p[near[b]];
+            // Case I: on the bisector c(t) = m + t n, |c - pa| = s, |c - cMC| = R - s
+            let m = [0.5 * (pa[0] + pb[0]), 0.5 * (pa[1] + pb[1])];
+            let len = dist(pa, pb);
+            if len > 0.0 {
+                let n = [-(pb[1] - pa[1]) / len, (pb[0] - pa[0]) / len];
+                let h = 0.5 * len;
+                let q = [m[0] - cmc[0], m[1] - cmc[1]];
+                let qq = q[0] * q[0] + q[1] * q[1];
+                let qn = q[0] * n[0] + q[1] * n[1];
+                let alpha = (rmc * rmc + h * h - qq) / (2.0 * rmc);
+                let beta = -qn / rmc;
+                for t in quadratic_roots(1.0 - beta * beta, -2.0 * alpha * beta, h * h - alpha * alpha) {
+                    if alpha + beta * t > 0.0 {
+                        consider([m[0] + t * n[0], m[1] + t * n[1]], ([near[a], near[b], 0], 2));
+                    }
+                }
+            }
+            for e in b + 1..K {
+                if let Some(c) = super::circumcenter(pa, pb, p[near[e]]) {
+                    consider(c, ([near[a], near[b], near[e]], 3));
+                }
+            }
+        }
+    }
+    let Some((_, c, (ids, k))) = best else {
+        return Ok(None);
+    };
+    let control = ids[..k].to_vec();
+    let r_near = p.iter().map(|q| dist(*q, c)).fold(f64::INFINITY, f64::min);
+    let radius = r_near.min(rmc - dist(c, cmc)).max(0.0);
+    Ok(Some(Circle { center: data.uncenter(c), radius, control }))
 }

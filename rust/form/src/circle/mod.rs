@@ -21,8 +21,8 @@ use gagekit_core::{GkError, Result};
 
 pub use lsq::least_squares;
 pub use mc::min_circumscribed;
-pub use mi::max_inscribed;
-pub use mz::min_zone;
+pub use mi::{max_inscribed, max_inscribed_near};
+pub use mz::{min_zone, min_zone_near};
 
 /// A circle with the indices of the input points that fix it.
 #[derive(Debug, Clone, PartialEq)]

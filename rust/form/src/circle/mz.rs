@@ -1,7 +1,7 @@
 //! Minimum zone circle (MZ, roundness; Eqs. 6.5-6.8, Sec. 6.2.3).
 
 use super::voronoi::{convex_hull, intersect, Farthest, Nearest, VEdge};
-use super::{circumcenter, dist, mc, subset, Centered, Zone};
+use super::{circumcenter, dist, dist2, mc, subset, Centered, Zone};
 use gagekit_core::Result;
 use rayon::prelude::*;
 
@@ -16,6 +16,9 @@ struct Cand {
 
 /// How many of the best candidates are verified against all points at the end.
 const TOP: usize = 8;
+
+/// Below this many points the solver runs on the calling thread only.
+const SEQUENTIAL: usize = 256;
 
 /// Minimum zone circle of `pts` (flat (n, 2), n >= 3, not collinear).
 ///
@@ -76,24 +79,67 @@ pub fn min_zone(pts: &[f64]) -> Result<Zone> {
             None => exact(p, data.scale)?,
         }
     };
+    if z.center[0].hypot(z.center[1]) > STRAIGHT * data.scale {
+        return Err(gagekit_core::GkError::degenerate(format!(
+            "{WHAT}: the {} points lie almost on a straight line (the narrowest zone's \
+             circles would have a radius above 10^4 times the points' extent); no roundness \
+             zone is determined; fit a straightness zone (two parallel lines) instead",
+            p.len()
+        )));
+    }
     Ok(Zone {
         center: data.uncenter(z.center),
         ..z
     })
 }
 
+/// Narrowest zone among the equal-distance solutions (1+3, 3+1, 2+2) of the four points
+/// nearest to and the four farthest from `center` (input coordinates): a local minimum
+/// of Eq. 6.5 near `center`, its radii taken over all points. Cheap (no Voronoi
+/// diagrams), for warm starts of a search in which the points move little between
+/// calls; not a global optimum. `None` for fewer than 8 points or a far centre.
+pub fn min_zone_near(pts: &[f64], center: [f64; 2]) -> Result<Option<Zone>> {
+    const WHAT: &str = "minimum zone circle";
+    let data = Centered::new(pts, WHAT, 3)?;
+    let p = &data.pts;
+    let c = [center[0] - data.shift[0], center[1] - data.shift[1]];
+    // the four points nearest to / farthest from the previous centre hold the
+    // active set of a zone that moved little
+    let Some(mut b) = local_choices::<4>(p, c) else {
+        return Ok(None);
+    };
+    if b.c[0].hypot(b.c[1]) > FAR * data.scale {
+        return Ok(None);
+    }
+    let (r_in, r_out) = radii(p, b.c);
+    for v in [&mut b.inner, &mut b.outer] {
+        v.sort_unstable();
+        v.dedup();
+    }
+    Ok(Some(Zone {
+        center: data.uncenter(b.c),
+        r_in,
+        r_out,
+        control_in: b.inner,
+        control_out: b.outer,
+    }))
+}
+
 /// Exact MZ of centred points (all of them), in centred coordinates.
 pub(crate) fn exact(p: &[[f64; 2]], scale: f64) -> Result<Zone> {
     const WHAT: &str = "minimum zone circle";
-    // MC and the farthest diagram on one core while the other triangulates
-    let (side, nvd) = rayon::join(
-        || {
-            let (cmc, mc_ctrl) = mc::welzl(p, scale);
-            let (r0, rmc) = radii(p, cmc);
-            (cmc, mc_ctrl, r0, rmc, Farthest::new(p, &convex_hull(p)))
-        },
-        || Nearest::build(p, WHAT),
-    );
+    // MC and the farthest diagram on one core while the other triangulates (small
+    // sets in sequence: a task hand-off costs more than either half)
+    let side = || {
+        let (cmc, mc_ctrl) = mc::welzl(p, scale);
+        let (r0, rmc) = radii(p, cmc);
+        (cmc, mc_ctrl, r0, rmc, Farthest::new(p, &convex_hull(p)))
+    };
+    let (side, nvd) = if p.len() < SEQUENTIAL {
+        (side(), Nearest::build(p, WHAT))
+    } else {
+        rayon::join(side, || Nearest::build(p, WHAT))
+    };
     let (cmc, mc_ctrl, r0, rmc, fvd) = side;
     let mut nvd = nvd?;
     // the MC centre bounds the width: w <= rmc - r0, so only empty circles of radius
@@ -109,19 +155,19 @@ pub(crate) fn exact(p: &[[f64; 2]], scale: f64) -> Result<Zone> {
             std::iter::once(cand.c)
                 .chain(polish(p, cand))
                 .map(move |c| {
-                    let (a, b) = radii(p, c);
-                    (b - a, c, a, b, k)
+                    let (a, b, w) = spread(p, c);
+                    (w, c, a, b, k)
                 })
         })
         .collect();
-    let (_, c, r_in, r_out, k) = checked
+    let (w, c, r_in, r_out, k) = checked
         .into_iter()
         .reduce(|x, y| if y.0 < x.0 { y } else { x })
         .expect("at least the MC centre is a candidate");
     let (mut control_in, mut control_out) = (top[k].inner.clone(), top[k].outer.clone());
     let (mut c, mut r_in, mut r_out) = (c, r_in, r_out);
     if let Some(b) = local_polish(p, c) {
-        if b.w < r_out - r_in {
+        if b.w < w {
             (c, control_in, control_out) = (b.c, b.inner, b.outer);
             (r_in, r_out) = radii(p, c);
         }
@@ -151,12 +197,51 @@ fn merge(mut a: Vec<Cand>, b: Vec<Cand>) -> Vec<Cand> {
 
 /// Width at `c` claimed by its control points (exact if they are the nearest/farthest).
 fn claimed(p: &[[f64; 2]], c: [f64; 2], inner: &[usize], outer: &[usize]) -> f64 {
-    let r = inner
-        .iter()
-        .map(|&j| dist(p[j], c))
-        .fold(f64::INFINITY, f64::min);
-    let big_r = outer.iter().map(|&i| dist(p[i], c)).fold(0.0, f64::max);
-    big_r - r
+    let size = inner.iter().chain(outer).map(|&k| p[k][0].abs().max(p[k][1].abs())).fold(0.0, f64::max);
+    if !is_far(c, size) {
+        let r = inner.iter().map(|&j| dist(p[j], c)).fold(f64::INFINITY, f64::min);
+        let big_r = outer.iter().map(|&i| dist(p[i], c)).fold(0.0, f64::max);
+        return big_r - r;
+    }
+    // far centre: distance differences from the difference of squares (see `offset`)
+    let k = inner.first().or(outer.first()).map_or(p[0], |&k| p[k]);
+    let dk = dist(k, c);
+    let lo = inner.iter().map(|&j| offset(p[j], k, c, dk)).fold(f64::INFINITY, f64::min);
+    let hi = outer.iter().map(|&i| offset(p[i], k, c, dk)).fold(f64::NEG_INFINITY, f64::max);
+    hi - lo
+}
+
+/// Centres farther than this many times the points' extent from them are "far": there
+/// |c - p_i| - |c - p_j| loses digits to rounding (about 1e-16 |c|) and is computed
+/// from the difference of squares instead.
+const FAR: f64 = 1e3;
+
+/// A zone whose centre lies farther than this many times the points' extent is no
+/// circle for metrology: the points are all but straight, the zone tends to two
+/// parallel lines (a straightness zone), and radii of 1e4 extents keep only about
+/// 1e-12 of the extent in their difference.
+const STRAIGHT: f64 = 1e4;
+
+/// Is `c` far (see [`FAR`]) from centred points whose coordinates are at most `size`?
+#[inline]
+fn is_far(c: [f64; 2], size: f64) -> bool {
+    c[0].abs().max(c[1].abs()) > FAR * size.max(f64::MIN_POSITIVE)
+}
+
+/// `|c - q| - |c - k|` accurate to rounding of the points' coordinates even for a
+/// centre `c` far away: `(|q|^2 - |k|^2 - 2 c . (q - k)) / (|c - q| + |c - k|)`;
+/// `dk = |c - k|`.
+#[inline]
+fn offset(q: [f64; 2], k: [f64; 2], c: [f64; 2], dk: f64) -> f64 {
+    let dq = dist(q, c);
+    let (d0, d1) = (q[0] - k[0], q[1] - k[1]);
+    let num = (q[0] + k[0]) * d0 + (q[1] + k[1]) * d1 - 2.0 * (c[0] * d0 + c[1] * d1);
+    let den = dq + dk;
+    if den > 0.0 {
+        num / den
+    } else {
+        0.0
+    }
 }
 
 fn solve(
@@ -206,7 +291,8 @@ fn solve(
         let c = fvd.verts[*k].c;
         (c[1] - cmc[1]).atan2(c[0] - cmc[0])
     };
-    order.sort_by(|a, b| ang(a).total_cmp(&ang(b)));
+    let keys: Vec<f64> = order.iter().map(ang).collect();
+    order.sort_by(|a, b| keys[*a].total_cmp(&keys[*b]));
     let mut prev = j0;
     for k in order {
         let u = &fvd.verts[k];
@@ -343,7 +429,11 @@ fn witnesses(
 /// the Voronoi geometry picked a neighbouring combination (points within ~1e-11 of a
 /// perfect circle).
 fn local_polish(p: &[[f64; 2]], c: [f64; 2]) -> Option<Cand> {
-    const K: usize = 6;
+    local_choices::<6>(p, c)
+}
+
+/// [`local_polish`] among the `K` points nearest to and farthest from `c`.
+fn local_choices<const K: usize>(p: &[[f64; 2]], c: [f64; 2]) -> Option<Cand> {
     let mut order: Vec<(f64, usize)> = p
         .iter()
         .enumerate()
@@ -355,8 +445,11 @@ fn local_polish(p: &[[f64; 2]], c: [f64; 2]) -> Option<Cand> {
     order.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
     let inner: Vec<usize> = order[..K].iter().map(|e| e.1).collect();
     let outer: Vec<usize> = order[order.len() - K..].iter().map(|e| e.1).collect();
-    type Choice = (Option<[f64; 2]>, Vec<usize>, Vec<usize>);
-    let mut cands: Vec<Choice> = Vec::new();
+    // (centre, inner controls, outer controls), without allocating per choice
+    type Ids = ([usize; 3], usize);
+    type Choice = (Option<[f64; 2]>, Ids, Ids);
+    const NONE: Ids = ([0; 3], 0);
+    let mut cands: Vec<Choice> = Vec::with_capacity(2 * K * K * K + K * K * K * K);
     for a in 0..K {
         for b in a + 1..K {
             for d in b + 1..K {
@@ -364,24 +457,16 @@ fn local_polish(p: &[[f64; 2]], c: [f64; 2]) -> Option<Cand> {
                     [inner[a], inner[b], inner[d]],
                     [outer[a], outer[b], outer[d]],
                 );
-                cands.push((
-                    circumcenter(p[i3[0]], p[i3[1]], p[i3[2]]),
-                    i3.to_vec(),
-                    vec![],
-                ));
-                cands.push((
-                    circumcenter(p[o3[0]], p[o3[1]], p[o3[2]]),
-                    vec![],
-                    o3.to_vec(),
-                ));
+                cands.push((circumcenter(p[i3[0]], p[i3[1]], p[i3[2]]), (i3, 3), NONE));
+                cands.push((circumcenter(p[o3[0]], p[o3[1]], p[o3[2]]), NONE, (o3, 3)));
             }
             for x in 0..K {
                 for y in x + 1..K {
                     let (ia, ib, oa, ob) = (inner[a], inner[b], outer[x], outer[y]);
                     cands.push((
                         bisector_crossing(p[ia], p[ib], p[oa], p[ob]),
-                        vec![ia, ib],
-                        vec![oa, ob],
+                        ([ia, ib, 0], 2),
+                        ([oa, ob, 0], 2),
                     ));
                 }
             }
@@ -390,19 +475,27 @@ fn local_polish(p: &[[f64; 2]], c: [f64; 2]) -> Option<Cand> {
     // rank the choices by their width over the near-active points, then check the best
     // few against all points
     let near: Vec<[f64; 2]> = inner.iter().chain(&outer).map(|&i| p[i]).collect();
+    let near_size = extent(&near);
     let mut ranked: Vec<(f64, usize)> = cands
         .iter()
         .enumerate()
-        .filter_map(|(k, (c, _, _))| c.map(|c| radii(&near, c)).map(|(lo, hi)| (hi - lo, k)))
+        .filter_map(|(k, (c, _, _))| c.map(|c| (spread_in(&near, c, near_size).2, k)))
         .collect();
-    ranked.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    // the four best in order (the key is total: same as sorting all of them)
+    let key = |a: &(f64, usize), b: &(f64, usize)| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1));
+    if ranked.len() > 4 {
+        ranked.select_nth_unstable_by(3, key);
+        ranked.truncate(4);
+    }
+    ranked.sort_by(key);
     ranked
         .iter()
         .take(4)
         .filter_map(|&(_, k)| {
-            let (c, mut inn, mut out) = cands[k].clone();
+            let (c, (ia, ni), (oa, no)) = cands[k];
+            let (mut inn, mut out) = (ia[..ni].to_vec(), oa[..no].to_vec());
             let c = c?;
-            let (lo, hi) = radii(p, c);
+            let (lo, hi, w) = spread(p, c);
             // the controls of a 1+3 / 3+1 choice: complete with the extreme point
             let extreme = |want: f64| p.iter().position(|q| dist(*q, c) == want);
             if inn.is_empty() {
@@ -413,7 +506,7 @@ fn local_polish(p: &[[f64; 2]], c: [f64; 2]) -> Option<Cand> {
             }
             Some(Cand {
                 c,
-                w: hi - lo,
+                w,
                 inner: inn,
                 outer: out,
             })
@@ -434,19 +527,57 @@ fn polish(p: &[[f64; 2]], b: &Cand) -> Option<[f64; 2]> {
     }
 }
 
-/// Smallest and largest distance of the points from `c`.
+/// Smallest and largest distance of the points from `c` (for a far centre, see [`FAR`],
+/// from differences of squares relative to the first point: the width `hi - lo` keeps
+/// its digits however far the centre is).
 pub(crate) fn radii(p: &[[f64; 2]], c: [f64; 2]) -> (f64, f64) {
+    let (lo, hi, _) = spread(p, c);
+    (lo, hi)
+}
+
+/// Smallest and largest distance of the points from `c` and the width between them,
+/// accurate also for a far centre (see [`FAR`]): there the distances are taken relative
+/// to the first point from differences of squares.
+fn spread(p: &[[f64; 2]], c: [f64; 2]) -> (f64, f64, f64) {
+    spread_in(p, c, extent(p))
+}
+
+/// Largest coordinate magnitude of centred points.
+fn extent(p: &[[f64; 2]]) -> f64 {
+    p.iter().map(|q| q[0].abs().max(q[1].abs())).fold(0.0, f64::max)
+}
+
+/// [`spread`] of points of the given [`extent`].
+fn spread_in(p: &[[f64; 2]], c: [f64; 2], size: f64) -> (f64, f64, f64) {
+    if is_far(c, size) {
+        let k = p[0];
+        let dk = dist(k, c);
+        let (lo, hi) = p.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), q| {
+            let e = offset(*q, k, c, dk);
+            (lo.min(e), hi.max(e))
+        });
+        return (dk + lo, dk + hi, hi - lo);
+    }
+    let (lo, hi) = near_radii(p, c);
+    (lo, hi, hi - lo)
+}
+
+fn near_radii(p: &[[f64; 2]], c: [f64; 2]) -> (f64, f64) {
+    // extremes of the squared distances, then two roots: sqrt is monotone and
+    // correctly rounded, so this equals the extremes of `dist`
     let fold = |(lo, hi): (f64, f64), q: &[f64; 2]| {
-        let d = dist(*q, c);
+        let d = dist2(*q, c);
         (lo.min(d), hi.max(d))
     };
-    if p.len() < 50_000 {
-        return p.iter().fold((f64::INFINITY, 0.0f64), fold);
-    }
-    p.par_iter().fold(|| (f64::INFINITY, 0.0f64), fold).reduce(
-        || (f64::INFINITY, 0.0f64),
-        |a, b| (a.0.min(b.0), a.1.max(b.1)),
-    )
+    let (lo, hi) = if p.len() < 50_000 {
+        p.iter().fold((f64::INFINITY, 0.0f64), fold)
+    } else {
+        p.par_iter().fold(|| (f64::INFINITY, 0.0f64), fold).reduce(
+            || (f64::INFINITY, 0.0f64),
+            |a, b| (a.0.min(b.0), a.1.max(b.1)),
+        )
+    };
+    (lo.sqrt(), hi.sqrt())
 }
 
 /// Point equidistant from a and b and from i and l (two linear equations), solved

@@ -428,3 +428,71 @@ fn extreme_coordinates_give_results_or_clear_errors() {
     let z = min_zone(&square).unwrap();
     assert!(z.width().abs() < 1e-15);
 }
+
+/// Points 30 mm along a shallow noisy arc of radius `r` (sagitta 4e-3 mm of noise).
+fn shallow_arc(r: f64) -> Vec<f64> {
+    (0..30)
+        .flat_map(|i| {
+            let a = (i as f64 / 29.0 - 0.5) * 20.0 / r;
+            let rr = r + 0.001 * ((i * 7) % 5) as f64;
+            [rr * a.sin(), rr * a.cos() - r]
+        })
+        .collect()
+}
+
+#[test]
+fn min_zone_of_nearly_straight_points_is_finite_or_degenerate() {
+    // moderately shallow arcs: the true zone (width 4e-3 mm of radial noise)
+    for r in [1e3, 1e4] {
+        let z = min_zone(&shallow_arc(r)).unwrap();
+        assert!((z.width() - 4e-3).abs() < 1e-9, "R {r}: width {}", z.width());
+        assert!((z.center[1] + r).abs() < 1e-3 * r);
+    }
+    // all but straight: an error, never a zone of width 0 around a centre at 1e18 mm
+    for r in [1e6, 1e8] {
+        let e = min_zone(&shallow_arc(r)).unwrap_err();
+        assert_eq!(e.kind, gagekit_core::ErrorKind::DegenerateGeometry, "R {r}: {e}");
+    }
+    // a noisy strip (a cylinder's points projected almost along its length): every
+    // accepted zone is finite, holds every point and has the strip's positive width
+    let mut rng = ChaCha8Rng::seed_from_u64(3);
+    for _ in 0..200 {
+        let tilt: f64 = rng.random_range(1e-7..1e-3);
+        let pts: Vec<f64> = (0..24)
+            .flat_map(|i| {
+                let x = -30.0 + 60.0 * (i as f64 / 23.0);
+                let y = tilt * x * x + 0.002 * ((i * 5 % 7) as f64 / 3.0 - 1.0);
+                [x, y]
+            })
+            .collect();
+        match min_zone(&pts) {
+            Ok(z) => {
+                assert!(z.width() > 1e-4, "width {} at centre {:?}", z.width(), z.center);
+                assert!(z.center[0].hypot(z.center[1]) < 1e4 * 31.0);
+                for p in pts.chunks_exact(2) {
+                    let d = (p[0] - z.center[0]).hypot(p[1] - z.center[1]);
+                    assert!(d >= z.r_in - 1e-9 && d <= z.r_out + 1e-9);
+                }
+            }
+            Err(e) => assert_eq!(e.kind, gagekit_core::ErrorKind::DegenerateGeometry),
+        }
+    }
+}
+
+#[test]
+fn near_kernels_find_the_exact_optimum_from_a_nearby_centre() {
+    for seed in 0..20u64 {
+        let v = random_set(seed, 40, 0);
+        let z = min_zone(&v).unwrap();
+        let c = [z.center[0] + 1e-3, z.center[1] - 2e-3];
+        let w = min_zone_near(&v, c).unwrap().unwrap();
+        // a local answer is never narrower than the global one, here the same zone
+        assert!(w.width() >= z.width() - 1e-12);
+        assert!((w.width() - z.width()).abs() < 1e-9, "seed {seed}: {} vs {}", w.width(), z.width());
+        let m = max_inscribed(&v).unwrap();
+        let n = max_inscribed_near(&v, [m.center[0] + 1e-3, m.center[1]]).unwrap().unwrap();
+        assert!(n.radius <= m.radius + 1e-12);
+        assert!((n.radius - m.radius).abs() < 1e-9, "seed {seed}: {} vs {}", n.radius, m.radius);
+        assert_eq!(n.control, m.control);
+    }
+}

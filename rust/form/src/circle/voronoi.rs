@@ -110,9 +110,15 @@ impl VEdge {
         if a.abs() <= 2.0 * w * (1.0 + 1e-9) {
             return true;
         }
+        let sq = |t: f64| (t * t + 2.0 * beta * t + gamma).max(0.0).sqrt();
+        // nothing to clip when psi < 0 already at the end that would move (less the
+        // margin): the root lies beyond it (the usual case; saves the Newton steps)
+        let end = if a > 0.0 { self.thi - margin } else { self.tlo + margin };
+        if end.is_finite() && a * end + b - 2.0 * w * sq(end) < 0.0 {
+            return self.tlo <= self.thi;
+        }
         // psi is strictly monotone and nearly linear: Newton from the linear root
         // (solving the squared equation instead loses half the digits when w is tiny)
-        let sq = |t: f64| (t * t + 2.0 * beta * t + gamma).max(0.0).sqrt();
         let mut root = -b / a;
         for _ in 0..8 {
             let r = sq(root);
