@@ -15,8 +15,8 @@
 
 use crate::criteria::{information, metrics, Criterion, Metrics};
 use crate::dense::{
-    dot, gram_add, lu_in_place, lu_inverse, mul_ab, mul_abt, small_spd_inverse, spd_inverse,
-    sym_eig, sym_eigenvalues, MAX_P, MAX_R,
+    dot, gram_add, lu_in_place, lu_inverse, mul_ab, mul_abt, skinny_mul, skinny_rows,
+    small_spd_inverse, spd_inverse, sym_eig, sym_eigenvalues, MAX_P, MAX_R,
 };
 use gagekit_core::{GkError, Result};
 use rand::seq::{index::sample, SliceRandom};
@@ -196,9 +196,16 @@ impl Problem<'_> {
 /// Candidates per blocked matrix product.
 const GEMM_CHUNK: usize = 256;
 
+/// Products with at most this many columns use [`skinny_mul`] (a GEMM's packing costs more).
+const SKINNY_Q: usize = 16;
+
 /// `out (m x q) = a (m x k) * w (k x q)`, all row-major.
 fn gemm(a: &[f64], m: usize, k: usize, w: &[f64], q: usize, out: &mut [f64]) {
     assert!(a.len() >= m * k && w.len() >= k * q && out.len() >= m * q);
+    if q <= SKINNY_Q {
+        skinny_mul(a, m, k, w, q, out);
+        return;
+    }
     // SAFETY: the slices hold the m x k, k x q and m x q row-major matrices (checked above).
     unsafe {
         matrixmultiply::dgemm(
@@ -229,25 +236,24 @@ impl Problem<'_> {
         F: Fn(usize, &[f64]) -> T + Sync,
     {
         let (r, k) = (self.r, self.k);
-        let sz = r * k;
         members
             .par_chunks(GEMM_CHUNK)
             .flat_map_iter(|chunk| {
-                let first = chunk[0];
-                let contiguous = chunk[chunk.len() - 1] == first + chunk.len() - 1
-                    && chunk.windows(2).all(|p| p[1] == p[0] + 1);
-                let gathered;
-                let a: &[f64] = if contiguous {
-                    &self.blocks[first * sz..(first + chunk.len()) * sz]
-                } else {
-                    gathered = chunk
-                        .iter()
-                        .flat_map(|&j| self.block(j).iter().copied())
-                        .collect::<Vec<f64>>();
-                    &gathered
-                };
                 let mut out = vec![0.0; chunk.len() * r * q];
-                gemm(a, chunk.len() * r, k, w, q, &mut out);
+                let m = chunk.len() * r;
+                if q <= SKINNY_Q {
+                    let row = |i: usize| {
+                        let at = (chunk[i / r] * r + i % r) * k;
+                        &self.blocks[at..at + k]
+                    };
+                    skinny_rows(&row, m, k, w, q, &mut out);
+                } else {
+                    let mut a = Vec::with_capacity(m * k);
+                    for &j in chunk {
+                        a.extend_from_slice(self.block(j));
+                    }
+                    gemm(&a, m, k, w, q, &mut out);
+                }
                 chunk
                     .iter()
                     .enumerate()
@@ -299,6 +305,9 @@ struct Run<'p, 'a> {
     /// Per candidate r x r: B F^-1 W F^-1 B^T (A and I).
     e: Vec<f64>,
     value: f64,
+    /// Per candidate (A, I): sqrt(tr((I + d_j)^-1 e_j)) and t_j / (1 + t_j), t_j = tr d_j,
+    /// the two ingredients of the improvement bound, kept with d and e.
+    bound_terms: Vec<[f64; 2]>,
 }
 
 /// The visited point's removal, shared by all candidates of a visit.
@@ -349,6 +358,7 @@ impl<'p, 'a> Run<'p, 'a> {
             d: vec![0.0; blocks_d],
             e: vec![0.0; if needs_e { blocks_d } else { 0 }],
             value: f64::INFINITY,
+            bound_terms: vec![],
         };
         run.recompute()?;
         Ok(run)
@@ -430,6 +440,7 @@ impl<'p, 'a> Run<'p, 'a> {
                 }
             }
         });
+        self.update_bound_terms();
     }
 
     /// For every candidate m, in parallel chunks of blocked products:
@@ -618,27 +629,62 @@ impl<'p, 'a> Run<'p, 'a> {
     ///
     /// D: F_- >= (1 - mu) F with mu = l_max(O F^-1 O^T), so B F_-^-1 B^T <= d_j / (1 - mu)
     /// and det(I + B F_-^-1 B^T) <= (1 + tr d_j / (r (1 - mu)))^r.
-    /// A, I: tr(P^-1 e-) <= tr(e-) and, by Cauchy-Schwarz on c = B F^-1 O^T
-    /// (|c|_F^2 <= tr d_j tr d_O), tr(e-) <= (sqrt(tr e_j) + sqrt(l_max(Qi e_O Qi) tr d_O tr d_j))^2.
+    /// A, I: P = I + B F_-^-1 B^T >= I + d_j, so with L = (I + d_j)^-1/2,
+    /// tr(P^-1 e-) <= |L B F_-^-1 W^1/2|_F^2 = |L B F^-1 W^1/2 + L c Qi O F^-1 W^1/2|_F^2
+    /// (c = B F^-1 O^T) <= (sqrt(tr((I + d_j)^-1 e_j)) + |L c|_F sqrt(l_max(Qi e_O Qi)))^2, and
+    /// |L c|_F^2 <= tr d_O t_j / (1 + t_j) with t_j = tr d_j (the eigenvalues of
+    /// F^-1/2 B^T (I + d_j)^-1 B F^-1/2 are s / (1 + s), s those of d_j).
     fn improvement_bound(&self, rm: &Removal, j: usize) -> f64 {
-        let r = self.p.r;
-        let rr = r * r;
-        let tr_d: f64 = (0..r)
-            .map(|a| self.d[j * rr + a * r + a])
-            .sum::<f64>()
-            .max(0.0);
         let base = self.value - rm.value_minus;
         match self.c {
-            Criterion::D => base + r as f64 * (tr_d * rm.bound_c).ln_1p(),
-            _ => {
-                let tr_e: f64 = (0..r)
-                    .map(|a| self.e[j * rr + a * r + a])
+            Criterion::D => {
+                let r = self.p.r;
+                let rr = r * r;
+                let tr_d: f64 = (0..r)
+                    .map(|a| self.d[j * rr + a * r + a])
                     .sum::<f64>()
                     .max(0.0);
-                let s = tr_e.sqrt() + (rm.bound_c * tr_d).sqrt();
-                base + s * s
+                base + r as f64 * (tr_d * rm.bound_c).ln_1p()
+            }
+            _ => {
+                let [sa, lev] = self.bound_terms[j];
+                let s = sa + (rm.bound_c * lev).sqrt();
+                // relative slack against the round-off of the updated blocks
+                (base + s * s) * (1.0 + 1e-9) + 1e-12 * self.value.abs()
             }
         }
+    }
+
+    /// Recompute [`Run::bound_terms`] from d and e (A, I).
+    fn update_bound_terms(&mut self) {
+        if !self.needs_e() {
+            return;
+        }
+        let r = self.p.r;
+        let rr = r * r;
+        let (d, e) = (&self.d, &self.e);
+        self.bound_terms = (0..self.p.n_cand)
+            .into_par_iter()
+            .with_min_len(1024)
+            .map(|j| {
+                let dj = &d[j * rr..(j + 1) * rr];
+                let mut pm = [0.0; MAX_R * MAX_R];
+                pm[..rr].copy_from_slice(dj);
+                for a in 0..r {
+                    pm[a * r + a] += 1.0;
+                }
+                let t: f64 = (0..r).map(|a| dj[a * r + a]).sum::<f64>().max(0.0);
+                let mut pinv = [0.0; MAX_R * MAX_R];
+                match small_spd_inverse(&pm, r, &mut pinv) {
+                    Some(_) => {
+                        let a: f64 = (0..rr).map(|x| pinv[x] * e[j * rr + x]).sum();
+                        [a.max(0.0).sqrt(), t / (1.0 + t)]
+                    }
+                    // not positive definite: no bound, always evaluate exactly
+                    None => [f64::INFINITY, 1.0],
+                }
+            })
+            .collect();
     }
 
     /// Criterion after exchanging the visited point for candidate j, as a removal
@@ -880,8 +926,19 @@ impl<'p, 'a> Run<'p, 'a> {
                 )
                 .reduce(|| (f64::INFINITY, usize::MAX), total_min),
             Some(rm) if self.c != Criterion::D => {
-                // A, I: the bound prunes little; one blocked product B [F^-1 O^T, F^-1 W F^-1 O^T]
-                // over all candidates, then the small r x r algebra per candidate.
+                // A, I: keep the candidates whose improvement bound can beat the tolerance
+                // (exact: the others cannot improve), then one blocked product
+                // B [F^-1 O^T, F^-1 W F^-1 O^T] over them and the small r x r algebra each.
+                let tol = self.tol();
+                let kept: Vec<usize> = cands
+                    .par_iter()
+                    .with_min_len(1024)
+                    .filter(|&&j| j != o && !(this.improvement_bound(rm, j) <= tol))
+                    .copied()
+                    .collect();
+                if kept.is_empty() {
+                    return false;
+                }
                 let mut w = vec![0.0; k * 2 * r];
                 for t in 0..k {
                     for q in 0..r {
@@ -890,7 +947,7 @@ impl<'p, 'a> Run<'p, 'a> {
                     }
                 }
                 self.p
-                    .products(cands, &w, 2 * r, |j, cf| {
+                    .products(&kept, &w, 2 * r, |j, cf| {
                         if j == o {
                             return (f64::INFINITY, usize::MAX);
                         }
@@ -919,8 +976,10 @@ impl<'p, 'a> Run<'p, 'a> {
                 order.sort_unstable_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
                 let mut best = (f64::INFINITY, usize::MAX);
                 for chunk in order.chunks(PRUNE_CHUNK) {
-                    let gain = self.value - best.0;
-                    if best.1 != usize::MAX && !(chunk[0].0 > gain) {
+                    // Only candidates that can beat both the best so far and the current
+                    // design by the tolerance matter.
+                    let gain = (self.value - best.0).max(tol);
+                    if !(chunk[0].0 > gain) {
                         break;
                     }
                     let b = chunk
@@ -1001,6 +1060,7 @@ impl<'p, 'a> Run<'p, 'a> {
                 }
             }
         });
+        self.update_bound_terms();
         let old = self.design[i];
         self.design[i] = j;
         if self.recompute().is_err() {
@@ -1238,32 +1298,43 @@ pub fn search(p: &Problem, o: &Options) -> Result<Outcome> {
     } else {
         o.starts.max(1)
     };
-    let runs: Vec<Result<(Vec<usize>, usize)>> = (0..starts)
-        .into_par_iter()
-        .map(|s| {
-            let mut rng = ChaCha8Rng::seed_from_u64(o.seed);
-            rng.set_stream(s as u64);
-            let mut moves = 0;
-            let design = match &o.initial {
-                Some(d) => d.clone(),
-                None => {
-                    let d = greedy_start(p, 1e-6 * scale, &mut rng);
-                    if matches!(c, Criterion::A | Criterion::I) {
-                        // A- and I-optimal designs are usually close to the D-optimal one,
-                        // whose exchanges are much cheaper: polish that instead.
-                        let mut pre = Run::new(p, Criterion::D, ridge, d)?;
-                        moves += pre.optimise(o.max_sweeps.max(1), &mut rng);
-                        pre.design
-                    } else {
-                        d
-                    }
+    let run_start = |s: usize| -> Result<(Vec<usize>, usize)> {
+        let mut rng = ChaCha8Rng::seed_from_u64(o.seed);
+        rng.set_stream(s as u64);
+        let mut moves = 0;
+        let design = match &o.initial {
+            Some(d) => d.clone(),
+            None => {
+                let d = greedy_start(p, 1e-6 * scale, &mut rng);
+                if matches!(c, Criterion::A | Criterion::I) {
+                    // A- and I-optimal designs are usually close to the D-optimal one,
+                    // whose exchanges are much cheaper: polish that instead.
+                    let mut pre = Run::new(p, Criterion::D, ridge, d)?;
+                    moves += pre.optimise(o.max_sweeps.max(1), &mut rng);
+                    pre.design
+                } else {
+                    d
                 }
-            };
-            let mut run = Run::new(p, c, ridge, design)?;
-            moves += run.optimise(o.max_sweeps.max(1), &mut rng);
-            Ok((run.design, moves))
-        })
-        .collect();
+            }
+        };
+        let mut run = Run::new(p, c, ridge, design)?;
+        moves += run.optimise(o.max_sweeps.max(1), &mut rng);
+        Ok((run.design, moves))
+    };
+    // With at least as many starts as threads, the starts are the parallelism: each runs
+    // its inner loops on a pool of its own single thread (nested fine-grained tasks cost
+    // more than they give). The result does not depend on this (fixed-order reductions).
+    let solo = starts >= 2 && rayon::current_num_threads() >= 2;
+    let one_start = |s: usize| -> Result<(Vec<usize>, usize)> {
+        if solo {
+            if let Ok(pool) = rayon::ThreadPoolBuilder::new().num_threads(1).build() {
+                return pool.install(|| run_start(s));
+            }
+        }
+        run_start(s)
+    };
+    let runs: Vec<Result<(Vec<usize>, usize)>> =
+        (0..starts).into_par_iter().map(one_start).collect();
     let mut best: Option<(f64, usize, Vec<usize>, Metrics, usize)> = None;
     let mut start_objectives = Vec::with_capacity(starts);
     for (s, res) in runs.into_iter().enumerate() {
