@@ -261,7 +261,7 @@ pub fn dot(a: &[f64], b: &[f64]) -> f64 {
     t
 }
 
-/// `out (m x q) = a (m x k) * w (k x q)`, all row-major, for small q (at most 16): the
+/// `out (m x q) = a (m x k) * w (k x q)`, all row-major, for small q: the
 /// skinny products of the exchange, without the packing a general GEMM does. Uses
 /// AVX2 + FMA when the processor has them; each output is one fixed sequence of
 /// operations, so the result does not depend on threads or chunking.
@@ -279,7 +279,7 @@ pub fn skinny_rows<'a>(
     q: usize,
     out: &mut [f64],
 ) {
-    assert!(q <= 16 && w.len() >= k * q && out.len() >= m * q);
+    assert!(w.len() >= k * q && out.len() >= m * q);
     #[cfg(target_arch = "x86_64")]
     {
         if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
@@ -314,26 +314,36 @@ fn skinny_dispatch<'a, const FMA: bool>(
     q: usize,
     out: &mut [f64],
 ) {
-    if q <= 8 {
-        skinny_body::<FMA, 8, 4>(row, m, k, w, q, out)
-    } else {
-        skinny_body::<FMA, 16, 2>(row, m, k, w, q, out)
+    // column slabs of at most 16 (more accumulators than registers would spill)
+    let mut c0 = 0;
+    while c0 < q {
+        let qc = (q - c0).min(16);
+        if qc <= 8 {
+            skinny_body::<FMA, 8, 4>(row, m, k, w, q, c0, qc, out);
+        } else {
+            skinny_body::<FMA, 16, 2>(row, m, k, w, q, c0, qc, out);
+        }
+        c0 += qc;
     }
 }
 
-/// Register-blocked kernel: MR rows at a time against w padded to NR columns.
+/// Register-blocked kernel for output columns c0 .. c0 + qc: MR rows at a time against
+/// those columns of w padded to NR.
 #[inline(always)]
+#[allow(clippy::too_many_arguments)]
 fn skinny_body<'a, const FMA: bool, const NR: usize, const MR: usize>(
     row: &(dyn Fn(usize) -> &'a [f64] + Sync),
     m: usize,
     k: usize,
     w: &[f64],
     q: usize,
+    c0: usize,
+    qc: usize,
     out: &mut [f64],
 ) {
     let mut wp = vec![0.0f64; k * NR];
     for t in 0..k {
-        wp[t * NR..t * NR + q].copy_from_slice(&w[t * q..(t + 1) * q]);
+        wp[t * NR..t * NR + qc].copy_from_slice(&w[t * q + c0..t * q + c0 + qc]);
     }
     let fma = |x: f64, y: f64, s: f64| if FMA { x.mul_add(y, s) } else { s + x * y };
     let mut i = 0;
@@ -350,7 +360,7 @@ fn skinny_body<'a, const FMA: bool, const NR: usize, const MR: usize>(
             }
         }
         for (ii, acc_i) in acc.iter().enumerate() {
-            out[(i + ii) * q..(i + ii + 1) * q].copy_from_slice(&acc_i[..q]);
+            out[(i + ii) * q + c0..(i + ii) * q + c0 + qc].copy_from_slice(&acc_i[..qc]);
         }
         i += MR;
     }
@@ -363,7 +373,7 @@ fn skinny_body<'a, const FMA: bool, const NR: usize, const MR: usize>(
                 acc[c] = fma(x, wp[t * NR + c], acc[c]);
             }
         }
-        out[i * q..(i + 1) * q].copy_from_slice(&acc[..q]);
+        out[i * q + c0..i * q + c0 + qc].copy_from_slice(&acc[..qc]);
         i += 1;
     }
 }

@@ -197,7 +197,7 @@ impl Problem<'_> {
 const GEMM_CHUNK: usize = 256;
 
 /// Products with at most this many columns use [`skinny_mul`] (a GEMM's packing costs more).
-const SKINNY_Q: usize = 16;
+const SKINNY_Q: usize = 24;
 
 /// `out (m x q) = a (m x k) * w (k x q)`, all row-major.
 fn gemm(a: &[f64], m: usize, k: usize, w: &[f64], q: usize, out: &mut [f64]) {
@@ -1018,44 +1018,75 @@ impl<'p, 'a> Run<'p, 'a> {
             mul_ab(bj, &self.fwf, r, k, &mut qt[..r * k]);
             qt[r * k..].copy_from_slice(&b_t);
         }
+        // With P = F^-1 U, Q = F^-1 W F^-1 U, y = B P, z = B Q, X = S^-1, R = U^T Q:
+        // d' = d - y X y^T and e' = e - [y z] G [y z]^T, G = [[-X R X, X], [X, 0]].
+        // Folding the eigenvectors of X and G into the product (X = V L V^T, G = E M E^T)
+        // leaves sums of weighted rank-one terms per candidate.
+        for a in 0..p {
+            for b in 0..a {
+                let v = 0.5 * (x[a * p + b] + x[b * p + a]);
+                x[a * p + b] = v;
+                x[b * p + a] = v;
+            }
+        }
+        let (lam, vx) = sym_eig(&x, p);
         let needs_e = self.needs_e();
-        let q = if needs_e { 2 * p } else { p };
-        let mut w = vec![0.0; k * q]; // [P, Q] = [F^-1 U, F^-1 W F^-1 U]
+        let pe = 2 * p;
+        let (gam, ve) = if needs_e {
+            let mut xr = vec![0.0; p * p];
+            mul_ab(&x, &e_pair, p, p, &mut xr);
+            let mut xrx = vec![0.0; p * p];
+            mul_ab(&xr, &x, p, p, &mut xrx);
+            let mut g = vec![0.0; pe * pe];
+            for a in 0..p {
+                for b in 0..p {
+                    g[a * pe + b] = -0.5 * (xrx[a * p + b] + xrx[b * p + a]);
+                    g[a * pe + p + b] = x[a * p + b];
+                    g[(p + a) * pe + b] = x[a * p + b];
+                }
+            }
+            sym_eig(&g, pe)
+        } else {
+            (vec![], vec![])
+        };
+        let q = if needs_e { p + pe } else { p };
+        let mut w = vec![0.0; k * q]; // [P V, [P Q] E]
         for t in 0..k {
-            for c in 0..p {
-                w[t * q + c] = pt[c * k + t];
-                if needs_e {
-                    w[t * q + p + c] = qt[c * k + t];
+            for l in 0..p {
+                w[t * q + l] = (0..p).map(|c| pt[c * k + t] * vx[c * p + l]).sum();
+            }
+            if needs_e {
+                for l in 0..pe {
+                    w[t * q + p + l] = (0..p)
+                        .map(|c| {
+                            pt[c * k + t] * ve[c * pe + l] + qt[c * k + t] * ve[(p + c) * pe + l]
+                        })
+                        .sum();
                 }
             }
         }
         self.for_candidate_products(&w, q, |prod, _b, dm, em| {
-            let mut yx = [0.0; MAX_R * MAX_P];
-            let y = |a: usize| &prod[a * q..a * q + p];
             for a in 0..r {
-                for c in 0..p {
-                    let mut v = 0.0;
-                    for u in 0..p {
-                        v += prod[a * q + u] * x[u * p + c];
+                let ya = &prod[a * q..a * q + p];
+                for c in 0..=a {
+                    let yc = &prod[c * q..c * q + p];
+                    let v: f64 = (0..p).map(|l| lam[l] * ya[l] * yc[l]).sum();
+                    dm[a * r + c] -= v;
+                    if c != a {
+                        dm[c * r + a] -= v;
                     }
-                    yx[a * p + c] = v;
-                    // Y = y S^-1
-                }
-            }
-            for a in 0..r {
-                for c in 0..r {
-                    dm[a * r + c] -= dot(&yx[a * p..(a + 1) * p], y(c));
                 }
             }
             if let Some(em) = em {
-                let z = |a: usize| &prod[a * q + p..a * q + 2 * p];
-                let mut t = [0.0; MAX_R * MAX_P];
-                mul_ab(&yx[..r * p], &e_pair, r, p, &mut t[..r * p]); // Y R
                 for a in 0..r {
-                    for c in 0..r {
-                        em[a * r + c] -= dot(z(a), &yx[c * p..(c + 1) * p])
-                            + dot(&yx[a * p..(a + 1) * p], z(c))
-                            - dot(&t[a * p..(a + 1) * p], &yx[c * p..(c + 1) * p]);
+                    let ha = &prod[a * q + p..(a + 1) * q];
+                    for c in 0..=a {
+                        let hc = &prod[c * q + p..(c + 1) * q];
+                        let v: f64 = (0..pe).map(|l| gam[l] * ha[l] * hc[l]).sum();
+                        em[a * r + c] -= v;
+                        if c != a {
+                            em[c * r + a] -= v;
+                        }
                     }
                 }
             }
