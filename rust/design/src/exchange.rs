@@ -1129,27 +1129,34 @@ impl<'p, 'a> Run<'p, 'a> {
         proj(self.p.block(o), &mut h_o);
         let c = self.c;
         let cands = &self.p.groups[self.p.point_group[i]];
-        let mut screened: Vec<(f64, usize)> = cands
-            .par_iter()
-            .with_min_len(256)
-            .filter(|&&j| j != o)
-            .map_init(
-                || vec![0.0; s],
-                |h, &j| {
-                    proj(self.p.block(j), h);
-                    let mut lo = f64::INFINITY;
-                    let mut hi = vals[k - 1];
-                    for q in 0..s {
-                        let est = vals[idx[q]] + h[q] - h_o[q];
-                        if q < s_lo {
-                            lo = lo.min(est);
-                        } else {
-                            hi = hi.max(est);
-                        }
+        // one blocked product B_j [v_q] over the candidates, then h_q = |B_j v_q|^2
+        let mut w = vec![0.0; k * s];
+        for (q, &m) in idx.iter().enumerate() {
+            for a in 0..k {
+                w[a * s + q] = vecs[a * k + m];
+            }
+        }
+        let mut screened: Vec<(f64, usize)> = self
+            .p
+            .products(cands, &w, s, |j, prod| {
+                if j == o {
+                    return (f64::INFINITY, usize::MAX);
+                }
+                let mut lo = f64::INFINITY;
+                let mut hi = vals[k - 1];
+                for q in 0..s {
+                    let h: f64 = (0..r).map(|a| prod[a * s + q] * prod[a * s + q]).sum();
+                    let est = vals[idx[q]] + h - h_o[q];
+                    if q < s_lo {
+                        lo = lo.min(est);
+                    } else {
+                        hi = hi.max(est);
                     }
-                    (sane(spectral_value(c, lo, hi)), j)
-                },
-            )
+                }
+                (sane(spectral_value(c, lo, hi)), j)
+            })
+            .into_iter()
+            .filter(|x| x.1 != usize::MAX)
             .collect();
         let top = EXACT_TOP.min(screened.len());
         if top == 0 {
