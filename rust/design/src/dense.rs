@@ -185,6 +185,51 @@ pub fn small_spd_inverse(a: &[f64], r: usize, inv: &mut [f64]) -> Option<f64> {
     Some(logdet)
 }
 
+/// tr(A^-1 E) for a small (r <= MAX_R) SPD matrix A and any r x r E (Cholesky solves);
+/// `None` when a pivot is not positive.
+pub fn small_spd_trace_solve(a: &[f64], e: &[f64], r: usize) -> Option<f64> {
+    let mut l = [0.0f64; MAX_R * MAX_R];
+    for j in 0..r {
+        let mut s = a[j * r + j];
+        for p in 0..j {
+            s -= l[j * r + p] * l[j * r + p];
+        }
+        if !(s > 0.0) {
+            return None;
+        }
+        let d = s.sqrt();
+        l[j * r + j] = d;
+        for i in j + 1..r {
+            let mut s = a[i * r + j];
+            for p in 0..j {
+                s -= l[i * r + p] * l[j * r + p];
+            }
+            l[i * r + j] = s / d;
+        }
+    }
+    let mut t = 0.0;
+    for q in 0..r {
+        // x = A^-1 e[:, q]; accumulate x[q]
+        let mut y = [0.0f64; MAX_R];
+        for a_ in 0..r {
+            let mut v = e[a_ * r + q];
+            for u in 0..a_ {
+                v -= l[a_ * r + u] * y[u];
+            }
+            y[a_] = v / l[a_ * r + a_];
+        }
+        for a_ in (0..r).rev() {
+            let mut v = y[a_];
+            for u in a_ + 1..r {
+                v -= l[u * r + a_] * y[u];
+            }
+            y[a_] = v / l[a_ * r + a_];
+        }
+        t += y[q];
+    }
+    Some(t)
+}
+
 /// Largest number of rows a design point may contribute.
 pub const MAX_R: usize = 8;
 /// Largest size of an exchange capacitance matrix (2 * MAX_R).
@@ -381,6 +426,23 @@ fn skinny_body<'a, const FMA: bool, const NR: usize, const MR: usize>(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn trace_solve_matches_the_inverse() {
+        let a = [4.0, 2.0, 0.6, 2.0, 5.0, 1.0, 0.6, 1.0, 3.0];
+        let e = [1.0, 0.3, -0.2, 0.5, 2.0, 0.1, 0.0, -0.4, 0.7];
+        let mut inv = [0.0; 9];
+        small_spd_inverse(&a, 3, &mut inv).unwrap();
+        let want: f64 = (0..3)
+            .map(|i| (0..3).map(|j| inv[i * 3 + j] * e[j * 3 + i]).sum::<f64>())
+            .sum();
+        let got = small_spd_trace_solve(&a, &e, 3).unwrap();
+        assert!(
+            (got - want).abs() < 1e-14 * want.abs().max(1.0),
+            "{got} vs {want}"
+        );
+        assert!(small_spd_trace_solve(&[-1.0], &[1.0], 1).is_none());
+    }
 
     #[test]
     fn skinny_products_match_the_naive_product() {

@@ -16,7 +16,7 @@
 use crate::criteria::{information, metrics, Criterion, Metrics};
 use crate::dense::{
     dot, gram_add, lu_in_place, lu_inverse, mul_ab, mul_abt, skinny_mul, skinny_rows,
-    small_spd_inverse, spd_inverse, sym_eig, sym_eigenvalues, MAX_P, MAX_R,
+    small_spd_inverse, small_spd_trace_solve, spd_inverse, sym_eig, sym_eigenvalues, MAX_P, MAX_R,
 };
 use gagekit_core::{GkError, Result};
 use rand::seq::{index::sample, SliceRandom};
@@ -305,9 +305,10 @@ struct Run<'p, 'a> {
     /// Per candidate r x r: B F^-1 W F^-1 B^T (A and I).
     e: Vec<f64>,
     value: f64,
-    /// Per candidate (A, I): sqrt(tr((I + d_j)^-1 e_j)) and t_j / (1 + t_j), t_j = tr d_j,
+    /// Per candidate (A, I): sqrt(tr((I + d_j)^-1 e_j)), t_j / (1 + t_j) with t_j = tr d_j,
+    /// and tr((I + d_j)^-1 d_j),
     /// the two ingredients of the improvement bound, kept with d and e.
-    bound_terms: Vec<[f64; 2]>,
+    bound_terms: Vec<[f64; 3]>,
 }
 
 /// The visited point's removal, shared by all candidates of a visit.
@@ -317,6 +318,9 @@ struct Removal {
     value_minus: f64,
     /// Constant of the improvement bound (see [`Run::improvement_bound`]); infinite: no pruning.
     bound_c: f64,
+    /// A, I: tr d_O and l_max(d_O) (the two bounds on |L c|_F^2).
+    tr_do: f64,
+    mu_o: f64,
 }
 
 /// Scratch of one candidate evaluation (A, D, I).
@@ -595,6 +599,8 @@ impl<'p, 'a> Run<'p, 'a> {
             qeq: [0.0; MAX_R * MAX_R],
             value_minus: 0.0,
             bound_c: f64::INFINITY,
+            tr_do: 0.0,
+            mu_o: 0.0,
         };
         let logdet_q = small_spd_inverse(&q, r, &mut rm.qi)?;
         if logdet_q < -18.0 {
@@ -609,17 +615,18 @@ impl<'p, 'a> Run<'p, 'a> {
                 self.value + (0..r).map(|a| t[a * r + a]).sum::<f64>()
             }
         };
-        let tr_do: f64 = (0..r).map(|a| d_o[a * r + a]).sum();
+        let mu = sym_eigenvalues(&d_o[..r * r], r)[r - 1];
+        rm.tr_do = (0..r).map(|a| d_o[a * r + a]).sum::<f64>().max(0.0);
+        rm.mu_o = mu.max(0.0);
         rm.bound_c = match self.c {
             Criterion::D => {
-                let mu = sym_eigenvalues(&d_o[..r * r], r)[r - 1];
                 if mu < 1.0 {
                     1.0 / (r as f64 * (1.0 - mu))
                 } else {
                     f64::INFINITY
                 }
             }
-            _ => sym_eigenvalues(&rm.qeq[..r * r], r)[r - 1].max(0.0) * tr_do,
+            _ => sym_eigenvalues(&rm.qeq[..r * r], r)[r - 1].max(0.0),
         };
         Some(rm)
     }
@@ -633,7 +640,8 @@ impl<'p, 'a> Run<'p, 'a> {
     /// tr(P^-1 e-) <= |L B F_-^-1 W^1/2|_F^2 = |L B F^-1 W^1/2 + L c Qi O F^-1 W^1/2|_F^2
     /// (c = B F^-1 O^T) <= (sqrt(tr((I + d_j)^-1 e_j)) + |L c|_F sqrt(l_max(Qi e_O Qi)))^2, and
     /// |L c|_F^2 <= tr d_O t_j / (1 + t_j) with t_j = tr d_j (the eigenvalues of
-    /// F^-1/2 B^T (I + d_j)^-1 B F^-1/2 are s / (1 + s), s those of d_j).
+    /// F^-1/2 B^T (I + d_j)^-1 B F^-1/2 are s / (1 + s), s those of d_j), and also
+    /// |L c|_F^2 = tr(L B F^-1 O^T O F^-1 B^T L) <= l_max(d_O) tr((I + d_j)^-1 d_j).
     fn improvement_bound(&self, rm: &Removal, j: usize) -> f64 {
         let base = self.value - rm.value_minus;
         match self.c {
@@ -647,8 +655,9 @@ impl<'p, 'a> Run<'p, 'a> {
                 base + r as f64 * (tr_d * rm.bound_c).ln_1p()
             }
             _ => {
-                let [sa, lev] = self.bound_terms[j];
-                let s = sa + (rm.bound_c * lev).sqrt();
+                let [sa, lev, tau] = self.bound_terms[j];
+                let lc = (rm.tr_do * lev).min(rm.mu_o * tau); // >= |L c|_F^2
+                let s = sa + (rm.bound_c * lc).sqrt();
                 // relative slack against the round-off of the updated blocks
                 (base + s * s) * (1.0 + 1e-9) + 1e-12 * self.value.abs()
             }
@@ -674,14 +683,12 @@ impl<'p, 'a> Run<'p, 'a> {
                     pm[a * r + a] += 1.0;
                 }
                 let t: f64 = (0..r).map(|a| dj[a * r + a]).sum::<f64>().max(0.0);
-                let mut pinv = [0.0; MAX_R * MAX_R];
-                match small_spd_inverse(&pm, r, &mut pinv) {
-                    Some(_) => {
-                        let a: f64 = (0..rr).map(|x| pinv[x] * e[j * rr + x]).sum();
-                        [a.max(0.0).sqrt(), t / (1.0 + t)]
-                    }
+                let ta = small_spd_trace_solve(&pm[..rr], &e[j * rr..(j + 1) * rr], r);
+                let td = small_spd_trace_solve(&pm[..rr], dj, r);
+                match ta.zip(td) {
+                    Some((a, tau)) => [a.max(0.0).sqrt(), t / (1.0 + t), tau.max(0.0)],
                     // not positive definite: no bound, always evaluate exactly
-                    None => [f64::INFINITY, 1.0],
+                    None => [f64::INFINITY, 1.0, 1.0],
                 }
             })
             .collect();
