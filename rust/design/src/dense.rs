@@ -188,6 +188,15 @@ pub fn small_spd_inverse(a: &[f64], r: usize, inv: &mut [f64]) -> Option<f64> {
 /// tr(A^-1 E) for a small (r <= MAX_R) SPD matrix A and any r x r E (Cholesky solves);
 /// `None` when a pivot is not positive.
 pub fn small_spd_trace_solve(a: &[f64], e: &[f64], r: usize) -> Option<f64> {
+    small_spd_trace_solves(a, [e], r).map(|t| t[0])
+}
+
+/// [`small_spd_trace_solve`] for several E with one factorisation of A.
+pub fn small_spd_trace_solves<const N: usize>(
+    a: &[f64],
+    es: [&[f64]; N],
+    r: usize,
+) -> Option<[f64; N]> {
     let mut l = [0.0f64; MAX_R * MAX_R];
     for j in 0..r {
         let mut s = a[j * r + j];
@@ -207,27 +216,29 @@ pub fn small_spd_trace_solve(a: &[f64], e: &[f64], r: usize) -> Option<f64> {
             l[i * r + j] = s / d;
         }
     }
-    let mut t = 0.0;
-    for q in 0..r {
-        // x = A^-1 e[:, q]; accumulate x[q]
-        let mut y = [0.0f64; MAX_R];
-        for a_ in 0..r {
-            let mut v = e[a_ * r + q];
-            for u in 0..a_ {
-                v -= l[a_ * r + u] * y[u];
+    let mut out = [0.0; N];
+    for (e, t) in es.iter().zip(out.iter_mut()) {
+        for q in 0..r {
+            // x = A^-1 e[:, q]; accumulate x[q]
+            let mut y = [0.0f64; MAX_R];
+            for a_ in 0..r {
+                let mut v = e[a_ * r + q];
+                for u in 0..a_ {
+                    v -= l[a_ * r + u] * y[u];
+                }
+                y[a_] = v / l[a_ * r + a_];
             }
-            y[a_] = v / l[a_ * r + a_];
-        }
-        for a_ in (0..r).rev() {
-            let mut v = y[a_];
-            for u in a_ + 1..r {
-                v -= l[u * r + a_] * y[u];
+            for a_ in (0..r).rev() {
+                let mut v = y[a_];
+                for u in a_ + 1..r {
+                    v -= l[u * r + a_] * y[u];
+                }
+                y[a_] = v / l[a_ * r + a_];
             }
-            y[a_] = v / l[a_ * r + a_];
+            *t += y[q];
         }
-        t += y[q];
     }
-    Some(t)
+    Some(out)
 }
 
 /// Largest number of rows a design point may contribute.
@@ -363,7 +374,9 @@ fn skinny_dispatch<'a, const FMA: bool>(
     let mut c0 = 0;
     while c0 < q {
         let qc = (q - c0).min(16);
-        if qc <= 8 {
+        if qc <= 4 {
+            skinny_body::<FMA, 4, 8>(row, m, k, w, q, c0, qc, out);
+        } else if qc <= 8 {
             skinny_body::<FMA, 8, 4>(row, m, k, w, q, c0, qc, out);
         } else {
             skinny_body::<FMA, 16, 2>(row, m, k, w, q, c0, qc, out);

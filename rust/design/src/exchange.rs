@@ -16,7 +16,7 @@
 use crate::criteria::{information, metrics, Criterion, Metrics};
 use crate::dense::{
     dot, gram_add, lu_in_place, lu_inverse, mul_ab, mul_abt, skinny_mul, skinny_rows,
-    small_spd_inverse, small_spd_trace_solve, spd_inverse, sym_eig, sym_eigenvalues, MAX_P, MAX_R,
+    small_spd_inverse, small_spd_trace_solves, spd_inverse, sym_eig, sym_eigenvalues, MAX_P, MAX_R,
 };
 use gagekit_core::{GkError, Result};
 use rand::seq::{index::sample, SliceRandom};
@@ -683,10 +683,8 @@ impl<'p, 'a> Run<'p, 'a> {
                     pm[a * r + a] += 1.0;
                 }
                 let t: f64 = (0..r).map(|a| dj[a * r + a]).sum::<f64>().max(0.0);
-                let ta = small_spd_trace_solve(&pm[..rr], &e[j * rr..(j + 1) * rr], r);
-                let td = small_spd_trace_solve(&pm[..rr], dj, r);
-                match ta.zip(td) {
-                    Some((a, tau)) => [a.max(0.0).sqrt(), t / (1.0 + t), tau.max(0.0)],
+                match small_spd_trace_solves(&pm[..rr], [&e[j * rr..(j + 1) * rr], dj], r) {
+                    Some([a, tau]) => [a.max(0.0).sqrt(), t / (1.0 + t), tau.max(0.0)],
                     // not positive definite: no bound, always evaluate exactly
                     None => [f64::INFINITY, 1.0, 1.0],
                 }
