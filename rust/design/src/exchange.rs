@@ -290,6 +290,22 @@ fn spectral_value(c: Criterion, lmin: f64, lmax: f64) -> f64 {
     }
 }
 
+/// [`Run::bound_terms`] of one candidate from its d_j and e_j (r x r).
+fn bound_terms_of(dj: &[f64], ej: &[f64], r: usize) -> [f64; 3] {
+    let rr = r * r;
+    let mut pm = [0.0; MAX_R * MAX_R];
+    pm[..rr].copy_from_slice(&dj[..rr]);
+    for a in 0..r {
+        pm[a * r + a] += 1.0;
+    }
+    let t: f64 = (0..r).map(|a| dj[a * r + a]).sum::<f64>().max(0.0);
+    match small_spd_trace_solves(&pm[..rr], [&ej[..rr], &dj[..rr]], r) {
+        Some([a, tau]) => [a.max(0.0).sqrt(), t / (1.0 + t), tau.max(0.0)],
+        // not positive definite: no bound, always evaluate exactly
+        None => [f64::INFINITY, 1.0, 1.0],
+    }
+}
+
 /// One start's mutable state.
 struct Run<'p, 'a> {
     p: &'p Problem<'a>,
@@ -444,7 +460,6 @@ impl<'p, 'a> Run<'p, 'a> {
                 }
             }
         });
-        self.update_bound_terms();
     }
 
     /// For every candidate m, in parallel chunks of blocked products:
@@ -457,7 +472,8 @@ impl<'p, 'a> Run<'p, 'a> {
         let rr = r * r;
         let sz = r * k;
         let blocks = self.p.blocks;
-        let run_chunk = |ci: usize, dch: &mut [f64], ech: Option<&mut [f64]>| {
+        // A, I: the bound terms of each candidate follow its updated d and e (same chunk).
+        let run_chunk = |ci: usize, dch: &mut [f64], ech: Option<(&mut [f64], &mut [[f64; 3]])>| {
             let n = dch.len() / rr;
             let first = ci * GEMM_CHUNK;
             let mut prod = vec![0.0; n * r * q];
@@ -472,21 +488,25 @@ impl<'p, 'a> Run<'p, 'a> {
             let mut ech = ech;
             for t in 0..n {
                 let b = &blocks[(first + t) * sz..(first + t + 1) * sz];
-                let em = ech.as_deref_mut().map(|e| &mut e[t * rr..(t + 1) * rr]);
-                f(
-                    &prod[t * r * q..(t + 1) * r * q],
-                    b,
-                    &mut dch[t * rr..(t + 1) * rr],
-                    em,
-                );
+                let dm = &mut dch[t * rr..(t + 1) * rr];
+                match ech.as_mut() {
+                    Some((ech, bt)) => {
+                        let em = &mut ech[t * rr..(t + 1) * rr];
+                        f(&prod[t * r * q..(t + 1) * r * q], b, dm, Some(&mut *em));
+                        bt[t] = bound_terms_of(dm, em, r);
+                    }
+                    None => f(&prod[t * r * q..(t + 1) * r * q], b, dm, None),
+                }
             }
         };
         if self.needs_e() {
+            self.bound_terms.resize(self.p.n_cand, [0.0; 3]);
             self.d
                 .par_chunks_mut(rr * GEMM_CHUNK)
                 .zip(self.e.par_chunks_mut(rr * GEMM_CHUNK))
+                .zip(self.bound_terms.par_chunks_mut(GEMM_CHUNK))
                 .enumerate()
-                .for_each(|(ci, (dch, ech))| run_chunk(ci, dch, Some(ech)));
+                .for_each(|(ci, ((dch, ech), bt))| run_chunk(ci, dch, Some((ech, bt))));
         } else {
             self.d
                 .par_chunks_mut(rr * GEMM_CHUNK)
@@ -665,33 +685,6 @@ impl<'p, 'a> Run<'p, 'a> {
     }
 
     /// Recompute [`Run::bound_terms`] from d and e (A, I).
-    fn update_bound_terms(&mut self) {
-        if !self.needs_e() {
-            return;
-        }
-        let r = self.p.r;
-        let rr = r * r;
-        let (d, e) = (&self.d, &self.e);
-        self.bound_terms = (0..self.p.n_cand)
-            .into_par_iter()
-            .with_min_len(1024)
-            .map(|j| {
-                let dj = &d[j * rr..(j + 1) * rr];
-                let mut pm = [0.0; MAX_R * MAX_R];
-                pm[..rr].copy_from_slice(dj);
-                for a in 0..r {
-                    pm[a * r + a] += 1.0;
-                }
-                let t: f64 = (0..r).map(|a| dj[a * r + a]).sum::<f64>().max(0.0);
-                match small_spd_trace_solves(&pm[..rr], [&e[j * rr..(j + 1) * rr], dj], r) {
-                    Some([a, tau]) => [a.max(0.0).sqrt(), t / (1.0 + t), tau.max(0.0)],
-                    // not positive definite: no bound, always evaluate exactly
-                    None => [f64::INFINITY, 1.0, 1.0],
-                }
-            })
-            .collect();
-    }
-
     /// Criterion after exchanging the visited point for candidate j, as a removal
     /// (prepared in `rm`) followed by a rank-r addition.
     fn exchange_value_fast(
@@ -1096,7 +1089,6 @@ impl<'p, 'a> Run<'p, 'a> {
                 }
             }
         });
-        self.update_bound_terms();
         let old = self.design[i];
         self.design[i] = j;
         if self.recompute().is_err() {
