@@ -197,43 +197,59 @@ pub fn small_spd_trace_solves<const N: usize>(
     es: [&[f64]; N],
     r: usize,
 ) -> Option<[f64; N]> {
-    let mut l = [0.0f64; MAX_R * MAX_R];
-    for j in 0..r {
-        let mut s = a[j * r + j];
+    match r {
+        1 => trace_solves::<1, N>(a, es),
+        2 => trace_solves::<2, N>(a, es),
+        3 => trace_solves::<3, N>(a, es),
+        4 => trace_solves::<4, N>(a, es),
+        5 => trace_solves::<5, N>(a, es),
+        6 => trace_solves::<6, N>(a, es),
+        7 => trace_solves::<7, N>(a, es),
+        _ => trace_solves::<MAX_R, N>(a, es),
+    }
+}
+
+#[inline(always)]
+fn trace_solves<const R: usize, const N: usize>(a: &[f64], es: [&[f64]; N]) -> Option<[f64; N]> {
+    let mut l = [[0.0f64; R]; R];
+    let mut inv_d = [0.0f64; R];
+    for j in 0..R {
+        let mut s = a[j * R + j];
         for p in 0..j {
-            s -= l[j * r + p] * l[j * r + p];
+            s -= l[j][p] * l[j][p];
         }
         if !(s > 0.0) {
             return None;
         }
         let d = s.sqrt();
-        l[j * r + j] = d;
-        for i in j + 1..r {
-            let mut s = a[i * r + j];
+        l[j][j] = d;
+        inv_d[j] = 1.0 / d;
+        for i in j + 1..R {
+            let mut s = a[i * R + j];
             for p in 0..j {
-                s -= l[i * r + p] * l[j * r + p];
+                s -= l[i][p] * l[j][p];
             }
-            l[i * r + j] = s / d;
+            l[i][j] = s * inv_d[j];
         }
     }
     let mut out = [0.0; N];
     for (e, t) in es.iter().zip(out.iter_mut()) {
-        for q in 0..r {
+        for q in 0..R {
             // x = A^-1 e[:, q]; accumulate x[q]
-            let mut y = [0.0f64; MAX_R];
-            for a_ in 0..r {
-                let mut v = e[a_ * r + q];
+            let mut y = [0.0f64; R];
+            for a_ in 0..R {
+                let mut v = e[a_ * R + q];
                 for u in 0..a_ {
-                    v -= l[a_ * r + u] * y[u];
+                    v -= l[a_][u] * y[u];
                 }
-                y[a_] = v / l[a_ * r + a_];
+                y[a_] = v * inv_d[a_];
             }
-            for a_ in (0..r).rev() {
+            for a_ in (0..R).rev() {
                 let mut v = y[a_];
-                for u in a_ + 1..r {
-                    v -= l[u * r + a_] * y[u];
+                for u in a_ + 1..R {
+                    v -= l[u][a_] * y[u];
                 }
-                y[a_] = v / l[a_ * r + a_];
+                y[a_] = v * inv_d[a_];
             }
             *t += y[q];
         }
