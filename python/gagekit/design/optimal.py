@@ -392,26 +392,42 @@ def _groups(cand: np.ndarray, zone_boxes, n: int):
 
 # ----------------------------------------------------------------------------- refinement
 
+#: The refinement stops when this many rounds improved the criterion by less than STALL_TOL.
+STALL_ROUNDS = 10
+STALL_TOL = 1e-6
+
+
 def _refine(rows, points, blocks, zone_of_point, zone_boxes, lo, hi, crit, weights, feasible, per_axis):
     """Compass search of every point inside its box (bounds or zone).
 
-    Each round proposes x_i +/- h e_j for every point and variable (clipped to the
-    point's box), evaluates ``rows`` on all proposals at once and lets the Rust
-    exchange move each point to its best proposal; h halves when nothing moves.
+    Each round proposes x_i +/- h_i e_j for every active point and variable (clipped
+    to the point's box), evaluates ``rows`` on all proposals at once and lets the Rust
+    exchange move each point to its best proposal. Each point has its own step: it
+    doubles (up to the initial step) when the point moved and halves when it did not,
+    and a point whose step is below the resolution stops proposing. The search stops
+    when the last STALL_ROUNDS rounds together improved the criterion by less than
+    STALL_TOL (relative).
     """
     n, d = points.shape
     r, k = blocks.shape[1:]
     box_lo = np.array([zone_boxes[z][0] if z >= 0 else lo for z in zone_of_point])
     box_hi = np.array([zone_boxes[z][1] if z >= 0 else hi for z in zone_of_point])
     span = hi - lo
-    h = np.minimum(0.25, 2.0 / max(per_axis, 1.0)) * span
+    h0 = np.minimum(0.25, 2.0 / max(per_axis, 1.0)) * span
     h_min = 1e-7 * np.maximum(span, 1e-300)
+    scale = np.ones(n)  # step of point i: scale[i] * h0
+    active = ~(h0 <= h_min).all() & np.ones(n, bool)
+    history: list[float] = []
     for _ in range(400):
-        if (h <= h_min).all():
+        if not active.any():
             break
-        steps = np.concatenate([np.diag(h), -np.diag(h)])  # (2d, d)
-        prop = np.clip(points[:, None, :] + steps[None], box_lo[:, None, :], box_hi[:, None, :])
-        owner = np.repeat(np.arange(n), 2 * d)
+        if len(history) > STALL_ROUNDS and history[-STALL_ROUNDS - 1] - history[-1] <= STALL_TOL * abs(history[-1]):
+            break
+        act = np.nonzero(active)[0]
+        steps = np.concatenate([np.diag(h0), -np.diag(h0)])  # (2d, d)
+        prop = points[act, None, :] + scale[act, None, None] * steps[None]
+        prop = np.clip(prop, box_lo[act, None, :], box_hi[act, None, :])
+        owner = np.repeat(act, 2 * d)
         prop = prop.reshape(-1, d)
         keep = (np.abs(prop - points[owner]) > 0).any(axis=1)
         for z, zone in enumerate(zone_boxes):
@@ -421,22 +437,27 @@ def _refine(rows, points, blocks, zone_of_point, zone_boxes, lo, hi, crit, weigh
         if feasible is not None and keep.any():
             keep[keep] = np.asarray(feasible(prop[keep]), bool)
         prop, owner = prop[keep], owner[keep]
-        if len(prop) == 0:
-            h = h / 2
-            continue
-        pb = _blocks(rows, prop, "refinement")
-        all_blocks = np.concatenate([blocks, pb])
-        groups = [np.concatenate([[i], n + np.nonzero(owner == i)[0]]).astype(np.int64) for i in range(n)]
-        out = _core.design_search(
-            np.ascontiguousarray(all_blocks.reshape(-1, k)), r, groups, list(range(n)), crit,
-            weights=weights, starts=1, max_sweeps=50, seed=0, initial=list(range(n)),
-        )
-        chosen = np.asarray(out["design"])
-        if (chosen == np.arange(n)).all():
-            h = h / 2
-            continue
-        allp = np.concatenate([points, prop])
-        points, blocks = allp[chosen].copy(), all_blocks[chosen].copy()
+        moved = np.zeros(n, bool)
+        if len(prop):
+            pb = _blocks(rows, prop, "refinement")
+            all_blocks = np.concatenate([blocks, pb])
+            order = np.argsort(owner, kind="stable")
+            starts_at = np.searchsorted(owner[order], np.arange(n + 1))
+            groups = [np.concatenate([[i], n + order[starts_at[i]:starts_at[i + 1]]]).astype(np.int64)
+                      for i in range(n)]
+            out = _core.design_search(
+                np.ascontiguousarray(all_blocks.reshape(-1, k)), r, groups, list(range(n)), crit,
+                weights=weights, starts=1, max_sweeps=50, seed=0, initial=list(range(n)),
+            )
+            chosen = np.asarray(out["design"])
+            moved = chosen != np.arange(n)
+            history.append(float(out["objective"]))
+            if moved.any():
+                allp = np.concatenate([points, prop])
+                points, blocks = allp[chosen].copy(), all_blocks[chosen].copy()
+        scale[~moved] /= 2
+        scale[moved] = np.minimum(2 * scale[moved], 1.0)  # a point on the move speeds up
+        active &= ~((scale[:, None] * h0[None]) <= h_min[None]).all(axis=1)
     return points, blocks
 
 

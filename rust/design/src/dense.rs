@@ -185,6 +185,78 @@ pub fn small_spd_inverse(a: &[f64], r: usize, inv: &mut [f64]) -> Option<f64> {
     Some(logdet)
 }
 
+/// tr(A^-1 E) for a small (r <= MAX_R) SPD matrix A and any r x r E (Cholesky solves);
+/// `None` when a pivot is not positive.
+pub fn small_spd_trace_solve(a: &[f64], e: &[f64], r: usize) -> Option<f64> {
+    small_spd_trace_solves(a, [e], r).map(|t| t[0])
+}
+
+/// [`small_spd_trace_solve`] for several E with one factorisation of A.
+pub fn small_spd_trace_solves<const N: usize>(
+    a: &[f64],
+    es: [&[f64]; N],
+    r: usize,
+) -> Option<[f64; N]> {
+    match r {
+        1 => trace_solves::<1, N>(a, es),
+        2 => trace_solves::<2, N>(a, es),
+        3 => trace_solves::<3, N>(a, es),
+        4 => trace_solves::<4, N>(a, es),
+        5 => trace_solves::<5, N>(a, es),
+        6 => trace_solves::<6, N>(a, es),
+        7 => trace_solves::<7, N>(a, es),
+        _ => trace_solves::<MAX_R, N>(a, es),
+    }
+}
+
+#[inline(always)]
+fn trace_solves<const R: usize, const N: usize>(a: &[f64], es: [&[f64]; N]) -> Option<[f64; N]> {
+    let mut l = [[0.0f64; R]; R];
+    let mut inv_d = [0.0f64; R];
+    for j in 0..R {
+        let mut s = a[j * R + j];
+        for p in 0..j {
+            s -= l[j][p] * l[j][p];
+        }
+        if !(s > 0.0) {
+            return None;
+        }
+        let d = s.sqrt();
+        l[j][j] = d;
+        inv_d[j] = 1.0 / d;
+        for i in j + 1..R {
+            let mut s = a[i * R + j];
+            for p in 0..j {
+                s -= l[i][p] * l[j][p];
+            }
+            l[i][j] = s * inv_d[j];
+        }
+    }
+    let mut out = [0.0; N];
+    for (e, t) in es.iter().zip(out.iter_mut()) {
+        for q in 0..R {
+            // x = A^-1 e[:, q]; accumulate x[q]
+            let mut y = [0.0f64; R];
+            for a_ in 0..R {
+                let mut v = e[a_ * R + q];
+                for u in 0..a_ {
+                    v -= l[a_][u] * y[u];
+                }
+                y[a_] = v * inv_d[a_];
+            }
+            for a_ in (0..R).rev() {
+                let mut v = y[a_];
+                for u in a_ + 1..R {
+                    v -= l[u][a_] * y[u];
+                }
+                y[a_] = v * inv_d[a_];
+            }
+            *t += y[q];
+        }
+    }
+    Some(out)
+}
+
 /// Largest number of rows a design point may contribute.
 pub const MAX_R: usize = 8;
 /// Largest size of an exchange capacitance matrix (2 * MAX_R).
@@ -261,9 +333,178 @@ pub fn dot(a: &[f64], b: &[f64]) -> f64 {
     t
 }
 
+/// `out (m x q) = a (m x k) * w (k x q)`, all row-major, for small q: the
+/// skinny products of the exchange, without the packing a general GEMM does. Uses
+/// AVX2 + FMA when the processor has them; each output is one fixed sequence of
+/// operations, so the result does not depend on threads or chunking.
+pub fn skinny_mul(a: &[f64], m: usize, k: usize, w: &[f64], q: usize, out: &mut [f64]) {
+    assert!(a.len() >= m * k);
+    skinny_rows(&|i| &a[i * k..(i + 1) * k], m, k, w, q, out);
+}
+
+/// As [`skinny_mul`] with row i of the left factor given by `row(i)` (k values each).
+pub fn skinny_rows<'a>(
+    row: &(dyn Fn(usize) -> &'a [f64] + Sync),
+    m: usize,
+    k: usize,
+    w: &[f64],
+    q: usize,
+    out: &mut [f64],
+) {
+    assert!(w.len() >= k * q && out.len() >= m * q);
+    #[cfg(target_arch = "x86_64")]
+    {
+        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
+        {
+            // SAFETY: the features were detected at run time.
+            unsafe { skinny_fma(row, m, k, w, q, out) };
+            return;
+        }
+    }
+    skinny_dispatch::<false>(row, m, k, w, q, out);
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn skinny_fma<'a>(
+    row: &(dyn Fn(usize) -> &'a [f64] + Sync),
+    m: usize,
+    k: usize,
+    w: &[f64],
+    q: usize,
+    out: &mut [f64],
+) {
+    skinny_dispatch::<true>(row, m, k, w, q, out);
+}
+
+#[inline(always)]
+fn skinny_dispatch<'a, const FMA: bool>(
+    row: &(dyn Fn(usize) -> &'a [f64] + Sync),
+    m: usize,
+    k: usize,
+    w: &[f64],
+    q: usize,
+    out: &mut [f64],
+) {
+    // column slabs of at most 16 (more accumulators than registers would spill)
+    let mut c0 = 0;
+    while c0 < q {
+        let qc = (q - c0).min(16);
+        if qc <= 4 {
+            skinny_body::<FMA, 4, 8>(row, m, k, w, q, c0, qc, out);
+        } else if qc <= 8 {
+            skinny_body::<FMA, 8, 4>(row, m, k, w, q, c0, qc, out);
+        } else {
+            skinny_body::<FMA, 16, 2>(row, m, k, w, q, c0, qc, out);
+        }
+        c0 += qc;
+    }
+}
+
+/// Register-blocked kernel for output columns c0 .. c0 + qc: MR rows at a time against
+/// those columns of w padded to NR.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn skinny_body<'a, const FMA: bool, const NR: usize, const MR: usize>(
+    row: &(dyn Fn(usize) -> &'a [f64] + Sync),
+    m: usize,
+    k: usize,
+    w: &[f64],
+    q: usize,
+    c0: usize,
+    qc: usize,
+    out: &mut [f64],
+) {
+    let mut wp = vec![0.0f64; k * NR];
+    for t in 0..k {
+        wp[t * NR..t * NR + qc].copy_from_slice(&w[t * q + c0..t * q + c0 + qc]);
+    }
+    let fma = |x: f64, y: f64, s: f64| if FMA { x.mul_add(y, s) } else { s + x * y };
+    let mut i = 0;
+    while i + MR <= m {
+        let rows: [&[f64]; MR] = std::array::from_fn(|ii| &row(i + ii)[..k]);
+        let mut acc = [[0.0f64; NR]; MR];
+        for t in 0..k {
+            let wt: &[f64; NR] = wp[t * NR..(t + 1) * NR].try_into().unwrap();
+            for (acc_i, r_i) in acc.iter_mut().zip(rows.iter()) {
+                let x = r_i[t];
+                for c in 0..NR {
+                    acc_i[c] = fma(x, wt[c], acc_i[c]);
+                }
+            }
+        }
+        for (ii, acc_i) in acc.iter().enumerate() {
+            out[(i + ii) * q + c0..(i + ii) * q + c0 + qc].copy_from_slice(&acc_i[..qc]);
+        }
+        i += MR;
+    }
+    while i < m {
+        let r_i = &row(i)[..k];
+        let mut acc = [0.0f64; NR];
+        for t in 0..k {
+            let x = r_i[t];
+            for c in 0..NR {
+                acc[c] = fma(x, wp[t * NR + c], acc[c]);
+            }
+        }
+        out[i * q + c0..i * q + c0 + qc].copy_from_slice(&acc[..qc]);
+        i += 1;
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn trace_solve_matches_the_inverse() {
+        let a = [4.0, 2.0, 0.6, 2.0, 5.0, 1.0, 0.6, 1.0, 3.0];
+        let e = [1.0, 0.3, -0.2, 0.5, 2.0, 0.1, 0.0, -0.4, 0.7];
+        let mut inv = [0.0; 9];
+        small_spd_inverse(&a, 3, &mut inv).unwrap();
+        let want: f64 = (0..3)
+            .map(|i| (0..3).map(|j| inv[i * 3 + j] * e[j * 3 + i]).sum::<f64>())
+            .sum();
+        let got = small_spd_trace_solve(&a, &e, 3).unwrap();
+        assert!(
+            (got - want).abs() < 1e-14 * want.abs().max(1.0),
+            "{got} vs {want}"
+        );
+        assert!(small_spd_trace_solve(&[-1.0], &[1.0], 1).is_none());
+    }
+
+    #[test]
+    fn skinny_products_match_the_naive_product() {
+        // m not a multiple of the row blocking, q on both sides of 8, k not a multiple of 4
+        for &(m, k, q) in &[
+            (7usize, 5usize, 3usize),
+            (9, 32, 6),
+            (10, 33, 12),
+            (1, 1, 16),
+        ] {
+            let a: Vec<f64> = (0..m * k)
+                .map(|i| ((i * 37 % 101) as f64 - 50.0) / 7.0)
+                .collect();
+            let w: Vec<f64> = (0..k * q)
+                .map(|i| ((i * 53 % 89) as f64 - 44.0) / 9.0)
+                .collect();
+            let mut naive = vec![0.0; m * q];
+            for i in 0..m {
+                for c in 0..q {
+                    naive[i * q + c] = (0..k).map(|t| a[i * k + t] * w[t * q + c]).sum();
+                }
+            }
+            let mut fast = vec![0.0; m * q];
+            skinny_mul(&a, m, k, &w, q, &mut fast);
+            let mut plain = vec![0.0; m * q];
+            skinny_dispatch::<false>(&|i| &a[i * k..(i + 1) * k], m, k, &w, q, &mut plain);
+            for t in 0..m * q {
+                let tol = 1e-12 * (1.0 + naive[t].abs()) * k as f64;
+                assert!((fast[t] - naive[t]).abs() < tol, "{m}x{k}x{q} [{t}]");
+                assert!((plain[t] - naive[t]).abs() < tol, "{m}x{k}x{q} [{t}]");
+            }
+        }
+    }
 
     #[test]
     fn spd_inverse_and_logdet() {

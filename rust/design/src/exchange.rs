@@ -15,8 +15,8 @@
 
 use crate::criteria::{information, metrics, Criterion, Metrics};
 use crate::dense::{
-    dot, gram_add, lu_in_place, lu_inverse, mul_ab, mul_abt, small_spd_inverse, spd_inverse,
-    sym_eig, sym_eigenvalues, MAX_P, MAX_R,
+    dot, gram_add, lu_in_place, lu_inverse, mul_ab, mul_abt, skinny_mul, skinny_rows,
+    small_spd_inverse, small_spd_trace_solves, spd_inverse, sym_eig, sym_eigenvalues, MAX_P, MAX_R,
 };
 use gagekit_core::{GkError, Result};
 use rand::seq::{index::sample, SliceRandom};
@@ -196,9 +196,16 @@ impl Problem<'_> {
 /// Candidates per blocked matrix product.
 const GEMM_CHUNK: usize = 256;
 
+/// Products with at most this many columns use [`skinny_mul`] (a GEMM's packing costs more).
+const SKINNY_Q: usize = 24;
+
 /// `out (m x q) = a (m x k) * w (k x q)`, all row-major.
 fn gemm(a: &[f64], m: usize, k: usize, w: &[f64], q: usize, out: &mut [f64]) {
     assert!(a.len() >= m * k && w.len() >= k * q && out.len() >= m * q);
+    if q <= SKINNY_Q {
+        skinny_mul(a, m, k, w, q, out);
+        return;
+    }
     // SAFETY: the slices hold the m x k, k x q and m x q row-major matrices (checked above).
     unsafe {
         matrixmultiply::dgemm(
@@ -229,25 +236,24 @@ impl Problem<'_> {
         F: Fn(usize, &[f64]) -> T + Sync,
     {
         let (r, k) = (self.r, self.k);
-        let sz = r * k;
         members
             .par_chunks(GEMM_CHUNK)
             .flat_map_iter(|chunk| {
-                let first = chunk[0];
-                let contiguous = chunk[chunk.len() - 1] == first + chunk.len() - 1
-                    && chunk.windows(2).all(|p| p[1] == p[0] + 1);
-                let gathered;
-                let a: &[f64] = if contiguous {
-                    &self.blocks[first * sz..(first + chunk.len()) * sz]
-                } else {
-                    gathered = chunk
-                        .iter()
-                        .flat_map(|&j| self.block(j).iter().copied())
-                        .collect::<Vec<f64>>();
-                    &gathered
-                };
                 let mut out = vec![0.0; chunk.len() * r * q];
-                gemm(a, chunk.len() * r, k, w, q, &mut out);
+                let m = chunk.len() * r;
+                if q <= SKINNY_Q {
+                    let row = |i: usize| {
+                        let at = (chunk[i / r] * r + i % r) * k;
+                        &self.blocks[at..at + k]
+                    };
+                    skinny_rows(&row, m, k, w, q, &mut out);
+                } else {
+                    let mut a = Vec::with_capacity(m * k);
+                    for &j in chunk {
+                        a.extend_from_slice(self.block(j));
+                    }
+                    gemm(&a, m, k, w, q, &mut out);
+                }
                 chunk
                     .iter()
                     .enumerate()
@@ -284,6 +290,22 @@ fn spectral_value(c: Criterion, lmin: f64, lmax: f64) -> f64 {
     }
 }
 
+/// [`Run::bound_terms`] of one candidate from its d_j and e_j (r x r).
+fn bound_terms_of(dj: &[f64], ej: &[f64], r: usize) -> [f64; 3] {
+    let rr = r * r;
+    let mut pm = [0.0; MAX_R * MAX_R];
+    pm[..rr].copy_from_slice(&dj[..rr]);
+    for a in 0..r {
+        pm[a * r + a] += 1.0;
+    }
+    let t: f64 = (0..r).map(|a| dj[a * r + a]).sum::<f64>().max(0.0);
+    match small_spd_trace_solves(&pm[..rr], [&ej[..rr], &dj[..rr]], r) {
+        Some([a, tau]) => [a.max(0.0).sqrt(), t / (1.0 + t), tau.max(0.0)],
+        // not positive definite: no bound, always evaluate exactly
+        None => [f64::INFINITY, 1.0, 1.0],
+    }
+}
+
 /// One start's mutable state.
 struct Run<'p, 'a> {
     p: &'p Problem<'a>,
@@ -299,6 +321,10 @@ struct Run<'p, 'a> {
     /// Per candidate r x r: B F^-1 W F^-1 B^T (A and I).
     e: Vec<f64>,
     value: f64,
+    /// Per candidate (A, I): sqrt(tr((I + d_j)^-1 e_j)), t_j / (1 + t_j) with t_j = tr d_j,
+    /// and tr((I + d_j)^-1 d_j),
+    /// the two ingredients of the improvement bound, kept with d and e.
+    bound_terms: Vec<[f64; 3]>,
 }
 
 /// The visited point's removal, shared by all candidates of a visit.
@@ -308,6 +334,9 @@ struct Removal {
     value_minus: f64,
     /// Constant of the improvement bound (see [`Run::improvement_bound`]); infinite: no pruning.
     bound_c: f64,
+    /// A, I: tr d_O and l_max(d_O) (the two bounds on |L c|_F^2).
+    tr_do: f64,
+    mu_o: f64,
 }
 
 /// Scratch of one candidate evaluation (A, D, I).
@@ -349,6 +378,7 @@ impl<'p, 'a> Run<'p, 'a> {
             d: vec![0.0; blocks_d],
             e: vec![0.0; if needs_e { blocks_d } else { 0 }],
             value: f64::INFINITY,
+            bound_terms: vec![],
         };
         run.recompute()?;
         Ok(run)
@@ -442,7 +472,8 @@ impl<'p, 'a> Run<'p, 'a> {
         let rr = r * r;
         let sz = r * k;
         let blocks = self.p.blocks;
-        let run_chunk = |ci: usize, dch: &mut [f64], ech: Option<&mut [f64]>| {
+        // A, I: the bound terms of each candidate follow its updated d and e (same chunk).
+        let run_chunk = |ci: usize, dch: &mut [f64], ech: Option<(&mut [f64], &mut [[f64; 3]])>| {
             let n = dch.len() / rr;
             let first = ci * GEMM_CHUNK;
             let mut prod = vec![0.0; n * r * q];
@@ -457,21 +488,25 @@ impl<'p, 'a> Run<'p, 'a> {
             let mut ech = ech;
             for t in 0..n {
                 let b = &blocks[(first + t) * sz..(first + t + 1) * sz];
-                let em = ech.as_deref_mut().map(|e| &mut e[t * rr..(t + 1) * rr]);
-                f(
-                    &prod[t * r * q..(t + 1) * r * q],
-                    b,
-                    &mut dch[t * rr..(t + 1) * rr],
-                    em,
-                );
+                let dm = &mut dch[t * rr..(t + 1) * rr];
+                match ech.as_mut() {
+                    Some((ech, bt)) => {
+                        let em = &mut ech[t * rr..(t + 1) * rr];
+                        f(&prod[t * r * q..(t + 1) * r * q], b, dm, Some(&mut *em));
+                        bt[t] = bound_terms_of(dm, em, r);
+                    }
+                    None => f(&prod[t * r * q..(t + 1) * r * q], b, dm, None),
+                }
             }
         };
         if self.needs_e() {
+            self.bound_terms.resize(self.p.n_cand, [0.0; 3]);
             self.d
                 .par_chunks_mut(rr * GEMM_CHUNK)
                 .zip(self.e.par_chunks_mut(rr * GEMM_CHUNK))
+                .zip(self.bound_terms.par_chunks_mut(GEMM_CHUNK))
                 .enumerate()
-                .for_each(|(ci, (dch, ech))| run_chunk(ci, dch, Some(ech)));
+                .for_each(|(ci, ((dch, ech), bt))| run_chunk(ci, dch, Some((ech, bt))));
         } else {
             self.d
                 .par_chunks_mut(rr * GEMM_CHUNK)
@@ -584,6 +619,8 @@ impl<'p, 'a> Run<'p, 'a> {
             qeq: [0.0; MAX_R * MAX_R],
             value_minus: 0.0,
             bound_c: f64::INFINITY,
+            tr_do: 0.0,
+            mu_o: 0.0,
         };
         let logdet_q = small_spd_inverse(&q, r, &mut rm.qi)?;
         if logdet_q < -18.0 {
@@ -598,17 +635,18 @@ impl<'p, 'a> Run<'p, 'a> {
                 self.value + (0..r).map(|a| t[a * r + a]).sum::<f64>()
             }
         };
-        let tr_do: f64 = (0..r).map(|a| d_o[a * r + a]).sum();
+        let mu = sym_eigenvalues(&d_o[..r * r], r)[r - 1];
+        rm.tr_do = (0..r).map(|a| d_o[a * r + a]).sum::<f64>().max(0.0);
+        rm.mu_o = mu.max(0.0);
         rm.bound_c = match self.c {
             Criterion::D => {
-                let mu = sym_eigenvalues(&d_o[..r * r], r)[r - 1];
                 if mu < 1.0 {
                     1.0 / (r as f64 * (1.0 - mu))
                 } else {
                     f64::INFINITY
                 }
             }
-            _ => sym_eigenvalues(&rm.qeq[..r * r], r)[r - 1].max(0.0) * tr_do,
+            _ => sym_eigenvalues(&rm.qeq[..r * r], r)[r - 1].max(0.0),
         };
         Some(rm)
     }
@@ -618,29 +656,35 @@ impl<'p, 'a> Run<'p, 'a> {
     ///
     /// D: F_- >= (1 - mu) F with mu = l_max(O F^-1 O^T), so B F_-^-1 B^T <= d_j / (1 - mu)
     /// and det(I + B F_-^-1 B^T) <= (1 + tr d_j / (r (1 - mu)))^r.
-    /// A, I: tr(P^-1 e-) <= tr(e-) and, by Cauchy-Schwarz on c = B F^-1 O^T
-    /// (|c|_F^2 <= tr d_j tr d_O), tr(e-) <= (sqrt(tr e_j) + sqrt(l_max(Qi e_O Qi) tr d_O tr d_j))^2.
+    /// A, I: P = I + B F_-^-1 B^T >= I + d_j, so with L = (I + d_j)^-1/2,
+    /// tr(P^-1 e-) <= |L B F_-^-1 W^1/2|_F^2 = |L B F^-1 W^1/2 + L c Qi O F^-1 W^1/2|_F^2
+    /// (c = B F^-1 O^T) <= (sqrt(tr((I + d_j)^-1 e_j)) + |L c|_F sqrt(l_max(Qi e_O Qi)))^2, and
+    /// |L c|_F^2 <= tr d_O t_j / (1 + t_j) with t_j = tr d_j (the eigenvalues of
+    /// F^-1/2 B^T (I + d_j)^-1 B F^-1/2 are s / (1 + s), s those of d_j), and also
+    /// |L c|_F^2 = tr(L B F^-1 O^T O F^-1 B^T L) <= l_max(d_O) tr((I + d_j)^-1 d_j).
     fn improvement_bound(&self, rm: &Removal, j: usize) -> f64 {
-        let r = self.p.r;
-        let rr = r * r;
-        let tr_d: f64 = (0..r)
-            .map(|a| self.d[j * rr + a * r + a])
-            .sum::<f64>()
-            .max(0.0);
         let base = self.value - rm.value_minus;
         match self.c {
-            Criterion::D => base + r as f64 * (tr_d * rm.bound_c).ln_1p(),
-            _ => {
-                let tr_e: f64 = (0..r)
-                    .map(|a| self.e[j * rr + a * r + a])
+            Criterion::D => {
+                let r = self.p.r;
+                let rr = r * r;
+                let tr_d: f64 = (0..r)
+                    .map(|a| self.d[j * rr + a * r + a])
                     .sum::<f64>()
                     .max(0.0);
-                let s = tr_e.sqrt() + (rm.bound_c * tr_d).sqrt();
-                base + s * s
+                base + r as f64 * (tr_d * rm.bound_c).ln_1p()
+            }
+            _ => {
+                let [sa, lev, tau] = self.bound_terms[j];
+                let lc = (rm.tr_do * lev).min(rm.mu_o * tau); // >= |L c|_F^2
+                let s = sa + (rm.bound_c * lc).sqrt();
+                // relative slack against the round-off of the updated blocks
+                (base + s * s) * (1.0 + 1e-9) + 1e-12 * self.value.abs()
             }
         }
     }
 
+    /// Recompute [`Run::bound_terms`] from d and e (A, I).
     /// Criterion after exchanging the visited point for candidate j, as a removal
     /// (prepared in `rm`) followed by a rank-r addition.
     fn exchange_value_fast(
@@ -880,8 +924,19 @@ impl<'p, 'a> Run<'p, 'a> {
                 )
                 .reduce(|| (f64::INFINITY, usize::MAX), total_min),
             Some(rm) if self.c != Criterion::D => {
-                // A, I: the bound prunes little; one blocked product B [F^-1 O^T, F^-1 W F^-1 O^T]
-                // over all candidates, then the small r x r algebra per candidate.
+                // A, I: keep the candidates whose improvement bound can beat the tolerance
+                // (exact: the others cannot improve), then one blocked product
+                // B [F^-1 O^T, F^-1 W F^-1 O^T] over them and the small r x r algebra each.
+                let tol = self.tol();
+                let kept: Vec<usize> = cands
+                    .par_iter()
+                    .with_min_len(1024)
+                    .filter(|&&j| j != o && !(this.improvement_bound(rm, j) <= tol))
+                    .copied()
+                    .collect();
+                if kept.is_empty() {
+                    return false;
+                }
                 let mut w = vec![0.0; k * 2 * r];
                 for t in 0..k {
                     for q in 0..r {
@@ -890,7 +945,7 @@ impl<'p, 'a> Run<'p, 'a> {
                     }
                 }
                 self.p
-                    .products(cands, &w, 2 * r, |j, cf| {
+                    .products(&kept, &w, 2 * r, |j, cf| {
                         if j == o {
                             return (f64::INFINITY, usize::MAX);
                         }
@@ -919,8 +974,10 @@ impl<'p, 'a> Run<'p, 'a> {
                 order.sort_unstable_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
                 let mut best = (f64::INFINITY, usize::MAX);
                 for chunk in order.chunks(PRUNE_CHUNK) {
-                    let gain = self.value - best.0;
-                    if best.1 != usize::MAX && !(chunk[0].0 > gain) {
+                    // Only candidates that can beat both the best so far and the current
+                    // design by the tolerance matter.
+                    let gain = (self.value - best.0).max(tol);
+                    if !(chunk[0].0 > gain) {
                         break;
                     }
                     let b = chunk
@@ -959,44 +1016,75 @@ impl<'p, 'a> Run<'p, 'a> {
             mul_ab(bj, &self.fwf, r, k, &mut qt[..r * k]);
             qt[r * k..].copy_from_slice(&b_t);
         }
+        // With P = F^-1 U, Q = F^-1 W F^-1 U, y = B P, z = B Q, X = S^-1, R = U^T Q:
+        // d' = d - y X y^T and e' = e - [y z] G [y z]^T, G = [[-X R X, X], [X, 0]].
+        // Folding the eigenvectors of X and G into the product (X = V L V^T, G = E M E^T)
+        // leaves sums of weighted rank-one terms per candidate.
+        for a in 0..p {
+            for b in 0..a {
+                let v = 0.5 * (x[a * p + b] + x[b * p + a]);
+                x[a * p + b] = v;
+                x[b * p + a] = v;
+            }
+        }
+        let (lam, vx) = sym_eig(&x, p);
         let needs_e = self.needs_e();
-        let q = if needs_e { 2 * p } else { p };
-        let mut w = vec![0.0; k * q]; // [P, Q] = [F^-1 U, F^-1 W F^-1 U]
+        let pe = 2 * p;
+        let (gam, ve) = if needs_e {
+            let mut xr = vec![0.0; p * p];
+            mul_ab(&x, &e_pair, p, p, &mut xr);
+            let mut xrx = vec![0.0; p * p];
+            mul_ab(&xr, &x, p, p, &mut xrx);
+            let mut g = vec![0.0; pe * pe];
+            for a in 0..p {
+                for b in 0..p {
+                    g[a * pe + b] = -0.5 * (xrx[a * p + b] + xrx[b * p + a]);
+                    g[a * pe + p + b] = x[a * p + b];
+                    g[(p + a) * pe + b] = x[a * p + b];
+                }
+            }
+            sym_eig(&g, pe)
+        } else {
+            (vec![], vec![])
+        };
+        let q = if needs_e { p + pe } else { p };
+        let mut w = vec![0.0; k * q]; // [P V, [P Q] E]
         for t in 0..k {
-            for c in 0..p {
-                w[t * q + c] = pt[c * k + t];
-                if needs_e {
-                    w[t * q + p + c] = qt[c * k + t];
+            for l in 0..p {
+                w[t * q + l] = (0..p).map(|c| pt[c * k + t] * vx[c * p + l]).sum();
+            }
+            if needs_e {
+                for l in 0..pe {
+                    w[t * q + p + l] = (0..p)
+                        .map(|c| {
+                            pt[c * k + t] * ve[c * pe + l] + qt[c * k + t] * ve[(p + c) * pe + l]
+                        })
+                        .sum();
                 }
             }
         }
         self.for_candidate_products(&w, q, |prod, _b, dm, em| {
-            let mut yx = [0.0; MAX_R * MAX_P];
-            let y = |a: usize| &prod[a * q..a * q + p];
             for a in 0..r {
-                for c in 0..p {
-                    let mut v = 0.0;
-                    for u in 0..p {
-                        v += prod[a * q + u] * x[u * p + c];
+                let ya = &prod[a * q..a * q + p];
+                for c in 0..=a {
+                    let yc = &prod[c * q..c * q + p];
+                    let v: f64 = (0..p).map(|l| lam[l] * ya[l] * yc[l]).sum();
+                    dm[a * r + c] -= v;
+                    if c != a {
+                        dm[c * r + a] -= v;
                     }
-                    yx[a * p + c] = v;
-                    // Y = y S^-1
-                }
-            }
-            for a in 0..r {
-                for c in 0..r {
-                    dm[a * r + c] -= dot(&yx[a * p..(a + 1) * p], y(c));
                 }
             }
             if let Some(em) = em {
-                let z = |a: usize| &prod[a * q + p..a * q + 2 * p];
-                let mut t = [0.0; MAX_R * MAX_P];
-                mul_ab(&yx[..r * p], &e_pair, r, p, &mut t[..r * p]); // Y R
                 for a in 0..r {
-                    for c in 0..r {
-                        em[a * r + c] -= dot(z(a), &yx[c * p..(c + 1) * p])
-                            + dot(&yx[a * p..(a + 1) * p], z(c))
-                            - dot(&t[a * p..(a + 1) * p], &yx[c * p..(c + 1) * p]);
+                    let ha = &prod[a * q + p..(a + 1) * q];
+                    for c in 0..=a {
+                        let hc = &prod[c * q + p..(c + 1) * q];
+                        let v: f64 = (0..pe).map(|l| gam[l] * ha[l] * hc[l]).sum();
+                        em[a * r + c] -= v;
+                        if c != a {
+                            em[c * r + a] -= v;
+                        }
                     }
                 }
             }
@@ -1038,27 +1126,34 @@ impl<'p, 'a> Run<'p, 'a> {
         proj(self.p.block(o), &mut h_o);
         let c = self.c;
         let cands = &self.p.groups[self.p.point_group[i]];
-        let mut screened: Vec<(f64, usize)> = cands
-            .par_iter()
-            .with_min_len(256)
-            .filter(|&&j| j != o)
-            .map_init(
-                || vec![0.0; s],
-                |h, &j| {
-                    proj(self.p.block(j), h);
-                    let mut lo = f64::INFINITY;
-                    let mut hi = vals[k - 1];
-                    for q in 0..s {
-                        let est = vals[idx[q]] + h[q] - h_o[q];
-                        if q < s_lo {
-                            lo = lo.min(est);
-                        } else {
-                            hi = hi.max(est);
-                        }
+        // one blocked product B_j [v_q] over the candidates, then h_q = |B_j v_q|^2
+        let mut w = vec![0.0; k * s];
+        for (q, &m) in idx.iter().enumerate() {
+            for a in 0..k {
+                w[a * s + q] = vecs[a * k + m];
+            }
+        }
+        let mut screened: Vec<(f64, usize)> = self
+            .p
+            .products(cands, &w, s, |j, prod| {
+                if j == o {
+                    return (f64::INFINITY, usize::MAX);
+                }
+                let mut lo = f64::INFINITY;
+                let mut hi = vals[k - 1];
+                for q in 0..s {
+                    let h: f64 = (0..r).map(|a| prod[a * s + q] * prod[a * s + q]).sum();
+                    let est = vals[idx[q]] + h - h_o[q];
+                    if q < s_lo {
+                        lo = lo.min(est);
+                    } else {
+                        hi = hi.max(est);
                     }
-                    (sane(spectral_value(c, lo, hi)), j)
-                },
-            )
+                }
+                (sane(spectral_value(c, lo, hi)), j)
+            })
+            .into_iter()
+            .filter(|x| x.1 != usize::MAX)
             .collect();
         let top = EXACT_TOP.min(screened.len());
         if top == 0 {
@@ -1238,32 +1333,43 @@ pub fn search(p: &Problem, o: &Options) -> Result<Outcome> {
     } else {
         o.starts.max(1)
     };
-    let runs: Vec<Result<(Vec<usize>, usize)>> = (0..starts)
-        .into_par_iter()
-        .map(|s| {
-            let mut rng = ChaCha8Rng::seed_from_u64(o.seed);
-            rng.set_stream(s as u64);
-            let mut moves = 0;
-            let design = match &o.initial {
-                Some(d) => d.clone(),
-                None => {
-                    let d = greedy_start(p, 1e-6 * scale, &mut rng);
-                    if matches!(c, Criterion::A | Criterion::I) {
-                        // A- and I-optimal designs are usually close to the D-optimal one,
-                        // whose exchanges are much cheaper: polish that instead.
-                        let mut pre = Run::new(p, Criterion::D, ridge, d)?;
-                        moves += pre.optimise(o.max_sweeps.max(1), &mut rng);
-                        pre.design
-                    } else {
-                        d
-                    }
+    let run_start = |s: usize| -> Result<(Vec<usize>, usize)> {
+        let mut rng = ChaCha8Rng::seed_from_u64(o.seed);
+        rng.set_stream(s as u64);
+        let mut moves = 0;
+        let design = match &o.initial {
+            Some(d) => d.clone(),
+            None => {
+                let d = greedy_start(p, 1e-6 * scale, &mut rng);
+                if matches!(c, Criterion::A | Criterion::I) {
+                    // A- and I-optimal designs are usually close to the D-optimal one,
+                    // whose exchanges are much cheaper: polish that instead.
+                    let mut pre = Run::new(p, Criterion::D, ridge, d)?;
+                    moves += pre.optimise(o.max_sweeps.max(1), &mut rng);
+                    pre.design
+                } else {
+                    d
                 }
-            };
-            let mut run = Run::new(p, c, ridge, design)?;
-            moves += run.optimise(o.max_sweeps.max(1), &mut rng);
-            Ok((run.design, moves))
-        })
-        .collect();
+            }
+        };
+        let mut run = Run::new(p, c, ridge, design)?;
+        moves += run.optimise(o.max_sweeps.max(1), &mut rng);
+        Ok((run.design, moves))
+    };
+    // With at least as many starts as threads, the starts are the parallelism: each runs
+    // its inner loops on a pool of its own single thread (nested fine-grained tasks cost
+    // more than they give). The result does not depend on this (fixed-order reductions).
+    let solo = starts >= 2 && rayon::current_num_threads() >= 2;
+    let one_start = |s: usize| -> Result<(Vec<usize>, usize)> {
+        if solo {
+            if let Ok(pool) = rayon::ThreadPoolBuilder::new().num_threads(1).build() {
+                return pool.install(|| run_start(s));
+            }
+        }
+        run_start(s)
+    };
+    let runs: Vec<Result<(Vec<usize>, usize)>> =
+        (0..starts).into_par_iter().map(one_start).collect();
     let mut best: Option<(f64, usize, Vec<usize>, Metrics, usize)> = None;
     let mut start_objectives = Vec::with_capacity(starts);
     for (s, res) in runs.into_iter().enumerate() {
