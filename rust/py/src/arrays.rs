@@ -1,7 +1,7 @@
 //! Conversions between numpy arrays and the flat row-major slices the kernels take.
 
 use crate::errors::gagekit_err;
-use numpy::{PyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
+use numpy::{Element, PyArray1, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 
 /// A contiguous (n, dim) float64 array as a flat slice, or an InvalidInputError.
@@ -19,6 +19,17 @@ pub fn rows<'a>(
             format!("{what}: expected an (n, {dim}) array, got shape {shape:?}"),
         ));
     }
+    arr.as_slice().map_err(|_| {
+        gagekit_err(py, "InvalidInputError", format!("{what}: array must be C-contiguous"))
+    })
+}
+
+/// A contiguous 1-D array as a slice, or an InvalidInputError naming `what`.
+pub fn values<'a, T: Element>(
+    py: Python<'_>,
+    arr: &'a PyReadonlyArray1<'_, T>,
+    what: &str,
+) -> PyResult<&'a [T]> {
     arr.as_slice().map_err(|_| {
         gagekit_err(py, "InvalidInputError", format!("{what}: array must be C-contiguous"))
     })

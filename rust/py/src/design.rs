@@ -1,6 +1,6 @@
 //! Bindings of gagekit-design: exchange search, design figures, Halton points.
 
-use crate::arrays::{indices, rows};
+use crate::arrays::{indices, rows, values};
 use crate::errors::{gagekit_err, run};
 use gagekit_design::{Criterion, Metrics, Options, Problem};
 use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
@@ -69,13 +69,7 @@ fn design_search<'py>(
     let (flat, n_cand, k) = self::blocks(py, &blocks, r)?;
     let mut gs = Vec::with_capacity(groups.len());
     for g in &groups {
-        let s = g.as_slice().map_err(|_| {
-            gagekit_err(
-                py,
-                "InvalidInputError",
-                "zone members must be contiguous".into(),
-            )
-        })?;
+        let s = values(py, g, "zone members")?;
         if s.iter().any(|&j| j < 0) {
             return Err(gagekit_err(
                 py,

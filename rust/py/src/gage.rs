@@ -1,6 +1,6 @@
 //! Bindings of gagekit-gage: the virtual-gage LP of Eq. 5.11 (array conversion only).
 
-use crate::arrays::rows;
+use crate::arrays::{rows, values};
 use crate::errors::{gagekit_err, run};
 use gagekit_gage::{GageSet, Motion, Options, MOTION_NAMES};
 use numpy::{PyReadonlyArray1, PyReadonlyArray2};
@@ -35,8 +35,8 @@ fn args<'a>(
         points: rows(py, points, 3, "gage points")?,
         offsets,
         planes: rows(py, planes, 4, "gage planes")?,
-        f: f.as_slice().map_err(|_| invalid("f must be contiguous"))?,
-        g: g.as_slice().map_err(|_| invalid("g must be contiguous"))?,
+        f: values(py, f, "f")?,
+        g: values(py, g, "g")?,
         motion: Motion { free, max_angle, max_shift },
     })
 }

@@ -2,7 +2,7 @@
 //! `(kind, vector, terms)` tuples (kind "shape" with its offset, "prismatic" or "rotary" with
 //! its axis; terms = Fourier terms of a rotary joint, else 0) and the tool offset.
 
-use crate::arrays::rows;
+use crate::arrays::{rows, values};
 use crate::errors::{gagekit_err, run};
 use gagekit_kinematics::{identifiability, lstsq, rigid_fit, Element, Machine};
 use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
@@ -63,9 +63,7 @@ fn machine_exact<'py>(
 ) -> PyResult<Bound<'py, PyArray2<f64>>> {
     let m = machine(py, spec, tool)?;
     let c = rows(py, &commands, m.n_joints(), "commands")?;
-    let p = params
-        .as_slice()
-        .map_err(|_| gagekit_err(py, "InvalidInputError", "parameters: array must be contiguous".into()))?;
+    let p = values(py, &params, "parameters")?;
     let out = run(py, || m.exact_positions(c, p))?;
     matrix(py, out, 3)
 }
@@ -135,9 +133,7 @@ fn machine_lstsq<'py>(
     let shape = a.shape();
     let (n, k) = (shape[0], shape[1]);
     let av = rows(py, &a, k, "design matrix")?;
-    let bv = b
-        .as_slice()
-        .map_err(|_| gagekit_err(py, "InvalidInputError", "observations: array must be contiguous".into()))?;
+    let bv = values(py, &b, "observations")?;
     let r = run(py, || lstsq(av, n, k, bv))?;
     let d = PyDict::new(py);
     d.set_item("x", PyArray1::from_vec(py, r.x))?;
