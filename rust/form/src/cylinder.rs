@@ -437,6 +437,26 @@ fn fit_direct(pts: &[f64], crit: Criterion, opts: &Options, lsq_axis: Option<Vec
 
     // Local refinement in coordinates (alpha, beta) about each start direction.
     let in_region = |a: &Vector3<f64>| a.dot(&basis.2).abs() >= s_max.cos() - 1e-12;
+    // Nelder–Mead over the tangent plane of the unit axis `a0`, starting at `a0`;
+    // directions outside the search region count as infinitely bad.
+    let descend = |a0: &Vector3<f64>, warm: Warm<'_>, step: f64, xtol: f64| {
+        let (u, v) = orthonormal_basis(a0);
+        let dir = |x: &[f64]| (a0 + u * x[0] + v * x[1]).normalize();
+        let nm = nelder_mead(
+            |x: &[f64]| {
+                let a = dir(x);
+                if in_region(&a) {
+                    warm.eval(&a)
+                } else {
+                    f64::INFINITY
+                }
+            },
+            &[0.0, 0.0],
+            step,
+            xtol,
+        );
+        (nm.value, dir(&nm.position), nm.evaluations, warm.active_sets())
+    };
     // Nelder–Mead from the best personal bests (distinct directions), best first.
     let mut cands: Vec<(f64, Vector3<f64>)> = swarm
         .personal_best
@@ -459,25 +479,7 @@ fn fit_direct(pts: &[f64], crit: Criterion, opts: &Options, lsq_axis: Option<Vec
     // in start order, so the thread count never changes the result
     let refined: Vec<(f64, Vector3<f64>, usize, ActiveSets)> = starts
         .par_iter()
-        .map(|a0| {
-            let (u, v) = orthonormal_basis(a0);
-            let dir = |x: &[f64]| (a0 + u * x[0] + v * x[1]).normalize();
-            let warm = Warm::new(&q, crit, size);
-            let nm = nelder_mead(
-                |x: &[f64]| {
-                    let a = dir(x);
-                    if in_region(&a) {
-                        warm.eval(&a)
-                    } else {
-                        f64::INFINITY
-                    }
-                },
-                &[0.0, 0.0],
-                NM_STEP,
-                NM_XTOL,
-            );
-            (nm.value, dir(&nm.position), nm.evaluations, warm.active_sets())
-        })
+        .map(|a0| descend(a0, Warm::new(&q, crit, size), NM_STEP, NM_XTOL))
         .collect();
     // the active sets met near the optimum: later searches there start knowing them
     let mut known = ActiveSets::new();
@@ -499,23 +501,7 @@ fn fit_direct(pts: &[f64], crit: Criterion, opts: &Options, lsq_axis: Option<Vec
             .map(|k| {
                 let th = 0.3 + 2.0 * PI * k as f64 / HOPS as f64;
                 let s0 = (a0 + (u * th.cos() + v * th.sin()) * HOP_RADIUS).normalize();
-                let (u2, v2) = orthonormal_basis(&s0);
-                let dir = |x: &[f64]| (s0 + u2 * x[0] + v2 * x[1]).normalize();
-                let warm = Warm::knowing(&q, crit, size, known.clone());
-                let nm = nelder_mead(
-                    |x: &[f64]| {
-                        let a = dir(x);
-                        if in_region(&a) {
-                            warm.eval(&a)
-                        } else {
-                            f64::INFINITY
-                        }
-                    },
-                    &[0.0, 0.0],
-                    0.2 * HOP_RADIUS,
-                    HOP_XTOL,
-                );
-                (nm.value, dir(&nm.position), nm.evaluations, warm.active_sets())
+                descend(&s0, Warm::knowing(&q, crit, size, known.clone()), 0.2 * HOP_RADIUS, HOP_XTOL)
             })
             .collect();
         let before = best.0;
@@ -530,26 +516,11 @@ fn fit_direct(pts: &[f64], crit: Criterion, opts: &Options, lsq_axis: Option<Vec
             break; // no new basin (gains at rounding level do not count)
         }
         // polish the new basin's minimum to full resolution
-        let a0 = best.1;
-        let (u2, v2) = orthonormal_basis(&a0);
-        let dir = |x: &[f64]| (a0 + u2 * x[0] + v2 * x[1]).normalize();
         let warm = Warm::knowing(&q, crit, size, known.clone());
-        let nm = nelder_mead(
-            |x: &[f64]| {
-                let a = dir(x);
-                if in_region(&a) {
-                    warm.eval(&a)
-                } else {
-                    f64::INFINITY
-                }
-            },
-            &[0.0, 0.0],
-            100.0 * HOP_XTOL,
-            NM_XTOL,
-        );
-        evaluations += nm.evaluations;
-        if nm.value < best.0 {
-            best = (nm.value, dir(&nm.position));
+        let (value, a, evals, _) = descend(&best.1, warm, 100.0 * HOP_XTOL, NM_XTOL);
+        evaluations += evals;
+        if value < best.0 {
+            best = (value, a);
         }
     }
     let a = best.1;
