@@ -11,7 +11,7 @@ import pytest
 
 import gagekit
 from gagekit.errors import ConfigError, DegenerateGeometryError, FileFormatError, InvalidInputError
-from gagekit.machine import Truth, load_machine, parse_machine
+from gagekit.machine import Truth, load_machine, parse_machine, read_commands
 from gagekit.machine.observations import write_csv
 from gagekit.machine.tracking import History, read_cycles, read_history, simulate_cycles, track
 
@@ -96,6 +96,19 @@ def gk(*args, ok=True):
     if ok:
         assert proc.returncode == 0, proc.stderr
     return proc
+
+
+def test_simulate_thermal_mode_equals_simulate_cycles(cycles_csv, tmp_path):
+    """`machine simulate --plan --cycles` is the thermal mode; `simulate-cycles` is its short form."""
+    plan = cycles_csv / "plan.csv"
+    d = json.loads(gk("simulate", EXAMPLE, "--plan", plan, "--cycles", 2, "--seed", 4, "--out", tmp_path / "a.csv", "--json").stdout)
+    assert d["cycles"] == 2 and d["points"] == len(read_commands(plan, load_machine(EXAMPLE)))
+    gk("simulate-cycles", EXAMPLE, plan, "--cycles", 2, "--seed", 4, "--out", tmp_path / "b.csv")
+    assert (tmp_path / "a.csv").read_bytes() == (tmp_path / "b.csv").read_bytes()
+    cyc = read_cycles(tmp_path / "a.csv", load_machine(EXAMPLE))
+    assert cyc.cycle_ids == (1, 2) and set(cyc.temperatures) == {"temp_X", "temp_Z", "temp_Y", "temp_W"}
+    bad = gk("simulate", EXAMPLE, "--points", 5, "--plan", plan, "--out", tmp_path / "c.csv", ok=False)
+    assert bad.returncode == 2 and "either --points" in bad.stderr
 
 
 def test_cli_track_history(cycles_csv, tmp_path):

@@ -61,8 +61,10 @@ def check(
 @app.command("simulate")
 def simulate_cmd(
     machine_file: Path = MACHINE_ARG,
-    points: int = typer.Option(..., "--points", help="Number of quasi-random commands over the joint ranges."),
-    out: Path = typer.Option(..., "--out", help="Observations CSV to write (joint columns, x, y, z)."),
+    points: Optional[int] = typer.Option(
+        None, "--points", help="Number of quasi-random commands over the joint ranges (or give --plan)."
+    ),
+    out: Path = typer.Option(..., "--out", help="Observations CSV to write (joint columns, x, y, z; with --cycles also cycle, time, temp_*)."),
     noise: float = typer.Option(0.0089, "--noise", help="Tracker noise sigma per coordinate, mm."),
     seed: int = typer.Option(0, "--seed", help="Seed for commands, noise and (without --params) the truth."),
     truth: Optional[Path] = typer.Option(None, "--truth", help="Write the true parameters, groups and frame (JSON)."),
@@ -73,21 +75,56 @@ def simulate_cmd(
         '"frame": {"rotation": 3x3, "translation": 3}}; parameters left out are zero.',
     ),
     scale: float = typer.Option(1.0, "--scale", help="Scale of the random errors (1 = Table 3.3's magnitudes)."),
+    plan: Optional[Path] = typer.Option(None, "--plan", help="PLAN.csv (joint columns): measure these commands instead of --points quasi-random ones."),
+    cycles: int = typer.Option(
+        0, "--cycles", help="Thermal mode (Sec. 4.3.2): measure the commands in this many heating/cooling cycles (0: static)."
+    ),
+    drift_scale: float = typer.Option(1.0, "--drift-scale", help="Thermal mode: scale of the W- and Y-axis drift (Fig. 4.8)."),
     as_json: bool = JSON_OPTION,
 ) -> None:
-    """Simulate laser-tracker observations from the exact perturbed chain (seeded)."""
-    from ..machine import Truth, load_machine, simulate
+    """Simulate laser-tracker observations from the exact perturbed chain (seeded).
+
+    With --cycles N the machine heats and cools over N cycles (thermal mode): the W- and Y-axis
+    terms drift as in Fig. 4.8 and the CSV gains cycle, time and temp_* columns, ready for
+    `gagekit machine track`.
+    """
+    from ..machine import Truth, load_machine, read_commands
 
     m = load_machine(machine_file)
-    if points < 1:
+    if (points is None) == (plan is None):
+        raise InvalidInputError("give either --points N (quasi-random commands) or --plan PLAN.csv")
+    if points is not None and points < 1:
         raise InvalidInputError(f"--points must be at least 1, got {points}")
+    if cycles < 0:
+        raise InvalidInputError(f"--cycles must be 0 (static) or more, got {cycles}")
     t = Truth.load(params, m) if params is not None else Truth.random(m, seed=seed, scale=scale)
-    obs = simulate(m, t, m.sample_commands(points, seed=seed), noise=noise, seed=seed)
-    obs.write(out)
+    cmds = read_commands(plan, m) if plan is not None else m.sample_commands(points, seed=seed)
+    result = _write_simulation(m, t, cmds, out, cycles=cycles, noise=noise, drift_scale=drift_scale, seed=seed)
     if truth is not None:
         t.save(truth, m)
-    result = {"points": len(obs), "noise": noise, "seed": seed, "out": str(out), "truth": str(truth) if truth else None}
-    emit(result, as_json, lambda r: f"wrote {r['points']} observations to {r['out']}" + (f", truth to {r['truth']}" if r["truth"] else ""))
+    result.update(noise=noise, seed=seed, truth=str(truth) if truth else None)
+
+    def human(r):
+        what = f"{r['cycles']} cycles of {r['points']} points" if r["cycles"] else f"{r['points']} observations"
+        return f"wrote {what} to {r['out']}" + (f", truth to {r['truth']}" if r["truth"] else "")
+
+    emit(result, as_json, human)
+
+
+def _write_simulation(m, t, cmds, out: Path, *, cycles: int, noise: float, drift_scale: float, seed: int) -> dict:
+    """Write simulated observations: static (cycles = 0) or over thermal cycles."""
+    from ..machine import simulate
+
+    if cycles == 0:
+        obs = simulate(m, t, cmds, noise=noise, seed=seed)
+        obs.write(out)
+        return {"points": len(obs), "cycles": 0, "out": str(out)}
+    from ..machine.observations import write_csv
+    from ..machine.tracking import simulate_cycles
+
+    blocks, info = simulate_cycles(m, t, cmds, cycles=cycles, noise=noise, drift_scale=drift_scale, seed=seed)
+    write_csv(out, info["header"], np.concatenate(blocks))
+    return {"points": int(len(blocks[0])), "cycles": cycles, "out": str(out), "drift_per_cycle": info["drift"]}
 
 
 def _identify_text(cal) -> str:

@@ -187,17 +187,13 @@ def simulate_cycles_cmd(
     seed: int = typer.Option(0, "--seed", help="Seed of the truth, drift signs and noise."),
     as_json: bool = JSON_OPTION,
 ) -> None:
-    """Thermal mode of the simulator: the same plan measured over heating and cooling cycles."""
-    import numpy as np
-
+    """Short for `machine simulate MACHINE.toml --plan PLAN.csv --cycles N` (thermal mode)."""
     from ..machine import Truth, load_machine, read_commands
-    from ..machine.observations import write_csv
-    from ..machine.tracking import simulate_cycles
+    from .machine import _write_simulation
 
+    if cycles < 1:
+        raise InvalidInputError(f"--cycles must be at least 1, got {cycles}")
     m = load_machine(machine_file)
-    cmds = read_commands(plan, m)
-    blocks, info = simulate_cycles(m, Truth.random(m, seed=seed), cmds, cycles=cycles, noise=noise,
-                                   drift_scale=drift_scale, seed=seed)
-    write_csv(out, info["header"], np.concatenate(blocks))
-    result = {"cycles": cycles, "points": int(len(cmds)), "out": str(out), "drift_per_cycle": info["drift"]}
+    result = _write_simulation(m, Truth.random(m, seed=seed), read_commands(plan, m), out, cycles=cycles,
+                               noise=noise, drift_scale=drift_scale, seed=seed)
     emit(result, as_json, lambda r: f"wrote {r['cycles']} cycles of {r['points']} points to {r['out']}")
