@@ -55,14 +55,14 @@ def test_dissertation_zones_are_eight_equal_volumes(space):
 
 
 def test_plan_honours_zones_and_beats_quasi_random(machine, tmp_path):
-    plan = design_observer(machine, 16, "A", "dissertation-8", **FAST)
-    assert [z["count"] for z in plan.zone_counts] == [2] * 8
+    plan = design_observer(machine, 32, "A", "dissertation-8", **FAST)
+    assert [z["count"] for z in plan.zone_counts] == [4] * 8
     r = machine.ranges
     assert ((plan.commands >= r[:, 0] - 1e-9) & (plan.commands <= r[:, 1] + 1e-9)).all()
     assert plan.figures["trace"] < plan.quasi_random["same_size"]["trace"]
     plan.write(tmp_path / "plan.csv")
     assert np.allclose(read_commands(tmp_path / "plan.csv", machine), plan.commands)
-    again = design_observer(machine, 16, "A", "dissertation-8", **FAST)
+    again = design_observer(machine, 32, "A", "dissertation-8", **FAST)
     assert np.array_equal(again.commands, plan.commands)
 
 
@@ -70,7 +70,7 @@ def test_exclusions_are_avoided(machine, space, tmp_path):
     f = tmp_path / "excl.toml"
     f.write_text('commands = [[0, -1250, 900, 350, -800]]\n\n[[box]]\nX = [0, 1250]\n"Z+W" = [1000, 2000]\n')
     ex = read_exclusions(f, space)
-    plan = design_observer(machine, 14, "D", exclude=ex, **FAST)
+    plan = design_observer(machine, 32, "D", exclude=ex, **FAST)
     c = plan.commands
     inside = (c[:, 1] >= 0) & (c[:, 2] + c[:, 4] >= 1000)
     assert not inside.any()
@@ -82,7 +82,7 @@ def test_exclusions_are_avoided(machine, space, tmp_path):
 def test_user_zones(machine, space, tmp_path):
     f = tmp_path / "zones.toml"
     f.write_text("[[zone]]\ncount = 5\nY = [350, 800]\n\n[[zone]]\ncount = 6\nX = [-1250, -1000]\n")
-    plan = design_observer(machine, 14, "A", read_zones(f, space), **FAST)
+    plan = design_observer(machine, 32, "A", read_zones(f, space), **FAST)
     assert [z["count"] for z in plan.zone_counts] == [5, 6]
     bad = tmp_path / "bad.toml"
     bad.write_text("[[zone]]\ncount = 2\nQ = [0, 1]\n")
@@ -93,14 +93,14 @@ def test_user_zones(machine, space, tmp_path):
 @pytest.mark.parametrize(
     "kwargs,exc,msg",
     [
-        (dict(points=10), InvalidInputError, "at least 11 points"),
+        (dict(points=10), InvalidInputError, "at least 32 points"),
         (dict(criterion="Z"), InvalidInputError, "unknown design criterion"),
         (dict(zones="dissertation-9"), InvalidInputError, "unknown zones"),
         (dict(candidates=5), InvalidInputError, "--candidates"),
     ],
 )
 def test_bad_plans(machine, kwargs, exc, msg):
-    args = dict(points=16, criterion="A", zones="none", **FAST)
+    args = dict(points=32, criterion="A", zones="none", **FAST)
     args.update(kwargs)
     with pytest.raises(exc, match=msg):
         design_observer(machine, **args)
@@ -110,7 +110,7 @@ def test_exclusions_leaving_nothing(machine, space, tmp_path):
     f = tmp_path / "all.toml"
     f.write_text("[[box]]\nX = [-2000, 2000]\n")
     with pytest.raises(DegenerateGeometryError, match="exclusions leave"):
-        design_observer(machine, 16, exclude=read_exclusions(f, space), **FAST)
+        design_observer(machine, 32, exclude=read_exclusions(f, space), **FAST)
 
 
 def test_evaluation_ranks_plans(machine):
@@ -141,4 +141,4 @@ def test_cli_design_and_evaluate(tmp_path):
     ev = json.loads(gk("evaluate-plan", EXAMPLE, tmp_path / "plan.csv", "--seeds", 2, "--no-compare", "--json").stdout)
     assert list(ev["plans"]) == ["plan"] and ev["plans"]["plan"]["rms_um"] > 0
     bad = gk("design", EXAMPLE, "--points", 5, "--out", tmp_path / "x.csv", ok=False)
-    assert bad.returncode == 2 and "at least 11 points" in bad.stderr and bad.stdout == ""
+    assert bad.returncode == 2 and "at least 32 points" in bad.stderr and bad.stdout == ""

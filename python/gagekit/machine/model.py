@@ -169,29 +169,14 @@ def example_machine_path() -> Path:
 
 
 def halton(n: int, dim: int, seed: Optional[int] = 0) -> np.ndarray:
-    """``n`` points of the ``dim``-dimensional Halton sequence in [0, 1)^dim, randomly shifted
-    modulo 1 (Cranley-Patterson) with ``seed`` (None: unshifted). Quasi-random commands as in
-    Sec. 3.2.1."""
-    if n < 0 or dim < 1:
-        raise InvalidInputError(f"halton: need n >= 0 and dim >= 1, got n={n}, dim={dim}")
-    primes = []
-    k = 2
-    while len(primes) < dim:
-        if all(k % p for p in primes):
-            primes.append(k)
-        k += 1
-    out = np.zeros((n, dim))
-    idx = np.arange(1, n + 1)
-    for j, b in enumerate(primes):
-        f, i, r = 1.0, idx.copy(), np.zeros(n)
-        while i.any():
-            f /= b
-            r += f * (i % b)
-            i //= b
-        out[:, j] = r
-    if seed is not None:
-        out = (out + np.random.default_rng(seed).random(dim)) % 1.0
-    return out
+    """``n`` points of the ``dim``-dimensional Halton sequence in [0, 1)^dim (from index 1),
+    randomly shifted modulo 1 (Cranley-Patterson) by ``seed``; seed 0 or None: unshifted.
+    Quasi-random commands as in Sec. 3.2.1; the same generator as the design candidates
+    (``rust/design/src/qmc.rs``)."""
+
+    if n < 0 or dim < 1 or (seed is not None and seed < 0):
+        raise InvalidInputError(f"halton: need n >= 0, dim >= 1 and seed >= 0, got n={n}, dim={dim}, seed={seed}")
+    return np.asarray(_core.design_halton(n, dim, seed or 0))
 
 
 @dataclass(frozen=True)

@@ -375,11 +375,11 @@ def design_observer(
         raise InvalidInputError(f"unknown design criterion {criterion!r}; choose one of A, D, K, E, I")
     if isinstance(points, bool) or not isinstance(points, (int, np.integer)) or points < 1:
         raise InvalidInputError(f"--points must be a positive integer, got {points!r}")
-    need = -(-space.structure.rank // 3)
+    need = space.structure.rank  # the rule of identify(): one point per identifiable group
     if points < need:
         raise InvalidInputError(
-            f"{points} points give {3 * points} equations for the {space.structure.rank} identifiable groups: "
-            f"a plan needs at least {need} points"
+            f"a {points}-point plan cannot be identified: the {need} identifiable groups need a plan of "
+            f"at least {need} points"
         )
     if zones is None or zones == "none":
         zone_list, zone_label = [], "none"
