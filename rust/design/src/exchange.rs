@@ -12,12 +12,17 @@
 //! B F^-1 W F^-1 B^T, which are kept current by the same update (refreshed each
 //! sweep). K and E have no such formula: candidates are screened by first-order
 //! perturbation of the extreme eigenvalues and the best few evaluated exactly.
+//!
+//! The products over the candidates run in an AVX-512 (else AVX2) skinny kernel, and the
+//! per-candidate small algebra of A and I (exchange values, block updates, bound terms)
+//! eight candidates per SIMD lane group (`lanes.rs`), bit-identical to the one-candidate code.
 
 use crate::criteria::{information, metrics, Criterion, Metrics};
 use crate::dense::{
     dot, gram_add, lu_in_place, lu_inverse, mul_ab, mul_abt, skinny_mul, skinny_rows,
     small_spd_inverse, small_spd_trace_solves, spd_inverse, sym_eig, sym_eigenvalues, MAX_P, MAX_R,
 };
+use crate::lanes::{bound_terms, exchange_values, rank_update, ExchangeIn, RankUpdate, LANES};
 use gagekit_core::{GkError, Result};
 use rand::seq::{index::sample, SliceRandom};
 use rand::SeedableRng;
@@ -264,6 +269,30 @@ impl Problem<'_> {
     }
 }
 
+impl Problem<'_> {
+    /// `body(chunk, B W)` for chunks of `members` (B W stacks the r x q products of the
+    /// chunk's candidates), in parallel; results in chunk order.
+    fn products_chunks<T, F>(&self, members: &[usize], w: &[f64], q: usize, body: F) -> Vec<T>
+    where
+        T: Send,
+        F: Fn(&[usize], &[f64]) -> T + Sync,
+    {
+        let (r, k) = (self.r, self.k);
+        members
+            .par_chunks(GEMM_CHUNK)
+            .map(|chunk| {
+                let mut out = vec![0.0; chunk.len() * r * q];
+                let row = |i: usize| {
+                    let at = (chunk[i / r] * r + i % r) * k;
+                    &self.blocks[at..at + k]
+                };
+                skinny_rows(&row, chunk.len() * r, k, w, q, &mut out);
+                body(chunk, &out)
+            })
+            .collect()
+    }
+}
+
 fn total_min(a: (f64, usize), b: (f64, usize)) -> (f64, usize) {
     match a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)) {
         std::cmp::Ordering::Greater => b,
@@ -303,6 +332,21 @@ fn bound_terms_of(dj: &[f64], ej: &[f64], r: usize) -> [f64; 3] {
         Some([a, tau]) => [a.max(0.0).sqrt(), t / (1.0 + t), tau.max(0.0)],
         // not positive definite: no bound, always evaluate exactly
         None => [f64::INFINITY, 1.0, 1.0],
+    }
+}
+
+/// [`bound_terms_of`] of every candidate of a chunk (d, e: r x r each).
+fn bound_terms_chunk(d: &[f64], e: &[f64], bt: &mut [[f64; 3]], r: usize) {
+    match r {
+        1 => bound_terms::<1>(d, e, bt),
+        2 => bound_terms::<2>(d, e, bt),
+        3 => bound_terms::<3>(d, e, bt),
+        _ => {
+            let rr = r * r;
+            for (t, b) in bt.iter_mut().enumerate() {
+                *b = bound_terms_of(&d[t * rr..(t + 1) * rr], &e[t * rr..(t + 1) * rr], r);
+            }
+        }
     }
 }
 
@@ -436,6 +480,7 @@ impl<'p, 'a> Run<'p, 'a> {
     /// Recompute every candidate's B F^-1 B^T (and B F^-1 W F^-1 B^T) exactly.
     fn refresh(&mut self) {
         let (r, k) = (self.p.r, self.p.k);
+        let rr = r * r;
         let needs_e = self.needs_e();
         let q = if needs_e { 2 * k } else { k };
         let mut w = vec![0.0; k * q]; // [F^-1, F^-1 W F^-1]
@@ -445,35 +490,39 @@ impl<'p, 'a> Run<'p, 'a> {
                 w[t * q + k..t * q + 2 * k].copy_from_slice(&self.fwf[t * k..(t + 1) * k]);
             }
         }
-        self.for_candidate_products(&w, q, |prod, b, dm, em| {
-            for a in 0..r {
-                for c in 0..r {
-                    dm[a * r + c] = dot(&prod[a * q..a * q + k], &b[c * k..(c + 1) * k]);
-                }
-            }
-            if let Some(em) = em {
+        let blocks = self.p.blocks;
+        self.for_candidate_products(&w, q, |prod, first, dch, ech, bt| {
+            for t in 0..dch.len() / rr {
+                let b = &blocks[(first + t) * r * k..(first + t + 1) * r * k];
+                let pr = &prod[t * r * q..(t + 1) * r * q];
                 for a in 0..r {
                     for c in 0..r {
-                        em[a * r + c] =
-                            dot(&prod[a * q + k..a * q + 2 * k], &b[c * k..(c + 1) * k]);
+                        dch[t * rr + a * r + c] =
+                            dot(&pr[a * q..a * q + k], &b[c * k..(c + 1) * k]);
+                        if needs_e {
+                            ech[t * rr + a * r + c] =
+                                dot(&pr[a * q + k..a * q + 2 * k], &b[c * k..(c + 1) * k]);
+                        }
                     }
                 }
+            }
+            if needs_e {
+                bound_terms_chunk(dch, ech, bt, r);
             }
         });
     }
 
-    /// For every candidate m, in parallel chunks of blocked products:
-    /// `f(B_m W (r x q), B_m, d_m, e_m)`.
+    /// For every chunk of candidates (from `first`), in parallel, with blocked products:
+    /// `f(B W (r x q per candidate), first, d, e, bound terms)` (e and the bound terms empty for D).
     fn for_candidate_products<F>(&mut self, w: &[f64], q: usize, f: F)
     where
-        F: Fn(&[f64], &[f64], &mut [f64], Option<&mut [f64]>) + Sync,
+        F: Fn(&[f64], usize, &mut [f64], &mut [f64], &mut [[f64; 3]]) + Sync,
     {
         let (r, k) = (self.p.r, self.p.k);
         let rr = r * r;
         let sz = r * k;
         let blocks = self.p.blocks;
-        // A, I: the bound terms of each candidate follow its updated d and e (same chunk).
-        let run_chunk = |ci: usize, dch: &mut [f64], ech: Option<(&mut [f64], &mut [[f64; 3]])>| {
+        let run_chunk = |ci: usize, dch: &mut [f64], ech: &mut [f64], bt: &mut [[f64; 3]]| {
             let n = dch.len() / rr;
             let first = ci * GEMM_CHUNK;
             let mut prod = vec![0.0; n * r * q];
@@ -485,19 +534,7 @@ impl<'p, 'a> Run<'p, 'a> {
                 q,
                 &mut prod,
             );
-            let mut ech = ech;
-            for t in 0..n {
-                let b = &blocks[(first + t) * sz..(first + t + 1) * sz];
-                let dm = &mut dch[t * rr..(t + 1) * rr];
-                match ech.as_mut() {
-                    Some((ech, bt)) => {
-                        let em = &mut ech[t * rr..(t + 1) * rr];
-                        f(&prod[t * r * q..(t + 1) * r * q], b, dm, Some(&mut *em));
-                        bt[t] = bound_terms_of(dm, em, r);
-                    }
-                    None => f(&prod[t * r * q..(t + 1) * r * q], b, dm, None),
-                }
-            }
+            f(&prod, first, dch, ech, bt);
         };
         if self.needs_e() {
             self.bound_terms.resize(self.p.n_cand, [0.0; 3]);
@@ -506,12 +543,12 @@ impl<'p, 'a> Run<'p, 'a> {
                 .zip(self.e.par_chunks_mut(rr * GEMM_CHUNK))
                 .zip(self.bound_terms.par_chunks_mut(GEMM_CHUNK))
                 .enumerate()
-                .for_each(|(ci, ((dch, ech), bt))| run_chunk(ci, dch, Some((ech, bt))));
+                .for_each(|(ci, ((dch, ech), bt))| run_chunk(ci, dch, ech, bt));
         } else {
             self.d
                 .par_chunks_mut(rr * GEMM_CHUNK)
                 .enumerate()
-                .for_each(|(ci, dch)| run_chunk(ci, dch, None));
+                .for_each(|(ci, dch)| run_chunk(ci, dch, &mut [], &mut []));
         }
     }
 
@@ -844,6 +881,36 @@ impl<'p, 'a> Run<'p, 'a> {
         }
     }
 
+    /// The best exchange among `chunk` (candidates j != visited point), with `cf` the rows
+    /// B_j [F^-1 O^T, F^-1 W F^-1 O^T] (R x 2R each, in chunk order): [`Self::fast_r`]
+    /// eight candidates at a time.
+    fn best_of_lanes<const R: usize>(
+        &self,
+        chunk: &[usize],
+        cf: &[f64],
+        rm: &Removal,
+    ) -> (f64, usize) {
+        let sz = R * 2 * R;
+        let rr = R * R;
+        let mut best = (f64::INFINITY, usize::MAX);
+        for (g, js) in chunk.chunks(LANES).enumerate() {
+            let at = |l: usize| g * LANES + l.min(js.len() - 1);
+            let x = ExchangeIn {
+                cf: std::array::from_fn(|l| &cf[at(l) * sz..(at(l) + 1) * sz]),
+                d: std::array::from_fn(|l| &self.d[chunk[at(l)] * rr..(chunk[at(l)] + 1) * rr]),
+                e: std::array::from_fn(|l| &self.e[chunk[at(l)] * rr..(chunk[at(l)] + 1) * rr]),
+                qi: &rm.qi[..rr],
+                qeq: &rm.qeq[..rr],
+                value_minus: rm.value_minus,
+            };
+            let v = exchange_values::<R>(&x);
+            for (l, &j) in js.iter().enumerate() {
+                best = total_min(best, (sane(v[l]), j));
+            }
+        }
+        best
+    }
+
     /// [`Self::exchange_value_fast`] for any block height.
     fn fast_dyn(&self, s: &mut Scratch, j: usize, rm: &Removal, a_t: &[f64], b_t: &[f64]) -> f64 {
         let (r, k) = (self.p.r, self.p.k);
@@ -945,17 +1012,17 @@ impl<'p, 'a> Run<'p, 'a> {
                     }
                 }
                 self.p
-                    .products(&kept, &w, 2 * r, |j, cf| {
-                        if j == o {
-                            return (f64::INFINITY, usize::MAX);
-                        }
-                        let v = match r {
-                            1 => this.fast_r::<1>(j, rm, &a_t, &b_t, Some(cf)),
-                            2 => this.fast_r::<2>(j, rm, &a_t, &b_t, Some(cf)),
-                            3 => this.fast_r::<3>(j, rm, &a_t, &b_t, Some(cf)),
-                            _ => this.fast_dyn(&mut Scratch::new(), j, rm, &a_t, &b_t),
-                        };
-                        (sane(v), j)
+                    .products_chunks(&kept, &w, 2 * r, |chunk, out| match r {
+                        1 => this.best_of_lanes::<1>(chunk, out, rm),
+                        2 => this.best_of_lanes::<2>(chunk, out, rm),
+                        3 => this.best_of_lanes::<3>(chunk, out, rm),
+                        _ => chunk
+                            .iter()
+                            .map(|&j| {
+                                let v = this.fast_dyn(&mut Scratch::new(), j, rm, &a_t, &b_t);
+                                (sane(v), j)
+                            })
+                            .fold((f64::INFINITY, usize::MAX), total_min),
                     })
                     .into_iter()
                     .fold((f64::INFINITY, usize::MAX), total_min)
@@ -1063,28 +1130,45 @@ impl<'p, 'a> Run<'p, 'a> {
                 }
             }
         }
-        self.for_candidate_products(&w, q, |prod, _b, dm, em| {
-            for a in 0..r {
-                let ya = &prod[a * q..a * q + p];
-                for c in 0..=a {
-                    let yc = &prod[c * q..c * q + p];
-                    let v: f64 = (0..p).map(|l| lam[l] * ya[l] * yc[l]).sum();
-                    dm[a * r + c] -= v;
-                    if c != a {
-                        dm[c * r + a] -= v;
-                    }
-                }
-            }
-            if let Some(em) = em {
-                for a in 0..r {
-                    let ha = &prod[a * q + p..(a + 1) * q];
-                    for c in 0..=a {
-                        let hc = &prod[c * q + p..(c + 1) * q];
-                        let v: f64 = (0..pe).map(|l| gam[l] * ha[l] * hc[l]).sum();
-                        em[a * r + c] -= v;
-                        if c != a {
-                            em[c * r + a] -= v;
+        let (lam, gam) = (&lam[..], &gam[..]);
+        self.for_candidate_products(&w, q, |prod, _first, dch, ech, bt| {
+            let u = RankUpdate { prod, q, lam, gam };
+            match r {
+                1 => rank_update::<1>(&u, dch, ech, bt),
+                2 => rank_update::<2>(&u, dch, ech, bt),
+                3 => rank_update::<3>(&u, dch, ech, bt),
+                _ => {
+                    for t in 0..dch.len() / (r * r) {
+                        let pr = &prod[t * r * q..(t + 1) * r * q];
+                        let dm = &mut dch[t * r * r..(t + 1) * r * r];
+                        for a in 0..r {
+                            let ya = &pr[a * q..a * q + p];
+                            for c in 0..=a {
+                                let yc = &pr[c * q..c * q + p];
+                                let v: f64 = (0..p).map(|l| lam[l] * ya[l] * yc[l]).sum();
+                                dm[a * r + c] -= v;
+                                if c != a {
+                                    dm[c * r + a] -= v;
+                                }
+                            }
                         }
+                        if needs_e {
+                            let em = &mut ech[t * r * r..(t + 1) * r * r];
+                            for a in 0..r {
+                                let ha = &pr[a * q + p..(a + 1) * q];
+                                for c in 0..=a {
+                                    let hc = &pr[c * q + p..(c + 1) * q];
+                                    let v: f64 = (0..pe).map(|l| gam[l] * ha[l] * hc[l]).sum();
+                                    em[a * r + c] -= v;
+                                    if c != a {
+                                        em[c * r + a] -= v;
+                                    }
+                                }
+                            }
+                        }
+                    }
+                    if needs_e {
+                        bound_terms_chunk(dch, ech, bt, r);
                     }
                 }
             }
