@@ -22,7 +22,10 @@ use crate::dense::{
     dot, gram_add, lu_in_place, lu_inverse, mul_ab, mul_abt, skinny_mul, skinny_rows,
     small_spd_inverse, small_spd_trace_solves, spd_inverse, sym_eig, sym_eigenvalues, MAX_P, MAX_R,
 };
-use crate::lanes::{bound_terms, exchange_values, rank_update, ExchangeIn, RankUpdate, LANES};
+use crate::lanes::{
+    bound_terms, exchange_values, rank_update, soa_blocks, soa_kernel, soa_update, ExchangeIn,
+    RankUpdate, LANES,
+};
 use gagekit_core::{GkError, Result};
 use rand::seq::{index::sample, SliceRandom};
 use rand::SeedableRng;
@@ -88,6 +91,8 @@ pub struct Outcome {
 
 /// Candidates screened exactly per visit for K and E.
 const EXACT_TOP: usize = 32;
+/// Candidates whose improvement bounds one task checks.
+const BOUND_CHUNK: usize = 4096;
 /// Candidates evaluated together between checks of the improvement bound.
 const PRUNE_CHUNK: usize = 512;
 /// Low-rank updates of the per-candidate blocks before they are recomputed exactly.
@@ -369,6 +374,8 @@ struct Run<'p, 'a> {
     /// and tr((I + d_j)^-1 d_j),
     /// the two ingredients of the improvement bound, kept with d and e.
     bound_terms: Vec<[f64; 3]>,
+    /// The candidate blocks regrouped for the lane kernels ([`soa_blocks`]); empty: unused.
+    soa: &'p [f64],
 }
 
 /// The visited point's removal, shared by all candidates of a visit.
@@ -407,7 +414,13 @@ impl Scratch {
 }
 
 impl<'p, 'a> Run<'p, 'a> {
-    fn new(p: &'p Problem<'a>, c: Criterion, ridge: f64, design: Vec<usize>) -> Result<Self> {
+    fn new(
+        p: &'p Problem<'a>,
+        soa: &'p [f64],
+        c: Criterion,
+        ridge: f64,
+        design: Vec<usize>,
+    ) -> Result<Self> {
         let r = p.r;
         let needs_e = matches!(c, Criterion::A | Criterion::I);
         let blocks_d = if c.is_spectral() { 0 } else { p.n_cand * r * r };
@@ -423,6 +436,7 @@ impl<'p, 'a> Run<'p, 'a> {
             e: vec![0.0; if needs_e { blocks_d } else { 0 }],
             value: f64::INFINITY,
             bound_terms: vec![],
+            soa,
         };
         run.recompute()?;
         Ok(run)
@@ -522,9 +536,8 @@ impl<'p, 'a> Run<'p, 'a> {
         let rr = r * r;
         let sz = r * k;
         let blocks = self.p.blocks;
-        let run_chunk = |ci: usize, dch: &mut [f64], ech: &mut [f64], bt: &mut [[f64; 3]]| {
+        self.for_candidate_chunks(|first, dch, ech, bt| {
             let n = dch.len() / rr;
-            let first = ci * GEMM_CHUNK;
             let mut prod = vec![0.0; n * r * q];
             gemm(
                 &blocks[first * sz..(first + n) * sz],
@@ -535,6 +548,18 @@ impl<'p, 'a> Run<'p, 'a> {
                 &mut prod,
             );
             f(&prod, first, dch, ech, bt);
+        });
+    }
+
+    /// `f(first, d, e, bound terms)` for every chunk of candidates (from `first`), in parallel
+    /// (e and the bound terms empty for D).
+    fn for_candidate_chunks<F>(&mut self, f: F)
+    where
+        F: Fn(usize, &mut [f64], &mut [f64], &mut [[f64; 3]]) + Sync,
+    {
+        let rr = self.p.r * self.p.r;
+        let run_chunk = |ci: usize, dch: &mut [f64], ech: &mut [f64], bt: &mut [[f64; 3]]| {
+            f(ci * GEMM_CHUNK, dch, ech, bt)
         };
         if self.needs_e() {
             self.bound_terms.resize(self.p.n_cand, [0.0; 3]);
@@ -996,10 +1021,13 @@ impl<'p, 'a> Run<'p, 'a> {
                 // B [F^-1 O^T, F^-1 W F^-1 O^T] over them and the small r x r algebra each.
                 let tol = self.tol();
                 let kept: Vec<usize> = cands
-                    .par_iter()
-                    .with_min_len(1024)
-                    .filter(|&&j| j != o && !(this.improvement_bound(rm, j) <= tol))
-                    .copied()
+                    .par_chunks(BOUND_CHUNK)
+                    .flat_map_iter(|ch| {
+                        ch.iter()
+                            .copied()
+                            .filter(|&j| j != o && !(this.improvement_bound(rm, j) <= tol))
+                            .collect::<Vec<usize>>()
+                    })
                     .collect();
                 if kept.is_empty() {
                     return false;
@@ -1031,12 +1059,27 @@ impl<'p, 'a> Run<'p, 'a> {
                 // Evaluate in order of decreasing improvement bound; stop when no
                 // remaining candidate can beat the best found (exact, not a heuristic).
                 let tol = self.tol();
+                // bound > tol needs tr d_j above a threshold (the bound grows with it):
+                // compute the bound (a logarithm) only for candidates that pass it
+                let r = self.p.r;
+                let rr = r * r;
+                let x_min = ((tol - (self.value - rm.value_minus)) / r as f64).exp_m1()
+                    / rm.bound_c
+                    * (1.0 - 1e-9);
+                let d = &self.d;
                 let mut order: Vec<(f64, usize)> = cands
-                    .par_iter()
-                    .with_min_len(1024)
-                    .filter(|&&j| j != o)
-                    .map(|&j| (this.improvement_bound(rm, j), j))
-                    .filter(|&(b, _)| !(b <= tol))
+                    .par_chunks(BOUND_CHUNK)
+                    .flat_map_iter(|ch| {
+                        ch.iter()
+                            .copied()
+                            .filter(|&j| {
+                                let tr_d: f64 = (0..r).map(|a| d[j * rr + a * r + a]).sum();
+                                j != o && !(tr_d < x_min)
+                            })
+                            .map(|j| (this.improvement_bound(rm, j), j))
+                            .filter(|&(b, _)| !(b <= tol))
+                            .collect::<Vec<(f64, usize)>>()
+                    })
                     .collect();
                 order.sort_unstable_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
                 let mut best = (f64::INFINITY, usize::MAX);
@@ -1131,48 +1174,55 @@ impl<'p, 'a> Run<'p, 'a> {
             }
         }
         let (lam, gam) = (&lam[..], &gam[..]);
-        self.for_candidate_products(&w, q, |prod, _first, dch, ech, bt| {
-            let u = RankUpdate { prod, q, lam, gam };
-            match r {
-                1 => rank_update::<1>(&u, dch, ech, bt),
-                2 => rank_update::<2>(&u, dch, ech, bt),
-                3 => rank_update::<3>(&u, dch, ech, bt),
-                _ => {
-                    for t in 0..dch.len() / (r * r) {
-                        let pr = &prod[t * r * q..(t + 1) * r * q];
-                        let dm = &mut dch[t * r * r..(t + 1) * r * r];
-                        for a in 0..r {
-                            let ya = &pr[a * q..a * q + p];
-                            for c in 0..=a {
-                                let yc = &pr[c * q..c * q + p];
-                                let v: f64 = (0..p).map(|l| lam[l] * ya[l] * yc[l]).sum();
-                                dm[a * r + c] -= v;
-                                if c != a {
-                                    dm[c * r + a] -= v;
+        if !self.soa.is_empty() && soa_kernel(r, q) {
+            let soa = self.soa;
+            self.for_candidate_chunks(|first, dch, ech, bt| {
+                soa_update(soa, first, r, k, &w, lam, gam, dch, ech, bt);
+            });
+        } else {
+            self.for_candidate_products(&w, q, |prod, _first, dch, ech, bt| {
+                let u = RankUpdate { prod, q, lam, gam };
+                match r {
+                    1 => rank_update::<1>(&u, dch, ech, bt),
+                    2 => rank_update::<2>(&u, dch, ech, bt),
+                    3 => rank_update::<3>(&u, dch, ech, bt),
+                    _ => {
+                        for t in 0..dch.len() / (r * r) {
+                            let pr = &prod[t * r * q..(t + 1) * r * q];
+                            let dm = &mut dch[t * r * r..(t + 1) * r * r];
+                            for a in 0..r {
+                                let ya = &pr[a * q..a * q + p];
+                                for c in 0..=a {
+                                    let yc = &pr[c * q..c * q + p];
+                                    let v: f64 = (0..p).map(|l| lam[l] * ya[l] * yc[l]).sum();
+                                    dm[a * r + c] -= v;
+                                    if c != a {
+                                        dm[c * r + a] -= v;
+                                    }
                                 }
                             }
-                        }
-                        if needs_e {
-                            let em = &mut ech[t * r * r..(t + 1) * r * r];
-                            for a in 0..r {
-                                let ha = &pr[a * q + p..(a + 1) * q];
-                                for c in 0..=a {
-                                    let hc = &pr[c * q + p..(c + 1) * q];
-                                    let v: f64 = (0..pe).map(|l| gam[l] * ha[l] * hc[l]).sum();
-                                    em[a * r + c] -= v;
-                                    if c != a {
-                                        em[c * r + a] -= v;
+                            if needs_e {
+                                let em = &mut ech[t * r * r..(t + 1) * r * r];
+                                for a in 0..r {
+                                    let ha = &pr[a * q + p..(a + 1) * q];
+                                    for c in 0..=a {
+                                        let hc = &pr[c * q + p..(c + 1) * q];
+                                        let v: f64 = (0..pe).map(|l| gam[l] * ha[l] * hc[l]).sum();
+                                        em[a * r + c] -= v;
+                                        if c != a {
+                                            em[c * r + a] -= v;
+                                        }
                                     }
                                 }
                             }
                         }
-                    }
-                    if needs_e {
-                        bound_terms_chunk(dch, ech, bt, r);
+                        if needs_e {
+                            bound_terms_chunk(dch, ech, bt, r);
+                        }
                     }
                 }
-            }
-        });
+            });
+        }
         let old = self.design[i];
         self.design[i] = j;
         if self.recompute().is_err() {
@@ -1417,6 +1467,13 @@ pub fn search(p: &Problem, o: &Options) -> Result<Outcome> {
     } else {
         o.starts.max(1)
     };
+    // the lane kernels' layout of the blocks, shared by the starts (A, D, I update the
+    // per-candidate blocks with it)
+    let soa = if !c.is_spectral() && soa_kernel(p.r, 2 * p.r) {
+        soa_blocks(p.blocks, p.n_cand, p.r, p.k)
+    } else {
+        vec![]
+    };
     let run_start = |s: usize| -> Result<(Vec<usize>, usize)> {
         let mut rng = ChaCha8Rng::seed_from_u64(o.seed);
         rng.set_stream(s as u64);
@@ -1428,7 +1485,7 @@ pub fn search(p: &Problem, o: &Options) -> Result<Outcome> {
                 if matches!(c, Criterion::A | Criterion::I) {
                     // A- and I-optimal designs are usually close to the D-optimal one,
                     // whose exchanges are much cheaper: polish that instead.
-                    let mut pre = Run::new(p, Criterion::D, ridge, d)?;
+                    let mut pre = Run::new(p, &soa, Criterion::D, ridge, d)?;
                     moves += pre.optimise(o.max_sweeps.max(1), &mut rng);
                     pre.design
                 } else {
@@ -1436,7 +1493,7 @@ pub fn search(p: &Problem, o: &Options) -> Result<Outcome> {
                 }
             }
         };
-        let mut run = Run::new(p, c, ridge, design)?;
+        let mut run = Run::new(p, &soa, c, ridge, design)?;
         moves += run.optimise(o.max_sweeps.max(1), &mut rng);
         Ok((run.design, moves))
     };

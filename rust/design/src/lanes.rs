@@ -243,7 +243,6 @@ fn rank_update_body<const R: usize>(
     let n = d.len() / rr;
     let q = u.q;
     let (p, pe) = (u.lam.len(), u.gam.len());
-    let with_e = !e.is_empty();
     let mut y = [[Z; MAX_Q]; R];
     let mut t0 = 0;
     while t0 < n {
@@ -257,68 +256,218 @@ fn rank_update_body<const R: usize>(
                 }
             }
         }
-        let mut dj = [[Z; R]; R];
-        let mut ej = [[Z; R]; R];
-        for l in 0..m {
-            let t = t0 + l;
-            for a in 0..R {
-                for c in 0..R {
-                    dj[a][c][l] = d[t * rr + a * R + c];
-                    if with_e {
-                        ej[a][c][l] = e[t * rr + a * R + c];
-                    }
+        let e_g = if e.is_empty() {
+            &mut [][..]
+        } else {
+            &mut e[t0 * rr..(t0 + m) * rr]
+        };
+        let bt_g = if bt.is_empty() {
+            &mut [][..]
+        } else {
+            &mut bt[t0..t0 + m]
+        };
+        group_update::<R>(&y, u.lam, u.gam, &mut d[t0 * rr..(t0 + m) * rr], e_g, bt_g);
+        t0 += m;
+    }
+}
+
+/// The update of one group of at most [`LANES`] candidates (d, e: R x R each, e and bt
+/// empty for D) from its product rows y (lane layout: y[a][column]).
+#[inline(always)]
+fn group_update<const R: usize>(
+    y: &[[V; MAX_Q]; R],
+    lam: &[f64],
+    gam: &[f64],
+    d: &mut [f64],
+    e: &mut [f64],
+    bt: &mut [[f64; 3]],
+) {
+    let rr = R * R;
+    let m = d.len() / rr;
+    let (p, pe) = (lam.len(), gam.len());
+    let with_e = !e.is_empty();
+    let mut dj = [[Z; R]; R];
+    let mut ej = [[Z; R]; R];
+    for l in 0..m {
+        for a in 0..R {
+            for c in 0..R {
+                dj[a][c][l] = d[l * rr + a * R + c];
+                if with_e {
+                    ej[a][c][l] = e[l * rr + a * R + c];
                 }
             }
         }
-        for a in 0..R {
-            for c in 0..=a {
+    }
+    for a in 0..R {
+        for c in 0..=a {
+            let mut v = [-0.0; LANES];
+            for col in 0..p {
+                for l in 0..LANES {
+                    v[l] += lam[col] * y[a][col][l] * y[c][col][l];
+                }
+            }
+            for l in 0..LANES {
+                dj[a][c][l] -= v[l];
+            }
+            if c != a {
+                for l in 0..LANES {
+                    dj[c][a][l] -= v[l];
+                }
+            }
+            if with_e {
                 let mut v = [-0.0; LANES];
-                for col in 0..p {
+                for col in 0..pe {
                     for l in 0..LANES {
-                        v[l] += u.lam[col] * y[a][col][l] * y[c][col][l];
+                        v[l] += gam[col] * y[a][p + col][l] * y[c][p + col][l];
                     }
                 }
                 for l in 0..LANES {
-                    dj[a][c][l] -= v[l];
+                    ej[a][c][l] -= v[l];
                 }
                 if c != a {
                     for l in 0..LANES {
-                        dj[c][a][l] -= v[l];
+                        ej[c][a][l] -= v[l];
                     }
                 }
+            }
+        }
+    }
+    for l in 0..m {
+        for a in 0..R {
+            for c in 0..R {
+                d[l * rr + a * R + c] = dj[a][c][l];
                 if with_e {
-                    let mut v = [-0.0; LANES];
-                    for col in 0..pe {
-                        for l in 0..LANES {
-                            v[l] += u.gam[col] * y[a][p + col][l] * y[c][p + col][l];
-                        }
-                    }
-                    for l in 0..LANES {
-                        ej[a][c][l] -= v[l];
-                    }
-                    if c != a {
-                        for l in 0..LANES {
-                            ej[c][a][l] -= v[l];
-                        }
-                    }
+                    e[l * rr + a * R + c] = ej[a][c][l];
                 }
             }
         }
-        for l in 0..m {
-            let t = t0 + l;
-            for a in 0..R {
-                for c in 0..R {
-                    d[t * rr + a * R + c] = dj[a][c][l];
-                    if with_e {
-                        e[t * rr + a * R + c] = ej[a][c][l];
-                    }
-                }
+    }
+    if with_e {
+        let b = bound_terms_body::<R>(&dj, &ej);
+        bt.copy_from_slice(&b[..m]);
+    }
+}
+
+/// The candidate blocks regrouped for [`soa_update`]: for each group of [`LANES`]
+/// candidates, row a, column t, the group's values side by side (zero past the last candidate).
+pub fn soa_blocks(blocks: &[f64], n_cand: usize, r: usize, k: usize) -> Vec<f64> {
+    let groups = n_cand.div_ceil(LANES);
+    let mut out = vec![0.0; groups * r * k * LANES];
+    for j in 0..n_cand {
+        let (g, l) = (j / LANES, j % LANES);
+        for a in 0..r {
+            for t in 0..k {
+                out[((g * r + a) * k + t) * LANES + l] = blocks[(j * r + a) * k + t];
             }
         }
-        if with_e {
-            let b = bound_terms_body::<R>(&dj, &ej);
-            bt[t0..t0 + m].copy_from_slice(&b[..m]);
+    }
+    out
+}
+
+/// Whether [`soa_update`] has a kernel for blocks of r rows and q product columns here.
+pub fn soa_kernel(r: usize, q: usize) -> bool {
+    wide()
+        && matches!(
+            (r, q),
+            (3, 18) | (3, 6) | (2, 12) | (2, 4) | (1, 6) | (1, 2)
+        )
+}
+
+/// [`rank_update`] for the candidates from `first` (a multiple of [`LANES`]) on, with the
+/// products B w (w: k x q, q = `lam.len() + gam.len()`) computed here from the regrouped
+/// blocks `soa`, one group per pass (no product rows stored). The products use the same
+/// fused multiply-adds in the same order as the skinny kernel, so the results are the same.
+/// Returns false (nothing done) when no kernel for this r and q exists or AVX-512 is missing.
+#[allow(clippy::too_many_arguments)]
+pub fn soa_update(
+    soa: &[f64],
+    first: usize,
+    r: usize,
+    k: usize,
+    w: &[f64],
+    lam: &[f64],
+    gam: &[f64],
+    d: &mut [f64],
+    e: &mut [f64],
+    bt: &mut [[f64; 3]],
+) -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if !wide() || first % LANES != 0 {
+            return false;
         }
+        let q = lam.len() + gam.len();
+        // SAFETY (all arms): the feature was detected at run time.
+        unsafe {
+            match (r, q) {
+                (3, 18) => soa_update_avx512::<3, 18>(soa, first, k, w, lam, gam, d, e, bt),
+                (3, 6) => soa_update_avx512::<3, 6>(soa, first, k, w, lam, gam, d, e, bt),
+                (2, 12) => soa_update_avx512::<2, 12>(soa, first, k, w, lam, gam, d, e, bt),
+                (2, 4) => soa_update_avx512::<2, 4>(soa, first, k, w, lam, gam, d, e, bt),
+                (1, 6) => soa_update_avx512::<1, 6>(soa, first, k, w, lam, gam, d, e, bt),
+                (1, 2) => soa_update_avx512::<1, 2>(soa, first, k, w, lam, gam, d, e, bt),
+                _ => return false,
+            }
+        }
+        true
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        let _ = (soa, first, r, k, w, lam, gam, d, e, bt);
+        false
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+#[allow(clippy::too_many_arguments)]
+unsafe fn soa_update_avx512<const R: usize, const Q: usize>(
+    soa: &[f64],
+    first: usize,
+    k: usize,
+    w: &[f64],
+    lam: &[f64],
+    gam: &[f64],
+    d: &mut [f64],
+    e: &mut [f64],
+    bt: &mut [[f64; 3]],
+) {
+    use std::arch::x86_64::*;
+    let rr = R * R;
+    let n = d.len() / rr;
+    assert!(w.len() >= k * Q && Q <= MAX_Q);
+    let g0 = first / LANES;
+    assert!(soa.len() >= (g0 + n.div_ceil(LANES)) * R * k * LANES);
+    let mut y = [[Z; MAX_Q]; R];
+    let mut t0 = 0;
+    while t0 < n {
+        let m = (n - t0).min(LANES);
+        let g = g0 + t0 / LANES;
+        for a in 0..R {
+            let base = soa.as_ptr().add((g * R + a) * k * LANES);
+            let mut acc = [_mm512_setzero_pd(); Q];
+            for t in 0..k {
+                let b = _mm512_loadu_pd(base.add(t * LANES));
+                let wt = w.as_ptr().add(t * Q);
+                for col in 0..Q {
+                    acc[col] = _mm512_fmadd_pd(b, _mm512_set1_pd(*wt.add(col)), acc[col]);
+                }
+            }
+            for col in 0..Q {
+                _mm512_storeu_pd(y[a][col].as_mut_ptr(), acc[col]);
+            }
+        }
+        let e_g = if e.is_empty() {
+            &mut [][..]
+        } else {
+            &mut e[t0 * rr..(t0 + m) * rr]
+        };
+        let bt_g = if bt.is_empty() {
+            &mut [][..]
+        } else {
+            &mut bt[t0..t0 + m]
+        };
+        group_update::<R>(&y, lam, gam, &mut d[t0 * rr..(t0 + m) * rr], e_g, bt_g);
         t0 += m;
     }
 }
