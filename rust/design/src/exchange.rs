@@ -23,8 +23,8 @@ use crate::dense::{
     small_spd_inverse, small_spd_trace_solves, spd_inverse, sym_eig, sym_eigenvalues, MAX_P, MAX_R,
 };
 use crate::lanes::{
-    bound_terms, exchange_values, rank_update, soa_blocks, soa_kernel, soa_update, ExchangeIn,
-    RankUpdate, LANES,
+    bound_terms, exchange_values, rank_update, soa_kernel, soa_update, ExchangeIn, RankUpdate, Soa,
+    LANES,
 };
 use gagekit_core::{GkError, Result};
 use rand::seq::{index::sample, SliceRandom};
@@ -287,14 +287,35 @@ impl Problem<'_> {
             .par_chunks(GEMM_CHUNK)
             .map(|chunk| {
                 let mut out = vec![0.0; chunk.len() * r * q];
-                let row = |i: usize| {
-                    let at = (chunk[i / r] * r + i % r) * k;
-                    &self.blocks[at..at + k]
-                };
-                skinny_rows(&row, chunk.len() * r, k, w, q, &mut out);
+                let mut a = Vec::with_capacity(chunk.len() * r * k);
+                for (t, &j) in chunk.iter().enumerate() {
+                    if let Some(&ahead) = chunk.get(t + PREFETCH_AHEAD) {
+                        prefetch(self.block(ahead));
+                    }
+                    a.extend_from_slice(self.block(j));
+                }
+                skinny_mul(&a, chunk.len() * r, k, w, q, &mut out);
                 body(chunk, &out)
             })
             .collect()
+    }
+}
+
+/// Candidates ahead whose blocks are prefetched when gathering scattered candidates.
+const PREFETCH_AHEAD: usize = 6;
+
+/// Hint the processor to bring `x` into cache (scattered candidate blocks live in L3).
+#[inline(always)]
+fn prefetch(x: &[f64]) {
+    #[cfg(target_arch = "x86_64")]
+    for line in x.chunks(8) {
+        // SAFETY: a prefetch hint has no effect on memory; the address is inside `x`.
+        unsafe {
+            std::arch::x86_64::_mm_prefetch(
+                line.as_ptr() as *const i8,
+                std::arch::x86_64::_MM_HINT_T0,
+            )
+        };
     }
 }
 
@@ -374,8 +395,8 @@ struct Run<'p, 'a> {
     /// and tr((I + d_j)^-1 d_j),
     /// the two ingredients of the improvement bound, kept with d and e.
     bound_terms: Vec<[f64; 3]>,
-    /// The candidate blocks regrouped for the lane kernels ([`soa_blocks`]); empty: unused.
-    soa: &'p [f64],
+    /// The candidate blocks regrouped for the lane kernels; empty: unused.
+    soa: &'p Soa,
 }
 
 /// The visited point's removal, shared by all candidates of a visit.
@@ -416,7 +437,7 @@ impl Scratch {
 impl<'p, 'a> Run<'p, 'a> {
     fn new(
         p: &'p Problem<'a>,
-        soa: &'p [f64],
+        soa: &'p Soa,
         c: Criterion,
         ridge: f64,
         design: Vec<usize>,
@@ -1177,7 +1198,7 @@ impl<'p, 'a> Run<'p, 'a> {
         if !self.soa.is_empty() && soa_kernel(r, q) {
             let soa = self.soa;
             self.for_candidate_chunks(|first, dch, ech, bt| {
-                soa_update(soa, first, r, k, &w, lam, gam, dch, ech, bt);
+                soa_update(soa, first, r, &w, lam, gam, dch, ech, bt);
             });
         } else {
             self.for_candidate_products(&w, q, |prod, _first, dch, ech, bt| {
@@ -1470,9 +1491,9 @@ pub fn search(p: &Problem, o: &Options) -> Result<Outcome> {
     // the lane kernels' layout of the blocks, shared by the starts (A, D, I update the
     // per-candidate blocks with it)
     let soa = if !c.is_spectral() && soa_kernel(p.r, 2 * p.r) {
-        soa_blocks(p.blocks, p.n_cand, p.r, p.k)
+        Soa::new(p.blocks, p.n_cand, p.r, p.k)
     } else {
-        vec![]
+        Soa::default()
     };
     let run_start = |s: usize| -> Result<(Vec<usize>, usize)> {
         let mut rng = ChaCha8Rng::seed_from_u64(o.seed);

@@ -349,19 +349,46 @@ fn group_update<const R: usize>(
 }
 
 /// The candidate blocks regrouped for [`soa_update`]: for each group of [`LANES`]
-/// candidates, row a, column t, the group's values side by side (zero past the last candidate).
-pub fn soa_blocks(blocks: &[f64], n_cand: usize, r: usize, k: usize) -> Vec<f64> {
-    let groups = n_cand.div_ceil(LANES);
-    let mut out = vec![0.0; groups * r * k * LANES];
-    for j in 0..n_cand {
-        let (g, l) = (j / LANES, j % LANES);
-        for a in 0..r {
-            for t in 0..k {
-                out[((g * r + a) * k + t) * LANES + l] = blocks[(j * r + a) * k + t];
+/// candidates, row a, each column t that is not zero for every candidate, the group's
+/// values side by side (zero past the last candidate). Columns that are zero throughout
+/// (common: a tracker row does not see every parameter) are left out.
+#[derive(Debug, Clone, Default)]
+pub struct Soa {
+    data: Vec<f64>,
+    /// Kept columns of each row.
+    cols: Vec<Vec<usize>>,
+    /// Kept columns over all rows (values per candidate).
+    width: usize,
+}
+
+impl Soa {
+    pub fn new(blocks: &[f64], n_cand: usize, r: usize, k: usize) -> Self {
+        let cols: Vec<Vec<usize>> = (0..r)
+            .map(|a| {
+                (0..k)
+                    .filter(|&t| (0..n_cand).any(|j| blocks[(j * r + a) * k + t] != 0.0))
+                    .collect()
+            })
+            .collect();
+        let width: usize = cols.iter().map(Vec::len).sum();
+        let groups = n_cand.div_ceil(LANES);
+        let mut data = vec![0.0; groups * width * LANES];
+        for j in 0..n_cand {
+            let (g, l) = (j / LANES, j % LANES);
+            let mut at = g * width;
+            for (a, ca) in cols.iter().enumerate() {
+                for &t in ca {
+                    data[at * LANES + l] = blocks[(j * r + a) * k + t];
+                    at += 1;
+                }
             }
         }
+        Self { data, cols, width }
     }
-    out
+
+    pub fn is_empty(&self) -> bool {
+        self.data.is_empty()
+    }
 }
 
 /// Whether [`soa_update`] has a kernel for blocks of r rows and q product columns here.
@@ -380,10 +407,9 @@ pub fn soa_kernel(r: usize, q: usize) -> bool {
 /// Returns false (nothing done) when no kernel for this r and q exists or AVX-512 is missing.
 #[allow(clippy::too_many_arguments)]
 pub fn soa_update(
-    soa: &[f64],
+    soa: &Soa,
     first: usize,
     r: usize,
-    k: usize,
     w: &[f64],
     lam: &[f64],
     gam: &[f64],
@@ -400,12 +426,12 @@ pub fn soa_update(
         // SAFETY (all arms): the feature was detected at run time.
         unsafe {
             match (r, q) {
-                (3, 18) => soa_update_avx512::<3, 18>(soa, first, k, w, lam, gam, d, e, bt),
-                (3, 6) => soa_update_avx512::<3, 6>(soa, first, k, w, lam, gam, d, e, bt),
-                (2, 12) => soa_update_avx512::<2, 12>(soa, first, k, w, lam, gam, d, e, bt),
-                (2, 4) => soa_update_avx512::<2, 4>(soa, first, k, w, lam, gam, d, e, bt),
-                (1, 6) => soa_update_avx512::<1, 6>(soa, first, k, w, lam, gam, d, e, bt),
-                (1, 2) => soa_update_avx512::<1, 2>(soa, first, k, w, lam, gam, d, e, bt),
+                (3, 18) => soa_update_avx512::<3, 18>(soa, first, w, lam, gam, d, e, bt),
+                (3, 6) => soa_update_avx512::<3, 6>(soa, first, w, lam, gam, d, e, bt),
+                (2, 12) => soa_update_avx512::<2, 12>(soa, first, w, lam, gam, d, e, bt),
+                (2, 4) => soa_update_avx512::<2, 4>(soa, first, w, lam, gam, d, e, bt),
+                (1, 6) => soa_update_avx512::<1, 6>(soa, first, w, lam, gam, d, e, bt),
+                (1, 2) => soa_update_avx512::<1, 2>(soa, first, w, lam, gam, d, e, bt),
                 _ => return false,
             }
         }
@@ -413,7 +439,7 @@ pub fn soa_update(
     }
     #[cfg(not(target_arch = "x86_64"))]
     {
-        let _ = (soa, first, r, k, w, lam, gam, d, e, bt);
+        let _ = (soa, first, r, w, lam, gam, d, e, bt);
         false
     }
 }
@@ -422,9 +448,8 @@ pub fn soa_update(
 #[target_feature(enable = "avx512f")]
 #[allow(clippy::too_many_arguments)]
 unsafe fn soa_update_avx512<const R: usize, const Q: usize>(
-    soa: &[f64],
+    soa: &Soa,
     first: usize,
-    k: usize,
     w: &[f64],
     lam: &[f64],
     gam: &[f64],
@@ -435,19 +460,21 @@ unsafe fn soa_update_avx512<const R: usize, const Q: usize>(
     use std::arch::x86_64::*;
     let rr = R * R;
     let n = d.len() / rr;
-    assert!(w.len() >= k * Q && Q <= MAX_Q);
+    assert!(soa.cols.len() == R && Q <= MAX_Q);
+    assert!(soa.cols.iter().flatten().all(|&t| w.len() >= (t + 1) * Q));
     let g0 = first / LANES;
-    assert!(soa.len() >= (g0 + n.div_ceil(LANES)) * R * k * LANES);
+    assert!(soa.data.len() >= (g0 + n.div_ceil(LANES)) * soa.width * LANES);
     let mut y = [[Z; MAX_Q]; R];
     let mut t0 = 0;
     while t0 < n {
         let m = (n - t0).min(LANES);
         let g = g0 + t0 / LANES;
+        let mut at = soa.data.as_ptr().add(g * soa.width * LANES);
         for a in 0..R {
-            let base = soa.as_ptr().add((g * R + a) * k * LANES);
             let mut acc = [_mm512_setzero_pd(); Q];
-            for t in 0..k {
-                let b = _mm512_loadu_pd(base.add(t * LANES));
+            for &t in &soa.cols[a] {
+                let b = _mm512_loadu_pd(at);
+                at = at.add(LANES);
                 let wt = w.as_ptr().add(t * Q);
                 for col in 0..Q {
                     acc[col] = _mm512_fmadd_pd(b, _mm512_set1_pd(*wt.add(col)), acc[col]);
