@@ -23,8 +23,8 @@ use crate::dense::{
     small_spd_inverse, small_spd_trace_solves, spd_inverse, sym_eig, sym_eigenvalues, MAX_P, MAX_R,
 };
 use crate::lanes::{
-    bound_terms, exchange_values, rank_update, soa_kernel, soa_update, ExchangeIn, RankUpdate, Soa,
-    LANES,
+    best_exchange, bound_terms, exchange_values, rank_update, soa_kernel, soa_update, ExchangeIn,
+    RankUpdate, Soa, LANES,
 };
 use gagekit_core::{GkError, Result};
 use rand::seq::{index::sample, SliceRandom};
@@ -1060,21 +1060,39 @@ impl<'p, 'a> Run<'p, 'a> {
                         w[t * 2 * r + r + q] = b_t[q * k + t];
                     }
                 }
-                self.p
-                    .products_chunks(&kept, &w, 2 * r, |chunk, out| match r {
-                        1 => this.best_of_lanes::<1>(chunk, out, rm),
-                        2 => this.best_of_lanes::<2>(chunk, out, rm),
-                        3 => this.best_of_lanes::<3>(chunk, out, rm),
-                        _ => chunk
-                            .iter()
-                            .map(|&j| {
-                                let v = this.fast_dyn(&mut Scratch::new(), j, rm, &a_t, &b_t);
-                                (sane(v), j)
-                            })
-                            .fold((f64::INFINITY, usize::MAX), total_min),
-                    })
-                    .into_iter()
-                    .fold((f64::INFINITY, usize::MAX), total_min)
+                let rr = r * r;
+                let soa = self.soa;
+                let lanes = |ch: &[usize]| {
+                    let (qi, qeq, v) = (&rm.qi[..rr], &rm.qeq[..rr], rm.value_minus);
+                    let (d, e) = (&this.d[..], &this.e[..]);
+                    match r {
+                        1 => best_exchange::<1>(soa, ch, &w, d, e, qi, qeq, v),
+                        2 => best_exchange::<2>(soa, ch, &w, d, e, qi, qeq, v),
+                        3 => best_exchange::<3>(soa, ch, &w, d, e, qi, qeq, v),
+                        _ => None,
+                    }
+                };
+                if !soa.is_empty() && lanes(&[]).is_some() {
+                    kept.par_chunks(GEMM_CHUNK)
+                        .map(|ch| lanes(ch).unwrap_or((f64::INFINITY, usize::MAX)))
+                        .reduce(|| (f64::INFINITY, usize::MAX), total_min)
+                } else {
+                    self.p
+                        .products_chunks(&kept, &w, 2 * r, |chunk, out| match r {
+                            1 => this.best_of_lanes::<1>(chunk, out, rm),
+                            2 => this.best_of_lanes::<2>(chunk, out, rm),
+                            3 => this.best_of_lanes::<3>(chunk, out, rm),
+                            _ => chunk
+                                .iter()
+                                .map(|&j| {
+                                    let v = this.fast_dyn(&mut Scratch::new(), j, rm, &a_t, &b_t);
+                                    (sane(v), j)
+                                })
+                                .fold((f64::INFINITY, usize::MAX), total_min),
+                        })
+                        .into_iter()
+                        .fold((f64::INFINITY, usize::MAX), total_min)
+                }
             }
             Some(rm) => {
                 // Evaluate in order of decreasing improvement bound; stop when no

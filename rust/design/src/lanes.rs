@@ -68,12 +68,27 @@ fn exchange_values_body<const R: usize>(x: &ExchangeIn) -> V {
             }
         }
     }
+    lane_values::<R>(&c, &f, &dj, &ej, x.qi, x.qeq, x.value_minus)
+}
+
+/// [`exchange_values`] from the lane-layout c = B F^-1 O^T, f = B F^-1 W F^-1 O^T, d and e.
+#[inline(always)]
+fn lane_values<const R: usize>(
+    c: &[[V; R]; R],
+    f: &[[V; R]; R],
+    dj: &[[V; R]; R],
+    ej: &[[V; R]; R],
+    qi: &[f64],
+    qeq: &[f64],
+    value_minus: f64,
+) -> V {
+    let x = (qi, qeq, value_minus);
     let mut cq = [[Z; R]; R]; // c Qi
     for a in 0..R {
         for q in 0..R {
             let mut v = Z;
             for t in 0..R {
-                let s = x.qi[t * R + q];
+                let s = x.0[t * R + q];
                 for l in 0..LANES {
                     v[l] += c[a][t][l] * s;
                 }
@@ -128,7 +143,7 @@ fn exchange_values_body<const R: usize>(x: &ExchangeIn) -> V {
         for q in 0..R {
             let mut v = Z;
             for t in 0..R {
-                let s = x.qeq[t * R + q];
+                let s = x.1[t * R + q];
                 for l in 0..LANES {
                     v[l] += c[a][t][l] * s;
                 }
@@ -182,7 +197,7 @@ fn exchange_values_body<const R: usize>(x: &ExchangeIn) -> V {
     }
     let mut out = Z;
     for l in 0..LANES {
-        let v = x.value_minus - t[l];
+        let v = x.2 - t[l];
         out[l] = if !bad[l] && v > 0.0 { v } else { f64::INFINITY };
     }
     out
@@ -359,6 +374,10 @@ pub struct Soa {
     cols: Vec<Vec<usize>>,
     /// Kept columns over all rows (values per candidate).
     width: usize,
+    /// The same values candidate by candidate (n_cand x stride, zero-padded to a multiple
+    /// of [`LANES`]), for gathering scattered candidates.
+    rows: Vec<f64>,
+    stride: usize,
 }
 
 impl Soa {
@@ -373,23 +392,177 @@ impl Soa {
         let width: usize = cols.iter().map(Vec::len).sum();
         let groups = n_cand.div_ceil(LANES);
         let mut data = vec![0.0; groups * width * LANES];
+        let stride = width.div_ceil(LANES) * LANES;
+        let mut rows = vec![0.0; n_cand * stride];
         for j in 0..n_cand {
             let (g, l) = (j / LANES, j % LANES);
-            let mut at = g * width;
+            let mut i = 0;
             for (a, ca) in cols.iter().enumerate() {
                 for &t in ca {
-                    data[at * LANES + l] = blocks[(j * r + a) * k + t];
-                    at += 1;
+                    let v = blocks[(j * r + a) * k + t];
+                    data[(g * width + i) * LANES + l] = v;
+                    rows[j * stride + i] = v;
+                    i += 1;
                 }
             }
         }
-        Self { data, cols, width }
+        Self {
+            data,
+            cols,
+            width,
+            rows,
+            stride,
+        }
     }
 
     pub fn is_empty(&self) -> bool {
         self.data.is_empty()
     }
 }
+
+/// The visit of the A/I exchange over the candidates `js` (scattered, none the visited
+/// point): B_j [F^-1 O^T, F^-1 W F^-1 O^T] with w = [F^-1 O^T, F^-1 W F^-1 O^T] (k x 2R), from the
+/// regrouped blocks, eight candidates at a time, then [`exchange_values`]; the best
+/// (value, candidate), lowest index on ties. `None`: no AVX-512 here.
+#[allow(clippy::too_many_arguments)]
+pub fn best_exchange<const R: usize>(
+    soa: &Soa,
+    js: &[usize],
+    w: &[f64],
+    d: &[f64],
+    e: &[f64],
+    qi: &[f64],
+    qeq: &[f64],
+    value_minus: f64,
+) -> Option<(f64, usize)> {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if wide() && soa.cols.len() == R {
+            // SAFETY: the feature was detected at run time.
+            return Some(unsafe {
+                best_exchange_avx512::<R>(soa, js, w, d, e, qi, qeq, value_minus)
+            });
+        }
+    }
+    let _ = (soa, js, w, d, e, qi, qeq, value_minus);
+    None
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+#[allow(clippy::too_many_arguments)]
+unsafe fn best_exchange_avx512<const R: usize>(
+    soa: &Soa,
+    js: &[usize],
+    w: &[f64],
+    d: &[f64],
+    e: &[f64],
+    qi: &[f64],
+    qeq: &[f64],
+    value_minus: f64,
+) -> (f64, usize) {
+    use std::arch::x86_64::*;
+    let (rr, sd, q2) = (R * R, soa.stride, 2 * R);
+    assert!(soa.cols.iter().flatten().all(|&t| w.len() >= (t + 1) * q2));
+    assert!(js
+        .iter()
+        .all(|&j| (j + 1) * sd <= soa.rows.len() && (j + 1) * rr <= d.len().min(e.len())));
+    let mut buf = vec![0.0f64; sd * LANES];
+    let mut best = (f64::INFINITY, usize::MAX);
+    let fetch = |j: usize| {
+        let p = soa.rows.as_ptr().add(j * sd);
+        for at in (0..sd).step_by(8) {
+            _mm_prefetch(p.add(at) as *const i8, _MM_HINT_T0);
+        }
+        _mm_prefetch(d.as_ptr().add(j * rr) as *const i8, _MM_HINT_T0);
+        _mm_prefetch(e.as_ptr().add(j * rr) as *const i8, _MM_HINT_T0);
+    };
+    for &j in js.iter().take(LANES) {
+        fetch(j);
+    }
+    for (g, grp) in js.chunks(LANES).enumerate() {
+        for &j in js.iter().skip((g + 1) * LANES).take(LANES) {
+            fetch(j);
+        }
+        let m = grp.len();
+        let src: [*const f64; LANES] =
+            std::array::from_fn(|l| soa.rows.as_ptr().add(grp[l.min(m - 1)] * sd));
+        for i0 in (0..sd).step_by(LANES) {
+            transpose8(src.map(|p| p.add(i0)), buf.as_mut_ptr().add(i0 * LANES));
+        }
+        let mut dj = [[Z; R]; R];
+        let mut ej = [[Z; R]; R];
+        for l in 0..LANES {
+            let j = grp[l.min(m - 1)];
+            for a in 0..R {
+                for c in 0..R {
+                    dj[a][c][l] = d[j * rr + a * R + c];
+                    ej[a][c][l] = e[j * rr + a * R + c];
+                }
+            }
+        }
+        let mut y = [[Z; 2 * MAX_LANE_R]; R];
+        let mut at = buf.as_ptr();
+        for a in 0..R {
+            let mut acc = [_mm512_setzero_pd(); 2 * MAX_LANE_R];
+            for &t in &soa.cols[a] {
+                let b = _mm512_loadu_pd(at);
+                at = at.add(LANES);
+                let wt = w.as_ptr().add(t * q2);
+                for col in 0..q2 {
+                    acc[col] = _mm512_fmadd_pd(b, _mm512_set1_pd(*wt.add(col)), acc[col]);
+                }
+            }
+            for col in 0..q2 {
+                _mm512_storeu_pd(y[a][col].as_mut_ptr(), acc[col]);
+            }
+        }
+        let c: [[V; R]; R] = std::array::from_fn(|a| std::array::from_fn(|q| y[a][q]));
+        let f: [[V; R]; R] = std::array::from_fn(|a| std::array::from_fn(|q| y[a][R + q]));
+        let v = lane_values::<R>(&c, &f, &dj, &ej, qi, qeq, value_minus);
+        for (l, &j) in grp.iter().enumerate() {
+            let x = if v[l].is_nan() { f64::INFINITY } else { v[l] };
+            if x.total_cmp(&best.0).then(j.cmp(&best.1)).is_lt() {
+                best = (x, j);
+            }
+        }
+    }
+    best
+}
+
+/// out[c * 8 + l] = rows[l][c] for an 8 x 8 block (rows: 8 values each).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+#[inline]
+unsafe fn transpose8(rows: [*const f64; LANES], out: *mut f64) {
+    use std::arch::x86_64::*;
+    let r: [__m512d; 8] = std::array::from_fn(|l| _mm512_loadu_pd(rows[l]));
+    let lo = |a: usize, b: usize| _mm512_unpacklo_pd(r[a], r[b]);
+    let hi = |a: usize, b: usize| _mm512_unpackhi_pd(r[a], r[b]);
+    let (t0, t1, t2, t3) = (lo(0, 1), hi(0, 1), lo(2, 3), hi(2, 3));
+    let (t4, t5, t6, t7) = (lo(4, 5), hi(4, 5), lo(6, 7), hi(6, 7));
+    // 128-bit lanes (0, 2) / (1, 3) of the two operands
+    let even = |a: __m512d, b: __m512d| _mm512_shuffle_f64x2::<0x88>(a, b);
+    let odd = |a: __m512d, b: __m512d| _mm512_shuffle_f64x2::<0xDD>(a, b);
+    let (s0, s1, s2, s3) = (even(t0, t2), odd(t0, t2), even(t4, t6), odd(t4, t6));
+    let (s4, s5, s6, s7) = (even(t1, t3), odd(t1, t3), even(t5, t7), odd(t5, t7));
+    let cols = [
+        even(s0, s2),
+        even(s4, s6),
+        even(s1, s3),
+        even(s5, s7),
+        odd(s0, s2),
+        odd(s4, s6),
+        odd(s1, s3),
+        odd(s5, s7),
+    ];
+    for (c, v) in cols.into_iter().enumerate() {
+        _mm512_storeu_pd(out.add(c * LANES), v);
+    }
+}
+
+/// Largest block height of the lane kernels.
+const MAX_LANE_R: usize = 3;
 
 /// Whether [`soa_update`] has a kernel for blocks of r rows and q product columns here.
 pub fn soa_kernel(r: usize, q: usize) -> bool {
@@ -724,6 +897,96 @@ mod tests {
                 "{} vs {want}",
                 v[l]
             );
+        }
+    }
+
+    /// Blocks (n x 3 x k) with some columns zero for every candidate, as a machine model gives.
+    fn sparse_blocks(rng: &mut ChaCha8Rng, n: usize, k: usize) -> Vec<f64> {
+        (0..n * 3 * k)
+            .map(|i| {
+                let (a, t) = ((i / k) % 3, i % k);
+                if (a + t) % 4 == 0 {
+                    0.0
+                } else {
+                    rng.random_range(-1.0..1.0)
+                }
+            })
+            .collect()
+    }
+
+    #[test]
+    fn lane_group_kernels_match_the_row_products() {
+        if !wide() {
+            return; // the lane-group kernels need AVX-512; the row path is used instead
+        }
+        let mut rng = ChaCha8Rng::seed_from_u64(7);
+        let (n, k) = (21, 13); // groups of 8 with a remainder; rows not a multiple of 8
+        let blocks = sparse_blocks(&mut rng, n, k);
+        let soa = Soa::new(&blocks, n, 3, k);
+        let row_product = |j: usize, a: usize, w: &[f64], q: usize, col: usize| {
+            (0..k).fold(0.0, |s: f64, t| {
+                blocks[(j * 3 + a) * k + t].mul_add(w[t * q + col], s)
+            })
+        };
+        // visit: scattered candidates against exchange_values on the row products
+        let w: Vec<f64> = (0..k * 6).map(|_| rng.random_range(-0.3..0.3)).collect();
+        let d: Vec<f64> = (0..n).flat_map(|_| spd(&mut rng)).collect();
+        let e: Vec<f64> = (0..n).flat_map(|_| spd(&mut rng)).collect();
+        let mut qi = spd(&mut rng);
+        for a in 0..3 {
+            qi[a * 3 + a] += 1.0;
+        }
+        let qeq = spd(&mut rng);
+        let js = [20usize, 3, 17, 5, 9, 0, 11, 14, 2, 19, 7];
+        let best = best_exchange::<3>(&soa, &js, &w, &d, &e, &qi, &qeq, 50.0).unwrap();
+        let cf: Vec<Vec<f64>> = js
+            .iter()
+            .map(|&j| {
+                (0..18)
+                    .map(|i| row_product(j, i / 6, &w, 6, i % 6))
+                    .collect()
+            })
+            .collect();
+        let mut want = (f64::INFINITY, usize::MAX);
+        for g in 0..js.len().div_ceil(LANES) {
+            let at = |l: usize| (g * LANES + l).min(js.len() - 1);
+            let x = ExchangeIn {
+                cf: std::array::from_fn(|l| &cf[at(l)][..]),
+                d: std::array::from_fn(|l| &d[js[at(l)] * 9..js[at(l)] * 9 + 9]),
+                e: std::array::from_fn(|l| &e[js[at(l)] * 9..js[at(l)] * 9 + 9]),
+                qi: &qi,
+                qeq: &qeq,
+                value_minus: 50.0,
+            };
+            let v = exchange_values::<3>(&x);
+            for l in 0..LANES.min(js.len() - g * LANES) {
+                let c = (v[l], js[g * LANES + l]);
+                if c.0.total_cmp(&want.0).then(c.1.cmp(&want.1)).is_lt() {
+                    want = c;
+                }
+            }
+        }
+        assert!(best.1 == want.1 && (best.0 - want.0).abs() <= 1e-12 * want.0.abs());
+        // update: the lane-group products against the row-product update
+        let (lam, gam) = ([0.5, -0.2, 0.1, 0.3, -0.4, 0.2], [0.1; 12]);
+        let w: Vec<f64> = (0..k * 18).map(|_| rng.random_range(-0.3..0.3)).collect();
+        let prod: Vec<f64> = (0..n * 3 * 18)
+            .map(|i| row_product(i / 54, (i / 18) % 3, &w, 18, i % 18))
+            .collect();
+        let (mut d1, mut e1, mut b1) = (d.clone(), e.clone(), vec![[0.0; 3]; n]);
+        let u = RankUpdate {
+            prod: &prod,
+            q: 18,
+            lam: &lam,
+            gam: &gam,
+        };
+        rank_update::<3>(&u, &mut d1, &mut e1, &mut b1);
+        let (mut d2, mut e2, mut b2) = (d.clone(), e.clone(), vec![[0.0; 3]; n]);
+        assert!(soa_update(
+            &soa, 0, 3, &w, &lam, &gam, &mut d2, &mut e2, &mut b2
+        ));
+        for i in 0..n * 9 {
+            assert!((d1[i] - d2[i]).abs() <= 1e-13 && (e1[i] - e2[i]).abs() <= 1e-13);
         }
     }
 }
