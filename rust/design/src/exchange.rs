@@ -4,6 +4,10 @@
 //! take candidates of its group (its zone, Eq. 4.8). Each start builds a
 //! randomised greedy D-optimal design, then sweeps over the points in random
 //! order and moves each to the allowed candidate that improves the criterion most.
+//! From that local optimum a few rounds of iterated local search follow: a tenth of
+//! the points jump to random candidates of their zones, the sweeps run again, and the
+//! result is kept only when it is better (so a start never ends worse than its first
+//! local optimum).
 //!
 //! Exchanging block O for block B is the rank-2r update F' = F + U C U^T with
 //! U = [B^T O^T] and C = diag(I, -I). With S = C + U^T F^-1 U (2r x 2r):
@@ -19,8 +23,8 @@
 
 use crate::criteria::{information, metrics, Criterion, Metrics};
 use crate::dense::{
-    dot, gram_add, lu_in_place, lu_inverse, mul_ab, mul_abt, skinny_mul, skinny_rows,
-    small_spd_inverse, small_spd_trace_solves, spd_inverse, sym_eig, sym_eigenvalues, MAX_P, MAX_R,
+    dot, gram_add, lu_in_place, lu_inverse, mul_ab, mul_abt, skinny_mul, small_spd_inverse,
+    small_spd_trace_solves, spd_inverse, sym_eig, sym_eigenvalues, MAX_P, MAX_R,
 };
 use crate::lanes::{
     best_exchange, bound_terms, exchange_values, rank_update, soa_kernel, soa_update, ExchangeIn,
@@ -28,7 +32,7 @@ use crate::lanes::{
 };
 use gagekit_core::{GkError, Result};
 use rand::seq::{index::sample, SliceRandom};
-use rand::SeedableRng;
+use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
@@ -97,6 +101,18 @@ const BOUND_CHUNK: usize = 4096;
 const PRUNE_CHUNK: usize = 512;
 /// Low-rank updates of the per-candidate blocks before they are recomputed exactly.
 const REFRESH_AFTER: usize = 40;
+/// Points moved per perturbation of the iterated local search: n / this.
+const PERTURB_FRACTION: usize = 10;
+
+/// Perturb-and-polish rounds after a start's local optimum (see [`Run::perturb_and_polish`]).
+fn polish_rounds(c: Criterion) -> usize {
+    // by the cost of a re-optimisation: D and I are cheap, A, K and E dear
+    match c {
+        Criterion::D | Criterion::I => 6,
+        Criterion::A | Criterion::K | Criterion::E => 1,
+    }
+}
+
 /// Candidates sampled per point when building a greedy start.
 const GREEDY_SAMPLE: usize = 64;
 
@@ -251,19 +267,8 @@ impl Problem<'_> {
             .flat_map_iter(|chunk| {
                 let mut out = vec![0.0; chunk.len() * r * q];
                 let m = chunk.len() * r;
-                if q <= SKINNY_Q {
-                    let row = |i: usize| {
-                        let at = (chunk[i / r] * r + i % r) * k;
-                        &self.blocks[at..at + k]
-                    };
-                    skinny_rows(&row, m, k, w, q, &mut out);
-                } else {
-                    let mut a = Vec::with_capacity(m * k);
-                    for &j in chunk {
-                        a.extend_from_slice(self.block(j));
-                    }
-                    gemm(&a, m, k, w, q, &mut out);
-                }
+                let gathered = self.gather(chunk);
+                gemm(&gathered, m, k, w, q, &mut out);
                 chunk
                     .iter()
                     .enumerate()
@@ -275,6 +280,31 @@ impl Problem<'_> {
 }
 
 impl Problem<'_> {
+    /// The stacked blocks of `chunk`: borrowed when the candidates are consecutive,
+    /// else copied (prefetching ahead, as scattered candidates live in L3).
+    fn gather(&self, chunk: &[usize]) -> std::borrow::Cow<'_, [f64]> {
+        let sz = self.r * self.k;
+        match (chunk.first(), chunk.last()) {
+            (Some(&a), Some(&b))
+                if b >= a
+                    && b - a + 1 == chunk.len()
+                    && chunk.windows(2).all(|x| x[1] == x[0] + 1) =>
+            {
+                std::borrow::Cow::Borrowed(&self.blocks[a * sz..(b + 1) * sz])
+            }
+            _ => {
+                let mut a = Vec::with_capacity(chunk.len() * sz);
+                for (t, &j) in chunk.iter().enumerate() {
+                    if let Some(&ahead) = chunk.get(t + PREFETCH_AHEAD) {
+                        prefetch(self.block(ahead));
+                    }
+                    a.extend_from_slice(self.block(j));
+                }
+                std::borrow::Cow::Owned(a)
+            }
+        }
+    }
+
     /// `body(chunk, B W)` for chunks of `members` (B W stacks the r x q products of the
     /// chunk's candidates), in parallel; results in chunk order.
     fn products_chunks<T, F>(&self, members: &[usize], w: &[f64], q: usize, body: F) -> Vec<T>
@@ -287,14 +317,7 @@ impl Problem<'_> {
             .par_chunks(GEMM_CHUNK)
             .map(|chunk| {
                 let mut out = vec![0.0; chunk.len() * r * q];
-                let mut a = Vec::with_capacity(chunk.len() * r * k);
-                for (t, &j) in chunk.iter().enumerate() {
-                    if let Some(&ahead) = chunk.get(t + PREFETCH_AHEAD) {
-                        prefetch(self.block(ahead));
-                    }
-                    a.extend_from_slice(self.block(j));
-                }
-                skinny_mul(&a, chunk.len() * r, k, w, q, &mut out);
+                skinny_mul(&self.gather(chunk), chunk.len() * r, k, w, q, &mut out);
                 body(chunk, &out)
             })
             .collect()
@@ -1409,6 +1432,40 @@ impl<'p, 'a> Run<'p, 'a> {
         moves
     }
 
+    /// Iterated local search from the local optimum reached: `rounds` times, move a few
+    /// random points to random candidates of their zones, optimise again, and keep the
+    /// result only if it beats the best so far (so the value never gets worse).
+    fn perturb_and_polish(
+        &mut self,
+        rounds: usize,
+        max_sweeps: usize,
+        rng: &mut ChaCha8Rng,
+    ) -> usize {
+        let n = self.p.n();
+        let mut moves = 0;
+        for _ in 0..rounds {
+            let (best, best_value) = (self.design.clone(), self.value);
+            let kick = (n / PERTURB_FRACTION).clamp(1, n);
+            for i in sample(rng, n, kick).iter() {
+                let members = &self.p.groups[self.p.point_group[i]];
+                self.design[i] = members[rng.random_range(0..members.len())];
+            }
+            let mut m = 0;
+            let improved = self.recompute().is_ok() && {
+                m = self.optimise(max_sweeps, rng);
+                self.value < best_value - self.tol()
+            };
+            if improved {
+                moves += m;
+            } else {
+                self.design = best;
+                // the best design was valid a moment ago
+                let _ = self.recompute();
+            }
+        }
+        moves
+    }
+
     /// The `m` design points whose removal raises the criterion least: tr(Q^-1 e_O)
     /// with Q = I - O F^-1 O^T (A, I), from the stored per-candidate blocks.
     fn cheapest_points(&self, m: usize) -> Vec<usize> {
@@ -1534,6 +1591,9 @@ pub fn search(p: &Problem, o: &Options) -> Result<Outcome> {
         };
         let mut run = Run::new(p, &soa, c, ridge, design)?;
         moves += run.optimise(o.max_sweeps.max(1), &mut rng);
+        if o.initial.is_none() {
+            moves += run.perturb_and_polish(polish_rounds(c), o.max_sweeps.max(1), &mut rng);
+        }
         Ok((run.design, moves))
     };
     // With at least as many starts as threads, the starts are the parallelism: each runs
