@@ -27,8 +27,8 @@ use crate::dense::{
     small_spd_trace_solves, spd_inverse, sym_eig, sym_eigenvalues, MAX_P, MAX_R,
 };
 use crate::lanes::{
-    best_exchange, bound_terms, exchange_values, rank_update, soa_kernel, soa_update, ExchangeIn,
-    RankUpdate, Soa, LANES,
+    best_exchange, bound_terms, exchange_values, rank_update, soa_kernel, soa_screen, soa_update,
+    ExchangeIn, RankUpdate, Screen, Soa, LANES,
 };
 use gagekit_core::{GkError, Result};
 use rand::seq::{index::sample, SliceRandom};
@@ -1329,28 +1329,62 @@ impl<'p, 'a> Run<'p, 'a> {
                 w[a * s + q] = vecs[a * k + m];
             }
         }
-        let mut screened: Vec<(f64, usize)> = self
-            .p
-            .products(cands, &w, s, |j, prod| {
-                if j == o {
-                    return (f64::INFINITY, usize::MAX);
+        // screening value of candidate j from h_q = |B_j v_q|^2
+        let base: Vec<f64> = (0..s).map(|q| vals[idx[q]]).collect();
+        let screen = |j: usize, h: &dyn Fn(usize) -> f64| {
+            let mut lo = f64::INFINITY;
+            let mut hi = vals[k - 1];
+            for q in 0..s {
+                let est = base[q] + h(q) - h_o[q];
+                if q < s_lo {
+                    lo = lo.min(est);
+                } else {
+                    hi = hi.max(est);
                 }
-                let mut lo = f64::INFINITY;
-                let mut hi = vals[k - 1];
-                for q in 0..s {
-                    let h: f64 = (0..r).map(|a| prod[a * s + q] * prod[a * s + q]).sum();
-                    let est = vals[idx[q]] + h - h_o[q];
-                    if q < s_lo {
-                        lo = lo.min(est);
-                    } else {
-                        hi = hi.max(est);
+            }
+            (sane(spectral_value(c, lo, hi)), j)
+        };
+        let n_cand = self.p.n_cand;
+        let all = cands.len() == n_cand && cands.iter().enumerate().all(|(t, &j)| t == j);
+        let soa = self.soa;
+        let mut vs = vec![];
+        if all && !soa.is_empty() {
+            let sc = Screen {
+                base: &base,
+                h_o: &h_o,
+                s_lo,
+                hi0: vals[k - 1],
+                ratio: c == Criterion::K,
+            };
+            vs = vec![0.0; n_cand];
+            let done = vs
+                .par_chunks_mut(GEMM_CHUNK)
+                .enumerate()
+                .map(|(ci, vc)| soa_screen(soa, ci * GEMM_CHUNK, r, &w, &sc, vc))
+                .reduce(|| true, |a, b| a && b);
+            if !done {
+                vs.clear();
+            }
+        }
+        let mut screened: Vec<(f64, usize)> = if !vs.is_empty() {
+            (0..n_cand)
+                .filter(|&j| j != o)
+                .map(|j| (vs[j], j))
+                .collect()
+        } else {
+            self.p
+                .products(cands, &w, s, |j, prod| {
+                    if j == o {
+                        return (f64::INFINITY, usize::MAX);
                     }
-                }
-                (sane(spectral_value(c, lo, hi)), j)
-            })
-            .into_iter()
-            .filter(|x| x.1 != usize::MAX)
-            .collect();
+                    screen(j, &|q| {
+                        (0..r).map(|a| prod[a * s + q] * prod[a * s + q]).sum()
+                    })
+                })
+                .into_iter()
+                .filter(|x| x.1 != usize::MAX)
+                .collect()
+        };
         let top = EXACT_TOP.min(screened.len());
         if top == 0 {
             return false;
@@ -1565,7 +1599,7 @@ pub fn search(p: &Problem, o: &Options) -> Result<Outcome> {
     };
     // the lane kernels' layout of the blocks, shared by the starts (A, D, I update the
     // per-candidate blocks with it)
-    let soa = if !c.is_spectral() && soa_kernel(p.r, 2 * p.r) {
+    let soa = if soa_kernel(p.r, 2 * p.r) {
         Soa::new(p.blocks, p.n_cand, p.r, p.k)
     } else {
         Soa::default()

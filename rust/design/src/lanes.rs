@@ -564,6 +564,121 @@ unsafe fn transpose8(rows: [*const f64; LANES], out: *mut f64) {
 /// Largest block height of the lane kernels.
 const MAX_LANE_R: usize = 3;
 
+/// The first-order screening of K and E (see `Run::visit_spectral`): with
+/// h_q = |B_j w_q|^2 (sum over the rows), the estimates base_q + h_q - h_o_q give the
+/// smallest eigenvalue (the first `s_lo`) and the largest (the others, and `hi0`).
+pub struct Screen<'a> {
+    pub base: &'a [f64],
+    pub h_o: &'a [f64],
+    pub s_lo: usize,
+    pub hi0: f64,
+    /// K: sqrt(l_max / l_min); else (E) 1 / l_min. Not positive or NaN: INFINITY.
+    pub ratio: bool,
+}
+
+/// [`Screen`] values of the candidates first.. of `out` (`first` a multiple of [`LANES`]),
+/// with w (k x s) from the regrouped blocks: the same products and sums as the row kernel.
+/// False (nothing done): no kernel here.
+pub fn soa_screen(
+    soa: &Soa,
+    first: usize,
+    r: usize,
+    w: &[f64],
+    sc: &Screen,
+    out: &mut [f64],
+) -> bool {
+    let s = sc.base.len();
+    #[cfg(target_arch = "x86_64")]
+    {
+        if !wide() || first % LANES != 0 || soa.cols.len() != r {
+            return false;
+        }
+        // SAFETY (all arms): the feature was detected at run time.
+        unsafe {
+            match (r, s) {
+                (3, 6) => soa_screen_avx512::<3, 6>(soa, first, w, sc, out),
+                (3, 4) => soa_screen_avx512::<3, 4>(soa, first, w, sc, out),
+                (2, 6) => soa_screen_avx512::<2, 6>(soa, first, w, sc, out),
+                (2, 4) => soa_screen_avx512::<2, 4>(soa, first, w, sc, out),
+                (1, 6) => soa_screen_avx512::<1, 6>(soa, first, w, sc, out),
+                (1, 4) => soa_screen_avx512::<1, 4>(soa, first, w, sc, out),
+                _ => return false,
+            }
+        }
+        true
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        let _ = (soa, first, r, w, s, sc, out);
+        false
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+unsafe fn soa_screen_avx512<const R: usize, const S: usize>(
+    soa: &Soa,
+    first: usize,
+    w: &[f64],
+    sc: &Screen,
+    out: &mut [f64],
+) {
+    use std::arch::x86_64::*;
+    let n = out.len();
+    assert!(sc.h_o.len() >= S && sc.s_lo <= S);
+    assert!(soa.cols.iter().flatten().all(|&t| w.len() >= (t + 1) * S));
+    let g0 = first / LANES;
+    assert!(soa.data.len() >= (g0 + n.div_ceil(LANES)) * soa.width * LANES);
+    let mut t0 = 0;
+    while t0 < n {
+        let m = (n - t0).min(LANES);
+        let g = g0 + t0 / LANES;
+        let mut at = soa.data.as_ptr().add(g * soa.width * LANES);
+        let mut hs = [[-0.0f64; LANES]; S];
+        for _a in 0..R {
+            let mut acc = [_mm512_setzero_pd(); S];
+            for &t in &soa.cols[_a] {
+                let b = _mm512_loadu_pd(at);
+                at = at.add(LANES);
+                let wt = w.as_ptr().add(t * S);
+                for q in 0..S {
+                    acc[q] = _mm512_fmadd_pd(b, _mm512_set1_pd(*wt.add(q)), acc[q]);
+                }
+            }
+            for q in 0..S {
+                let mut y = Z;
+                _mm512_storeu_pd(y.as_mut_ptr(), acc[q]);
+                for l in 0..LANES {
+                    hs[q][l] += y[l] * y[l];
+                }
+            }
+        }
+        let mut lo = [f64::INFINITY; LANES];
+        let mut hi = [sc.hi0; LANES];
+        for q in 0..S {
+            for l in 0..LANES {
+                let est = sc.base[q] + hs[q][l] - sc.h_o[q];
+                if q < sc.s_lo {
+                    lo[l] = lo[l].min(est);
+                } else {
+                    hi[l] = hi[l].max(est);
+                }
+            }
+        }
+        for l in 0..m {
+            let v = if !(lo[l] > 0.0) {
+                f64::INFINITY
+            } else if sc.ratio {
+                (hi[l] / lo[l]).sqrt()
+            } else {
+                1.0 / lo[l]
+            };
+            out[t0 + l] = if v.is_nan() { f64::INFINITY } else { v };
+        }
+        t0 += m;
+    }
+}
+
 /// Whether [`soa_update`] has a kernel for blocks of r rows and q product columns here.
 pub fn soa_kernel(r: usize, q: usize) -> bool {
     wide()
@@ -987,6 +1102,34 @@ mod tests {
         ));
         for i in 0..n * 9 {
             assert!((d1[i] - d2[i]).abs() <= 1e-13 && (e1[i] - e2[i]).abs() <= 1e-13);
+        }
+        // spectral screening: K ratio and E inverse from the same squared projections
+        let w: Vec<f64> = (0..k * 6).map(|_| rng.random_range(-0.3..0.3)).collect();
+        let (base, h_o) = ([0.5, 0.6, 0.7, 0.8, 5.0, 6.0], [0.1; 6]);
+        for ratio in [true, false] {
+            let sc = Screen {
+                base: &base,
+                h_o: &h_o,
+                s_lo: 4,
+                hi0: 6.5,
+                ratio,
+            };
+            let mut got = vec![0.0; n];
+            assert!(soa_screen(&soa, 0, 3, &w, &sc, &mut got));
+            for j in 0..n {
+                let est = |q: usize| {
+                    let h: f64 = (0..3).map(|a| row_product(j, a, &w, 6, q).powi(2)).sum();
+                    base[q] + h - h_o[q]
+                };
+                let lo = (0..4).map(est).fold(f64::INFINITY, f64::min);
+                let hi = (4..6).map(est).fold(6.5, f64::max);
+                let want = if ratio { (hi / lo).sqrt() } else { 1.0 / lo };
+                assert!(
+                    (got[j] - want).abs() <= 1e-12 * want,
+                    "{} vs {want}",
+                    got[j]
+                );
+            }
         }
     }
 }
