@@ -1,4 +1,6 @@
-//! Point-exchange search over a candidate set (Fedorov exchange, Sec. 4.1-4.2).
+//! Point-exchange search over a candidate set (Fedorov exchange, Sec. 4.1-4.2):
+//! minimise a criterion of M^T M (D: Eq. 4.3, A: Eq. 4.4, K: Eq. 4.5, plus E and I)
+//! over the design points (Eq. 4.7).
 //!
 //! A design is n candidate indices (repeats allowed); design point i may only
 //! take candidates of its group (its zone, Eq. 4.8). Each start builds a
@@ -13,13 +15,18 @@
 //! U = [B^T O^T] and C = diag(I, -I). With S = C + U^T F^-1 U (2r x 2r):
 //! det F' / det F = (-1)^r det S and tr(W F'^-1) = tr(W F^-1) - tr(S^-1 U^T F^-1 W F^-1 U),
 //! so A, D and I are exact from the per-candidate r x r blocks B F^-1 B^T and
-//! B F^-1 W F^-1 B^T, which are kept current by the same update (refreshed each
-//! sweep). K and E have no such formula: candidates are screened by first-order
-//! perturbation of the extreme eigenvalues and the best few evaluated exactly.
+//! B F^-1 W F^-1 B^T, which are kept current by the same update (recomputed exactly
+//! after every REFRESH_AFTER exchanges). Candidates whose improvement bound cannot beat
+//! the tolerance are skipped before the exact value. K and E have no such formula:
+//! candidates are screened by first-order perturbation of the extreme eigenvalues and
+//! the best few evaluated exactly.
 //!
-//! The products over the candidates run in an AVX-512 (else AVX2) skinny kernel, and the
-//! per-candidate small algebra of A and I (exchange values, block updates, bound terms)
-//! eight candidates per SIMD lane group (`lanes.rs`), bit-identical to the one-candidate code.
+//! Speed: the candidates' products run eight candidates per group of SIMD lanes
+//! (`lanes.rs`, AVX-512) from a copy of the blocks regrouped by eight that leaves out the
+//! columns zero for every candidate (the block updates and the K/E screening stream it; the
+//! A/I visits gather the few kept candidates into it), with the same fused operations in
+//! the same order as the one-candidate code, so the search takes the same path either way;
+//! without AVX-512, a row kernel (AVX2) and the one-candidate code do the same work.
 
 use crate::criteria::{information, metrics, Criterion, Metrics};
 use crate::dense::{
