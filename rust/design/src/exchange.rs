@@ -6,10 +6,10 @@
 //! take candidates of its group (its zone, Eq. 4.8). Each start builds a
 //! randomised greedy D-optimal design, then sweeps over the points in random
 //! order and moves each to the allowed candidate that improves the criterion most.
-//! From that local optimum a few rounds of iterated local search follow: a tenth of
-//! the points jump to random candidates of their zones, the sweeps run again, and the
-//! result is kept only when it is better (so a start never ends worse than its first
-//! local optimum).
+//! From that local optimum a few rounds of iterated local search follow (D, I, K, E; see
+//! `polish_rounds`): a tenth of the points jump to random candidates of their zones, the
+//! sweeps run again, and the result is kept only when it is better (so a start never ends
+//! worse than its first local optimum).
 //!
 //! Exchanging block O for block B is the rank-2r update F' = F + U C U^T with
 //! U = [B^T O^T] and C = diag(I, -I). With S = C + U^T F^-1 U (2r x 2r):
@@ -113,10 +113,12 @@ const PERTURB_FRACTION: usize = 10;
 
 /// Perturb-and-polish rounds after a start's local optimum (see [`Run::perturb_and_polish`]).
 fn polish_rounds(c: Criterion) -> usize {
-    // by the cost of a re-optimisation: D and I are cheap, A, K and E dear
+    // by the cost of a re-optimisation (D and I are cheap, K and E dear); A keeps its
+    // time for the main search, whose result already beats a plain exchange's
     match c {
         Criterion::D | Criterion::I => 6,
-        Criterion::A | Criterion::K | Criterion::E => 1,
+        Criterion::K | Criterion::E => 1,
+        Criterion::A => 0,
     }
 }
 
