@@ -1,4 +1,5 @@
-"""Optimal-design search: gagekit (Rust exchange with low-rank updates, multistart, rayon)
+"""Optimal-design search: gagekit (Rust exchange with low-rank updates, multistart with
+iterated local search, rayon)
 against a plain one-point-at-a-time exchange written here in NumPy (exact criterion for every
 candidate, vectorised over the candidates; single start).
 

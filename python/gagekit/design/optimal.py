@@ -3,8 +3,9 @@
 The model is given as a function ``rows(X)`` that maps an (m, d) array of design
 variables to the (m, r, k) design-matrix rows those points produce (Eq. 4.9;
 r = 3 for a tracker point, r = 1 for a scalar response). The search is a
-multistart point exchange over quasi-random candidates (``gagekit._core``),
-followed by a continuous pattern-search refinement of each point inside its
+multistart point exchange over quasi-random candidates (``gagekit._core``; for D,
+I, K and E each start's local optimum is then perturbed and re-optimised a few
+times, keeping only improvements), followed by a continuous pattern-search refinement of each point inside its
 bounds and zone: ``rows`` is evaluated here, in Python, on the candidates and on
 the refinement moves; the combinatorial search runs in Rust on the stacked rows.
 

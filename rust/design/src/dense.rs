@@ -354,6 +354,11 @@ pub fn skinny_rows<'a>(
     assert!(w.len() >= k * q && out.len() >= m * q);
     #[cfg(target_arch = "x86_64")]
     {
+        if std::arch::is_x86_feature_detected!("avx512f") {
+            // SAFETY: the feature was detected at run time.
+            unsafe { skinny_avx512(row, m, k, w, q, out) };
+            return;
+        }
         if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
         {
             // SAFETY: the features were detected at run time.
@@ -375,6 +380,84 @@ unsafe fn skinny_fma<'a>(
     out: &mut [f64],
 ) {
     skinny_dispatch::<true>(row, m, k, w, q, out);
+}
+
+/// AVX-512 kernel: column slabs of up to 24 (3 vectors of 8), 8 rows at a time.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+unsafe fn skinny_avx512<'a>(
+    row: &(dyn Fn(usize) -> &'a [f64] + Sync),
+    m: usize,
+    k: usize,
+    w: &[f64],
+    q: usize,
+    out: &mut [f64],
+) {
+    let mut c0 = 0;
+    while c0 < q {
+        let qc = (q - c0).min(24);
+        match qc.div_ceil(8) {
+            1 => avx512_body::<1, 8>(row, m, k, w, q, c0, qc, out),
+            2 => avx512_body::<2, 8>(row, m, k, w, q, c0, qc, out),
+            _ => avx512_body::<3, 8>(row, m, k, w, q, c0, qc, out),
+        }
+        c0 += qc;
+    }
+}
+
+/// Columns c0 .. c0 + qc (at most 8 NV) of the product, MR rows per register tile.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+#[allow(clippy::too_many_arguments)]
+unsafe fn avx512_body<'a, const NV: usize, const MR: usize>(
+    row: &(dyn Fn(usize) -> &'a [f64] + Sync),
+    m: usize,
+    k: usize,
+    w: &[f64],
+    q: usize,
+    c0: usize,
+    qc: usize,
+    out: &mut [f64],
+) {
+    use std::arch::x86_64::*;
+    let nr = 8 * NV;
+    let mut wp = vec![0.0f64; k * nr];
+    for t in 0..k {
+        wp[t * nr..t * nr + qc].copy_from_slice(&w[t * q + c0..t * q + c0 + qc]);
+    }
+    let mut i = 0;
+    while i < m {
+        let mr = (m - i).min(MR);
+        let rows: [&[f64]; MR] = std::array::from_fn(|ii| &row(i + ii.min(mr - 1))[..k]);
+        let mut acc = [[_mm512_setzero_pd(); NV]; MR];
+        for t in 0..k {
+            let wt: [__m512d; NV] =
+                std::array::from_fn(|v| _mm512_loadu_pd(wp.as_ptr().add(t * nr + 8 * v)));
+            for ii in 0..MR {
+                let x = _mm512_set1_pd(*rows[ii].get_unchecked(t));
+                for v in 0..NV {
+                    acc[ii][v] = _mm512_fmadd_pd(x, wt[v], acc[ii][v]);
+                }
+            }
+        }
+        for ii in 0..mr {
+            let o = out[(i + ii) * q + c0..(i + ii) * q + c0 + qc].as_mut_ptr();
+            for v in 0..NV {
+                let n = qc.saturating_sub(8 * v).min(8);
+                // SAFETY: lanes below n are inside this row's qc outputs.
+                if n == 8 {
+                    _mm512_storeu_pd(o.add(8 * v), acc[ii][v]);
+                } else {
+                    let mut tile = [0.0f64; 8];
+                    _mm512_storeu_pd(tile.as_mut_ptr(), acc[ii][v]);
+                    for c in 0..n {
+                        *o.add(8 * v + c) = tile[c];
+                    }
+                }
+            }
+        }
+        i += mr;
+    }
 }
 
 #[inline(always)]
@@ -481,6 +564,8 @@ mod tests {
             (9, 32, 6),
             (10, 33, 12),
             (1, 1, 16),
+            (17, 32, 18),
+            (3, 7, 30),
         ] {
             let a: Vec<f64> = (0..m * k)
                 .map(|i| ((i * 37 % 101) as f64 - 50.0) / 7.0)

@@ -1,26 +1,45 @@
-//! Point-exchange search over a candidate set (Fedorov exchange, Sec. 4.1-4.2).
+//! Point-exchange search over a candidate set (Fedorov exchange, Sec. 4.1-4.2):
+//! minimise a criterion of M^T M (D: Eq. 4.3, A: Eq. 4.4, K: Eq. 4.5, plus E and I)
+//! over the design points (Eq. 4.7).
 //!
 //! A design is n candidate indices (repeats allowed); design point i may only
 //! take candidates of its group (its zone, Eq. 4.8). Each start builds a
 //! randomised greedy D-optimal design, then sweeps over the points in random
 //! order and moves each to the allowed candidate that improves the criterion most.
+//! From that local optimum a few rounds of iterated local search follow (D, I, K, E; see
+//! `polish_rounds`): a tenth of the points jump to random candidates of their zones, the
+//! sweeps run again, and the result is kept only when it is better (so a start never ends
+//! worse than its first local optimum).
 //!
 //! Exchanging block O for block B is the rank-2r update F' = F + U C U^T with
 //! U = [B^T O^T] and C = diag(I, -I). With S = C + U^T F^-1 U (2r x 2r):
 //! det F' / det F = (-1)^r det S and tr(W F'^-1) = tr(W F^-1) - tr(S^-1 U^T F^-1 W F^-1 U),
 //! so A, D and I are exact from the per-candidate r x r blocks B F^-1 B^T and
-//! B F^-1 W F^-1 B^T, which are kept current by the same update (refreshed each
-//! sweep). K and E have no such formula: candidates are screened by first-order
-//! perturbation of the extreme eigenvalues and the best few evaluated exactly.
+//! B F^-1 W F^-1 B^T, which are kept current by the same update (recomputed exactly
+//! after every REFRESH_AFTER exchanges). Candidates whose improvement bound cannot beat
+//! the tolerance are skipped before the exact value. K and E have no such formula:
+//! candidates are screened by first-order perturbation of the extreme eigenvalues and
+//! the best few evaluated exactly.
+//!
+//! Speed: the candidates' products run eight candidates per group of SIMD lanes
+//! (`lanes.rs`, AVX-512) from a copy of the blocks regrouped by eight that leaves out the
+//! columns zero for every candidate (the block updates and the K/E screening stream it; the
+//! A/I visits gather the few kept candidates into it), with the same fused operations in
+//! the same order as the one-candidate code, so the search takes the same path either way;
+//! without AVX-512, a row kernel (AVX2) and the one-candidate code do the same work.
 
 use crate::criteria::{information, metrics, Criterion, Metrics};
 use crate::dense::{
-    dot, gram_add, lu_in_place, lu_inverse, mul_ab, mul_abt, skinny_mul, skinny_rows,
-    small_spd_inverse, small_spd_trace_solves, spd_inverse, sym_eig, sym_eigenvalues, MAX_P, MAX_R,
+    dot, gram_add, lu_in_place, lu_inverse, mul_ab, mul_abt, skinny_mul, small_spd_inverse,
+    small_spd_trace_solves, spd_inverse, sym_eig, sym_eigenvalues, MAX_P, MAX_R,
+};
+use crate::lanes::{
+    best_exchange, bound_terms, exchange_values, rank_update, soa_kernel, soa_screen, soa_update,
+    ExchangeIn, RankUpdate, Screen, Soa, LANES,
 };
 use gagekit_core::{GkError, Result};
 use rand::seq::{index::sample, SliceRandom};
-use rand::SeedableRng;
+use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
@@ -83,10 +102,26 @@ pub struct Outcome {
 
 /// Candidates screened exactly per visit for K and E.
 const EXACT_TOP: usize = 32;
+/// Candidates whose improvement bounds one task checks.
+const BOUND_CHUNK: usize = 4096;
 /// Candidates evaluated together between checks of the improvement bound.
 const PRUNE_CHUNK: usize = 512;
 /// Low-rank updates of the per-candidate blocks before they are recomputed exactly.
 const REFRESH_AFTER: usize = 40;
+/// Points moved per perturbation of the iterated local search: n / this.
+const PERTURB_FRACTION: usize = 10;
+
+/// Perturb-and-polish rounds after a start's local optimum (see [`Run::perturb_and_polish`]).
+fn polish_rounds(c: Criterion) -> usize {
+    // by the cost of a re-optimisation (D and I are cheap, K and E dear); A keeps its
+    // time for the main search, whose result already beats a plain exchange's
+    match c {
+        Criterion::D | Criterion::I => 6,
+        Criterion::K | Criterion::E => 1,
+        Criterion::A => 0,
+    }
+}
+
 /// Candidates sampled per point when building a greedy start.
 const GREEDY_SAMPLE: usize = 64;
 
@@ -241,19 +276,8 @@ impl Problem<'_> {
             .flat_map_iter(|chunk| {
                 let mut out = vec![0.0; chunk.len() * r * q];
                 let m = chunk.len() * r;
-                if q <= SKINNY_Q {
-                    let row = |i: usize| {
-                        let at = (chunk[i / r] * r + i % r) * k;
-                        &self.blocks[at..at + k]
-                    };
-                    skinny_rows(&row, m, k, w, q, &mut out);
-                } else {
-                    let mut a = Vec::with_capacity(m * k);
-                    for &j in chunk {
-                        a.extend_from_slice(self.block(j));
-                    }
-                    gemm(&a, m, k, w, q, &mut out);
-                }
+                let gathered = self.gather(chunk);
+                gemm(&gathered, m, k, w, q, &mut out);
                 chunk
                     .iter()
                     .enumerate()
@@ -261,6 +285,69 @@ impl Problem<'_> {
                     .collect::<Vec<T>>()
             })
             .collect()
+    }
+}
+
+impl Problem<'_> {
+    /// The stacked blocks of `chunk`: borrowed when the candidates are consecutive,
+    /// else copied (prefetching ahead, as scattered candidates live in L3).
+    fn gather(&self, chunk: &[usize]) -> std::borrow::Cow<'_, [f64]> {
+        let sz = self.r * self.k;
+        match (chunk.first(), chunk.last()) {
+            (Some(&a), Some(&b))
+                if b >= a
+                    && b - a + 1 == chunk.len()
+                    && chunk.windows(2).all(|x| x[1] == x[0] + 1) =>
+            {
+                std::borrow::Cow::Borrowed(&self.blocks[a * sz..(b + 1) * sz])
+            }
+            _ => {
+                let mut a = Vec::with_capacity(chunk.len() * sz);
+                for (t, &j) in chunk.iter().enumerate() {
+                    if let Some(&ahead) = chunk.get(t + PREFETCH_AHEAD) {
+                        prefetch(self.block(ahead));
+                    }
+                    a.extend_from_slice(self.block(j));
+                }
+                std::borrow::Cow::Owned(a)
+            }
+        }
+    }
+
+    /// `body(chunk, B W)` for chunks of `members` (B W stacks the r x q products of the
+    /// chunk's candidates), in parallel; results in chunk order.
+    fn products_chunks<T, F>(&self, members: &[usize], w: &[f64], q: usize, body: F) -> Vec<T>
+    where
+        T: Send,
+        F: Fn(&[usize], &[f64]) -> T + Sync,
+    {
+        let (r, k) = (self.r, self.k);
+        members
+            .par_chunks(GEMM_CHUNK)
+            .map(|chunk| {
+                let mut out = vec![0.0; chunk.len() * r * q];
+                skinny_mul(&self.gather(chunk), chunk.len() * r, k, w, q, &mut out);
+                body(chunk, &out)
+            })
+            .collect()
+    }
+}
+
+/// Candidates ahead whose blocks are prefetched when gathering scattered candidates.
+const PREFETCH_AHEAD: usize = 6;
+
+/// Hint the processor to bring `x` into cache (scattered candidate blocks live in L3).
+#[inline(always)]
+fn prefetch(x: &[f64]) {
+    #[cfg(target_arch = "x86_64")]
+    for line in x.chunks(8) {
+        // SAFETY: a prefetch hint has no effect on memory; the address is inside `x`.
+        unsafe {
+            std::arch::x86_64::_mm_prefetch(
+                line.as_ptr() as *const i8,
+                std::arch::x86_64::_MM_HINT_T0,
+            )
+        };
     }
 }
 
@@ -306,6 +393,21 @@ fn bound_terms_of(dj: &[f64], ej: &[f64], r: usize) -> [f64; 3] {
     }
 }
 
+/// [`bound_terms_of`] of every candidate of a chunk (d, e: r x r each).
+fn bound_terms_chunk(d: &[f64], e: &[f64], bt: &mut [[f64; 3]], r: usize) {
+    match r {
+        1 => bound_terms::<1>(d, e, bt),
+        2 => bound_terms::<2>(d, e, bt),
+        3 => bound_terms::<3>(d, e, bt),
+        _ => {
+            let rr = r * r;
+            for (t, b) in bt.iter_mut().enumerate() {
+                *b = bound_terms_of(&d[t * rr..(t + 1) * rr], &e[t * rr..(t + 1) * rr], r);
+            }
+        }
+    }
+}
+
 /// One start's mutable state.
 struct Run<'p, 'a> {
     p: &'p Problem<'a>,
@@ -325,6 +427,8 @@ struct Run<'p, 'a> {
     /// and tr((I + d_j)^-1 d_j),
     /// the two ingredients of the improvement bound, kept with d and e.
     bound_terms: Vec<[f64; 3]>,
+    /// The candidate blocks regrouped for the lane kernels; empty: unused.
+    soa: &'p Soa,
 }
 
 /// The visited point's removal, shared by all candidates of a visit.
@@ -363,7 +467,13 @@ impl Scratch {
 }
 
 impl<'p, 'a> Run<'p, 'a> {
-    fn new(p: &'p Problem<'a>, c: Criterion, ridge: f64, design: Vec<usize>) -> Result<Self> {
+    fn new(
+        p: &'p Problem<'a>,
+        soa: &'p Soa,
+        c: Criterion,
+        ridge: f64,
+        design: Vec<usize>,
+    ) -> Result<Self> {
         let r = p.r;
         let needs_e = matches!(c, Criterion::A | Criterion::I);
         let blocks_d = if c.is_spectral() { 0 } else { p.n_cand * r * r };
@@ -379,6 +489,7 @@ impl<'p, 'a> Run<'p, 'a> {
             e: vec![0.0; if needs_e { blocks_d } else { 0 }],
             value: f64::INFINITY,
             bound_terms: vec![],
+            soa,
         };
         run.recompute()?;
         Ok(run)
@@ -436,6 +547,7 @@ impl<'p, 'a> Run<'p, 'a> {
     /// Recompute every candidate's B F^-1 B^T (and B F^-1 W F^-1 B^T) exactly.
     fn refresh(&mut self) {
         let (r, k) = (self.p.r, self.p.k);
+        let rr = r * r;
         let needs_e = self.needs_e();
         let q = if needs_e { 2 * k } else { k };
         let mut w = vec![0.0; k * q]; // [F^-1, F^-1 W F^-1]
@@ -445,37 +557,40 @@ impl<'p, 'a> Run<'p, 'a> {
                 w[t * q + k..t * q + 2 * k].copy_from_slice(&self.fwf[t * k..(t + 1) * k]);
             }
         }
-        self.for_candidate_products(&w, q, |prod, b, dm, em| {
-            for a in 0..r {
-                for c in 0..r {
-                    dm[a * r + c] = dot(&prod[a * q..a * q + k], &b[c * k..(c + 1) * k]);
-                }
-            }
-            if let Some(em) = em {
+        let blocks = self.p.blocks;
+        self.for_candidate_products(&w, q, |prod, first, dch, ech, bt| {
+            for t in 0..dch.len() / rr {
+                let b = &blocks[(first + t) * r * k..(first + t + 1) * r * k];
+                let pr = &prod[t * r * q..(t + 1) * r * q];
                 for a in 0..r {
                     for c in 0..r {
-                        em[a * r + c] =
-                            dot(&prod[a * q + k..a * q + 2 * k], &b[c * k..(c + 1) * k]);
+                        dch[t * rr + a * r + c] =
+                            dot(&pr[a * q..a * q + k], &b[c * k..(c + 1) * k]);
+                        if needs_e {
+                            ech[t * rr + a * r + c] =
+                                dot(&pr[a * q + k..a * q + 2 * k], &b[c * k..(c + 1) * k]);
+                        }
                     }
                 }
+            }
+            if needs_e {
+                bound_terms_chunk(dch, ech, bt, r);
             }
         });
     }
 
-    /// For every candidate m, in parallel chunks of blocked products:
-    /// `f(B_m W (r x q), B_m, d_m, e_m)`.
+    /// For every chunk of candidates (from `first`), in parallel, with blocked products:
+    /// `f(B W (r x q per candidate), first, d, e, bound terms)` (e and the bound terms empty for D).
     fn for_candidate_products<F>(&mut self, w: &[f64], q: usize, f: F)
     where
-        F: Fn(&[f64], &[f64], &mut [f64], Option<&mut [f64]>) + Sync,
+        F: Fn(&[f64], usize, &mut [f64], &mut [f64], &mut [[f64; 3]]) + Sync,
     {
         let (r, k) = (self.p.r, self.p.k);
         let rr = r * r;
         let sz = r * k;
         let blocks = self.p.blocks;
-        // A, I: the bound terms of each candidate follow its updated d and e (same chunk).
-        let run_chunk = |ci: usize, dch: &mut [f64], ech: Option<(&mut [f64], &mut [[f64; 3]])>| {
+        self.for_candidate_chunks(|first, dch, ech, bt| {
             let n = dch.len() / rr;
-            let first = ci * GEMM_CHUNK;
             let mut prod = vec![0.0; n * r * q];
             gemm(
                 &blocks[first * sz..(first + n) * sz],
@@ -485,19 +600,19 @@ impl<'p, 'a> Run<'p, 'a> {
                 q,
                 &mut prod,
             );
-            let mut ech = ech;
-            for t in 0..n {
-                let b = &blocks[(first + t) * sz..(first + t + 1) * sz];
-                let dm = &mut dch[t * rr..(t + 1) * rr];
-                match ech.as_mut() {
-                    Some((ech, bt)) => {
-                        let em = &mut ech[t * rr..(t + 1) * rr];
-                        f(&prod[t * r * q..(t + 1) * r * q], b, dm, Some(&mut *em));
-                        bt[t] = bound_terms_of(dm, em, r);
-                    }
-                    None => f(&prod[t * r * q..(t + 1) * r * q], b, dm, None),
-                }
-            }
+            f(&prod, first, dch, ech, bt);
+        });
+    }
+
+    /// `f(first, d, e, bound terms)` for every chunk of candidates (from `first`), in parallel
+    /// (e and the bound terms empty for D).
+    fn for_candidate_chunks<F>(&mut self, f: F)
+    where
+        F: Fn(usize, &mut [f64], &mut [f64], &mut [[f64; 3]]) + Sync,
+    {
+        let rr = self.p.r * self.p.r;
+        let run_chunk = |ci: usize, dch: &mut [f64], ech: &mut [f64], bt: &mut [[f64; 3]]| {
+            f(ci * GEMM_CHUNK, dch, ech, bt)
         };
         if self.needs_e() {
             self.bound_terms.resize(self.p.n_cand, [0.0; 3]);
@@ -506,12 +621,12 @@ impl<'p, 'a> Run<'p, 'a> {
                 .zip(self.e.par_chunks_mut(rr * GEMM_CHUNK))
                 .zip(self.bound_terms.par_chunks_mut(GEMM_CHUNK))
                 .enumerate()
-                .for_each(|(ci, ((dch, ech), bt))| run_chunk(ci, dch, Some((ech, bt))));
+                .for_each(|(ci, ((dch, ech), bt))| run_chunk(ci, dch, ech, bt));
         } else {
             self.d
                 .par_chunks_mut(rr * GEMM_CHUNK)
                 .enumerate()
-                .for_each(|(ci, dch)| run_chunk(ci, dch, None));
+                .for_each(|(ci, dch)| run_chunk(ci, dch, &mut [], &mut []));
         }
     }
 
@@ -844,6 +959,36 @@ impl<'p, 'a> Run<'p, 'a> {
         }
     }
 
+    /// The best exchange among `chunk` (candidates j != visited point), with `cf` the rows
+    /// B_j [F^-1 O^T, F^-1 W F^-1 O^T] (R x 2R each, in chunk order): [`Self::fast_r`]
+    /// eight candidates at a time.
+    fn best_of_lanes<const R: usize>(
+        &self,
+        chunk: &[usize],
+        cf: &[f64],
+        rm: &Removal,
+    ) -> (f64, usize) {
+        let sz = R * 2 * R;
+        let rr = R * R;
+        let mut best = (f64::INFINITY, usize::MAX);
+        for (g, js) in chunk.chunks(LANES).enumerate() {
+            let at = |l: usize| g * LANES + l.min(js.len() - 1);
+            let x = ExchangeIn {
+                cf: std::array::from_fn(|l| &cf[at(l) * sz..(at(l) + 1) * sz]),
+                d: std::array::from_fn(|l| &self.d[chunk[at(l)] * rr..(chunk[at(l)] + 1) * rr]),
+                e: std::array::from_fn(|l| &self.e[chunk[at(l)] * rr..(chunk[at(l)] + 1) * rr]),
+                qi: &rm.qi[..rr],
+                qeq: &rm.qeq[..rr],
+                value_minus: rm.value_minus,
+            };
+            let v = exchange_values::<R>(&x);
+            for (l, &j) in js.iter().enumerate() {
+                best = total_min(best, (sane(v[l]), j));
+            }
+        }
+        best
+    }
+
     /// [`Self::exchange_value_fast`] for any block height.
     fn fast_dyn(&self, s: &mut Scratch, j: usize, rm: &Removal, a_t: &[f64], b_t: &[f64]) -> f64 {
         let (r, k) = (self.p.r, self.p.k);
@@ -929,10 +1074,13 @@ impl<'p, 'a> Run<'p, 'a> {
                 // B [F^-1 O^T, F^-1 W F^-1 O^T] over them and the small r x r algebra each.
                 let tol = self.tol();
                 let kept: Vec<usize> = cands
-                    .par_iter()
-                    .with_min_len(1024)
-                    .filter(|&&j| j != o && !(this.improvement_bound(rm, j) <= tol))
-                    .copied()
+                    .par_chunks(BOUND_CHUNK)
+                    .flat_map_iter(|ch| {
+                        ch.iter()
+                            .copied()
+                            .filter(|&j| j != o && !(this.improvement_bound(rm, j) <= tol))
+                            .collect::<Vec<usize>>()
+                    })
                     .collect();
                 if kept.is_empty() {
                     return false;
@@ -944,32 +1092,65 @@ impl<'p, 'a> Run<'p, 'a> {
                         w[t * 2 * r + r + q] = b_t[q * k + t];
                     }
                 }
-                self.p
-                    .products(&kept, &w, 2 * r, |j, cf| {
-                        if j == o {
-                            return (f64::INFINITY, usize::MAX);
-                        }
-                        let v = match r {
-                            1 => this.fast_r::<1>(j, rm, &a_t, &b_t, Some(cf)),
-                            2 => this.fast_r::<2>(j, rm, &a_t, &b_t, Some(cf)),
-                            3 => this.fast_r::<3>(j, rm, &a_t, &b_t, Some(cf)),
-                            _ => this.fast_dyn(&mut Scratch::new(), j, rm, &a_t, &b_t),
-                        };
-                        (sane(v), j)
-                    })
-                    .into_iter()
-                    .fold((f64::INFINITY, usize::MAX), total_min)
+                let rr = r * r;
+                let soa = self.soa;
+                let lanes = |ch: &[usize]| {
+                    let (qi, qeq, v) = (&rm.qi[..rr], &rm.qeq[..rr], rm.value_minus);
+                    let (d, e) = (&this.d[..], &this.e[..]);
+                    match r {
+                        1 => best_exchange::<1>(soa, ch, &w, d, e, qi, qeq, v),
+                        2 => best_exchange::<2>(soa, ch, &w, d, e, qi, qeq, v),
+                        3 => best_exchange::<3>(soa, ch, &w, d, e, qi, qeq, v),
+                        _ => None,
+                    }
+                };
+                if !soa.is_empty() && lanes(&[]).is_some() {
+                    kept.par_chunks(GEMM_CHUNK)
+                        .map(|ch| lanes(ch).unwrap_or((f64::INFINITY, usize::MAX)))
+                        .reduce(|| (f64::INFINITY, usize::MAX), total_min)
+                } else {
+                    self.p
+                        .products_chunks(&kept, &w, 2 * r, |chunk, out| match r {
+                            1 => this.best_of_lanes::<1>(chunk, out, rm),
+                            2 => this.best_of_lanes::<2>(chunk, out, rm),
+                            3 => this.best_of_lanes::<3>(chunk, out, rm),
+                            _ => chunk
+                                .iter()
+                                .map(|&j| {
+                                    let v = this.fast_dyn(&mut Scratch::new(), j, rm, &a_t, &b_t);
+                                    (sane(v), j)
+                                })
+                                .fold((f64::INFINITY, usize::MAX), total_min),
+                        })
+                        .into_iter()
+                        .fold((f64::INFINITY, usize::MAX), total_min)
+                }
             }
             Some(rm) => {
                 // Evaluate in order of decreasing improvement bound; stop when no
                 // remaining candidate can beat the best found (exact, not a heuristic).
                 let tol = self.tol();
+                // bound > tol needs tr d_j above a threshold (the bound grows with it):
+                // compute the bound (a logarithm) only for candidates that pass it
+                let r = self.p.r;
+                let rr = r * r;
+                let x_min = ((tol - (self.value - rm.value_minus)) / r as f64).exp_m1()
+                    / rm.bound_c
+                    * (1.0 - 1e-9);
+                let d = &self.d;
                 let mut order: Vec<(f64, usize)> = cands
-                    .par_iter()
-                    .with_min_len(1024)
-                    .filter(|&&j| j != o)
-                    .map(|&j| (this.improvement_bound(rm, j), j))
-                    .filter(|&(b, _)| !(b <= tol))
+                    .par_chunks(BOUND_CHUNK)
+                    .flat_map_iter(|ch| {
+                        ch.iter()
+                            .copied()
+                            .filter(|&j| {
+                                let tr_d: f64 = (0..r).map(|a| d[j * rr + a * r + a]).sum();
+                                j != o && !(tr_d < x_min)
+                            })
+                            .map(|j| (this.improvement_bound(rm, j), j))
+                            .filter(|&(b, _)| !(b <= tol))
+                            .collect::<Vec<(f64, usize)>>()
+                    })
                     .collect();
                 order.sort_unstable_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
                 let mut best = (f64::INFINITY, usize::MAX);
@@ -1063,32 +1244,56 @@ impl<'p, 'a> Run<'p, 'a> {
                 }
             }
         }
-        self.for_candidate_products(&w, q, |prod, _b, dm, em| {
-            for a in 0..r {
-                let ya = &prod[a * q..a * q + p];
-                for c in 0..=a {
-                    let yc = &prod[c * q..c * q + p];
-                    let v: f64 = (0..p).map(|l| lam[l] * ya[l] * yc[l]).sum();
-                    dm[a * r + c] -= v;
-                    if c != a {
-                        dm[c * r + a] -= v;
-                    }
-                }
-            }
-            if let Some(em) = em {
-                for a in 0..r {
-                    let ha = &prod[a * q + p..(a + 1) * q];
-                    for c in 0..=a {
-                        let hc = &prod[c * q + p..(c + 1) * q];
-                        let v: f64 = (0..pe).map(|l| gam[l] * ha[l] * hc[l]).sum();
-                        em[a * r + c] -= v;
-                        if c != a {
-                            em[c * r + a] -= v;
+        let (lam, gam) = (&lam[..], &gam[..]);
+        if !self.soa.is_empty() && soa_kernel(r, q) {
+            let soa = self.soa;
+            self.for_candidate_chunks(|first, dch, ech, bt| {
+                soa_update(soa, first, r, &w, lam, gam, dch, ech, bt);
+            });
+        } else {
+            self.for_candidate_products(&w, q, |prod, _first, dch, ech, bt| {
+                let u = RankUpdate { prod, q, lam, gam };
+                match r {
+                    1 => rank_update::<1>(&u, dch, ech, bt),
+                    2 => rank_update::<2>(&u, dch, ech, bt),
+                    3 => rank_update::<3>(&u, dch, ech, bt),
+                    _ => {
+                        for t in 0..dch.len() / (r * r) {
+                            let pr = &prod[t * r * q..(t + 1) * r * q];
+                            let dm = &mut dch[t * r * r..(t + 1) * r * r];
+                            for a in 0..r {
+                                let ya = &pr[a * q..a * q + p];
+                                for c in 0..=a {
+                                    let yc = &pr[c * q..c * q + p];
+                                    let v: f64 = (0..p).map(|l| lam[l] * ya[l] * yc[l]).sum();
+                                    dm[a * r + c] -= v;
+                                    if c != a {
+                                        dm[c * r + a] -= v;
+                                    }
+                                }
+                            }
+                            if needs_e {
+                                let em = &mut ech[t * r * r..(t + 1) * r * r];
+                                for a in 0..r {
+                                    let ha = &pr[a * q + p..(a + 1) * q];
+                                    for c in 0..=a {
+                                        let hc = &pr[c * q + p..(c + 1) * q];
+                                        let v: f64 = (0..pe).map(|l| gam[l] * ha[l] * hc[l]).sum();
+                                        em[a * r + c] -= v;
+                                        if c != a {
+                                            em[c * r + a] -= v;
+                                        }
+                                    }
+                                }
+                            }
+                        }
+                        if needs_e {
+                            bound_terms_chunk(dch, ech, bt, r);
                         }
                     }
                 }
-            }
-        });
+            });
+        }
         let old = self.design[i];
         self.design[i] = j;
         if self.recompute().is_err() {
@@ -1133,28 +1338,62 @@ impl<'p, 'a> Run<'p, 'a> {
                 w[a * s + q] = vecs[a * k + m];
             }
         }
-        let mut screened: Vec<(f64, usize)> = self
-            .p
-            .products(cands, &w, s, |j, prod| {
-                if j == o {
-                    return (f64::INFINITY, usize::MAX);
+        // screening value of candidate j from h_q = |B_j v_q|^2
+        let base: Vec<f64> = (0..s).map(|q| vals[idx[q]]).collect();
+        let screen = |j: usize, h: &dyn Fn(usize) -> f64| {
+            let mut lo = f64::INFINITY;
+            let mut hi = vals[k - 1];
+            for q in 0..s {
+                let est = base[q] + h(q) - h_o[q];
+                if q < s_lo {
+                    lo = lo.min(est);
+                } else {
+                    hi = hi.max(est);
                 }
-                let mut lo = f64::INFINITY;
-                let mut hi = vals[k - 1];
-                for q in 0..s {
-                    let h: f64 = (0..r).map(|a| prod[a * s + q] * prod[a * s + q]).sum();
-                    let est = vals[idx[q]] + h - h_o[q];
-                    if q < s_lo {
-                        lo = lo.min(est);
-                    } else {
-                        hi = hi.max(est);
+            }
+            (sane(spectral_value(c, lo, hi)), j)
+        };
+        let n_cand = self.p.n_cand;
+        let all = cands.len() == n_cand && cands.iter().enumerate().all(|(t, &j)| t == j);
+        let soa = self.soa;
+        let mut vs = vec![];
+        if all && !soa.is_empty() {
+            let sc = Screen {
+                base: &base,
+                h_o: &h_o,
+                s_lo,
+                hi0: vals[k - 1],
+                ratio: c == Criterion::K,
+            };
+            vs = vec![0.0; n_cand];
+            let done = vs
+                .par_chunks_mut(GEMM_CHUNK)
+                .enumerate()
+                .map(|(ci, vc)| soa_screen(soa, ci * GEMM_CHUNK, r, &w, &sc, vc))
+                .reduce(|| true, |a, b| a && b);
+            if !done {
+                vs.clear();
+            }
+        }
+        let mut screened: Vec<(f64, usize)> = if !vs.is_empty() {
+            (0..n_cand)
+                .filter(|&j| j != o)
+                .map(|j| (vs[j], j))
+                .collect()
+        } else {
+            self.p
+                .products(cands, &w, s, |j, prod| {
+                    if j == o {
+                        return (f64::INFINITY, usize::MAX);
                     }
-                }
-                (sane(spectral_value(c, lo, hi)), j)
-            })
-            .into_iter()
-            .filter(|x| x.1 != usize::MAX)
-            .collect();
+                    screen(j, &|q| {
+                        (0..r).map(|a| prod[a * s + q] * prod[a * s + q]).sum()
+                    })
+                })
+                .into_iter()
+                .filter(|x| x.1 != usize::MAX)
+                .collect()
+        };
         let top = EXACT_TOP.min(screened.len());
         if top == 0 {
             return false;
@@ -1231,6 +1470,40 @@ impl<'p, 'a> Run<'p, 'a> {
                 full = true;
             } else if k_exchange {
                 full = false;
+            }
+        }
+        moves
+    }
+
+    /// Iterated local search from the local optimum reached: `rounds` times, move a few
+    /// random points to random candidates of their zones, optimise again, and keep the
+    /// result only if it beats the best so far (so the value never gets worse).
+    fn perturb_and_polish(
+        &mut self,
+        rounds: usize,
+        max_sweeps: usize,
+        rng: &mut ChaCha8Rng,
+    ) -> usize {
+        let n = self.p.n();
+        let mut moves = 0;
+        for _ in 0..rounds {
+            let (best, best_value) = (self.design.clone(), self.value);
+            let kick = (n / PERTURB_FRACTION).clamp(1, n);
+            for i in sample(rng, n, kick).iter() {
+                let members = &self.p.groups[self.p.point_group[i]];
+                self.design[i] = members[rng.random_range(0..members.len())];
+            }
+            let mut m = 0;
+            let improved = self.recompute().is_ok() && {
+                m = self.optimise(max_sweeps, rng);
+                self.value < best_value - self.tol()
+            };
+            if improved {
+                moves += m;
+            } else {
+                self.design = best;
+                // the best design was valid a moment ago
+                let _ = self.recompute();
             }
         }
         moves
@@ -1333,6 +1606,13 @@ pub fn search(p: &Problem, o: &Options) -> Result<Outcome> {
     } else {
         o.starts.max(1)
     };
+    // the lane kernels' layout of the blocks, shared by the starts (A, D, I update the
+    // per-candidate blocks with it)
+    let soa = if soa_kernel(p.r, 2 * p.r) {
+        Soa::new(p.blocks, p.n_cand, p.r, p.k)
+    } else {
+        Soa::default()
+    };
     let run_start = |s: usize| -> Result<(Vec<usize>, usize)> {
         let mut rng = ChaCha8Rng::seed_from_u64(o.seed);
         rng.set_stream(s as u64);
@@ -1344,7 +1624,7 @@ pub fn search(p: &Problem, o: &Options) -> Result<Outcome> {
                 if matches!(c, Criterion::A | Criterion::I) {
                     // A- and I-optimal designs are usually close to the D-optimal one,
                     // whose exchanges are much cheaper: polish that instead.
-                    let mut pre = Run::new(p, Criterion::D, ridge, d)?;
+                    let mut pre = Run::new(p, &soa, Criterion::D, ridge, d)?;
                     moves += pre.optimise(o.max_sweeps.max(1), &mut rng);
                     pre.design
                 } else {
@@ -1352,8 +1632,11 @@ pub fn search(p: &Problem, o: &Options) -> Result<Outcome> {
                 }
             }
         };
-        let mut run = Run::new(p, c, ridge, design)?;
+        let mut run = Run::new(p, &soa, c, ridge, design)?;
         moves += run.optimise(o.max_sweeps.max(1), &mut rng);
+        if o.initial.is_none() {
+            moves += run.perturb_and_polish(polish_rounds(c), o.max_sweeps.max(1), &mut rng);
+        }
         Ok((run.design, moves))
     };
     // With at least as many starts as threads, the starts are the parallelism: each runs

@@ -15,6 +15,7 @@
 pub mod criteria;
 pub mod dense;
 pub mod exchange;
+mod lanes;
 pub mod qmc;
 
 pub use criteria::{information, metrics, Criterion, Metrics};
