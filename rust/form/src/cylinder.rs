@@ -5,38 +5,44 @@
 //! azimuth f) projects the points onto the plane normal to it,
 //! q = [I2 0] Ry(-t) Rz(-f) p (Eq. 6.12 as corrected in ERRATA item 1), and
 //! the projected 2-D set is fitted exactly by the circle kernels
-//! ([`crate::circle`]). The search over directions:
+//! ([`crate::circle`]). The value of a direction is that exact 2-D fit's radius
+//! (MCC, MIC) or width (MZC). The search over directions:
 //!
 //! 1. the seeded parallel PSO ([`gagekit_pso`]) over the half sphere (or a cone
-//!    around a given axis), with the least-squares axis as one particle;
-//! 2. Nelder–Mead in local coordinates (alpha, beta) from the best distinct
-//!    particles, to 1e-12 rad (MIC and MZC with a warm-started 2-D evaluation,
-//!    see `Warm`);
-//! 3. basin hopping: Nelder–Mead restarted 1e-4 rad around the best axis while
-//!    that finds a lower basin (minimax landscapes have long narrow valleys with
-//!    several local minima some 1e-5 rad apart).
+//!    around a given axis), with the least-squares axis as one particle, on the
+//!    exact 2-D values (MIC and MZC warm-started per particle, see `Warm`);
+//! 2. local searches from the best distinct particles by sequential linear
+//!    programming with a trust region (`slp`): the same minimax problem
+//!    (Eqs. 6.13-6.15) written in the axis tilt, axis offset and radii, with the
+//!    point-to-axis distances linearised by their analytic gradients; each step
+//!    is a 5- or 6-variable LP (`lp`, a dense dual simplex), and the steps
+//!    converge quadratically at the usual vertex solutions;
+//! 3. basin hopping: the local search restarted from 8 axes tilted 1e-4 rad
+//!    about the best while that finds a lower basin (minimax landscapes have long
+//!    narrow valleys with several local minima some 1e-5 rad apart).
 //!
-//! Large inputs are fitted on an active subset (see [`fit`]). Every result
-//! carries its certificate: min and max distance of the input points to the
-//! reported axis, recomputed in 3-D.
+//! Every local search's end direction is scored by the exact 2-D kernel, and the
+//! reported cylinder is the exact 2-D fit along the best direction. Large inputs
+//! are fitted on an active subset (see [`fit`]). Every result carries its
+//! certificate: min and max distance of the input points to the reported axis,
+//! recomputed in 3-D.
 
 use crate::circle;
 use crate::lsq::{self, centroid, orthonormal_basis, Extent};
 use gagekit_core::{check_finite, GkError, Result};
-use gagekit_pso::{minimize_particles, nelder_mead, Settings};
+use gagekit_pso::{minimize_particles, Settings};
 use nalgebra::Vector3;
 use rayon::prelude::*;
 use std::f64::consts::{FRAC_PI_2, PI};
 
-/// Initial simplex edge (rad) and final resolution of the axis refinement: 1e-12
-/// rad moves a point 100 mm along the axis by 1e-10 mm.
-const NM_STEP: f64 = 1e-4;
-const NM_XTOL: f64 = 1e-12;
-/// Basin hopping: restarts per round and their distance (rad) from the best axis.
+mod lp;
+mod slp;
+
+/// Initial trust region (rad of tilt) of the local searches from the swarm.
+const START_STEP: f64 = 1e-3;
+/// Basin hopping: restarts per round and their tilt (rad) from the best axis.
 const HOPS: usize = 8;
 const HOP_RADIUS: f64 = 1e-4;
-/// Resolution of the hops' searches (the best hop is then polished to NM_XTOL).
-const HOP_XTOL: f64 = 1e-9;
 
 /// Which cylinder to fit.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -192,25 +198,30 @@ fn fit2d(q: &[f64], a: &Vector3<f64>, crit: Criterion) -> Result<(f64, f64, circ
 /// points is no cylinder section (a strip: the zone degenerates to parallel
 /// lines) and is rejected.
 fn objective(q: &[f64], a: &Vector3<f64>, crit: Criterion, size: f64) -> f64 {
-    match fit2d(q, a, crit) {
-        Ok((_, _, z)) if z.center[0].hypot(z.center[1]) <= 100.0 * size && z.r_out.is_finite() => match crit {
-            Criterion::MinCircumscribed => z.r_out,
-            Criterion::MaxInscribed => -z.r_in,
-            Criterion::MinZone => z.r_out - z.r_in,
-        },
-        _ => f64::INFINITY,
+    fit2d(q, a, crit).map_or(f64::INFINITY, |(_, _, z)| zone_value(&z, crit, size))
+}
+
+/// The value of a 2-D fit for [`objective`].
+fn zone_value(z: &circle::Zone, crit: Criterion, size: f64) -> f64 {
+    if !(z.center[0].hypot(z.center[1]) <= 100.0 * size && z.r_out.is_finite()) {
+        return f64::INFINITY;
+    }
+    match crit {
+        Criterion::MinCircumscribed => z.r_out,
+        Criterion::MaxInscribed => -z.r_in,
+        Criterion::MinZone => z.r_out - z.r_in,
     }
 }
 
-/// The objective for one local search (a sequence of nearby axes), warm-started for
+/// The objective for one particle of the swarm (a sequence of axes), warm-started for
 /// the minimum zone and the maximum inscribed cylinder: around the previous axis's
 /// centre, the candidates built from the points nearest the circles
 /// ([`circle::min_zone_near`], [`circle::max_inscribed_near`]) are tried first. Their
-/// best is accepted only
-/// when its control points are an active set the exact kernel has already returned in
-/// this search (near the optimum the projections cycle through a few active sets);
-/// otherwise the exact kernel runs, and its zone becomes the warm start. Each search
-/// owns its state and is sequential, so results do not depend on threads.
+/// best is accepted only when its control points are an active set the exact kernel
+/// has already returned for this particle (near the optimum the projections cycle
+/// through a few active sets); otherwise the exact kernel runs, and its zone becomes
+/// the warm start. Each particle owns its state and is evaluated sequentially, so
+/// results do not depend on threads.
 struct Warm<'a> {
     q: &'a [f64],
     crit: Criterion,
@@ -222,28 +233,9 @@ struct Warm<'a> {
 /// Control points (inner, outer) of exact 2-D fits.
 type ActiveSets = Vec<(Vec<usize>, Vec<usize>)>;
 
-/// Union of active sets, in order (deterministic).
-fn merge_sets(into: &mut ActiveSets, more: ActiveSets) {
-    for k in more {
-        if !into.contains(&k) {
-            into.push(k);
-        }
-    }
-}
-
 impl<'a> Warm<'a> {
     fn new(q: &'a [f64], crit: Criterion, size: f64) -> Self {
-        Self::knowing(q, crit, size, Vec::new())
-    }
-
-    /// A search that starts knowing the active sets other searches met.
-    fn knowing(q: &'a [f64], crit: Criterion, size: f64, known: ActiveSets) -> Self {
-        Self { q, crit, size, state: std::sync::Mutex::new((None, known)) }
-    }
-
-    /// The active sets the exact kernel returned so far.
-    fn active_sets(self) -> ActiveSets {
-        self.state.into_inner().unwrap_or_else(|e| e.into_inner()).1
+        Self { q, crit, size, state: std::sync::Mutex::new((None, Vec::new())) }
     }
 
     fn eval(&self, a: &Vector3<f64>) -> f64 {
@@ -435,29 +427,28 @@ fn fit_direct(pts: &[f64], crit: Criterion, opts: &Options, lsq_axis: Option<Vec
         ));
     }
 
-    // Local refinement in coordinates (alpha, beta) about each start direction.
+    // Local refinement: SLP on the 3-D minimax problem from the best distinct particles.
     let in_region = |a: &Vector3<f64>| a.dot(&basis.2).abs() >= s_max.cos() - 1e-12;
-    // Nelder–Mead over the tangent plane of the unit axis `a0`, starting at `a0`;
-    // directions outside the search region count as infinitely bad.
-    let descend = |a0: &Vector3<f64>, warm: Warm<'_>, step: f64, xtol: f64| {
-        let (u, v) = orthonormal_basis(a0);
-        let dir = |x: &[f64]| (a0 + u * x[0] + v * x[1]).normalize();
-        let nm = nelder_mead(
-            |x: &[f64]| {
-                let a = dir(x);
-                if in_region(&a) {
-                    warm.eval(&a)
-                } else {
-                    f64::INFINITY
-                }
-            },
-            &[0.0, 0.0],
-            step,
-            xtol,
-        );
-        (nm.value, dir(&nm.position), nm.evaluations, warm.active_sets())
+    let len = q
+        .chunks_exact(3)
+        .map(|p| Vector3::new(p[0], p[1], p[2]).dot(&lsq_axis.unwrap_or(basis.2)).abs())
+        .fold(1e-3 * size, f64::max);
+    // the exact projection-model value at a direction and the axis of its 2-D fit
+    let exact = |a: &Vector3<f64>| -> Option<(f64, slp::Axis)> {
+        let (theta, phi, zone) = fit2d(&q, a, crit).ok()?;
+        let v = zone_value(&zone, crit, size);
+        let (u, w) = frame(theta, phi);
+        let p = Vector3::from(u) * zone.center[0] + Vector3::from(w) * zone.center[1];
+        v.is_finite().then(|| (v, slp::Axis::new(*a, p)))
     };
-    // Nelder–Mead from the best personal bests (distinct directions), best first.
+    // one local search; its result is scored by the exact 2-D kernel
+    let search = |start: slp::Axis, delta: f64| -> (f64, slp::Axis, usize) {
+        let local = slp::descend(&q, crit, start, delta, len, size, &in_region);
+        match exact(&local.axis.dir) {
+            Some((v, ax)) => (v, ax, local.steps + 1),
+            None => (f64::INFINITY, local.axis, local.steps + 1),
+        }
+    };
     let mut cands: Vec<(f64, Vector3<f64>)> = swarm
         .personal_best
         .iter()
@@ -474,56 +465,56 @@ fn fit_direct(pts: &[f64], crit: Criterion, opts: &Options, lsq_axis: Option<Vec
             starts.push(a);
         }
     }
-    let mut best = (swarm.value, cone_dir(&basis, swarm.position[0], swarm.position[1]));
-    // refinements run in parallel; each is deterministic and the best is taken
-    // in start order, so the thread count never changes the result
-    let refined: Vec<(f64, Vector3<f64>, usize, ActiveSets)> = starts
+    // searches run in parallel; each is deterministic and the best is taken in
+    // start order, so the thread count never changes the result
+    let first = cone_dir(&basis, swarm.position[0], swarm.position[1]);
+    let mut best = match exact(&first) {
+        Some((v, ax)) => (v, ax),
+        None => (f64::INFINITY, slp::Axis::new(first, Vector3::zeros())),
+    };
+    evaluations += 1;
+    let refined: Vec<(f64, slp::Axis, usize)> = starts
         .par_iter()
-        .map(|a0| descend(a0, Warm::new(&q, crit, size), NM_STEP, NM_XTOL))
+        .map(|a0| match exact(a0) {
+            Some((_, ax)) => {
+                let (v, ax, e) = search(ax, START_STEP * len);
+                (v, ax, e + 1)
+            }
+            None => (f64::INFINITY, slp::Axis::new(*a0, Vector3::zeros()), 1),
+        })
         .collect();
-    // the active sets met near the optimum: later searches there start knowing them
-    let mut known = ActiveSets::new();
-    for (value, a, evals, sets) in refined {
-        merge_sets(&mut known, sets);
+    for (value, ax, evals) in refined {
         evaluations += evals;
         if value < best.0 {
-            best = (value, a);
+            best = (value, ax);
         }
     }
-    // Basin hopping: minimum-zone landscapes have long narrow valleys holding
-    // several local minima some 1e-5 rad apart (set 3: two minima 4.6e-5 rad and
-    // 6e-9 mm apart); restart the refinement from HOPS points around the best.
+    // Basin hopping: minimax landscapes have long narrow valleys holding several
+    // local minima some 1e-5 rad apart (set 3: two minima 4.6e-5 rad and 6e-9 mm
+    // apart); restart the search from HOPS axes tilted HOP_RADIUS about the best.
     for _ in 0..opts.hop_rounds {
-        let (u, v) = orthonormal_basis(&best.1);
+        let (u, v) = orthonormal_basis(&best.1.dir);
         let a0 = best.1;
-        let hops: Vec<(f64, Vector3<f64>, usize, ActiveSets)> = (0..HOPS)
+        let hops: Vec<(f64, slp::Axis, usize)> = (0..HOPS)
             .into_par_iter()
             .map(|k| {
                 let th = 0.3 + 2.0 * PI * k as f64 / HOPS as f64;
-                let s0 = (a0 + (u * th.cos() + v * th.sin()) * HOP_RADIUS).normalize();
-                descend(&s0, Warm::knowing(&q, crit, size, known.clone()), 0.2 * HOP_RADIUS, HOP_XTOL)
+                let dir = a0.dir + (u * th.cos() + v * th.sin()) * HOP_RADIUS;
+                search(slp::Axis::new(dir, a0.point), HOP_RADIUS * len)
             })
             .collect();
         let before = best.0;
-        for (value, a, evals, sets) in hops {
-            merge_sets(&mut known, sets);
+        for (value, ax, evals) in hops {
             evaluations += evals;
             if value < best.0 {
-                best = (value, a);
+                best = (value, ax);
             }
         }
         if best.0 >= before - 1e-9 * before.abs() {
             break; // no new basin (gains at rounding level do not count)
         }
-        // polish the new basin's minimum to full resolution
-        let warm = Warm::knowing(&q, crit, size, known.clone());
-        let (value, a, evals, _) = descend(&best.1, warm, 100.0 * HOP_XTOL, NM_XTOL);
-        evaluations += evals;
-        if value < best.0 {
-            best = (value, a);
-        }
     }
-    let a = best.1;
+    let a = best.1.dir;
     let (theta, phi, zone) = fit2d(&q, &a, crit)?;
     let dir = axis(theta, phi);
     let (u, v) = frame(theta, phi);
