@@ -155,7 +155,7 @@ pub(super) fn descend(
         steps += 1;
         let Some(z) = lp::minimize(&a, &b, &c) else { break };
         let predicted = -c.iter().zip(&z).map(|(c, z)| c * z).sum::<f64>();
-        if !(predicted > ftol) {
+        if predicted.is_nan() || predicted <= ftol {
             break;
         }
         let dir = ax.dir + (u * z[2] + v * z[3]) / len;
