@@ -106,7 +106,7 @@ def fit_cylinder(
     *,
     particles: int = 20,
     iterations: int = 300,
-    stall_iterations: int = 8,
+    stall_iterations: int = 6,
     refine_starts: int = 8,
     hop_rounds: int = 3,
     search_axis: Optional[Any] = None,

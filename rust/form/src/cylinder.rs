@@ -94,9 +94,9 @@ impl Default for Options {
             particles: 20,
             max_iterations: 300,
             // the local searches from 8 particles and the basin hopping follow, so
-            // the swarm only has to find the right valley (8: same results for seeds
-            // 0..19 on data sets 1 and 3 and on 60 random cylinders as 25)
-            stall_iterations: 8,
+            // the swarm only has to find the right valley (6: same results for seeds
+            // 0..19 on data sets 1 and 3 and on 120 random cylinders as 25)
+            stall_iterations: 6,
             search: Search::HalfSphere,
             refine_starts: 8,
             hop_rounds: 3,
@@ -125,7 +125,8 @@ pub struct CylinderFit {
     pub control_out: Vec<usize>,
     /// Certificate: min and max 3-D distance of the points to the reported axis.
     pub extent: Extent,
-    /// PSO iterations run and objective evaluations (PSO + refinement).
+    /// PSO iterations run, and the work: exact 2-D fits (the swarm's and those
+    /// scoring the local searches) plus the local searches' linear programs.
     pub iterations: usize,
     pub evaluations: usize,
 }
@@ -498,10 +499,17 @@ fn fit_direct(pts: &[f64], crit: Criterion, opts: &Options, lsq_axis: Option<Vec
         None => (f64::INFINITY, slp::Axis::new(first, Vector3::zeros())),
     };
     evaluations += 1;
+    // each search starts at the axis of the projection's circumscribed circle (a
+    // cheap fit near the centre of every criterion's circles)
+    let mc_axis = |a: &Vector3<f64>| -> Option<slp::Axis> {
+        let (theta, phi, zone) = fit2d(&q, a, Criterion::MinCircumscribed).ok()?;
+        let (u, w) = frame(theta, phi);
+        Some(slp::Axis::new(*a, Vector3::from(u) * zone.center[0] + Vector3::from(w) * zone.center[1]))
+    };
     let refined: Vec<(f64, slp::Axis, usize)> = starts
         .par_iter()
-        .map(|a0| match exact(a0) {
-            Some((_, ax)) => {
+        .map(|a0| match mc_axis(a0) {
+            Some(ax) => {
                 let (v, ax, e) = search(ax, START_STEP * len);
                 (v, ax, e + 1)
             }
