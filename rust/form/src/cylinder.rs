@@ -22,7 +22,10 @@
 //!    narrow valleys with several local minima some 1e-5 rad apart).
 //!
 //! Every local search's end direction is scored by the exact 2-D kernel, and the
-//! reported cylinder is the exact 2-D fit along the best direction. Large inputs
+//! reported cylinder is the exact 2-D fit along the best direction. One case keeps
+//! the earlier Nelder–Mead search on the exact values (`nelder_mead_search`): the
+//! MIC of a partial arc, whose inscribed circle touches the circumscribed one
+//! (Sec. 6.2.2, Cases I and II), a constraint the SLP model of the points lacks. Large inputs
 //! are fitted on an active subset (see [`fit`]). Every result carries its
 //! certificate: min and max distance of the input points to the reported axis,
 //! recomputed in 3-D.

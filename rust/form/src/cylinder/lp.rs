@@ -49,7 +49,7 @@ pub(super) fn minimize(a: &[f64], b: &[f64], c: &[f64]) -> Option<Vec<f64>> {
     for r in 0..k {
         if basis[r] >= m {
             if let Some(j) = (0..m).find(|&j| t[r * w + j].abs() > 1e-9) {
-                pivot(&mut t, &mut d, &mut basis, k, w, r, j);
+                pivot(&mut t, &mut d, &mut basis, w, r, j);
             }
         }
     }
@@ -100,12 +100,12 @@ fn run(t: &mut [f64], d: &mut [f64], basis: &mut [usize], k: usize, w: usize, m:
             }
         }
         let (r, _) = leave?; // unbounded dual
-        pivot(t, d, basis, k, w, r, j);
+        pivot(t, d, basis, w, r, j);
     }
     None
 }
 
-fn pivot(t: &mut [f64], d: &mut [f64], basis: &mut [usize], k: usize, w: usize, r: usize, j: usize) {
+fn pivot(t: &mut [f64], d: &mut [f64], basis: &mut [usize], w: usize, r: usize, j: usize) {
     let p = t[r * w + j];
     for v in &mut t[r * w..(r + 1) * w] {
         *v /= p;
@@ -127,7 +127,6 @@ fn pivot(t: &mut [f64], d: &mut [f64], basis: &mut [usize], k: usize, w: usize, 
         }
     }
     basis[r] = j;
-    let _ = k;
 }
 
 #[cfg(test)]
@@ -151,5 +150,28 @@ mod tests {
         let b = [1.0, 1.0, 1.0, 1.0, 1.5];
         let z = minimize(&a, &b, &[-1.0, -2.0]).unwrap();
         assert!((z[0] - 0.5).abs() < 1e-12 && (z[1] - 1.0).abs() < 1e-12, "{z:?}");
+    }
+
+    #[test]
+    fn degenerate_vertex_of_a_regular_polygon() {
+        // MCC step at the centre of a regular 40-gon: every point row is active at
+        // z = 0 (all slacks zero), the optimum is z = 0 with value 0
+        let (k, n) = (3, 40);
+        let (mut a, mut b) = (Vec::new(), Vec::new());
+        for j in 0..2 {
+            for s in [1.0, -1.0] {
+                let mut row = vec![0.0; k];
+                row[j] = s;
+                a.extend(row);
+                b.push(0.5);
+            }
+        }
+        for i in 0..n {
+            let t = std::f64::consts::TAU * i as f64 / n as f64;
+            a.extend([-t.cos(), -t.sin(), -1.0]);
+            b.push(0.0);
+        }
+        let z = minimize(&a, &b, &[0.0, 0.0, 1.0]).unwrap();
+        assert!(z.iter().all(|v| v.abs() < 1e-12), "{z:?}");
     }
 }
