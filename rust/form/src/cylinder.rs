@@ -25,9 +25,10 @@
 //! reported cylinder is the exact 2-D fit along the best direction. One case keeps
 //! the earlier Nelder–Mead search on the exact values (`nelder_mead_search`): the
 //! MIC of a partial arc, whose inscribed circle touches the circumscribed one
-//! (Sec. 6.2.2, Cases I and II), a constraint the SLP model of the points lacks. Large inputs
-//! are fitted on an active subset (see [`fit`]). Every result carries its
-//! certificate: min and max distance of the input points to the reported axis,
+//! (Sec. 6.2.2, Cases I and II), a constraint the SLP model of the points lacks.
+//!
+//! Large inputs are fitted on an active subset (see [`fit`]). Every result carries
+//! its certificate: min and max distance of the input points to the reported axis,
 //! recomputed in 3-D.
 
 use crate::circle;
@@ -223,15 +224,15 @@ fn zone_value(z: &circle::Zone, crit: Criterion, size: f64) -> f64 {
     }
 }
 
-/// The objective for one particle of the swarm (a sequence of axes), warm-started for
-/// the minimum zone and the maximum inscribed cylinder: around the previous axis's
-/// centre, the candidates built from the points nearest the circles
-/// ([`circle::min_zone_near`], [`circle::max_inscribed_near`]) are tried first. Their
-/// best is accepted only when its control points are an active set the exact kernel
-/// has already returned for this particle (near the optimum the projections cycle
-/// through a few active sets); otherwise the exact kernel runs, and its zone becomes
-/// the warm start. Each particle owns its state and is evaluated sequentially, so
-/// results do not depend on threads.
+/// The objective for one particle of the swarm or one Nelder–Mead search (a
+/// sequence of axes), warm-started for the minimum zone and the maximum inscribed
+/// cylinder: around the previous axis's centre, the candidates built from the points
+/// nearest the circles ([`circle::min_zone_near`], [`circle::max_inscribed_near`])
+/// are tried first. Their best is accepted only when its control points are an
+/// active set the exact kernel has already returned for this sequence (near the
+/// optimum the projections cycle through a few active sets); otherwise the exact
+/// kernel runs, and its zone becomes the warm start. Each sequence owns its state
+/// and is evaluated in order, so results do not depend on threads.
 struct Warm<'a> {
     q: &'a [f64],
     crit: Criterion,
