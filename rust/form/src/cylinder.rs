@@ -10,7 +10,7 @@
 //!
 //! 1. the seeded parallel PSO ([`gagekit_pso`]) over the half sphere (or a cone
 //!    around a given axis), with the least-squares axis as one particle, on the
-//!    exact 2-D values (MIC and MZC warm-started per particle, see `Warm`);
+//!    exact 2-D values;
 //! 2. local searches from the best distinct particles by sequential linear
 //!    programming with a trust region (`slp`): the same minimax problem
 //!    (Eqs. 6.13-6.15) written in the axis tilt, axis offset and radii, with the
@@ -34,7 +34,7 @@
 use crate::circle;
 use crate::lsq::{self, centroid, orthonormal_basis, Extent};
 use gagekit_core::{check_finite, GkError, Result};
-use gagekit_pso::{minimize_particles, nelder_mead, Settings};
+use gagekit_pso::{minimize_from, nelder_mead, Settings};
 use nalgebra::Vector3;
 use rayon::prelude::*;
 use std::f64::consts::{FRAC_PI_2, PI};
@@ -224,15 +224,15 @@ fn zone_value(z: &circle::Zone, crit: Criterion, size: f64) -> f64 {
     }
 }
 
-/// The objective for one particle of the swarm or one Nelder–Mead search (a
-/// sequence of axes), warm-started for the minimum zone and the maximum inscribed
-/// cylinder: around the previous axis's centre, the candidates built from the points
-/// nearest the circles ([`circle::min_zone_near`], [`circle::max_inscribed_near`])
-/// are tried first. Their best is accepted only when its control points are an
-/// active set the exact kernel has already returned for this sequence (near the
-/// optimum the projections cycle through a few active sets); otherwise the exact
-/// kernel runs, and its zone becomes the warm start. Each sequence owns its state
-/// and is evaluated in order, so results do not depend on threads.
+/// The objective for one Nelder–Mead search (a sequence of nearby axes),
+/// warm-started for the minimum zone and the maximum inscribed cylinder: around the
+/// previous axis's centre, the candidates built from the points nearest the circles
+/// ([`circle::min_zone_near`], [`circle::max_inscribed_near`]) are tried first.
+/// Their best is accepted only when its control points are an active set the exact
+/// kernel has already returned in this search (near the optimum the projections
+/// cycle through a few active sets); otherwise the exact kernel runs, and its zone
+/// becomes the warm start. Each search owns its state and is sequential, so
+/// results do not depend on threads.
 struct Warm<'a> {
     q: &'a [f64],
     crit: Criterion,
@@ -441,10 +441,9 @@ fn fit_direct(pts: &[f64], crit: Criterion, opts: &Options, lsq_axis: Option<Vec
             seeds.push(vec![s, a.dot(&basis.1).atan2(a.dot(&basis.0))]);
         }
     }
-    // every particle keeps its own warm start (its positions come in order)
-    let warm: Vec<Warm> = (0..opts.particles).map(|_| Warm::new(&q, crit, size)).collect();
-    let swarm = minimize_particles(
-        |i: usize, x: &[f64]| warm[i].eval(&cone_dir(&basis, x[0], x[1])),
+    // the swarm sees the exact 2-D values (its particles jump too far for warm starts)
+    let swarm = minimize_from(
+        |x: &[f64]| objective(&q, &cone_dir(&basis, x[0], x[1]), crit, size),
         &[0.0, -PI],
         &[s_max, PI],
         &settings,
