@@ -106,8 +106,8 @@ def fit_cylinder(
     *,
     particles: int = 20,
     iterations: int = 300,
-    stall_iterations: int = 25,
-    refine_starts: int = 4,
+    stall_iterations: int = 6,
+    refine_starts: int = 8,
     hop_rounds: int = 3,
     search_axis: Optional[Any] = None,
     max_tilt: Optional[float] = None,
@@ -123,17 +123,19 @@ def fit_cylinder(
         ``minimum-zone`` (``mzc``, cylindricity, Eq. 6.14): the projection model of
         Sec. 6.3 -- the points are projected along the axis (theta, phi) by Eq. 6.12
         (ERRATA item 1) and the 2-D set is fitted exactly (MC, MI within MC, MZ); a seeded
-        parallel PSO searches (theta, phi), Nelder-Mead refines the best axis (and the
-        least-squares axis) to double precision.
+        parallel PSO searches (theta, phi) (the least-squares axis is one particle), and
+        local searches by sequential linear programming on the same minimax problem
+        (Eqs. 6.13-6.15, in axis tilt, axis offset and radii) refine the best particles
+        to double precision; every candidate axis is scored by the exact 2-D fit.
     seed
         Seed of the swarm: the same seed gives the same result on any number of threads.
     particles, iterations, stall_iterations
         Swarm size, maximum iterations and the number of iterations without improvement
         after which the swarm stops (the dissertation uses 20 particles, 2000 iterations).
     refine_starts
-        Nelder-Mead refinements from this many of the swarm's best distinct particles.
+        Local searches from this many of the swarm's best distinct particles.
     hop_rounds
-        Rounds of basin hopping: 8 refinements restarted 1e-4 rad around the best axis,
+        Rounds of basin hopping: 8 local searches restarted 1e-4 rad around the best axis,
         repeated while they improve it (minimum-zone landscapes have long narrow valleys
         with several local minima some 1e-5 rad apart). 0 disables.
     search_axis, max_tilt

@@ -232,7 +232,7 @@ fn config_err(py: Python<'_>, msg: String) -> PyErr {
 /// (or around the least-squares axis when `axis` is None); no `half_angle`: the
 /// half sphere. Returns a dict of the fit.
 #[pyfunction]
-#[pyo3(signature = (points, criterion, seed=0, particles=20, max_iterations=300, stall_iterations=25, axis=None, half_angle=None, refine_starts=4, hop_rounds=3))]
+#[pyo3(signature = (points, criterion, seed=0, particles=20, max_iterations=300, stall_iterations=6, axis=None, half_angle=None, refine_starts=8, hop_rounds=3))]
 #[allow(clippy::too_many_arguments)]
 fn form_cylinder_fit<'py>(
     py: Python<'py>,
