@@ -420,6 +420,31 @@ impl Soa {
     }
 }
 
+/// One row of the lane products: `acc[c] = sum_t b_t * w[t * width + c]` for `c < width`
+/// (`width <= N`), where `b_t` are the eight lanes' values of kept column `t`, read in order
+/// from `*at` (which moves past them). Shared by the AVX-512 kernels below.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+#[inline]
+unsafe fn lane_row_products<const N: usize>(
+    at: &mut *const f64,
+    cols: &[usize],
+    w: &[f64],
+    width: usize,
+) -> [std::arch::x86_64::__m512d; N] {
+    use std::arch::x86_64::*;
+    let mut acc = [_mm512_setzero_pd(); N];
+    for &t in cols {
+        let b = _mm512_loadu_pd(*at);
+        *at = at.add(LANES);
+        let wt = w.as_ptr().add(t * width);
+        for col in 0..width {
+            acc[col] = _mm512_fmadd_pd(b, _mm512_set1_pd(*wt.add(col)), acc[col]);
+        }
+    }
+    acc
+}
+
 /// The visit of the A/I exchange over the candidates `js` (scattered, none the visited
 /// point): B_j [F^-1 O^T, F^-1 W F^-1 O^T] with w = [F^-1 O^T, F^-1 W F^-1 O^T] (k x 2R), from the
 /// regrouped blocks, eight candidates at a time, then [`exchange_values`]; the best
@@ -504,15 +529,7 @@ unsafe fn best_exchange_avx512<const R: usize>(
         let mut y = [[Z; 2 * MAX_LANE_R]; R];
         let mut at = buf.as_ptr();
         for a in 0..R {
-            let mut acc = [_mm512_setzero_pd(); 2 * MAX_LANE_R];
-            for &t in &soa.cols[a] {
-                let b = _mm512_loadu_pd(at);
-                at = at.add(LANES);
-                let wt = w.as_ptr().add(t * q2);
-                for col in 0..q2 {
-                    acc[col] = _mm512_fmadd_pd(b, _mm512_set1_pd(*wt.add(col)), acc[col]);
-                }
-            }
+            let acc = lane_row_products::<{ 2 * MAX_LANE_R }>(&mut at, &soa.cols[a], w, q2);
             for col in 0..q2 {
                 _mm512_storeu_pd(y[a][col].as_mut_ptr(), acc[col]);
             }
@@ -636,15 +653,7 @@ unsafe fn soa_screen_avx512<const R: usize, const S: usize>(
         let mut at = soa.data.as_ptr().add(g * soa.width * LANES);
         let mut hs = [[-0.0f64; LANES]; S];
         for _a in 0..R {
-            let mut acc = [_mm512_setzero_pd(); S];
-            for &t in &soa.cols[_a] {
-                let b = _mm512_loadu_pd(at);
-                at = at.add(LANES);
-                let wt = w.as_ptr().add(t * S);
-                for q in 0..S {
-                    acc[q] = _mm512_fmadd_pd(b, _mm512_set1_pd(*wt.add(q)), acc[q]);
-                }
-            }
+            let acc = lane_row_products::<S>(&mut at, &soa.cols[_a], w, S);
             for q in 0..S {
                 let mut y = Z;
                 _mm512_storeu_pd(y.as_mut_ptr(), acc[q]);
@@ -759,15 +768,7 @@ unsafe fn soa_update_avx512<const R: usize, const Q: usize>(
         let g = g0 + t0 / LANES;
         let mut at = soa.data.as_ptr().add(g * soa.width * LANES);
         for a in 0..R {
-            let mut acc = [_mm512_setzero_pd(); Q];
-            for &t in &soa.cols[a] {
-                let b = _mm512_loadu_pd(at);
-                at = at.add(LANES);
-                let wt = w.as_ptr().add(t * Q);
-                for col in 0..Q {
-                    acc[col] = _mm512_fmadd_pd(b, _mm512_set1_pd(*wt.add(col)), acc[col]);
-                }
-            }
+            let acc = lane_row_products::<Q>(&mut at, &soa.cols[a], w, Q);
             for col in 0..Q {
                 _mm512_storeu_pd(y[a][col].as_mut_ptr(), acc[col]);
             }
