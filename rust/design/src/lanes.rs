@@ -71,6 +71,26 @@ fn exchange_values_body<const R: usize>(x: &ExchangeIn) -> V {
     lane_values::<R>(&c, &f, &dj, &ej, x.qi, x.qeq, x.value_minus)
 }
 
+/// Per lane, the R x R product `c m` of the lanes' matrices `c` with one shared row-major
+/// matrix `m`.
+#[inline(always)]
+fn times_matrix<const R: usize>(c: &[[V; R]; R], m: &[f64]) -> [[V; R]; R] {
+    let mut out = [[Z; R]; R];
+    for a in 0..R {
+        for q in 0..R {
+            let mut v = Z;
+            for t in 0..R {
+                let s = m[t * R + q];
+                for l in 0..LANES {
+                    v[l] += c[a][t][l] * s;
+                }
+            }
+            out[a][q] = v;
+        }
+    }
+    out
+}
+
 /// [`exchange_values`] from the lane-layout c = B F^-1 O^T, f = B F^-1 W F^-1 O^T, d and e.
 #[inline(always)]
 fn lane_values<const R: usize>(
@@ -83,19 +103,7 @@ fn lane_values<const R: usize>(
     value_minus: f64,
 ) -> V {
     let x = (qi, qeq, value_minus);
-    let mut cq = [[Z; R]; R]; // c Qi
-    for a in 0..R {
-        for q in 0..R {
-            let mut v = Z;
-            for t in 0..R {
-                let s = x.0[t * R + q];
-                for l in 0..LANES {
-                    v[l] += c[a][t][l] * s;
-                }
-            }
-            cq[a][q] = v;
-        }
-    }
+    let cq = times_matrix::<R>(c, x.0); // c Qi
     let mut pm = [[Z; R]; R]; // I + B F_-^-1 B^T
     for a in 0..R {
         for q in 0..=a {
@@ -138,19 +146,7 @@ fn lane_values<const R: usize>(
             }
         }
     }
-    let mut cqe = [[Z; R]; R];
-    for a in 0..R {
-        for q in 0..R {
-            let mut v = Z;
-            for t in 0..R {
-                let s = x.1[t * R + q];
-                for l in 0..LANES {
-                    v[l] += c[a][t][l] * s;
-                }
-            }
-            cqe[a][q] = v;
-        }
-    }
+    let cqe = times_matrix::<R>(c, x.1);
     // e- = e_j + f cQ^T + cQ f^T + c (Qi e_O Qi) c^T
     let mut em = [[Z; R]; R];
     for a in 0..R {
