@@ -18,7 +18,7 @@ import numpy as np
 
 from .. import _core
 from ..errors import ConfigError
-from .fits import Certificate, _points, _vec, normalize_criterion
+from .fits import Certificate, _fit_dict, _points, _vec, normalize_criterion
 
 __all__ = ["CylinderFit", "fit_cylinder", "axis_angles"]
 
@@ -69,23 +69,17 @@ class CylinderFit:
     shape: str = field(default="cylinder", init=False)
 
     def to_dict(self) -> dict[str, Any]:
-        d: dict[str, Any] = {
-            "shape": self.shape,
-            "criterion": self.criterion,
-            "n_points": self.n_points,
-            "form_error": self.form_error,
-            "radius": self.radius,
-        }
+        radii: dict[str, Any] = {"radius": self.radius}
         if self.criterion == "minimum-zone":
-            d["inner_radius"] = self.inner_radius
-            d["outer_radius"] = self.outer_radius
-        d.update(
+            radii.update(inner_radius=self.inner_radius, outer_radius=self.outer_radius)
+        d = _fit_dict(
+            self,
+            **radii,
             axis_point=list(self.axis_point),
             axis_direction=list(self.axis_direction),
             theta=self.theta,
             phi=self.phi,
             control_points=list(self.control_points),
-            certificate=self.certificate.to_dict(),
         )
         if self.criterion != "least-squares":
             d["iterations"] = self.iterations

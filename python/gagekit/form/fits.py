@@ -91,6 +91,19 @@ class Certificate:
         return {"min_distance": self.min_distance, "max_distance": self.max_distance}
 
 
+def _fit_dict(fit: Any, **fields: Any) -> dict[str, Any]:
+    """The JSON of a 3-D fit (issue 3's keys): shape, criterion, n_points, form_error, then
+    the feature's own ``fields`` in order, then the certificate."""
+    return {
+        "shape": fit.shape,
+        "criterion": fit.criterion,
+        "n_points": fit.n_points,
+        "form_error": fit.form_error,
+        **fields,
+        "certificate": fit.certificate.to_dict(),
+    }
+
+
 @dataclass(frozen=True)
 class LineFit:
     """A fitted line. ``certificate``: signed distances (2-D) or distances (3-D) to the line;
@@ -106,16 +119,9 @@ class LineFit:
     shape: str = field(default="line", init=False)
 
     def to_dict(self) -> dict[str, Any]:
-        return {
-            "shape": self.shape,
-            "criterion": self.criterion,
-            "n_points": self.n_points,
-            "form_error": self.form_error,
-            "point": list(self.point),
-            "direction": list(self.direction),
-            "control_points": list(self.control_points),
-            "certificate": self.certificate.to_dict(),
-        }
+        return _fit_dict(
+            self, point=list(self.point), direction=list(self.direction), control_points=list(self.control_points)
+        )
 
 
 @dataclass(frozen=True)
@@ -132,16 +138,9 @@ class PlaneFit:
     shape: str = field(default="plane", init=False)
 
     def to_dict(self) -> dict[str, Any]:
-        return {
-            "shape": self.shape,
-            "criterion": self.criterion,
-            "n_points": self.n_points,
-            "form_error": self.form_error,
-            "point": list(self.point),
-            "normal": list(self.normal),
-            "control_points": list(self.control_points),
-            "certificate": self.certificate.to_dict(),
-        }
+        return _fit_dict(
+            self, point=list(self.point), normal=list(self.normal), control_points=list(self.control_points)
+        )
 
 
 @dataclass(frozen=True)
@@ -157,15 +156,7 @@ class SphereFit:
     shape: str = "sphere"
 
     def to_dict(self) -> dict[str, Any]:
-        return {
-            "shape": self.shape,
-            "criterion": self.criterion,
-            "n_points": self.n_points,
-            "form_error": self.form_error,
-            "radius": self.radius,
-            "center": list(self.center),
-            "certificate": self.certificate.to_dict(),
-        }
+        return _fit_dict(self, radius=self.radius, center=list(self.center))
 
 
 @dataclass(frozen=True)
@@ -183,16 +174,7 @@ class Circle3DFit:
     shape: str = field(default="circle3d", init=False)
 
     def to_dict(self) -> dict[str, Any]:
-        return {
-            "shape": self.shape,
-            "criterion": self.criterion,
-            "n_points": self.n_points,
-            "form_error": self.form_error,
-            "radius": self.radius,
-            "center": list(self.center),
-            "normal": list(self.normal),
-            "certificate": self.certificate.to_dict(),
-        }
+        return _fit_dict(self, radius=self.radius, center=list(self.center), normal=list(self.normal))
 
 
 def _cert(ext: tuple[float, float]) -> Certificate:
@@ -293,17 +275,13 @@ class ConeFit:
     shape: str = field(default="cone", init=False)
 
     def to_dict(self) -> dict[str, Any]:
-        return {
-            "shape": self.shape,
-            "criterion": self.criterion,
-            "n_points": self.n_points,
-            "form_error": self.form_error,
-            "axis_point": list(self.point),
-            "axis_direction": list(self.direction),
-            "distance": self.distance,
-            "apex_angle": self.apex_angle,
-            "certificate": self.certificate.to_dict(),
-        }
+        return _fit_dict(
+            self,
+            axis_point=list(self.point),
+            axis_direction=list(self.direction),
+            distance=self.distance,
+            apex_angle=self.apex_angle,
+        )
 
 
 def fit_cone(points: Any, criterion: str = "least-squares") -> ConeFit:
