@@ -366,6 +366,20 @@ fn sane(v: f64) -> f64 {
     }
 }
 
+/// The R x R product `c m` with `m` row-major (the one-candidate twin of the lanes'
+/// `times_matrix`: same operations, same order).
+fn times_matrix<const R: usize>(c: &[[f64; R]; R], m: &[f64]) -> [[f64; R]; R] {
+    std::array::from_fn(|a| {
+        std::array::from_fn(|q| {
+            let mut v = 0.0;
+            for t in 0..R {
+                v += c[a][t] * m[t * R + q];
+            }
+            v
+        })
+    })
+}
+
 /// Spectral objective from ascending eigenvalues.
 fn spectral_value(c: Criterion, lmin: f64, lmax: f64) -> f64 {
     if !(lmin > 0.0) {
@@ -843,26 +857,17 @@ impl<'p, 'a> Run<'p, 'a> {
     ) -> f64 {
         let k = self.p.k;
         let b = self.p.block(j);
-        let mut c = [[0.0; R]; R]; // c = B F^-1 O^T
-        for a in 0..R {
-            for q in 0..R {
-                c[a][q] = match cf {
-                    Some(cf) => cf[a * 2 * R + q],
-                    None => dot(&b[a * k..(a + 1) * k], &a_t[q * k..(q + 1) * k]),
-                };
-            }
-        }
-        let qi = |a: usize, q: usize| rm.qi[a * R + q];
-        let mut cq = [[0.0; R]; R]; // c Qi
-        for a in 0..R {
-            for q in 0..R {
-                let mut v = 0.0;
-                for t in 0..R {
-                    v += c[a][t] * qi(t, q);
-                }
-                cq[a][q] = v;
-            }
-        }
+        // B X^T for the k x R-transposed `x_t`, or the `at`-th R columns of the cached `cf`
+        let product = |x_t: &[f64], at: usize| -> [[f64; R]; R] {
+            std::array::from_fn(|a| {
+                std::array::from_fn(|q| match cf {
+                    Some(cf) => cf[a * 2 * R + at * R + q],
+                    None => dot(&b[a * k..(a + 1) * k], &x_t[q * k..(q + 1) * k]),
+                })
+            })
+        };
+        let c = product(a_t, 0); // c = B F^-1 O^T
+        let cq = times_matrix(&c, &rm.qi); // c Qi
         let dj = &self.d[j * R * R..(j + 1) * R * R];
         let mut pm = [[0.0; R]; R]; // I + B F_-^-1 B^T
         for a in 0..R {
@@ -898,26 +903,8 @@ impl<'p, 'a> Run<'p, 'a> {
         if self.c == Criterion::D {
             return rm.value_minus - det.ln();
         }
-        let mut f = [[0.0; R]; R]; // f = B F^-1 W F^-1 O^T
-        for a in 0..R {
-            for q in 0..R {
-                f[a][q] = match cf {
-                    Some(cf) => cf[a * 2 * R + R + q],
-                    None => dot(&b[a * k..(a + 1) * k], &b_t[q * k..(q + 1) * k]),
-                };
-            }
-        }
-        let qeq = |a: usize, q: usize| rm.qeq[a * R + q];
-        let mut cqe = [[0.0; R]; R];
-        for a in 0..R {
-            for q in 0..R {
-                let mut v = 0.0;
-                for t in 0..R {
-                    v += c[a][t] * qeq(t, q);
-                }
-                cqe[a][q] = v;
-            }
-        }
+        let f = product(b_t, 1); // f = B F^-1 W F^-1 O^T
+        let cqe = times_matrix(&c, &rm.qeq);
         // e- = B F_-^-1 W F_-^-1 B^T = e_j + f cQ^T + cQ f^T + c (Qi e_O Qi) c^T
         let ej = &self.e[j * R * R..(j + 1) * R * R];
         let mut em = [[0.0; R]; R];
