@@ -12,12 +12,12 @@ Usage: python benches/bench_circle.py [--sizes 1000 10000 100000 1000000] [--noi
 from __future__ import annotations
 
 import argparse
-import time
 
 import numpy as np
 from scipy.optimize import least_squares, minimize
 
 from gagekit import fit_circle
+from _timing import timed
 
 
 def noisy_circle(n: int, noise: float, seed: int = 0) -> np.ndarray:
@@ -56,15 +56,6 @@ def peer(pts: np.ndarray, crit: str) -> float:
 
     res = minimize(g, cmc.x, method="Nelder-Mead", options=opts)
     return float(-res.fun)
-
-
-def timed(fn, repeat: int) -> tuple[float, object]:
-    best, out = float("inf"), None
-    for _ in range(repeat):
-        t = time.perf_counter()
-        out = fn()
-        best = min(best, time.perf_counter() - t)
-    return best, out
 
 
 def main() -> None:

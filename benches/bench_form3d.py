@@ -16,25 +16,16 @@ from __future__ import annotations
 
 import os
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
 from scipy.optimize import least_squares, linprog, minimize
 
 import gagekit
+from _timing import timed
 
 ROOT = Path(__file__).resolve().parents[1]
 REF = Path(os.environ.get("GAGEKIT_SHARED", ROOT.parent / "shared")) / "reference-data" / "seed-cylinders"
-
-
-def timed(fn, repeat=3):
-    best, out = float("inf"), None
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        out = fn()
-        best = min(best, time.perf_counter() - t0)
-    return best, out
 
 
 def axis_dist(pts, x):

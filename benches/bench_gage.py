@@ -19,7 +19,6 @@ Cases (one line each: case, gagekit time, peer time, ratio peer / gagekit):
 from __future__ import annotations
 
 import argparse
-import time
 
 import numpy as np
 from scipy.optimize import linprog
@@ -31,15 +30,7 @@ from gagekit import _core
 from gagekit.data.make_castings import make_casting
 from gagekit.gage import build_problem, solve_problem
 from gagekit.gage.align import apply
-
-
-def timed(fn, repeat=1):
-    best, out = float("inf"), None
-    for _ in range(repeat):
-        t = time.perf_counter()
-        out = fn()
-        best = min(best, time.perf_counter() - t)
-    return best, out
+from _timing import timed
 
 
 def line(case, tg, tp, peer):

@@ -11,12 +11,12 @@ from __future__ import annotations
 
 import os
 import sys
-import time
 
 import numpy as np
 from scipy.spatial import ConvexHull
 
 import gagekit
+from _timing import timed
 
 
 def noisy_patch(n: int, seed: int) -> np.ndarray:
@@ -27,15 +27,6 @@ def noisy_patch(n: int, seed: int) -> np.ndarray:
 
 def ball(n: int, seed: int) -> np.ndarray:
     return np.random.default_rng(seed).normal(size=(n, 3))
-
-
-def best(fn, repeats: int):
-    out, times = None, []
-    for _ in range(repeats):
-        t = time.perf_counter()
-        out = fn()
-        times.append(time.perf_counter() - t)
-    return out, min(times)
 
 
 def main() -> None:
@@ -55,8 +46,8 @@ def main() -> None:
         if quick:
             pts = pts[: len(pts) // 10]
         gagekit.convex_hull_indices(pts)  # warm-up (thread pool)
-        idx, t_gk = best(lambda: gagekit.convex_hull_indices(pts), reps_gk)
-        hull, t_qh = best(lambda: ConvexHull(pts), reps_qh)
+        t_gk, idx = timed(lambda: gagekit.convex_hull_indices(pts), reps_gk)
+        t_qh, hull = timed(lambda: ConvexHull(pts), reps_qh)
         agree = np.array_equal(idx, np.sort(hull.vertices))
         print(f"{name:<18} {t_gk * 1e3:8.1f}ms {t_qh * 1e3:8.1f}ms {t_qh / t_gk:6.1f}x {len(idx):>9}  {agree}")
 

@@ -11,12 +11,12 @@ from __future__ import annotations
 
 import argparse
 import os
-import time
 from pathlib import Path
 
 import numpy as np
 
 import gagekit
+from _timing import timed
 
 SHARED = Path("/work/shared/examples/dissertation-5axis.toml")
 EXAMPLE = SHARED if SHARED.exists() else gagekit.machine.example_machine_path()
@@ -102,16 +102,6 @@ def numpy_chunked(machine, commands, chunk=100_000):
     return out
 
 
-def best(f, repeat):
-    times = []
-    for _ in range(repeat):
-        t = time.perf_counter()
-        r = f()
-        times.append(time.perf_counter() - t)
-        del r
-    return min(times)
-
-
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--sizes", type=int, nargs="+", default=[100_000, 300_000, 1_000_000])
@@ -124,8 +114,8 @@ def main() -> None:
     print(f"{'case':<40} {'gagekit [s]':>12} {'numpy [s]':>12} {'ratio':>8}")
     for n in a.sizes:
         c = m.sample_commands(n, seed=2)
-        tg = best(lambda: m.design_matrix(c), a.repeat)
-        tn = best(lambda: numpy_chunked(m, c), max(1, a.repeat - 1))
+        tg, _ = timed(lambda: m.design_matrix(c), a.repeat)
+        tn, _ = timed(lambda: numpy_chunked(m, c), max(1, a.repeat - 1))
         print(f"{f'design matrix {n} cmds ({3 * n}x{m.n_parameters})':<40} {tg:12.4f} {tn:12.4f} {tn / tg:8.1f}")
 
 
