@@ -11,11 +11,13 @@ import numpy as np
 import typer
 
 from ..errors import InvalidInputError
+from ..machine.simulate import TRACKER_SIGMA
 from ._common import JSON_OPTION, emit, table
 
 app = typer.Typer(help="Machine-tool volumetric error models, identification and observers (Ch. 3-4).", no_args_is_help=True)
 
 MACHINE_ARG = typer.Argument(..., help="Machine file (TOML).", exists=False, dir_okay=False)
+NOISE_OPTION = typer.Option(TRACKER_SIGMA, "--noise", help="Tracker noise sigma per coordinate, mm (Sec. 3.2.1).")
 
 
 @contextmanager
@@ -65,7 +67,7 @@ def simulate_cmd(
         None, "--points", help="Number of quasi-random commands over the joint ranges (or give --plan)."
     ),
     out: Path = typer.Option(..., "--out", help="Observations CSV to write (joint columns, x, y, z; with --cycles also cycle, time, temp_*)."),
-    noise: float = typer.Option(0.0089, "--noise", help="Tracker noise sigma per coordinate, mm."),
+    noise: float = NOISE_OPTION,
     seed: int = typer.Option(0, "--seed", help="Seed for commands, noise and (without --params) the truth."),
     truth: Optional[Path] = typer.Option(None, "--truth", help="Write the true parameters, groups and frame (JSON)."),
     params: Optional[Path] = typer.Option(

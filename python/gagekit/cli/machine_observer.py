@@ -12,7 +12,7 @@ import typer
 
 from ..errors import InvalidInputError
 from ._common import JSON_OPTION, emit, table
-from .machine import MACHINE_ARG, _warnings_to_stderr, app
+from .machine import MACHINE_ARG, NOISE_OPTION, _warnings_to_stderr, _write_simulation, app
 
 
 def _sci(v: float) -> str:
@@ -78,7 +78,7 @@ def evaluate_plan_cmd(
     machine_file: Path = MACHINE_ARG,
     plan: Path = typer.Argument(..., help="PLAN.csv (joint columns), e.g. from `machine design`."),
     seeds: int = typer.Option(20, "--seeds", help="Random machines simulated."),
-    noise: float = typer.Option(0.0089, "--noise", help="Tracker noise sigma per coordinate, mm."),
+    noise: float = NOISE_OPTION,
     test_points: int = typer.Option(2000, "--test-points", help="Quasi-random commands where predictions are compared."),
     seed: int = typer.Option(0, "--seed", help="Seed of machines, noise and test commands."),
     compare: bool = typer.Option(True, "--compare/--no-compare", help="Also evaluate quasi-random plans of the same size and of 290 points."),
@@ -182,14 +182,13 @@ def simulate_cycles_cmd(
     plan: Path = typer.Argument(..., help="PLAN.csv (joint columns) measured in every cycle."),
     out: Path = typer.Option(..., "--out", help="Cycles CSV to write (cycle, joints, x, y, z, time, temp_*)."),
     cycles: int = typer.Option(6, "--cycles", help="Measurement cycles (Fig. 4.4: 4 heating, 1 cooling after the first)."),
-    noise: float = typer.Option(0.0089, "--noise", help="Tracker noise sigma per coordinate, mm."),
+    noise: float = NOISE_OPTION,
     drift_scale: float = typer.Option(1.0, "--drift-scale", help="Scale of the W- and Y-axis thermal drift."),
     seed: int = typer.Option(0, "--seed", help="Seed of the truth, drift signs and noise."),
     as_json: bool = JSON_OPTION,
 ) -> None:
     """Short for `machine simulate MACHINE.toml --plan PLAN.csv --cycles N` (thermal mode)."""
     from ..machine import Truth, load_machine, read_commands
-    from .machine import _write_simulation
 
     if cycles < 1:
         raise InvalidInputError(f"--cycles must be at least 1, got {cycles}")
