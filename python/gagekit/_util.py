@@ -5,11 +5,11 @@ from __future__ import annotations
 import json
 import math
 from dataclasses import asdict, is_dataclass
-from typing import Any
+from typing import Any, Iterator, Mapping, Sequence
 
 import numpy as np
 
-from .errors import InvalidInputError
+from .errors import ConfigError, InvalidInputError
 
 
 def as_points(points: Any, dim: int = 3, what: str = "points") -> np.ndarray:
@@ -78,3 +78,19 @@ def load_toml(path) -> dict:
         raise ConfigError(f"{p}: no such file") from None
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(f"{p}: not valid TOML ({exc})") from None
+
+
+def named_tables(tables: Sequence[Any], kind: str, source: str) -> Iterator[tuple[str, Mapping]]:
+    """The ``[[kind]]`` tables of a TOML file as (name, table): each must be a table with a
+    non-empty ``name`` not used before; otherwise a ConfigError naming the file and the table."""
+    seen: set[str] = set()
+    for k, t in enumerate(tables):
+        if not isinstance(t, Mapping):
+            raise ConfigError(f"{source}: {kind} #{k + 1} must be a table")
+        name = t.get("name")
+        if not isinstance(name, str) or not name:
+            raise ConfigError(f"{source}: {kind} #{k + 1} needs a name")
+        if name in seen:
+            raise ConfigError(f"{source}: {kind} '{name}' is defined twice")
+        seen.add(name)
+        yield name, t

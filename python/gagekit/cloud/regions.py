@@ -8,7 +8,7 @@ from typing import Sequence
 import numpy as np
 
 from .. import _core
-from .._util import as_points
+from .._util import as_points, named_tables
 from ..errors import ConfigError
 
 
@@ -70,16 +70,7 @@ def regions_from_tables(tables: Sequence[dict], source: str = "regions") -> list
     malformed key, a non-positive size or a repeated name.
     """
     boxes: list[Box] = []
-    seen: set[str] = set()
-    for k, t in enumerate(tables):
-        if not isinstance(t, dict):
-            raise ConfigError(f"{source}: region #{k + 1} must be a table")
-        name = t.get("name")
-        if not isinstance(name, str) or not name:
-            raise ConfigError(f"{source}: region #{k + 1} needs a name")
-        if name in seen:
-            raise ConfigError(f"{source}: region '{name}' is defined twice")
-        seen.add(name)
+    for name, t in named_tables(tables, "region", source):
         for key in ("center", "size"):
             if key not in t:
                 raise ConfigError(f"{source}: region '{name}' has no '{key}'")

@@ -40,6 +40,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Mapping, Optional, Union
 
+from .._util import named_tables
 from ..cloud.regions import Box, regions_from_tables
 from ..errors import ConfigError
 
@@ -252,16 +253,9 @@ def _parse(doc: Mapping[str, Any], source: str) -> GageSpec:
     if not isinstance(gtables, list) or not gtables:
         raise ConfigError(f"{source}: no gages: add at least one [[gage]] table")
     gages: list[Gage] = []
-    for k, t in enumerate(gtables):
-        if not isinstance(t, Mapping):
-            raise ConfigError(f"{source}: gage #{k + 1} must be a table")
-        name = t.get("name")
-        if not isinstance(name, str) or not name:
-            raise ConfigError(f"{source}: gage #{k + 1} needs a name")
+    for name, t in named_tables(gtables, "gage", source):
         label = f"gage '{name}'"
         _unknown(t.keys(), _GAGE_KEYS, label, source)
-        if any(g.name == name for g in gages):
-            raise ConfigError(f"{source}: {label} is defined twice")
         region = t.get("region")
         if region is None:
             raise ConfigError(f"{source}: {label} has no region (add region = \"<name of a [[region]]>\")")
