@@ -3,16 +3,13 @@
 import json
 import subprocess
 import sys
-from pathlib import Path
 
 import pytest
 
-import gagekit
 
-from conftest import SHARED as _SHARED_DIR
+from conftest import EXAMPLE_MACHINE
 
-SHARED = _SHARED_DIR / "examples" / "dissertation-5axis.toml"
-EXAMPLE = SHARED
+EXAMPLE = EXAMPLE_MACHINE
 
 
 def gk(*args, ok=True):

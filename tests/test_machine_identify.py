@@ -1,6 +1,5 @@
 """Identification from simulated tracker data (Sec. 3.1.5, 3.2; ERRATA item 6)."""
 
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -10,21 +9,10 @@ import gagekit
 from gagekit.errors import ConfigError, DegenerateGeometryError, FileFormatError, InvalidInputError
 from gagekit.machine.identify import NOISE_FLOOR_FACTOR, rotation_from_vector
 
-from conftest import SHARED as _SHARED_DIR
+from conftest import EXAMPLE_MACHINE
 
-SHARED = _SHARED_DIR / "examples" / "dissertation-5axis.toml"
-EXAMPLE = SHARED
+EXAMPLE = EXAMPLE_MACHINE
 SIGMA = 0.0089
-
-
-@pytest.fixture(scope="module")
-def machine():
-    return gagekit.load_machine(EXAMPLE)
-
-
-@pytest.fixture(scope="module")
-def structure(machine):
-    return machine.structure()
 
 
 @pytest.fixture(scope="module", params=[1, 7])

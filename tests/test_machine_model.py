@@ -1,6 +1,5 @@
 """Machine files, the first-order error model and its structure (Sec. 3.1, Eq. 3.13-3.14)."""
 
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -9,20 +8,9 @@ from hypothesis import given, settings, strategies as st
 import gagekit
 from gagekit.errors import ConfigError, FileFormatError, InvalidInputError
 
-from conftest import SHARED as _SHARED_DIR
+from conftest import EXAMPLE_MACHINE
 
-SHARED = _SHARED_DIR / "examples" / "dissertation-5axis.toml"
-EXAMPLE = SHARED
-
-
-@pytest.fixture(scope="module")
-def machine():
-    return gagekit.load_machine(EXAMPLE)
-
-
-@pytest.fixture(scope="module")
-def structure(machine):
-    return machine.structure()
+EXAMPLE = EXAMPLE_MACHINE
 
 
 def test_example_loads_with_52_parameters(machine):
@@ -187,8 +175,8 @@ offset = [0.0, 30.0, -100.0]
 def test_bundled_example_is_the_shared_one():
     bundled = gagekit.machine.example_machine_path()
     assert gagekit.load_machine(bundled).n_parameters == 52
-    if SHARED.exists():
-        assert bundled.read_bytes() == SHARED.read_bytes()
+    if EXAMPLE.exists():
+        assert bundled.read_bytes() == EXAMPLE.read_bytes()
 
 
 def test_rotary_error_about_its_own_axis_adds_to_the_joint_angle(machine):
