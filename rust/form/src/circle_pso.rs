@@ -7,7 +7,7 @@
 //! minimising max - min (MZ); a Nelder–Mead search then refines the centre.
 
 use crate::circle::{self, Circle, Zone};
-use gagekit_core::{check_finite, GkError, Result};
+use gagekit_core::{GkError, Result};
 use gagekit_pso::{minimize, nelder_mead, Settings};
 
 /// Which 2-D circle the swarm fits.
@@ -36,22 +36,8 @@ fn extremes(pts: &[[f64; 2]], c: [f64; 2]) -> (f64, f64) {
 
 /// Fit a 2-D circle of the given kind with the seeded PSO (`settings.seed`).
 pub fn fit(pts: &[f64], kind: Kind, settings: &Settings) -> Result<SwarmFit> {
-    check_finite(pts, 2, "points")?;
-    let n = pts.len() / 2;
-    if n < 3 {
-        return Err(GkError::invalid(format!("circle: needs at least 3 points, got {n}")));
-    }
-    // centre the data on its bounding box
-    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-    for p in pts.chunks_exact(2) {
-        for k in 0..2 {
-            lo[k] = lo[k].min(p[k]);
-            hi[k] = hi[k].max(p[k]);
-        }
-    }
-    let mid = [0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1])];
-    let q: Vec<[f64; 2]> = pts.chunks_exact(2).map(|p| [p[0] - mid[0], p[1] - mid[1]]).collect();
-    let half = [0.5 * (hi[0] - lo[0]), 0.5 * (hi[1] - lo[1])];
+    // centre the data on its bounding box (checks: finite, at least 3 points, sane units)
+    let circle::Centered { pts: q, shift: mid, half, .. } = circle::Centered::new(pts, "circle", 3)?;
     let size = half[0].hypot(half[1]);
     if size == 0.0 {
         return Err(GkError::degenerate("circle: all points coincide"));

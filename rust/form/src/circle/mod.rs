@@ -59,6 +59,8 @@ pub(crate) struct Centered {
     pub shift: [f64; 2],
     /// Half the diagonal of the bounding box (0 if all points coincide).
     pub scale: f64,
+    /// Half the width and height of the bounding box.
+    pub half: [f64; 2],
 }
 
 impl Centered {
@@ -86,11 +88,12 @@ impl Centered {
         }
         let shift = [0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1])];
         let scale = 0.5 * (hi[0] - lo[0]).hypot(hi[1] - lo[1]);
+        let half = [0.5 * (hi[0] - lo[0]), 0.5 * (hi[1] - lo[1])];
         let pts = pts
             .chunks_exact(2)
             .map(|p| [p[0] - shift[0], p[1] - shift[1]])
             .collect();
-        Ok(Self { pts, shift, scale })
+        Ok(Self { pts, shift, scale, half })
     }
 
     pub fn uncenter(&self, c: [f64; 2]) -> [f64; 2] {
