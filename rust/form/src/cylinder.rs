@@ -224,20 +224,18 @@ fn zone_value(z: &circle::Zone, crit: Criterion, size: f64) -> f64 {
     }
 }
 
-/// The objective for one Nelder–Mead search (a sequence of nearby axes),
-/// warm-started for the minimum zone and the maximum inscribed cylinder: around the
-/// previous axis's centre, the candidates built from the points nearest the circles
-/// ([`circle::min_zone_near`], [`circle::max_inscribed_near`]) are tried first.
-/// Their best is accepted only when its control points are an active set the exact
-/// kernel has already returned in this search (near the optimum the projections
-/// cycle through a few active sets); otherwise the exact kernel runs, and its zone
-/// becomes the warm start. Each search owns its state and is sequential, so
+/// The MIC objective for one Nelder–Mead search (a sequence of nearby axes; see
+/// [`nelder_mead_search`]), warm-started: around the previous axis's centre, the
+/// candidates built from the points nearest the circle ([`circle::max_inscribed_near`])
+/// are tried first. Their best is accepted only when its control points are an active
+/// set the exact kernel has already returned in this search (near the optimum the
+/// projections cycle through a few active sets); otherwise the exact kernel runs, and
+/// its circle becomes the warm start. Each search owns its state and is sequential, so
 /// results do not depend on threads.
 struct Warm<'a> {
     q: &'a [f64],
-    crit: Criterion,
     size: f64,
-    /// Centre of the last zone and the control points of every exact fit so far.
+    /// Centre of the last circle and the control points of every exact fit so far.
     state: std::sync::Mutex<(Option<[f64; 2]>, ActiveSets)>,
 }
 
@@ -254,13 +252,13 @@ fn merge_sets(into: &mut ActiveSets, more: ActiveSets) {
 }
 
 impl<'a> Warm<'a> {
-    fn new(q: &'a [f64], crit: Criterion, size: f64) -> Self {
-        Self::knowing(q, crit, size, Vec::new())
+    fn new(q: &'a [f64], size: f64) -> Self {
+        Self::knowing(q, size, Vec::new())
     }
 
     /// A search that starts knowing the active sets other searches met.
-    fn knowing(q: &'a [f64], crit: Criterion, size: f64, known: ActiveSets) -> Self {
-        Self { q, crit, size, state: std::sync::Mutex::new((None, known)) }
+    fn knowing(q: &'a [f64], size: f64, known: ActiveSets) -> Self {
+        Self { q, size, state: std::sync::Mutex::new((None, known)) }
     }
 
     /// The active sets the exact kernel returned so far.
@@ -269,46 +267,31 @@ impl<'a> Warm<'a> {
     }
 
     fn eval(&self, a: &Vector3<f64>) -> f64 {
-        if self.crit == Criterion::MinCircumscribed {
-            return objective(self.q, a, self.crit, self.size);
-        }
+        const MIC: Criterion = Criterion::MaxInscribed;
         let (t, f) = angles(&[a[0], a[1], a[2]]);
         let proj = project(self.q, t, f);
-        let near = |c: [f64; 2]| -> Option<circle::Zone> {
-            match self.crit {
-                Criterion::MinZone => circle::min_zone_near(&proj, c).ok().flatten(),
-                _ => circle::max_inscribed_near(&proj, c).ok().flatten().map(zone_of),
-            }
-        };
-        let exact = || -> Result<circle::Zone> {
-            match self.crit {
-                Criterion::MinZone => circle::min_zone(&proj),
-                _ => circle::max_inscribed(&proj).map(zone_of),
-            }
-        };
-        let value = |z: &circle::Zone| if self.crit == Criterion::MinZone { z.r_out - z.r_in } else { -z.r_in };
-        let accept = |z: &circle::Zone| z.center[0].hypot(z.center[1]) <= 100.0 * self.size && z.r_out.is_finite();
         let mut state = self.state.lock().unwrap_or_else(|e| e.into_inner());
         let (center, seen) = &mut *state;
-        if let Some(z) = center.and_then(near) {
-            let known = seen.iter().any(|(i, o)| *i == z.control_in && *o == z.control_out);
-            if known && accept(&z) {
+        let near = center.and_then(|c| circle::max_inscribed_near(&proj, c).ok().flatten()).map(zone_of);
+        if let Some(z) = near {
+            let v = zone_value(&z, MIC, self.size);
+            if v.is_finite() && seen.iter().any(|(i, o)| *i == z.control_in && *o == z.control_out) {
                 *center = Some(z.center);
-                return value(&z);
+                return v;
             }
         }
-        match exact() {
-            Ok(z) if accept(&z) => {
-                *center = Some(z.center);
-                let v = value(&z);
-                let key = (z.control_in, z.control_out);
-                if !seen.contains(&key) {
-                    seen.push(key);
-                }
-                v
+        let Ok(z) = circle::max_inscribed(&proj).map(zone_of) else {
+            return f64::INFINITY;
+        };
+        let v = zone_value(&z, MIC, self.size);
+        if v.is_finite() {
+            *center = Some(z.center);
+            let key = (z.control_in, z.control_out);
+            if !seen.contains(&key) {
+                seen.push(key);
             }
-            _ => f64::INFINITY,
         }
+        v
     }
 }
 
@@ -554,7 +537,7 @@ fn fit_direct(pts: &[f64], crit: Criterion, opts: &Options, lsq_axis: Option<Vec
     // one (Sec. 6.2.2, Cases I and II), the SLP model (the points only) is not the
     // objective; search the exact values directly
     if crit == Criterion::MaxInscribed && fit2d(&q, &best.1.dir, crit).is_ok_and(|(_, _, z)| z.control_in.len() < 3) {
-        let (value, a, evals) = nelder_mead_search(&q, crit, size, &starts, (best.0, best.1.dir), opts.hop_rounds, &in_region);
+        let (value, a, evals) = nelder_mead_search(&q, size, &starts, (best.0, best.1.dir), opts.hop_rounds, &in_region);
         evaluations += evals;
         if value < best.0 {
             best = (value, slp::Axis::new(a, Vector3::zeros()));
@@ -587,13 +570,12 @@ fn fit_direct(pts: &[f64], crit: Criterion, opts: &Options, lsq_axis: Option<Vec
     })
 }
 
-/// Nelder–Mead over the tangent plane of the axis on the exact projection-model
-/// values (warm-started, see `Warm`), from each of `starts`, then `hop_rounds` rounds
+/// Nelder–Mead over the tangent plane of the axis on the exact MIC values
+/// (warm-started, see `Warm`), from each of `starts`, then `hop_rounds` rounds
 /// of basin hopping about the best (restarts HOP_RADIUS away, polished to NM_XTOL).
 /// Returns the best value and direction and the evaluations spent.
 fn nelder_mead_search(
     q: &[f64],
-    crit: Criterion,
     size: f64,
     starts: &[Vector3<f64>],
     mut best: (f64, Vector3<f64>),
@@ -620,7 +602,7 @@ fn nelder_mead_search(
     };
     let mut evaluations = 0;
     let refined: Vec<(f64, Vector3<f64>, usize, ActiveSets)> =
-        starts.par_iter().map(|a0| descend(a0, Warm::new(q, crit, size), NM_STEP, NM_XTOL)).collect();
+        starts.par_iter().map(|a0| descend(a0, Warm::new(q, size), NM_STEP, NM_XTOL)).collect();
     let mut known = ActiveSets::new();
     for (value, a, evals, sets) in refined {
         merge_sets(&mut known, sets);
@@ -637,7 +619,7 @@ fn nelder_mead_search(
             .map(|k| {
                 let th = 0.3 + 2.0 * PI * k as f64 / HOPS as f64;
                 let s0 = (a0 + (u * th.cos() + v * th.sin()) * HOP_RADIUS).normalize();
-                descend(&s0, Warm::knowing(q, crit, size, known.clone()), 0.2 * HOP_RADIUS, HOP_XTOL)
+                descend(&s0, Warm::knowing(q, size, known.clone()), 0.2 * HOP_RADIUS, HOP_XTOL)
             })
             .collect();
         let before = best.0;
@@ -651,7 +633,7 @@ fn nelder_mead_search(
         if best.0 >= before - 1e-9 * before.abs() {
             break;
         }
-        let warm = Warm::knowing(q, crit, size, known.clone());
+        let warm = Warm::knowing(q, size, known.clone());
         let (value, a, evals, _) = descend(&best.1, warm, 100.0 * HOP_XTOL, NM_XTOL);
         evaluations += evals;
         if value < best.0 {

@@ -22,7 +22,7 @@ use gagekit_core::{GkError, Result};
 pub use lsq::least_squares;
 pub use mc::min_circumscribed;
 pub use mi::{max_inscribed, max_inscribed_near};
-pub use mz::{min_zone, min_zone_near};
+pub use mz::min_zone;
 
 /// A circle with the indices of the input points that fix it.
 #[derive(Debug, Clone, PartialEq)]

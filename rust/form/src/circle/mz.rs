@@ -93,38 +93,6 @@ pub fn min_zone(pts: &[f64]) -> Result<Zone> {
     })
 }
 
-/// Narrowest zone among the equal-distance solutions (1+3, 3+1, 2+2) of the four points
-/// nearest to and the four farthest from `center` (input coordinates): a local minimum
-/// of Eq. 6.5 near `center`, its radii taken over all points. Cheap (no Voronoi
-/// diagrams), for warm starts of a search in which the points move little between
-/// calls; not a global optimum. `None` for fewer than 8 points or a far centre.
-pub fn min_zone_near(pts: &[f64], center: [f64; 2]) -> Result<Option<Zone>> {
-    const WHAT: &str = "minimum zone circle";
-    let data = Centered::new(pts, WHAT, 3)?;
-    let p = &data.pts;
-    let c = [center[0] - data.shift[0], center[1] - data.shift[1]];
-    // the four points nearest to / farthest from the previous centre hold the
-    // active set of a zone that moved little
-    let Some(mut b) = local_choices::<4>(p, c) else {
-        return Ok(None);
-    };
-    if b.c[0].hypot(b.c[1]) > FAR * data.scale {
-        return Ok(None);
-    }
-    let (r_in, r_out) = radii(p, b.c);
-    for v in [&mut b.inner, &mut b.outer] {
-        v.sort_unstable();
-        v.dedup();
-    }
-    Ok(Some(Zone {
-        center: data.uncenter(b.c),
-        r_in,
-        r_out,
-        control_in: b.inner,
-        control_out: b.outer,
-    }))
-}
-
 /// Exact MZ of centred points (all of them), in centred coordinates.
 pub(crate) fn exact(p: &[[f64; 2]], scale: f64) -> Result<Zone> {
     const WHAT: &str = "minimum zone circle";

@@ -480,15 +480,9 @@ fn min_zone_of_nearly_straight_points_is_finite_or_degenerate() {
 }
 
 #[test]
-fn near_kernels_find_the_exact_optimum_from_a_nearby_centre() {
+fn near_kernel_finds_the_exact_optimum_from_a_nearby_centre() {
     for seed in 0..20u64 {
         let v = random_set(seed, 40, 0);
-        let z = min_zone(&v).unwrap();
-        let c = [z.center[0] + 1e-3, z.center[1] - 2e-3];
-        let w = min_zone_near(&v, c).unwrap().unwrap();
-        // a local answer is never narrower than the global one, here the same zone
-        assert!(w.width() >= z.width() - 1e-12);
-        assert!((w.width() - z.width()).abs() < 1e-9, "seed {seed}: {} vs {}", w.width(), z.width());
         let m = max_inscribed(&v).unwrap();
         let n = max_inscribed_near(&v, [m.center[0] + 1e-3, m.center[1]]).unwrap().unwrap();
         assert!(n.radius <= m.radius + 1e-12);
