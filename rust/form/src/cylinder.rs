@@ -159,6 +159,13 @@ fn frame(theta: f64, phi: f64) -> ([f64; 3], [f64; 3]) {
     ([ct * cf, ct * sf, -st], [-sf, cf, 0.0])
 }
 
+/// The 3-D point (in the projection's origin) of the 2-D point `c` of the plane
+/// normal to the axis (theta, phi): the inverse of [`project`] on that plane.
+fn in_space(theta: f64, phi: f64, c: [f64; 2]) -> Vector3<f64> {
+    let (u, w) = frame(theta, phi);
+    Vector3::from(u) * c[0] + Vector3::from(w) * c[1]
+}
+
 /// Project 3-D points along the axis (theta, phi) to 2-D (Eq. 6.12, corrected).
 pub fn project(pts: &[f64], theta: f64, phi: f64) -> Vec<f64> {
     let (u, v) = frame(theta, phi);
@@ -449,9 +456,7 @@ fn fit_direct(pts: &[f64], crit: Criterion, opts: &Options, lsq_axis: Option<Vec
     let exact = |a: &Vector3<f64>| -> Option<(f64, slp::Axis)> {
         let (theta, phi, zone) = fit2d(&q, a, crit).ok()?;
         let v = zone_value(&zone, crit, size);
-        let (u, w) = frame(theta, phi);
-        let p = Vector3::from(u) * zone.center[0] + Vector3::from(w) * zone.center[1];
-        v.is_finite().then(|| (v, slp::Axis::new(*a, p)))
+        v.is_finite().then(|| (v, slp::Axis::new(*a, in_space(theta, phi, zone.center))))
     };
     // one local search; its result is scored by the exact 2-D kernel
     let search = |start: slp::Axis, delta: f64| -> (f64, slp::Axis, usize) {
@@ -489,8 +494,7 @@ fn fit_direct(pts: &[f64], crit: Criterion, opts: &Options, lsq_axis: Option<Vec
     // cheap fit near the centre of every criterion's circles)
     let mc_axis = |a: &Vector3<f64>| -> Option<slp::Axis> {
         let (theta, phi, zone) = fit2d(&q, a, Criterion::MinCircumscribed).ok()?;
-        let (u, w) = frame(theta, phi);
-        Some(slp::Axis::new(*a, Vector3::from(u) * zone.center[0] + Vector3::from(w) * zone.center[1]))
+        Some(slp::Axis::new(*a, in_space(theta, phi, zone.center)))
     };
     let refined: Vec<(f64, slp::Axis, usize)> = starts
         .par_iter()
