@@ -22,10 +22,10 @@ import numpy as np
 from scipy.optimize import least_squares, linprog, minimize
 
 import gagekit
+from gagekit.demo import data_path
 from _timing import timed
 
-ROOT = Path(__file__).resolve().parents[1]
-REF = Path(os.environ.get("GAGEKIT_SHARED", ROOT.parent / "shared")) / "reference-data" / "seed-cylinders"
+REF = data_path("cylinders")
 
 
 def axis_dist(pts, x):

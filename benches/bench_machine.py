@@ -18,8 +18,7 @@ import numpy as np
 import gagekit
 from _timing import timed
 
-SHARED = Path("/work/shared/examples/dissertation-5axis.toml")
-EXAMPLE = SHARED if SHARED.exists() else gagekit.machine.example_machine_path()
+EXAMPLE = gagekit.machine.example_machine_path()
 
 
 def _rot(axis: np.ndarray, theta: np.ndarray) -> np.ndarray:

@@ -1,24 +1,29 @@
-"""Shared test settings: where the read-only reference data lives; the example machine."""
+"""Shared test settings: where the bundled reference data lives; the example machine.
 
-import os
+Everything the tests read is inside the repository: the NIST least-squares pairs under
+``tests/data/nist-l2`` (public data, see ``tests/data/README.md``), the dissertation's cylinder
+sets and the example machine inside the package (runtime data the demo uses too).
+"""
+
 from pathlib import Path
 
 import pytest
 
+import gagekit
+from gagekit.demo import data_path
+
 ROOT = Path(__file__).resolve().parents[1]
-# shared/ sits beside the checkout (../shared), in development and in CI.
-SHARED = Path(os.environ.get("GAGEKIT_SHARED", ROOT.parent / "shared"))
-if not (SHARED / "reference-data").is_dir():
-    raise RuntimeError(f"reference data not found at {SHARED}; set GAGEKIT_SHARED to the shared/ folder")
-REFERENCE = SHARED / "reference-data"
-# the dissertation's 5-axis machine (Eq. 3.1, Table 3.1), as shipped in shared/examples
-EXAMPLE_MACHINE = SHARED / "examples" / "dissertation-5axis.toml"
+TEST_DATA = ROOT / "tests" / "data"
+# NIST ASME B89.4.10 least-squares reference pairs
+NIST = TEST_DATA / "nist-l2"
+# the dissertation's cylinder data sets 1 and 3 with its reported results (Tables 6.2, 6.4)
+SEED_CYLINDERS = data_path("cylinders")
+# the dissertation's 5-axis machine (Eq. 3.1, Table 3.1), as bundled in the package
+EXAMPLE_MACHINE = gagekit.machine.example_machine_path()
 
 
 @pytest.fixture(scope="session")
 def machine():
-    import gagekit
-
     return gagekit.load_machine(EXAMPLE_MACHINE)
 
 

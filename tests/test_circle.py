@@ -18,9 +18,9 @@ from gagekit import fit_circle
 from gagekit.cli import app
 from gagekit.errors import ConfigError, DegenerateGeometryError, InvalidInputError
 
-from conftest import REFERENCE
+from conftest import NIST as _NIST
 
-NIST = REFERENCE / "nist-l2" / "circle2d"
+NIST = _NIST / "circle2d"
 NIST_SETS = sorted(NIST.glob("*.ds"))
 
 

@@ -20,6 +20,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import gagekit
+from conftest import SEED_CYLINDERS
 from gagekit.errors import ConfigError, DegenerateGeometryError, InvalidInputError
 
 try:
@@ -27,8 +28,7 @@ try:
 except ModuleNotFoundError:  # Python < 3.11
     import tomli as tomllib
 
-ROOT = Path(__file__).resolve().parents[1]
-SEED = Path(os.environ.get("GAGEKIT_SHARED", ROOT.parent / "shared")) / "reference-data" / "seed-cylinders"
+SEED = SEED_CYLINDERS
 ROUNDING = 5e-8  # half a unit of the 7th decimal printed in Tables 6.2 and 6.4
 CERT_TOL = 1e-9
 

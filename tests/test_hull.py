@@ -15,9 +15,9 @@ from scipy.spatial import ConvexHull
 import gagekit
 from gagekit.errors import InvalidInputError
 
-from conftest import REFERENCE
+from conftest import NIST as _NIST
 
-REF = REFERENCE / "nist-l2"
+REF = _NIST
 
 
 def hull_idx(points) -> np.ndarray:

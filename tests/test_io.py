@@ -8,9 +8,9 @@ import pytest
 import gagekit
 from gagekit.errors import FileFormatError, GagekitError, InvalidInputError
 
-from conftest import REFERENCE
+from conftest import NIST as _NIST
 
-NIST = REFERENCE / "nist-l2"
+NIST = _NIST
 
 RNG = np.random.default_rng(7)
 PTS = RNG.normal(scale=100.0, size=(500, 3))

@@ -172,11 +172,9 @@ offset = [0.0, 30.0, -100.0]
     assert np.allclose(s.reduce(m.design_matrix(cmds)) @ s.coefficients, m.design_matrix(cmds), atol=1e-8)
 
 
-def test_bundled_example_is_the_shared_one():
+def test_bundled_example_machine_loads():
     bundled = gagekit.machine.example_machine_path()
     assert gagekit.load_machine(bundled).n_parameters == 52
-    if EXAMPLE.exists():
-        assert bundled.read_bytes() == EXAMPLE.read_bytes()
 
 
 def test_rotary_error_about_its_own_axis_adds_to_the_joint_angle(machine):

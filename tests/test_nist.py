@@ -6,16 +6,13 @@ positions of lines and axes compared by the distance between the lines.
 
 from __future__ import annotations
 
-import os
-from pathlib import Path
-
 import numpy as np
 import pytest
 
 import gagekit
+from conftest import NIST
 
-ROOT = Path(__file__).resolve().parents[1]
-REF = Path(os.environ.get("GAGEKIT_SHARED", ROOT.parent / "shared")) / "reference-data" / "nist-l2"
+REF = NIST
 
 POS_TOL = 1e-7
 DIA_TOL = 1e-7
