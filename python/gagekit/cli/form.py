@@ -4,13 +4,13 @@ from __future__ import annotations
 
 from enum import Enum
 from pathlib import Path
-from typing import Any
+from typing import Any, Optional
 
 import numpy as np
 import typer
 
 from ..errors import FileFormatError
-from ._common import JSON_OPTION, emit, table
+from ._common import JSON_OPTION, UNITS_OPTION, emit, read_cloud_cli, table
 
 app = typer.Typer(help="Form of lines, planes, circles, spheres and cylinders (Ch. 6).", no_args_is_help=True)
 
@@ -26,20 +26,19 @@ class _CircleCriterion(str, Enum):
     all = "all"
 
 
-def _read_xy(path: Path) -> np.ndarray:
+def _read_xy(path: Path, units: Any = None) -> np.ndarray:
     """(n, 2) points from any file ``read_points`` reads: 3-D points must lie in a plane
     parallel to a coordinate plane (as NIST's 2-D sets do); the constant coordinate is
     dropped. ASCII files of 2 columns are read as 2-D points."""
-    from ..cloud import read_points
     from ..errors import FileFormatError, InvalidInputError
 
     try:
-        arr = read_points(path, dim=3)
+        arr = read_cloud_cli(path, units, dim=3).points
     except FileFormatError as exc3:
         if _text_columns(path) != 2:
             raise
         try:
-            return read_points(path, dim=2)
+            return read_cloud_cli(path, units, dim=2).points
         except (FileFormatError, InvalidInputError):
             raise exc3 from None
     const = [k for k in range(3) if np.ptp(arr[:, k]) == 0.0]
@@ -76,12 +75,13 @@ def circle(
     file: Path = typer.Argument(..., help="Points: any file read_points reads (NIST .ds too); 2 columns or planar 3-D."),
     criterion: _CircleCriterion = typer.Option(_CircleCriterion.lsq, "--criterion", "-c",
                                                help="lsq, mc (min circumscribed), mi (max inscribed), mz (min zone), or all."),
+    units: Optional[str] = UNITS_OPTION,
     as_json: bool = JSON_OPTION,
 ) -> None:
     """Fit a 2-D circle (Sec. 6.2): least squares, MC, MI or minimum zone (roundness)."""
     from ..form.circle import fit_circle
 
-    pts = _read_xy(file)
+    pts = _read_xy(file, units)
     crits = ["lsq", "mc", "mi", "mz"] if criterion.value == "all" else [criterion.value]
     fits = [fit_circle(pts, c) for c in crits]
     result = fits[0] if len(fits) == 1 else {f.to_dict()["criterion"]: f for f in fits}
@@ -104,11 +104,9 @@ def circle(
 _SHAPES_3D = ("line", "plane", "sphere", "circle3d", "cylinder", "cone")
 
 
-def _load_points(path: Path) -> np.ndarray:
+def _load_points(path: Path, units: Any = None) -> np.ndarray:
     """Points from any file ``read_points`` reads; ASCII files of 2 columns as 2-D points."""
-    from ..cloud import read_points
-
-    return read_points(path, dim=2) if _text_columns(path) == 2 else read_points(path)
+    return read_cloud_cli(path, units, dim=2 if _text_columns(path) == 2 else 3).points
 
 
 def _fmt_vec(v: Any) -> str:
@@ -139,6 +137,7 @@ def fit(
     file: Path = typer.Argument(..., help="Points: any file read_points reads (XYZ/CSV/TXT, NIST .ds, PLY, .npy, ...)"),
     criterion: str = typer.Option("least-squares", "--criterion", "-c", help="Fit criterion"),
     seed: int = typer.Option(0, "--seed", help="Seed of the particle swarm (cylinders)"),
+    units: Optional[str] = UNITS_OPTION,
     as_json: bool = JSON_OPTION,
 ) -> None:
     """Fit a feature to the points of FILE and report its form error and certificate."""
@@ -146,9 +145,9 @@ def fit(
 
     name = shape.strip().lower().replace("-", "").replace("_", "")
     if name == "circle":  # 2-D circles: the circle reader drops a constant coordinate
-        emit(form.fit_circle(_read_xy(file), criterion), as_json, _human)
+        emit(form.fit_circle(_read_xy(file, units), criterion), as_json, _human)
         return
-    pts = _load_points(file)
+    pts = _load_points(file, units)
     if name == "line":
         r = form.fit_line(pts, criterion)
     elif name == "plane":
@@ -175,9 +174,10 @@ def cylinder(
         "least-squares", "--criterion", "-c", help="least-squares (lsq), mcc, mic or mzc"
     ),
     seed: int = typer.Option(0, "--seed", help="Seed of the particle swarm"),
+    units: Optional[str] = UNITS_OPTION,
     as_json: bool = JSON_OPTION,
 ) -> None:
     """Fit a cylinder (least squares, min circumscribed, max inscribed, minimum zone)."""
     from .. import form
 
-    emit(form.fit_cylinder(_load_points(file), criterion, seed=seed), as_json, _human)
+    emit(form.fit_cylinder(_load_points(file, units), criterion, seed=seed), as_json, _human)
