@@ -60,7 +60,7 @@ class Observations:
 def _read_table(path: Union[str, Path]) -> tuple[list[str], np.ndarray]:
     p = Path(path)
     try:
-        text = p.read_text(encoding="utf-8")
+        text = p.read_text(encoding="utf-8-sig")  # utf-8-sig: Excel's "CSV UTF-8" starts with a BOM
     except FileNotFoundError:
         raise FileFormatError(f"{p}: file not found") from None
     except (OSError, UnicodeDecodeError) as exc:

@@ -2,7 +2,7 @@
 
 use crate::arrays::rows;
 use crate::errors::{gagekit_err, run};
-use gagekit_cloudio::{parse_ascii, write_ascii, AsciiOptions};
+use gagekit_cloudio::{parse_ascii, read_e57, read_ply_file, write_ascii, AsciiOptions};
 use gagekit_core::GkError;
 use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray2};
 use pyo3::prelude::*;
@@ -24,6 +24,25 @@ fn cloud_read_ascii<'py>(
     let n = parsed.coords.len() / dim;
     let arr = PyArray1::from_vec(py, parsed.coords).reshape([n, dim])?;
     Ok((arr.into_any(), parsed.header_lines, parsed.columns))
+}
+
+/// Read the vertices of a PLY file (memory-mapped): returns (points (n, 3), format name).
+#[pyfunction]
+fn cloud_read_ply<'py>(py: Python<'py>, path: String) -> PyResult<(Bound<'py, PyAny>, &'static str)> {
+    let p = run(py, || read_ply_file(std::path::Path::new(&path), &path))?;
+    let n = p.coords.len() / 3;
+    let arr = PyArray1::from_vec(py, p.coords).reshape([n, 3])?;
+    Ok((arr.into_any(), p.format))
+}
+
+/// Read every scan of an E57 file (metres, poses applied): returns
+/// (points (n, 3), number of scans, number of invalid points dropped).
+#[pyfunction]
+fn cloud_read_e57<'py>(py: Python<'py>, path: String) -> PyResult<(Bound<'py, PyAny>, usize, usize)> {
+    let p = run(py, || read_e57(std::path::Path::new(&path), &path))?;
+    let n = p.coords.len() / 3;
+    let arr = PyArray1::from_vec(py, p.coords).reshape([n, 3])?;
+    Ok((arr.into_any(), p.scans, p.invalid_dropped))
 }
 
 /// Write points (n, d) as ASCII with separator `sep` and an optional header line.
@@ -51,5 +70,7 @@ fn cloud_write_ascii(
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(cloud_read_ascii, m)?)?;
     m.add_function(wrap_pyfunction!(cloud_write_ascii, m)?)?;
+    m.add_function(wrap_pyfunction!(cloud_read_ply, m)?)?;
+    m.add_function(wrap_pyfunction!(cloud_read_e57, m)?)?;
     Ok(())
 }
