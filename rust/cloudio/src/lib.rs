@@ -16,4 +16,4 @@ pub mod ply;
 
 pub use ascii::{detect_style, parse_ascii, write_ascii, AsciiOptions, Parsed, Style};
 pub use e57::{read_e57, E57Points};
-pub use ply::{read_ply, read_ply_file, PlyPoints};
+pub use ply::{read_ply, read_ply_file, PlyFile, PlyPoints};

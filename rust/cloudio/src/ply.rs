@@ -210,33 +210,151 @@ fn non_finite(what: &str, i: usize) -> GkError {
     GkError::invalid(format!("{what}: vertex {i} has a non-finite coordinate (NaN or inf)"))
 }
 
-/// Read the vertices of the PLY file at `path`, memory-mapped (no copy of the file).
-pub fn read_ply_file(path: &std::path::Path, what: &str) -> Result<PlyPoints> {
-    let file = std::fs::File::open(path).map_err(|e| GkError::invalid(format!("{what}: cannot be read ({e})")))?;
-    let len = file.metadata().map_err(|e| GkError::invalid(format!("{what}: cannot be read ({e})")))?.len();
-    if len == 0 {
-        return Err(bad(what, "the file is empty"));
+/// A PLY file opened for reading: memory-mapped, header parsed, its size checked against
+/// the header. [`PlyFile::vertex_count`] tells the caller how large a buffer to give
+/// [`PlyFile::read_into`] (the binding hands numpy's own allocation, so the vertices are
+/// written once, straight into the array the user gets).
+pub struct PlyFile {
+    map: memmap2::Mmap,
+    what: String,
+    format: Format,
+    elements: Vec<Element>,
+    body: usize,
+    vi: usize,
+    idx: [usize; 3],
+}
+
+impl PlyFile {
+    /// Open and check the PLY file at `path`; `what` names it in messages.
+    pub fn open(path: &std::path::Path, what: &str) -> Result<PlyFile> {
+        let io = |e: std::io::Error| GkError::invalid(format!("{what}: cannot be read ({e})"));
+        let file = std::fs::File::open(path).map_err(io)?;
+        if file.metadata().map_err(io)?.len() == 0 {
+            return Err(bad(what, "the file is empty"));
+        }
+        // SAFETY: the map is read-only and lives only as long as this reader; a file
+        // truncated by another process meanwhile is outside what any reader can guard against.
+        let map = unsafe { memmap2::MmapOptions::new().populate().map(&file) }.map_err(io)?;
+        let (format, elements, body) = header(&map, what)?;
+        let (vi, idx) = xyz(&elements, what)?;
+        // a count no file of this size can hold: refuse before anyone allocates for it
+        let el = &elements[vi];
+        let least = match format {
+            Format::Ascii => 2 * el.props.len(),
+            _ => el.props.iter().map(|p| p.list.unwrap_or(p.ty).size()).sum(),
+        };
+        if el.count > (map.len() - body) / least.max(1) {
+            return Err(GkError::invalid(format!(
+                "{what}: the PLY header declares {} vertices, more than the file's {} bytes can hold: truncated or a wrong count",
+                el.count,
+                map.len()
+            )));
+        }
+        Ok(PlyFile { map, what: what.to_string(), format, elements, body, vi, idx })
     }
-    // SAFETY: the map is read-only and lives only during this call; a file truncated by
-    // another process meanwhile is outside what any reader can guard against.
-    let map = unsafe { memmap2::Mmap::map(&file) }.map_err(|e| GkError::invalid(format!("{what}: cannot be read ({e})")))?;
-    read_ply(&map, what)
+
+    /// Number of vertices the header declares.
+    pub fn vertex_count(&self) -> usize {
+        self.elements[self.vi].count
+    }
+
+    /// `ascii`, `binary_little_endian` or `binary_big_endian`.
+    pub fn format_name(&self) -> &'static str {
+        match self.format {
+            Format::Ascii => "ascii",
+            Format::Le => "binary_little_endian",
+            Format::Be => "binary_big_endian",
+        }
+    }
+
+    /// Decode x, y, z of every vertex into `out` (length 3 x [`Self::vertex_count`]).
+    pub fn read_into(&self, out: &mut [f64]) -> Result<()> {
+        if out.len() != 3 * self.vertex_count() {
+            return Err(GkError::invalid(format!("{}: output buffer of {} values for {} vertices", self.what, out.len(), self.vertex_count())));
+        }
+        let (bytes, what) = (&self.map[..], self.what.as_str());
+        match self.format {
+            Format::Ascii => read_ascii(bytes, self.body, &self.elements, self.vi, self.idx, what, out),
+            Format::Le | Format::Be => {
+                read_binary(bytes, self.body, &self.elements, self.vi, self.idx, self.format == Format::Be, what, out)
+            }
+        }
+    }
+}
+
+/// Read the vertices of the PLY file at `path` (memory-mapped).
+pub fn read_ply_file(path: &std::path::Path, what: &str) -> Result<PlyPoints> {
+    let f = PlyFile::open(path, what)?;
+    let mut coords = vec![0.0; 3 * f.vertex_count()];
+    f.read_into(&mut coords)?;
+    Ok(PlyPoints { coords, format: f.format_name() })
 }
 
 /// Read the vertices of a PLY file held in `bytes`. `what` names the file in messages.
 pub fn read_ply(bytes: &[u8], what: &str) -> Result<PlyPoints> {
     let (format, elements, body) = header(bytes, what)?;
     let (vi, idx) = xyz(&elements, what)?;
-    match format {
-        Format::Ascii => read_ascii(bytes, body, &elements, vi, idx, what),
-        Format::Le | Format::Be => read_binary(bytes, body, &elements, vi, idx, format == Format::Be, what),
+    let mut coords = vec![0.0; 3 * elements[vi].count.min(bytes.len())];
+    if coords.len() != 3 * elements[vi].count {
+        return Err(GkError::invalid(format!("{what}: the PLY header declares more vertices than the file has bytes: truncated or a wrong count")));
     }
+    match format {
+        Format::Ascii => read_ascii(bytes, body, &elements, vi, idx, what, &mut coords)?,
+        Format::Le | Format::Be => read_binary(bytes, body, &elements, vi, idx, format == Format::Be, what, &mut coords)?,
+    }
+    Ok(PlyPoints { coords, format: match format { Format::Ascii => "ascii", Format::Le => "binary_little_endian", Format::Be => "binary_big_endian" } })
+}
+
+/// x, y, z of `n` fixed-size records of `stride` bytes (fields at byte offsets `fo`, of
+/// types `ty`), decoded in parallel chunks; `Err(i)` names the first non-finite vertex.
+fn decode_fixed(data: &[u8], stride: usize, fo: [usize; 3], ty: [Ty; 3], be: bool, coords: &mut [f64]) -> std::result::Result<(), usize> {
+    let chunk = 1 << 16;
+    // one monomorphised loop per scalar type when x, y, z share it (the usual case)
+    macro_rules! same_type {
+        ($t:ty, $n:expr) => {
+            coords.par_chunks_mut(3 * chunk).enumerate().try_for_each(|(c, out)| {
+                let recs = &data[c * chunk * stride..];
+                for (j, o) in out.chunks_exact_mut(3).enumerate() {
+                    let rec = &recs[j * stride..j * stride + stride];
+                    for a in 0..3 {
+                        let b: [u8; $n] = rec[fo[a]..fo[a] + $n].try_into().unwrap_or([0; $n]);
+                        o[a] = (if be { <$t>::from_be_bytes(b) } else { <$t>::from_le_bytes(b) }) as f64;
+                    }
+                    if !(o[0].is_finite() && o[1].is_finite() && o[2].is_finite()) {
+                        return Err(c * chunk + j);
+                    }
+                }
+                Ok(())
+            })
+        };
+    }
+    if ty[0] == ty[1] && ty[1] == ty[2] && matches!(ty[0], Ty::F32 | Ty::F64) {
+        if ty[0] == Ty::F64 {
+            same_type!(f64, 8)?;
+        } else {
+            same_type!(f32, 4)?;
+        }
+        return Ok(());
+    }
+    coords.par_chunks_mut(3 * chunk).enumerate().try_for_each(|(c, out)| {
+        for (j, o) in out.chunks_exact_mut(3).enumerate() {
+            let rec = &data[(c * chunk + j) * stride..];
+            for a in 0..3 {
+                o[a] = ty[a].get(&rec[fo[a]..], be);
+            }
+            if !(o[0].is_finite() && o[1].is_finite() && o[2].is_finite()) {
+                return Err(c * chunk + j);
+            }
+        }
+        Ok(())
+    })
 }
 
 fn count_desc(elements: &[Element]) -> String {
     elements.iter().map(|e| format!("{} {}", e.count, e.name)).collect::<Vec<_>>().join(", ")
 }
 
+#[allow(clippy::too_many_arguments)]
 fn read_binary(
     bytes: &[u8],
     body: usize,
@@ -245,7 +363,8 @@ fn read_binary(
     idx: [usize; 3],
     be: bool,
     what: &str,
-) -> Result<PlyPoints> {
+    coords: &mut [f64],
+) -> Result<()> {
     let truncated = || {
         GkError::invalid(format!(
             "{what}: the PLY file is shorter than its header declares ({}): truncated or a wrong count",
@@ -253,7 +372,6 @@ fn read_binary(
         ))
     };
     let mut off = body;
-    let mut coords = Vec::new();
     for (k, el) in elements.iter().enumerate() {
         if let Some(stride) = el.fixed_size() {
             let size = stride.checked_mul(el.count).ok_or_else(truncated)?;
@@ -261,29 +379,11 @@ fn read_binary(
             if k == vi {
                 let field = |p: usize| el.props[..p].iter().map(|q| q.ty.size()).sum::<usize>();
                 let (fo, ty) = (idx.map(field), idx.map(|p| el.props[p].ty));
-                let data = &bytes[off..end];
-                coords = vec![0.0; 3 * el.count];
-                let chunk = 1 << 16;
-                coords
-                    .par_chunks_mut(3 * chunk)
-                    .enumerate()
-                    .try_for_each(|(c, out)| {
-                        for (j, o) in out.chunks_exact_mut(3).enumerate() {
-                            let rec = &data[(c * chunk + j) * stride..];
-                            for a in 0..3 {
-                                o[a] = ty[a].get(&rec[fo[a]..], be);
-                            }
-                            if !(o[0].is_finite() && o[1].is_finite() && o[2].is_finite()) {
-                                return Err(non_finite(what, c * chunk + j));
-                            }
-                        }
-                        Ok(())
-                    })?;
+                decode_fixed(&bytes[off..end], stride, fo, ty, be, coords).map_err(|i| non_finite(what, i))?;
             }
             off = end;
         } else {
             // records with list properties: walk them one by one
-            let mut pts = Vec::new();
             for i in 0..el.count {
                 let mut v = [0.0; 3];
                 for (pi, p) in el.props.iter().enumerate() {
@@ -312,11 +412,8 @@ fn read_binary(
                     if !v.iter().all(|x| x.is_finite()) {
                         return Err(non_finite(what, i));
                     }
-                    pts.extend_from_slice(&v);
+                    coords[3 * i..3 * i + 3].copy_from_slice(&v);
                 }
-            }
-            if k == vi {
-                coords = pts;
             }
         }
     }
@@ -332,7 +429,7 @@ fn read_binary(
             count_desc(elements)
         )));
     }
-    Ok(PlyPoints { coords, format: if be { "binary_big_endian" } else { "binary_little_endian" } })
+    Ok(())
 }
 
 fn read_ascii(
@@ -342,7 +439,8 @@ fn read_ascii(
     vi: usize,
     idx: [usize; 3],
     what: &str,
-) -> Result<PlyPoints> {
+    coords: &mut [f64],
+) -> Result<()> {
     let text = &bytes[body..];
     if memchr::memchr(0, text).is_some() {
         return Err(bad(what, "binary bytes in an ASCII PLY body"));
@@ -376,7 +474,6 @@ fn read_ascii(
     let first: usize = elements[..vi].iter().map(|e| e.count).sum();
     let el = &elements[vi];
     let lines = &data[first..first + el.count];
-    let mut coords = vec![0.0; 3 * el.count];
     coords.par_chunks_mut(3 * 4096).enumerate().try_for_each(|(c, out)| {
         for (j, o) in out.chunks_exact_mut(3).enumerate() {
             let k = lines[c * 4096 + j];
@@ -409,8 +506,7 @@ fn read_ascii(
             }
         }
         Ok(())
-    })?;
-    Ok(PlyPoints { coords, format: "ascii" })
+    })
 }
 
 #[cfg(test)]

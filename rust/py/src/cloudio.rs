@@ -2,9 +2,9 @@
 
 use crate::arrays::rows;
 use crate::errors::{gagekit_err, run};
-use gagekit_cloudio::{parse_ascii, read_e57, read_ply_file, write_ascii, AsciiOptions};
+use gagekit_cloudio::{parse_ascii, read_e57, write_ascii, AsciiOptions, PlyFile};
 use gagekit_core::GkError;
-use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray2};
+use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray2};
 use pyo3::prelude::*;
 
 /// Read an ASCII point file: returns (points (n, dim), header_lines, columns).
@@ -27,12 +27,20 @@ fn cloud_read_ascii<'py>(
 }
 
 /// Read the vertices of a PLY file (memory-mapped): returns (points (n, 3), format name).
+/// The points are decoded straight into numpy's allocation (one pass, no copy).
 #[pyfunction]
 fn cloud_read_ply<'py>(py: Python<'py>, path: String) -> PyResult<(Bound<'py, PyAny>, &'static str)> {
-    let p = run(py, || read_ply_file(std::path::Path::new(&path), &path))?;
-    let n = p.coords.len() / 3;
-    let arr = PyArray1::from_vec(py, p.coords).reshape([n, 3])?;
-    Ok((arr.into_any(), p.format))
+    let file = run(py, || PlyFile::open(std::path::Path::new(&path), &path))?;
+    let n = file.vertex_count();
+    // SAFETY: uninitialised until `read_into` has written every element; on an error the
+    // array is dropped without being seen by Python.
+    let arr = unsafe { PyArray2::<f64>::new(py, [n, 3], false) };
+    {
+        // SAFETY: the array was just created, is C-contiguous and nothing else refers to it.
+        let out = unsafe { arr.as_slice_mut() }.map_err(|e| gagekit_err(py, "InternalError", e.to_string()))?;
+        run(py, || file.read_into(out))?;
+    }
+    Ok((arr.into_any(), file.format_name()))
 }
 
 /// Read every scan of an E57 file (metres, poses applied): returns

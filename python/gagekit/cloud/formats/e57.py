@@ -21,4 +21,4 @@ def read(p: Path, dim: int) -> Raw:
     if scans == 0:
         raise FileFormatError(f"{p}: the E57 file holds no scans")
     return Raw(pts, "e57", unit="m", unit_basis="E57 standard (ASTM E2807): metres",
-               scans=scans, invalid_dropped=dropped)
+               scans=scans, invalid_dropped=dropped, finite_checked=True)

@@ -17,4 +17,4 @@ def read(p: Path, dim: int) -> Raw:
         pts, fmt = _core.cloud_read_ply(str(p))
     except InvalidInputError as exc:
         raise FileFormatError(str(exc)) from None
-    return Raw(pts, f"ply {fmt}")
+    return Raw(pts, f"ply {fmt}", finite_checked=True)
