@@ -267,6 +267,32 @@ impl PlyFile {
         }
     }
 
+    /// When the vertices are stored exactly as gagekit needs them (binary little-endian,
+    /// `vertex` the first element, properties `double x, y, z` and nothing else), the byte
+    /// offset of the first vertex, after checking every coordinate is finite: the caller
+    /// can then map the file itself and use its bytes as the (n, 3) array, with no copy.
+    pub fn direct_f64_offset(&self) -> Result<Option<usize>> {
+        let el = &self.elements[self.vi];
+        let exact = self.format == Format::Le
+            && self.vi == 0
+            && el.props.len() == 3
+            && el.props.iter().zip(["x", "y", "z"]).all(|(p, n)| p.name == n && p.ty == Ty::F64 && p.list.is_none());
+        if !exact {
+            return Ok(None);
+        }
+        // the element walk checks the file's size against every element of the header
+        let end = self.body + 24 * el.count;
+        let data = &self.map[self.body..end];
+        let bad = data.par_chunks(24 * 65536).enumerate().find_map_first(|(c, block)| {
+            block.chunks_exact(8).position(|b| !f64::from_le_bytes(b.try_into().unwrap_or([0; 8])).is_finite()).map(|i| c * 65536 + i / 3)
+        });
+        if let Some(i) = bad {
+            return Err(non_finite(&self.what, i));
+        }
+        check_tail(&self.map, &self.elements, self.vi, &self.what, self.body, false)?;
+        Ok(Some(self.body))
+    }
+
     /// Decode x, y, z of every vertex into `out` (length 3 x [`Self::vertex_count`]).
     pub fn read_into(&self, out: &mut [f64]) -> Result<()> {
         if out.len() != 3 * self.vertex_count() {
@@ -303,6 +329,13 @@ pub fn read_ply(bytes: &[u8], what: &str) -> Result<PlyPoints> {
         Format::Le | Format::Be => read_binary(bytes, body, &elements, vi, idx, format == Format::Be, what, &mut coords)?,
     }
     Ok(PlyPoints { coords, format: match format { Format::Ascii => "ascii", Format::Le => "binary_little_endian", Format::Be => "binary_big_endian" } })
+}
+
+/// Walk the elements of a binary body (without decoding) and check that the file ends
+/// where the header says it does.
+fn check_tail(bytes: &[u8], elements: &[Element], vi: usize, what: &str, body: usize, be: bool) -> Result<()> {
+    let mut none: [f64; 0] = [];
+    walk_binary(bytes, body, elements, vi, None, be, what, &mut none)
 }
 
 /// x, y, z of `n` fixed-size records of `stride` bytes (fields at byte offsets `fo`, of
@@ -365,6 +398,22 @@ fn read_binary(
     what: &str,
     coords: &mut [f64],
 ) -> Result<()> {
+    walk_binary(bytes, body, elements, vi, Some(idx), be, what, coords)
+}
+
+/// Walk every element of a binary body, checking sizes; decode the vertices into
+/// `coords` when `idx` (their x, y, z property indices) is given.
+#[allow(clippy::too_many_arguments)]
+fn walk_binary(
+    bytes: &[u8],
+    body: usize,
+    elements: &[Element],
+    vi: usize,
+    idx: Option<[usize; 3]>,
+    be: bool,
+    what: &str,
+    coords: &mut [f64],
+) -> Result<()> {
     let truncated = || {
         GkError::invalid(format!(
             "{what}: the PLY file is shorter than its header declares ({}): truncated or a wrong count",
@@ -376,7 +425,7 @@ fn read_binary(
         if let Some(stride) = el.fixed_size() {
             let size = stride.checked_mul(el.count).ok_or_else(truncated)?;
             let end = off.checked_add(size).filter(|&e| e <= bytes.len()).ok_or_else(truncated)?;
-            if k == vi {
+            if let (true, Some(idx)) = (k == vi, idx) {
                 let field = |p: usize| el.props[..p].iter().map(|q| q.ty.size()).sum::<usize>();
                 let (fo, ty) = (idx.map(field), idx.map(|p| el.props[p].ty));
                 decode_fixed(&bytes[off..end], stride, fo, ty, be, coords).map_err(|i| non_finite(what, i))?;
@@ -401,14 +450,14 @@ fn read_binary(
                     };
                     let size = n * p.ty.size();
                     let b = bytes.get(off..off + size).ok_or_else(truncated)?;
-                    if k == vi {
+                    if let (true, Some(idx)) = (k == vi, idx) {
                         if let Some(a) = idx.iter().position(|&x| x == pi) {
                             v[a] = p.ty.get(b, be);
                         }
                     }
                     off += size;
                 }
-                if k == vi {
+                if k == vi && idx.is_some() {
                     if !v.iter().all(|x| x.is_finite()) {
                         return Err(non_finite(what, i));
                     }

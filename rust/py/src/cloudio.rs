@@ -53,6 +53,18 @@ fn cloud_read_e57<'py>(py: Python<'py>, path: String) -> PyResult<(Bound<'py, Py
     Ok((arr.into_any(), p.scans, p.invalid_dropped))
 }
 
+/// Open a PLY file and, when its vertices are stored as exactly `double x, y, z`
+/// little-endian with nothing else (gagekit's own layout), return (vertex count, byte
+/// offset of the data) after checking sizes and finiteness; otherwise (count, None).
+/// Python then maps the file (copy-on-write) as the array: no copy at all.
+#[pyfunction]
+fn cloud_ply_direct(py: Python<'_>, path: String) -> PyResult<(usize, Option<usize>)> {
+    run(py, || {
+        let f = PlyFile::open(std::path::Path::new(&path), &path)?;
+        Ok((f.vertex_count(), f.direct_f64_offset()?))
+    })
+}
+
 /// Write points (n, d) as ASCII with separator `sep` and an optional header line.
 #[pyfunction]
 #[pyo3(signature = (path, points, sep=",", header=None))]
@@ -79,6 +91,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(cloud_read_ascii, m)?)?;
     m.add_function(wrap_pyfunction!(cloud_write_ascii, m)?)?;
     m.add_function(wrap_pyfunction!(cloud_read_ply, m)?)?;
+    m.add_function(wrap_pyfunction!(cloud_ply_direct, m)?)?;
     m.add_function(wrap_pyfunction!(cloud_read_e57, m)?)?;
     Ok(())
 }

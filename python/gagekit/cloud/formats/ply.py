@@ -1,11 +1,16 @@
 """PLY (ASCII, binary little- and big-endian), read by the Rust reader of
 ``gagekit-cloudio``: the file is memory-mapped and the vertex ``x y z`` decoded in one
-parallel pass; the header's element counts are checked against the file (more or less
-data than declared is an error). No unit: mm."""
+parallel pass straight into the result; the header's element counts are checked against
+the file (more or less data than declared is an error). A file in gagekit's own layout
+(binary little-endian ``double x, y, z`` only, as :func:`gagekit.write_points` writes it)
+is not decoded at all: the result is a copy-on-write memory map of the file (changing the
+array never changes the file). No unit: mm."""
 
 from __future__ import annotations
 
 from pathlib import Path
+
+import numpy as np
 
 from ... import _core
 from ...errors import FileFormatError, InvalidInputError
@@ -14,6 +19,10 @@ from . import Raw
 
 def read(p: Path, dim: int) -> Raw:
     try:
+        n, offset = _core.cloud_ply_direct(str(p))
+        if offset is not None:
+            pts = np.asarray(np.memmap(p, dtype="<f8", mode="c", offset=offset, shape=(n, 3))) if n else np.empty((0, 3))
+            return Raw(pts, "ply binary_little_endian", finite_checked=True)
         pts, fmt = _core.cloud_read_ply(str(p))
     except InvalidInputError as exc:
         raise FileFormatError(str(exc)) from None
