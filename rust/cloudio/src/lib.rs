@@ -12,6 +12,7 @@
 
 pub mod ascii;
 pub mod e57;
+mod e57_fast;
 pub mod ply;
 
 pub use ascii::{detect_style, parse_ascii, write_ascii, AsciiOptions, Parsed, Style};
