@@ -70,12 +70,12 @@ def load_toml(path) -> dict:
         import tomllib
     else:  # pragma: no cover
         import tomli as tomllib
+    from ._files import read_text
+
     p = Path(path)
+    text = read_text(p, "TOML file")  # typed errors: missing, folder, FIFO, not UTF-8
     try:
-        with p.open("rb") as fh:
-            return tomllib.load(fh)
-    except FileNotFoundError:
-        raise ConfigError(f"{p}: no such file") from None
+        return tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(f"{p}: not valid TOML ({exc})") from None
 

@@ -30,7 +30,12 @@ def check(
     from ..cloud import read_points, write_points
     from ..gage import GageSpec, check_gages, corrected_cloud
     from ..gage.report import human, write_report
+    from .._files import output_dir, output_file
 
+    if report is not None:
+        output_dir(report)
+    if out_cloud is not None:
+        output_file(out_cloud)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         spec = GageSpec.load(gages)

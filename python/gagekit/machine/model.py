@@ -405,16 +405,10 @@ def _group_name(leader: str, terms: dict) -> str:
 def load_machine(path: Union[str, Path]) -> Machine:
     """Read and validate a machine file (TOML). Raises FileFormatError for unreadable TOML and
     ConfigError naming the exact entry for anything inconsistent."""
+    from .._files import read_text
+
     p = Path(path)
-    try:
-        text = p.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise FileFormatError(f"{p}: machine file not found") from None
-    except OSError as exc:
-        raise FileFormatError(f"{p}: cannot read the machine file ({exc.strerror})") from None
-    except UnicodeDecodeError:
-        raise FileFormatError(f"{p}: not a text (UTF-8) file") from None
-    return parse_machine(text, source=str(p))
+    return parse_machine(read_text(p, "machine file (TOML)"), source=str(p))
 
 
 def parse_machine(text: str, source: str = "<machine>") -> Machine:

@@ -210,13 +210,12 @@ def dissertation_zones(space: ObserverSpace, points: int) -> list[Zone]:
 
 
 def _toml(path: Union[str, Path], what: str) -> dict:
+    from .._files import read_text
+
     p = Path(path)
+    text = read_text(p, f"{what} file (TOML)")
     try:
-        return tomllib.loads(p.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise FileFormatError(f"{p}: {what} file not found") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise FileFormatError(f"{p}: cannot read the {what} file ({exc})") from None
+        return tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise FileFormatError(f"{p}: not valid TOML ({exc})") from None
 

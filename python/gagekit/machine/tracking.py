@@ -221,9 +221,14 @@ def plot_drift(result: TrackResult, path: Union[str, Path], top: int = 8) -> Non
     """Write :func:`drift_figure` as a PNG."""
     import matplotlib.pyplot as plt
 
+    from .._files import atomic_path
+
     fig = drift_figure(result, top)
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    try:
+        with atomic_path(path) as tmp:
+            fig.savefig(tmp, dpi=120)
+    finally:
+        plt.close(fig)
 
 
 def drift_figure(result: TrackResult, top: int = 8):
