@@ -83,6 +83,8 @@ def load_toml(path) -> dict:
 def named_tables(tables: Sequence[Any], kind: str, source: str) -> Iterator[tuple[str, Mapping]]:
     """The ``[[kind]]`` tables of a TOML file as (name, table): each must be a table with a
     non-empty ``name`` not used before; otherwise a ConfigError naming the file and the table."""
+    if not isinstance(tables, (list, tuple)):
+        raise ConfigError(f"{source}: {kind} must be given as [[{kind}]] tables, got {tables!r}")
     seen: set[str] = set()
     for k, t in enumerate(tables):
         if not isinstance(t, Mapping):

@@ -193,6 +193,14 @@ def _names(v: Any, where: str, source: str) -> tuple[str, ...]:
     return tuple(v)
 
 
+def _scaled_rotation(raw: Any, ang: float, source: str) -> Any:
+    """A region's rotation in degrees, to radians (left as given when malformed: the box
+    check then names the region and the key)."""
+    if isinstance(raw, list) and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in raw):
+        return [float(v) * ang for v in raw]
+    return raw
+
+
 def _parse(doc: Mapping[str, Any], source: str) -> GageSpec:
     if not isinstance(doc, Mapping):
         raise ConfigError(f"{source}: expected a table at the top level")
@@ -239,7 +247,8 @@ def _parse(doc: Mapping[str, Any], source: str) -> GageSpec:
             raise ConfigError(f"{source}: {label}: frame must be \"part\" or \"scanner\", got {frame!r}")
         frames.append(frame)
     if ang != 1.0:
-        tables = [dict(t, rotation=[float(v) * ang for v in t["rotation"]]) if "rotation" in t else t for t in tables]
+        tables = [dict(t, rotation=_scaled_rotation(t["rotation"], ang, source)) if "rotation" in t else t
+                  for t in tables]
     try:
         boxes = regions_from_tables(tables, source)
     except ConfigError as exc:
