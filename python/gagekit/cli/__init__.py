@@ -97,8 +97,7 @@ def main(argv: Optional[list[str]] = None) -> None:
         if code == 0:
             for line in dict.fromkeys(str(w.message) for w in caught):
                 print(f"gagekit: warning: {line}", file=sys.stderr)
-    if code:
-        sys.exit(code)
+    sys.exit(code)  # always, as click's standalone mode does (callers of main() expect SystemExit)
 
 
 def _click_classes() -> tuple:
