@@ -1,13 +1,24 @@
-//! Bindings of gagekit-cloudio: ASCII point-cloud reading and writing.
+//! Bindings of gagekit-cloudio: point-cloud reading (ASCII, PLY, E57) and ASCII writing.
 
 use crate::arrays::rows;
-use crate::errors::{gagekit_err, run};
+use crate::errors::{invalid, run};
 use gagekit_cloudio::{parse_ascii, read_e57, write_ascii, AsciiOptions, PlyFile};
 use gagekit_core::GkError;
 use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray2};
 use pyo3::prelude::*;
 
-/// Read an ASCII point file: returns (points (n, dim), header_lines, columns).
+/// A parsed ASCII point file.
+#[pyclass(frozen, get_all, module = "gagekit._core")]
+pub struct AsciiCloud {
+    /// (n, dim) coordinates.
+    points: Py<PyAny>,
+    /// Header lines skipped before the first point.
+    header_lines: usize,
+    /// Number of columns of each data line.
+    columns: Vec<usize>,
+}
+
+/// Read an ASCII point file.
 #[pyfunction]
 #[pyo3(signature = (path, dim=3, skip_lines=0))]
 fn cloud_read_ascii<'py>(
@@ -15,7 +26,7 @@ fn cloud_read_ascii<'py>(
     path: String,
     dim: usize,
     skip_lines: usize,
-) -> PyResult<(Bound<'py, PyAny>, usize, Vec<usize>)> {
+) -> PyResult<AsciiCloud> {
     let parsed = run(py, || {
         let bytes = std::fs::read(&path)
             .map_err(|e| GkError::invalid(format!("{path}: cannot be read ({e})")))?;
@@ -23,13 +34,22 @@ fn cloud_read_ascii<'py>(
     })?;
     let n = parsed.coords.len() / dim;
     let arr = PyArray1::from_vec(py, parsed.coords).reshape([n, dim])?;
-    Ok((arr.into_any(), parsed.header_lines, parsed.columns))
+    Ok(AsciiCloud { points: arr.into_any().unbind(), header_lines: parsed.header_lines, columns: parsed.columns })
 }
 
-/// Read the vertices of a PLY file (memory-mapped): returns (points (n, 3), format name).
-/// The points are decoded straight into numpy's allocation (one pass, no copy).
+/// The vertices of a PLY file.
+#[pyclass(frozen, get_all, module = "gagekit._core")]
+pub struct PlyCloud {
+    /// (n, 3) coordinates.
+    points: Py<PyAny>,
+    /// `ascii`, `binary_little_endian` or `binary_big_endian`.
+    format: &'static str,
+}
+
+/// Read the vertices of a PLY file (memory-mapped), decoded straight into numpy's
+/// allocation (one pass, no copy).
 #[pyfunction]
-fn cloud_read_ply<'py>(py: Python<'py>, path: String) -> PyResult<(Bound<'py, PyAny>, &'static str)> {
+fn cloud_read_ply(py: Python<'_>, path: String) -> PyResult<PlyCloud> {
     let file = run(py, || PlyFile::open(std::path::Path::new(&path), &path))?;
     let n = file.vertex_count();
     // SAFETY: uninitialised until `read_into` has written every element; on an error the
@@ -37,32 +57,50 @@ fn cloud_read_ply<'py>(py: Python<'py>, path: String) -> PyResult<(Bound<'py, Py
     let arr = unsafe { PyArray2::<f64>::new(py, [n, 3], false) };
     {
         // SAFETY: the array was just created, is C-contiguous and nothing else refers to it.
-        let out = unsafe { arr.as_slice_mut() }.map_err(|e| gagekit_err(py, "InternalError", e.to_string()))?;
+        let out = unsafe { arr.as_slice_mut() }.map_err(|e| invalid(e.to_string()))?;
         run(py, || file.read_into(out))?;
     }
-    Ok((arr.into_any(), file.format_name()))
+    Ok(PlyCloud { points: arr.into_any().unbind(), format: file.format_name() })
 }
 
-/// Read every scan of an E57 file (metres, poses applied): returns
-/// (points (n, 3), number of scans, number of invalid points dropped).
+/// Where the vertices of a PLY file are, when they can be used without decoding.
+#[pyclass(frozen, get_all, module = "gagekit._core")]
+pub struct PlyLayout {
+    /// Number of vertices the header declares.
+    vertices: usize,
+    /// Byte offset of the first vertex when the file is in gagekit's own layout (binary
+    /// little-endian `double x, y, z` only; sizes and finiteness checked), else None.
+    direct_offset: Option<usize>,
+}
+
+/// Open and check a PLY file; see [`PlyLayout`]. Python then maps the file
+/// (copy-on-write) as the array: no copy at all.
 #[pyfunction]
-fn cloud_read_e57<'py>(py: Python<'py>, path: String) -> PyResult<(Bound<'py, PyAny>, usize, usize)> {
+fn cloud_ply_layout(py: Python<'_>, path: String) -> PyResult<PlyLayout> {
+    run(py, || {
+        let f = PlyFile::open(std::path::Path::new(&path), &path)?;
+        Ok(PlyLayout { vertices: f.vertex_count(), direct_offset: f.direct_f64_offset()? })
+    })
+}
+
+/// The points of every scan of an E57 file.
+#[pyclass(frozen, get_all, module = "gagekit._core")]
+pub struct E57Cloud {
+    /// (n, 3) coordinates in metres, poses applied, invalid points dropped.
+    points: Py<PyAny>,
+    /// Number of scans.
+    scans: usize,
+    /// Points dropped because their invalid state was not 0.
+    invalid_dropped: usize,
+}
+
+/// Read every scan of an E57 file.
+#[pyfunction]
+fn cloud_read_e57(py: Python<'_>, path: String) -> PyResult<E57Cloud> {
     let p = run(py, || read_e57(std::path::Path::new(&path), &path))?;
     let n = p.coords.len() / 3;
     let arr = PyArray1::from_vec(py, p.coords).reshape([n, 3])?;
-    Ok((arr.into_any(), p.scans, p.invalid_dropped))
-}
-
-/// Open a PLY file and, when its vertices are stored as exactly `double x, y, z`
-/// little-endian with nothing else (gagekit's own layout), return (vertex count, byte
-/// offset of the data) after checking sizes and finiteness; otherwise (count, None).
-/// Python then maps the file (copy-on-write) as the array: no copy at all.
-#[pyfunction]
-fn cloud_ply_direct(py: Python<'_>, path: String) -> PyResult<(usize, Option<usize>)> {
-    run(py, || {
-        let f = PlyFile::open(std::path::Path::new(&path), &path)?;
-        Ok((f.vertex_count(), f.direct_f64_offset()?))
-    })
+    Ok(E57Cloud { points: arr.into_any().unbind(), scans: p.scans, invalid_dropped: p.invalid_dropped })
 }
 
 /// Write points (n, d) as ASCII with separator `sep` and an optional header line.
@@ -79,7 +117,7 @@ fn cloud_write_ascii(
     let flat = rows(py, &points, dim, "points")?;
     let sep = match sep.as_bytes() {
         [b] => *b,
-        _ => return Err(gagekit_err(py, "InvalidInputError", format!("separator must be one character, got {sep:?}"))),
+        _ => return Err(invalid(format!("separator must be one character, got {sep:?}"))),
     };
     run(py, || {
         let text = write_ascii(flat, dim, sep, header.as_deref())?;
@@ -88,10 +126,14 @@ fn cloud_write_ascii(
 }
 
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<AsciiCloud>()?;
     m.add_function(wrap_pyfunction!(cloud_read_ascii, m)?)?;
     m.add_function(wrap_pyfunction!(cloud_write_ascii, m)?)?;
+    m.add_class::<PlyCloud>()?;
+    m.add_class::<PlyLayout>()?;
+    m.add_class::<E57Cloud>()?;
     m.add_function(wrap_pyfunction!(cloud_read_ply, m)?)?;
-    m.add_function(wrap_pyfunction!(cloud_ply_direct, m)?)?;
+    m.add_function(wrap_pyfunction!(cloud_ply_layout, m)?)?;
     m.add_function(wrap_pyfunction!(cloud_read_e57, m)?)?;
     Ok(())
 }

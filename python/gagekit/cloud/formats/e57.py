@@ -15,9 +15,10 @@ from . import Raw
 
 def read(p: Path, dim: int) -> Raw:
     try:
-        pts, scans, dropped = _core.cloud_read_e57(str(p))
+        cloud = _core.cloud_read_e57(str(p))
     except InvalidInputError as exc:
         raise FileFormatError(str(exc)) from None
+    pts, scans, dropped = cloud.points, cloud.scans, cloud.invalid_dropped
     if scans == 0:
         raise FileFormatError(f"{p}: the E57 file holds no scans")
     return Raw(pts, "e57", unit="m", unit_basis="E57 standard (ASTM E2807): metres",

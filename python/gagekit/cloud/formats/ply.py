@@ -19,11 +19,12 @@ from . import Raw
 
 def read(p: Path, dim: int) -> Raw:
     try:
-        n, offset = _core.cloud_ply_direct(str(p))
+        layout = _core.cloud_ply_layout(str(p))
+        n, offset = layout.vertices, layout.direct_offset
         if offset is not None:
             pts = np.asarray(np.memmap(p, dtype="<f8", mode="c", offset=offset, shape=(n, 3))) if n else np.empty((0, 3))
             return Raw(pts, "ply binary_little_endian", finite_checked=True)
-        pts, fmt = _core.cloud_read_ply(str(p))
+        cloud = _core.cloud_read_ply(str(p))
     except InvalidInputError as exc:
         raise FileFormatError(str(exc)) from None
-    return Raw(pts, f"ply {fmt}", finite_checked=True)
+    return Raw(cloud.points, f"ply {cloud.format}", finite_checked=True)
