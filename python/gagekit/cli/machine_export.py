@@ -1,0 +1,122 @@
+"""`gagekit machine export | compensate-nc`: from a calibration to the controller (Sec. 7.1.1 (3)).
+
+Registered on the ``machine`` sub-application by the import at the end of ``cli/machine.py``.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Optional
+
+import typer
+
+from ..errors import InvalidInputError
+from ._common import JSON_OPTION, emit
+from .machine import MACHINE_ARG, _warnings_to_stderr, app
+
+CAL_ARG = typer.Argument(..., help="Calibration JSON from identify --out.")
+
+
+def _number(text: str, what: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise InvalidInputError(f"{what}: '{text}' is not a number") from None
+    if not math.isfinite(v):
+        raise InvalidInputError(f"{what}: '{text}' is not a finite number")
+    return v
+
+
+def parse_assignments(text: Optional[str], what: str) -> dict:
+    """'B=0,W=-500' -> {'B': 0.0, 'W': -500.0}."""
+    out: dict = {}
+    if not text:
+        return out
+    for part in text.split(","):
+        part = part.strip()
+        if not part:
+            continue
+        if "=" not in part:
+            raise InvalidInputError(f"{what}: expected NAME=VALUE items separated by commas, got '{part}'")
+        k, v = (s.strip() for s in part.split("=", 1))
+        if k in out:
+            raise InvalidInputError(f"{what}: '{k}' is given twice")
+        out[k] = v
+    return out
+
+
+def _per_axis_option(text: Optional[str], what: str):
+    """'50' (every axis) or 'X=50,B=5'."""
+    if text is None:
+        return None
+    if "=" not in text:
+        return _number(text, what)
+    return {k: _number(v, f"{what} {k}") for k, v in parse_assignments(text, what).items()}
+
+
+def _limits(text: Optional[str]) -> dict:
+    out = {}
+    for k, v in parse_assignments(text, "--limits").items():
+        if ":" not in v:
+            raise InvalidInputError(f"--limits {k}: expected LO:HI, got '{v}'")
+        lo, hi = v.split(":", 1)
+        out[k] = (_number(lo, f"--limits {k}"), _number(hi, f"--limits {k}"))
+    return out
+
+
+@app.command("export")
+def export_cmd(
+    machine_file: Path = MACHINE_ARG,
+    calibration: Path = CAL_ARG,
+    fmt: str = typer.Option(..., "--format", help="grid-csv, isg-csv (ISG/Beckhoff TF5280), fanuc-3d or linuxcnc."),
+    out: Path = typer.Option(..., "--out", help="File to write (linuxcnc: one file per axis, OUT_<joint>.ext)."),
+    axes: Optional[str] = typer.Option(None, "--axes", help="Grid joints, e.g. X,Y,Z (default depends on the format)."),
+    step: Optional[str] = typer.Option(None, "--step", help="Node spacing: one value (file units) or X=50,B=5 (default 50 mm, 5 deg)."),
+    points: Optional[str] = typer.Option(None, "--points", help="Nodes per axis: one value or X=51,Y=44 (instead of --step)."),
+    at: Optional[str] = typer.Option(None, "--at", help="Fixed values of the other joints, e.g. B=0,W=-500 (default 0 or mid-range)."),
+    limits: Optional[str] = typer.Option(None, "--limits", help="Grid extent inside the joint ranges, e.g. X=-1000:1000."),
+    increment: float = typer.Option(0.001, "--increment", help="fanuc-3d: detection unit, mm (0.001 IS-B, 0.0001 IS-C)."),
+    seed: int = typer.Option(0, "--seed", help="Seed of the random commands of the read-back check."),
+    as_json: bool = JSON_OPTION,
+) -> None:
+    """Write a compensation table for a controller and read it back as the controller interpolates it."""
+    from ..machine import load_calibration, load_machine
+    from ..machine.export import export
+
+    m = load_machine(machine_file)
+    cal = load_calibration(calibration)
+    ax = [a.strip() for a in axes.split(",") if a.strip()] if axes else None
+    fixed = {k: _number(v, f"--at {k}") for k, v in parse_assignments(at, "--at").items()}
+    with _warnings_to_stderr():
+        res = export(
+            m, cal, fmt, out, axes=ax, step=_per_axis_option(step, "--step"), points=_per_axis_option(points, "--points"),
+            at=fixed, limits=_limits(limits), increment=increment, stamp=calibration_stamp(calibration, cal), seed=seed,
+        )
+
+    def human(r) -> str:
+        rb = r.readback
+        g = r.grid
+        return (
+            f"wrote {r.format} ({' x '.join(str(n) for n in g.shape)} nodes over {', '.join(g.axes)}) to "
+            f"{', '.join(r.files)}\nread back at {rb['n']} random commands: {rb['quantity']} within "
+            f"{rb['max_um']:.3g} um (RMS {rb['rms_um']:.3g} um)"
+        )
+
+    emit(res, as_json, human)
+
+
+def calibration_stamp(path: Path, cal) -> str:
+    """'<date> (machine <name>)': the calibration's ``created`` field, else the file's date."""
+    import datetime
+    import json
+
+    created = None
+    try:
+        created = json.loads(Path(path).read_text(encoding="utf-8")).get("created")
+    except (OSError, ValueError, AttributeError):
+        pass
+    if not isinstance(created, str) or not created:
+        ts = Path(path).stat().st_mtime
+        created = datetime.datetime.fromtimestamp(ts, datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC") + " (file date)"
+    return f"{created}, machine {cal.machine}, file {Path(path).name}"
