@@ -185,7 +185,8 @@ def test_cli_export_json_and_error(machine, cal, tmp_path):
     assert p.returncode == 0, p.stderr
     d = json.loads(p.stdout)
     assert d["readback"]["max_um"] < 1.0 and d["grid"]["fixed"] == {"W": -500.0}
-    assert "machine dissertation-5axis-BXZYW" in (tmp_path / "v.csv").read_text()
+    text = (tmp_path / "v.csv").read_text()
+    assert "dissertation-5axis-BXZYW" in text and "// calibration: " in text
     p = run("export", EXAMPLE_MACHINE, calf, "--format", "fanuc-3d", "--axes", "X,Y,B", "--out", tmp_path / "f.tap")
     assert p.returncode == 2 and p.stderr.startswith("gagekit: error: ") and len(p.stderr.splitlines()) == 1
     assert not (tmp_path / "f.tap").exists()

@@ -107,7 +107,7 @@ def export_cmd(
 
 
 def calibration_stamp(path: Path, cal) -> str:
-    """'<date> (machine <name>)': the calibration's ``created`` field, else the file's date."""
+    """'<date>, file <name>': the calibration's ``created`` field, else the file's date."""
     import datetime
     import json
 
@@ -119,4 +119,39 @@ def calibration_stamp(path: Path, cal) -> str:
     if not isinstance(created, str) or not created:
         ts = Path(path).stat().st_mtime
         created = datetime.datetime.fromtimestamp(ts, datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC") + " (file date)"
-    return f"{created}, machine {cal.machine}, file {Path(path).name}"
+    return f"{created}, file {Path(path).name}"
+
+
+@app.command("compensate-nc")
+def compensate_nc_cmd(
+    machine_file: Path = MACHINE_ARG,
+    calibration: Path = CAL_ARG,
+    program: Path = typer.Argument(..., help="G-code program (ISO 6983 / RS-274) with the machine's joint letters."),
+    out: Path = typer.Option(..., "--out", help="Corrected program to write."),
+    axes: Optional[str] = typer.Option(None, "--axes", help="Joints that compensate (default: all prismatic)."),
+    max_step: float = typer.Option(0.001, "--max-step", help="Subdivide G1 moves whose correction changes by more than this, mm."),
+    linearize_arcs: Optional[float] = typer.Option(None, "--linearize-arcs", help="Turn G2/G3 into chords within TOL mm (default: arcs are errors)."),
+    start: Optional[str] = typer.Option(None, "--start", help="Joint positions before the program, e.g. B=0,W=-500."),
+    decimals: int = typer.Option(4, "--decimals", help="Decimals of the written coordinates."),
+    as_json: bool = JSON_OPTION,
+) -> None:
+    """Correct an NC program point by point through the inverse error model (arcs, cycles, macros: errors)."""
+    from ..machine import load_calibration, load_machine
+    from ..machine.nc import compensate_nc
+
+    m = load_machine(machine_file)
+    cal = load_calibration(calibration)
+    ax = [a.strip() for a in axes.split(",") if a.strip()] if axes else None
+    st = {k: _number(v, f"--start {k}") for k, v in parse_assignments(start, "--start").items()}
+    res = compensate_nc(
+        m, cal, program, out, axes=ax, max_step=max_step, linearize_arcs=linearize_arcs, start=st,
+        decimals=decimals, stamp=calibration_stamp(calibration, cal),
+    )
+    emit(
+        res,
+        as_json,
+        lambda r: (
+            f"wrote {r.out}: {r.lines} lines, {r.moves} moves corrected (largest correction {r.max_correction:.4f} mm), "
+            f"{r.inserted} points inserted in {r.subdivided} moves; predicted error left <= {r.max_remaining_um:.2g} um"
+        ),
+    )

@@ -17,8 +17,8 @@ _UMASK = os.umask(0)
 os.umask(_UMASK)
 
 
-def write_files_atomically(files: Mapping[Union[str, Path], str]) -> None:
-    """Write ``{path: text}``; all or nothing (temporary files, then renames)."""
+def write_files_atomically(files: Mapping[Union[str, Path], Union[str, bytes]]) -> None:
+    """Write ``{path: text or bytes}``; all or nothing (temporary files, then renames)."""
     temps = []
     try:
         for path, text in files.items():
@@ -29,8 +29,12 @@ def write_files_atomically(files: Mapping[Union[str, Path], str]) -> None:
             fd, tmp = tempfile.mkstemp(prefix=f".{p.name}.", suffix=".tmp", dir=folder)
             temps.append((tmp, p))
             os.chmod(tmp, 0o666 & ~_UMASK)
-            with os.fdopen(fd, "w", encoding="utf-8", newline="") as f:
-                f.write(text)
+            if isinstance(text, bytes):
+                with os.fdopen(fd, "wb") as fb:
+                    fb.write(text)
+            else:
+                with os.fdopen(fd, "w", encoding="utf-8", newline="") as f:
+                    f.write(text)
         for tmp, p in temps:
             os.replace(tmp, p)
         temps = []

@@ -44,7 +44,7 @@ Formats (units and sources in ``docs/controller-tables.md``):
     One file per linear axis for ``[JOINT_n] COMP_FILE`` with ``COMP_FILE_TYPE = 1``: lines
     ``nominal forward-trim reverse-trim`` in machine units (mm), ascending, at most 256 lines,
     no comments (LinuxCNC stops reading at the first line that is not three numbers,
-    ``emcJointLoadComp``); between lines the motion controller interpolates linearly. The trim
+    ``usrmotLoadComp``); between lines the motion controller interpolates linearly. The trim
     is the joint's own correction along a line through the ``at`` point (other joints fixed):
     a per-axis table cannot carry the cross-axis terms, which the readback shows.
 """

@@ -9,9 +9,9 @@ use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArra
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-type Spec = Vec<(String, [f64; 3], usize)>;
+pub(crate) type Spec = Vec<(String, [f64; 3], usize)>;
 
-fn machine(py: Python<'_>, spec: Spec, tool: [f64; 3]) -> PyResult<Machine> {
+pub(crate) fn machine(py: Python<'_>, spec: Spec, tool: [f64; 3]) -> PyResult<Machine> {
     let mut elements = Vec::with_capacity(spec.len());
     for (k, (kind, v, terms)) in spec.into_iter().enumerate() {
         elements.push(match kind.as_str() {

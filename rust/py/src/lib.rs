@@ -10,6 +10,7 @@ mod form;
 mod gage;
 mod geometry;
 mod kinematics;
+mod nc;
 
 use pyo3::prelude::*;
 
@@ -28,6 +29,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     geometry::register(m)?;
     form::register(m)?;
     kinematics::register(m)?;
+    nc::register(m)?;
     gage::register(m)?;
     design::register(m)?;
     Ok(())
