@@ -119,7 +119,9 @@ def test_subdivision_keeps_the_predicted_path_on_the_line(machine, cal):
        z=st.floats(950, 2100), b=st.floats(0, 90))
 @settings(max_examples=25, deadline=None)
 def test_any_g1_move_is_followed_within_max_step(machine, cal, x0, x1, y0, y1, z, b):
-    text = f"G0 B{b:.3f} X{x0:.3f} Y{y0:.3f} Z{z:.3f} W-500\nG1 X{x1:.3f} Y{y1:.3f} B{b / 2:.3f} F100\n".encode()
+    x0, x1, y0, y1, z, b = (round(v, 3) for v in (x0, x1, y0, y1, z, b))
+    b2 = round(b / 2, 3)
+    text = f"G0 B{b:.3f} X{x0:.3f} Y{y0:.3f} Z{z:.3f} W-500\nG1 X{x1:.3f} Y{y1:.3f} B{b2:.3f} F100\n".encode()
     out, _ = compensate_nc_text(machine, cal, text, decimals=8)
     rows = []
     for l in out.decode().split("\n")[1:-1]:
@@ -133,11 +135,11 @@ def test_any_g1_move_is_followed_within_max_step(machine, cal, x0, x1, y0, y1, z
     cmds = np.array(cmds)
     a = actual(machine, cal, cmds)
     p0 = machine.nominal([[b, x0, z, y0, -500.0]])[0]
-    p1 = machine.nominal([[b / 2, x1, z, y1, -500.0]])[0]
+    p1 = machine.nominal([[b2, x1, z, y1, -500.0]])[0]
     # each written point's predicted position is the nominal position of its programmed point:
     # on the joint-space line between the two programmed points
     ts = np.linspace(0, 1, 2001)
-    line = machine.nominal(np.column_stack([b + (b / 2 - b) * ts, x0 + (x1 - x0) * ts, np.full_like(ts, z), y0 + (y1 - y0) * ts, np.full_like(ts, -500.0)]))
+    line = machine.nominal(np.column_stack([b + (b2 - b) * ts, x0 + (x1 - x0) * ts, np.full_like(ts, z), y0 + (y1 - y0) * ts, np.full_like(ts, -500.0)]))
     dist = np.array([np.linalg.norm(line - q, axis=1).min() for q in a])
     span = np.linalg.norm(p1 - p0) / 2000
     assert dist.max() < 1e-5 + span
@@ -193,3 +195,20 @@ def test_cli_compensate_nc(cal, tmp_path):
     p = run("compensate-nc", EXAMPLE_MACHINE, calf, tmp_path / "q.nc", "--out", tmp_path / "o2.nc")
     assert p.returncode == 2 and "line 2" in p.stderr and len(p.stderr.splitlines()) == 1
     assert not (tmp_path / "o2.nc").exists()
+
+
+def test_compensate_kernel_matches_a_numpy_gauss_newton(machine, cal):
+    """`compensate` (Rust kernel) against the same iteration written with NumPy here."""
+    c0 = machine.sample_commands(200, seed=3)
+    p = calibration_parameters(machine, cal)
+    idx = [1, 2, 3, 4]
+    target = machine.nominal(c0)
+    c = c0.copy()
+    for _ in range(4):
+        miss = (machine.nominal(c) + machine.volumetric_error(c, p) - target).reshape(-1, 3, 1)
+        jac = machine.command_jacobian(c).reshape(-1, 3, 5)[:, :, idx]
+        c[:, idx] -= (np.linalg.pinv(jac) @ miss)[:, :, 0]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        got, left = compensate(machine, cal, c0)
+    assert np.abs(got - c).max() < 1e-9 and np.abs(left).max() < 1e-9

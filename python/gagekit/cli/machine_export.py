@@ -1,6 +1,6 @@
 """`gagekit machine export | compensate-nc`: from a calibration to the controller (Sec. 7.1.1 (3)).
 
-Registered on the ``machine`` sub-application by the import at the end of ``cli/machine.py``.
+Registered on the ``machine`` sub-application by :func:`register`, called in ``cli/__init__.py``.
 """
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ import typer
 
 from ..errors import InvalidInputError
 from ._common import JSON_OPTION, emit
-from .machine import MACHINE_ARG, _warnings_to_stderr, app
+from .machine import MACHINE_ARG, _warnings_to_stderr
 
 CAL_ARG = typer.Argument(..., help="Calibration JSON from identify --out.")
 
@@ -65,7 +65,6 @@ def _limits(text: Optional[str]) -> dict:
     return out
 
 
-@app.command("export")
 def export_cmd(
     machine_file: Path = MACHINE_ARG,
     calibration: Path = CAL_ARG,
@@ -122,7 +121,6 @@ def calibration_stamp(path: Path, cal) -> str:
     return f"{created}, file {Path(path).name}"
 
 
-@app.command("compensate-nc")
 def compensate_nc_cmd(
     machine_file: Path = MACHINE_ARG,
     calibration: Path = CAL_ARG,
@@ -155,3 +153,16 @@ def compensate_nc_cmd(
             f"{r.inserted} points inserted in {r.subdivided} moves; predicted error left <= {r.max_remaining_um:.2g} um"
         ),
     )
+
+
+#: (command name, function) of this module, in help order.
+COMMANDS = (
+    ("export", export_cmd),
+    ("compensate-nc", compensate_nc_cmd),
+)
+
+
+def register(app: typer.Typer) -> None:
+    """Add this module's commands to the ``machine`` sub-application ``app``."""
+    for name, fn in COMMANDS:
+        app.command(name)(fn)

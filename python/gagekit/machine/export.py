@@ -62,7 +62,8 @@ import numpy as np
 from ..errors import ConfigError, FileFormatError, InvalidInputError
 from ._files import write_files_atomically
 from .errormotions import Twist, compose, element_twists, frames, transport
-from .identify import Calibration, predict, predict_uncertainty
+from .calibration import Calibration
+from .predict import predict, predict_uncertainty
 from .model import JointSpec, Machine, ShapeSpec
 
 __all__ = [
@@ -272,7 +273,7 @@ def check_calibration(machine: Machine, calibration: Calibration) -> None:
 def calibration_parameters(machine: Machine, calibration: Calibration) -> np.ndarray:
     """The minimum-norm parameter vector (P,) with the calibration's group values (Eq. 3.14);
     raises ConfigError when the calibration's groups are not this machine's."""
-    from .identify import _coefficients
+    from .predict import _coefficients
 
     st = machine.structure()
     c = _coefficients(machine, calibration, st)

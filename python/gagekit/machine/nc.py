@@ -38,7 +38,7 @@ from .. import _core
 from ..errors import ConfigError, FileFormatError, InvalidInputError
 from ._files import write_files_atomically
 from .export import calibration_parameters, check_calibration
-from .identify import Calibration
+from .calibration import Calibration
 from .model import Machine
 
 __all__ = ["NcResult", "compensate_nc", "compensate_nc_text"]
