@@ -166,3 +166,37 @@ def register(app: typer.Typer) -> None:
     """Add this module's commands to the ``machine`` sub-application ``app``."""
     for name, fn in COMMANDS:
         app.command(name)(fn)
+
+
+def iso230_2_cmd(
+    runs: Path = typer.Argument(..., help="Laser-interferometer runs CSV: target,direction,cycle,measured (mm; direction + or -)."),
+    report: Optional[Path] = typer.Option(None, "--report", help="Directory for report.html with the standard's plot."),
+    as_json: bool = JSON_OPTION,
+) -> None:
+    """Accuracy and repeatability of positioning of an axis, ISO 230-2:2014."""
+    from ..machine.iso230_2 import iso230_2, read_runs
+    from ..report.text import table
+
+    res = iso230_2(*read_runs(runs))
+    if report is not None:
+        from ..report import Report
+        from ..report.iso230_2 import add_iso230_2
+
+        rep = Report(f"ISO 230-2 positioning: {runs.name}", f"{len(res.targets)} targets, {res.cycles} cycles per direction")
+        add_iso230_2(rep, res)
+        rep.write(report)
+
+    def human(r) -> str:
+        keys = ("A", "A_up", "A_down", "E", "E_up", "E_down", "M", "R", "R_up", "R_down", "B", "B_mean")
+        rows = [[t.target] + [round(1e3 * v, 3) for v in (t.mean_up, t.mean_down, t.s_up, t.s_down, t.R, t.B)] for t in r.targets]
+        return "\n".join([
+            f"ISO 230-2:2014, {len(r.targets)} targets, {r.cycles} cycles per direction (um)",
+            "  ".join(f"{k} {1e3 * getattr(r, k):.3f}" for k in keys),
+            "",
+            table(["target (mm)", "mean up", "mean down", "s up", "s down", "R", "B"], rows),
+        ])
+
+    emit(res, as_json, human)
+
+
+COMMANDS = COMMANDS + (("iso230-2", iso230_2_cmd),)
