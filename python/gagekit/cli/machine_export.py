@@ -177,6 +177,10 @@ def iso230_2_cmd(
     from ..machine.iso230_2 import iso230_2, read_runs
     from ..report.text import table
 
+    from .._files import atomic_dir, output_dir
+
+    if report is not None:
+        output_dir(report)
     res = iso230_2(*read_runs(runs))
     if report is not None:
         from ..report import Report
@@ -184,7 +188,8 @@ def iso230_2_cmd(
 
         rep = Report(f"ISO 230-2 positioning: {runs.name}", f"{len(res.targets)} targets, {res.cycles} cycles per direction")
         add_iso230_2(rep, res)
-        rep.write(report)
+        with atomic_dir(report) as tmp:
+            rep.write(tmp)
 
     def human(r) -> str:
         keys = ("A", "A_up", "A_down", "E", "E_up", "E_down", "M", "R", "R_up", "R_down", "B", "B_mean")

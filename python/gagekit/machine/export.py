@@ -628,9 +628,13 @@ def export(
         raise InvalidInputError(f"unknown format {fmt!r} (choose {', '.join(FORMATS)})")
     if not (math.isfinite(increment) and increment > 0):
         raise InvalidInputError(f"--increment must be a positive number of mm, got {increment}")
+    from .._files import output_file
+
     check_calibration(machine, calibration)
     params = calibration_parameters(machine, calibration)
     grid = make_grid(machine, axes if axes else default_axes(machine, fmt), step, points, at, limits)
+    for p in linuxcnc_paths(out, grid.axes) if fmt == "linuxcnc" else [out]:
+        output_file(p)  # a bad output path fails before any work
     stamp = stamp or "undated"
     notes: list[str] = []
     if fmt == "grid-csv":

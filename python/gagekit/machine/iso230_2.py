@@ -95,13 +95,10 @@ class Iso230Result:
 
 def read_runs(path: Union[str, Path]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(targets (m,), deviations up (m, n), deviations down (m, n)) from a runs CSV."""
+    from .._files import read_text
+
     p = Path(path)
-    try:
-        text = p.read_text(encoding="utf-8-sig")
-    except FileNotFoundError:
-        raise FileFormatError(f"{p}: file not found") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise FileFormatError(f"{p}: cannot read the file ({exc})") from None
+    text = read_text(p, "interferometer runs")
     rows = [r for r in csv.reader(io.StringIO(text)) if r and "".join(r).strip() and not r[0].lstrip().startswith("#")]
     if not rows:
         raise FileFormatError(f"{p}: empty file (expected the header target,direction,cycle,measured)")

@@ -153,13 +153,11 @@ def compensate_nc(
     **kwargs,
 ) -> NcResult:
     """Read ``program``, correct it (:func:`compensate_nc_text`) and write ``out`` atomically."""
+    from .._files import output_file, read_bytes
+
     p = Path(program)
-    try:
-        text = p.read_bytes()
-    except FileNotFoundError:
-        raise FileFormatError(f"{p}: NC program not found") from None
-    except OSError as exc:
-        raise FileFormatError(f"{p}: cannot read the NC program ({exc.strerror})") from None
+    text = read_bytes(p, "NC program")
+    output_file(out)
     t0 = time.perf_counter()
     try:
         data, report = compensate_nc_text(machine, calibration, text, **kwargs)

@@ -40,12 +40,12 @@ class TemperatureModel:
 
 def load_temperature_model(path: Union[str, Path]) -> TemperatureModel:
     """Read the ``temperature_model`` of a ``machine track --json`` output (or report track.json)."""
+    from .._files import read_text
+
     p = Path(path)
     try:
-        d = json.loads(p.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise FileFormatError(f"{p}: tracking result not found") from None
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        d = json.loads(read_text(p, "tracking result"))
+    except json.JSONDecodeError as exc:
         raise FileFormatError(f"{p}: not a tracking result JSON ({exc})") from None
     tm = d.get("temperature_model") if isinstance(d, dict) else None
     if not isinstance(tm, dict) or not tm.get("fitted") or "intercept" not in tm:
