@@ -1,6 +1,7 @@
 """Corrected NC programs (issue 15 part 2): byte-for-byte copies, the inverse model's points,
 subdivision that keeps the predicted path on the programmed line, clear errors."""
 
+import dataclasses
 import json
 import re
 import subprocess
@@ -162,7 +163,7 @@ def test_errors_name_the_line_and_write_nothing(machine, cal, tmp_path):
     assert not (tmp_path / "o.nc").exists()
     with pytest.raises(FileFormatError, match="not found"):
         compensate_nc(machine, cal, tmp_path / "missing.nc", tmp_path / "o.nc")
-    other = type(machine)(**{**machine.__dict__, "name": "other"})
+    other = dataclasses.replace(machine, name="other")
     with pytest.raises(ConfigError, match="not 'other'"):
         compensate_nc_text(other, cal, b"G0 X1\n")
 

@@ -1,6 +1,7 @@
 """Temperatures that predict the errors (issue 15 part 4): the physical thermal simulator, the
 ridge temperature model with nested leave-one-cycle-out, `machine predict --temperatures`."""
 
+import dataclasses
 import json
 import subprocess
 import sys
@@ -78,6 +79,6 @@ def test_predict_from_temperatures(machine, run, tmp_path):
         from gagekit.machine.thermal import read_temperatures
 
         read_temperatures(tmp_path / "T2.csv", model)
-    other = type(machine)(**{**machine.__dict__, "name": "other"})
+    other = dataclasses.replace(machine, name="other")
     with pytest.raises(ConfigError, match="not 'other'"):
         predict_from_temperatures(other, model, cyc.commands, temps)

@@ -130,7 +130,7 @@ def compensate_nc_text(
         + (f"; arcs linearised within {linearize_arcs:g} mm" if linearize_arcs else "")
     )
     out, report = _core.nc_compensate(
-        *machine._spec(),
+        machine._chain,
         params,
         bytes(text),
         letters,

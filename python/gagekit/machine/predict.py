@@ -103,7 +103,7 @@ def compensate(
     # c <- c - pinv(J_axes) (P(c) + M(c) p - P(c0)), minimum-norm steps for redundant axes
     unit = machine._angle_factor()
     c, remaining = _core.machine_compensate(
-        *machine._spec(), np.ascontiguousarray(c0 * unit), np.ascontiguousarray(p), idx, int(iterations)
+        machine._chain, np.ascontiguousarray(c0 * unit), np.ascontiguousarray(p), idx, int(iterations)
     )
     c = c0 + (np.asarray(c) - c0 * unit) / unit  # joints not in ``axes`` stay bit-identical
     c[:, [j for j in range(c.shape[1]) if j not in idx]] = c0[:, [j for j in range(c.shape[1]) if j not in idx]]

@@ -1,10 +1,10 @@
 //! Bindings of gagekit-nc (corrected G-code programs) and of the inverse error model.
 
-use crate::arrays::{rows, values};
+use crate::arrays::{matrix, rows, values};
 use crate::errors::run;
-use crate::kinematics::{machine, Spec};
+use crate::kinematics::KinematicChain;
 use gagekit_nc::{compensate_program, Options, Settings};
-use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2};
+use numpy::{PyArray2, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict};
 
@@ -13,30 +13,27 @@ use pyo3::types::{PyBytes, PyDict};
 #[pyfunction]
 fn machine_compensate<'py>(
     py: Python<'py>,
-    spec: Spec,
-    tool: [f64; 3],
+    chain: &Bound<'py, KinematicChain>,
     commands: PyReadonlyArray2<'py, f64>,
     params: PyReadonlyArray1<'py, f64>,
     joints: Vec<usize>,
     iterations: usize,
 ) -> PyResult<(Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<f64>>)> {
-    let m = machine(py, spec, tool)?;
+    let m = chain.get().chain();
     let nj = m.n_joints();
     let c = rows(py, &commands, nj, "commands")?;
     let p = values(py, &params, "parameters")?;
     let (out, left) = run(py, || m.compensate(c, p, &joints, iterations))?;
-    let n = out.len() / nj;
-    Ok((PyArray1::from_vec(py, out).reshape([n, nj])?, PyArray1::from_vec(py, left).reshape([n, 3])?))
+    Ok((matrix(py, out, nj)?, matrix(py, left, 3)?))
 }
 
 /// Correct a G-code program (bytes); returns (bytes, report dict).
 #[pyfunction]
-#[pyo3(signature = (spec, tool, params, text, letters, unit, start, joints, max_step, decimals, header, arc_tolerance=None, iterations=4))]
+#[pyo3(signature = (chain, params, text, letters, unit, start, joints, max_step, decimals, header, arc_tolerance=None, iterations=4))]
 #[allow(clippy::too_many_arguments)]
 fn nc_compensate<'py>(
     py: Python<'py>,
-    spec: Spec,
-    tool: [f64; 3],
+    chain: &Bound<'py, KinematicChain>,
     params: PyReadonlyArray1<'py, f64>,
     text: &[u8],
     letters: String,
@@ -49,7 +46,7 @@ fn nc_compensate<'py>(
     arc_tolerance: Option<f64>,
     iterations: usize,
 ) -> PyResult<(Bound<'py, PyBytes>, Bound<'py, PyDict>)> {
-    let m = machine(py, spec, tool)?;
+    let m = chain.get().chain();
     let p = values(py, &params, "parameters")?;
     let settings = Settings {
         options: Options { letters: letters.into_bytes(), start, arc_tolerance },
@@ -60,7 +57,7 @@ fn nc_compensate<'py>(
         header,
         iterations,
     };
-    let (out, r) = run(py, || compensate_program(text, &m, p, &settings))?;
+    let (out, r) = run(py, || compensate_program(text, m, p, &settings))?;
     let d = PyDict::new(py);
     d.set_item("lines", r.lines)?;
     d.set_item("moves", r.moves)?;
