@@ -31,6 +31,13 @@ fn classify_boxes<'py>(
     Ok(out.into_iter().map(|v| indices(py, v)).collect())
 }
 
+/// Check an oriented box (Sec. 5.4.1): finite centre, size and rotation, a positive size on
+/// every axis; ConfigError naming the region otherwise.
+#[pyfunction]
+fn validate_box(py: Python<'_>, name: &str, center: [f64; 3], size: [f64; 3], rotation: [f64; 3]) -> PyResult<()> {
+    run(py, || OrientedBox { center, size, rotation }.validate(name))
+}
+
 /// Ascending indices of the convex-hull vertices of an (n, 3) point array (Eq. 5.21).
 #[pyfunction]
 fn hull_indices<'py>(py: Python<'py>, points: PyReadonlyArray2<'py, f64>) -> PyResult<Bound<'py, PyArray1<i64>>> {
@@ -42,5 +49,6 @@ fn hull_indices<'py>(py: Python<'py>, points: PyReadonlyArray2<'py, f64>) -> PyR
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(classify_boxes, m)?)?;
     m.add_function(wrap_pyfunction!(hull_indices, m)?)?;
+    m.add_function(wrap_pyfunction!(validate_box, m)?)?;
     Ok(())
 }
