@@ -15,7 +15,7 @@ import typer
 
 from .. import __version__
 from ..errors import GagekitError
-from . import cloud, demo, form, gage, machine
+from . import cloud, demo, form, gage, machine, studio
 
 app = typer.Typer(
     name="gagekit",
@@ -29,6 +29,7 @@ app.add_typer(form.app, name="form")
 app.add_typer(gage.app, name="gage")
 app.add_typer(machine.app, name="machine")
 app.command("demo")(demo.demo)
+app.command("studio")(studio.studio)
 
 
 def _version_callback(value: bool) -> None:
