@@ -287,9 +287,10 @@ function bindEditor() {
     if (c.some(Number.isNaN) || s.some(Number.isNaN) || rot.some(Number.isNaN)) return;
     r.center = c; r.size = s;
     if (r.rotation || rot.some((v) => v !== 0)) r.rotation = rot;
+    changed(false);
+    if (s.some((v) => !(v > 0))) { $("re-count").textContent = "–"; return; } // the reader's message shows
     view.updateBox(state.selected, regionInRad(r));
     recount();
-    changed(false);
   };
   ["c", "s", "r"].forEach((k) => ["x", "y", "z"].forEach((a) => $(`re-${k}${a}`).addEventListener("input", fromInputs)));
   $("re-name").addEventListener("change", () => {
