@@ -15,7 +15,7 @@ import typer
 
 from .. import __version__
 from ..errors import GagekitError
-from . import cloud, demo, form, gage, machine, studio
+from . import cloud, demo, form, gage, machine, machine_observer, studio
 
 app = typer.Typer(
     name="gagekit",
@@ -24,6 +24,8 @@ app = typer.Typer(
     add_completion=False,
     pretty_exceptions_enable=False,
 )
+# Every sub-application and command is registered here, explicitly (no registration by import).
+machine_observer.register(machine.app)  # machine design, evaluate-plan, track, history, simulate-cycles
 app.add_typer(cloud.app, name="cloud")
 app.add_typer(form.app, name="form")
 app.add_typer(gage.app, name="gage")
@@ -54,6 +56,10 @@ def _root(
 
 def main(argv: Optional[list[str]] = None) -> None:
     """Entry point of the console script."""
+    import warnings
+
+    # library warnings (e.g. a LAS file's assumed unit) as one line each on stderr
+    warnings.showwarning = lambda message, *_a, **_k: print(f"gagekit: warning: {message}", file=sys.stderr)
     try:
         app(args=argv, prog_name="gagekit", standalone_mode=True)
     except GagekitError as exc:

@@ -4,13 +4,12 @@ from __future__ import annotations
 
 from enum import Enum
 from pathlib import Path
-from typing import Any
+from typing import Any, Optional
 
 import numpy as np
 import typer
 
-from ..errors import FileFormatError
-from ._common import JSON_OPTION, emit, table
+from ._common import JSON_OPTION, UNITS_OPTION, emit, table
 
 app = typer.Typer(help="Form of lines, planes, circles, spheres and cylinders (Ch. 6).", no_args_is_help=True)
 
@@ -26,49 +25,10 @@ class _CircleCriterion(str, Enum):
     all = "all"
 
 
-def _read_xy(path: Path) -> np.ndarray:
-    """(n, 2) points from any file ``read_points`` reads: 3-D points must lie in a plane
-    parallel to a coordinate plane (as NIST's 2-D sets do); the constant coordinate is
-    dropped. ASCII files of 2 columns are read as 2-D points."""
-    from ..cloud import read_points
-    from ..errors import FileFormatError, InvalidInputError
+def _read_xy(path: Path, units: Optional[str] = None) -> np.ndarray:
+    from ..form.files import read_xy
 
-    try:
-        arr = read_points(path, dim=3)
-    except FileFormatError as exc3:
-        if _text_columns(path) != 2:
-            raise
-        try:
-            return read_points(path, dim=2)
-        except (FileFormatError, InvalidInputError):
-            raise exc3 from None
-    const = [k for k in range(3) if np.ptp(arr[:, k]) == 0.0]
-    if not const:
-        raise InvalidInputError(
-            f"{path}: 3-D points do not lie in a plane parallel to a coordinate plane; "
-            "a 2-D circle fit needs planar points"
-        )
-    return np.ascontiguousarray(np.delete(arr, const[-1], axis=1))
-
-
-def _text_columns(path: Path) -> int:
-    """Number of numeric fields on the first data line of a text file (0 if none)."""
-    import re
-
-    try:
-        with open(path, encoding="utf-8", errors="replace") as fh:
-            for _, line in zip(range(1000), fh):
-                fields = [f for f in re.split(r"[,;\s]+", line.strip()) if f]
-                if not fields or fields[0].startswith("#"):
-                    continue
-                try:
-                    [float(f) for f in fields]
-                except ValueError:
-                    continue  # a header line
-                return len(fields)
-    except OSError:
-        return 0
-    return 0
+    return read_xy(path, units)
 
 
 @app.command("circle")
@@ -76,12 +36,13 @@ def circle(
     file: Path = typer.Argument(..., help="Points: any file read_points reads (NIST .ds too); 2 columns or planar 3-D."),
     criterion: _CircleCriterion = typer.Option(_CircleCriterion.lsq, "--criterion", "-c",
                                                help="lsq, mc (min circumscribed), mi (max inscribed), mz (min zone), or all."),
+    units: Optional[str] = UNITS_OPTION,
     as_json: bool = JSON_OPTION,
 ) -> None:
     """Fit a 2-D circle (Sec. 6.2): least squares, MC, MI or minimum zone (roundness)."""
     from ..form.circle import fit_circle
 
-    pts = _read_xy(file)
+    pts = _read_xy(file, units)
     crits = ["lsq", "mc", "mi", "mz"] if criterion.value == "all" else [criterion.value]
     fits = [fit_circle(pts, c) for c in crits]
     result = fits[0] if len(fits) == 1 else {f.to_dict()["criterion"]: f for f in fits}
@@ -101,14 +62,10 @@ def circle(
 
 # 3-D fits ------------------------------------------------------------------
 
-_SHAPES_3D = ("line", "plane", "sphere", "circle3d", "cylinder", "cone")
+def _load_points(path: Path, units: Optional[str] = None) -> np.ndarray:
+    from ..form.files import load_points
 
-
-def _load_points(path: Path) -> np.ndarray:
-    """Points from any file ``read_points`` reads; ASCII files of 2 columns as 2-D points."""
-    from ..cloud import read_points
-
-    return read_points(path, dim=2) if _text_columns(path) == 2 else read_points(path)
+    return load_points(path, units)
 
 
 def _fmt_vec(v: Any) -> str:
@@ -139,33 +96,13 @@ def fit(
     file: Path = typer.Argument(..., help="Points: any file read_points reads (XYZ/CSV/TXT, NIST .ds, PLY, .npy, ...)"),
     criterion: str = typer.Option("least-squares", "--criterion", "-c", help="Fit criterion"),
     seed: int = typer.Option(0, "--seed", help="Seed of the particle swarm (cylinders)"),
+    units: Optional[str] = UNITS_OPTION,
     as_json: bool = JSON_OPTION,
 ) -> None:
     """Fit a feature to the points of FILE and report its form error and certificate."""
-    from .. import form
+    from ..form.files import fit_file
 
-    name = shape.strip().lower().replace("-", "").replace("_", "")
-    if name == "circle":  # 2-D circles: the circle reader drops a constant coordinate
-        emit(form.fit_circle(_read_xy(file), criterion), as_json, _human)
-        return
-    pts = _load_points(file)
-    if name == "line":
-        r = form.fit_line(pts, criterion)
-    elif name == "plane":
-        r = form.fit_plane(pts, criterion)
-    elif name == "sphere":
-        r = form.fit_sphere(pts, criterion)
-    elif name in ("circle3d", "circle3"):
-        r = form.fit_circle_3d(pts, criterion)
-    elif name == "cylinder":
-        r = form.fit_cylinder(pts, criterion, seed=seed)
-    elif name == "cone":
-        r = form.fit_cone(pts, criterion)
-    else:
-        from ..errors import ConfigError
-
-        raise ConfigError(f"unknown shape {shape!r}; choose one of circle, {', '.join(_SHAPES_3D)}")
-    emit(r, as_json, _human)
+    emit(fit_file(shape, file, criterion, seed=seed, units=units), as_json, _human)
 
 
 @app.command("cylinder")
@@ -175,9 +112,10 @@ def cylinder(
         "least-squares", "--criterion", "-c", help="least-squares (lsq), mcc, mic or mzc"
     ),
     seed: int = typer.Option(0, "--seed", help="Seed of the particle swarm"),
+    units: Optional[str] = UNITS_OPTION,
     as_json: bool = JSON_OPTION,
 ) -> None:
     """Fit a cylinder (least squares, min circumscribed, max inscribed, minimum zone)."""
     from .. import form
 
-    emit(form.fit_cylinder(_load_points(file), criterion, seed=seed), as_json, _human)
+    emit(form.fit_cylinder(_load_points(file, units), criterion, seed=seed), as_json, _human)

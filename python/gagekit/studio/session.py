@@ -11,7 +11,6 @@ points.
 from __future__ import annotations
 
 import base64
-import inspect
 import math
 import os
 import threading
@@ -33,15 +32,6 @@ from . import specdoc
 LOD_MAX = 2_000_000
 """Most points sent to the browser for display."""
 LOD_SEED = 0
-
-
-def _read(path: Path, units: Optional[str]) -> np.ndarray:
-    """``read_points`` with ``units`` when the reader takes it (io's unit conversion)."""
-    if "units" in inspect.signature(read_points).parameters:
-        return read_points(path, units=units)
-    if units not in (None, "mm"):
-        raise ConfigError(f"--units {units}: this gagekit reads millimetres only")
-    return read_points(path)
 
 
 def _b64(arr: np.ndarray) -> str:
@@ -82,7 +72,7 @@ class Scan:
 def load_scan(path: Path, units: Optional[str] = None, lod_max: int = LOD_MAX) -> Scan:
     """Read a scan, index it, choose its display subsample."""
     t0 = time.perf_counter()
-    pts = _read(path, units)
+    pts = read_points(path, units=units)
     cloud = IndexedCloud(pts)
     n = len(pts)
     if n > lod_max:
