@@ -54,3 +54,5 @@ def test_points_are_read_only_and_bad_input_raises():
     with pytest.raises(GagekitError, match="point 3"):
         IndexedCloud(bad)
     assert len(ic) == len(CLOUD) and ic.cell_size > 0
+    lo, hi = ic.bounds
+    assert np.array_equal(lo, CLOUD.min(axis=0)) and np.array_equal(hi, CLOUD.max(axis=0))

@@ -48,6 +48,12 @@ class IndexedCloud:
         """Edge length of a grid cell (mm)."""
         return float(self._grid.cell_size)
 
+    @property
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """Smallest and largest x, y, z of the points (found while indexing)."""
+        lo, hi = self._grid.bounds
+        return np.array(lo), np.array(hi)
+
     def select(self, region: Box) -> np.ndarray:
         """Ascending indices of the points inside ``region`` (boundary included)."""
         return self._grid.select(np.asarray(region.row(), dtype=np.float64))

@@ -76,6 +76,7 @@ def serve(scan: Path, spec: Optional[Path] = None, *, units: Optional[str] = Non
     sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
     try:
         sock.bind((bind.strip("[]"), port))
+        sock.listen(128)  # connections queue from now on, before uvicorn takes the socket
     except OSError as exc:
         sock.close()
         raise ConfigError(f"cannot listen on {bind}:{port} ({exc.strerror or exc}); choose another --port") from None

@@ -58,7 +58,7 @@ class Scan:
 
     def info(self) -> dict:
         pts = self.points
-        lo, hi = pts.min(axis=0), pts.max(axis=0)
+        lo, hi = self.cloud.bounds
         return {"name": self.path.name, "path": str(self.path), "units": self.units or "mm",
                 "count": int(len(pts)), "lod_count": int(len(self.lod)),
                 "bbox": {"min": lo.tolist(), "max": hi.tolist()}, "origin": self.origin.tolist(),
@@ -69,18 +69,25 @@ class Scan:
         return np.ascontiguousarray(self.lod_cloud.points - self.origin, dtype="<f4").tobytes()
 
 
+def display_subsample(n: int, m: int, seed: int = LOD_SEED) -> np.ndarray:
+    """Ascending indices of at most ``m`` of ``n`` points: one point drawn (seeded) from
+    each of ``m`` equal runs of the file order, so the subsample spreads over the whole
+    scan and costs ``m`` random numbers, not ``n``."""
+    if n <= m:
+        return np.arange(n)
+    edges = (np.arange(m + 1, dtype=np.float64) * (n / m)).astype(np.int64)
+    width = np.maximum(edges[1:] - edges[:-1], 1)
+    return edges[:-1] + (np.random.default_rng(seed).random(m) * width).astype(np.int64)
+
+
 def load_scan(path: Path, units: Optional[str] = None, lod_max: int = LOD_MAX) -> Scan:
     """Read a scan, index it, choose its display subsample."""
     t0 = time.perf_counter()
     pts = read_points(path, units=units)
     cloud = IndexedCloud(pts)
-    n = len(pts)
-    if n > lod_max:
-        lod = np.sort(np.random.default_rng(LOD_SEED).choice(n, lod_max, replace=False))
-    else:
-        lod = np.arange(n)
+    lod = display_subsample(len(pts), lod_max)
     lod_cloud = IndexedCloud(pts[lod])
-    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    lo, hi = cloud.bounds
     origin = np.round((lo + hi) / 2.0, 3)
     return Scan(path, units, cloud, lod, lod_cloud, origin, time.perf_counter() - t0)
 

@@ -28,6 +28,8 @@ pub struct CellGrid {
     order: Vec<u32>,
     /// Rounding margin for the whole-cell decisions (mm).
     margin: f64,
+    /// Largest coordinate along x, y, z (the smallest is `origin`).
+    upper: [f64; 3],
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
@@ -63,7 +65,7 @@ impl CellGrid {
         let target = (n / per_cell).clamp(1, MAX_CELLS);
         let (cell, dims) = cell_size(ext, target);
         let ncells = dims[0] * dims[1] * dims[2];
-        let grid0 = CellGrid { origin: lo, cell, dims, starts: Vec::new(), order: Vec::new(), margin: 0.0 };
+        let grid0 = CellGrid { origin: lo, cell, dims, starts: Vec::new(), order: Vec::new(), margin: 0.0, upper: hi };
         let ids: Vec<u32> = points.par_chunks_exact(3).map(|p| grid0.cell_of(p) as u32).collect();
         let mut starts = vec![0usize; ncells + 1];
         for &c in &ids {
@@ -81,7 +83,7 @@ impl CellGrid {
         }
         let scale = lo.iter().chain(&hi).fold(0.0f64, |m, v| m.max(v.abs())) + cell;
         let margin = 1e-9 * scale;
-        Ok(CellGrid { origin: lo, cell, dims, starts, order, margin })
+        Ok(CellGrid { origin: lo, cell, dims, starts, order, margin, upper: hi })
     }
 
     /// Number of points indexed.
@@ -102,6 +104,11 @@ impl CellGrid {
     /// Edge length of a cell (mm).
     pub fn cell_size(&self) -> f64 {
         self.cell
+    }
+
+    /// The bounding box of the points: smallest and largest x, y, z.
+    pub fn bounds(&self) -> ([f64; 3], [f64; 3]) {
+        (self.origin, self.upper)
     }
 
     fn cell_of(&self, p: &[f64]) -> usize {
@@ -312,6 +319,12 @@ mod tests {
         seen.sort_unstable();
         assert_eq!(seen, (0..5000).collect::<Vec<_>>());
         assert_eq!(g.len(), 5000);
+        let (lo, hi) = g.bounds();
+        for k in 0..3 {
+            let col = pts.iter().skip(k).step_by(3);
+            assert_eq!(lo[k], col.clone().fold(f64::INFINITY, |m, &v| m.min(v)));
+            assert_eq!(hi[k], col.fold(f64::NEG_INFINITY, |m, &v| m.max(v)));
+        }
         for c in 0..g.starts.len() - 1 {
             let ids = &g.order[g.starts[c]..g.starts[c + 1]];
             assert!(ids.windows(2).all(|w| w[0] < w[1]));

@@ -98,6 +98,12 @@ impl PointGrid {
     fn cell_size(&self) -> f64 {
         self.grid.cell_size()
     }
+
+    /// Bounding box of the points: ((xmin, ymin, zmin), (xmax, ymax, zmax)).
+    #[getter]
+    fn bounds(&self) -> ([f64; 3], [f64; 3]) {
+        self.grid.bounds()
+    }
 }
 
 /// Index an (n, 3) C-contiguous float64 cloud by grid cells of about `per_cell` points.
