@@ -69,7 +69,7 @@ def not_blank(path: Path) -> None:
     from PIL import Image
 
     img = np.asarray(Image.open(path).convert("RGB")).astype(float)
-    view = img[:, : img.shape[1] - 450]                      # the 3-D view, left of the panel
+    view = img[:, : img.shape[1] - 490]                      # the 3-D view, left of the panel
     assert view.std() > 10, "the 3-D view is blank"
     background = np.array([0x20, 0x26, 0x2E], dtype=float)
     drawn = (np.abs(view - background).sum(axis=2) > 30).mean()

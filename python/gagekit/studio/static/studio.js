@@ -440,7 +440,8 @@ async function start() {
   state.scan = st.scan;
   state.spec = st.spec;
   state.doc = st.spec.doc || { length_unit: "mm" };
-  view = new View($("view"), { boxChanged: onBoxChanged, boxPicked: selectRegion, pointPicked: addBoxAt });
+  view = new View($("view"), { boxChanged: onBoxChanged, boxPicked: selectRegion, pointPicked: addBoxAt,
+    missed: () => { $("status").textContent = "no scan point there: click on the points (Esc to cancel)"; } });
   studio.view = view;
   bindToolbar();
   bindEditor();

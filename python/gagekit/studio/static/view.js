@@ -242,7 +242,7 @@ export class View {
           // the hit in scanner coordinates (the frame the points are stored in)
           const local = this.scanGroup.worldToLocal(hits[0].point.clone());
           this.events.pointPicked(local.toArray());
-        }
+        } else if (this.events.missed) this.events.missed();
         return;
       }
       const hit = this.raycaster.intersectObjects(this.boxes, false)[0];
