@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import base64
 import math
-import os
 import threading
 import time
 from dataclasses import dataclass
@@ -21,6 +20,7 @@ from typing import Any, Optional
 
 import numpy as np
 
+from .._files import write_bytes
 from ..cloud.grid import IndexedCloud
 from ..cloud.io import read_points
 from ..cloud.regions import Box
@@ -176,7 +176,7 @@ class Session:
         same = target == self.spec_path
         original = self.spec_text if same else ""
         text = specdoc.render(original, doc, target.name)
-        _atomic_write(target, text)
+        write_bytes(target, text.encode("utf-8"))  # atomic: temporary file, then rename
         with self.lock:
             self.spec_path = target
             self.spec_text = text
@@ -296,23 +296,6 @@ def _alignment_dict(alignment) -> Optional[dict]:
     if alignment is None:
         return None
     return {"H": np.asarray(alignment.H).tolist(), "C": np.asarray(alignment.frame).tolist()}
-
-
-def _atomic_write(path: Path, text: str) -> None:
-    """Write through a temporary file in the same folder, then rename over ``path``."""
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    try:
-        with open(tmp, "w", encoding="utf-8", newline="") as fh:
-            fh.write(text)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, path)
-    except OSError as exc:
-        try:
-            tmp.unlink()
-        except OSError:
-            pass
-        raise ConfigError(f"{path}: cannot write the gage file ({exc.strerror or exc})") from None
 
 
 __all__ = ["Session", "Scan", "load_scan", "box_of", "SpecError", "LOD_MAX"]
