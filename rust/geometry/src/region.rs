@@ -40,7 +40,7 @@ impl OrientedBox {
     }
 
     /// A membership test with the rotation precomputed.
-    fn tester(&self) -> impl Fn(&[f64]) -> bool + Sync + '_ {
+    pub(crate) fn tester(&self) -> impl Fn(&[f64]) -> bool + Sync + '_ {
         let r = rotation_matrix(self.rotation);
         let half = [self.size[0] / 2.0, self.size[1] / 2.0, self.size[2] / 2.0];
         let c = self.center;
