@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from enum import Enum
 from pathlib import Path
-from typing import Any
+from typing import Any, Optional
 
 import numpy as np
 import typer
@@ -27,9 +27,10 @@ class _CircleCriterion(str, Enum):
 
 
 def _read_xy(path: Path) -> np.ndarray:
-    """(n, 2) points from any file ``read_points`` reads: 3-D points must lie in a plane
-    parallel to a coordinate plane (as NIST's 2-D sets do); the constant coordinate is
-    dropped. ASCII files of 2 columns are read as 2-D points."""
+    """Circle points from any file ``read_points`` reads: ASCII files of 2 columns as 2-D
+    points; 3-D points in a plane parallel to a coordinate plane (as NIST's 2-D sets) as
+    2-D points without the constant coordinate; any other 3-D points as (n, 3), fitted
+    in their least-squares plane."""
     from ..cloud import read_points
     from ..errors import FileFormatError, InvalidInputError
 
@@ -44,10 +45,7 @@ def _read_xy(path: Path) -> np.ndarray:
             raise exc3 from None
     const = [k for k in range(3) if np.ptp(arr[:, k]) == 0.0]
     if not const:
-        raise InvalidInputError(
-            f"{path}: 3-D points do not lie in a plane parallel to a coordinate plane; "
-            "a 2-D circle fit needs planar points"
-        )
+        return arr
     return np.ascontiguousarray(np.delete(arr, const[-1], axis=1))
 
 
@@ -73,12 +71,13 @@ def _text_columns(path: Path) -> int:
 
 @app.command("circle")
 def circle(
-    file: Path = typer.Argument(..., help="Points: any file read_points reads (NIST .ds too); 2 columns or planar 3-D."),
+    file: Path = typer.Argument(..., help="Points: any file read_points reads (NIST .ds too); 2-D, or 3-D in any pose."),
     criterion: _CircleCriterion = typer.Option(_CircleCriterion.lsq, "--criterion", "-c",
                                                help="lsq, mc (min circumscribed), mi (max inscribed), mz (min zone), or all."),
     as_json: bool = JSON_OPTION,
 ) -> None:
-    """Fit a 2-D circle (Sec. 6.2): least squares, MC, MI or minimum zone (roundness)."""
+    """Fit a circle (Sec. 6.2): least squares, MC, MI or minimum zone (roundness); points in
+    space are fitted in their least-squares plane."""
     from ..form.circle import fit_circle
 
     pts = _read_xy(file)
@@ -87,9 +86,10 @@ def circle(
     result = fits[0] if len(fits) == 1 else {f.to_dict()["criterion"]: f for f in fits}
 
     def human(_: object) -> str:
-        rows = [[f.to_dict()["criterion"], f.center[0], f.center[1], f.radius, f.width,
+        xyz = ["x", "y", "z"][: len(fits[0].center)]
+        rows = [[f.to_dict()["criterion"], *f.center, f.radius, f.width,
                  " ".join(map(str, f.control_points))] for f in fits]
-        text = table(["criterion", "x", "y", "radius", "form error", "control points"], rows)
+        text = table(["criterion", *xyz, "radius", "form error", "control points"], rows)
         notes = [w for f in fits for w in f.warnings]
         return "\n".join([f"{file}: {fits[0].n_points} points", text, *[f"warning: {w}" for w in notes]])
 
@@ -118,7 +118,7 @@ def _fmt_vec(v: Any) -> str:
 def _human(r: Any) -> str:
     d = r.to_dict()
     rows = []
-    for key in ("radius", "inner_radius", "outer_radius", "form_error", "theta", "phi", "distance", "apex_angle"):
+    for key in ("radius", "inner_radius", "outer_radius", "form_error", "theta", "phi", "tilt_deg", "distance", "apex_angle"):
         if d.get(key) is not None:
             rows.append([key, f"{d[key]:.9f}"])
     for key in ("center", "normal", "point", "direction", "axis_point", "axis_direction"):
@@ -130,35 +130,58 @@ def _human(r: Any) -> str:
     rows.append(["min_distance", f"{cert['min_distance']:.9f}"])
     rows.append(["max_distance", f"{cert['max_distance']:.9f}"])
     head = f"{d['shape']} ({d['criterion']}), {d['n_points']} points"
-    return head + "\n" + table(["quantity", "value (mm, rad)"], rows)
+    notes = [f"warning: {w}" for w in d.get("warnings", ())]
+    return "\n".join([head, table(["quantity", "value (mm, rad)"], rows), *notes])
+
+
+def _axis(text: Optional[str]) -> Optional[tuple[float, ...]]:
+    """``--axis X,Y,Z`` as three numbers (the kernels check length and finiteness)."""
+    from ..errors import ConfigError
+
+    if text is None:
+        return None
+    parts = [p for p in text.replace(";", ",").replace(" ", ",").split(",") if p]
+    try:
+        vals = tuple(float(p) for p in parts)
+    except ValueError:
+        vals = ()
+    if len(vals) != 3:
+        raise ConfigError(f"--axis: expected three numbers X,Y,Z, got {text!r}")
+    return vals
+
+
+AXIS_OPTION = typer.Option(None, "--axis", help="Nominal axis X,Y,Z of cylinders and 3-D lines (default: the least-squares axis)")
+TILT_OPTION = typer.Option(10.0, "--max-tilt", help="Chebyshev fits search axes within DEG of the axis (0: fixed, 90: all)")
 
 
 @app.command("fit")
 def fit(
-    shape: str = typer.Argument(..., help="circle, line, plane, sphere, circle3d, cylinder or cone"),
+    shape: str = typer.Argument(..., help="circle (circle3d: alias), line, plane, sphere, cylinder or cone"),
     file: Path = typer.Argument(..., help="Points: any file read_points reads (XYZ/CSV/TXT, NIST .ds, PLY, .npy, ...)"),
     criterion: str = typer.Option("least-squares", "--criterion", "-c", help="Fit criterion"),
     seed: int = typer.Option(0, "--seed", help="Seed of the particle swarm (cylinders)"),
+    axis: Optional[str] = AXIS_OPTION,
+    max_tilt: float = TILT_OPTION,
     as_json: bool = JSON_OPTION,
 ) -> None:
     """Fit a feature to the points of FILE and report its form error and certificate."""
     from .. import form
 
     name = shape.strip().lower().replace("-", "").replace("_", "")
-    if name == "circle":  # 2-D circles: the circle reader drops a constant coordinate
+    if name in ("circle", "circle3d", "circle3"):
+        # circles in any pose (circle3d is an alias): 2-D points, or a constant coordinate
+        # dropped, or 3-D points fitted in their least-squares plane
         emit(form.fit_circle(_read_xy(file), criterion), as_json, _human)
         return
     pts = _load_points(file)
     if name == "line":
-        r = form.fit_line(pts, criterion)
+        r = form.fit_line(pts, criterion, seed=seed, axis=_axis(axis), max_tilt=max_tilt)
     elif name == "plane":
         r = form.fit_plane(pts, criterion)
     elif name == "sphere":
         r = form.fit_sphere(pts, criterion)
-    elif name in ("circle3d", "circle3"):
-        r = form.fit_circle_3d(pts, criterion)
     elif name == "cylinder":
-        r = form.fit_cylinder(pts, criterion, seed=seed)
+        r = form.fit_cylinder(pts, criterion, seed=seed, axis=_axis(axis), max_tilt=max_tilt)
     elif name == "cone":
         r = form.fit_cone(pts, criterion)
     else:
@@ -175,9 +198,12 @@ def cylinder(
         "least-squares", "--criterion", "-c", help="least-squares (lsq), mcc, mic or mzc"
     ),
     seed: int = typer.Option(0, "--seed", help="Seed of the particle swarm"),
+    axis: Optional[str] = AXIS_OPTION,
+    max_tilt: float = TILT_OPTION,
     as_json: bool = JSON_OPTION,
 ) -> None:
     """Fit a cylinder (least squares, min circumscribed, max inscribed, minimum zone)."""
     from .. import form
 
-    emit(form.fit_cylinder(_load_points(file), criterion, seed=seed), as_json, _human)
+    r = form.fit_cylinder(_load_points(file), criterion, seed=seed, axis=_axis(axis), max_tilt=max_tilt)
+    emit(r, as_json, _human)
