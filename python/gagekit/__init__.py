@@ -16,6 +16,7 @@ from .machine import *  # noqa: F401,F403
 from .errors import (
     ConfigError,
     DegenerateGeometryError,
+    FileAccessError,
     FileFormatError,
     GagekitError,
     InfeasibleError,
@@ -39,6 +40,7 @@ __all__ = [
     "GagekitError",
     "InvalidInputError",
     "FileFormatError",
+    "FileAccessError",
     "DegenerateGeometryError",
     "InfeasibleError",
     "ConfigError",

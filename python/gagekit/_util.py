@@ -1,15 +1,22 @@
-"""Small helpers shared by the gagekit modules (array checks, JSON)."""
+"""Small helpers shared by the gagekit modules (array checks, JSON, TOML files)."""
 
 from __future__ import annotations
 
 import json
 import math
 from dataclasses import asdict, is_dataclass
-from typing import Any, Iterator, Mapping, Sequence
+import sys
+from pathlib import Path
+from typing import Any, Iterator, Mapping, Sequence, Union
 
 import numpy as np
 
-from .errors import ConfigError, InvalidInputError
+from .errors import ConfigError, ConfigFileError, InvalidInputError
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
 
 
 def as_points(points: Any, dim: int = 3, what: str = "points") -> np.ndarray:
@@ -59,30 +66,36 @@ def dumps(obj: Any) -> str:
     return json.dumps(to_jsonable(obj), indent=2, allow_nan=False)
 
 
-def load_toml(path) -> dict:
-    """Parse a TOML file; :class:`ConfigError` names the file and the problem."""
-    import sys
-    from pathlib import Path
+def load_toml(path: Union[str, Path], what: str = "TOML") -> dict:
+    """Parse the TOML file ``path`` (a ``what`` file: machine, gage, zones, ...): the one TOML
+    reader of the package. A file that cannot be read raises
+    :class:`~gagekit.errors.FileAccessError` (or FileFormatError for non-UTF-8 bytes), invalid
+    TOML :class:`~gagekit.errors.ConfigFileError`, each naming the file and the problem."""
+    return parse_toml(read_text(path, what), str(path))
 
-    from .errors import ConfigError
 
-    if sys.version_info >= (3, 11):
-        import tomllib
-    else:  # pragma: no cover
-        import tomli as tomllib
-    p = Path(path)
+def read_text(path: Union[str, Path], what: str) -> str:
+    """The UTF-8 text of a ``what`` file, through the one file boundary
+    (:func:`gagekit._files.read_text`): typed errors for a missing file, a folder, a FIFO
+    (never opened, so never a hang), permissions and non-UTF-8 bytes."""
+    from ._files import read_text as _read_text
+
+    return _read_text(path, f"{what} file")
+
+
+def parse_toml(text: str, source: str) -> dict:
+    """Parse TOML text; ConfigFileError naming ``source`` if it is not valid TOML."""
     try:
-        with p.open("rb") as fh:
-            return tomllib.load(fh)
-    except FileNotFoundError:
-        raise ConfigError(f"{p}: no such file") from None
+        return tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
-        raise ConfigError(f"{p}: not valid TOML ({exc})") from None
+        raise ConfigFileError(f"{source}: not valid TOML ({exc})") from None
 
 
 def named_tables(tables: Sequence[Any], kind: str, source: str) -> Iterator[tuple[str, Mapping]]:
     """The ``[[kind]]`` tables of a TOML file as (name, table): each must be a table with a
     non-empty ``name`` not used before; otherwise a ConfigError naming the file and the table."""
+    if not isinstance(tables, (list, tuple)):
+        raise ConfigError(f"{source}: {kind} must be given as [[{kind}]] tables, got {tables!r}")
     seen: set[str] = set()
     for k, t in enumerate(tables):
         if not isinstance(t, Mapping):

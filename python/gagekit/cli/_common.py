@@ -7,8 +7,64 @@ from typing import Any, Callable
 import typer
 
 from .._util import dumps
+from ..report.text import table
+
+__all__ = ["JSON_OPTION", "emit", "table"]
 
 JSON_OPTION = typer.Option(False, "--json", help="Print the result as JSON on stdout, and nothing else.")
+
+#: Seeds are unsigned 64-bit integers (the kernels' generators take a u64).
+SEED_MAX = 2**64 - 1
+
+
+def seed_option(help: str, flag: str = "--seed") -> Any:
+    """A ``--seed`` option: an integer in [0, 2**64 - 1]; anything else is a usage error
+    (one line, exit 2) instead of an OverflowError deep in numpy or the kernels."""
+    return typer.Option(0, flag, min=0, max=SEED_MAX, help=help)
+
+
+def count_option(default: int, flag: str, help: str, min: int = 1, max: int = 10**9) -> Any:
+    """A count option (points, candidates, starts, cycles...): an integer in [min, max]."""
+    return typer.Option(default, flag, min=min, max=max, help=help)
+
+
+def _finite(value: Any) -> Any:
+    import math
+
+    if value is not None and not math.isfinite(value):
+        raise typer.BadParameter(f"must be a finite number, got {value}")
+    return value
+
+
+def _nonnegative(value: Any) -> Any:
+    _finite(value)
+    if value is not None and value < 0:
+        raise typer.BadParameter(f"must be zero or positive, got {value}")
+    return value
+
+
+def float_option(default: float, flag: str, help: str, nonnegative: bool = True) -> Any:
+    """A float option that refuses NaN and infinities (and, by default, negative values)."""
+    return typer.Option(default, flag, help=help, callback=_nonnegative if nonnegative else _finite)
+
+
+UNITS_OPTION = typer.Option(
+    None, "--units",
+    help="Unit of the cloud file's coordinates: mm, cm, m, um, in or ft (default: the file's own: "
+         "E57 m, LAS/LAZ its CRS unit, others mm). Everything is converted to mm.",
+)
+
+
+def read_cloud_cli(path: Any, units: Any = None, dim: int = 3) -> Any:
+    """Read a cloud for a command (:func:`gagekit.cloud.read_cloud`), printing each reader
+    warning as one ``gagekit: warning: ...`` line on stderr. Every command that reads a
+    cloud takes ``units: Optional[str] = UNITS_OPTION`` and passes it here."""
+    from ..cloud import read_cloud
+
+    cloud = read_cloud(path, units=units, dim=dim)
+    for w in cloud.warnings:
+        typer.echo(f"gagekit: warning: {w}", err=True)
+    return cloud
 
 
 def emit(result: Any, as_json: bool, human: Callable[[Any], str]) -> None:
@@ -17,29 +73,3 @@ def emit(result: Any, as_json: bool, human: Callable[[Any], str]) -> None:
         typer.echo(dumps(result))
     else:
         typer.echo(human(result))
-
-
-def table(headers: list[str], rows: list[list[Any]]) -> str:
-    """A plain aligned text table (numbers right-aligned)."""
-    cells = [[str(h) for h in headers]] + [[_fmt(c) for c in r] for r in rows]
-    widths = [max(len(r[i]) for r in cells) for i in range(len(headers))]
-    lines = []
-    for k, r in enumerate(cells):
-        lines.append("  ".join(c.rjust(w) if k and _is_num(c) else c.ljust(w) for c, w in zip(r, widths)).rstrip())
-        if k == 0:
-            lines.append("  ".join("-" * w for w in widths))
-    return "\n".join(lines)
-
-
-def _fmt(v: Any) -> str:
-    if isinstance(v, float):
-        return f"{v:.4f}"
-    return str(v)
-
-
-def _is_num(s: str) -> bool:
-    try:
-        float(s)
-        return True
-    except ValueError:
-        return False

@@ -9,8 +9,7 @@ from typing import Any, Optional
 import numpy as np
 import typer
 
-from ..errors import FileFormatError
-from ._common import JSON_OPTION, emit, table
+from ._common import JSON_OPTION, UNITS_OPTION, emit, seed_option, table
 
 app = typer.Typer(help="Form of lines, planes, circles, spheres and cylinders (Ch. 6).", no_args_is_help=True)
 
@@ -26,47 +25,10 @@ class _CircleCriterion(str, Enum):
     all = "all"
 
 
-def _read_xy(path: Path) -> np.ndarray:
-    """Circle points from any file ``read_points`` reads: ASCII files of 2 columns as 2-D
-    points; 3-D points in a plane parallel to a coordinate plane (as NIST's 2-D sets) as
-    2-D points without the constant coordinate; any other 3-D points as (n, 3), fitted
-    in their least-squares plane."""
-    from ..cloud import read_points
-    from ..errors import FileFormatError, InvalidInputError
+def _read_xy(path: Path, units: Optional[str] = None) -> np.ndarray:
+    from ..form.files import read_xy
 
-    try:
-        arr = read_points(path, dim=3)
-    except FileFormatError as exc3:
-        if _text_columns(path) != 2:
-            raise
-        try:
-            return read_points(path, dim=2)
-        except (FileFormatError, InvalidInputError):
-            raise exc3 from None
-    const = [k for k in range(3) if np.ptp(arr[:, k]) == 0.0]
-    if not const:
-        return arr
-    return np.ascontiguousarray(np.delete(arr, const[-1], axis=1))
-
-
-def _text_columns(path: Path) -> int:
-    """Number of numeric fields on the first data line of a text file (0 if none)."""
-    import re
-
-    try:
-        with open(path, encoding="utf-8", errors="replace") as fh:
-            for _, line in zip(range(1000), fh):
-                fields = [f for f in re.split(r"[,;\s]+", line.strip()) if f]
-                if not fields or fields[0].startswith("#"):
-                    continue
-                try:
-                    [float(f) for f in fields]
-                except ValueError:
-                    continue  # a header line
-                return len(fields)
-    except OSError:
-        return 0
-    return 0
+    return read_xy(path, units)
 
 
 @app.command("circle")
@@ -74,13 +36,14 @@ def circle(
     file: Path = typer.Argument(..., help="Points: any file read_points reads (NIST .ds too); 2-D, or 3-D in any pose."),
     criterion: _CircleCriterion = typer.Option(_CircleCriterion.lsq, "--criterion", "-c",
                                                help="lsq, mc (min circumscribed), mi (max inscribed), mz (min zone), or all."),
+    units: Optional[str] = UNITS_OPTION,
     as_json: bool = JSON_OPTION,
 ) -> None:
     """Fit a circle (Sec. 6.2): least squares, MC, MI or minimum zone (roundness); points in
     space are fitted in their least-squares plane."""
     from ..form.circle import fit_circle
 
-    pts = _read_xy(file)
+    pts = _read_xy(file, units)
     crits = ["lsq", "mc", "mi", "mz"] if criterion.value == "all" else [criterion.value]
     fits = [fit_circle(pts, c) for c in crits]
     result = fits[0] if len(fits) == 1 else {f.to_dict()["criterion"]: f for f in fits}
@@ -101,14 +64,10 @@ def circle(
 
 # 3-D fits ------------------------------------------------------------------
 
-_SHAPES_3D = ("line", "plane", "sphere", "circle3d", "cylinder", "cone")
+def _load_points(path: Path, units: Optional[str] = None) -> np.ndarray:
+    from ..form.files import load_points
 
-
-def _load_points(path: Path) -> np.ndarray:
-    """Points from any file ``read_points`` reads; ASCII files of 2 columns as 2-D points."""
-    from ..cloud import read_points
-
-    return read_points(path, dim=2) if _text_columns(path) == 2 else read_points(path)
+    return load_points(path, units)
 
 
 def _fmt_vec(v: Any) -> str:
@@ -159,35 +118,16 @@ def fit(
     shape: str = typer.Argument(..., help="circle (circle3d: alias), line, plane, sphere, cylinder or cone"),
     file: Path = typer.Argument(..., help="Points: any file read_points reads (XYZ/CSV/TXT, NIST .ds, PLY, .npy, ...)"),
     criterion: str = typer.Option("least-squares", "--criterion", "-c", help="Fit criterion"),
-    seed: int = typer.Option(0, "--seed", help="Seed of the particle swarm (cylinders)"),
+    seed: int = seed_option(help="Seed of the particle swarm (cylinders, 3-D lines)"),
     axis: Optional[str] = AXIS_OPTION,
     max_tilt: float = TILT_OPTION,
+    units: Optional[str] = UNITS_OPTION,
     as_json: bool = JSON_OPTION,
 ) -> None:
     """Fit a feature to the points of FILE and report its form error and certificate."""
-    from .. import form
+    from ..form.files import fit_file
 
-    name = shape.strip().lower().replace("-", "").replace("_", "")
-    if name in ("circle", "circle3d", "circle3"):
-        # circles in any pose (circle3d is an alias): 2-D points, or a constant coordinate
-        # dropped, or 3-D points fitted in their least-squares plane
-        emit(form.fit_circle(_read_xy(file), criterion), as_json, _human)
-        return
-    pts = _load_points(file)
-    if name == "line":
-        r = form.fit_line(pts, criterion, seed=seed, axis=_axis(axis), max_tilt=max_tilt)
-    elif name == "plane":
-        r = form.fit_plane(pts, criterion)
-    elif name == "sphere":
-        r = form.fit_sphere(pts, criterion)
-    elif name == "cylinder":
-        r = form.fit_cylinder(pts, criterion, seed=seed, axis=_axis(axis), max_tilt=max_tilt)
-    elif name == "cone":
-        r = form.fit_cone(pts, criterion)
-    else:
-        from ..errors import ConfigError
-
-        raise ConfigError(f"unknown shape {shape!r}; choose one of circle, {', '.join(_SHAPES_3D)}")
+    r = fit_file(shape, file, criterion, seed=seed, units=units, axis=_axis(axis), max_tilt=max_tilt)
     emit(r, as_json, _human)
 
 
@@ -197,13 +137,14 @@ def cylinder(
     criterion: str = typer.Option(
         "least-squares", "--criterion", "-c", help="least-squares (lsq), mcc, mic or mzc"
     ),
-    seed: int = typer.Option(0, "--seed", help="Seed of the particle swarm"),
+    seed: int = seed_option(help="Seed of the particle swarm"),
     axis: Optional[str] = AXIS_OPTION,
     max_tilt: float = TILT_OPTION,
+    units: Optional[str] = UNITS_OPTION,
     as_json: bool = JSON_OPTION,
 ) -> None:
     """Fit a cylinder (least squares, min circumscribed, max inscribed, minimum zone)."""
     from .. import form
 
-    r = form.fit_cylinder(_load_points(file), criterion, seed=seed, axis=_axis(axis), max_tilt=max_tilt)
+    r = form.fit_cylinder(_load_points(file, units), criterion, seed=seed, axis=_axis(axis), max_tilt=max_tilt)
     emit(r, as_json, _human)

@@ -24,7 +24,6 @@ from __future__ import annotations
 
 import math
 import re
-import sys
 import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -33,12 +32,8 @@ from typing import Any, Optional, Union
 import numpy as np
 
 from .. import _core
-from ..errors import ConfigError, FileFormatError, InvalidInputError
-
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover
-    import tomli as tomllib
+from .._util import parse_toml, read_text
+from ..errors import ConfigError, InvalidInputError
 
 __all__ = [
     "Machine",
@@ -206,18 +201,21 @@ class Machine:
         """(J, 2) joint ranges in file units."""
         return np.array([j.range for j in self.joints], dtype=np.float64)
 
-    def _spec(self) -> tuple[list, list]:
-        spec = []
-        for e in self.elements:
-            if isinstance(e, ShapeSpec):
-                spec.append(("shape", list(e.offset), 0))
-            else:
-                spec.append((e.kind, list(e.axis), e.terms))
-        return spec, list(self.tool)
+    def __post_init__(self) -> None:
+        # The Rust chain is built and validated once, here; every kinematic call reuses it.
+        spec = [("shape", list(e.offset), 0) if isinstance(e, ShapeSpec) else (e.kind, list(e.axis), e.terms)
+                for e in self.elements]
+        chain = _core.KinematicChain(spec, list(self.tool))
+        object.__setattr__(self, "_chain", chain)
+        object.__setattr__(self, "_labels", tuple(chain.parameter_labels))  # crosses the boundary once
 
-    @property
-    def _labels(self) -> list:
-        return _core.machine_parameter_labels(*self._spec())
+    def __getstate__(self) -> dict:
+        return {k: v for k, v in self.__dict__.items() if k not in ("_chain", "_labels")}
+
+    def __setstate__(self, state: dict) -> None:
+        for k, v in state.items():
+            object.__setattr__(self, k, v)
+        self.__post_init__()
 
     @property
     def parameter_names(self) -> list[str]:
@@ -298,24 +296,24 @@ class Machine:
     # ----- kinematics (Rust) ---------------------------------------------------------------
     def nominal(self, commands: Any) -> np.ndarray:
         """Nominal target positions (n, 3) in the table frame, mm (Eq. 3.1)."""
-        return _core.machine_nominal(*self._spec(), self._internal(commands))
+        return self._chain.nominal(self._internal(commands))
 
     def positions(self, commands: Any, params: Any) -> np.ndarray:
         """Target positions (n, 3) of the exactly perturbed chain (Eq. 3.7), mm."""
         p = np.ascontiguousarray(np.asarray(params, dtype=np.float64).reshape(-1))
         if p.shape[0] != self.n_parameters:
             raise InvalidInputError(f"parameters: expected {self.n_parameters} values, got {p.shape[0]}")
-        return _core.machine_exact(*self._spec(), self._internal(commands), p)
+        return self._chain.exact(self._internal(commands), p)
 
     def design_matrix(self, commands: Any) -> np.ndarray:
         """The design matrix M (3n, P) of Eq. 3.13: rows x, y, z of the volumetric error of
         each command in the table frame, columns ``parameter_names``; analytic first-order
         derivatives, assembled in parallel in Rust."""
-        return _core.machine_design_matrix(*self._spec(), self._internal(commands))
+        return self._chain.design_matrix(self._internal(commands))
 
     def command_jacobian(self, commands: Any) -> np.ndarray:
         """d(nominal position)/d(command), (3n, J), per file unit (mm, or deg/rad)."""
-        jac = _core.machine_command_jacobian(*self._spec(), self._internal(commands))
+        jac = self._chain.command_jacobian(self._internal(commands))
         return jac * self._angle_factor()
 
     def volumetric_error(self, commands: Any, params: Any) -> np.ndarray:
@@ -351,19 +349,19 @@ class Machine:
         m = self.design_matrix(cmds)
         res = _core.machine_identifiability(m, self.length_scale(cmds), self.parameter_length_powers, rtol)
         names = self.parameter_names
-        coef = np.asarray(res["coefficients"])
+        coef = np.asarray(res.coefficients)
         groups = []
-        for k, lead in enumerate(res["leaders"]):
+        for k, lead in enumerate(res.leaders):
             terms = {names[j]: float(_tidy(coef[k, j])) for j in np.flatnonzero(coef[k])}
             groups.append(Group(name=_group_name(names[lead], terms), leader=names[lead], terms=terms))
         return ModelStructure(
             parameters=tuple(names),
-            rank=int(res["rank"]),
+            rank=int(res.rank),
             groups=tuple(groups),
-            no_effect=tuple(names[j] for j in res["no_effect"]),
-            singular_values=tuple(float(s) for s in res["singular_values"]),
+            no_effect=tuple(names[j] for j in res.no_effect),
+            singular_values=tuple(float(s) for s in res.singular_values),
             coefficients=coef,
-            leaders=tuple(int(j) for j in res["leaders"]),
+            leaders=tuple(int(j) for j in res.leaders),
             n_commands=int(cmds.shape[0]),
         )
 
@@ -403,26 +401,14 @@ def _group_name(leader: str, terms: dict) -> str:
 
 # ----- loading and validation ----------------------------------------------------------------
 def load_machine(path: Union[str, Path]) -> Machine:
-    """Read and validate a machine file (TOML). Raises FileFormatError for unreadable TOML and
+    """Read and validate a machine file (TOML). Raises ConfigFileError (a FileFormatError) for an unreadable file or invalid TOML and
     ConfigError naming the exact entry for anything inconsistent."""
-    p = Path(path)
-    try:
-        text = p.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise FileFormatError(f"{p}: machine file not found") from None
-    except OSError as exc:
-        raise FileFormatError(f"{p}: cannot read the machine file ({exc.strerror})") from None
-    except UnicodeDecodeError:
-        raise FileFormatError(f"{p}: not a text (UTF-8) file") from None
-    return parse_machine(text, source=str(p))
+    return parse_machine(read_text(path, "machine"), source=str(path))
 
 
 def parse_machine(text: str, source: str = "<machine>") -> Machine:
     """Validate the text of a machine file; see :func:`load_machine`."""
-    try:
-        doc = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise FileFormatError(f"{source}: not valid TOML ({exc})") from None
+    doc = parse_toml(text, source)
 
     def fail(msg: str) -> ConfigError:
         return ConfigError(f"{source}: {msg}")
@@ -434,7 +420,7 @@ def parse_machine(text: str, source: str = "<machine>") -> Machine:
     if lu != "mm":
         raise fail(f'length_unit must be "mm" (gagekit works in millimetres), got {lu!r}')
     au = doc.get("angle_unit", "deg")
-    if au not in _ANGLE_UNITS:
+    if not isinstance(au, str) or au not in _ANGLE_UNITS:
         raise fail(f'angle_unit must be "deg" or "rad", got {au!r}')
     name = doc.get("name", Path(source).stem)
     if not isinstance(name, str):
