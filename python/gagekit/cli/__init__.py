@@ -16,7 +16,7 @@ import typer
 
 from .. import __version__
 from ..errors import GagekitError
-from . import cloud, demo, form, gage, machine, machine_observer
+from . import cloud, demo, form, gage, machine, machine_observer, studio
 
 app = typer.Typer(
     name="gagekit",
@@ -32,6 +32,7 @@ app.add_typer(form.app, name="form")
 app.add_typer(gage.app, name="gage")
 app.add_typer(machine.app, name="machine")
 app.command("demo")(demo.demo)
+app.command("studio")(studio.studio)
 
 
 def _version_callback(value: bool) -> None:
