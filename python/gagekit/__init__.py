@@ -14,6 +14,7 @@ from .form import *  # noqa: F401,F403
 from .gage import *  # noqa: F401,F403
 from .machine import *  # noqa: F401,F403
 from .errors import (
+    ClusterError,
     ConfigError,
     DegenerateGeometryError,
     FileFormatError,
@@ -22,6 +23,8 @@ from .errors import (
     InternalError,
     InvalidInputError,
     NumericalError,
+    SchemaVersionError,
+    StoreError,
 )
 
 try:
@@ -44,4 +47,7 @@ __all__ = [
     "ConfigError",
     "NumericalError",
     "InternalError",
+    "StoreError",
+    "SchemaVersionError",
+    "ClusterError",
 ]
