@@ -23,7 +23,7 @@ import os
 from typing import Any, Iterable, Optional
 
 from ..errors import ClusterError, ConfigError, InvalidInputError
-from .tasks import execute, limit_threads
+from .tasks import execute, limit_threads, warm_up
 
 __all__ = ["WorkerLost", "LocalPool", "DaskCluster", "default_workers"]
 
@@ -56,6 +56,10 @@ class LocalPool:
     def _start(self) -> cf.ProcessPoolExecutor:
         return cf.ProcessPoolExecutor(self.workers, mp_context=multiprocessing.get_context("spawn"),
                                       initializer=limit_threads, initargs=(self.threads,))
+
+    def warm(self) -> None:
+        """Start every worker now (the benchmark times batches without the start-up)."""
+        list(self._pool.map(warm_up, [0.2] * self.workers))
 
     def submit(self, args: tuple, key: str) -> cf.Future:
         try:
@@ -114,6 +118,10 @@ class DaskCluster:
             raise ClusterError(f"the Dask scheduler at {address} has no workers (waited {wait_for_workers:g} s)") from None
         n = len(self.client.scheduler_info().get("workers", {}))
         self.description = f"Dask scheduler {address} ({n} worker{'s' if n != 1 else ''})"
+
+    def warm(self) -> None:
+        """Import the kernels on every worker now."""
+        self.client.run(warm_up, 0.0)
 
     def submit(self, args: tuple, key: str):
         return self.client.submit(execute, *args, key=key, pure=False, retries=1)

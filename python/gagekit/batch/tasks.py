@@ -18,7 +18,7 @@ from dataclasses import dataclass
 from datetime import datetime, timezone
 from typing import Any, Callable, Mapping, Optional
 
-__all__ = ["Outcome", "execute", "TASKS", "limit_threads"]
+__all__ = ["Outcome", "execute", "TASKS", "limit_threads", "warm_up"]
 
 
 @dataclass(frozen=True)
@@ -39,6 +39,15 @@ def limit_threads(threads: int) -> None:
     N cores do not each start N threads. Must run before the first kernel call."""
     for var in ("RAYON_NUM_THREADS", "OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
         os.environ[var] = str(max(1, int(threads)))
+
+
+def warm_up(seconds: float = 0.2) -> int:
+    """Import the kernels and hold the worker briefly (so that N calls land on N workers);
+    returns the process id. Used to start workers before timing them."""
+    from .. import gage  # noqa: F401  (the heavy imports: numpy, the Rust extension)
+
+    time.sleep(seconds)
+    return os.getpid()
 
 
 def _read(path: str, units: Optional[str]):

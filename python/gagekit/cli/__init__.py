@@ -15,7 +15,7 @@ import typer
 
 from .. import __version__
 from ..errors import GagekitError
-from . import batch, cloud, db, demo, form, gage, machine
+from . import batch, cloud, db, demo, form, gage, machine, stats
 
 app = typer.Typer(
     name="gagekit",
@@ -29,6 +29,7 @@ app.add_typer(form.app, name="form")
 app.add_typer(gage.app, name="gage")
 app.add_typer(machine.app, name="machine")
 app.add_typer(db.app, name="db")
+app.command("stats")(stats.stats)
 gage.app.command("batch")(batch.gage_batch)
 form.app.command("batch")(batch.form_batch)
 app.command("demo")(demo.demo)
