@@ -123,7 +123,9 @@ def test_las_round_trip(tmp_path):
     las.x, las.y, las.z = pts[:, 0], pts[:, 1], pts[:, 2]
     f = tmp_path / "scan.las"
     las.write(str(f))
-    np.testing.assert_allclose(gagekit.read_points(f), pts, atol=1e-9)
+    # no CRS in the header: metres (issue 13), so x1000; units= overrides
+    np.testing.assert_allclose(gagekit.read_points(f), pts * 1000.0, atol=1e-6)
+    np.testing.assert_allclose(gagekit.read_points(f, units="mm"), pts, atol=1e-9)
 
 
 def test_e57_round_trip(tmp_path):
@@ -132,4 +134,5 @@ def test_e57_round_trip(tmp_path):
     e57 = pye57.E57(str(f), mode="w")
     e57.write_scan_raw({"cartesianX": PTS[:, 0], "cartesianY": PTS[:, 1], "cartesianZ": PTS[:, 2]})
     e57.close()
-    np.testing.assert_allclose(gagekit.read_points(f), PTS, atol=1e-9)
+    # E57 stores metres (ASTM E2807)
+    np.testing.assert_allclose(gagekit.read_points(f), PTS * 1000.0, atol=1e-6)

@@ -57,6 +57,10 @@ def _root(
 
 def main(argv: Optional[list[str]] = None) -> None:
     """Entry point of the console script."""
+    import warnings
+
+    # library warnings (e.g. a LAS file's assumed unit) as one line each on stderr
+    warnings.showwarning = lambda message, *_a, **_k: print(f"gagekit: warning: {message}", file=sys.stderr)
     try:
         app(args=argv, prog_name="gagekit", standalone_mode=True)
     except GagekitError as exc:

@@ -9,8 +9,8 @@ from typing import Optional
 import numpy as np
 import typer
 
-from ..cloud import convex_hull_indices, load_regions, read_points, write_points
-from ._common import JSON_OPTION, emit, table
+from ..cloud import convex_hull_indices, load_regions, write_points
+from ._common import JSON_OPTION, UNITS_OPTION, emit, read_cloud_cli, table
 
 app = typer.Typer(help="Point clouds: information, convex-hull filter.", no_args_is_help=True)
 
@@ -18,14 +18,15 @@ app = typer.Typer(help="Point clouds: information, convex-hull filter.", no_args
 @app.command("info")
 def info(
     file: Path = typer.Argument(..., help="Point cloud: XYZ/CSV/TXT, NIST .ds, PLY, .npy, LAS/LAZ, E57."),
+    units: Optional[str] = UNITS_OPTION,
     as_json: bool = JSON_OPTION,
 ) -> None:
-    """Number of points and their bounding box."""
-    pts = read_points(file)
+    """Number of points, their bounding box (mm), the file's unit and the conversion applied."""
+    cloud = read_cloud_cli(file, units)
+    pts = cloud.points
     lo, hi = pts.min(axis=0), pts.max(axis=0)
     result = {
-        "file": str(file),
-        "count": int(len(pts)),
+        **cloud.to_dict(),
         "min": lo.tolist(),
         "max": hi.tolist(),
         "size": (hi - lo).tolist(),
@@ -34,7 +35,14 @@ def info(
 
     def human(r: dict) -> str:
         rows = [[ax, r["min"][i], r["max"][i], r["size"][i]] for i, ax in enumerate("xyz")]
-        return f"{r['file']}: {r['count']} points\n" + table(["axis", "min (mm)", "max (mm)", "size (mm)"], rows)
+        conv = f"x {r['scale_to_mm']:g}" + (f" (z x {r['z_scale_to_mm']:g})" if r["z_scale_to_mm"] != r["scale_to_mm"] else "")
+        lines = [
+            f"{r['file']}: {r['count']} points ({r['format']}" + (f", {r['scans']} scans" if r["scans"] != 1 else "") + ")",
+            f"unit: {r['source_unit']} ({r['unit_basis']}), converted to mm {conv}",
+        ]
+        if r["invalid_dropped"]:
+            lines.append(f"invalid points dropped: {r['invalid_dropped']}")
+        return "\n".join(lines) + "\n" + table(["axis", "min (mm)", "max (mm)", "size (mm)"], rows)
 
     emit(result, as_json, human)
 
@@ -42,11 +50,12 @@ def info(
 @app.command("hull")
 def hull(
     file: Path = typer.Argument(..., help="Point cloud file."),
-    out: Optional[Path] = typer.Option(None, "--out", help="Write the hull vertices to this file (.ply, .csv, .xyz, .npy)."),
+    out: Optional[Path] = typer.Option(None, "--out", help="Write the hull vertices (mm) to this file (.ply, .csv, .xyz, .npy)."),
+    units: Optional[str] = UNITS_OPTION,
     as_json: bool = JSON_OPTION,
 ) -> None:
     """Keep only the vertices of the convex hull (Eq. 5.21): the points an LP over the cloud needs."""
-    pts = read_points(file)
+    pts = read_cloud_cli(file, units).points
     t0 = time.perf_counter()
     idx = convex_hull_indices(pts)
     seconds = time.perf_counter() - t0
@@ -72,12 +81,13 @@ def hull(
 def regions(
     file: Path = typer.Argument(..., help="Point cloud file."),
     regions_toml: Path = typer.Argument(..., help="TOML file with [[region]] tables (a gage file works)."),
+    units: Optional[str] = UNITS_OPTION,
     as_json: bool = JSON_OPTION,
 ) -> None:
     """Cut a cloud into its regions and hull-filter each one (Sec. 5.4.1)."""
     from ..cloud.workflow import cut_and_filter
 
-    result = cut_and_filter(read_points(file), load_regions(regions_toml))
+    result = cut_and_filter(read_cloud_cli(file, units).points, load_regions(regions_toml))
 
     def human(r: dict) -> str:
         rows = [[g["name"], g["points"], g["hull_vertices"], f"{g['reduction']:.1f}x"] for g in r["regions"]]

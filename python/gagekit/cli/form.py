@@ -4,12 +4,12 @@ from __future__ import annotations
 
 from enum import Enum
 from pathlib import Path
-from typing import Any
+from typing import Any, Optional
 
 import numpy as np
 import typer
 
-from ._common import JSON_OPTION, emit, table
+from ._common import JSON_OPTION, UNITS_OPTION, emit, table
 
 app = typer.Typer(help="Form of lines, planes, circles, spheres and cylinders (Ch. 6).", no_args_is_help=True)
 
@@ -25,10 +25,10 @@ class _CircleCriterion(str, Enum):
     all = "all"
 
 
-def _read_xy(path: Path) -> np.ndarray:
+def _read_xy(path: Path, units: Optional[str] = None) -> np.ndarray:
     from ..form.files import read_xy
 
-    return read_xy(path)
+    return read_xy(path, units)
 
 
 @app.command("circle")
@@ -36,12 +36,13 @@ def circle(
     file: Path = typer.Argument(..., help="Points: any file read_points reads (NIST .ds too); 2 columns or planar 3-D."),
     criterion: _CircleCriterion = typer.Option(_CircleCriterion.lsq, "--criterion", "-c",
                                                help="lsq, mc (min circumscribed), mi (max inscribed), mz (min zone), or all."),
+    units: Optional[str] = UNITS_OPTION,
     as_json: bool = JSON_OPTION,
 ) -> None:
     """Fit a 2-D circle (Sec. 6.2): least squares, MC, MI or minimum zone (roundness)."""
     from ..form.circle import fit_circle
 
-    pts = _read_xy(file)
+    pts = _read_xy(file, units)
     crits = ["lsq", "mc", "mi", "mz"] if criterion.value == "all" else [criterion.value]
     fits = [fit_circle(pts, c) for c in crits]
     result = fits[0] if len(fits) == 1 else {f.to_dict()["criterion"]: f for f in fits}
@@ -61,10 +62,10 @@ def circle(
 
 # 3-D fits ------------------------------------------------------------------
 
-def _load_points(path: Path) -> np.ndarray:
+def _load_points(path: Path, units: Optional[str] = None) -> np.ndarray:
     from ..form.files import load_points
 
-    return load_points(path)
+    return load_points(path, units)
 
 
 def _fmt_vec(v: Any) -> str:
@@ -95,12 +96,13 @@ def fit(
     file: Path = typer.Argument(..., help="Points: any file read_points reads (XYZ/CSV/TXT, NIST .ds, PLY, .npy, ...)"),
     criterion: str = typer.Option("least-squares", "--criterion", "-c", help="Fit criterion"),
     seed: int = typer.Option(0, "--seed", help="Seed of the particle swarm (cylinders)"),
+    units: Optional[str] = UNITS_OPTION,
     as_json: bool = JSON_OPTION,
 ) -> None:
     """Fit a feature to the points of FILE and report its form error and certificate."""
     from ..form.files import fit_file
 
-    emit(fit_file(shape, file, criterion, seed=seed), as_json, _human)
+    emit(fit_file(shape, file, criterion, seed=seed, units=units), as_json, _human)
 
 
 @app.command("cylinder")
@@ -110,9 +112,10 @@ def cylinder(
         "least-squares", "--criterion", "-c", help="least-squares (lsq), mcc, mic or mzc"
     ),
     seed: int = typer.Option(0, "--seed", help="Seed of the particle swarm"),
+    units: Optional[str] = UNITS_OPTION,
     as_json: bool = JSON_OPTION,
 ) -> None:
     """Fit a cylinder (least squares, min circumscribed, max inscribed, minimum zone)."""
     from .. import form
 
-    emit(form.fit_cylinder(_load_points(file), criterion, seed=seed), as_json, _human)
+    emit(form.fit_cylinder(_load_points(file, units), criterion, seed=seed), as_json, _human)

@@ -8,7 +8,7 @@ from typing import Optional
 
 import typer
 
-from ._common import JSON_OPTION, emit
+from ._common import JSON_OPTION, UNITS_OPTION, emit, read_cloud_cli
 
 app = typer.Typer(help="Virtual gages: can a scanned casting be machined to print? (Ch. 5)", no_args_is_help=True)
 
@@ -21,13 +21,14 @@ def check(
     report: Optional[Path] = typer.Option(None, "--report", help="Write tables, PNG pictures and an HTML page into DIR."),
     out_cloud: Optional[Path] = typer.Option(None, "--out-cloud", help="Write the cloud in the part frame with T* applied."),
     no_groups: bool = typer.Option(False, "--no-groups", help="Skip the infeasible-group LPs of Eq. 5.10."),
+    units: Optional[str] = UNITS_OPTION,
 ) -> None:
     """Find the correction T* of the machining frame (Eq. 5.11) and every gage's allowance.
 
     Exit status 0 whether or not the part conforms; read `status` (conforming /
     nonconforming). Errors in the files: one line on stderr, exit 2.
     """
-    from ..cloud import read_points, write_points
+    from ..cloud import write_points
     from ..gage import GageSpec, check_gages, corrected_cloud
     from ..gage.report import human, write_report
 
@@ -36,7 +37,7 @@ def check(
         spec = GageSpec.load(gages)
     for w in caught:
         typer.echo(f"gagekit: warning: {w.message}", err=True)
-    pts = read_points(cloud)
+    pts = read_cloud_cli(cloud, units).points
     result = check_gages(pts, spec, groups=not no_groups)
     if report is not None:
         write_report(result, report)

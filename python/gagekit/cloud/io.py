@@ -1,79 +1,177 @@
-"""Reading and writing point clouds.
+"""Reading and writing point clouds, in millimetres.
 
 Formats, chosen by the file's extension (or, for an unknown extension, by its
-first bytes):
+first bytes); one reader module per format in :mod:`gagekit.cloud.formats`:
 
-========================  =====================================================
-``.xyz .csv .txt .asc``   ASCII, values separated by commas, semicolons, spaces
-``.pts``                  or tabs; optional header lines (a header naming
-                          ``x``, ``y``, ``z`` columns selects them, otherwise the
-                          first columns are used); extra columns ignored; ``#``
-                          comment lines skipped. Parsed in parallel in Rust.
-``.ds``                   NIST Algorithm Testing System: a count line, then
-                          ``x y z`` per line (the count is checked).
-``.ply``                  ASCII or binary PLY (float32 or float64 ``x y z``
-                          vertex properties), read with ``plyfile``.
-``.npy``                  NumPy array of shape (n, 3) or wider.
-``.las .laz``             with the optional ``laspy`` extra (``pip install gagekit[las]``).
-``.e57``                  with the optional ``pye57`` extra (``pip install gagekit[e57]``).
-========================  =====================================================
+========================  ===========  ===============================================
+extension                 file unit    reader
+========================  ===========  ===============================================
+``.xyz .csv .txt .asc``   mm           ASCII, values separated by commas, semicolons,
+``.pts``                               spaces or tabs (decimal commas in semicolon
+                                       files); header lines naming ``x``, ``y``, ``z``
+                                       select columns; ``#`` comments; UTF-8 BOM.
+                                       Parsed in parallel in Rust (``gagekit-cloudio``).
+``.ds``                   mm           NIST Algorithm Testing System: a count line,
+                                       then ``x y z`` per line (the count is checked).
+``.ply``                  mm           ASCII or binary PLY; the element counts of the
+                                       header are checked against the file's size.
+``.npy``                  mm           NumPy array (n, 3) or wider, real numbers.
+``.las .laz``             CRS unit     ``laspy`` (``pip install gagekit[las]``); the
+                                       unit of the header's CRS, metres without one.
+``.e57``                  m            every scan, pose applied, spherical converted,
+                                       invalid points dropped and counted.
+========================  ===========  ===============================================
 
-Every reader returns a C-contiguous float64 array of shape (n, 3) (or (n, 2)
-with ``dim=2`` for ASCII files of 2-D points) and raises
-:class:`~gagekit.errors.FileFormatError` naming the file (and line, for text)
-for anything it cannot read, and :class:`~gagekit.errors.InvalidInputError`
-for NaN or infinite coordinates.
+Units (see :mod:`gagekit.cloud.units`): every reader returns millimetres. The file's own
+unit is used unless ``units`` is given (``"mm", "cm", "m", "um", "in", "ft"``), which
+overrides it. :func:`read_cloud` returns a :class:`Cloud` with the points and what was
+done (``source_unit``, ``scale_to_mm``, dropped invalid points, warnings);
+:func:`read_points` returns the points alone and issues the warnings with
+:func:`warnings.warn`.
+
+For command-line commands that read a cloud (use this in every new command)::
+
+    from ._common import UNITS_OPTION, read_cloud_cli
+    def cmd(file: Path = ..., units: Optional[str] = UNITS_OPTION):
+        pts = read_cloud_cli(file, units).points   # warnings -> "gagekit: warning: ..." lines
+
+Errors: :class:`~gagekit.errors.FileFormatError` naming the file (and line, for text)
+for anything a reader cannot read; :class:`~gagekit.errors.InvalidInputError` for NaN or
+infinite coordinates and unknown unit names.
 """
 
 from __future__ import annotations
 
 import os
+import warnings
+from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Union
+from typing import Optional, Union
 
 import numpy as np
 
 from .. import _core, _progress
 from .._util import as_points
 from ..errors import FileFormatError, InvalidInputError
+from . import units as _units
+from .formats import Raw, e57, las, npy, ply, text
 
 PathLike = Union[str, os.PathLike]
 
 ASCII_SUFFIXES = {".xyz", ".csv", ".txt", ".asc", ".pts", ".ds"}
-SUPPORTED = "XYZ/CSV/TXT/ASC/PTS, NIST .ds, PLY, .npy, LAS/LAZ (laspy), E57 (pye57)"
+SUPPORTED = "XYZ/CSV/TXT/ASC/PTS, NIST .ds, PLY, .npy, LAS/LAZ (laspy), E57"
+_BINARY = {".ply": ply.read, ".npy": npy.read, ".las": las.read, ".laz": las.read, ".e57": e57.read}
+
+__all__ = ["Cloud", "read_cloud", "read_points", "write_points", "SUPPORTED"]
 
 
-def read_points(path: PathLike, dim: int = 3) -> np.ndarray:
-    """Read a point cloud file into a float64 array of shape (n, ``dim``).
+@dataclass(frozen=True, eq=False)
+class Cloud:
+    """A point cloud read from a file, in millimetres, and how it was read.
 
+    ``source_unit``: the unit the file's coordinates were taken to be in; ``scale_to_mm``:
+    the factor applied (``z_scale_to_mm`` differs only for a LAS file whose vertical CRS
+    unit differs from its horizontal one); ``unit_basis``: why that unit (the format's
+    standard, the LAS CRS, an assumption, or ``units=``); ``invalid_dropped``: E57 points
+    whose invalid state was not 0; ``warnings``: what the reader assumed.
+    """
+
+    points: np.ndarray
+    path: str
+    format: str
+    source_unit: str
+    scale_to_mm: float
+    unit_basis: str
+    z_scale_to_mm: float
+    scans: int = 1
+    invalid_dropped: int = 0
+    warnings: tuple = field(default_factory=tuple)
+
+    def to_dict(self) -> dict:
+        """The description without the points (for ``--json``)."""
+        return {
+            "file": self.path,
+            "format": self.format,
+            "count": int(len(self.points)),
+            "source_unit": self.source_unit,
+            "scale_to_mm": self.scale_to_mm,
+            "z_scale_to_mm": self.z_scale_to_mm,
+            "unit_basis": self.unit_basis,
+            "scans": self.scans,
+            "invalid_dropped": self.invalid_dropped,
+            "warnings": list(self.warnings),
+        }
+
+
+def read_cloud(path: PathLike, units: Optional[str] = None, dim: int = 3) -> Cloud:
+    """Read a point-cloud file and convert it to millimetres (see the module docstring).
+
+    ``units`` overrides the file's unit (``mm``, ``cm``, ``m``, ``um``, ``in``, ``ft``);
     ``dim=2`` is accepted for ASCII files of 2-D points (x y per line).
     """
+    override = _units.check_units(units)
     p = Path(path)
+    if dim not in (2, 3):
+        raise InvalidInputError(f"dim must be 2 or 3, got {dim}")
     if not p.exists():
         raise FileFormatError(f"{p}: no such file")
     if not p.is_file():
-        raise FileFormatError(f"{p}: not a file")
-    if dim not in (2, 3):
-        raise InvalidInputError(f"dim must be 2 or 3, got {dim}")
+        raise FileFormatError(f"{p}: not a regular file")
     suffix = p.suffix.lower()
-    if suffix not in ASCII_SUFFIXES | {".ply", ".npy", ".las", ".laz", ".e57"}:
+    if suffix not in ASCII_SUFFIXES and suffix not in _BINARY:
         suffix = _sniff(p)
-    with _progress.status(f"reading {p.name} ({p.stat().st_size / 1e6:.0f} MB)"):
+    try:
+        size = p.stat().st_size
+    except OSError as exc:
+        raise FileFormatError(f"{p}: cannot be read ({exc.strerror or exc})") from None
+    with _progress.status(f"reading {p.name} ({size / 1e6:.0f} MB)"):
         if suffix in ASCII_SUFFIXES:
-            pts = _read_ascii(p, dim, nist=suffix == ".ds")
+            raw = text.read(p, dim, nist=suffix == ".ds")
         else:
             if dim != 3:
                 raise InvalidInputError(f"{p}: dim=2 is only for ASCII files")
-            reader = {".ply": _read_ply, ".npy": _read_npy, ".las": _read_las, ".laz": _read_las, ".e57": _read_e57}
-            pts = reader[suffix](p)
-            _check_finite(pts, p)
+            try:
+                raw = _BINARY[suffix](p, dim)
+            except OSError as exc:
+                raise FileFormatError(f"{p}: cannot be read ({exc.strerror or exc})") from None
+    return _to_mm(raw, p, override)
+
+
+def read_points(path: PathLike, units: Optional[str] = None, dim: int = 3) -> np.ndarray:
+    """Read a point cloud file into a float64 array of shape (n, ``dim``), in millimetres.
+
+    ``units`` overrides the unit of the file (E57: metres, LAS/LAZ: its CRS unit, the
+    other formats: millimetres). Warnings of the reader are issued with
+    :func:`warnings.warn`; :func:`read_cloud` returns them with the points.
+    """
+    cloud = read_cloud(path, units=units, dim=dim)
+    for w in cloud.warnings:
+        warnings.warn(w, stacklevel=2)
+    return cloud.points
+
+
+def _to_mm(raw: Raw, p: Path, override: Optional[str]) -> Cloud:
+    pts = raw.points
+    warns = list(raw.warnings)
+    if override is not None:
+        unit, z_unit, basis = override, override, "given (units=/--units)"
+        warns = [w for w in warns if "unit" not in w]  # the reader's unit assumption no longer applies
+    elif raw.unit is None:
+        raise FileFormatError(raw.unit_basis)
+    else:
+        unit, z_unit, basis = raw.unit, raw.z_unit or raw.unit, raw.unit_basis
+    s, sz = _units.scale_to_mm(unit), _units.scale_to_mm(z_unit)
+    if s != 1.0 or sz != 1.0:
+        pts = pts * np.array([s, s, sz][: pts.shape[1]]) if sz != s else pts * s
     if len(pts) == 0:
         raise FileFormatError(f"{p}: the file holds no points")
-    return pts
+    _check_finite(pts, p)
+    return Cloud(np.ascontiguousarray(pts), str(p), raw.format, unit, s, basis, sz,
+                 raw.scans, raw.invalid_dropped, tuple(warns))
 
 
 def write_points(path: PathLike, points, *, binary: bool = True) -> None:
-    """Write an (n, 3) array as PLY (binary little-endian float64 unless
+    """Write an (n, 3) array (millimetres) as PLY (binary little-endian float64 unless
     ``binary=False``), CSV (``x,y,z`` header), XYZ/TXT (space separated) or .npy,
     by the extension of ``path``."""
     p = Path(path)
@@ -92,8 +190,11 @@ def write_points(path: PathLike, points, *, binary: bool = True) -> None:
 
 
 def _sniff(p: Path) -> str:
-    with open(p, "rb") as fh:
-        head = fh.read(8)
+    try:
+        with open(p, "rb") as fh:
+            head = fh.read(8)
+    except OSError as exc:
+        raise FileFormatError(f"{p}: cannot be read ({exc.strerror or exc})") from None
     if head.startswith(b"ply"):
         return ".ply"
     if head.startswith(b"\x93NUMPY"):
@@ -114,36 +215,6 @@ def _check_finite(pts: np.ndarray, p: Path) -> None:
         raise InvalidInputError(f"{p}: point {i} has a non-finite coordinate {pts[i].tolist()}")
 
 
-def _read_ascii(p: Path, dim: int, nist: bool) -> np.ndarray:
-    try:
-        pts, _header_lines, _cols = _core.cloud_read_ascii(str(p), dim, 1 if nist else 0)
-    except InvalidInputError as exc:
-        raise FileFormatError(str(exc)) from None
-    if nist:
-        first = p.open("rb").readline().split()
-        try:
-            count = int(first[0])
-        except (IndexError, ValueError):
-            raise FileFormatError(f"{p}: line 1: a NIST .ds file starts with the point count") from None
-        if count != len(pts):
-            raise FileFormatError(f"{p}: line 1 announces {count} points but the file holds {len(pts)}")
-    return pts
-
-
-def _read_ply(p: Path) -> np.ndarray:
-    from plyfile import PlyData  # maintained PLY reader (ASCII and binary)
-
-    try:
-        ply = PlyData.read(str(p))
-        vertex = ply["vertex"].data
-        pts = np.column_stack([np.asarray(vertex[c], dtype=np.float64) for c in ("x", "y", "z")])
-    except KeyError as exc:
-        raise FileFormatError(f"{p}: PLY file without vertex x, y, z properties ({exc})") from None
-    except Exception as exc:  # plyfile raises several exception types for malformed files
-        raise FileFormatError(f"{p}: not a readable PLY file ({exc})") from None
-    return np.ascontiguousarray(pts)
-
-
 def _write_ply(p: Path, pts: np.ndarray, binary: bool) -> None:
     from plyfile import PlyData, PlyElement
 
@@ -152,43 +223,3 @@ def _write_ply(p: Path, pts: np.ndarray, binary: bool) -> None:
     vertex = np.empty(len(pts), dtype=[("x", "<f8"), ("y", "<f8"), ("z", "<f8")])
     vertex["x"], vertex["y"], vertex["z"] = pts.T
     PlyData([PlyElement.describe(vertex, "vertex")], text=not binary).write(str(p))
-
-
-def _read_npy(p: Path) -> np.ndarray:
-    try:
-        arr = np.load(p, allow_pickle=False)
-    except Exception as exc:
-        raise FileFormatError(f"{p}: not a readable .npy file ({exc})") from None
-    if arr.ndim != 2 or arr.shape[1] < 3 or not np.issubdtype(arr.dtype, np.number):
-        raise FileFormatError(f"{p}: expected a numeric (n, 3) array, got {arr.dtype} {arr.shape}")
-    return np.ascontiguousarray(arr[:, :3], dtype=np.float64)
-
-
-def _read_las(p: Path) -> np.ndarray:
-    try:
-        import laspy
-    except ImportError:
-        raise FileFormatError(f"{p}: LAS/LAZ needs the optional extra: pip install 'gagekit[las]'") from None
-    try:
-        las = laspy.read(str(p))
-    except Exception as exc:
-        raise FileFormatError(f"{p}: not a readable LAS/LAZ file ({exc})") from None
-    return np.ascontiguousarray(np.column_stack([las.x, las.y, las.z]), dtype=np.float64)
-
-
-def _read_e57(p: Path) -> np.ndarray:
-    try:
-        import pye57
-    except ImportError:
-        raise FileFormatError(f"{p}: E57 needs the optional extra: pip install 'gagekit[e57]'") from None
-    try:
-        e57 = pye57.E57(str(p))
-        scans = [e57.read_scan(i, ignore_missing_fields=True, transform=True) for i in range(e57.scan_count)]
-    except Exception as exc:
-        raise FileFormatError(f"{p}: not a readable E57 file ({exc})") from None
-    if not scans:
-        raise FileFormatError(f"{p}: the E57 file holds no scans")
-    return np.ascontiguousarray(
-        np.vstack([np.column_stack([s["cartesianX"], s["cartesianY"], s["cartesianZ"]]) for s in scans]),
-        dtype=np.float64,
-    )

@@ -39,19 +39,19 @@ def text_columns(path: Union[str, Path]) -> int:
     return 0
 
 
-def read_xy(path: Union[str, Path]) -> np.ndarray:
+def read_xy(path: Union[str, Path], units: Optional[str] = None) -> np.ndarray:
     """(n, 2) points from any file ``read_points`` reads: 3-D points must lie in a plane
     parallel to a coordinate plane (as NIST's 2-D sets do); the constant coordinate is
     dropped. ASCII files of 2 columns are read as 2-D points."""
     from ..cloud import read_points
 
     try:
-        arr = read_points(path, dim=3)
+        arr = read_points(path, units=units, dim=3)
     except FileFormatError as exc3:
         if text_columns(path) != 2:
             raise
         try:
-            return read_points(path, dim=2)
+            return read_points(path, units=units, dim=2)
         except (FileFormatError, InvalidInputError):
             raise exc3 from None
     const = [k for k in range(3) if np.ptp(arr[:, k]) == 0.0]
@@ -63,11 +63,12 @@ def read_xy(path: Union[str, Path]) -> np.ndarray:
     return np.ascontiguousarray(np.delete(arr, const[-1], axis=1))
 
 
-def load_points(path: Union[str, Path]) -> np.ndarray:
-    """Points from any file ``read_points`` reads; ASCII files of 2 columns as 2-D points."""
+def load_points(path: Union[str, Path], units: Optional[str] = None) -> np.ndarray:
+    """Points from any file ``read_points`` reads (in mm; ``units`` overrides the file's unit);
+    ASCII files of 2 columns as 2-D points."""
     from ..cloud import read_points
 
-    return read_points(path, dim=2) if text_columns(path) == 2 else read_points(path)
+    return read_points(path, units=units, dim=2 if text_columns(path) == 2 else 3)
 
 
 def normalize_shape(shape: str) -> str:
@@ -81,17 +82,18 @@ def normalize_shape(shape: str) -> str:
 
 
 def fit_file(shape: str, path: Union[str, Path], criterion: str = "least-squares", seed: int = 0,
-             points: Optional[np.ndarray] = None) -> Any:
+             points: Optional[np.ndarray] = None, units: Optional[str] = None) -> Any:
     """Fit ``shape`` to the points of ``path`` with ``criterion`` (seeded swarm for cylinders).
 
-    ``points`` skips the reading (already read the way :func:`read_xy` / :func:`load_points` do).
+    ``points`` skips the reading (already read the way :func:`read_xy` / :func:`load_points` do);
+    ``units`` overrides the unit of the file (see :func:`gagekit.read_points`).
     """
     from .. import form
 
     name = normalize_shape(shape)
     if name == "circle":  # 2-D circles: the circle reader drops a constant coordinate
-        return form.fit_circle(read_xy(path) if points is None else points, criterion)
-    pts = load_points(path) if points is None else points
+        return form.fit_circle(read_xy(path, units) if points is None else points, criterion)
+    pts = load_points(path, units) if points is None else points
     if name == "line":
         return form.fit_line(pts, criterion)
     if name == "plane":
