@@ -174,3 +174,20 @@ def test_killing_a_dask_worker_mid_batch_loses_nothing(casting_set, dask_cluster
     _, again = lines(gk("gage", "batch", gages, *scans, "--db", url, "--json", "--scheduler", dask_cluster.scheduler_address))
     assert again["skipped"] == stored and again["ok"] == len(scans) - stored and again["failed"] == 0
     assert counts(url)[0] == len(scans)
+
+
+def test_units_are_passed_to_every_scan(tmp_path):
+    import numpy as np
+
+    t = np.linspace(0, 2 * np.pi, 90, endpoint=False)
+    f = tmp_path / "ring_cm.csv"
+    np.savetxt(f, np.c_[2.5 * np.cos(t), 2.5 * np.sin(t) + 0.001 * np.sin(5 * t)], delimiter=",")
+    url = f"sqlite:///{tmp_path / 'u.db'}"
+    got, _ = lines(gk("form", "batch", "circle", f, "--units", "cm", "--db", url, "--json", "-w", "1"))
+    single = json.loads(gk("form", "fit", "circle", f, "--units", "cm", "--json").stdout)
+    assert got[0]["result"] == single and single["radius"] == pytest.approx(25.0, abs=0.02)
+    # another unit is another spec: evaluated again, not skipped
+    got_mm, summary = lines(gk("form", "batch", "circle", f, "--db", url, "--json"))
+    assert summary["ok"] == 1 and got_mm[0]["result"]["radius"] == pytest.approx(2.5, abs=0.002)
+    bad = gk("form", "batch", "circle", f, "--units", "furlong", "--db", url)
+    assert bad.returncode == 2 and bad.stderr.startswith("gagekit: error: unknown unit 'furlong'")

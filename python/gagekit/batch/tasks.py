@@ -53,9 +53,9 @@ def warm_up(seconds: float = 0.2) -> int:
 def _read(path: str, units: Optional[str]):
     from ..cloud import read_points
 
-    if units is None:
-        return read_points(path)
-    return read_points(path, units=units)
+    with warnings.catch_warnings():  # reader warnings (unit guesses, dropped points) would go to the worker's stderr
+        warnings.simplefilter("ignore")
+        return read_points(path, units=units)
 
 
 def _gage(path: str, document: Mapping[str, Any], options: Mapping[str, Any]) -> dict:
@@ -73,7 +73,10 @@ def _form(path: str, document: Mapping[str, Any], options: Mapping[str, Any]) ->
     from .._util import to_jsonable
     from ..form.files import fit_file
 
-    return to_jsonable(fit_file(document["shape"], path, document["criterion"], seed=int(document.get("seed", 0))))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return to_jsonable(fit_file(document["shape"], path, document["criterion"], seed=int(document.get("seed", 0)),
+                                    units=options.get("units")))
 
 
 #: the kinds of batch and their worker functions (``inspect`` registers itself here)

@@ -21,8 +21,9 @@ from typing import Callable, List, Optional
 
 import typer
 
+from ._common import UNITS_OPTION
+
 SCANS_ARG = typer.Argument(..., help="Scan files, folders (searched for scan files) or glob patterns ('scans/*.ply').")
-UNITS_OPTION = typer.Option(None, "--units", help="Length unit of the scan files (as `cloud` commands read them).")
 WORKERS_OPTION = typer.Option(None, "--workers", "-w", help="Local worker processes (default: one per core).")
 SCHEDULER_OPTION = typer.Option(None, "--scheduler", help="Run on a Dask cluster: the scheduler's address, tcp://host:8786.")
 DB_OPTION = typer.Option(None, "--db", help="Results database: sqlite:///FILE (default gagekit.db beside the report) or postgresql://...")
@@ -50,17 +51,11 @@ def _executor(workers: Optional[int], scheduler: Optional[str]):
     return DaskCluster(scheduler) if scheduler is not None else LocalPool(workers)
 
 
-def _check_units(units: Optional[str]) -> dict:
-    if units is None:
-        return {}
-    import inspect
+def _units(units: Optional[str]) -> dict:
+    """The ``units`` option (checked now: a bad unit stops the batch before it starts)."""
+    from ..cloud.units import check_units
 
-    from ..cloud import read_points
-    from ..errors import ConfigError
-
-    if "units" not in inspect.signature(read_points).parameters:
-        raise ConfigError("--units: this gagekit's readers take no unit (scans are read in mm)")
-    return {"units": units}
+    return {} if units is None else {"units": check_units(units)}
 
 
 def _human_line(ev) -> str:
@@ -137,7 +132,7 @@ def gage_batch(
         GageSpec.from_dict(doc, str(gages))  # a bad gage file stops the batch before it starts
     for w in caught:
         typer.echo(f"gagekit: warning: {w.message}", err=True)
-    options = {"groups": not no_groups, **_check_units(units)}
+    options = {"groups": not no_groups, **_units(units)}
     job = Job("gage", {"spec": doc}, options, source=str(gages), part=part or gages.stem)
     run(job, scans, db, report, workers, scheduler, as_json, retry_failed, f"Virtual-gage batch: {gages.name}")
 
@@ -147,6 +142,7 @@ def form_batch(
     scans: List[str] = SCANS_ARG,
     criterion: str = typer.Option("least-squares", "--criterion", "-c", help="Fit criterion, as for `form fit`."),
     seed: int = typer.Option(0, "--seed", help="Seed of the particle swarm (cylinders)"),
+    units: Optional[str] = UNITS_OPTION,
     workers: Optional[int] = WORKERS_OPTION,
     scheduler: Optional[str] = SCHEDULER_OPTION,
     db: Optional[str] = DB_OPTION,
@@ -160,5 +156,5 @@ def form_batch(
     from ..form.files import normalize_shape
 
     name = normalize_shape(shape)
-    job = Job("form", {"shape": name, "criterion": criterion, "seed": seed}, {}, source=None, part=part)
+    job = Job("form", {"shape": name, "criterion": criterion, "seed": seed}, _units(units), source=None, part=part)
     run(job, scans, db, report, workers, scheduler, as_json, retry_failed, f"Form batch: {name} ({criterion})")
