@@ -21,7 +21,7 @@ from sqlalchemy.engine import URL
 
 from ..errors import StoreError
 from . import models as m
-from .schema import _reason, create_engine, ensure_schema, safe_url
+from .schema import _reason, create_engine, ensure_schema, safe_url, use_wal
 
 __all__ = ["ResultStore", "StoredResult", "Outcome", "spec_hash", "canonical_json", "now"]
 
@@ -106,10 +106,16 @@ def _details(kind: str, result_id: int, result: Mapping[str, Any]) -> list[tuple
         row = {"result_id": result_id, "shape": result["shape"], "criterion": result["criterion"],
                "n_points": result["n_points"], "form_error": result["form_error"], "radius": result.get("radius")}
         return [(m.FormResult.__table__, [row])]
-    if kind == "inspect":
-        rows = [{"result_id": result_id, "tolerance": t["name"], "characteristic": t.get("characteristic", t.get("kind", "")),
-                 "value": t["value"], "lower": t.get("lower"), "upper": t.get("upper"), "conforming": bool(t["conforming"])}
-                for t in result.get("tolerances", [])]
+    if kind == "inspect":  # gagekit.inspect: each callout's measured value against its tolerance (upper limit)
+        rows, seen = [], set()
+        for t in result.get("tolerances", []):
+            name = t.get("name") or f"{t['characteristic']} of {t['feature']}"
+            base, k = name, 2
+            while name in seen:  # the same callout twice (other datums): numbered
+                name, k = f"{base} #{k}", k + 1
+            seen.add(name)
+            rows.append({"result_id": result_id, "tolerance": name, "characteristic": t["characteristic"],
+                         "value": t["measured"], "lower": None, "upper": t["tolerance"], "conforming": bool(t["pass"])})
         return [(m.InspectionResult.__table__, rows)] if rows else []
     return []
 
@@ -122,6 +128,7 @@ class ResultStore:
         self.url = safe_url(self.engine.url)
         try:
             self.revision = ensure_schema(self.engine, create=create)
+            use_wal(self.engine)
         except Exception:
             self.engine.dispose()
             raise

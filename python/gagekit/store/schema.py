@@ -73,21 +73,15 @@ def _sqlite_events(engine: Engine) -> None:
     """pysqlite's own transaction handling defers BEGIN and never locks before the first
     write; two writers that both read first then deadlock into 'database is locked'.
     Every transaction starts with BEGIN IMMEDIATE instead (SQLAlchemy's documented recipe),
-    so writers queue on the busy timeout; foreign keys are enforced.
-
-    The journal is a write-ahead log with ``synchronous = NORMAL`` (SQLite's recommendation
-    for WAL): a commit is not flushed to the disk on its own, so a transaction costs
-    microseconds instead of an fsync; a crash of the process loses nothing committed, a
-    power cut may lose the last commits but never corrupts the file, and a batch run again
-    redoes exactly those scans."""
+    so writers queue on the busy timeout; foreign keys are enforced. Connecting changes
+    nothing in the file (a foreign or damaged file is left as it was)."""
 
     @sa.event.listens_for(engine, "connect")
     def _connect(dbapi_conn, _record):  # pragma: no cover - trivial
         dbapi_conn.isolation_level = None
         cur = dbapi_conn.cursor()
         cur.execute("PRAGMA foreign_keys = ON")
-        cur.execute("PRAGMA journal_mode = WAL")
-        cur.execute("PRAGMA synchronous = NORMAL")
+        cur.execute("PRAGMA synchronous = NORMAL")  # in WAL mode: no fsync per commit (see use_wal)
         cur.close()
 
     @sa.event.listens_for(engine, "begin")
@@ -120,6 +114,24 @@ def create_engine(url: Union[str, Path, URL], *, must_exist: bool = False) -> En
         engine.dispose()
         raise StoreError(f"cannot open the database {safe_url(u)}: {_reason(exc)}") from None
     return engine
+
+
+def use_wal(engine: Engine) -> None:
+    """Put a SQLite database of ours into write-ahead-log mode (kept in the file).
+
+    With ``synchronous = NORMAL`` (SQLite's recommendation for WAL) a commit is not flushed
+    to the disk on its own, so a transaction costs microseconds instead of an fsync: a
+    crash of the process loses nothing committed, a power cut may lose the last commits but
+    never corrupts the file, and a batch run again redoes exactly those scans."""
+    if engine.dialect.name != "sqlite":
+        return
+    raw = engine.raw_connection()  # outside a transaction (no BEGIN): the mode cannot change inside one
+    try:
+        cur = raw.cursor()
+        cur.execute("PRAGMA journal_mode = WAL")
+        cur.close()
+    finally:
+        raw.close()
 
 
 def _reason(exc: BaseException) -> str:
