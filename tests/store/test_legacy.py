@@ -100,3 +100,31 @@ def test_old_history_file_is_migrated_by_db_upgrade(tracked, tmp_path):
     assert {(n, c): v for n, c, v in gv} == {(n, c): v[c - 1] for n, v in res.groups.items() for c in (1, 2, 3, 4)}
     assert stats[0] == json.loads(json.dumps(res.cycles[2]))
     ResultStore(url).close()  # now a current results database
+
+
+def test_machine_history_reads_an_old_file_and_track_converts_it(tracked, tmp_path):
+    from gagekit.machine.observations import write_csv
+
+    machine, cyc, res = tracked
+    f = tmp_path / "old.sqlite"
+    write_old_history(f, machine, cyc, res, runs=2)
+    before = f.read_bytes()
+    gk = lambda *a: subprocess.run([sys.executable, "-m", "gagekit", *map(str, a)], capture_output=True, text=True)  # noqa: E731
+    h = gk("machine", "history", f, "--json")
+    assert h.returncode == 0, h.stderr
+    assert [r["run"] for r in json.loads(h.stdout)["runs"]] == [1, 2] and f.read_bytes() == before  # read as it is
+    header = ["cycle", *machine.joint_names, "x", "y", "z", "time", *cyc.temperatures]
+    rows = np.concatenate([np.column_stack([np.full(len(cyc.commands), c), cyc.commands, cyc.measured[j],
+                                            np.full(len(cyc.commands), cyc.time[j]),
+                                            *[np.full(len(cyc.commands), v[j]) for v in cyc.temperatures.values()]])
+                           for j, c in enumerate(cyc.cycle_ids)])
+    write_csv(tmp_path / "cycles.csv", header, rows)
+    t = gk("machine", "track", gagekit.machine.example_machine_path(), tmp_path / "cycles.csv", "--history", f, "--json")
+    assert t.returncode == 0, t.stderr
+    assert json.loads(t.stdout)["history_run"] == 3  # the two old runs kept, converted, then this one
+    h = json.loads(gk("machine", "history", f, "--json").stdout)
+    assert [r["run"] for r in h["runs"]] == [1, 2, 3] and h["machine"] == machine.name
+    assert h["runs"][0]["cycles"][2]["full_mean"] == pytest.approx(res.cycles[2]["full"]["mean"])
+    s = gk("stats", "--db", f"sqlite:///{f}", "--json")  # the same file is a results database now
+    assert s.returncode == 0, s.stderr
+    assert json.loads(s.stdout)["machines"][0]["calibrations"] == 3

@@ -2,8 +2,8 @@
 
 Registered on the ``gage`` and ``form`` groups by :mod:`gagekit.cli`. Each scan's result is
 exactly what the single-scan command prints with ``--json``; results go to the results
-database (``--db``, default ``gagekit.db`` in the ``--report`` folder, else the current
-one), and a batch run again skips what is stored there.
+database (``--db``, default ``gagekit.db`` beside the ``--report`` folder, else in the
+current one), and a batch run again skips what is stored there.
 
 ``--json`` prints one line per scan, ``{"scan": PATH, "status": "ok" | "error" | "skipped",
 "result": {...}}`` or ``{"scan": PATH, "status": "error", "error": MESSAGE}``, then
@@ -26,7 +26,7 @@ from ._common import UNITS_OPTION
 SCANS_ARG = typer.Argument(..., help="Scan files, folders (searched for scan files) or glob patterns ('scans/*.ply').")
 WORKERS_OPTION = typer.Option(None, "--workers", "-w", help="Local worker processes (default: one per core).")
 SCHEDULER_OPTION = typer.Option(None, "--scheduler", help="Run on a Dask cluster: the scheduler's address, tcp://host:8786.")
-DB_OPTION = typer.Option(None, "--db", help="Results database: sqlite:///FILE (default gagekit.db beside the report) or postgresql://...")
+DB_OPTION = typer.Option(None, "--db", help="Results database: sqlite:///FILE (default gagekit.db beside the --report folder, else here) or postgresql://...")
 REPORT_OPTION = typer.Option(None, "--report", help="Write batch.json and an HTML summary into DIR.")
 RETRY_OPTION = typer.Option(False, "--retry-failed", help="Evaluate again the scans whose stored result is an error.")
 PART_OPTION = typer.Option(None, "--part", help="Part number to file the results under (default: the spec file's name).")
@@ -34,11 +34,11 @@ JSON_LINES = typer.Option(False, "--json", help="One JSON line per scan, then a 
 
 
 def _db_url(db: Optional[str], report: Optional[Path]) -> str:
+    """--db, or gagekit.db beside the report folder (not inside: the folder is replaced
+    whole when the report is written again), else in the current folder."""
     if db:
         return db
-    folder = report if report is not None else Path(".")
-    if report is not None:
-        folder.mkdir(parents=True, exist_ok=True)
+    folder = Path(report).resolve().parent if report is not None else Path(".")
     return f"sqlite:///{folder / 'gagekit.db'}"
 
 
@@ -76,6 +76,10 @@ def run(job, scans: List[str], db: Optional[str], report: Optional[Path], worker
     from ..batch import BatchSummary, expand_scans, run_batch
     from ..store import ResultStore
 
+    if report is not None:
+        from .._files import output_dir
+
+        output_dir(report)  # checked before the work
     paths = expand_scans(scans)
     store = ResultStore(_db_url(db, report))
     executor = _executor(workers, scheduler)

@@ -42,6 +42,10 @@ def stats(
     from .._util import load_toml
     from ..stats import collect
 
+    if report is not None:
+        from .._files import output_dir
+
+        output_dir(report)  # checked before the work
     documents = None
     if spec is not None:
         doc = load_toml(spec)

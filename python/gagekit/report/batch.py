@@ -3,26 +3,13 @@
 from __future__ import annotations
 
 import json
-import os
-import tempfile
 from pathlib import Path
 from typing import Sequence, Union
 
+from .._files import write_text
 from .html import Report
 
 __all__ = ["write_batch_report", "scan_row"]
-
-
-def _write_atomic(path: Path, text: str) -> None:
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            fh.write(text)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
 
 
 def scan_row(line: dict) -> list:
@@ -39,12 +26,14 @@ def scan_row(line: dict) -> list:
 
 
 def write_batch_report(directory: Union[str, Path], title: str, lines: Sequence[dict], summary) -> Path:
-    """Write ``batch.json`` (every line and the summary) and ``report.html`` into ``directory``."""
+    """Write ``batch.json`` (every line and the summary) and ``report.html`` into the folder
+    ``directory``, atomically (:func:`gagekit._files.atomic_dir`)."""
+    from .._files import atomic_dir
+
     out = Path(directory)
-    out.mkdir(parents=True, exist_ok=True)
     doc = {"summary": summary.to_dict(), "seconds": summary.seconds, "executor": summary.executor,
            "database": summary.database, "scans": list(lines)}
-    _write_atomic(out / "batch.json", json.dumps(doc, indent=2, allow_nan=False))
+    text = json.dumps(doc, indent=2, allow_nan=False)
     rep = Report(title, f"{summary.scans} scans on {summary.executor}; results in {summary.database}")
     rep.section("Summary").table(["scans", "ok", "failed", "skipped", "seconds"],
                                  [[summary.scans, summary.ok, summary.failed, summary.skipped, round(summary.seconds, 2)]])
@@ -52,4 +41,7 @@ def write_batch_report(directory: Union[str, Path], title: str, lines: Sequence[
     headers = (["scan", "status", "outcome", "smallest allowance after T* (mm)", "T*"] if gage
                else ["scan", "status", "criterion / error", "form error (mm)", "shape"])
     rep.section("Scans").table(headers, [scan_row(ln) for ln in lines])
-    return rep.write(out)
+    with atomic_dir(out) as tmp:  # the old folder or the new one, never half of each
+        write_text(tmp / "batch.json", text)
+        rep.write(tmp)
+    return out / "report.html"

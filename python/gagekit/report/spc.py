@@ -138,4 +138,8 @@ def write_spc_report(stats: dict, directory: Union[str, Path]) -> Path:
         rep.table(["group", "unit", "n", "first", "last", "largest change", "its effect (um)", "trend / day"], rows)
         if mach["identifications"] >= 2:
             rep.figure(drift_figure(mach), f"drift-{mach['machine']}", "Parameter drift across calibrations")
-    return rep.write(directory)
+    from .._files import atomic_dir
+
+    with atomic_dir(Path(directory)) as tmp:  # the old folder or the new one, never half of each
+        rep.write(tmp)
+    return Path(directory) / "report.html"

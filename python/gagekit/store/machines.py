@@ -70,7 +70,8 @@ def machine_names(conn: sa.Connection) -> list[str]:
 
 
 def machine_summary(conn: sa.Connection, name: Optional[str] = None) -> dict:
-    """The runs of a machine (the only one when ``name`` is None), as ``machine history`` lists them."""
+    """The runs of a machine (the only one when ``name`` is None): id, creation time, source,
+    points and the statistics of each cycle (``stats``, Tables 4.4-4.6)."""
     q = sa.select(m.MachineRow.id, m.MachineRow.name, m.MachineRow.created).order_by(m.MachineRow.id)
     if name is not None:
         q = q.where(m.MachineRow.name == name)
@@ -86,9 +87,6 @@ def machine_summary(conn: sa.Connection, name: Optional[str] = None) -> dict:
             .where(m.Calibration.machine_id == mid).order_by(m.Calibration.id)):
         cyc = conn.execute(sa.select(m.TrackingCycle.stats).where(m.TrackingCycle.calibration_id == cal)
                            .order_by(m.TrackingCycle.cycle)).scalars().all()
-        runs.append({"run": cal, "created": ccreated.isoformat(), "source": source, "points": npts,
-                     "cycles": [{"cycle": c["cycle"], "observed_mean": c["observed"]["mean"], "full_mean": c["full"]["mean"],
-                                 "static_mean": c["static"]["mean"], "drift_only_mean": c["drift_only"]["mean"]}
-                                for c in cyc]})
+        runs.append({"run": cal, "created": ccreated.isoformat(), "source": source, "points": npts, "stats": list(cyc)})
     return {"machine": mname, "created": created.isoformat(), "runs": runs}
 
