@@ -4,11 +4,10 @@ for a plant. Scans and their results per specification, machines and their calib
 Importing :mod:`gagekit` does not import this package (SQLAlchemy loads on first use).
 """
 
-from .results import Outcome, ResultStore, StoredResult, canonical_json, spec_hash
+from .results import ResultStore, StoredResult, canonical_json, spec_hash
 from .schema import create_engine, current_revision, head_revision, known_revisions, parse_url, safe_url, upgrade
 
 __all__ = [
-    "Outcome",
     "ResultStore",
     "StoredResult",
     "canonical_json",

@@ -23,7 +23,7 @@ from ..errors import StoreError
 from . import models as m
 from .schema import _reason, create_engine, ensure_schema, safe_url, use_wal
 
-__all__ = ["ResultStore", "StoredResult", "Outcome", "spec_hash", "canonical_json", "now"]
+__all__ = ["ResultStore", "StoredResult", "spec_hash", "canonical_json", "now"]
 
 
 def now() -> datetime:
@@ -38,19 +38,6 @@ def canonical_json(obj: Any) -> str:
 def spec_hash(kind: str, document: Mapping[str, Any], options: Mapping[str, Any]) -> str:
     """SHA-256 of the canonical JSON of (kind, document, options)."""
     return hashlib.sha256(canonical_json({"kind": kind, "document": document, "options": options}).encode()).hexdigest()
-
-
-@dataclass(frozen=True)
-class Outcome:
-    """What a worker returns for one scan."""
-
-    status: str  # "ok" | "error"
-    result: Optional[dict]
-    error: Optional[str]
-    started: datetime
-    finished: datetime
-    seconds: float
-    worker: Optional[str] = None
 
 
 @dataclass(frozen=True)
@@ -212,8 +199,9 @@ class ResultStore:
             self.write_seconds += time.perf_counter() - t0
 
     def record(self, kind: str, spec_id: int, content_hash: str, size: int, scanned: datetime, paths: Sequence[str],
-               outcome: Outcome) -> bool:
-        """Store one scan's outcome with its paths and detail rows, in one transaction.
+               outcome: Any) -> bool:
+        """Store one scan's outcome (a :class:`gagekit.batch.Outcome`) with its paths and
+        detail rows, in one transaction.
 
         Returns False (and changes nothing but the paths) when the result was already there."""
         import time
