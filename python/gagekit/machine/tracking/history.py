@@ -20,7 +20,7 @@ from __future__ import annotations
 import json
 import sqlite3
 from pathlib import Path
-from typing import Any, Optional, Union
+from typing import Optional, Union
 
 from ...errors import ConfigError, FileFormatError, InvalidInputError, SchemaVersionError, StoreError
 from ..model import Machine
