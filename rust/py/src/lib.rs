@@ -8,6 +8,7 @@ mod errors;
 mod design;
 mod form;
 mod gage;
+mod gdt;
 mod geometry;
 mod kinematics;
 
@@ -29,6 +30,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     form::register(m)?;
     kinematics::register(m)?;
     gage::register(m)?;
+    gdt::register(m)?;
     design::register(m)?;
     Ok(())
 }
