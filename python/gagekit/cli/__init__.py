@@ -16,6 +16,7 @@ import typer
 from .. import __version__
 from ..errors import GagekitError
 from . import cloud, demo, form, gage, machine
+from . import inspect as inspect_cmd
 
 app = typer.Typer(
     name="gagekit",
@@ -29,6 +30,7 @@ app.add_typer(form.app, name="form")
 app.add_typer(gage.app, name="gage")
 app.add_typer(machine.app, name="machine")
 app.command("demo")(demo.demo)
+app.command("inspect")(inspect_cmd.inspect)
 
 
 def _version_callback(value: bool) -> None:
