@@ -109,7 +109,7 @@ def make_bracket(density: float = 1.0) -> np.ndarray:
     band = np.abs(z - 20) > 1.0
     parts.append(np.column_stack([x[band], 0 * x[band] + 80, z[band]]))
     # rib: a bowed line on the back face at z = 20
-    x = np.linspace(10, 110, int(round(100 / h * 2)) + 1)
+    x = np.linspace(10, 110, 2 * int(round(50 / h * 2)) + 1)  # odd: the crest x = 60 is sampled
     parts.append(np.column_stack([x, 80 + B_RIB * np.sin(math.pi * (x - 10) / 100), 0 * x + 20]))
     # bore: tilted, three lobes; axis parameter t in [-15, 15] about (30 + DX, 40 + DY, 20)
     th = _ring(nt)

@@ -78,6 +78,5 @@ def inspect(points: Any, spec: Union[PartSpec, str, Any]) -> InspectionResult:
             frames.append(system.frame(r))
     main = frames[0] if frames else None
     used = {n: feats[n] for n in spec.features}
-    devs = {n: (fd.points, fd.deviations()) for n, fd in feats.items()}
     return InspectionResult(spec.name, int(len(pts)), tuple(system.simulated()), main, tuple(frames), tuple(results), used,
-                            time.perf_counter() - t0, devs)
+                            time.perf_counter() - t0, feats)

@@ -69,7 +69,13 @@ class InspectionResult:
     tolerances: tuple[CalloutResult, ...]
     features: dict[str, Any]
     seconds: float = 0.0
-    deviations: dict[str, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict, repr=False)
+    feature_data: dict[str, Any] = field(default_factory=dict, repr=False)
+
+    @property
+    def deviations(self) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+        """Each feature's points and their signed deviations from its least-squares fit
+        (computed on first use, for the report's 3-D view)."""
+        return {n: (fd.points, fd.deviations()) for n, fd in self.feature_data.items()}
 
     @property
     def status(self) -> str:
