@@ -1,15 +1,22 @@
-"""Small helpers shared by the gagekit modules (array checks, JSON)."""
+"""Small helpers shared by the gagekit modules (array checks, JSON, TOML files)."""
 
 from __future__ import annotations
 
 import json
 import math
 from dataclasses import asdict, is_dataclass
-from typing import Any, Iterator, Mapping, Sequence
+import sys
+from pathlib import Path
+from typing import Any, Iterator, Mapping, Sequence, Union
 
 import numpy as np
 
-from .errors import ConfigError, InvalidInputError
+from .errors import ConfigError, ConfigFileError, InvalidInputError
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
 
 
 def as_points(points: Any, dim: int = 3, what: str = "points") -> np.ndarray:
@@ -59,25 +66,34 @@ def dumps(obj: Any) -> str:
     return json.dumps(to_jsonable(obj), indent=2, allow_nan=False)
 
 
-def load_toml(path) -> dict:
-    """Parse a TOML file; :class:`ConfigError` names the file and the problem."""
-    import sys
-    from pathlib import Path
+def load_toml(path: Union[str, Path], what: str = "TOML") -> dict:
+    """Parse the TOML file ``path`` (a ``what`` file: machine, gage, zones, ...): the one TOML
+    reader of the package. An unreadable or invalid file raises
+    :class:`~gagekit.errors.ConfigFileError` naming the file and the problem."""
+    return parse_toml(read_text(path, what), str(path))
 
-    from .errors import ConfigError
 
-    if sys.version_info >= (3, 11):
-        import tomllib
-    else:  # pragma: no cover
-        import tomli as tomllib
+def read_text(path: Union[str, Path], what: str) -> str:
+    """The UTF-8 text of a ``what`` file; ConfigFileError if missing or unreadable."""
     p = Path(path)
     try:
-        with p.open("rb") as fh:
-            return tomllib.load(fh)
+        return p.read_text(encoding="utf-8")
     except FileNotFoundError:
-        raise ConfigError(f"{p}: no such file") from None
+        raise ConfigFileError(f"{p}: {what} file not found") from None
+    except IsADirectoryError:
+        raise ConfigFileError(f"{p}: is a folder, not a {what} file") from None
+    except OSError as exc:
+        raise ConfigFileError(f"{p}: cannot read the {what} file ({exc.strerror or exc})") from None
+    except UnicodeDecodeError:
+        raise ConfigFileError(f"{p}: not a text (UTF-8) file") from None
+
+
+def parse_toml(text: str, source: str) -> dict:
+    """Parse TOML text; ConfigFileError naming ``source`` if it is not valid TOML."""
+    try:
+        return tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
-        raise ConfigError(f"{p}: not valid TOML ({exc})") from None
+        raise ConfigFileError(f"{source}: not valid TOML ({exc})") from None
 
 
 def named_tables(tables: Sequence[Any], kind: str, source: str) -> Iterator[tuple[str, Mapping]]:

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from ._util import to_jsonable
-from .cli._common import table
+from .report.text import table
 
 
 def machine_step(ctx) -> tuple[dict, str]:
@@ -98,25 +98,9 @@ def observer_step(ctx) -> tuple[dict, str]:
 
 
 def _plan_figure(ctx, m, plan) -> None:
-    import matplotlib
+    from .report.machine import plan_figure
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    names = list(m.joint_names)
-    c = plan.commands
-    x, y = c[:, names.index("X")], c[:, names.index("Y")]
-    zw = c[:, names.index("Z")] + c[:, names.index("W")]
-    fig = plt.figure(figsize=(7, 5.5))
-    ax = fig.add_subplot(projection="3d")
-    sc = ax.scatter(x, zw, y, c=c[:, names.index("B")], cmap="viridis", s=18)
-    ax.set_xlabel("X (mm)")
-    ax.set_ylabel("Z + W (mm)")
-    ax.set_zlabel("Y (mm)")
-    fig.colorbar(sc, ax=ax, shrink=0.6, label="B (deg)")
-    zones = "no zones" if plan.zones == "none" else f"{plan.zones} zones"
-    ax.set_title(f"{len(c)}-point {plan.criterion}-optimal plan ({zones})")
-    ctx.report.figure(fig, "observer-plan", "The plan in the workspace (cf. Fig. 4.2)")
+    ctx.report.figure(plan_figure(m, plan), "observer-plan", "The plan in the workspace (cf. Fig. 4.2)")
 
 
 def tracking_step(ctx) -> tuple[dict, str]:
@@ -150,7 +134,7 @@ def castings_step(ctx) -> tuple[dict, str]:
     from .cloud import read_points
     from .demo import data_path
     from .gage import check_gages
-    from .gage.report import add_to_report
+    from .report.gage import add_to_report
 
     data, lines = {}, []
     for name in ("casting_ok", "casting_short"):

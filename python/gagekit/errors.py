@@ -33,6 +33,11 @@ class ConfigError(GagekitError, ValueError):
     """An inconsistent configuration: machine file, gage file, region."""
 
 
+class ConfigFileError(FileFormatError, ConfigError):
+    """A configuration file (TOML: machine, gage, regions, zones, exclusions) that cannot be
+    read or is not valid TOML; both a file-format and a configuration error."""
+
+
 class NumericalError(GagekitError, ArithmeticError):
     """A numerical method failed to converge or lost accuracy."""
 

@@ -15,7 +15,7 @@ import typer
 
 from .. import __version__
 from ..errors import GagekitError
-from . import cloud, demo, form, gage, machine
+from . import cloud, demo, form, gage, machine, machine_observer
 from . import inspect as inspect_cmd
 
 app = typer.Typer(
@@ -25,6 +25,8 @@ app = typer.Typer(
     add_completion=False,
     pretty_exceptions_enable=False,
 )
+# Every sub-application and command is registered here, explicitly (no registration by import).
+machine_observer.register(machine.app)  # machine design, evaluate-plan, track, history, simulate-cycles
 app.add_typer(cloud.app, name="cloud")
 app.add_typer(form.app, name="form")
 app.add_typer(gage.app, name="gage")

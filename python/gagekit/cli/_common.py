@@ -7,6 +7,9 @@ from typing import Any, Callable
 import typer
 
 from .._util import dumps
+from ..report.text import table
+
+__all__ = ["JSON_OPTION", "emit", "table"]
 
 JSON_OPTION = typer.Option(False, "--json", help="Print the result as JSON on stdout, and nothing else.")
 
@@ -35,29 +38,3 @@ def emit(result: Any, as_json: bool, human: Callable[[Any], str]) -> None:
         typer.echo(dumps(result))
     else:
         typer.echo(human(result))
-
-
-def table(headers: list[str], rows: list[list[Any]]) -> str:
-    """A plain aligned text table (numbers right-aligned)."""
-    cells = [[str(h) for h in headers]] + [[_fmt(c) for c in r] for r in rows]
-    widths = [max(len(r[i]) for r in cells) for i in range(len(headers))]
-    lines = []
-    for k, r in enumerate(cells):
-        lines.append("  ".join(c.rjust(w) if k and _is_num(c) else c.ljust(w) for c, w in zip(r, widths)).rstrip())
-        if k == 0:
-            lines.append("  ".join("-" * w for w in widths))
-    return "\n".join(lines)
-
-
-def _fmt(v: Any) -> str:
-    if isinstance(v, float):
-        return f"{v:.4f}"
-    return str(v)
-
-
-def _is_num(s: str) -> bool:
-    try:
-        float(s)
-        return True
-    except ValueError:
-        return False

@@ -30,7 +30,8 @@ def check(
     """
     from ..cloud import write_points
     from ..gage import GageSpec, check_gages, corrected_cloud
-    from ..gage.report import human, write_report
+    from ..gage.report import human
+    from ..report.gage import write_report
 
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")

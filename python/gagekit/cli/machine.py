@@ -251,4 +251,3 @@ def compensate_cmd(
     rem = np.linalg.norm(remaining, axis=1) if len(remaining) else np.zeros(1)
     result = {"points": int(len(corrected)), "out": str(out), "remaining_max": float(rem.max())}
     emit(result, as_json, lambda r: f"wrote {r['points']} corrected commands to {r['out']} (remaining predicted error <= {r['remaining_max']:.2e} mm)")
-from . import machine_observer  # noqa: E402,F401  (registers `machine design`, `evaluate-plan`, ...)

@@ -1,6 +1,6 @@
 """`gagekit machine design | evaluate-plan`: optimal error observers (Ch. 4).
 
-Registered on the ``machine`` sub-application by the import at the end of ``cli/machine.py``.
+Registered on the ``machine`` sub-application by :func:`register`, called in ``cli/__init__.py``.
 """
 
 from __future__ import annotations
@@ -12,14 +12,13 @@ import typer
 
 from ..errors import InvalidInputError
 from ._common import JSON_OPTION, emit, table
-from .machine import MACHINE_ARG, NOISE_OPTION, _warnings_to_stderr, _write_simulation, app
+from .machine import MACHINE_ARG, NOISE_OPTION, _warnings_to_stderr, _write_simulation
 
 
 def _sci(v: float) -> str:
     return f"{v:.4g}"
 
 
-@app.command("design")
 def design_cmd(
     machine_file: Path = MACHINE_ARG,
     points: int = typer.Option(80, "--points", help="Measurement points in the plan (Sec. 4.2: 80)."),
@@ -73,7 +72,6 @@ def design_cmd(
     emit(result, as_json, human)
 
 
-@app.command("evaluate-plan")
 def evaluate_plan_cmd(
     machine_file: Path = MACHINE_ARG,
     plan: Path = typer.Argument(..., help="PLAN.csv (joint columns), e.g. from `machine design`."),
@@ -116,7 +114,6 @@ def _track_text(r) -> str:
     return text
 
 
-@app.command("track")
 def track_cmd(
     machine_file: Path = MACHINE_ARG,
     cycles_csv: Path = typer.Argument(..., help="Observations of repeated cycles: cycle, joints, x, y, z [, time, temp_*]."),
@@ -127,7 +124,8 @@ def track_cmd(
     """Track the error model cycle by cycle against static and drift-only calibrations (Tables 4.4-4.6)."""
     from .._util import dumps
     from ..machine import load_machine
-    from ..machine.tracking import History, plot_drift, read_cycles, track
+    from ..machine.tracking import History, read_cycles, track
+    from ..report.machine import plot_drift
 
     m = load_machine(machine_file)
     with _warnings_to_stderr():
@@ -154,7 +152,6 @@ def track_cmd(
     emit(out, as_json, lambda _: _track_text(res))
 
 
-@app.command("history")
 def history_cmd(
     history_file: Path = typer.Argument(..., help="SQLite history written by `machine track --history`."),
     as_json: bool = JSON_OPTION,
@@ -176,7 +173,6 @@ def history_cmd(
     emit(s, as_json, human)
 
 
-@app.command("simulate-cycles")
 def simulate_cycles_cmd(
     machine_file: Path = MACHINE_ARG,
     plan: Path = typer.Argument(..., help="PLAN.csv (joint columns) measured in every cycle."),
@@ -196,3 +192,19 @@ def simulate_cycles_cmd(
     result = _write_simulation(m, Truth.random(m, seed=seed), read_commands(plan, m), out, cycles=cycles,
                                noise=noise, drift_scale=drift_scale, seed=seed)
     emit(result, as_json, lambda r: f"wrote {r['cycles']} cycles of {r['points']} points to {r['out']}")
+
+
+#: (command name, function) of this module, in help order.
+COMMANDS = (
+    ("design", design_cmd),
+    ("evaluate-plan", evaluate_plan_cmd),
+    ("track", track_cmd),
+    ("history", history_cmd),
+    ("simulate-cycles", simulate_cycles_cmd),
+)
+
+
+def register(app: typer.Typer) -> None:
+    """Add this module's commands to the ``machine`` sub-application ``app``."""
+    for name, fn in COMMANDS:
+        app.command(name)(fn)

@@ -82,4 +82,4 @@ def load_regions(path) -> list[Box]:
     """Read the ``[[region]]`` tables of a TOML file (a gage file or a regions file)."""
     from .._util import load_toml
 
-    return regions_from_tables(load_toml(path).get("region", []), str(path))
+    return regions_from_tables(load_toml(path, "regions").get("region", []), str(path))

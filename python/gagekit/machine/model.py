@@ -24,7 +24,6 @@ from __future__ import annotations
 
 import math
 import re
-import sys
 import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -33,12 +32,8 @@ from typing import Any, Optional, Union
 import numpy as np
 
 from .. import _core
-from ..errors import ConfigError, FileFormatError, InvalidInputError
-
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover
-    import tomli as tomllib
+from .._util import parse_toml, read_text
+from ..errors import ConfigError, InvalidInputError
 
 __all__ = [
     "Machine",
@@ -403,26 +398,14 @@ def _group_name(leader: str, terms: dict) -> str:
 
 # ----- loading and validation ----------------------------------------------------------------
 def load_machine(path: Union[str, Path]) -> Machine:
-    """Read and validate a machine file (TOML). Raises FileFormatError for unreadable TOML and
+    """Read and validate a machine file (TOML). Raises ConfigFileError (a FileFormatError) for an unreadable file or invalid TOML and
     ConfigError naming the exact entry for anything inconsistent."""
-    p = Path(path)
-    try:
-        text = p.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise FileFormatError(f"{p}: machine file not found") from None
-    except OSError as exc:
-        raise FileFormatError(f"{p}: cannot read the machine file ({exc.strerror})") from None
-    except UnicodeDecodeError:
-        raise FileFormatError(f"{p}: not a text (UTF-8) file") from None
-    return parse_machine(text, source=str(p))
+    return parse_machine(read_text(path, "machine"), source=str(path))
 
 
 def parse_machine(text: str, source: str = "<machine>") -> Machine:
     """Validate the text of a machine file; see :func:`load_machine`."""
-    try:
-        doc = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise FileFormatError(f"{source}: not valid TOML ({exc})") from None
+    doc = parse_toml(text, source)
 
     def fail(msg: str) -> ConfigError:
         return ConfigError(f"{source}: {msg}")

@@ -1,8 +1,10 @@
-"""Report sections for machine calibrations (Sec. 3.2, Fig. 3.12, Tables 3.4-3.5)."""
+"""Report sections and figures for machines: calibrations (Sec. 3.2, Fig. 3.12, Tables 3.4-3.5),
+observer plans (Fig. 4.2) and thermal tracking (Tables 4.4-4.6, Fig. 4.8)."""
 
 from __future__ import annotations
 
-from typing import Sequence
+from pathlib import Path
+from typing import Sequence, Union
 
 import numpy as np
 
@@ -71,8 +73,6 @@ def tracking_table(result) -> tuple[list[str], list[list]]:
 
 def add_tracking(report: Report, result) -> None:
     """Residuals per cycle for the three strategies and the parameter drift (Fig. 4.8)."""
-    from ..machine.tracking import drift_figure
-
     headers, rows = tracking_table(result)
     report.table(headers, rows, "Residuals per cycle: identified anew each cycle (full, Table 4.4), first cycle's "
                  "model kept (static, Table 4.5), observed change only (drift only, Table 4.6)")
@@ -81,3 +81,52 @@ def add_tracking(report: Report, result) -> None:
         report.text(f"Temperature model over {', '.join(tm['sensors'])}: leave-one-cycle-out mean residual "
                     f"{tm['leave_one_cycle_out_mean'] * 1000:.1f} um.")
     report.figure(drift_figure(result), "parameter-drift", "Drift of the identified groups over the cycles (cf. Fig. 4.8)")
+
+
+def plot_drift(result, path: Union[str, Path], top: int = 8) -> None:
+    """Write :func:`drift_figure` as a PNG."""
+    plt = _plt()
+    fig = drift_figure(result, top)
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def drift_figure(result, top: int = 8):
+    """Fig. 4.8: how much each group's change since the first cycle moves the target, RMS
+    over the plan's points (um), for the ``top`` groups that move it most."""
+    plt = _plt()
+    names = list(result.groups)
+    vals = np.array([result.groups[n] for n in names]) * np.array([result.group_effect[n] for n in names])[:, None] * 1000.0
+    change = vals - vals[:, :1]
+    order = np.argsort(-np.abs(change).max(axis=1))[:top]
+    x = [c["cycle"] for c in result.cycles]
+    fig, ax = plt.subplots(figsize=(8, 4.5))
+    for i in order:
+        ax.plot(x, change[i], marker="o", label=names[i] if len(names[i]) < 40 else names[i][:37] + "...")
+    ax.set_xlabel("cycle")
+    ax.set_ylabel(f"effect of the change since cycle {x[0]} (um RMS)")
+    ax.set_title("Parameter drift over cycles (Fig. 4.8)")
+    ax.legend(fontsize=7, ncol=2)
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    return fig
+
+
+def plan_figure(machine, plan):
+    """An observer plan in the workspace (cf. Fig. 4.2): X, Z+W and Y of each point,
+    coloured by B; returns a matplotlib Figure."""
+    plt = _plt()
+    names = list(machine.joint_names)
+    c = plan.commands
+    x, y = c[:, names.index("X")], c[:, names.index("Y")]
+    zw = c[:, names.index("Z")] + c[:, names.index("W")]
+    fig = plt.figure(figsize=(7, 5.5))
+    ax = fig.add_subplot(projection="3d")
+    sc = ax.scatter(x, zw, y, c=c[:, names.index("B")], cmap="viridis", s=18)
+    ax.set_xlabel("X (mm)")
+    ax.set_ylabel("Z + W (mm)")
+    ax.set_zlabel("Y (mm)")
+    fig.colorbar(sc, ax=ax, shrink=0.6, label="B (deg)")
+    zones = "no zones" if plan.zones == "none" else f"{plan.zones} zones"
+    ax.set_title(f"{len(c)}-point {plan.criterion}-optimal plan ({zones})")
+    return fig

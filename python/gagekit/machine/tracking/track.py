@@ -1,0 +1,147 @@
+"""Thermal error tracking over repeated measurement cycles (Sec. 4.3.2-4.3.4).
+
+The same plan is measured in every cycle. The tracker frame T0 is fitted in cycle 1 (Eq. 4.11;
+with the frame correction of ERRATA item 6) and kept; then, per cycle j:
+
+* ``full``: the groups re-identified from cycle j (Eqs. 4.12-4.14, Table 4.4);
+* ``static``: cycle 1's groups used unchanged (Eq. 4.15, Table 4.5);
+* ``drift_only``: cycle 1's groups plus a fitted translation of the workspace (Eqs. 4.16-4.18,
+  Table 4.6);
+* ``observed``: the errors left after the tracker placement (the "Observed" columns).
+
+With temperature columns, a linear model from the cycle-mean temperatures to each group
+(Sec. 7.2, item 4) and its leave-one-cycle-out prediction residuals.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Optional
+
+import numpy as np
+
+from ... import _progress
+from ...errors import DegenerateGeometryError
+from ..identify import identify
+from ..model import Machine, ModelStructure
+from ..observations import Observations
+from .cycles import Cycles
+
+__all__ = ["TrackResult", "track"]
+
+
+def _stats(res: np.ndarray, observed: dict) -> dict:
+    """mean/max of per-point residual norms (mm) and % decrease against the observed errors."""
+    n = np.linalg.norm(res, axis=1)
+    d = {"mean": float(n.mean()), "max": float(n.max())}
+    if observed:
+        d["decrease_mean_pct"] = 100.0 * (1 - d["mean"] / observed["mean"]) if observed["mean"] > 0 else 0.0
+        d["decrease_max_pct"] = 100.0 * (1 - d["max"] / observed["max"]) if observed["max"] > 0 else 0.0
+    return d
+
+
+@dataclass(frozen=True, eq=False)
+class TrackResult:
+    """Per-cycle statistics (mm) of Tables 4.4-4.6, group values per cycle, temperature model."""
+
+    machine: str
+    cycles: list
+    groups: dict
+    group_units: dict
+    temperature_model: Optional[dict]
+    residuals: dict = field(repr=False)  # mode -> (C, n) residual norms, mm
+    frame: dict = field(default_factory=dict)
+    #: RMS over the plan's points of |d(error)/d(group)|, mm per group unit (for the drift plot)
+    group_effect: dict = field(default_factory=dict)
+
+    def to_dict(self) -> dict:
+        d = {"machine": self.machine, "cycles": self.cycles, "groups": self.groups, "group_units": self.group_units,
+             "frame": self.frame}
+        if self.temperature_model is not None:
+            d["temperature_model"] = self.temperature_model
+        return d
+
+
+def track(machine: Machine, cycles: Cycles, structure: Optional[ModelStructure] = None) -> TrackResult:
+    """Track the error model over the cycles (Eqs. 4.11-4.18)."""
+    st = structure if structure is not None else machine.structure()
+    cmds = cycles.commands
+    n = len(cmds)
+    if n < st.rank:
+        raise DegenerateGeometryError(
+            f"the plan has {n} points; re-identifying the {st.rank} groups each cycle needs at least {st.rank}"
+        )
+    p_nom = machine.nominal(cmds)
+    m = st.reduce(machine.design_matrix(cmds))
+    sv = np.linalg.svd(m, compute_uv=False)
+    if sv[-1] <= 1e-10 * sv[0]:
+        raise DegenerateGeometryError("the plan cannot identify all groups (its design matrix is rank deficient): design it with `machine design`")
+    cal1 = identify(machine, Observations(cmds, cycles.measured[0], cycles.joint_names), structure=st)
+    frame = cal1.frame  # Eq. 4.11, kept for all cycles
+    resid = [frame.to_table(q) - p_nom for q in cycles.measured]  # observed errors, table frame
+    pinv = np.linalg.pinv(m)
+    params = [pinv @ r.reshape(-1) for r in resid]  # Eqs. 4.12, 4.13
+    p1 = params[0]
+    rows, modes = [], {"full": [], "static": [], "drift_only": []}
+    for j, (cid, r) in enumerate(_progress.track(list(zip(cycles.cycle_ids, resid)), "tracking cycles")):
+        obs = _stats(r, {})
+        full = r - (m @ params[j]).reshape(-1, 3)  # Eq. 4.14
+        static = r - (m @ p1).reshape(-1, 3)  # Eq. 4.15
+        drift = static - static.mean(axis=0)  # Eqs. 4.16-4.18: best translation of the workspace
+        row = {"cycle": cid, "observed": obs, "full": _stats(full, obs), "static": _stats(static, obs),
+               "drift_only": _stats(drift, obs), "drift_translation_mm": static.mean(axis=0).tolist()}
+        if cycles.time is not None:
+            row["time"] = float(cycles.time[j])
+        if cycles.temperatures:
+            row["temperatures"] = {s: float(v[j]) for s, v in cycles.temperatures.items()}
+        rows.append(row)
+        for key, arr in (("full", full), ("static", static), ("drift_only", drift)):
+            modes[key].append(np.linalg.norm(arr, axis=1))
+    names = [g.name for g in st.groups]
+    units = machine.parameter_units()
+    groups = {name: [float(p[i]) for p in params] for i, name in enumerate(names)}
+    temp_model = _temperature_model(cycles, params, names, m, resid) if cycles.temperatures else None
+    effect = np.sqrt((m.reshape(n, 3, -1) ** 2).sum(axis=1).mean(axis=0))  # RMS |column| over the plan
+    return TrackResult(
+        machine=machine.name,
+        cycles=rows,
+        groups=groups,
+        group_units={name: units[st.leaders[i]] for i, name in enumerate(names)},
+        temperature_model=temp_model,
+        residuals={k: np.array(v) for k, v in modes.items()},
+        frame=frame.to_dict(),
+        group_effect={name: float(effect[i]) for i, name in enumerate(names)},
+    )
+
+
+def _temperature_model(cycles: Cycles, params, names, m, resid) -> dict:
+    """Linear model group = a + b . (T - T_mean) over cycle-mean temperatures, minimum-norm
+    least squares (more sensors than cycles is common), with leave-one-cycle-out residuals."""
+    sensors = list(cycles.temperatures)
+    T = np.column_stack([cycles.temperatures[s] for s in sensors])  # (C, S)
+    P = np.array(params)  # (C, G)
+    C = len(P)
+    if C < 3:
+        return {"sensors": sensors, "fitted": False, "reason": "a temperature model needs at least 3 cycles"}
+
+    def fit(idx):
+        Tm, Pm = T[idx].mean(axis=0), P[idx].mean(axis=0)
+        B = np.linalg.pinv(T[idx] - Tm) @ (P[idx] - Pm)  # (S, G)
+        return Tm, Pm, B
+
+    Tm, Pm, B = fit(np.arange(C))
+    loo = []
+    for c in range(C):
+        keep = np.array([i for i in range(C) if i != c])
+        tm, pm, b = fit(keep)
+        g = pm + (T[c] - tm) @ b
+        res = np.linalg.norm(resid[c] - (m @ g).reshape(-1, 3), axis=1)
+        loo.append({"cycle": cycles.cycle_ids[c], "mean": float(res.mean()), "max": float(res.max())})
+    return {
+        "fitted": True,
+        "sensors": sensors,
+        "coefficients": {name: {s: float(B[k, i]) for k, s in enumerate(sensors)} for i, name in enumerate(names)},
+        "reference_temperatures": {s: float(v) for s, v in zip(sensors, Tm)},
+        "leave_one_cycle_out": loo,
+        "leave_one_cycle_out_mean": float(np.mean([x["mean"] for x in loo])),
+    }
