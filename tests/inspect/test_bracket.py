@@ -4,7 +4,7 @@ rigid motion measures the same."""
 import numpy as np
 import pytest
 
-from conftest import key
+from bracket_fixture import bracket, key  # noqa: F401  (the fixture)
 from gagekit import inspect
 
 

@@ -10,7 +10,7 @@ import browser
 
 SECTIONS = ["Point cloud", "Machine calibration", "Optimal error observer", "Thermal error tracking",
             "Virtual gages on two castings", "casting_ok: virtual gage result", "casting_short: virtual gage result",
-            "Form of cylinders", "GD&T inspection of a bracket", "Inspection of the bracket"]
+            "Form of cylinders", "inspection of a bracket (ISO 1101, ISO 5459)", "Inspection of the bracket"]
 
 
 @pytest.fixture(scope="module")

@@ -19,7 +19,7 @@ from typing import Any, Union
 
 import numpy as np
 
-from .._util import as_points, check_finite
+from .._util import as_points
 from .datums import DatumFrame, DatumSystem, SimulatedDatum
 from .features import FeatureData, extract
 from .result import CalloutResult, InspectionResult
@@ -60,8 +60,7 @@ def inspect(points: Any, spec: Union[PartSpec, str, Any]) -> InspectionResult:
     t0 = time.perf_counter()
     if not isinstance(spec, PartSpec):
         spec = load_part_spec(spec)
-    pts = as_points(points)
-    check_finite(pts)
+    pts = as_points(points)  # the region kernel checks finiteness (naming the row)
     feats = extract(pts, spec.features, spec.source)
     system = DatumSystem(spec, feats)
     results = []

@@ -195,7 +195,12 @@ class DatumSystem:
                 raise ConfigError(f"{where}: a tertiary plane after two datum axes is not supported")
         pts = fd.points
         fit = fd.spec.datum_fit
+        label = mode
+        if mode == "free" and fit == "chebyshev":
+            # the free Chebyshev tangent plane has the minimum-zone normal (shared with flatness)
+            mode, axis = "fixed", tuple(fd.min_zone()[1])
         point, normal, _, dev = _core.gdt_datum_plane(pts, tuple(out), mode, axis, angle, fit)
+        mode = label
         method = ("chebyshev tangent plane" if fit == "chebyshev" else "least-squares plane") + ("" if mode == "free" else f", {mode}")
         return SimulatedDatum(ref.letter, fd.name, "plane", method, np.array(point), np.array(normal), before, deviation=float(dev))
 

@@ -98,6 +98,14 @@ class FeatureData:
             d = -d
         return p, d
 
+    def min_zone(self) -> tuple[float, np.ndarray]:
+        """(width, normal) of the minimum zone of the points (flatness, ISO 12781), computed
+        once: the flatness callout and the free datum plane share it."""
+        if "mz" not in self._cache:
+            normal, _, _, width = _core.gdt_slab(self.points, "free", (0.0, 0.0, 1.0), 0.0)
+            self._cache["mz"] = (float(width), np.array(normal))
+        return self._cache["mz"]
+
     def plane_normal_out(self) -> np.ndarray:
         """Least-squares normal of a plane feature, turned to its ``outward``."""
         n = _unit(self.lsq().normal)

@@ -179,13 +179,9 @@ class PartSpec:
 def _rotvec_matrix(rv: Any) -> np.ndarray:
     """Rodrigues: the rotation matrix of a rotation vector (the box convention: it turns
     the cloud axes onto the box axes, so the box axes are its columns)."""
-    r = np.asarray(rv, dtype=float)
-    th = float(np.linalg.norm(r))
-    if th == 0.0:
-        return np.eye(3)
-    k = r / th
-    K = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
-    return np.eye(3) + math.sin(th) * K + (1 - math.cos(th)) * (K @ K)
+    from ..machine.frame import rotation_from_vector
+
+    return rotation_from_vector(rv)
 
 
 def _matrix_rotvec(R: np.ndarray) -> np.ndarray:

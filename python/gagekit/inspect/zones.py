@@ -173,7 +173,7 @@ def evaluate(tol: Tolerance, fd: FeatureData, system: DatumSystem) -> Measuremen
 
 
 def _flatness(tol, fd, system):
-    w, n = _slab(fd.points, "free")
+    w, n = fd.min_zone()
     return Measurement(w, "width", "surface", len(fd.points), {"zone_normal": n.tolist()})
 
 
@@ -386,7 +386,7 @@ def _plane_location(tol, fd, frame, element):
 
 def _profile(tol, fd, system):
     if not tol.datums:
-        w, n = _slab(fd.points, "free")
+        w, n = fd.min_zone()
         return Measurement(w, "width", "surface (no datums: the zone floats)", len(fd.points), {"zone_normal": n.tolist()})
     return _plane_location(tol, fd, system.frame(tol.datums), "surface")
 
