@@ -17,6 +17,7 @@ from .inspect import InspectionResult, PartSpec, inspect, load_part_spec  # noqa
 from .errors import (
     ConfigError,
     DegenerateGeometryError,
+    FileAccessError,
     FileFormatError,
     GagekitError,
     InfeasibleError,
@@ -44,6 +45,7 @@ __all__ = [
     "GagekitError",
     "InvalidInputError",
     "FileFormatError",
+    "FileAccessError",
     "DegenerateGeometryError",
     "InfeasibleError",
     "ConfigError",

@@ -68,24 +68,19 @@ def dumps(obj: Any) -> str:
 
 def load_toml(path: Union[str, Path], what: str = "TOML") -> dict:
     """Parse the TOML file ``path`` (a ``what`` file: machine, gage, zones, ...): the one TOML
-    reader of the package. An unreadable or invalid file raises
-    :class:`~gagekit.errors.ConfigFileError` naming the file and the problem."""
+    reader of the package. A file that cannot be read raises
+    :class:`~gagekit.errors.FileAccessError` (or FileFormatError for non-UTF-8 bytes), invalid
+    TOML :class:`~gagekit.errors.ConfigFileError`, each naming the file and the problem."""
     return parse_toml(read_text(path, what), str(path))
 
 
 def read_text(path: Union[str, Path], what: str) -> str:
-    """The UTF-8 text of a ``what`` file; ConfigFileError if missing or unreadable."""
-    p = Path(path)
-    try:
-        return p.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise ConfigFileError(f"{p}: {what} file not found") from None
-    except IsADirectoryError:
-        raise ConfigFileError(f"{p}: is a folder, not a {what} file") from None
-    except OSError as exc:
-        raise ConfigFileError(f"{p}: cannot read the {what} file ({exc.strerror or exc})") from None
-    except UnicodeDecodeError:
-        raise ConfigFileError(f"{p}: not a text (UTF-8) file") from None
+    """The UTF-8 text of a ``what`` file, through the one file boundary
+    (:func:`gagekit._files.read_text`): typed errors for a missing file, a folder, a FIFO
+    (never opened, so never a hang), permissions and non-UTF-8 bytes."""
+    from ._files import read_text as _read_text
+
+    return _read_text(path, f"{what} file")
 
 
 def parse_toml(text: str, source: str) -> dict:
@@ -99,6 +94,8 @@ def parse_toml(text: str, source: str) -> dict:
 def named_tables(tables: Sequence[Any], kind: str, source: str) -> Iterator[tuple[str, Mapping]]:
     """The ``[[kind]]`` tables of a TOML file as (name, table): each must be a table with a
     non-empty ``name`` not used before; otherwise a ConfigError naming the file and the table."""
+    if not isinstance(tables, (list, tuple)):
+        raise ConfigError(f"{source}: {kind} must be given as [[{kind}]] tables, got {tables!r}")
     seen: set[str] = set()
     for k, t in enumerate(tables):
         if not isinstance(t, Mapping):

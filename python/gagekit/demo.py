@@ -67,9 +67,25 @@ def _steps() -> list[Step]:
 
 def run_demo(out: Optional[Path] = None, quick: bool = False, echo: Callable[[str], None] = print,
              only: Optional[list[str]] = None) -> DemoResult:
-    """Run every demo step (or those named in ``only``); write the report into ``out``."""
-    out = Path(out) if out is not None else Path(tempfile.mkdtemp(prefix="gagekit-demo-"))
-    out.mkdir(parents=True, exist_ok=True)
+    """Run every demo step (or those named in ``only``); write the report into ``out``.
+
+    The folder is built under a temporary name beside ``out`` and renamed at the end
+    (:func:`gagekit._files.atomic_dir`): an interrupted demo leaves no half-written report."""
+    from ._files import atomic_dir, output_dir
+
+    if out is None:
+        out = Path(tempfile.mkdtemp(prefix="gagekit-demo-")) / "report"
+    final = output_dir(out)
+    with atomic_dir(final) as tmp:
+        res = _run_demo(tmp, quick, echo, only)
+    page = final / res.report.name
+    echo(f"\nreport: {page}")
+    return DemoResult(final, page, res.steps)
+
+
+def _run_demo(out: Path, quick: bool, echo: Callable[[str], None], only: Optional[list[str]]) -> DemoResult:
+    from ._files import write_text
+
     report = Report("gagekit demo", "Machining accuracy on bundled sample data: every number below was computed by this run.")
     ctx = DemoContext(out, quick, report, echo)
     outcomes = []
@@ -82,8 +98,7 @@ def run_demo(out: Optional[Path] = None, quick: bool = False, echo: Callable[[st
         dt = time.perf_counter() - t0
         echo(summary)
         echo(f"({dt:.2f} s)")
-        (out / f"{name}.json").write_text(json.dumps(to_jsonable(data), indent=2, allow_nan=False))
+        write_text(out / f"{name}.json", json.dumps(to_jsonable(data), indent=2, allow_nan=False))
         outcomes.append(StepOutcome(name, title, dt, summary, data))
     page = report.write(out)
-    echo(f"\nreport: {page}")
     return DemoResult(out, page, tuple(outcomes))

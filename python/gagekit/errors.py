@@ -21,6 +21,12 @@ class FileFormatError(InvalidInputError):
     """A file that cannot be read: unknown format, malformed line, empty file."""
 
 
+class FileAccessError(FileFormatError, OSError):
+    """A file or folder that cannot be opened, read or written: missing, a folder where a
+    file was expected, a FIFO or device, permission denied, read-only, disk full, a locked
+    database. Raised by :mod:`gagekit._files`, the one place that maps OS errors."""
+
+
 class DegenerateGeometryError(GagekitError, ValueError):
     """Too few points or a configuration too degenerate for the computation."""
 
@@ -50,6 +56,7 @@ __all__ = [
     "GagekitError",
     "InvalidInputError",
     "FileFormatError",
+    "FileAccessError",
     "DegenerateGeometryError",
     "InfeasibleError",
     "ConfigError",

@@ -8,6 +8,7 @@ stderr with exit status 2; nothing is printed to stdout then.
 
 from __future__ import annotations
 
+import os
 import sys
 from typing import Optional
 
@@ -56,13 +57,70 @@ def _root(
 
 
 def main(argv: Optional[list[str]] = None) -> None:
-    """Entry point of the console script."""
+    """Entry point of the console script.
+
+    Every failure ends the same way: one line ``gagekit: error: ...`` on stderr and exit
+    status 2 (130 after Ctrl-C), nothing on stdout. That covers gagekit's own errors,
+    bad arguments (click's usage errors, which Typer would print as a framed box) and
+    an interrupt. Python warnings raised while a command runs (numpy's "Mean of empty
+    slice"...) are held back: printed as ``gagekit: warning: ...`` lines after a
+    successful run, dropped when the command fails, so the error line is never buried.
+    """
     import warnings
 
-    # library warnings (e.g. a LAS file's assumed unit) as one line each on stderr
-    warnings.showwarning = lambda message, *_a, **_k: print(f"gagekit: warning: {message}", file=sys.stderr)
+    usage_error, no_args_help, exit_exc, abort_exc = _click_classes()
+    args = list(sys.argv[1:] if argv is None else argv)
+    command = typer.main.get_command(app)
+    code = 0
+    with warnings.catch_warnings(record=True) as caught:
+        try:
+            with command.make_context("gagekit", args) as ctx:
+                command.invoke(ctx)
+        except GagekitError as exc:
+            code = _fail(str(exc))
+        except no_args_help as exc:  # `gagekit machine` alone: its help, exit 0
+            typer.echo(exc.ctx.get_help() if exc.ctx is not None else str(exc))
+        except exit_exc as exc:
+            code = exc.exit_code
+        except abort_exc:
+            code = _fail("interrupted", 130)
+        except usage_error as exc:  # bad or missing arguments, unknown options
+            code = _fail(exc.format_message())
+        except KeyboardInterrupt:
+            code = _fail("interrupted", 130)
+        except RecursionError:
+            code = _fail("the input is nested too deeply to be read")
+        except MemoryError:
+            code = _fail("out of memory: the input is too large for this computer")
+        except BrokenPipeError:  # `gagekit ... | head`: the reader went away
+            code = 0
+            try:
+                sys.stdout = open(os.devnull, "w")
+            except OSError:  # pragma: no cover
+                pass
+        if code == 0:
+            for line in dict.fromkeys(str(w.message) for w in caught):
+                print(f"gagekit: warning: {line}", file=sys.stderr)
+    sys.exit(code)  # always, as click's standalone mode does (callers of main() expect SystemExit)
+
+
+def _click_classes() -> tuple:
+    """The argument-parsing exception classes: Typer >= 0.20 vendors click as
+    ``typer._click`` and has its own Exit/Abort; older Typer uses click's."""
     try:
-        app(args=argv, prog_name="gagekit", standalone_mode=True)
-    except GagekitError as exc:
-        print(f"gagekit: error: {exc}", file=sys.stderr)
-        sys.exit(2)
+        from typer._click import exceptions as ce
+        from typer import exceptions as te
+
+        return ((ce.ClickException, te.TyperException), ce.NoArgsIsHelpError, te.Exit, te.Abort)
+    except ImportError:  # pragma: no cover - Typer with click as a dependency
+        import click
+
+        nah = getattr(click.exceptions, "NoArgsIsHelpError", ())
+        return (click.ClickException, nah, click.exceptions.Exit, click.exceptions.Abort)
+
+
+def _fail(message: str, code: int = 2) -> int:
+    """Print the one error line (newlines folded: one line, always)."""
+    line = " ".join(str(message).split())
+    print(f"gagekit: error: {line}", file=sys.stderr)
+    return code

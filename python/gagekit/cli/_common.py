@@ -13,6 +13,41 @@ __all__ = ["JSON_OPTION", "emit", "table"]
 
 JSON_OPTION = typer.Option(False, "--json", help="Print the result as JSON on stdout, and nothing else.")
 
+#: Seeds are unsigned 64-bit integers (the kernels' generators take a u64).
+SEED_MAX = 2**64 - 1
+
+
+def seed_option(help: str, flag: str = "--seed") -> Any:
+    """A ``--seed`` option: an integer in [0, 2**64 - 1]; anything else is a usage error
+    (one line, exit 2) instead of an OverflowError deep in numpy or the kernels."""
+    return typer.Option(0, flag, min=0, max=SEED_MAX, help=help)
+
+
+def count_option(default: int, flag: str, help: str, min: int = 1, max: int = 10**9) -> Any:
+    """A count option (points, candidates, starts, cycles...): an integer in [min, max]."""
+    return typer.Option(default, flag, min=min, max=max, help=help)
+
+
+def _finite(value: Any) -> Any:
+    import math
+
+    if value is not None and not math.isfinite(value):
+        raise typer.BadParameter(f"must be a finite number, got {value}")
+    return value
+
+
+def _nonnegative(value: Any) -> Any:
+    _finite(value)
+    if value is not None and value < 0:
+        raise typer.BadParameter(f"must be zero or positive, got {value}")
+    return value
+
+
+def float_option(default: float, flag: str, help: str, nonnegative: bool = True) -> Any:
+    """A float option that refuses NaN and infinities (and, by default, negative values)."""
+    return typer.Option(default, flag, help=help, callback=_nonnegative if nonnegative else _finite)
+
+
 UNITS_OPTION = typer.Option(
     None, "--units",
     help="Unit of the cloud file's coordinates: mm, cm, m, um, in or ft (default: the file's own: "

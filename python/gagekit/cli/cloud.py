@@ -55,6 +55,10 @@ def hull(
     as_json: bool = JSON_OPTION,
 ) -> None:
     """Keep only the vertices of the convex hull (Eq. 5.21): the points an LP over the cloud needs."""
+    from .._files import output_file
+
+    if out is not None:
+        output_file(out)
     pts = read_cloud_cli(file, units).points
     t0 = time.perf_counter()
     idx = convex_hull_indices(pts)
@@ -89,7 +93,8 @@ def regions(
 
     result = cut_and_filter(read_cloud_cli(file, units).points, load_regions(regions_toml))
 
-    def human(r: dict) -> str:
+    def human(res) -> str:
+        r = res.to_dict()
         rows = [[g["name"], g["points"], g["hull_vertices"], f"{g['reduction']:.1f}x"] for g in r["regions"]]
         return f"{r['points']} points, {len(rows)} regions\n" + table(["region", "points", "hull vertices", "reduction"], rows)
 

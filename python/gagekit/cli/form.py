@@ -9,7 +9,7 @@ from typing import Any, Optional
 import numpy as np
 import typer
 
-from ._common import JSON_OPTION, UNITS_OPTION, emit, table
+from ._common import JSON_OPTION, UNITS_OPTION, emit, seed_option, table
 
 app = typer.Typer(help="Form of lines, planes, circles, spheres and cylinders (Ch. 6).", no_args_is_help=True)
 
@@ -95,7 +95,7 @@ def fit(
     shape: str = typer.Argument(..., help="circle, line, plane, sphere, circle3d, cylinder or cone"),
     file: Path = typer.Argument(..., help="Points: any file read_points reads (XYZ/CSV/TXT, NIST .ds, PLY, .npy, ...)"),
     criterion: str = typer.Option("least-squares", "--criterion", "-c", help="Fit criterion"),
-    seed: int = typer.Option(0, "--seed", help="Seed of the particle swarm (cylinders)"),
+    seed: int = seed_option(help="Seed of the particle swarm (cylinders)"),
     units: Optional[str] = UNITS_OPTION,
     as_json: bool = JSON_OPTION,
 ) -> None:
@@ -111,7 +111,7 @@ def cylinder(
     criterion: str = typer.Option(
         "least-squares", "--criterion", "-c", help="least-squares (lsq), mcc, mic or mzc"
     ),
-    seed: int = typer.Option(0, "--seed", help="Seed of the particle swarm"),
+    seed: int = seed_option(help="Seed of the particle swarm"),
     units: Optional[str] = UNITS_OPTION,
     as_json: bool = JSON_OPTION,
 ) -> None:

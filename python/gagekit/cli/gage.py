@@ -32,7 +32,12 @@ def check(
     from ..gage import GageSpec, check_gages, corrected_cloud
     from ..gage.report import human
     from ..report.gage import write_report
+    from .._files import output_dir, output_file
 
+    if report is not None:
+        output_dir(report)
+    if out_cloud is not None:
+        output_file(out_cloud)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         spec = GageSpec.load(gages)

@@ -12,12 +12,12 @@ import typer
 
 from ..errors import InvalidInputError
 from ..machine.simulate import TRACKER_SIGMA
-from ._common import JSON_OPTION, emit, table
+from ._common import JSON_OPTION, count_option, emit, float_option, seed_option, table
 
 app = typer.Typer(help="Machine-tool volumetric error models, identification and observers (Ch. 3-4).", no_args_is_help=True)
 
 MACHINE_ARG = typer.Argument(..., help="Machine file (TOML).", exists=False, dir_okay=False)
-NOISE_OPTION = typer.Option(TRACKER_SIGMA, "--noise", help="Tracker noise sigma per coordinate, mm (Sec. 3.2.1).")
+NOISE_OPTION = float_option(TRACKER_SIGMA, "--noise", help="Tracker noise sigma per coordinate, mm (Sec. 3.2.1).")
 
 
 @contextmanager
@@ -30,6 +30,16 @@ def _warnings_to_stderr() -> Iterator[None]:
         typer.echo(f"gagekit: warning: {w.message}", err=True)
 
 
+def _outputs(*paths: Optional[Path]) -> None:
+    """Check every output path before the work starts (folder exists and is writable, not a
+    folder, not read-only): a bad path fails in a second, not after the computation."""
+    from .._files import output_file
+
+    for p in paths:
+        if p is not None:
+            output_file(p)
+
+
 def _sci(v: Optional[float]) -> str:
     return "-" if v is None else f"{v:.4e}"
 
@@ -37,7 +47,7 @@ def _sci(v: Optional[float]) -> str:
 @app.command("check")
 def check(
     machine_file: Path = MACHINE_ARG,
-    commands: int = typer.Option(2000, "--commands", help="Quasi-random commands used for the rank analysis."),
+    commands: int = count_option(2000, "--commands", help="Quasi-random commands used for the rank analysis."),
     as_json: bool = JSON_OPTION,
 ) -> None:
     """Validate a machine file; show its chain, parameters, rank and identifiable groups (Eq. 3.14)."""
@@ -64,11 +74,11 @@ def check(
 def simulate_cmd(
     machine_file: Path = MACHINE_ARG,
     points: Optional[int] = typer.Option(
-        None, "--points", help="Number of quasi-random commands over the joint ranges (or give --plan)."
+        None, "--points", min=1, max=10**9, help="Number of quasi-random commands over the joint ranges (or give --plan)."
     ),
     out: Path = typer.Option(..., "--out", help="Observations CSV to write (joint columns, x, y, z; with --cycles also cycle, time, temp_*)."),
     noise: float = NOISE_OPTION,
-    seed: int = typer.Option(0, "--seed", help="Seed for commands, noise and (without --params) the truth."),
+    seed: int = seed_option(help="Seed for commands, noise and (without --params) the truth."),
     truth: Optional[Path] = typer.Option(None, "--truth", help="Write the true parameters, groups and frame (JSON)."),
     params: Optional[Path] = typer.Option(
         None,
@@ -76,12 +86,12 @@ def simulate_cmd(
         help='Truth JSON to use instead of random errors (e.g. written by --truth): {"parameters": {name: value}, '
         '"frame": {"rotation": 3x3, "translation": 3}}; parameters left out are zero.',
     ),
-    scale: float = typer.Option(1.0, "--scale", help="Scale of the random errors (1 = Table 3.3's magnitudes)."),
+    scale: float = float_option(1.0, "--scale", help="Scale of the random errors (1 = Table 3.3's magnitudes)."),
     plan: Optional[Path] = typer.Option(None, "--plan", help="PLAN.csv (joint columns): measure these commands instead of --points quasi-random ones."),
     cycles: int = typer.Option(
-        0, "--cycles", help="Thermal mode (Sec. 4.3.2): measure the commands in this many heating/cooling cycles (0: static)."
+        0, "--cycles", min=0, max=10**6, help="Thermal mode (Sec. 4.3.2): measure the commands in this many heating/cooling cycles (0: static)."
     ),
-    drift_scale: float = typer.Option(1.0, "--drift-scale", help="Thermal mode: scale of the W- and Y-axis drift (Fig. 4.8)."),
+    drift_scale: float = float_option(1.0, "--drift-scale", help="Thermal mode: scale of the W- and Y-axis drift (Fig. 4.8)."),
     as_json: bool = JSON_OPTION,
 ) -> None:
     """Simulate laser-tracker observations from the exact perturbed chain (seeded).
@@ -91,6 +101,8 @@ def simulate_cmd(
     `gagekit machine track`.
     """
     from ..machine import Truth, load_machine, read_commands
+
+    _outputs(out, truth)
 
     m = load_machine(machine_file)
     if (points is None) == (plan is None):
@@ -173,6 +185,7 @@ def identify_cmd(
     """Identify the error model's groups from tracker observations (Sec. 3.1.5, Tables 3.2-3.5)."""
     from ..machine import identify, load_machine, read_observations
 
+    _outputs(out, residuals)
     if method not in ("joint", "two-step"):
         raise InvalidInputError(f"--method must be joint or two-step, got {method!r}")
     m = load_machine(machine_file)
@@ -216,6 +229,7 @@ def predict_cmd(
     from ..machine import load_calibration, load_machine, predict, predict_uncertainty, read_commands
     from ..machine.observations import write_csv
 
+    _outputs(out)
     m = load_machine(machine_file)
     cal = load_calibration(calibration)
     cmds = read_commands(commands, m)
@@ -241,6 +255,7 @@ def compensate_cmd(
     from ..machine import compensate, load_calibration, load_machine, read_commands
     from ..machine.observations import write_csv
 
+    _outputs(out)
     m = load_machine(machine_file)
     cal = load_calibration(calibration)
     cmds = read_commands(commands, m)

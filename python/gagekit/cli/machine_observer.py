@@ -11,8 +11,8 @@ from typing import Optional
 import typer
 
 from ..errors import InvalidInputError
-from ._common import JSON_OPTION, emit, table
-from .machine import MACHINE_ARG, NOISE_OPTION, _warnings_to_stderr, _write_simulation
+from ._common import JSON_OPTION, count_option, emit, float_option, seed_option, table
+from .machine import MACHINE_ARG, NOISE_OPTION, _outputs, _warnings_to_stderr, _write_simulation
 
 
 def _sci(v: float) -> str:
@@ -21,13 +21,13 @@ def _sci(v: float) -> str:
 
 def design_cmd(
     machine_file: Path = MACHINE_ARG,
-    points: int = typer.Option(80, "--points", help="Measurement points in the plan (Sec. 4.2: 80)."),
+    points: int = count_option(80, "--points", help="Measurement points in the plan (Sec. 4.2: 80)."),
     criterion: str = typer.Option("I", "--criterion", help="A, D, K, E or I (default I: it predicted best in simulation; see README)."),
     zones: str = typer.Option("none", "--zones", help="none, dissertation-8 (Fig. 4.3) or a zones TOML file."),
     exclude: Optional[Path] = typer.Option(None, "--exclude", help="Exclusions TOML: [[box]] tables and/or commands to avoid."),
-    candidates: int = typer.Option(20000, "--candidates", help="Quasi-random candidate commands."),
-    seed: int = typer.Option(0, "--seed", help="Seed of candidates and search (same seed, same plan)."),
-    starts: int = typer.Option(4, "--starts", help="Independent starts of the exchange search."),
+    candidates: int = count_option(20000, "--candidates", help="Quasi-random candidate commands."),
+    seed: int = seed_option(help="Seed of candidates and search (same seed, same plan)."),
+    starts: int = count_option(4, "--starts", help="Independent starts of the exchange search."),
     out: Path = typer.Option(..., "--out", help="PLAN.csv to write: one column per joint."),
     as_json: bool = JSON_OPTION,
 ) -> None:
@@ -35,6 +35,7 @@ def design_cmd(
     from ..machine import load_machine
     from ..machine.observer import ObserverSpace, design_observer, read_exclusions, read_zones
 
+    _outputs(out)
     m = load_machine(machine_file)
     space = ObserverSpace.of(m)
     zone_arg = zones
@@ -75,10 +76,10 @@ def design_cmd(
 def evaluate_plan_cmd(
     machine_file: Path = MACHINE_ARG,
     plan: Path = typer.Argument(..., help="PLAN.csv (joint columns), e.g. from `machine design`."),
-    seeds: int = typer.Option(20, "--seeds", help="Random machines simulated."),
+    seeds: int = count_option(20, "--seeds", help="Random machines simulated."),
     noise: float = NOISE_OPTION,
-    test_points: int = typer.Option(2000, "--test-points", help="Quasi-random commands where predictions are compared."),
-    seed: int = typer.Option(0, "--seed", help="Seed of machines, noise and test commands."),
+    test_points: int = count_option(2000, "--test-points", help="Quasi-random commands where predictions are compared."),
+    seed: int = seed_option(help="Seed of machines, noise and test commands."),
     compare: bool = typer.Option(True, "--compare/--no-compare", help="Also evaluate quasi-random plans of the same size and of 290 points."),
     as_json: bool = JSON_OPTION,
 ) -> None:
@@ -127,6 +128,10 @@ def track_cmd(
     from ..machine.tracking import History, read_cycles, track
     from ..report.machine import plot_drift
 
+    from .._files import output_dir
+
+    if report is not None:
+        output_dir(report)
     m = load_machine(machine_file)
     with _warnings_to_stderr():
         cyc = read_cycles(cycles_csv, m)
@@ -139,16 +144,18 @@ def track_cmd(
         finally:
             h.close()
     if report is not None:
-        report.mkdir(parents=True, exist_ok=True)
-        (report / "track.json").write_text(dumps(out))
-        plot_drift(res, report / "drift.png")
+        from .._files import atomic_dir, write_text
         from ..report import Report
         from ..report.machine import add_tracking
 
-        rep = Report(f"Thermal tracking of {m.name}", f"{cycles_csv}: {len(res.cycles)} cycles")
-        rep.section("Residuals and drift per cycle (Sec. 4.3.3)")
-        add_tracking(rep, res)
-        out["report"] = str(rep.write(report))
+        with atomic_dir(report) as tmp:
+            write_text(tmp / "track.json", dumps(out))
+            plot_drift(res, tmp / "drift.png")
+            rep = Report(f"Thermal tracking of {m.name}", f"{cycles_csv}: {len(res.cycles)} cycles")
+            rep.section("Residuals and drift per cycle (Sec. 4.3.3)")
+            add_tracking(rep, res)
+            page = rep.write(tmp).name
+        out["report"] = str(report / page)
     emit(out, as_json, lambda _: _track_text(res))
 
 
@@ -177,15 +184,16 @@ def simulate_cycles_cmd(
     machine_file: Path = MACHINE_ARG,
     plan: Path = typer.Argument(..., help="PLAN.csv (joint columns) measured in every cycle."),
     out: Path = typer.Option(..., "--out", help="Cycles CSV to write (cycle, joints, x, y, z, time, temp_*)."),
-    cycles: int = typer.Option(6, "--cycles", help="Measurement cycles (Fig. 4.4: 4 heating, 1 cooling after the first)."),
+    cycles: int = count_option(6, "--cycles", help="Measurement cycles (Fig. 4.4: 4 heating, 1 cooling after the first)."),
     noise: float = NOISE_OPTION,
-    drift_scale: float = typer.Option(1.0, "--drift-scale", help="Scale of the W- and Y-axis thermal drift."),
-    seed: int = typer.Option(0, "--seed", help="Seed of the truth, drift signs and noise."),
+    drift_scale: float = float_option(1.0, "--drift-scale", help="Scale of the W- and Y-axis thermal drift."),
+    seed: int = seed_option(help="Seed of the truth, drift signs and noise."),
     as_json: bool = JSON_OPTION,
 ) -> None:
     """Short for `machine simulate MACHINE.toml --plan PLAN.csv --cycles N` (thermal mode)."""
     from ..machine import Truth, load_machine, read_commands
 
+    _outputs(out)
     if cycles < 1:
         raise InvalidInputError(f"--cycles must be at least 1, got {cycles}")
     m = load_machine(machine_file)

@@ -109,14 +109,12 @@ def read_cloud(path: PathLike, units: Optional[str] = None, dim: int = 3) -> Clo
     ``units`` overrides the file's unit (``mm``, ``cm``, ``m``, ``um``, ``in``, ``ft``);
     ``dim=2`` is accepted for ASCII files of 2-D points (x y per line).
     """
+    from .._files import input_file
+
     override = _units.check_units(units)
-    p = Path(path)
     if dim not in (2, 3):
         raise InvalidInputError(f"dim must be 2 or 3, got {dim}")
-    if not p.exists():
-        raise FileFormatError(f"{p}: no such file")
-    if not p.is_file():
-        raise FileFormatError(f"{p}: not a regular file")
+    p = input_file(path, "point cloud file")  # typed errors: missing, folder, FIFO, permissions
     suffix = p.suffix.lower()
     if suffix not in ASCII_SUFFIXES and suffix not in _BINARY:
         suffix = _sniff(p)
@@ -178,15 +176,18 @@ def write_points(path: PathLike, points, *, binary: bool = True) -> None:
     pts = as_points(points, dim=np.asarray(points).shape[-1] if np.ndim(points) == 2 else 3)
     _check_finite(pts, p)
     suffix = p.suffix.lower()
-    if suffix == ".ply":
-        _write_ply(p, pts, binary)
-    elif suffix == ".npy":
-        np.save(p, pts)
-    elif suffix in (".csv", ".xyz", ".txt", ".asc"):
-        header = ",".join("xyz"[: pts.shape[1]]) if suffix == ".csv" else None
-        _core.cloud_write_ascii(str(p), pts, "," if suffix == ".csv" else " ", header)
-    else:
+    if suffix not in (".ply", ".npy", ".csv", ".xyz", ".txt", ".asc"):
         raise FileFormatError(f"{p}: cannot write '{suffix}' files; use .ply, .csv, .xyz, .txt or .npy")
+    from .._files import atomic_path
+
+    with atomic_path(p) as tmp:  # temp file in the same folder, then rename: never half-written
+        if suffix == ".ply":
+            _write_ply(tmp, pts, binary)
+        elif suffix == ".npy":
+            np.save(tmp, pts)
+        else:
+            header = ",".join("xyz"[: pts.shape[1]]) if suffix == ".csv" else None
+            _core.cloud_write_ascii(str(tmp), pts, "," if suffix == ".csv" else " ", header)
 
 
 def _sniff(p: Path) -> str:

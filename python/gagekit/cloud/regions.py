@@ -27,6 +27,8 @@ class Box:
     def __post_init__(self) -> None:
         for attr in ("center", "size", "rotation"):
             raw = getattr(self, attr)
+            if isinstance(raw, (str, bytes, dict)) or any(isinstance(v, (bool, str)) for v in _iter_or_empty(raw)):
+                raise ConfigError(f"region '{self.name}': {attr} must be three numbers, got {raw!r}")
             try:
                 vals = tuple(float(v) for v in raw)
             except (TypeError, ValueError):
@@ -45,6 +47,13 @@ class Box:
 
     def to_dict(self) -> dict:
         return {"name": self.name, "center": list(self.center), "size": list(self.size), "rotation": list(self.rotation)}
+
+
+def _iter_or_empty(raw) -> tuple:
+    try:
+        return tuple(raw)
+    except TypeError:
+        return ()
 
 
 def classify(points, regions: Sequence[Box]) -> list[np.ndarray]:

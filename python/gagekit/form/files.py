@@ -13,7 +13,7 @@ from typing import Any, Optional, Union
 
 import numpy as np
 
-from ..errors import ConfigError, FileFormatError, InvalidInputError
+from ..errors import ConfigError, FileAccessError, FileFormatError, InvalidInputError
 
 SHAPES_3D = ("line", "plane", "sphere", "circle3d", "cylinder", "cone")
 SHAPES = ("circle", *SHAPES_3D)
@@ -48,7 +48,7 @@ def read_xy(path: Union[str, Path], units: Optional[str] = None) -> np.ndarray:
     try:
         arr = read_points(path, units=units, dim=3)
     except FileFormatError as exc3:
-        if text_columns(path) != 2:
+        if isinstance(exc3, FileAccessError) or text_columns(path) != 2:  # never reopen a FIFO
             raise
         try:
             return read_points(path, units=units, dim=2)

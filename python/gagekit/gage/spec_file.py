@@ -22,6 +22,14 @@ _REGION_KEYS = {"name", "frame", "center", "size", "rotation"}
 _GAGE_KEYS = {"name", "region", "plane", "weight", "slack_weight"}
 
 
+
+def _scaled_rotation(raw: Any, ang: float) -> Any:
+    """A region's rotation in degrees, to radians (left as given when malformed: the box
+    check then names the region and the key)."""
+    if isinstance(raw, list) and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in raw):
+        return [float(v) * ang for v in raw]
+    return raw
+
 def _unknown(keys, allowed, where: str, source: str) -> None:
     extra = sorted(set(keys) - allowed)
     if extra:
@@ -113,7 +121,7 @@ def _parse_regions(doc: Mapping[str, Any], source: str, ang: float) -> tuple[Reg
             raise ConfigError(f"{source}: {label}: frame must be \"part\" or \"scanner\", got {frame!r}")
         frames.append(frame)
     if ang != 1.0:
-        tables = [dict(t, rotation=[float(v) * ang for v in t["rotation"]]) if "rotation" in t else t for t in tables]
+        tables = [dict(t, rotation=_scaled_rotation(t["rotation"], ang)) if "rotation" in t else t for t in tables]
     try:
         boxes = regions_from_tables(tables, source)
     except ConfigError as exc:
@@ -134,7 +142,7 @@ def _parse_gages(doc: Mapping[str, Any], source: str, names: set) -> list[Gage]:
         region = t.get("region")
         if region is None:
             raise ConfigError(f"{source}: {label} has no region (add region = \"<name of a [[region]]>\")")
-        if region not in names:
+        if not isinstance(region, str) or region not in names:
             raise ConfigError(f"{source}: {label}: unknown region {region!r}; defined regions: "
                               f"{', '.join(sorted(names)) or '(none)'}")
         plane = t.get("plane")

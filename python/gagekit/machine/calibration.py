@@ -161,7 +161,9 @@ class Calibration:
         return d
 
     def save(self, path: Union[str, Path]) -> None:
-        Path(path).write_text(dumps(self) + "\n", encoding="utf-8")
+        from .._files import write_text
+
+        write_text(path, dumps(self) + "\n")  # atomic: temp file in the same folder, then rename
 
     @classmethod
     def from_dict(cls, d: dict) -> "Calibration":
@@ -201,12 +203,13 @@ class Calibration:
 
 def load_calibration(path: Union[str, Path]) -> Calibration:
     """Read a calibration JSON written by ``gagekit machine identify --out``."""
+    from .._files import read_text
+
     p = Path(path)
+    text = read_text(p, "calibration JSON")
     try:
-        d = json.loads(p.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise FileFormatError(f"{p}: calibration file not found") from None
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        d = json.loads(text)
+    except json.JSONDecodeError as exc:
         raise FileFormatError(f"{p}: not a calibration JSON ({exc})") from None
     if not isinstance(d, dict):
         raise FileFormatError(f"{p}: not a calibration JSON (top level is not an object)")

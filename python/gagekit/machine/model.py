@@ -417,7 +417,7 @@ def parse_machine(text: str, source: str = "<machine>") -> Machine:
     if lu != "mm":
         raise fail(f'length_unit must be "mm" (gagekit works in millimetres), got {lu!r}')
     au = doc.get("angle_unit", "deg")
-    if au not in _ANGLE_UNITS:
+    if not isinstance(au, str) or au not in _ANGLE_UNITS:
         raise fail(f'angle_unit must be "deg" or "rad", got {au!r}')
     name = doc.get("name", Path(source).stem)
     if not isinstance(name, str):

@@ -58,13 +58,10 @@ class Observations:
 
 
 def _read_table(path: Union[str, Path]) -> tuple[list[str], np.ndarray]:
+    from .._files import read_text
+
     p = Path(path)
-    try:
-        text = p.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise FileFormatError(f"{p}: file not found") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise FileFormatError(f"{p}: cannot read the file ({exc})") from None
+    text = read_text(p, "CSV file")
     rows = []
     header: Optional[list[str]] = None
     for lineno, row in enumerate(csv.reader(io.StringIO(text)), start=1):
@@ -142,8 +139,10 @@ def read_commands(path: Union[str, Path], machine: Machine, warn_range: bool = F
 
 
 def write_csv(path: Union[str, Path], header: Sequence[str], data: np.ndarray) -> None:
-    """Write a CSV with ``header`` and full-precision numbers."""
-    with open(path, "w", newline="", encoding="utf-8") as f:
+    """Write a CSV with ``header`` and full-precision numbers, atomically."""
+    from .._files import atomic_open
+
+    with atomic_open(path, "w", newline="") as f:
         w = csv.writer(f)
         w.writerow(list(header))
         for row in np.asarray(data, dtype=np.float64):

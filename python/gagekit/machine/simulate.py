@@ -99,17 +99,20 @@ class Truth:
         return d
 
     def save(self, path: Union[str, Path], machine: Optional[Machine] = None) -> None:
-        Path(path).write_text(dumps(self.to_dict(machine)) + "\n", encoding="utf-8")
+        from .._files import write_text
+
+        write_text(path, dumps(self.to_dict(machine)) + "\n")
 
     @classmethod
     def load(cls, path: Union[str, Path], machine: Machine) -> "Truth":
+        from .._files import read_text
+
         p = Path(path)
+        text = read_text(p, "truth JSON")
         try:
-            d = json.loads(p.read_text(encoding="utf-8"))
+            d = json.loads(text)
             params, frame = d["parameters"], Frame.from_dict(d["frame"])
-        except FileNotFoundError:
-            raise FileFormatError(f"{p}: file not found") from None
-        except (OSError, ValueError, KeyError, TypeError) as exc:
+        except (ValueError, KeyError, TypeError) as exc:
             raise FileFormatError(f"{p}: not a truth JSON with parameters and frame ({exc})") from None
         if not isinstance(params, dict):
             raise FileFormatError(f"{p}: parameters must be an object {{name: value}}")

@@ -91,20 +91,19 @@ def add_to_report(rep, result: GageCheckResult, label: str = "") -> list[str]:
 
 def write_report(result: GageCheckResult, out: Union[str, Path]) -> list[Path]:
     """Write into ``out``: ``result.json``, ``report.txt`` (the tables), ``report.html``
-    and one PNG per region (``region-<name>.png``, before and after T*); returns the paths."""
+    and one PNG per region (``region-<name>.png``, before and after T*); returns the paths.
+
+    The folder is built under a temporary name and renamed into place at the end
+    (:func:`gagekit._files.atomic_dir`), so an interrupted run leaves the old folder or none."""
+    from .._files import atomic_dir, write_text
     from . import Report
 
     out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
-    written = []
-    p = out / "result.json"
-    p.write_text(dumps(result))
-    written.append(p)
-    p = out / "report.txt"
-    p.write_text(human(result) + "\n")
-    written.append(p)
-    rep = Report("Virtual gage analysis", "Allowances before and after the correction T* (Eq. 5.11); "
-                 "every number was computed by this run.")
-    written += [out / n for n in add_to_report(rep, result)]
-    written.append(rep.write(out))
-    return written
+    with atomic_dir(out) as tmp:
+        names = [write_text(tmp / "result.json", dumps(result)).name,
+                 write_text(tmp / "report.txt", human(result) + "\n").name]
+        rep = Report("Virtual gage analysis", "Allowances before and after the correction T* (Eq. 5.11); "
+                     "every number was computed by this run.")
+        names += add_to_report(rep, result)
+        names.append(rep.write(tmp).name)
+    return [out / n for n in names]

@@ -124,10 +124,11 @@ class Report:
 
     def write(self, directory: str | Path, name: str = "report.html") -> Path:
         """Write the page and its figures into ``directory``; return the page's path."""
+        from .._files import write_bytes, write_text
+
         out = Path(directory)
-        out.mkdir(parents=True, exist_ok=True)
         for fname, png in self._figures:
-            (out / fname).write_bytes(png)
+            write_bytes(out / fname, png)
         page = out / name
-        page.write_text(self.html(), encoding="utf-8")
+        write_text(page, self.html())
         return page

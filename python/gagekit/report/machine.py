@@ -85,10 +85,15 @@ def add_tracking(report: Report, result) -> None:
 
 def plot_drift(result, path: Union[str, Path], top: int = 8) -> None:
     """Write :func:`drift_figure` as a PNG."""
+    from .._files import atomic_path
+
     plt = _plt()
     fig = drift_figure(result, top)
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    try:
+        with atomic_path(path) as tmp:  # temp file in the same folder, then rename
+            fig.savefig(tmp, dpi=120)
+    finally:
+        plt.close(fig)
 
 
 def drift_figure(result, top: int = 8):

@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Union
+from typing import Any, Union
 
 import numpy as np
 
@@ -25,6 +25,22 @@ __all__ = ["Zone", "Exclusions", "dissertation_zones", "read_zones", "read_exclu
 Zone = tuple  # (lower (d,), upper (d,), count, hole or None)
 
 
+def _interval(val: Any, what: str) -> tuple[float, float]:
+    """``[lower, upper]``: two finite numbers, lower <= upper (a reversed or NaN box would
+    silently select nothing)."""
+    if not isinstance(val, (list, tuple)) or len(val) != 2 or any(isinstance(v, (bool, str)) for v in val):
+        raise ConfigError(f"{what} must be [lower, upper], got {val!r}")
+    try:
+        a, z = (float(v) for v in val)
+    except (TypeError, ValueError):
+        raise ConfigError(f"{what} must be [lower, upper], got {val!r}") from None
+    if not (math.isfinite(a) and math.isfinite(z)):
+        raise ConfigError(f"{what} = {val!r}: the bounds must be finite numbers")
+    if a > z:
+        raise ConfigError(f"{what} = {val!r} is reversed: give [lower, upper]")
+    return a, z
+
+
 def _named_box(space: ObserverSpace, spec: dict, what: str) -> tuple[np.ndarray, np.ndarray]:
     b = space.bounds
     lo, hi = b[:, 0].copy(), b[:, 1].copy()
@@ -33,12 +49,7 @@ def _named_box(space: ObserverSpace, spec: dict, what: str) -> tuple[np.ndarray,
             continue
         if key not in space.names:
             raise ConfigError(f"{what}: unknown variable '{key}' (use {', '.join(space.names)})")
-        try:
-            a, z = (float(v) for v in val)
-        except (TypeError, ValueError):
-            raise ConfigError(f"{what}: '{key}' must be [lower, upper]") from None
-        if not (math.isfinite(a) and math.isfinite(z)) or a > z:
-            raise ConfigError(f"{what}: '{key}' = [{a}, {z}] is not an interval")
+        a, z = _interval(val, f"{what}: '{key}'")
         j = space.names.index(key)
         lo[j], hi[j] = a, z
     return lo, hi
@@ -124,9 +135,11 @@ def read_exclusions(path: Union[str, Path], space: ObserverSpace) -> Exclusions:
     margin of ``tolerance`` (fraction of every joint range, default 0.01)."""
     doc = load_toml(path, "exclusions")
     boxes = []
-    items = doc.get("box", []) or []
+    items = doc.get("box", [])
     if isinstance(items, dict):  # a single [box] table
         items = [items]
+    if not isinstance(items, list):
+        raise ConfigError(f"{path}: box must be given as [[box]] tables, got {items!r}")
     for k, bx in enumerate(items):
         if not isinstance(bx, dict) or not bx:
             raise ConfigError(f"{path}: box {k + 1} is empty")
@@ -135,20 +148,21 @@ def read_exclusions(path: Union[str, Path], space: ObserverSpace) -> Exclusions:
         for key, val in bx.items():
             if key not in valid:
                 raise ConfigError(f"{path}: box {k + 1}: unknown variable '{key}' (use {', '.join(sorted(valid))})")
-            try:
-                a, z = (float(v) for v in val)
-            except (TypeError, ValueError):
-                raise ConfigError(f"{path}: box {k + 1}: '{key}' must be [lower, upper]") from None
-            spec[key] = (a, z)
+            spec[key] = _interval(val, f"{path}: box {k + 1}: '{key}'")
         boxes.append(spec)
     cmds = doc.get("commands", [])
     nj = len(space.machine.joint_names)
+    rows_msg = f"{path}: commands must be a list of [{', '.join(space.machine.joint_names)}] rows"
+    if not isinstance(cmds, list) or not all(isinstance(r, list) and len(r) == nj for r in cmds):
+        raise ConfigError(rows_msg)
     try:
-        cmd_arr = np.asarray(cmds, dtype=np.float64).reshape(-1, nj) if len(cmds) else np.empty((0, nj))
+        cmd_arr = np.asarray(cmds, dtype=np.float64).reshape(-1, nj) if cmds else np.empty((0, nj))
     except (TypeError, ValueError):
-        raise ConfigError(f"{path}: commands must be a list of [{', '.join(space.machine.joint_names)}] rows") from None
+        raise ConfigError(rows_msg) from None
+    if not np.isfinite(cmd_arr).all():
+        raise ConfigError(f"{path}: commands must be finite numbers")
     tol = doc.get("tolerance", 0.01)
-    if not isinstance(tol, (int, float)) or not (0 <= tol < 0.5):
+    if isinstance(tol, bool) or not isinstance(tol, (int, float)) or not (0 <= tol < 0.5):
         raise ConfigError(f"{path}: tolerance must be a fraction of the joint ranges in [0, 0.5)")
     if not boxes and not len(cmd_arr):
         raise ConfigError(f"{path}: no [[box]] tables and no commands to exclude")

@@ -1,0 +1,122 @@
+"""gagekit._files: typed errors at every file boundary, atomic outputs (library level)."""
+
+from __future__ import annotations
+
+import os
+import stat
+
+import pytest
+
+from gagekit import _files
+from gagekit.errors import FileAccessError, FileFormatError, GagekitError
+
+
+def test_input_file_refuses_missing_folder_fifo(tmp_path):
+    with pytest.raises(FileAccessError, match="not found"):
+        _files.input_file(tmp_path / "nope.toml")
+    with pytest.raises(FileAccessError, match="is a folder"):
+        _files.input_file(tmp_path)
+    fifo = tmp_path / "f.toml"
+    os.mkfifo(fifo)
+    with pytest.raises(FileAccessError, match="FIFO"):  # returns at once: stat never blocks
+        _files.read_text(fifo)
+
+
+def test_read_text_maps_decoding_and_drops_a_bom(tmp_path):
+    p = tmp_path / "latin1.toml"
+    p.write_bytes("name = 'caf\xe9'".encode("latin-1"))
+    with pytest.raises(FileFormatError, match="not UTF-8 text .* offset 11"):
+        _files.read_text(p)
+    p.write_bytes(b"\xef\xbb\xbfa = 1")
+    assert _files.read_text(p) == "a = 1"
+
+
+def test_errors_are_gagekit_and_os_errors():
+    e = _files.os_error(PermissionError(13, "Permission denied"), "x.csv", "write")
+    assert isinstance(e, GagekitError) and isinstance(e, OSError)
+    assert str(e) == "x.csv: cannot write: permission denied"
+
+
+@pytest.mark.parametrize("msg,cls,text", [
+    ("database is locked", FileAccessError, "locked"),
+    ("attempt to write a readonly database", FileAccessError, "read-only"),
+    ("file is not a database", FileFormatError, "not a"),
+])
+def test_sqlite_mapping(msg, cls, text):
+    import sqlite3
+
+    e = _files.sqlite_error(sqlite3.OperationalError(msg), "h.sqlite", "history")
+    assert type(e) is cls and text in str(e)
+
+
+def test_output_paths(tmp_path):
+    with pytest.raises(FileAccessError, match="does not exist"):
+        _files.output_file(tmp_path / "missing" / "x.csv")
+    with pytest.raises(FileAccessError, match="is a folder"):
+        _files.output_file(tmp_path)
+    ro = tmp_path / "ro.csv"
+    ro.write_text("old")
+    ro.chmod(0o444)
+    with pytest.raises(FileAccessError, match="read-only"):
+        _files.write_text(ro, "new")
+    assert ro.read_text() == "old"
+    folder = tmp_path / "rofolder"
+    folder.mkdir()
+    folder.chmod(0o555)
+    try:
+        with pytest.raises(FileAccessError, match="read-only"):
+            _files.output_file(folder / "x.csv")
+    finally:
+        folder.chmod(0o755)
+
+
+def test_atomic_write_keeps_the_old_file_when_the_writer_fails(tmp_path):
+    p = tmp_path / "out.csv"
+    p.write_text("old\n")
+    with pytest.raises(ZeroDivisionError):
+        with _files.atomic_open(p) as fh:
+            fh.write("half")
+            1 / 0
+    assert p.read_text() == "old\n"
+    assert [x.name for x in tmp_path.iterdir()] == ["out.csv"]  # no temporary left
+    with pytest.raises(KeyboardInterrupt):
+        with _files.atomic_open(p) as fh:
+            fh.write("half")
+            raise KeyboardInterrupt
+    assert p.read_text() == "old\n" and len(list(tmp_path.iterdir())) == 1
+    _files.write_text(p, "new\n")
+    assert p.read_text() == "new\n" and len(list(tmp_path.iterdir())) == 1
+
+
+def test_atomic_path_keeps_the_suffix_and_the_mode(tmp_path):
+    p = tmp_path / "fig.png"
+    p.write_bytes(b"x")
+    p.chmod(0o640)
+    with _files.atomic_path(p) as tmp:
+        assert tmp.suffix == ".png" and tmp.parent == tmp_path
+        tmp.write_bytes(b"png")
+    assert p.read_bytes() == b"png" and stat.S_IMODE(p.stat().st_mode) == 0o640
+
+
+def test_atomic_dir_builds_beside_and_never_replaces_foreign_folders(tmp_path):
+    out = tmp_path / "report"
+    with _files.atomic_dir(out) as tmp:
+        assert tmp.parent == tmp_path and not out.exists()
+        (tmp / "a.txt").write_text("1")
+    assert sorted(x.name for x in out.iterdir()) == [_files.REPORT_MARKER, "a.txt"]
+    with pytest.raises(RuntimeError):  # a failed rewrite leaves the old report
+        with _files.atomic_dir(out) as tmp:
+            (tmp / "b.txt").write_text("2")
+            raise RuntimeError("boom")
+    assert sorted(x.name for x in out.iterdir()) == [_files.REPORT_MARKER, "a.txt"]
+    with _files.atomic_dir(out) as tmp:  # a gagekit report folder is replaced as a whole
+        (tmp / "c.txt").write_text("3")
+    assert sorted(x.name for x in out.iterdir()) == [_files.REPORT_MARKER, "c.txt"]
+    assert sorted(x.name for x in tmp_path.iterdir()) == ["report"]
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    (mine / "thesis.tex").write_text("precious")
+    with pytest.raises(FileAccessError, match="holds other files"):
+        _files.output_dir(mine)
+    with pytest.raises(FileAccessError, match="a file of that name"):
+        _files.output_dir(mine / "thesis.tex")
