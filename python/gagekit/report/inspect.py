@@ -158,32 +158,17 @@ def add_inspection(report, result, title: str | None = None) -> None:
 
 
 def write_report(result, out: Path) -> Path:
-    """Write ``report.html`` and ``result.json`` into ``out`` (atomically); return the page."""
+    """Write ``report.html`` and ``result.json`` into ``out``; return the page. The folder
+    is built under a temporary name and renamed into place (:func:`gagekit._files.atomic_dir`)."""
+    from .._files import atomic_dir, write_text
     from .._util import dumps
     from .html import Report
 
     out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
-    _atomic_text(out / "result.json", dumps(result))
-    rep = Report(f"Inspection of {result.part}", "GD&T callouts against the scan (ISO 1101, ISO 5459); every number was computed by this run.")
-    add_inspection(rep, result)
-    page = out / "report.html"
-    _atomic_text(page, rep.html())
-    return page
-
-
-def _atomic_text(path: Path, text: str) -> None:
-    import os
-    import tempfile
-
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            fh.write(text)
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    with atomic_dir(out) as tmp:
+        write_text(tmp / "result.json", dumps(result))
+        rep = Report(f"Inspection of {result.part}",
+                     "GD&T callouts against the scan (ISO 1101, ISO 5459); every number was computed by this run.")
+        add_inspection(rep, result)
+        name = rep.write(tmp).name
+    return out / name
