@@ -16,7 +16,7 @@ import typer
 
 from .. import __version__
 from ..errors import GagekitError
-from . import cloud, demo, form, gage, machine, machine_observer
+from . import cloud, demo, form, gage, machine, machine_observer, studio
 from . import inspect as inspect_cmd
 
 app = typer.Typer(
@@ -34,6 +34,7 @@ app.add_typer(gage.app, name="gage")
 app.add_typer(machine.app, name="machine")
 app.command("demo")(demo.demo)
 app.command("inspect")(inspect_cmd.inspect)
+app.command("studio")(studio.studio)
 
 
 def _version_callback(value: bool) -> None:
