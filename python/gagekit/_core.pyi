@@ -81,6 +81,22 @@ class KinematicChain:
     def design_matrix(self, commands: _F64) -> _F64: ...
     def command_jacobian(self, commands: _F64) -> _F64: ...
 
+def machine_compensate(chain: KinematicChain, commands: _F64, params: _F64, joints: Sequence[int], iterations: int) -> tuple[_F64, _F64]: ...
+def nc_compensate(
+    chain: KinematicChain,
+    params: _F64,
+    text: bytes,
+    letters: str,
+    unit: Sequence[float],
+    start: Sequence[Optional[float]],
+    joints: Sequence[int],
+    max_step: float,
+    decimals: int,
+    header: str,
+    arc_tolerance: Optional[float] = None,
+    iterations: int = 4,
+) -> tuple[bytes, dict[str, Any]]: ...
+
 class Identifiability:
     @property
     def rank(self) -> int: ...

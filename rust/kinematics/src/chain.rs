@@ -29,6 +29,8 @@ use gagekit_core::{check_finite, GkError, Result};
 use nalgebra::{Matrix3, Rotation3, Unit, Vector3};
 use rayon::prelude::*;
 
+mod inverse;
+
 type V3 = Vector3<f64>;
 type M3 = Matrix3<f64>;
 

@@ -13,6 +13,7 @@ mod gage;
 mod gdt;
 mod geometry;
 mod kinematics;
+mod nc;
 
 use pyo3::prelude::*;
 
@@ -40,6 +41,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     geometry::register(m)?;
     form::register(m)?;
     kinematics::register(m)?;
+    nc::register(m)?;
     gage::register(m)?;
     gdt::register(m)?;
     design::register(m)?;
