@@ -233,7 +233,7 @@ class DatumSystem:
             return SimulatedDatum(ref.letter, fd.name, "axis", f"{method} circle", np.array(point), np.array(direction), before,
                                   radius=float(radius))
         crit = "max-inscribed" if fit == "inscribed" else "min-circumscribed"
-        cyl = fit_cylinder(fd.points, crit, seed=0, search_axis=d_ls, max_tilt=0.2)
+        cyl = fit_cylinder(fd.points, crit, seed=0, axis=tuple(d_ls), max_tilt=10.0)
         d = _unit(cyl.axis_direction)
         d = d if float(d @ d_ls) >= 0 else -d
         name = "maximum inscribed cylinder" if fit == "inscribed" else "minimum circumscribed cylinder"

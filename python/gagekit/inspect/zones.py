@@ -217,7 +217,7 @@ def _roundness(tol, fd, system):
 
 def _cylindricity(tol, fd, system):
     _, d = fd.axis_line()
-    fit = fit_cylinder(fd.points, "minimum-zone", seed=0, search_axis=d, max_tilt=0.2)
+    fit = fit_cylinder(fd.points, "minimum-zone", seed=0, axis=tuple(d), max_tilt=10.0)
     return Measurement(float(fit.form_error), "width", "surface", len(fd.points),
                        {"axis_point": list(fit.axis_point), "axis_direction": list(fit.axis_direction)})
 
