@@ -1,7 +1,9 @@
 """Throughput of `gagekit machine compensate-nc` (issue 15: at least 200,000 lines/s on a
 1 M-line program): the Rust kernel (interpret, correct every point through the inverse error
 model, subdivide, write) against a straightforward Python implementation written here (regex
-words, the package's NumPy `compensate`, string writing), timed on the first 50,000 lines.
+words, the package's `compensate` - itself the Rust inverse kernel - and string writing, no
+subdivision), timed on the first 50,000 lines: the ratio is the cost of parsing and writing in
+Python. The first line also gives CPU-seconds, since the wall time depends on the machine's load.
 
     python benches/bench_nc.py [--lines 1000000] [--peer-lines 50000]
 
@@ -52,7 +54,7 @@ _WORD = re.compile(r"([A-Z])\s*([-+]?[0-9.]+)")
 
 
 def python_peer(machine, cal, text: bytes) -> bytes:
-    """Parse with regular expressions, correct with the package's NumPy `compensate`, write."""
+    """Parse with regular expressions, correct with the package's `compensate`, write."""
     names = machine.joint_names
     pos = dict.fromkeys(names, 0.0)
     blocks, points = [], []

@@ -230,14 +230,101 @@ def form_min_zone_flat(points: _F64) -> tuple[list[float], list[float], list[flo
 def form_plane_extent(points: _F64, point: Sequence[float], normal: Sequence[float]) -> _Ext: ...
 def form_line_extent(points: _F64, point: Sequence[float], direction: Sequence[float]) -> _Ext: ...
 def form_axis_extent(points: _F64, point: Sequence[float], direction: Sequence[float]) -> _Ext: ...
+class OutsideResult:
+    """A better optimum of the free search outside the search cone (radius or width, mm)."""
+    value: float
+    direction: tuple[float, float, float]
+    tilt: float
+
+class CylinderResult:
+    """A minimax cylinder (Sec. 6.3); angles rad, lengths mm."""
+    criterion: str
+    point: tuple[float, float, float]
+    direction: tuple[float, float, float]
+    theta: float
+    phi: float
+    radius: float
+    r_in: float
+    r_out: float
+    control_in: list[int]
+    control_out: list[int]
+    min_distance: float
+    max_distance: float
+    iterations: int
+    evaluations: int
+    reference: tuple[float, float, float]
+    tilt: float
+    outside: Optional[OutsideResult]
+    at_limit: bool
+    arc: float
+    ill_posed: bool
+    lsq_axis: Optional[tuple[tuple[float, float, float], tuple[float, float, float]]]
+
 def form_cylinder_fit(
     points: _F64, criterion: str, seed: int = 0, particles: int = 20, max_iterations: int = 300,
-    stall_iterations: int = 6, axis: Optional[Sequence[float]] = None, half_angle: Optional[float] = None,
+    stall_iterations: int = 6, axis: Optional[Sequence[float]] = None, max_tilt: float = ...,
     refine_starts: int = 8, hop_rounds: int = 3,
-) -> dict[str, Any]: ...
+) -> CylinderResult: ...
+
+class Line3Result:
+    """A minimum-zone line in space (straightness)."""
+    point: tuple[float, float, float]
+    direction: tuple[float, float, float]
+    min_distance: float
+    max_distance: float
+    form_error: float
+    control: list[int]
+    reference: tuple[float, float, float]
+    tilt: float
+    outside: Optional[OutsideResult]
+
+def form_line3_min_zone(
+    points: _F64, seed: int = 0, axis: Optional[Sequence[float]] = None, max_tilt: float = ...,
+) -> Line3Result: ...
+def form_criterion(name: str, allowed: Sequence[str] = ..., shape: str = "fit") -> str: ...
+def form_criteria() -> list[tuple[str, str, str]]: ...
+
+class Circle3Result:
+    """A circle in any pose, fitted in the least-squares plane."""
+    center: tuple[float, float, float]
+    normal: tuple[float, float, float]
+    radius: float
+    r_in: float
+    r_out: float
+    control_in: list[int]
+    control_out: list[int]
+    min_distance: float
+    max_distance: float
+    out_of_plane: float
+    arc: float
+
+def form_circle_in_plane(points: _F64, criterion: str) -> Circle3Result: ...
+
+class SphereResult:
+    """A Chebyshev sphere (MC, MI, MZ)."""
+    criterion: str
+    center: tuple[float, float, float]
+    r_in: float
+    r_out: float
+    control_in: list[int]
+    control_out: list[int]
+    min_distance: float
+    max_distance: float
+    iterations: int
+
+def form_sphere_fit(points: _F64, criterion: str) -> SphereResult: ...
 def form_circle_pso(
     points: _F64, criterion: str, seed: int = 0, particles: int = 20, max_iterations: int = 2000,
     stall_iterations: int = 100,
 ) -> tuple[tuple[float, float], float, float, list[int], list[int], int, int]: ...
 def form_cylinder_arc(points: _F64, point: Sequence[float], direction: Sequence[float]) -> float: ...
 def form_cone_lsq(points: _F64) -> tuple[list[float], list[float], float, float, _Ext]: ...
+
+# -------------------------------------------------------------------------------- gdt
+_V3 = tuple[float, float, float]
+
+def gdt_min_width_2d(points: _F64) -> tuple[float, tuple[float, float], float, float]: ...
+def gdt_slab(points: _F64, mode: str, axis: _V3, angle: float) -> tuple[_V3, float, float, float]: ...
+def gdt_datum_plane(points: _F64, outward: _V3, mode: str, axis: _V3, angle: float, fit: str) -> tuple[_V3, _V3, float, float]: ...
+def gdt_axis_along(points: _F64, direction: _V3, fit: str) -> tuple[_V3, _V3, float, float, float]: ...
+def gdt_min_zone_sphere(points: _F64) -> tuple[_V3, float, float]: ...

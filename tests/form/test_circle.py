@@ -133,7 +133,7 @@ def test_errors_are_gagekit_errors() -> None:
     with pytest.raises(ConfigError, match="unknown circle criterion"):
         fit_circle([[0, 0], [1, 0], [0, 1]], "best")
     with pytest.raises(InvalidInputError, match=r"\(n, 2\)"):
-        fit_circle(np.zeros((5, 3)), "mc")
+        fit_circle(np.zeros((5, 4)), "mc")  # (n, 3) is a circle in space since issue 13
 
 
 def test_mc_two_points_and_duplicates() -> None:

@@ -9,6 +9,7 @@ certificate consistent with the reported radii to 1e-9 mm.
 from __future__ import annotations
 
 import json
+import math
 import os
 import subprocess
 import sys
@@ -164,7 +165,11 @@ def test_pso_circles_agree_with_exact_kernels():
         (np.ones((9, 3)), {}, DegenerateGeometryError),
         (np.random.default_rng(0).normal(size=(9, 3)), {"particles": 0}, ConfigError),
         (np.random.default_rng(0).normal(size=(9, 3)), {"max_tilt": -1.0}, ConfigError),
-        (np.random.default_rng(0).normal(size=(9, 3)), {"search_axis": [0, 0, 1]}, ConfigError),
+        (np.random.default_rng(0).normal(size=(9, 3)), {"max_tilt": 90.5}, ConfigError),
+        (np.random.default_rng(0).normal(size=(9, 3)), {"max_tilt": float("nan")}, ConfigError),
+        (np.random.default_rng(0).normal(size=(9, 3)), {"axis": [0, 0, 0]}, ConfigError),
+        (np.random.default_rng(0).normal(size=(9, 3)), {"axis": [0, 1]}, ConfigError),
+        (np.random.default_rng(0).normal(size=(9, 3)), {"axis": [0, float("inf"), 1]}, ConfigError),
         (np.random.default_rng(0).normal(size=(9, 3)), {"seed": -1}, ConfigError),
     ],
 )
@@ -175,7 +180,7 @@ def test_bad_cylinder_input(pts, kwargs, err):
 
 def test_search_cone_around_given_axis():
     pts = load_set("set3")
-    r = gagekit.fit_cylinder(pts, "mcc", search_axis=[0, 0, 1], max_tilt=0.05)
+    r = gagekit.fit_cylinder(pts, "mcc", axis=[0, 0, 1], max_tilt=math.degrees(0.05))
     full = gagekit.fit_cylinder(pts, "mcc")
     assert abs(r.radius - full.radius) < 1e-9
 
@@ -197,7 +202,7 @@ def test_partial_cylinder_mic_is_flagged_ill_posed():
     t = rng.uniform(0, np.radians(60), 80)
     z = rng.uniform(0, 40, 80)
     pts = np.column_stack([15 * np.cos(t), 15 * np.sin(t), z]) + rng.normal(0, 0.001, (80, 3))
-    r = gagekit.fit_cylinder(pts, "mic", max_tilt=0.1)
+    r = gagekit.fit_cylinder(pts, "mic", max_tilt=math.degrees(0.1))
     assert r.ill_posed and r.arc_deg < 90 and "ill-posed" in r.warnings[0]
     full = gagekit.fit_cylinder(load_set("set3"), "mic")
     assert not full.ill_posed and full.arc_deg > 270 and full.to_dict()["warnings"] == []

@@ -17,6 +17,7 @@ import typer
 from .. import __version__
 from ..errors import GagekitError
 from . import batch, cloud, db, demo, form, gage, machine, machine_export, machine_observer, stats, studio
+from . import inspect as inspect_cmd
 
 app = typer.Typer(
     name="gagekit",
@@ -37,6 +38,7 @@ app.command("stats")(stats.stats)
 gage.app.command("batch")(batch.gage_batch)
 form.app.command("batch")(batch.form_batch)
 app.command("demo")(demo.demo)
+app.command("inspect")(inspect_cmd.inspect)
 app.command("studio")(studio.studio)
 
 

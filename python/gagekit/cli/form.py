@@ -33,13 +33,14 @@ def _read_xy(path: Path, units: Optional[str] = None) -> np.ndarray:
 
 @app.command("circle")
 def circle(
-    file: Path = typer.Argument(..., help="Points: any file read_points reads (NIST .ds too); 2 columns or planar 3-D."),
+    file: Path = typer.Argument(..., help="Points: any file read_points reads (NIST .ds too); 2-D, or 3-D in any pose."),
     criterion: _CircleCriterion = typer.Option(_CircleCriterion.lsq, "--criterion", "-c",
                                                help="lsq, mc (min circumscribed), mi (max inscribed), mz (min zone), or all."),
     units: Optional[str] = UNITS_OPTION,
     as_json: bool = JSON_OPTION,
 ) -> None:
-    """Fit a 2-D circle (Sec. 6.2): least squares, MC, MI or minimum zone (roundness)."""
+    """Fit a circle (Sec. 6.2): least squares, MC, MI or minimum zone (roundness); points in
+    space are fitted in their least-squares plane."""
     from ..form.circle import fit_circle
 
     pts = _read_xy(file, units)
@@ -48,9 +49,10 @@ def circle(
     result = fits[0] if len(fits) == 1 else {f.to_dict()["criterion"]: f for f in fits}
 
     def human(_: object) -> str:
-        rows = [[f.to_dict()["criterion"], f.center[0], f.center[1], f.radius, f.width,
+        xyz = ["x", "y", "z"][: len(fits[0].center)]
+        rows = [[f.to_dict()["criterion"], *f.center, f.radius, f.width,
                  " ".join(map(str, f.control_points))] for f in fits]
-        text = table(["criterion", "x", "y", "radius", "form error", "control points"], rows)
+        text = table(["criterion", *xyz, "radius", "form error", "control points"], rows)
         notes = [w for f in fits for w in f.warnings]
         return "\n".join([f"{file}: {fits[0].n_points} points", text, *[f"warning: {w}" for w in notes]])
 
@@ -75,7 +77,7 @@ def _fmt_vec(v: Any) -> str:
 def _human(r: Any) -> str:
     d = r.to_dict()
     rows = []
-    for key in ("radius", "inner_radius", "outer_radius", "form_error", "theta", "phi", "distance", "apex_angle"):
+    for key in ("radius", "inner_radius", "outer_radius", "form_error", "theta", "phi", "tilt_deg", "distance", "apex_angle"):
         if d.get(key) is not None:
             rows.append([key, f"{d[key]:.9f}"])
     for key in ("center", "normal", "point", "direction", "axis_point", "axis_direction"):
@@ -87,22 +89,46 @@ def _human(r: Any) -> str:
     rows.append(["min_distance", f"{cert['min_distance']:.9f}"])
     rows.append(["max_distance", f"{cert['max_distance']:.9f}"])
     head = f"{d['shape']} ({d['criterion']}), {d['n_points']} points"
-    return head + "\n" + table(["quantity", "value (mm, rad)"], rows)
+    notes = [f"warning: {w}" for w in d.get("warnings", ())]
+    return "\n".join([head, table(["quantity", "value (mm, rad)"], rows), *notes])
+
+
+def _axis(text: Optional[str]) -> Optional[tuple[float, ...]]:
+    """``--axis X,Y,Z`` as three numbers (the kernels check length and finiteness)."""
+    from ..errors import ConfigError
+
+    if text is None:
+        return None
+    parts = [p for p in text.replace(";", ",").replace(" ", ",").split(",") if p]
+    try:
+        vals = tuple(float(p) for p in parts)
+    except ValueError:
+        vals = ()
+    if len(vals) != 3:
+        raise ConfigError(f"--axis: expected three numbers X,Y,Z, got {text!r}")
+    return vals
+
+
+AXIS_OPTION = typer.Option(None, "--axis", help="Nominal axis X,Y,Z of cylinders and 3-D lines (default: the least-squares axis)")
+TILT_OPTION = typer.Option(10.0, "--max-tilt", help="Chebyshev fits search axes within DEG of the axis (0: fixed, 90: all)")
 
 
 @app.command("fit")
 def fit(
-    shape: str = typer.Argument(..., help="circle, line, plane, sphere, circle3d, cylinder or cone"),
+    shape: str = typer.Argument(..., help="circle (circle3d: alias), line, plane, sphere, cylinder or cone"),
     file: Path = typer.Argument(..., help="Points: any file read_points reads (XYZ/CSV/TXT, NIST .ds, PLY, .npy, ...)"),
     criterion: str = typer.Option("least-squares", "--criterion", "-c", help="Fit criterion"),
-    seed: int = seed_option(help="Seed of the particle swarm (cylinders)"),
+    seed: int = seed_option(help="Seed of the particle swarm (cylinders, 3-D lines)"),
+    axis: Optional[str] = AXIS_OPTION,
+    max_tilt: float = TILT_OPTION,
     units: Optional[str] = UNITS_OPTION,
     as_json: bool = JSON_OPTION,
 ) -> None:
     """Fit a feature to the points of FILE and report its form error and certificate."""
     from ..form.files import fit_file
 
-    emit(fit_file(shape, file, criterion, seed=seed, units=units), as_json, _human)
+    r = fit_file(shape, file, criterion, seed=seed, units=units, axis=_axis(axis), max_tilt=max_tilt)
+    emit(r, as_json, _human)
 
 
 @app.command("cylinder")
@@ -112,10 +138,13 @@ def cylinder(
         "least-squares", "--criterion", "-c", help="least-squares (lsq), mcc, mic or mzc"
     ),
     seed: int = seed_option(help="Seed of the particle swarm"),
+    axis: Optional[str] = AXIS_OPTION,
+    max_tilt: float = TILT_OPTION,
     units: Optional[str] = UNITS_OPTION,
     as_json: bool = JSON_OPTION,
 ) -> None:
     """Fit a cylinder (least squares, min circumscribed, max inscribed, minimum zone)."""
     from .. import form
 
-    emit(form.fit_cylinder(_load_points(file, units), criterion, seed=seed), as_json, _human)
+    r = form.fit_cylinder(_load_points(file, units), criterion, seed=seed, axis=_axis(axis), max_tilt=max_tilt)
+    emit(r, as_json, _human)

@@ -9,12 +9,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Optional
 
 import numpy as np
 
 from .. import _core
-from .._util import as_points
 from ..errors import ConfigError
 
 __all__ = ["CircleFit", "fit_circle", "CIRCLE_CRITERIA"]
@@ -43,10 +42,15 @@ class CircleFit:
     input indices of the points that fix the fit (for MZ ``control_in`` + ``control_out``).
     ``arc_deg`` is the arc the points cover seen from the centre; ``warnings`` explains
     when the result is ill-posed (MI of an arc below 90 degrees).
+
+    For points in space (any pose) ``center`` is 3-D, ``normal`` the unit normal of the
+    least-squares plane the circle was fitted in, ``r_in`` / ``r_out`` (the certificate)
+    are measured in that plane, and ``out_of_plane`` is the largest distance of a point
+    from it.
     """
 
     criterion: str
-    center: tuple[float, float]
+    center: tuple[float, ...]
     radius: float
     r_in: float
     r_out: float
@@ -59,6 +63,8 @@ class CircleFit:
     arc_deg: float = 360.0
     ill_posed: bool = False
     warnings: tuple[str, ...] = field(default_factory=tuple)
+    normal: Optional[tuple[float, float, float]] = None
+    out_of_plane: Optional[float] = None
 
     def to_dict(self) -> dict[str, Any]:
         d: dict[str, Any] = {
@@ -70,6 +76,9 @@ class CircleFit:
             "center": list(self.center),
             "radius": self.radius,
         }
+        if self.normal is not None:
+            d["normal"] = list(self.normal)
+            d["out_of_plane"] = self.out_of_plane
         if self.criterion == "mz":
             d["inner_radius"] = self.r_in
             d["outer_radius"] = self.r_out
@@ -92,12 +101,14 @@ def _criterion(criterion: str) -> str:
 
 
 def fit_circle(points: Any, criterion: str = "lsq", method: str = "exact", seed: int = 0, **options: Any) -> CircleFit:
-    """Fit a circle to (n, 2) points.
+    """Fit a circle to (n, 2) points, or to (n, 3) points in any pose.
 
     Parameters
     ----------
-    points : array_like, shape (n, 2)
-        Coordinates in mm.
+    points : array_like, shape (n, 2) or (n, 3)
+        Coordinates in mm. Points in space are fitted in their least-squares plane (the
+        NIST convention: plane, projection, fit; a set with an exactly constant
+        coordinate uses that coordinate plane exactly), with every criterion.
     criterion : {"lsq", "mc", "mi", "mz"} or the long names "least-squares",
         "min-circumscribed", "max-inscribed", "minimum-zone".
         - ``lsq``: geometric least squares (orthogonal distances), as CMM software does.
@@ -132,7 +143,11 @@ def fit_circle(points: Any, criterion: str = "lsq", method: str = "exact", seed:
         raise ConfigError(f"unknown circle fit method {method!r}; available: 'exact', 'pso'")
     if method == "exact" and options:
         raise ConfigError(f"unexpected options for method 'exact': {', '.join(sorted(options))}")
-    pts = as_points(points, dim=2)
+    pts = _circle_points(points)
+    if pts.shape[1] == 3:
+        if method != "exact":
+            raise ConfigError("method 'pso' fits 2-D points; fit points in space with method 'exact'")
+        return _fit_in_plane(pts, crit)
     n = int(pts.shape[0])
     control_in: tuple[int, ...] = ()
     control_out: tuple[int, ...] = ()
@@ -170,14 +185,46 @@ def fit_circle(points: Any, criterion: str = "lsq", method: str = "exact", seed:
     return _result(crit, method, pts, center, radius, r_in, r_out, control, control_in, control_out)
 
 
-def _result(crit, method, pts, center, radius, r_in, r_out, control, control_in, control_out) -> CircleFit:
-    gap = _core.form_circle_angular_gap(pts, (float(center[0]), float(center[1])))
-    arc = math.degrees(2.0 * math.pi - gap)
+def _circle_points(points: Any) -> np.ndarray:
+    from .fits import _points
+
+    return _points(points, (2, 3), "circle")
+
+
+def _fit_in_plane(pts: np.ndarray, crit: str) -> CircleFit:
+    """A circle in space: the 2-D fit in the least-squares plane, in Rust."""
+    r = _core.form_circle_in_plane(pts, crit)
+    arc = math.degrees(r.arc)
     if crit == "mi" and arc < 270.0:
-        # MI's own centre can sit anywhere inside a short arc: judge the arc about the
-        # least-squares centre instead
-        ref = _core.form_circle_lsq(pts)[0]
-        arc = math.degrees(2.0 * math.pi - _core.form_circle_angular_gap(pts, (float(ref[0]), float(ref[1]))))
+        # as in 2-D: MI's own centre can sit anywhere inside a short arc
+        arc = math.degrees(_core.form_circle_in_plane(pts, "lsq").arc)
+    if crit == "mz":
+        control_in, control_out = tuple(r.control_in), tuple(r.control_out)
+        control = control_in + tuple(i for i in control_out if i not in control_in)
+    else:
+        control_in = control_out = ()
+        control = tuple(r.control_out)
+    ill_posed, warnings = _arc_warnings(crit, arc)
+    return CircleFit(
+        criterion=crit,
+        center=tuple(float(v) for v in r.center),
+        radius=float(r.radius),
+        r_in=float(r.min_distance),
+        r_out=float(r.max_distance),
+        width=float(r.max_distance - r.min_distance),
+        control_points=tuple(int(i) for i in control),
+        n_points=int(pts.shape[0]),
+        control_in=tuple(int(i) for i in control_in),
+        control_out=tuple(int(i) for i in control_out),
+        arc_deg=float(arc),
+        ill_posed=ill_posed,
+        warnings=tuple(warnings),
+        normal=(float(r.normal[0]), float(r.normal[1]), float(r.normal[2])),
+        out_of_plane=float(r.out_of_plane),
+    )
+
+
+def _arc_warnings(crit: str, arc: float) -> tuple[bool, list[str]]:
     warnings: list[str] = []
     ill_posed = False
     if crit == "mi" and arc < MIN_ARC_DEG:
@@ -188,6 +235,18 @@ def _result(crit, method, pts, center, radius, r_in, r_out, control, control_in,
         )
     elif arc < MIN_ARC_DEG:
         warnings.append(f"the points cover only {arc:.1f} degrees of arc: centre and radius are poorly determined")
+    return ill_posed, warnings
+
+
+def _result(crit, method, pts, center, radius, r_in, r_out, control, control_in, control_out) -> CircleFit:
+    gap = _core.form_circle_angular_gap(pts, (float(center[0]), float(center[1])))
+    arc = math.degrees(2.0 * math.pi - gap)
+    if crit == "mi" and arc < 270.0:
+        # MI's own centre can sit anywhere inside a short arc: judge the arc about the
+        # least-squares centre instead
+        ref = _core.form_circle_lsq(pts)[0]
+        arc = math.degrees(2.0 * math.pi - _core.form_circle_angular_gap(pts, (float(ref[0]), float(ref[1]))))
+    ill_posed, warnings = _arc_warnings(crit, arc)
     return CircleFit(
         criterion=crit,
         center=(float(center[0]), float(center[1])),

@@ -19,8 +19,9 @@ import numpy as np
 from .. import _core
 from ..errors import ConfigError
 from .fits import Certificate, _fit_dict, _points, _vec, normalize_criterion
+from .search import DEFAULT_MAX_TILT, outside_warning, search_settings
 
-__all__ = ["CylinderFit", "fit_cylinder", "axis_angles"]
+__all__ = ["CylinderFit", "fit_cylinder", "axis_angles", "DEFAULT_MAX_TILT"]
 
 _ALLOWED = ("least-squares", "min-circumscribed", "max-inscribed", "minimum-zone")
 
@@ -66,6 +67,8 @@ class CylinderFit:
     arc_deg: float = 360.0
     ill_posed: bool = False
     warnings: tuple[str, ...] = ()
+    tilt_deg: Optional[float] = None
+    reference_axis: Optional[tuple[float, float, float]] = None
     shape: str = field(default="cylinder", init=False)
 
     def to_dict(self) -> dict[str, Any]:
@@ -84,13 +87,11 @@ class CylinderFit:
         if self.criterion != "least-squares":
             d["iterations"] = self.iterations
             d["evaluations"] = self.evaluations
+            d["tilt_deg"] = self.tilt_deg
         d["arc_deg"] = self.arc_deg
         d["ill_posed"] = self.ill_posed
         d["warnings"] = list(self.warnings)
         return d
-
-
-_CODES = {"min-circumscribed": "mcc", "max-inscribed": "mic", "minimum-zone": "mzc"}
 
 
 def fit_cylinder(
@@ -103,8 +104,8 @@ def fit_cylinder(
     stall_iterations: int = 6,
     refine_starts: int = 8,
     hop_rounds: int = 3,
-    search_axis: Optional[Any] = None,
-    max_tilt: Optional[float] = None,
+    axis: Optional[Any] = None,
+    max_tilt: float = DEFAULT_MAX_TILT,
 ) -> CylinderFit:
     """Fit a cylinder to (n, 3) points (mm).
 
@@ -132,12 +133,16 @@ def fit_cylinder(
         Rounds of basin hopping: 8 local searches restarted 1e-4 rad around the best axis,
         repeated while they improve it (minimum-zone landscapes have long narrow valleys
         with several local minima some 1e-5 rad apart). 0 disables.
-    search_axis, max_tilt
-        Restrict the search to directions within ``max_tilt`` rad of ``search_axis`` (of the
-        least-squares axis when ``search_axis`` is None). Default: the upper half sphere
-        theta in [0, pi/2], phi in [-pi, pi] as in Sec. 6.4. A maximum inscribed cylinder is
-        only meaningful near the part's axis (Eq. 6.11 bounds the axis location): for parts
-        that are not long compared to their diameter pass e.g. ``max_tilt=0.2``.
+    axis, max_tilt
+        The Chebyshev fits (MCC, MIC, MZC) search axis directions within ``max_tilt``
+        degrees (default 10) of a reference axis: the nominal ``axis`` (x, y, z) when
+        given, else the least-squares axis. ``max_tilt=0`` fixes the orientation;
+        ``max_tilt=90`` searches the whole upper half sphere (theta in [0, pi/2], phi in
+        [-pi, pi], Sec. 6.4). Over all orientations, the minimum circumscribed cylinder of
+        a short bore can lie across the bore, a size with no meaning for the feature. The
+        result reports ``tilt_deg``, the angle between the fitted and the reference axis;
+        when the free search finds a better optimum outside the cone, ``warnings`` gives
+        its value (a better one inside the cone replaces the result).
 
     Returns
     -------
@@ -151,6 +156,7 @@ def fit_cylinder(
     """
     crit = normalize_criterion(criterion, _ALLOWED, "cylinder")
     pts = _points(points, (3,), "cylinder")
+    nominal, tilt_rad = search_settings(axis, max_tilt, "cylinder")
     if crit == "least-squares":
         point, direction, radius, ext = _core.form_cylinder_lsq(pts)
         cert = Certificate(float(ext[0]), float(ext[1]))
@@ -164,36 +170,44 @@ def fit_cylinder(
             raise ConfigError(f"cylinder: {name} must be a positive integer, got {v}")
     if seed < 0:
         raise ConfigError(f"cylinder: seed must be a non-negative integer, got {seed}")
-    axis = None if search_axis is None else tuple(float(x) for x in np.asarray(search_axis, dtype=float).ravel())
-    if axis is not None and len(axis) != 3:
-        raise ConfigError("cylinder: search_axis must have 3 components")
-    if axis is not None and max_tilt is None:
-        raise ConfigError("cylinder: give max_tilt (rad) together with search_axis")
-    d = _core.form_cylinder_fit(
-        pts, _CODES[crit], int(seed), int(particles), int(iterations), int(stall_iterations),
-        axis, None if max_tilt is None else float(max_tilt), int(refine_starts), int(hop_rounds),
+    r = _core.form_cylinder_fit(
+        pts, crit, int(seed), int(particles), int(iterations), int(stall_iterations),
+        nominal, tilt_rad, int(refine_starts), int(hop_rounds),
     )
-    cert = Certificate(float(d["min_distance"]), float(d["max_distance"]))
-    code = _CODES[crit]
-    if code == "mcc":
-        radius, form_error, control = d["r_out"], cert.max_distance - cert.min_distance, d["control_out"]
+    cert = Certificate(float(r.min_distance), float(r.max_distance))
+    if crit == "min-circumscribed":
+        radius, form_error, control = r.r_out, cert.max_distance - cert.min_distance, r.control_out
         inner = outer = None
-    elif code == "mic":
-        radius, form_error, control = d["r_in"], cert.max_distance - cert.min_distance, d["control_in"]
+    elif crit == "max-inscribed":
+        radius, form_error, control = r.r_in, cert.max_distance - cert.min_distance, r.control_in
         inner = outer = None
     else:
-        radius, inner, outer = d["radius"], d["r_in"], d["r_out"]
+        radius, inner, outer = r.radius, r.r_in, r.r_out
         form_error = outer - inner
-        control = list(d["control_in"]) + [i for i in d["control_out"] if i not in d["control_in"]]
-    return _with_arc(pts, CylinderFit(
-        crit, len(pts), _vec(d["point"]), _vec(d["direction"]), float(d["theta"]), float(d["phi"]),
+        control = list(r.control_in) + [i for i in r.control_out if i not in r.control_in]
+    arc = math.degrees(r.arc)
+    warnings = _arc_warnings(crit, arc)
+    if r.at_limit:
+        warnings.append(
+            f"the axis lies on the boundary of the search cone (max_tilt = {float(max_tilt):g} degrees from the "
+            "reference axis): the points alone would tilt it further; give the nominal axis (axis=...) or check the data"
+        )
+    if r.outside is not None:
+        warnings.append(outside_warning(crit, r.outside, max_tilt))
+    return CylinderFit(
+        crit, len(pts), _vec(r.point), _vec(r.direction), float(r.theta), float(r.phi),
         float(radius), float(form_error), cert,
         inner_radius=None if inner is None else float(inner),
         outer_radius=None if outer is None else float(outer),
         control_points=tuple(int(i) for i in control),
-        iterations=int(d["iterations"]),
-        evaluations=int(d["evaluations"]),
-    ))
+        iterations=int(r.iterations),
+        evaluations=int(r.evaluations),
+        arc_deg=float(arc),
+        ill_posed=bool(r.ill_posed),
+        warnings=tuple(warnings),
+        tilt_deg=math.degrees(r.tilt),
+        reference_axis=_vec(r.reference),
+    )
 
 
 #: Below this arc (degrees) around the axis a maximum inscribed cylinder is ill-posed.
@@ -201,21 +215,19 @@ MIN_ARC_DEG = 90.0
 
 
 def _with_arc(pts: np.ndarray, r: CylinderFit) -> CylinderFit:
-    # judged about the least-squares axis for MIC (its own axis can sit anywhere inside a
-    # short arc), about the fitted axis otherwise -- as for circles
-    point, direction = r.axis_point, r.axis_direction
-    if r.criterion == "max-inscribed":
-        point, direction, _, _ = _core.form_cylinder_lsq(pts)
-    arc = math.degrees(_core.form_cylinder_arc(pts, point, direction))
+    """The least-squares cylinder with its arc coverage."""
+    arc = math.degrees(_core.form_cylinder_arc(pts, r.axis_point, r.axis_direction))
+    return replace(r, arc_deg=float(arc), warnings=tuple(_arc_warnings(r.criterion, arc)))
+
+
+def _arc_warnings(crit: str, arc: float) -> list[str]:
     warnings: list[str] = []
-    ill = False
     if arc < MIN_ARC_DEG:
-        if r.criterion == "max-inscribed":
-            ill = True
+        if crit == "max-inscribed":
             warnings.append(
                 f"the points cover only {arc:.1f} degrees around the axis (< {MIN_ARC_DEG:.0f}): the "
                 "maximum inscribed cylinder is ill-posed and its radius is not a meaningful size"
             )
         else:
             warnings.append(f"the points cover only {arc:.1f} degrees around the axis: axis and radius are poorly determined")
-    return replace(r, arc_deg=float(arc), ill_posed=ill, warnings=tuple(warnings))
+    return warnings

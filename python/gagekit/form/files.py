@@ -40,9 +40,10 @@ def text_columns(path: Union[str, Path]) -> int:
 
 
 def read_xy(path: Union[str, Path], units: Optional[str] = None) -> np.ndarray:
-    """(n, 2) points from any file ``read_points`` reads: 3-D points must lie in a plane
-    parallel to a coordinate plane (as NIST's 2-D sets do); the constant coordinate is
-    dropped. ASCII files of 2 columns are read as 2-D points."""
+    """Circle points from any file ``read_points`` reads: ASCII files of 2 columns as 2-D
+    points; 3-D points in a plane parallel to a coordinate plane (as NIST's 2-D sets) as
+    2-D points without the constant coordinate; any other 3-D points as (n, 3), fitted in
+    their least-squares plane (circles in any pose)."""
     from ..cloud import read_points
 
     try:
@@ -56,10 +57,7 @@ def read_xy(path: Union[str, Path], units: Optional[str] = None) -> np.ndarray:
             raise exc3 from None
     const = [k for k in range(3) if np.ptp(arr[:, k]) == 0.0]
     if not const:
-        raise InvalidInputError(
-            f"{path}: 3-D points do not lie in a plane parallel to a coordinate plane; "
-            "a 2-D circle fit needs planar points"
-        )
+        return arr
     return np.ascontiguousarray(np.delete(arr, const[-1], axis=1))
 
 
@@ -72,18 +70,21 @@ def load_points(path: Union[str, Path], units: Optional[str] = None) -> np.ndarr
 
 
 def normalize_shape(shape: str) -> str:
-    """The canonical shape name (``circle-3d`` -> ``circle3d``); ConfigError for an unknown one."""
+    """The canonical shape name (``circle3d`` is an alias of ``circle``: circles in any
+    pose); ConfigError for an unknown one."""
     name = shape.strip().lower().replace("-", "").replace("_", "")
-    if name == "circle3":
-        name = "circle3d"
+    if name in ("circle3", "circle3d"):
+        name = "circle"
     if name not in SHAPES:
         raise ConfigError(f"unknown shape {shape!r}; choose one of circle, {', '.join(SHAPES_3D)}")
     return name
 
 
 def fit_file(shape: str, path: Union[str, Path], criterion: str = "least-squares", seed: int = 0,
-             points: Optional[np.ndarray] = None, units: Optional[str] = None) -> Any:
-    """Fit ``shape`` to the points of ``path`` with ``criterion`` (seeded swarm for cylinders).
+             points: Optional[np.ndarray] = None, units: Optional[str] = None,
+             axis: Optional[Any] = None, max_tilt: float = 10.0) -> Any:
+    """Fit ``shape`` to the points of ``path`` with ``criterion`` (seeded swarm for cylinders
+    and 3-D lines, searched within ``max_tilt`` degrees of ``axis`` or the least-squares axis).
 
     ``points`` skips the reading (already read the way :func:`read_xy` / :func:`load_points` do);
     ``units`` overrides the unit of the file (see :func:`gagekit.read_points`).
@@ -91,17 +92,15 @@ def fit_file(shape: str, path: Union[str, Path], criterion: str = "least-squares
     from .. import form
 
     name = normalize_shape(shape)
-    if name == "circle":  # 2-D circles: the circle reader drops a constant coordinate
+    if name == "circle":  # the circle reader drops a constant coordinate; else any pose
         return form.fit_circle(read_xy(path, units) if points is None else points, criterion)
     pts = load_points(path, units) if points is None else points
     if name == "line":
-        return form.fit_line(pts, criterion)
+        return form.fit_line(pts, criterion, seed=seed, axis=axis, max_tilt=max_tilt)
     if name == "plane":
         return form.fit_plane(pts, criterion)
     if name == "sphere":
         return form.fit_sphere(pts, criterion)
-    if name == "circle3d":
-        return form.fit_circle_3d(pts, criterion)
     if name == "cylinder":
-        return form.fit_cylinder(pts, criterion, seed=seed)
+        return form.fit_cylinder(pts, criterion, seed=seed, axis=axis, max_tilt=max_tilt)
     return form.fit_cone(pts, criterion)

@@ -13,8 +13,9 @@ projection, least-squares circle in that plane).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Optional
 
 import numpy as np
 
@@ -116,12 +117,33 @@ class LineFit:
     form_error: float
     certificate: Certificate
     control_points: tuple[int, ...] = ()
+    tilt_deg: Optional[float] = None
+    warnings: tuple[str, ...] = ()
     shape: str = field(default="line", init=False)
 
     def to_dict(self) -> dict[str, Any]:
-        return _fit_dict(
+        d = _fit_dict(
             self, point=list(self.point), direction=list(self.direction), control_points=list(self.control_points)
         )
+        if self.tilt_deg is not None:
+            d["tilt_deg"] = self.tilt_deg
+            d["warnings"] = list(self.warnings)
+        return d
+
+
+@dataclass(frozen=True)
+class _Diameter:
+    """An enclosing cylinder's optimum outside the cone, as its straightness (diameter)."""
+
+    _outside: Any
+
+    @property
+    def value(self) -> float:
+        return 2.0 * float(self._outside.value)
+
+    @property
+    def tilt(self) -> float:
+        return float(self._outside.tilt)
 
 
 @dataclass(frozen=True)
@@ -145,7 +167,10 @@ class PlaneFit:
 
 @dataclass(frozen=True)
 class SphereFit:
-    """A fitted sphere (3-D) or circle (2-D). ``certificate``: distances to the centre."""
+    """A fitted sphere (3-D) or circle (2-D). ``certificate``: distances to the centre;
+    ``form_error`` = max - min (sphericity about this centre; the zone width for the
+    minimum zone). Chebyshev spheres also give ``inner_radius`` / ``outer_radius`` (the
+    zone, minimum zone only) and ``control_points``."""
 
     criterion: str
     n_points: int
@@ -154,9 +179,17 @@ class SphereFit:
     form_error: float
     certificate: Certificate
     shape: str = "sphere"
+    inner_radius: Optional[float] = None
+    outer_radius: Optional[float] = None
+    control_points: Optional[tuple[int, ...]] = None
 
     def to_dict(self) -> dict[str, Any]:
-        return _fit_dict(self, radius=self.radius, center=list(self.center))
+        if self.control_points is None:
+            return _fit_dict(self, radius=self.radius, center=list(self.center))
+        radii: dict[str, Any] = {"radius": self.radius}
+        if self.criterion == "minimum-zone":
+            radii.update(inner_radius=self.inner_radius, outer_radius=self.outer_radius)
+        return _fit_dict(self, **radii, center=list(self.center), control_points=list(self.control_points))
 
 
 @dataclass(frozen=True)
@@ -181,27 +214,39 @@ def _cert(ext: tuple[float, float]) -> Certificate:
     return Certificate(float(ext[0]), float(ext[1]))
 
 
-def fit_line(points: Any, criterion: str = "least-squares", seed: int = 0) -> LineFit:
+def fit_line(
+    points: Any,
+    criterion: str = "least-squares",
+    seed: int = 0,
+    *,
+    axis: Optional[Any] = None,
+    max_tilt: float = 10.0,
+) -> LineFit:
     """Line through (n, 2) or (n, 3) points.
 
     ``least-squares``: orthogonal distances; the line passes through the centroid along
     the principal axis. ``minimum-zone`` (straightness): in 2-D the two parallel lines of
     least separation (LP, then exact active-set solve); in 3-D the thinnest enclosing
-    cylinder (MCC of Sec. 6.3 searched near the least-squares direction with the seeded
-    PSO), whose diameter is the ``form_error``.
+    cylinder (MCC of Sec. 6.3, Eq. 6.13, with the seeded PSO), searched within
+    ``max_tilt`` degrees (default 10) of the nominal ``axis`` or, by default, of the
+    least-squares direction; its diameter is the ``form_error``. ``tilt_deg`` and
+    ``warnings`` as for :func:`fit_cylinder`. Exactly collinear points give 0.
     Raises :class:`DegenerateGeometryError` when all points coincide.
     """
+    from .search import outside_warning, search_settings
+
     crit = normalize_criterion(criterion, ("least-squares", "minimum-zone"), "line")
     pts = _points(points, (2, 3), "line")
     if crit == "minimum-zone" and pts.shape[1] == 3:
-        # straightness in space: the thinnest cylinder around the points (MCC, Eq. 6.13),
-        # searched within 0.2 rad of the least-squares direction; the zone is its diameter
-        _, ls_dir, _ = _core.form_line_lsq(pts)
-        d = _core.form_cylinder_fit(pts, "mcc", seed, 20, 300, 50, tuple(ls_dir), 0.2, 4)
-        cert = _cert(_core.form_line_extent(pts, list(d["point"]), list(d["direction"])))
+        # straightness in space: the thinnest cylinder around the points (MCC, Eq. 6.13);
+        # the zone is its diameter
+        nominal, tilt_rad = search_settings(axis, max_tilt, "line")
+        z = _core.form_line3_min_zone(pts, int(seed), nominal, tilt_rad)
+        cert = Certificate(float(z.min_distance), float(z.max_distance))
+        warnings = () if z.outside is None else (outside_warning("minimum-zone", _Diameter(z.outside), max_tilt),)
         return LineFit(
-            crit, len(pts), _vec(d["point"]), _vec(d["direction"]), 2.0 * cert.max_distance, cert,
-            tuple(int(i) for i in d["control_out"]),
+            crit, len(pts), _vec(z.point), _vec(z.direction), float(z.form_error), cert,
+            tuple(int(i) for i in z.control), tilt_deg=math.degrees(z.tilt), warnings=warnings,
         )
     if crit == "minimum-zone":
         point, normal, direction, width, up, lo, _ = _core.form_min_zone_flat(pts)
@@ -234,11 +279,33 @@ def fit_plane(points: Any, criterion: str = "least-squares") -> PlaneFit:
 
 
 def fit_sphere(points: Any, criterion: str = "least-squares") -> SphereFit:
-    """Least-squares sphere of (n, 3) points (or circle of (n, 2) points), minimising the
-    squared orthogonal distances |p - c| - r (Levenberg-Marquardt from an algebraic start).
-    Coplanar points raise :class:`DegenerateGeometryError`."""
-    crit = normalize_criterion(criterion, ("least-squares",), "sphere")
+    """Sphere of (n, 3) points (or least-squares circle of (n, 2) points).
+
+    ``least-squares``: minimises the squared orthogonal distances |p - c| - r
+    (Levenberg-Marquardt from an algebraic start). ``min-circumscribed``: the smallest
+    sphere containing every point (Welzl's algorithm in 3-D, exact; the 3-D form of
+    Eq. 6.1). ``max-inscribed``: the largest sphere with no point inside, within the
+    circumscribed one (the 3-D form of Eq. 6.2). ``minimum-zone`` (sphericity): two
+    concentric spheres of least radial separation enclosing the points (the 3-D form of
+    Eq. 6.5). MI and MZ: sequential linear programming from the least-squares and MC
+    centres to a point where the Chebyshev conditions hold. Coplanar points raise
+    :class:`DegenerateGeometryError` (except for the circumscribed sphere).
+    """
+    crit = normalize_criterion(criterion, ("least-squares", "min-circumscribed", "max-inscribed", "minimum-zone"), "sphere")
     pts = _points(points, (2, 3), "sphere")
+    if crit != "least-squares":
+        if pts.shape[1] != 3:
+            raise ConfigError(f"sphere: {crit} needs (n, 3) points; for 2-D points use fit_circle")
+        z = _core.form_sphere_fit(pts, crit)
+        radius = {"min-circumscribed": z.r_out, "max-inscribed": z.r_in}.get(crit, 0.5 * (z.r_in + z.r_out))
+        cert = Certificate(float(z.min_distance), float(z.max_distance))
+        control = z.control_out if crit != "minimum-zone" else list(z.control_in) + [i for i in z.control_out if i not in z.control_in]
+        return SphereFit(
+            crit, len(pts), _vec(z.center), float(radius), cert.max_distance - cert.min_distance, cert,
+            inner_radius=float(z.r_in) if crit == "minimum-zone" else None,
+            outer_radius=float(z.r_out) if crit == "minimum-zone" else None,
+            control_points=tuple(int(i) for i in control),
+        )
     center, radius, ext = _core.form_sphere_lsq(pts)
     cert = _cert(ext)
     shape = "sphere" if pts.shape[1] == 3 else "circle"

@@ -5,9 +5,16 @@
 //! - [`lsq`]: least-squares lines, planes, spheres, 3-D circles and cylinders.
 //! - [`cylinder`]: cylinders by the projection model and the parallel PSO.
 //! - [`minzone`]: minimum-zone planes (flatness) and 2-D lines (straightness) by LP.
+//! - [`sphere`]: minimum circumscribed (Welzl), maximum inscribed and minimum-zone spheres.
+//! - [`straightness`]: minimum-zone lines in space (the thinnest enclosing cylinder).
+//! - [`criterion`]: the fit criteria and their names (one table for the package).
 
 pub mod circle;
 pub mod circle_pso;
 pub mod cylinder;
+mod lp;
 pub mod lsq;
 pub mod minzone;
+pub mod sphere;
+pub mod straightness;
+pub mod criterion;

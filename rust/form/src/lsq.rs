@@ -80,6 +80,7 @@ fn check_points(pts: &[f64], dim: usize, min_n: usize, shape: &str) -> Result<us
         return Err(GkError::invalid(format!("{shape}: points must be 2-D or 3-D, got {dim}-D")));
     }
     check_finite(pts, dim, "points")?;
+    check_magnitude(pts, dim)?;
     let n = pts.len() / dim;
     if n < min_n {
         return Err(GkError::invalid(format!(
@@ -87,6 +88,22 @@ fn check_points(pts: &[f64], dim: usize, min_n: usize, shape: &str) -> Result<us
         )));
     }
     Ok(n)
+}
+
+/// Largest accepted coordinate magnitude (mm): squared distances and scatter sums of
+/// larger coordinates overflow (a plane fit at 1e155 mm would return NaN normals).
+pub const MAX_COORD: f64 = 1e150;
+
+/// An InvalidInput error naming the first point with a coordinate beyond [`MAX_COORD`].
+pub fn check_magnitude(pts: &[f64], dim: usize) -> Result<()> {
+    match pts.iter().position(|v| v.abs() > MAX_COORD) {
+        None => Ok(()),
+        Some(pos) => Err(GkError::invalid(format!(
+            "points: point {} has a coordinate beyond 1e150 mm ({:e}); check the units",
+            pos / dim,
+            pts[pos]
+        ))),
+    }
 }
 
 /// Centroid, computed in two passes (mean, then mean of the deviations).
@@ -433,23 +450,28 @@ pub fn sphere(pts: &[f64], dim: usize) -> Result<Sphere> {
 }
 
 /// Least-squares circle in 3-D (the NIST convention): least-squares plane,
-/// projection of the points onto it, least-squares circle in that plane.
+/// projection of the points onto it, least-squares circle in that plane
+/// ([`crate::circle::in_plane`]).
 pub fn circle3(pts: &[f64]) -> Result<Circle3> {
-    check_points(pts, 3, 3, "3-D circle")?;
+    let c = crate::circle::in_plane::fit(pts, crate::criterion::FitCriterion::LeastSquares)?;
+    Ok(Circle3 { center: c.center, normal: c.normal, radius: c.radius })
+}
+
+/// The plane of points in space for a planar feature: the centroid and the principal
+/// axes (largest spread first; the third is the least-squares normal). Errors for
+/// coincident or collinear points.
+pub fn plane_frame(pts: &[f64], what: &str) -> Result<(Vec<f64>, [Vector3<f64>; 3])> {
+    check_points(pts, 3, 3, what)?;
     let c = centroid(pts, 3);
     let q = centred3(pts, 3, &c);
     let (sv, axes) = principal_axes(&q);
     if sv[0] == 0.0 {
-        return Err(GkError::degenerate("3-D circle: all points coincide"));
+        return Err(GkError::degenerate(format!("{what}: all points coincide")));
     }
     if sv[1] <= DEGENERATE * sv[0] {
-        return Err(GkError::degenerate("3-D circle: the points are collinear; no circle passes near them"));
+        return Err(GkError::degenerate(format!("{what}: the points are collinear; no circle passes near them")));
     }
-    let (u, v, nrm) = (axes[0], axes[1], axes[2]);
-    let q2: Vec<[f64; 3]> = q.iter().map(|x| [vec3(x).dot(&u), vec3(x).dot(&v), 0.0]).collect();
-    let (off, r) = geometric_sphere(&q2, 2, "3-D circle")?;
-    let center = vec3(&c) + u * off[0] + v * off[1];
-    Ok(Circle3 { center: arr(&center), normal: arr(&nrm), radius: r })
+    Ok((c, axes))
 }
 
 // ---------------------------------------------------------------- cylinders

@@ -227,56 +227,276 @@ fn config_err(py: Python<'_>, msg: String) -> PyErr {
     gagekit_err(py, "ConfigError", msg)
 }
 
-/// Minimax cylinder by the projection model + PSO (Sec. 6.3). `criterion` is "mcc",
-/// "mic" or "mzc"; `half_angle` (rad) restricts the search to a cone around `axis`
-/// (or around the least-squares axis when `axis` is None); no `half_angle`: the
-/// half sphere. Returns a dict of the fit.
+/// A better optimum of the free search outside the search cone.
+#[pyclass(frozen, get_all, module = "gagekit._core")]
+pub struct OutsideResult {
+    /// Its radius (MCC, MIC) or zone width (MZC), mm.
+    pub value: f64,
+    pub direction: [f64; 3],
+    /// Tilt (rad) of its axis from the reference axis.
+    pub tilt: f64,
+}
+
+impl OutsideResult {
+    fn new(o: gagekit_form::cylinder::Outside) -> Self {
+        Self { value: o.value, direction: o.direction, tilt: o.tilt }
+    }
+}
+
+/// A minimax cylinder (Sec. 6.3): axis, radii, control points, certificate, search
+/// diagnostics (angles rad, lengths mm).
+#[pyclass(frozen, get_all, module = "gagekit._core")]
+pub struct CylinderResult {
+    pub criterion: String,
+    pub point: [f64; 3],
+    pub direction: [f64; 3],
+    pub theta: f64,
+    pub phi: f64,
+    pub radius: f64,
+    pub r_in: f64,
+    pub r_out: f64,
+    pub control_in: Vec<usize>,
+    pub control_out: Vec<usize>,
+    /// Certificate: min and max 3-D distance of the points to the axis.
+    pub min_distance: f64,
+    pub max_distance: f64,
+    pub iterations: usize,
+    pub evaluations: usize,
+    /// Reference axis (nominal or least squares) and the tilt (rad) from it.
+    pub reference: [f64; 3],
+    pub tilt: f64,
+    pub outside: Option<Py<OutsideResult>>,
+    /// The axis lies on the boundary of the search cone.
+    pub at_limit: bool,
+    /// Arc (rad) covered around the axis, ill-posed flag (MIC below 90 degrees).
+    pub arc: f64,
+    pub ill_posed: bool,
+    /// The least-squares axis (point, direction), if it exists.
+    pub lsq_axis: Option<([f64; 3], [f64; 3])>,
+}
+
+fn search_of(axis: Option<[f64; 3]>, max_tilt: f64) -> gagekit_form::cylinder::Search {
+    gagekit_form::cylinder::Search { axis, max_tilt }
+}
+
+/// Minimax cylinder by the projection model + PSO (Sec. 6.3). `criterion`: any name of
+/// the criterion table but least squares; the axis is searched within `max_tilt` (rad,
+/// [0, pi/2]) of `axis` (default: the least-squares axis).
 #[pyfunction]
-#[pyo3(signature = (points, criterion, seed=0, particles=20, max_iterations=300, stall_iterations=6, axis=None, half_angle=None, refine_starts=8, hop_rounds=3))]
+#[pyo3(signature = (points, criterion, seed=0, particles=20, max_iterations=300, stall_iterations=6, axis=None, max_tilt=gagekit_form::cylinder::DEFAULT_MAX_TILT, refine_starts=8, hop_rounds=3))]
 #[allow(clippy::too_many_arguments)]
-fn form_cylinder_fit<'py>(
-    py: Python<'py>,
-    points: PyReadonlyArray2<'py, f64>,
+fn form_cylinder_fit(
+    py: Python<'_>,
+    points: PyReadonlyArray2<'_, f64>,
     criterion: &str,
     seed: u64,
     particles: usize,
     max_iterations: usize,
     stall_iterations: usize,
     axis: Option<[f64; 3]>,
-    half_angle: Option<f64>,
+    max_tilt: f64,
     refine_starts: usize,
     hop_rounds: usize,
-) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
-    use gagekit_form::cylinder::{fit, Criterion, Options, Search};
+) -> PyResult<CylinderResult> {
+    use gagekit_form::criterion::FitCriterion as F;
+    use gagekit_form::cylinder::{fit, Criterion, Options};
     let pts = rows(py, &points, 3, "points")?;
-    let crit = match criterion {
-        "mcc" => Criterion::MinCircumscribed,
-        "mic" => Criterion::MaxInscribed,
-        "mzc" => Criterion::MinZone,
-        other => return Err(config_err(py, format!("cylinder: unknown criterion {other:?} (mcc, mic, mzc)"))),
+    let allowed = [F::MinCircumscribed, F::MaxInscribed, F::MinZone];
+    let crit = match F::parse_for(criterion, &allowed, "cylinder") {
+        Ok(F::MinCircumscribed) => Criterion::MinCircumscribed,
+        Ok(F::MaxInscribed) => Criterion::MaxInscribed,
+        Ok(_) => Criterion::MinZone,
+        Err(e) => return Err(config_err(py, e.message)),
     };
-    let search = match (axis, half_angle) {
-        (_, None) => Search::HalfSphere,
-        (Some(a), Some(h)) => Search::Cone { axis: a, half_angle: h },
-        (None, Some(h)) => Search::AroundLeastSquares { half_angle: h },
-    };
-    let opts = Options { seed, particles, max_iterations, stall_iterations, search, refine_starts, hop_rounds };
+    let opts = Options { seed, particles, max_iterations, stall_iterations, search: search_of(axis, max_tilt), refine_starts, hop_rounds };
     let r = run(py, || fit(pts, crit, &opts))?;
-    let d = pyo3::types::PyDict::new(py);
-    d.set_item("point", r.point)?;
-    d.set_item("direction", r.direction)?;
-    d.set_item("theta", r.theta)?;
-    d.set_item("phi", r.phi)?;
-    d.set_item("radius", r.radius)?;
-    d.set_item("r_in", r.r_in)?;
-    d.set_item("r_out", r.r_out)?;
-    d.set_item("control_in", r.control_in)?;
-    d.set_item("control_out", r.control_out)?;
-    d.set_item("min_distance", r.extent.min)?;
-    d.set_item("max_distance", r.extent.max)?;
-    d.set_item("iterations", r.iterations)?;
-    d.set_item("evaluations", r.evaluations)?;
-    Ok(d)
+    let name = match crit {
+        Criterion::MinCircumscribed => F::MinCircumscribed,
+        Criterion::MaxInscribed => F::MaxInscribed,
+        Criterion::MinZone => F::MinZone,
+    };
+    let outside = match r.outside {
+        Some(o) => Some(Py::new(py, OutsideResult::new(o))?),
+        None => None,
+    };
+    Ok(CylinderResult {
+        criterion: name.name().to_string(),
+        point: r.point,
+        direction: r.direction,
+        theta: r.theta,
+        phi: r.phi,
+        radius: r.radius,
+        r_in: r.r_in,
+        r_out: r.r_out,
+        control_in: r.control_in,
+        control_out: r.control_out,
+        min_distance: r.extent.min,
+        max_distance: r.extent.max,
+        iterations: r.iterations,
+        evaluations: r.evaluations,
+        reference: r.reference,
+        tilt: r.tilt,
+        outside,
+        at_limit: r.at_limit,
+        arc: r.arc,
+        ill_posed: r.ill_posed,
+        lsq_axis: r.lsq_axis,
+    })
+}
+
+/// A minimum-zone line in space (straightness): the thinnest enclosing cylinder.
+#[pyclass(frozen, get_all, module = "gagekit._core")]
+pub struct Line3Result {
+    pub point: [f64; 3],
+    pub direction: [f64; 3],
+    /// Certificate: min and max distance of the points to the line.
+    pub min_distance: f64,
+    pub max_distance: f64,
+    pub form_error: f64,
+    pub control: Vec<usize>,
+    pub reference: [f64; 3],
+    pub tilt: f64,
+    pub outside: Option<Py<OutsideResult>>,
+}
+
+/// Minimum-zone 3-D line, searched within `max_tilt` (rad) of `axis` (default: the
+/// least-squares direction).
+#[pyfunction]
+#[pyo3(signature = (points, seed=0, axis=None, max_tilt=gagekit_form::cylinder::DEFAULT_MAX_TILT))]
+fn form_line3_min_zone(
+    py: Python<'_>,
+    points: PyReadonlyArray2<'_, f64>,
+    seed: u64,
+    axis: Option<[f64; 3]>,
+    max_tilt: f64,
+) -> PyResult<Line3Result> {
+    use gagekit_form::cylinder::Options;
+    let pts = rows(py, &points, 3, "points")?;
+    let opts = Options { seed, stall_iterations: 50, refine_starts: 4, search: search_of(axis, max_tilt), ..Options::default() };
+    let z = run(py, || gagekit_form::straightness::line3(pts, &opts))?;
+    let outside = match z.outside.clone() {
+        Some(o) => Some(Py::new(py, OutsideResult::new(o))?),
+        None => None,
+    };
+    Ok(Line3Result {
+        point: z.point,
+        direction: z.direction,
+        min_distance: z.extent.min,
+        max_distance: z.extent.max,
+        form_error: z.form_error(),
+        control: z.control,
+        reference: z.reference,
+        tilt: z.tilt,
+        outside,
+    })
+}
+
+/// The canonical name of a fit criterion (any alias of the package's one table), or a
+/// ConfigError listing the names `allowed` (all when empty) for `shape`.
+#[pyfunction]
+#[pyo3(signature = (name, allowed=Vec::new(), shape="fit"))]
+fn form_criterion(py: Python<'_>, name: &str, allowed: Vec<String>, shape: &str) -> PyResult<String> {
+    use gagekit_form::criterion::FitCriterion as F;
+    let allowed: Vec<F> = if allowed.is_empty() {
+        F::ALL.to_vec()
+    } else {
+        allowed.iter().map(|a| a.parse::<F>()).collect::<Result<_, _>>().map_err(|e| config_err(py, e.message))?
+    };
+    F::parse_for(name, &allowed, shape).map(|c| c.name().to_string()).map_err(|e| config_err(py, e.message))
+}
+
+/// The criterion table: (alias, canonical name, circle code) for every accepted spelling.
+#[pyfunction]
+fn form_criteria() -> Vec<(&'static str, &'static str, &'static str)> {
+    gagekit_form::criterion::ALIASES.iter().map(|(k, c)| (*k, c.name(), c.code())).collect()
+}
+
+/// A circle in space (any pose): the 2-D fit of a criterion in the least-squares plane.
+#[pyclass(frozen, get_all, module = "gagekit._core")]
+pub struct Circle3Result {
+    pub center: [f64; 3],
+    pub normal: [f64; 3],
+    pub radius: f64,
+    pub r_in: f64,
+    pub r_out: f64,
+    pub control_in: Vec<usize>,
+    pub control_out: Vec<usize>,
+    /// Certificate: min and max in-plane distance of the points to the centre.
+    pub min_distance: f64,
+    pub max_distance: f64,
+    /// Largest distance of a point from the circle's plane.
+    pub out_of_plane: f64,
+    /// Arc (rad) covered seen from the centre.
+    pub arc: f64,
+}
+
+/// Circle of (n, 3) points in any pose: least-squares plane, projection, 2-D fit of
+/// `criterion` (any name of the criterion table).
+#[pyfunction]
+fn form_circle_in_plane(py: Python<'_>, points: PyReadonlyArray2<'_, f64>, criterion: &str) -> PyResult<Circle3Result> {
+    use gagekit_form::criterion::FitCriterion as F;
+    let pts = rows(py, &points, 3, "points")?;
+    let crit = F::parse_for(criterion, &F::ALL, "circle").map_err(|e| config_err(py, e.message))?;
+    let c = run(py, || gagekit_form::circle::in_plane::fit(pts, crit))?;
+    Ok(Circle3Result {
+        center: c.center,
+        normal: c.normal,
+        radius: c.radius,
+        r_in: c.zone.r_in,
+        r_out: c.zone.r_out,
+        control_in: c.zone.control_in,
+        control_out: c.zone.control_out,
+        min_distance: c.extent.min,
+        max_distance: c.extent.max,
+        out_of_plane: c.out_of_plane,
+        arc: c.arc,
+    })
+}
+
+/// A Chebyshev sphere: centre, radii, control points and certificate.
+#[pyclass(frozen, get_all, module = "gagekit._core")]
+pub struct SphereResult {
+    pub criterion: String,
+    pub center: [f64; 3],
+    pub r_in: f64,
+    pub r_out: f64,
+    pub control_in: Vec<usize>,
+    pub control_out: Vec<usize>,
+    /// Certificate: min and max distance of the points to the centre.
+    pub min_distance: f64,
+    pub max_distance: f64,
+    /// Linear programs of the MI / MZ searches (0 for MC).
+    pub iterations: usize,
+}
+
+/// Minimum circumscribed, maximum inscribed or minimum-zone sphere of (n, 3) points.
+#[pyfunction]
+fn form_sphere_fit(py: Python<'_>, points: PyReadonlyArray2<'_, f64>, criterion: &str) -> PyResult<SphereResult> {
+    use gagekit_form::criterion::FitCriterion as F;
+    use gagekit_form::sphere;
+    let pts = rows(py, &points, 3, "points")?;
+    let allowed = [F::MinCircumscribed, F::MaxInscribed, F::MinZone];
+    let crit = F::parse_for(criterion, &allowed, "sphere").map_err(|e| config_err(py, e.message))?;
+    let (z, e) = run(py, || {
+        let z = match crit {
+            F::MinCircumscribed => sphere::min_circumscribed(pts),
+            F::MaxInscribed => sphere::max_inscribed(pts),
+            _ => sphere::min_zone(pts),
+        }?;
+        let e = lsq::center_extent(pts, 3, &z.center);
+        Ok((z, e))
+    })?;
+    Ok(SphereResult {
+        criterion: crit.name().to_string(),
+        center: z.center,
+        r_in: z.r_in,
+        r_out: z.r_out,
+        control_in: z.control_in,
+        control_out: z.control_out,
+        min_distance: e.min,
+        max_distance: e.max,
+        iterations: z.iterations,
+    })
 }
 
 /// 2-D circle by the PSO over the centre (Eqs. 6.1, 6.4, 6.5; cross-check of the
@@ -330,6 +550,16 @@ fn register_3d(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(form_cone_lsq, m)?)?;
     m.add_function(wrap_pyfunction!(form_cylinder_arc, m)?)?;
     m.add_function(wrap_pyfunction!(form_cylinder_fit, m)?)?;
+    m.add_function(wrap_pyfunction!(form_line3_min_zone, m)?)?;
+    m.add_function(wrap_pyfunction!(form_criterion, m)?)?;
+    m.add_function(wrap_pyfunction!(form_criteria, m)?)?;
+    m.add_class::<CylinderResult>()?;
+    m.add_class::<OutsideResult>()?;
+    m.add_class::<Line3Result>()?;
+    m.add_function(wrap_pyfunction!(form_circle_in_plane, m)?)?;
+    m.add_function(wrap_pyfunction!(form_sphere_fit, m)?)?;
+    m.add_class::<Circle3Result>()?;
+    m.add_class::<SphereResult>()?;
     m.add_function(wrap_pyfunction!(form_circle_pso, m)?)?;
     m.add_function(wrap_pyfunction!(form_plane_extent, m)?)?;
     m.add_function(wrap_pyfunction!(form_line_extent, m)?)?;

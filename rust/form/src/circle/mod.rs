@@ -7,6 +7,7 @@
 //! All fits work on data translated to the middle of its bounding box, so a part
 //! 10^6 mm away from the origin is fitted as accurately as one at the origin.
 
+pub mod in_plane;
 mod lsq;
 mod mc;
 mod mi;
@@ -151,7 +152,7 @@ pub(crate) fn dist(a: [f64; 2], b: [f64; 2]) -> f64 {
 }
 
 /// Largest accepted coordinate magnitude (mm): squares of distances stay finite.
-pub(crate) const MAX_COORD: f64 = 1e150;
+pub(crate) use crate::lsq::MAX_COORD;
 
 /// Centre of the circle through three points, or `None` if they are collinear.
 /// Computed relative to `a` for accuracy.

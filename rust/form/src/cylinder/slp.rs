@@ -19,7 +19,7 @@
 //! steps at its edge and shrinks after poor ones. At a vertex solution (as many
 //! active points as unknowns) the steps converge quadratically.
 
-use super::lp;
+use crate::lp;
 use super::Criterion;
 use crate::lsq::orthonormal_basis;
 use nalgebra::Vector3;

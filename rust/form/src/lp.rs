@@ -1,4 +1,4 @@
-//! A small dense linear program for the local cylinder search: few variables (at
+//! A small dense linear program for the local minimax searches (cylinders, spheres): few variables (at
 //! most six), many inequality rows.
 //!
 //! `min c^T z` subject to `A z <= b` with `b >= 0` (so `z = 0` is feasible), solved
@@ -16,7 +16,7 @@ const MAX_PIVOTS: usize = 2000;
 /// Minimise `c^T z` subject to `a z <= b` (`a` row-major with `c.len()` columns,
 /// every `b` non-negative). `None` if the problem is unbounded or the pivoting
 /// did not finish.
-pub(super) fn minimize(a: &[f64], b: &[f64], c: &[f64]) -> Option<Vec<f64>> {
+pub(crate) fn minimize(a: &[f64], b: &[f64], c: &[f64]) -> Option<Vec<f64>> {
     let k = c.len();
     let m = b.len();
     debug_assert_eq!(a.len(), m * k);
