@@ -30,3 +30,8 @@ def machine():
 @pytest.fixture(scope="session")
 def structure(machine):
     return machine.structure()
+
+
+# real servers (PostgreSQL, Dask LocalCluster) for the store and batch tests: tests/servers.py
+from servers import dask_cluster, postgres, postgres_url  # noqa: E402,F401
+from castings import casting_set, scans_copy  # noqa: E402,F401

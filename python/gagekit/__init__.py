@@ -13,7 +13,9 @@ from .design import *  # noqa: F401,F403
 from .form import *  # noqa: F401,F403
 from .gage import *  # noqa: F401,F403
 from .machine import *  # noqa: F401,F403
+from .inspect import InspectionResult, PartSpec, inspect, load_part_spec  # noqa: F401
 from .errors import (
+    ClusterError,
     ConfigError,
     DegenerateGeometryError,
     FileAccessError,
@@ -23,6 +25,8 @@ from .errors import (
     InternalError,
     InvalidInputError,
     NumericalError,
+    SchemaVersionError,
+    StoreError,
 )
 
 try:
@@ -37,6 +41,10 @@ __all__ = [
     *form.__all__,
     *gage.__all__,
     *machine.__all__,
+    "inspect",
+    "load_part_spec",
+    "PartSpec",
+    "InspectionResult",
     "GagekitError",
     "InvalidInputError",
     "FileFormatError",
@@ -46,4 +54,7 @@ __all__ = [
     "ConfigError",
     "NumericalError",
     "InternalError",
+    "StoreError",
+    "SchemaVersionError",
+    "ClusterError",
 ]

@@ -181,6 +181,34 @@ def cylinders_step(ctx) -> tuple[dict, str]:
     return to_jsonable(data), table(headers, rows)
 
 
+def inspection_step(ctx) -> tuple[dict, str]:
+    """GD&T inspection (ISO 1101 / ISO 5459) of the bundled bracket: 20 callouts with
+    known deviations, each measured value next to the one that follows from the
+    construction (make_bracket.py)."""
+    import importlib.util
+
+    from .cloud import read_points
+    from .demo import data_path
+    from .inspect import inspect, load_part_spec
+    from .report.inspect import add_inspection, callout_rows
+
+    gen_spec = importlib.util.spec_from_file_location("make_bracket", data_path("make_bracket.py"))
+    gen = importlib.util.module_from_spec(gen_spec)
+    gen_spec.loader.exec_module(gen)
+    res = inspect(read_points(data_path("bracket.ply")), load_part_spec(data_path("bracket.toml")))
+    add_inspection(ctx.report, res, "Inspection of the bracket")
+    rows, worst = [], 0.0
+    for r, t in zip(callout_rows(res), res.tolerances):
+        key = f"{t.characteristic} of {t.feature}" + (" to " + "|".join(t.datums) if t.feature == "C" else "")
+        want = gen.EXPECTED[key]
+        worst = max(worst, abs(t.measured - want))
+        rows.append([r[0], r[1], r[2], r[3], f"{t.tolerance:.4f}", f"{t.measured:.6f}", f"{want:.6f}", r[8]])
+    ctx.report.text(f"Largest difference between a measured value and its analytic value: {worst:.1e} mm.")
+    data = {**res.to_dict(), "expected": gen.EXPECTED, "max_abs_difference_from_expected": worst}
+    text = table(["#", "feature", "characteristic", "datums", "tolerance", "measured", "expected", "result"], rows)
+    return to_jsonable(data), text + f"\n{res.status}; largest |measured - expected| = {worst:.1e} mm"
+
+
 STEPS = [
     ("cloud", "Point cloud: regions and convex-hull filter (Sec. 5.4.1)", cloud_step),
     ("machine", "Machine calibration (Ch. 3)", machine_step),
@@ -188,4 +216,5 @@ STEPS = [
     ("tracking", "Thermal error tracking (Sec. 4.3.3)", tracking_step),
     ("castings", "Virtual gages on two castings (Ch. 5)", castings_step),
     ("cylinders", "Form of cylinders (Ch. 6)", cylinders_step),
+    ("inspection", "GD&T inspection of a bracket (ISO 1101, ISO 5459)", inspection_step),
 ]

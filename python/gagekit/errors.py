@@ -52,6 +52,20 @@ class InternalError(GagekitError, RuntimeError):
     """A bug inside gagekit (a caught panic of a Rust kernel). Please report it."""
 
 
+class StoreError(GagekitError):
+    """The results database cannot be reached, opened or written (the message names its URL,
+    password hidden)."""
+
+
+class SchemaVersionError(StoreError):
+    """The results database has a schema this gagekit cannot use: newer than it knows
+    (upgrade gagekit) or older (run ``gagekit db upgrade URL``)."""
+
+
+class ClusterError(GagekitError):
+    """The Dask scheduler cannot be reached, or the cluster cannot run the batch."""
+
+
 __all__ = [
     "GagekitError",
     "InvalidInputError",
@@ -62,4 +76,7 @@ __all__ = [
     "ConfigError",
     "NumericalError",
     "InternalError",
+    "StoreError",
+    "SchemaVersionError",
+    "ClusterError",
 ]

@@ -64,9 +64,10 @@ def test_history_store(machine, cycles_csv, tmp_path):
     h.close()
     s = read_history(tmp_path / "h.sqlite")
     assert s["machine"] == machine.name and [run["run"] for run in s["runs"]] == [1, 2]
-    con = sqlite3.connect(tmp_path / "h.sqlite")
-    assert con.execute("SELECT COUNT(*) FROM observations").fetchone()[0] == 2 * 6 * 60
-    assert con.execute("SELECT COUNT(*) FROM groups").fetchone()[0] == 2 * 6 * 32
+    con = sqlite3.connect(tmp_path / "h.sqlite")  # the results database's tables (gagekit.store.models)
+    assert con.execute("SELECT COUNT(*) FROM cycle_observations").fetchone()[0] == 2 * 6 * 60
+    assert con.execute("SELECT COUNT(*) FROM group_values").fetchone()[0] == 2 * 6 * 32
+    assert con.execute("SELECT COUNT(*) FROM calibrations").fetchone()[0] == 2
     con.close()
     other = parse_machine(EXAMPLE.read_text().replace('name = "dissertation-5axis-BXZYW"', 'name = "other"'))
     with pytest.raises(ConfigError, match="belongs to machine"):

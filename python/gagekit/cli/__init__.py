@@ -16,7 +16,8 @@ import typer
 
 from .. import __version__
 from ..errors import GagekitError
-from . import cloud, demo, form, gage, machine, machine_export, machine_observer, studio
+from . import batch, cloud, db, demo, form, gage, machine, machine_export, machine_observer, stats, studio
+from . import inspect as inspect_cmd
 
 app = typer.Typer(
     name="gagekit",
@@ -32,7 +33,12 @@ app.add_typer(cloud.app, name="cloud")
 app.add_typer(form.app, name="form")
 app.add_typer(gage.app, name="gage")
 app.add_typer(machine.app, name="machine")
+app.add_typer(db.app, name="db")
+app.command("stats")(stats.stats)
+gage.app.command("batch")(batch.gage_batch)
+form.app.command("batch")(batch.form_batch)
 app.command("demo")(demo.demo)
+app.command("inspect")(inspect_cmd.inspect)
 app.command("studio")(studio.studio)
 
 

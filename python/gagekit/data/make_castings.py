@@ -146,10 +146,19 @@ def _sample_face(rng, origin, u, v, normal, holes, density, noise, form: bool):
 
 
 def make_casting(name: str = "casting_ok", density: float = 1.5, noise: float = 0.03,
-                 seed: Optional[int] = None) -> tuple[np.ndarray, dict]:
+                 seed: Optional[int] = None, shift: Optional[tuple] = None,
+                 tilt: Optional[float] = None) -> tuple[np.ndarray, dict]:
     """Simulate the scan of a case of :data:`CASES`; returns (points in the scanner
-    frame, the gage-file document as a dict). ``density`` in points per mm^2."""
-    case = CASES[name]
+    frame, the gage-file document as a dict). ``density`` in points per mm^2.
+
+    ``seed``, ``shift`` (x, y mm) and ``tilt`` (rad about y) override the case's: another
+    casting of the same pattern sitting differently on its spacers, seen by the same
+    scanner over the same fixture (so the case's gage file applies to it)."""
+    case = dict(CASES[name])
+    if shift is not None:
+        case["shift"] = tuple(shift)
+    if tilt is not None:
+        case["tilt"] = float(tilt)
     rng = np.random.default_rng(case["seed"] if seed is None else seed)
     beta = case["tilt"]
     Rp = _rot((0.0, beta, 0.0))

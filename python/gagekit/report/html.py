@@ -52,6 +52,7 @@ class Report:
         self.subtitle = subtitle
         self.sections: list[_Section] = []
         self._figures: list[tuple[str, bytes]] = []
+        self._scripts: dict[str, str] = {}
 
     def section(self, title: str) -> "Report":
         anchor = _slug(title)
@@ -97,15 +98,27 @@ class Report:
         )
         return self
 
+    def raw(self, markup: str) -> "Report":
+        """Append trusted HTML made by a report module (tables with classes, plot divs)."""
+        self._current().parts.append(markup)
+        return self
+
+    def script(self, name: str, source: str) -> "Report":
+        """Embed a JavaScript library once per page (in the head), e.g. plotly.js: the
+        page stays self-contained and works offline."""
+        self._scripts.setdefault(name, source)
+        return self
+
     def html(self) -> str:
         nav = "".join(f'<li><a href="#{s.anchor}">{html.escape(s.title)}</a></li>' for s in self.sections)
         body = "".join(
             f'<section id="{s.anchor}"><h2>{html.escape(s.title)}</h2>{"".join(s.parts)}</section>' for s in self.sections
         )
         sub = f"<p>{html.escape(self.subtitle)}</p>" if self.subtitle else ""
+        scripts = "".join(f'<script data-library="{html.escape(k)}">{v}</script>' for k, v in self._scripts.items())
         return (
             "<!DOCTYPE html><html lang=\"en\"><head><meta charset=\"utf-8\">"
-            f"<title>{html.escape(self.title)}</title><style>{_CSS}</style></head><body>"
+            f"<title>{html.escape(self.title)}</title><style>{_CSS}</style>{scripts}</head><body>"
             f"<h1>{html.escape(self.title)}</h1>{sub}<nav><ol>{nav}</ol></nav>{body}</body></html>"
         )
 

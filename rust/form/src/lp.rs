@@ -69,6 +69,19 @@ pub(crate) fn minimize(a: &[f64], b: &[f64], c: &[f64]) -> Option<Vec<f64>> {
     Some((0..k).map(|r| -sign[r] * d[m + r]).collect())
 }
 
+/// Trust-region radius of the SLP searches after a step of infinity norm `step` whose
+/// true decrease was `ratio` times the LP's prediction: shrink after poor steps, grow
+/// after good ones at the box edge (up to `delta_max`).
+pub(crate) fn next_radius(delta: f64, step: f64, ratio: f64, delta_max: f64) -> f64 {
+    if ratio < 0.25 {
+        0.25 * step.min(delta)
+    } else if ratio > 0.75 && step > 0.99 * delta {
+        (2.0 * delta).min(delta_max)
+    } else {
+        delta
+    }
+}
+
 /// Simplex iterations on the tableau until no dual column (index < m) has a
 /// negative reduced cost.
 fn run(t: &mut [f64], d: &mut [f64], basis: &mut [usize], k: usize, w: usize, m: usize) -> Option<()> {

@@ -10,6 +10,7 @@ mod design;
 mod errors;
 mod form;
 mod gage;
+mod gdt;
 mod geometry;
 mod kinematics;
 mod nc;
@@ -42,6 +43,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     kinematics::register(m)?;
     nc::register(m)?;
     gage::register(m)?;
+    gdt::register(m)?;
     design::register(m)?;
     testing(m.py(), m)
 }

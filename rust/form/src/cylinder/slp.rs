@@ -167,11 +167,7 @@ pub(super) fn descend(
             f = f_trial;
         }
         let step = z[..4].iter().fold(0.0f64, |m, z| m.max(z.abs()));
-        if ratio < 0.25 {
-            delta = 0.25 * step.min(delta);
-        } else if ratio > 0.75 && step > 0.99 * delta {
-            delta = (2.0 * delta).min(delta_max);
-        }
+        delta = lp::next_radius(delta, step, ratio, delta_max);
         if delta < delta_min {
             break;
         }

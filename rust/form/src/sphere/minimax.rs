@@ -116,11 +116,7 @@ impl Problem {
                 f = ft;
             }
             let step = z[..3].iter().fold(0.0f64, |m, v| m.max(v.abs()));
-            if ratio < 0.25 {
-                delta = 0.25 * step.min(delta);
-            } else if ratio > 0.75 && step > 0.99 * delta {
-                delta = (2.0 * delta).min(delta_max);
-            }
+            delta = lp::next_radius(delta, step, ratio, delta_max);
             if delta < delta_min {
                 break;
             }

@@ -1,0 +1,152 @@
+"""Where the scans run: local worker processes, or a Dask distributed cluster.
+
+Both offer the same three calls to the batch runner: ``submit`` one scan, ``wait`` for the
+first completions, and ``outcome`` of a finished one, which raises :class:`WorkerLost`
+when the worker died or the cluster lost the task (the runner submits it again; a scan's
+own errors never raise, see :func:`gagekit.batch.tasks.execute`).
+
+* :class:`LocalPool` - ``concurrent.futures.ProcessPoolExecutor`` with spawned processes;
+  each worker caps its kernel threads at cores / workers. A worker that dies breaks the
+  whole pool (a property of the standard library), so the pool is started again and the
+  unfinished scans resubmitted.
+* :class:`DaskCluster` - ``dask.distributed.Client`` on ``tcp://host:8786``; the scheduler
+  reschedules the tasks of a worker that dies (``distributed.scheduler.allowed-failures``)
+  and a task that failed for other reasons is retried once. Workers must see the scan
+  files at the same paths (a shared file system) and have gagekit installed.
+"""
+
+from __future__ import annotations
+
+import concurrent.futures as cf
+import multiprocessing
+import os
+from typing import Any, Iterable, Optional
+
+from ..errors import ClusterError, ConfigError, InvalidInputError
+from .tasks import execute, limit_threads, warm_up
+
+__all__ = ["WorkerLost", "LocalPool", "DaskCluster", "default_workers"]
+
+
+class WorkerLost(Exception):
+    """The worker running a scan died or the cluster lost the task (not the scan's fault)."""
+
+
+def default_workers() -> int:
+    """One worker per core this process may use."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # pragma: no cover - not Linux
+        return max(1, os.cpu_count() or 1)
+
+
+class LocalPool:
+    """``workers`` spawned processes on this machine."""
+
+    def __init__(self, workers: Optional[int] = None):
+        n = default_workers() if workers is None else int(workers)
+        if n < 1:
+            raise InvalidInputError(f"--workers must be at least 1, got {n}")
+        self.workers = n
+        self.threads = max(1, default_workers() // n)
+        self.description = f"{n} local worker process{'es' if n != 1 else ''}"
+        self._pool = self._start()
+        self._broken = False
+
+    def _start(self) -> cf.ProcessPoolExecutor:
+        return cf.ProcessPoolExecutor(self.workers, mp_context=multiprocessing.get_context("spawn"),
+                                      initializer=limit_threads, initargs=(self.threads,))
+
+    def warm(self) -> None:
+        """Start every worker now (the benchmark times batches without the start-up)."""
+        list(self._pool.map(warm_up, [0.2] * self.workers))
+
+    def submit(self, args: tuple, key: str) -> cf.Future:
+        try:
+            return self._pool.submit(execute, *args)
+        except cf.process.BrokenProcessPool:
+            self._broken = True
+            self.recover()
+            return self._pool.submit(execute, *args)
+
+    def wait(self, futures: Iterable[cf.Future], timeout: Optional[float]) -> set:
+        done, _ = cf.wait(list(futures), timeout=timeout, return_when=cf.FIRST_COMPLETED)
+        return done
+
+    def outcome(self, fut: cf.Future) -> Any:
+        try:
+            return fut.result()
+        except (cf.process.BrokenProcessPool, cf.CancelledError) as exc:
+            self._broken = True
+            raise WorkerLost(f"a worker process died ({type(exc).__name__})") from None
+        except Exception as exc:  # pickling of the outcome failed, or similar: not the scan's data
+            raise WorkerLost(f"{type(exc).__name__}: {exc}") from None
+
+    def recover(self) -> None:
+        """Start a new pool after a worker died (the old one is broken for good)."""
+        if self._broken:
+            self._pool.shutdown(wait=False, cancel_futures=True)
+            self._pool = self._start()
+            self._broken = False
+
+    def close(self) -> None:
+        self._pool.shutdown(wait=True, cancel_futures=True)
+
+
+class DaskCluster:
+    """A client of the Dask scheduler at ``address`` (``tcp://host:8786``)."""
+
+    def __init__(self, address: str, timeout: Optional[float] = None, wait_for_workers: float = 30.0):
+        try:
+            import dask.config
+            from dask.utils import parse_timedelta
+            from distributed import Client
+        except ImportError:
+            raise ConfigError("--scheduler needs dask.distributed: pip install 'gagekit[dask]'") from None
+        self.address = address
+        if timeout is None:  # Dask's own setting (DASK_DISTRIBUTED__COMM__TIMEOUTS__CONNECT), 30 s by default
+            timeout = parse_timedelta(dask.config.get("distributed.comm.timeouts.connect"), "s")
+        try:
+            self.client = Client(address, timeout=timeout)
+        except (OSError, TimeoutError, ValueError) as exc:
+            reason = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+            raise ClusterError(f"cannot reach the Dask scheduler at {address}: {reason}") from None
+        try:
+            self.client.wait_for_workers(1, timeout=wait_for_workers)
+        except (TimeoutError, OSError):
+            self.client.close()
+            raise ClusterError(f"the Dask scheduler at {address} has no workers (waited {wait_for_workers:g} s)") from None
+        n = len(self.client.scheduler_info().get("workers", {}))
+        self.description = f"Dask scheduler {address} ({n} worker{'s' if n != 1 else ''})"
+
+    def warm(self) -> None:
+        """Import the kernels on every worker now."""
+        self.client.run(warm_up, 0.0)
+
+    def submit(self, args: tuple, key: str):
+        return self.client.submit(execute, *args, key=key, pure=False, retries=1)
+
+    def wait(self, futures: Iterable[Any], timeout: Optional[float]) -> set:
+        from distributed import wait
+
+        futures = list(futures)
+        if timeout == 0:
+            return {f for f in futures if f.done()}
+        try:
+            return set(wait(futures, timeout=timeout, return_when="FIRST_COMPLETED").done)
+        except TimeoutError:
+            return set()
+
+    def outcome(self, fut) -> Any:
+        try:
+            return fut.result()
+        except Exception as exc:  # KilledWorker, CancelledError, lost connections, missing gagekit on a worker
+            raise WorkerLost(f"{type(exc).__name__}: {exc}") from None
+        finally:
+            fut.release()
+
+    def recover(self) -> None:
+        """Nothing to do: the scheduler replaces lost workers' tasks itself."""
+
+    def close(self) -> None:
+        self.client.close()

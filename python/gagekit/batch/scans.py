@@ -1,0 +1,88 @@
+"""Which files a batch reads (files, folders, glob patterns) and what each one holds.
+
+A scan is identified by the SHA-256 of its bytes, not by its path: the same file copied
+under two names is evaluated once and both paths are recorded; a file renamed since the
+last run is not evaluated again.
+"""
+
+from __future__ import annotations
+
+import glob
+import hashlib
+import os
+from dataclasses import dataclass
+from datetime import datetime, timezone
+from pathlib import Path
+from typing import Iterable
+
+from ..cloud.io import ASCII_SUFFIXES
+from ..errors import InvalidInputError
+
+#: file suffixes a folder is searched for (every format ``read_points`` reads)
+SCAN_SUFFIXES = frozenset(ASCII_SUFFIXES | {".ply", ".npy", ".las", ".laz", ".e57"})
+_CHUNK = 1 << 22
+
+__all__ = ["SCAN_SUFFIXES", "FileIdentity", "expand_scans", "identify_file"]
+
+
+def _is_pattern(arg: str) -> bool:
+    return any(c in arg for c in "*?[")
+
+
+def expand_scans(args: Iterable[str]) -> list[str]:
+    """The scan paths named by ``args``, in order, each once.
+
+    A folder stands for its scan files (by suffix, recursively, sorted); a glob pattern
+    (``*``, ``?``, ``[...]``, ``**``) for its matches (sorted), and a pattern matching
+    nothing is an error; any other argument is a file (a missing one is reported by the
+    batch as a failed scan). No scans at all is an error."""
+    out: list[str] = []
+    seen: set[str] = set()
+
+    def add(p: str) -> None:
+        key = os.path.abspath(p)
+        if key not in seen:
+            seen.add(key)
+            out.append(p)
+
+    for arg in args:
+        arg = str(arg)
+        if _is_pattern(arg) and not Path(arg).exists():
+            matches = sorted(m for m in glob.glob(arg, recursive=True) if os.path.isfile(m))
+            if not matches:
+                raise InvalidInputError(f"{arg}: the pattern matches no file")
+            for m in matches:
+                add(m)
+        elif Path(arg).is_dir():
+            files = sorted(str(p) for p in Path(arg).rglob("*") if p.is_file() and p.suffix.lower() in SCAN_SUFFIXES)
+            if not files:
+                raise InvalidInputError(f"{arg}: the folder holds no scan files ({', '.join(sorted(SCAN_SUFFIXES))})")
+            for f in files:
+                add(f)
+        else:
+            add(arg)
+    if not out:
+        raise InvalidInputError("no scans given")
+    return out
+
+
+@dataclass(frozen=True)
+class FileIdentity:
+    """A scan file's content hash (SHA-256, hex), size (bytes) and modification time (UTC)."""
+
+    content_hash: str
+    size: int
+    modified: datetime
+
+
+def identify_file(path: str) -> FileIdentity:
+    """Hash a file's bytes; OSError when it cannot be read."""
+    h = hashlib.sha256()
+    with open(path, "rb") as fh:
+        st = os.fstat(fh.fileno())
+        while True:
+            chunk = fh.read(_CHUNK)
+            if not chunk:
+                break
+            h.update(chunk)
+    return FileIdentity(h.hexdigest(), int(st.st_size), datetime.fromtimestamp(st.st_mtime, timezone.utc))

@@ -1,0 +1,102 @@
+"""What a worker does with one scan: the single-scan command's computation, as JSON.
+
+Runs in a local worker process or on a Dask worker; imports only what the task needs.
+:func:`execute` never raises for a bad scan: a :class:`~gagekit.errors.GagekitError`
+(unreadable file, infeasible problem, degenerate points) becomes an ``error`` outcome
+with its message, as does an unexpected exception (named as an internal error), so the
+batch goes on. Results are exactly the dictionaries the single-scan commands print with
+``--json`` (``gage check``, ``form fit``).
+"""
+
+from __future__ import annotations
+
+import os
+import socket
+import time
+import warnings
+from dataclasses import dataclass
+from datetime import datetime, timezone
+from typing import Any, Callable, Mapping, Optional
+
+__all__ = ["Outcome", "execute", "TASKS", "limit_threads", "warm_up"]
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """What a worker returns for one scan (times in UTC, seconds of wall time)."""
+
+    status: str  # "ok" | "error"
+    result: Optional[dict]
+    error: Optional[str]
+    started: datetime
+    finished: datetime
+    seconds: float
+    worker: Optional[str] = None
+
+
+def limit_threads(threads: int) -> None:
+    """Cap the kernels' threads in this worker process (Rayon, BLAS), so that N workers on
+    N cores do not each start N threads. Must run before the first kernel call."""
+    for var in ("RAYON_NUM_THREADS", "OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+        os.environ[var] = str(max(1, int(threads)))
+
+
+def warm_up(seconds: float = 0.2) -> int:
+    """Import the kernels and hold the worker briefly (so that N calls land on N workers);
+    returns the process id. Used to start workers before timing them."""
+    from .. import gage  # noqa: F401  (the heavy imports: numpy, the Rust extension)
+
+    time.sleep(seconds)
+    return os.getpid()
+
+
+def _read(path: str, units: Optional[str]):
+    from ..cloud import read_points
+
+    with warnings.catch_warnings():  # reader warnings (unit guesses, dropped points) would go to the worker's stderr
+        warnings.simplefilter("ignore")
+        return read_points(path, units=units)
+
+
+def _gage(path: str, document: Mapping[str, Any], options: Mapping[str, Any]) -> dict:
+    from .._util import to_jsonable
+    from ..gage import GageSpec, check_gages
+
+    with warnings.catch_warnings():  # the batch printed the spec's warnings once
+        warnings.simplefilter("ignore")
+        spec = GageSpec.from_dict(document["spec"], options.get("source") or "gage spec")
+    pts = _read(path, options.get("units"))
+    return to_jsonable(check_gages(pts, spec, groups=options.get("groups", True)))
+
+
+def _form(path: str, document: Mapping[str, Any], options: Mapping[str, Any]) -> dict:
+    from .._util import to_jsonable
+    from ..form.files import fit_file
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return to_jsonable(fit_file(document["shape"], path, document["criterion"], seed=int(document.get("seed", 0)),
+                                    units=options.get("units")))
+
+
+#: the kinds of batch and their worker functions (``inspect`` registers itself here)
+TASKS: dict[str, Callable[[str, Mapping[str, Any], Mapping[str, Any]], dict]] = {"gage": _gage, "form": _form}
+
+
+def execute(kind: str, path: str, document: Mapping[str, Any], options: Mapping[str, Any]) -> Outcome:
+    """Evaluate one scan; every failure of the scan itself is an ``error`` outcome."""
+    from ..errors import GagekitError
+
+    started = datetime.now(timezone.utc)
+    t0 = time.perf_counter()
+    worker = f"{socket.gethostname()}:{os.getpid()}"
+    try:
+        result = TASKS[kind](path, document, options)
+        status, error = "ok", None
+    except GagekitError as exc:
+        result, status, error = None, "error", str(exc)
+    except MemoryError:
+        result, status, error = None, "error", f"{path}: out of memory"
+    except Exception as exc:  # a bug: recorded so the batch goes on, named as such
+        result, status, error = None, "error", f"internal error ({type(exc).__name__}): {exc}"
+    return Outcome(status, result, error, started, datetime.now(timezone.utc), time.perf_counter() - t0, worker)

@@ -1,0 +1,41 @@
+"""`gagekit inspect`: a scan against its drawing -- GD&T callouts with datum frames."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Optional
+
+import typer
+
+from ._common import JSON_OPTION, UNITS_OPTION, emit, read_cloud_cli, table
+
+
+def human(result) -> str:
+    from ..report.inspect import callout_rows
+
+    rows = [[r[0], r[1], r[2], r[3], r[4], f"{r[5]:.4f}", f"{r[6]:.6f}", f"{r[7]:+.6f}", r[8]] for r in callout_rows(result)]
+    text = table(["#", "feature", "characteristic", "datums", "zone", "tolerance", "measured", "margin", "result"], rows)
+    return f"{text}\n\n{result.part}: {result.status} ({sum(t.passed for t in result.tolerances)}/{len(result.tolerances)} callouts pass)"
+
+
+def inspect(
+    scan: Path = typer.Argument(..., help="Scanned cloud: XYZ/CSV/TXT, NIST .ds, PLY, .npy, LAS/LAZ, E57."),
+    part: Path = typer.Argument(..., help="The drawing (TOML): [[feature]], [datums], [[tolerance]]."),
+    units: Optional[str] = UNITS_OPTION,
+    as_json: bool = JSON_OPTION,
+    report: Optional[Path] = typer.Option(None, "--report", help="Write report.html (callouts, datum frame, 3-D deviation view) and result.json into DIR."),
+) -> None:
+    """Evaluate every GD&T callout of PART.toml on the scan (ISO 1101 zones, ISO 5459 datums).
+
+    Exit status 0 whether or not the part conforms (read `status`); 2 on errors.
+    """
+    from ..inspect import inspect as run_inspect, load_part_spec
+
+    spec = load_part_spec(part)
+    pts = read_cloud_cli(scan, units).points
+    result = run_inspect(pts, spec)
+    if report is not None:
+        from ..report.inspect import write_report
+
+        write_report(result, report)
+    emit(result, as_json, human)

@@ -1,0 +1,62 @@
+"""`gagekit stats`: statistical process control of the results database."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Optional
+
+import typer
+
+from ._common import JSON_OPTION, emit, table
+
+
+def _human(s: dict) -> str:
+    out = [f"SPC of {s['database']}"]
+    for spec in s["specs"]:
+        label = spec.get("part") or spec.get("source") or spec["spec"]
+        out.append(f"\n{spec['kind']} {label} ({spec['spec']}): {spec['results']} results, {spec['failed']} failed")
+        rows = []
+        for c in spec["characteristics"]:
+            g = lambda k: c.get(k, "-")  # noqa: E731
+            rows.append([c["name"], c["n"], c["mean"], g("sd"), g("min_margin"), g("cpk"), g("ppk"),
+                         len(c.get("chart", {}).get("signals", []))])
+        if rows:
+            out.append(table(["characteristic", "n", "mean", "sd", "min margin", "Cpk", "Ppk", "signals"], rows))
+    for mach in s["machines"]:
+        out.append(f"\nmachine {mach['machine']}: {mach['calibrations']} tracking runs, "
+                   f"{mach['identifications']} identifications; largest drifts:")
+        out.append(table(["group", "first", "last", "largest change"],
+                         [[g["name"], g["first"], g["last"], g["max_change"]] for g in mach["groups"][:8]]))
+    return "\n".join(out)
+
+
+def stats(
+    db: str = typer.Option(..., "--db", help="Results database: sqlite:///FILE or postgresql://..."),
+    spec: Optional[Path] = typer.Option(None, "--spec", help="Only the results of this gage file (GAGES.toml)."),
+    tolerance: Optional[float] = typer.Option(None, "--tolerance", help="Upper limit of form errors (mm), for Cp/Cpk of form batches."),
+    report: Optional[Path] = typer.Option(None, "--report", help="Write report.html with the charts into DIR."),
+    as_json: bool = JSON_OPTION,
+) -> None:
+    """Per gage or tolerance: n, mean, sd, minimum margin, Cp/Cpk and Pp/Ppk, I-MR charts with
+    the Western Electric rules, trends of the allowances and T*; per machine: drift across calibrations."""
+    from .._util import load_toml
+    from ..stats import collect
+
+    if report is not None:
+        from .._files import output_dir
+
+        output_dir(report)  # checked before the work
+    documents = None
+    if spec is not None:
+        doc = load_toml(spec)
+        documents = [{"spec": doc}, {"part": doc}]
+    s = collect(db, documents=documents, tolerance=tolerance)
+    if spec is not None and not s["specs"]:
+        from ..errors import ConfigError
+
+        raise ConfigError(f"{spec}: no results of this spec in {s['database']}")
+    if report is not None:
+        from ..report.spc import write_spc_report
+
+        write_spc_report(s, report)
+    emit(s, as_json, _human)

@@ -1,0 +1,152 @@
+"""Generate the bundled inspection sample: a machined bracket with known deviations.
+
+    python make_bracket.py            # writes bracket.ply and bracket.toml beside this file
+
+The part (mm): a block 120 x 80 x 40 with a 45-degree chamfer along its top right edge,
+a bore (hole, radius 10) at (30, 40), a stepped boss (radius 12, then 8) at (70, 40)
+topped by a ball (radius 8), a pin hole (radius 3, one scanned circle) at (30, 15) and a
+scanned line on the back face. Every surface is sampled exactly (no noise) on a grid
+that includes its edges, with deviations whose inspection values follow analytically
+from the construction (``EXPECTED``):
+
+The scanner stops 1 mm short of every edge of the block's faces.
+
+- A (bottom, z = 0): perfect -> flatness 0.
+- B (front, z in [1, 39]): leans by S_B (y = S_B (z - 1)) -> perpendicularity to A =
+  38 S_B; its datum (perpendicular to A, on the air side) is y = 0.
+- C (left end, y in [1, 79]): twisted about z (x = S_C (y - 1)) -> perpendicularity to A
+  alone = 0 (the zone turns about A's normal), to A and B = 78 S_C; its datum is x = 0.
+- top: z = 40 + OFF + T (x - 50), x in [1, 99] -> parallelism to A = 98 T, flatness 0,
+  profile (basic z = 40, datum A) = 2 (OFF + 49 T).
+- chamfer: at 45 deg + DELTA, scanned over the slant s in [1, L - 1] -> angularity to A
+  (45 deg) = (L - 2) sin(DELTA).
+- bore: axis through (30 + DX, 40 + DY, 20), tilted by ALPHA about y, 30 mm long, three
+  lobes of amplitude A3 -> position (A|B|C) = 2 sqrt((DX + 15 sin ALPHA)^2 + DY^2),
+  perpendicularity to A = 30 sin ALPHA, cylindricity = roundness = 2 A3.
+- boss: lower step (datum D, shaft) on the axis (70, 40); upper step offset by E ->
+  coaxiality = circular run-out = total run-out = 2 E.
+- ball: centre offset (BX, 0, BZ) from (70, 40, 75), perfect -> position S-diameter =
+  2 sqrt(BX^2 + BZ^2), sphericity 0.
+- rib line on the back face, x in [10, 110]: bowed by B_RIB (half sine) -> straightness = B_RIB.
+- pin circle: four lobes of amplitude A4, centre offset PX -> roundness = 2 A4,
+  position = 2 PX.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+
+S_B, S_C, T, OFF, DELTA = 1e-3, 5e-4, 6e-4, 0.01, 1e-3
+DX, DY, ALPHA, A3 = 0.02, -0.01, 5e-4, 0.004
+E, BX, BZ, B_RIB, A4, PX = 0.015, 0.015, 0.01, 0.012, 0.003, 0.01
+L_CHAMFER = 20.0 * math.sqrt(2.0)
+
+EXPECTED = {
+    "flatness of A": 0.0,
+    "perpendicularity of B": 38 * S_B,
+    "perpendicularity of C to A|B": 78 * S_C,
+    "perpendicularity of C to A": 0.0,
+    "parallelism of top": 98 * T,
+    "flatness of top": 0.0,
+    "profile of top": 2 * (OFF + 49 * T),
+    "angularity of chamfer": (L_CHAMFER - 2) * math.sin(DELTA),
+    "position of bore": 2 * math.hypot(DX + 15 * math.sin(ALPHA), DY),
+    "perpendicularity of bore": 30 * math.sin(ALPHA),
+    "cylindricity of bore": 2 * A3,
+    "roundness of bore": 2 * A3,
+    "coaxiality of boss-top": 2 * E,
+    "circular-runout of boss-top": 2 * E,
+    "total-runout of boss-top": 2 * E,
+    "position of ball": 2 * math.hypot(BX, BZ),
+    "sphericity of ball": 0.0,
+    "straightness of rib": B_RIB,
+    "roundness of pin": 2 * A4,
+    "position of pin": 2 * PX,
+}
+
+
+def _grid(a0, a1, b0, b1, step):
+    na = max(2, int(round((a1 - a0) / step)) + 1)
+    nb = max(2, int(round((b1 - b0) / step)) + 1)
+    a, b = np.meshgrid(np.linspace(a0, a1, na), np.linspace(b0, b1, nb), indexing="ij")
+    return a.ravel(), b.ravel()
+
+
+def _ring(n_theta):
+    return np.linspace(0.0, 2 * math.pi, n_theta, endpoint=False)
+
+
+def make_bracket(density: float = 1.0) -> np.ndarray:
+    """The bracket's points (n, 3); ``density`` scales the number of points (1: ~40 000)."""
+    h = 2.0 / math.sqrt(density)  # grid step on the faces (mm)
+    nt = max(24, int(round(180 * math.sqrt(density))) // 12 * 12)  # points per turn (a multiple of 12)
+    parts = []
+    # A: bottom, perfect
+    x, y = _grid(1, 119, 1, 79, h)
+    parts.append(np.column_stack([x, y, 0 * x]))
+    # B: front, leaning y = S_B (z - 1)
+    x, z = _grid(1, 119, 1, 39, h)
+    parts.append(np.column_stack([x, S_B * (z - 1), z]))
+    # C: left end, twisted x = S_C (y - 1)
+    y, z = _grid(1, 79, 1, 39, h)
+    parts.append(np.column_stack([S_C * (y - 1), y, z]))
+    # top: tilted plane, without the bore, the boss and the pin hole
+    x, y = _grid(1, 99, 1, 79, h / 2)
+    keep = (np.hypot(x - 30, y - 40) > 10.5) & (np.hypot(x - 70, y - 40) > 12.5) & (np.hypot(x - 30, y - 15) > 3.5)
+    x, y = x[keep], y[keep]
+    parts.append(np.column_stack([x, y, 40 + OFF + T * (x - 50)]))
+    # chamfer from (100, y, 40) down at 45 deg + DELTA, slant length L
+    s, y = _grid(1, L_CHAMFER - 1, 1, 79, h)
+    a = math.pi / 4 + DELTA
+    parts.append(np.column_stack([100 + s * math.cos(a), y, 40 - s * math.sin(a)]))
+    # right face below the chamfer, back face (without the rib line's band)
+    y, z = _grid(1, 79, 1, 40 - L_CHAMFER * math.sin(a) - 1, h)
+    parts.append(np.column_stack([0 * y + 120, y, z]))
+    x, z = _grid(1, 119, 1, 39, h)
+    band = np.abs(z - 20) > 1.0
+    parts.append(np.column_stack([x[band], 0 * x[band] + 80, z[band]]))
+    # rib: a bowed line on the back face at z = 20
+    x = np.linspace(10, 110, 2 * int(round(50 / h * 2)) + 1)  # odd: the crest x = 60 is sampled
+    parts.append(np.column_stack([x, 80 + B_RIB * np.sin(math.pi * (x - 10) / 100), 0 * x + 20]))
+    # bore: tilted, three lobes; axis parameter t in [-15, 15] about (30 + DX, 40 + DY, 20)
+    th = _ring(nt)
+    t = np.linspace(-15, 15, int(round(30 / h * 2)) + 1)
+    T_, TH = np.meshgrid(t, th, indexing="ij")
+    r = 10 + A3 * np.cos(3 * TH)
+    d = np.array([math.sin(ALPHA), 0.0, math.cos(ALPHA)])
+    u = np.array([math.cos(ALPHA), 0.0, -math.sin(ALPHA)])
+    v = np.array([0.0, 1.0, 0.0])
+    c = np.array([30 + DX, 40 + DY, 20.0])
+    bore = c + T_.ravel()[:, None] * d + (r * np.cos(TH)).ravel()[:, None] * u + (r * np.sin(TH)).ravel()[:, None] * v
+    parts.append(bore)
+    # boss: lower step r = 12 on (70, 40), z in [42, 58]; upper step r = 8 on (70 + E, 40), z in [61, 74]
+    for (cx, r0, z0, z1) in ((70.0, 12.0, 42.0, 58.0), (70.0 + E, 8.0, 61.0, 74.0)):
+        zz = np.linspace(z0, z1, int(round((z1 - z0) / h * 2)) + 1)
+        Z, TH = np.meshgrid(zz, th, indexing="ij")
+        parts.append(np.column_stack([(cx + r0 * np.cos(TH)).ravel(), (40 + r0 * np.sin(TH)).ravel(), Z.ravel()]))
+    # ball: the upper hemisphere of radius 8 about (70 + BX, 40, 75 + BZ)
+    n_lat = max(6, nt // 8)
+    lat = np.linspace(0, math.pi / 2, n_lat + 1)[1:]
+    LAT, TH = np.meshgrid(lat, th, indexing="ij")
+    bc = np.array([70 + BX, 40.0, 75 + BZ])
+    parts.append(bc + 8 * np.column_stack([(np.cos(LAT) * np.cos(TH)).ravel(), (np.cos(LAT) * np.sin(TH)).ravel(), np.sin(LAT).ravel()]))
+    # pin hole: one scanned circle at z = 38, four lobes, centre offset PX
+    th2 = _ring(2 * nt)
+    r = 3 + A4 * np.cos(4 * th2)
+    parts.append(np.column_stack([30 + PX + r * np.cos(th2), 15 + r * np.sin(th2), 0 * th2 + 38]))
+    return np.ascontiguousarray(np.concatenate(parts))
+
+
+def main() -> None:  # pragma: no cover - regenerates the bundled files
+    from gagekit.cloud import write_points
+
+    here = Path(__file__).resolve().parent
+    write_points(here / "bracket.ply", make_bracket())
+    print(f"wrote {here / 'bracket.ply'}")
+
+
+if __name__ == "__main__":  # pragma: no cover
+    main()

@@ -1,0 +1,227 @@
+"""The scan's points of each feature and their associated (least-squares) geometry.
+
+Each feature's points are the scan's points inside its region box (Sec. 5.4.1). Its
+least-squares fit (ISO 14405 / ASME B89.4.10 geometric fits, :mod:`gagekit.form`) is the
+reference for the point deviations shown in the report and the source of a cylinder's
+or cone's **derived axis**:
+
+- ``axis = "least-squares"`` (default): the least-squares axis limited to the span of the
+  feature's points projected onto it -- a segment, what CMM software reports; its two
+  end points stand for it in every convex tolerance zone (a segment lies in a convex
+  zone when its ends do);
+- ``axis = "median-line"``: the centres of the least-squares circles of ``sections``
+  equal slices across the least-squares axis (the extracted median line, ISO 12180-1
+  Sec. 3.3.4 / ISO 17450-3); the zone then contains every section centre.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Optional
+
+import numpy as np
+
+from .. import _core
+from ..errors import DegenerateGeometryError
+from ..form import fit_circle, fit_circle_3d, fit_cone, fit_cylinder, fit_line, fit_plane, fit_sphere
+from .spec import MIN_POINTS, Feature, _rotvec_matrix
+
+__all__ = ["FeatureData", "extract"]
+
+
+def _unit(v: Any) -> np.ndarray:
+    v = np.asarray(v, dtype=float)
+    return v / np.linalg.norm(v)
+
+
+@dataclass
+class FeatureData:
+    """A feature's points (``indices`` into the scan) and its fits, computed once."""
+
+    spec: Feature
+    indices: np.ndarray
+    points: np.ndarray
+    _cache: dict = field(default_factory=dict, repr=False)
+
+    @property
+    def name(self) -> str:
+        return self.spec.name
+
+    @property
+    def shape(self) -> str:
+        return self.spec.shape
+
+    def box_axes(self) -> np.ndarray:
+        """The region box's axes as rows (they move with the part)."""
+        return _rotvec_matrix(self.spec.region.rotation).T
+
+    # -- least-squares fits ------------------------------------------------------------
+    def lsq(self):
+        if "lsq" not in self._cache:
+            p, shape = self.points, self.shape
+            if shape == "plane":
+                fit = fit_plane(p)
+            elif shape == "line":
+                fit = fit_line(p)
+            elif shape == "circle":
+                fit = fit_circle_3d(p)
+            elif shape == "sphere":
+                fit = fit_sphere(p)
+            elif shape == "cylinder":
+                fit = fit_cylinder(p)
+            else:
+                fit = fit_cone(p)
+            self._cache["lsq"] = fit
+        return self._cache["lsq"]
+
+    def sign_hint(self) -> np.ndarray:
+        """The direction that fixes the sign of an axis: the feature's ``direction``, else
+        the third axis of its region box (both move with the part)."""
+        if self.spec.direction is not None:
+            return _unit(self.spec.direction)
+        return self.box_axes()[2]
+
+    def axis_line(self) -> tuple[np.ndarray, np.ndarray]:
+        """(point, unit direction) of the least-squares axis (cylinder, cone), the normal
+        through the centre (circle) or the line (line), signed by :meth:`sign_hint`."""
+        fit = self.lsq()
+        if self.shape in ("cylinder", "cone"):
+            p, d = np.array(fit.axis_point if self.shape == "cylinder" else fit.point), _unit(
+                fit.axis_direction if self.shape == "cylinder" else fit.direction)
+        elif self.shape == "circle":
+            p, d = np.array(fit.center), _unit(fit.normal)
+        elif self.shape == "line":
+            p, d = np.array(fit.point), _unit(fit.direction)
+        else:
+            raise DegenerateGeometryError(f"feature '{self.name}': a {self.shape} has no axis")
+        if self.shape != "cone" and float(d @ self.sign_hint()) < 0:
+            d = -d
+        return p, d
+
+    def min_zone(self) -> tuple[float, np.ndarray]:
+        """(width, normal) of the minimum zone of the points (flatness, ISO 12781), computed
+        once: the flatness callout and the free datum plane share it."""
+        if "mz" not in self._cache:
+            normal, _, _, width = _core.gdt_slab(self.points, "free", (0.0, 0.0, 1.0), 0.0)
+            self._cache["mz"] = (float(width), np.array(normal))
+        return self._cache["mz"]
+
+    def plane_normal_out(self) -> np.ndarray:
+        """Least-squares normal of a plane feature, turned to its ``outward``."""
+        n = _unit(self.lsq().normal)
+        return n if float(n @ np.asarray(self.spec.outward)) >= 0 else -n
+
+    # -- derived axis ------------------------------------------------------------------
+    def axis_points(self, method: Optional[str] = None, sections: Optional[int] = None) -> np.ndarray:
+        """The derived axis as points: the two ends of the least-squares axis limited to
+        the span of the points, or the section centres of the median line."""
+        method = method or self.spec.axis
+        sections = sections or self.spec.sections
+        key = ("axis", method, sections)
+        if key not in self._cache:
+            p0, d = self.axis_line()
+            if self.shape == "circle":
+                pts = p0[None, :]
+            elif method == "least-squares":
+                t = (self.points - p0) @ d
+                pts = np.array([p0 + t.min() * d, p0 + t.max() * d])
+            else:
+                pts = np.array([c for c, _ in self.section_circles(sections)])
+            self._cache[key] = pts
+        return self._cache[key]
+
+    def sections(self, count: int, origin: Optional[np.ndarray] = None, direction: Optional[np.ndarray] = None):
+        """Indices of the points in ``count`` equal slices across an axis (default: the
+        least-squares axis) covering the points' span; empty slices are skipped."""
+        if origin is None or direction is None:
+            origin, direction = self.axis_line()
+        t = (self.points - origin) @ direction
+        lo, hi = float(t.min()), float(t.max())
+        if hi <= lo:
+            return [np.arange(len(t))]
+        k = np.minimum(((t - lo) / (hi - lo) * count).astype(np.int64), count - 1)
+        order = np.argsort(k, kind="stable")
+        bounds = np.searchsorted(k[order], np.arange(count + 1))
+        return [order[bounds[i]:bounds[i + 1]] for i in range(count) if bounds[i + 1] > bounds[i]]
+
+    def section_circles(self, count: int) -> list[tuple[np.ndarray, Any]]:
+        """Least-squares circle of each section (projected along the least-squares axis):
+        (centre in 3-D at the section's mean height, 2-D points) per section with >= 3 points."""
+        p0, d = self.axis_line()
+        u, v = _basis(d)
+        out = []
+        for idx in self.sections(count, p0, d):
+            if len(idx) < 3:
+                continue
+            q = self.points[idx] - p0
+            xy = np.ascontiguousarray(np.column_stack([q @ u, q @ v]))
+            c, _, _ = _core.form_circle_lsq(xy)
+            h = float((q @ d).mean())
+            out.append((p0 + c[0] * u + c[1] * v + h * d, xy))
+        if len(out) < 2:
+            raise DegenerateGeometryError(
+                f"feature '{self.name}': fewer than 2 of its {count} sections hold 3 points; the median line needs more points")
+        return out
+
+    # -- deviations for the report -----------------------------------------------------
+    def deviations(self) -> np.ndarray:
+        """Signed deviation of every point from the least-squares feature (mm; positive
+        outside the material for planes, away from the axis/centre otherwise)."""
+        if "dev" in self._cache:
+            return self._cache["dev"]
+        fit, p = self.lsq(), self.points
+        if self.shape == "plane":
+            dev = (p - np.array(fit.point)) @ self.plane_normal_out()
+        elif self.shape == "line":
+            p0, d = self.axis_line()
+            q = p - p0
+            dev = np.linalg.norm(q - np.outer(q @ d, d), axis=1)
+        elif self.shape == "sphere":
+            dev = np.linalg.norm(p - np.array(fit.center), axis=1) - fit.radius
+        elif self.shape == "cone":
+            p0, d = np.array(fit.point), _unit(fit.direction)
+            q = p - p0
+            t = q @ d
+            rho = np.linalg.norm(q - np.outer(t, d), axis=1)
+            half = 0.5 * fit.apex_angle
+            dev = rho * np.cos(half) - t * np.sin(half) - fit.distance
+        else:  # cylinder, circle: radial
+            p0, d = self.axis_line()
+            q = p - p0
+            r = np.linalg.norm(q - np.outer(q @ d, d), axis=1)
+            dev = r - fit.radius
+        self._cache["dev"] = dev
+        return dev
+
+    def to_dict(self) -> dict[str, Any]:
+        d = self.lsq().to_dict()
+        d = {"shape": self.shape, "n_points": int(len(self.points)), "least_squares": d}
+        if self.shape in ("cylinder", "cone"):
+            d["derived_axis"] = {"method": self.spec.axis, "points": self.axis_points().tolist()}
+        return d
+
+
+def _basis(d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The orthonormal pair of gagekit-gdt's vec3::basis (Frisvad, Duff et al.)."""
+    s = 1.0 if d[2] >= 0 else -1.0
+    a = -1.0 / (s + d[2])
+    b = d[0] * d[1] * a
+    return np.array([1.0 + s * d[0] * d[0] * a, s * b, -s * d[0]]), np.array([b, s + d[1] * d[1] * a, -d[1]])
+
+
+def extract(points: np.ndarray, features: dict[str, Feature], source: str = "part") -> dict[str, FeatureData]:
+    """Cut every feature's points out of the scan (one parallel pass over the boxes)."""
+    from ..cloud.regions import classify
+
+    names = list(features)
+    idx = classify(points, [features[n].region for n in names])
+    out: dict[str, FeatureData] = {}
+    for name, ids in zip(names, idx):
+        f = features[name]
+        need = MIN_POINTS[f.shape]
+        if len(ids) < need:
+            raise DegenerateGeometryError(
+                f"{source}: [[feature]] '{name}': 'region' holds {len(ids)} point(s) of the scan; a {f.shape} needs at "
+                f"least {need} (check the region's center, size and rotation, and the scan's units)")
+        out[name] = FeatureData(f, ids, np.ascontiguousarray(points[ids]))
+    return out

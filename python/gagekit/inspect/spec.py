@@ -1,0 +1,459 @@
+"""PART.toml: the part's features, datums and tolerance callouts (the drawing).
+
+All lengths are millimetres in the scan's frame, angles degrees. Layout::
+
+    [part]                       # optional
+    name = "bracket"
+    datum_fit = "chebyshev"      # or "least-squares" (ISO 5459 default: chebyshev)
+    axis = "least-squares"       # derived axes: or "median-line" (ISO 12180)
+    sections = 10                # sections of a median line / circular run-out / roundness
+
+    [[feature]]
+    name = "A"
+    shape = "plane"              # plane | cylinder | circle | sphere | line | cone
+    region = { center = [50, 30, 0], size = [100, 60, 2], rotation = [0, 0, 0] }
+    outward = [0, 0, -1]         # planes (and optionally lines): from the material into the air
+    kind = "hole"                # cylinder / circle / sphere / cone: "hole" or "shaft"
+    direction = [0, 0, 1]        # cylinder / cone / line / circle: roughly along the axis (its sign)
+
+    [datums]
+    A = "A"                      # letter -> feature name
+    B = { feature = "side", angle = 90.0 }   # basic angle to the primary (secondary planes)
+
+    [[tolerance]]
+    feature = "bore"
+    characteristic = "position"
+    tolerance = 0.1
+    datums = ["A", "B", "C"]
+    nominal = { point = [50, 30, 0], direction = [0, 0, 1] }   # in the datum frame
+    angle = 45.0                 # angularity: basic angle between feature and datum
+
+Every mistake raises :class:`~gagekit.errors.ConfigError` naming the file, the table and
+the key.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any, Mapping, Optional
+
+import numpy as np
+
+from ..cloud.regions import Box
+from ..errors import ConfigError, GagekitError
+
+__all__ = [
+    "SHAPES",
+    "CHARACTERISTICS",
+    "APPLIES_TO",
+    "Feature",
+    "DatumRef",
+    "Tolerance",
+    "PartSpec",
+    "load_part_spec",
+    "part_spec_from_dict",
+]
+
+SHAPES = ("plane", "cylinder", "circle", "sphere", "line", "cone")
+FORM = ("flatness", "straightness", "roundness", "cylindricity", "sphericity")
+ORIENTATION = ("parallelism", "perpendicularity", "angularity")
+LOCATION = ("position", "coaxiality", "profile")
+RUNOUT = ("circular-runout", "total-runout")
+CHARACTERISTICS = FORM + ORIENTATION + LOCATION + RUNOUT
+
+#: Which feature shapes each characteristic applies to.
+APPLIES_TO: dict[str, tuple[str, ...]] = {
+    "flatness": ("plane",),
+    "straightness": ("line", "cylinder"),
+    "roundness": ("circle", "cylinder", "cone"),
+    "cylindricity": ("cylinder",),
+    "sphericity": ("sphere",),
+    "parallelism": ("plane", "cylinder", "cone"),
+    "perpendicularity": ("plane", "cylinder", "cone"),
+    "angularity": ("plane", "cylinder", "cone"),
+    "position": ("plane", "cylinder", "cone", "circle", "sphere"),
+    "coaxiality": ("cylinder", "cone", "circle", "sphere"),
+    "profile": ("plane",),
+    "circular-runout": ("cylinder", "cone", "circle", "plane"),
+    "total-runout": ("cylinder", "cone", "plane"),
+}
+
+#: Shapes that can serve as a datum feature (plane -> a plane; the others -> an axis).
+DATUM_SHAPES = ("plane", "cylinder", "cone", "circle")
+AXIAL = ("cylinder", "cone", "circle")
+AXIS_METHODS = ("least-squares", "median-line")
+DATUM_FITS = ("chebyshev", "least-squares")
+MIN_POINTS = {"plane": 3, "line": 2, "circle": 3, "sphere": 4, "cylinder": 5, "cone": 6}
+
+_FEATURE_KEYS = {"name", "shape", "region", "outward", "kind", "direction", "axis", "sections", "datum_fit"}
+_TOL_KEYS = {"feature", "characteristic", "tolerance", "datums", "nominal", "angle", "name", "sections"}
+_PART_KEYS = {"name", "datum_fit", "axis", "sections"}
+_TOP_KEYS = {"part", "feature", "datums", "tolerance", "region"}
+
+
+@dataclass(frozen=True)
+class Feature:
+    """A toleranced or datum feature: the points of the scan inside ``region``."""
+
+    name: str
+    shape: str
+    region: Box
+    outward: Optional[tuple[float, float, float]] = None
+    kind: Optional[str] = None
+    direction: Optional[tuple[float, float, float]] = None
+    axis: str = "least-squares"
+    sections: int = 10
+    datum_fit: str = "chebyshev"
+
+    def to_dict(self) -> dict[str, Any]:
+        d: dict[str, Any] = {"name": self.name, "shape": self.shape, "region": self.region.to_dict()}
+        for key in ("outward", "kind", "direction"):
+            v = getattr(self, key)
+            if v is not None:
+                d[key] = list(v) if isinstance(v, tuple) else v
+        d.update(axis=self.axis, sections=self.sections, datum_fit=self.datum_fit)
+        return d
+
+
+@dataclass(frozen=True)
+class DatumRef:
+    """A datum letter: its feature and (for a secondary plane) the basic angle to the primary."""
+
+    letter: str
+    feature: str
+    angle: float = 90.0
+
+
+@dataclass(frozen=True)
+class Tolerance:
+    """One callout of the drawing's feature control frames."""
+
+    feature: str
+    characteristic: str
+    tolerance: float
+    datums: tuple[str, ...] = ()
+    nominal_point: Optional[tuple[float, float, float]] = None
+    nominal_direction: Optional[tuple[float, float, float]] = None
+    angle: Optional[float] = None
+    name: str = ""
+    sections: Optional[int] = None
+    index: int = 0
+
+    @property
+    def label(self) -> str:
+        return self.name or f"{self.characteristic} of {self.feature}"
+
+
+@dataclass(frozen=True)
+class PartSpec:
+    """A parsed PART.toml (see the module docstring)."""
+
+    name: str
+    features: dict[str, Feature]
+    datums: dict[str, DatumRef]
+    tolerances: tuple[Tolerance, ...]
+    source: str = "part"
+
+    def moved(self, rotation: Any, translation: Any) -> "PartSpec":
+        """The same drawing for the part moved by the rigid motion p -> R p + t: regions,
+        ``outward`` and ``direction`` move with it (nominals are in the datum frame and
+        do not change)."""
+        R = np.asarray(rotation, dtype=float).reshape(3, 3)
+        t = np.asarray(translation, dtype=float).reshape(3)
+        feats = {}
+        for name, f in self.features.items():
+            box_R = _rotvec_matrix(f.region.rotation)
+            new_R = R @ box_R
+            feats[name] = Feature(
+                f.name, f.shape,
+                Box(tuple(R @ np.array(f.region.center) + t), f.region.size, tuple(_matrix_rotvec(new_R)), name=f.region.name),
+                None if f.outward is None else tuple(R @ np.array(f.outward)),
+                f.kind,
+                None if f.direction is None else tuple(R @ np.array(f.direction)),
+                f.axis, f.sections, f.datum_fit,
+            )
+        return PartSpec(self.name, feats, self.datums, self.tolerances, self.source)
+
+
+def _rotvec_matrix(rv: Any) -> np.ndarray:
+    """Rodrigues: the rotation matrix of a rotation vector (the box convention: it turns
+    the cloud axes onto the box axes, so the box axes are its columns)."""
+    from ..machine.frame import rotation_from_vector
+
+    return rotation_from_vector(rv)
+
+
+def _matrix_rotvec(R: np.ndarray) -> np.ndarray:
+    """The rotation vector of a rotation matrix (via the unit quaternion, Shepperd's
+    method: stable for every angle up to pi)."""
+    t = np.trace(R)
+    k = int(np.argmax([t, R[0, 0], R[1, 1], R[2, 2]]))
+    if k == 0:
+        w = 0.5 * math.sqrt(1.0 + t)
+        x, y, z = (R[2, 1] - R[1, 2]) / (4 * w), (R[0, 2] - R[2, 0]) / (4 * w), (R[1, 0] - R[0, 1]) / (4 * w)
+    elif k == 1:
+        x = 0.5 * math.sqrt(1.0 + 2 * R[0, 0] - t)
+        w, y, z = (R[2, 1] - R[1, 2]) / (4 * x), (R[0, 1] + R[1, 0]) / (4 * x), (R[0, 2] + R[2, 0]) / (4 * x)
+    elif k == 2:
+        y = 0.5 * math.sqrt(1.0 + 2 * R[1, 1] - t)
+        w, x, z = (R[0, 2] - R[2, 0]) / (4 * y), (R[0, 1] + R[1, 0]) / (4 * y), (R[1, 2] + R[2, 1]) / (4 * y)
+    else:
+        z = 0.5 * math.sqrt(1.0 + 2 * R[2, 2] - t)
+        w, x, y = (R[1, 0] - R[0, 1]) / (4 * z), (R[0, 2] + R[2, 0]) / (4 * z), (R[1, 2] + R[2, 1]) / (4 * z)
+    if w < 0:
+        w, x, y, z = -w, -x, -y, -z
+    s = math.sqrt(x * x + y * y + z * z)
+    if s == 0.0:
+        return np.zeros(3)
+    angle = 2.0 * math.atan2(s, w)
+    return np.array([x, y, z]) * (angle / s)
+
+
+# -- parsing ---------------------------------------------------------------------------
+
+
+def _vec3(v: Any, where: str, key: str, nonzero: bool = False) -> tuple[float, float, float]:
+    try:
+        vals = tuple(float(x) for x in v)
+    except (TypeError, ValueError):
+        raise ConfigError(f"{where}: '{key}' must be three numbers, got {v!r}") from None
+    if len(vals) != 3 or not all(math.isfinite(x) for x in vals):
+        raise ConfigError(f"{where}: '{key}' must be three finite numbers, got {v!r}")
+    if nonzero and math.hypot(*vals) == 0.0:
+        raise ConfigError(f"{where}: '{key}' has zero length; give a direction")
+    return vals  # type: ignore[return-value]
+
+
+def _number(v: Any, where: str, key: str, positive: bool = False) -> float:
+    if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(float(v)):
+        raise ConfigError(f"{where}: '{key}' must be a finite number, got {v!r}")
+    if positive and float(v) <= 0:
+        raise ConfigError(f"{where}: '{key}' must be positive, got {v!r}")
+    return float(v)
+
+
+def _sections(v: Any, where: str) -> int:
+    if isinstance(v, bool) or not isinstance(v, int) or v < 1:
+        raise ConfigError(f"{where}: 'sections' must be a positive integer, got {v!r}")
+    return int(v)
+
+
+def _choice(v: Any, choices: tuple[str, ...], where: str, key: str) -> str:
+    if v not in choices:
+        raise ConfigError(f"{where}: '{key}' = {v!r} is unknown; choose one of {', '.join(choices)}")
+    return v
+
+
+def _unknown(t: Mapping, allowed: set, where: str) -> None:
+    extra = sorted(set(t) - allowed)
+    if extra:
+        raise ConfigError(f"{where}: unknown key(s) {', '.join(repr(k) for k in extra)}; allowed: {', '.join(sorted(allowed))}")
+
+
+def _region(v: Any, regions: Mapping[str, Box], where: str, name: str) -> Box:
+    if isinstance(v, str):
+        if v not in regions:
+            raise ConfigError(f"{where}: 'region' = {v!r} names no [[region]] table")
+        return regions[v]
+    if not isinstance(v, Mapping):
+        raise ConfigError(f"{where}: 'region' must be a table {{ center, size, rotation }} or the name of a [[region]]")
+    _unknown(v, {"center", "size", "rotation", "name"}, f"{where}, region")
+    for key in ("center", "size"):
+        if key not in v:
+            raise ConfigError(f"{where}: 'region' has no '{key}'")
+    try:
+        return Box(v["center"], v["size"], v.get("rotation", (0.0, 0.0, 0.0)), name=str(v.get("name", name)))
+    except ConfigError as exc:
+        raise ConfigError(f"{where}: 'region': {exc}") from None
+
+
+def part_spec_from_dict(doc: Mapping[str, Any], source: str = "part") -> PartSpec:
+    """Validate a parsed PART.toml document (see the module docstring)."""
+    from ..cloud.regions import regions_from_tables
+
+    if not isinstance(doc, Mapping):
+        raise ConfigError(f"{source}: expected a TOML document")
+    _unknown(doc, _TOP_KEYS, source)
+    part = doc.get("part", {})
+    if not isinstance(part, Mapping):
+        raise ConfigError(f"{source}: [part] must be a table")
+    _unknown(part, _PART_KEYS, f"{source}: [part]")
+    pname = str(part.get("name", "part"))
+    dfit = _choice(part.get("datum_fit", "chebyshev"), DATUM_FITS, f"{source}: [part]", "datum_fit")
+    daxis = _choice(part.get("axis", "least-squares"), AXIS_METHODS, f"{source}: [part]", "axis")
+    dsec = _sections(part.get("sections", 10), f"{source}: [part]")
+    regions = {b.name: b for b in regions_from_tables(doc.get("region", []), source)}
+
+    raw_features = doc.get("feature", [])
+    if not isinstance(raw_features, list) or not raw_features:
+        raise ConfigError(f"{source}: no [[feature]] tables; describe at least one feature")
+    features: dict[str, Feature] = {}
+    for k, t in enumerate(raw_features):
+        if not isinstance(t, Mapping):
+            raise ConfigError(f"{source}: [[feature]] #{k + 1} must be a table")
+        name = t.get("name")
+        where = f"{source}: [[feature]] #{k + 1}" + (f" ('{name}')" if isinstance(name, str) and name else "")
+        if not isinstance(name, str) or not name:
+            raise ConfigError(f"{where}: 'name' is missing or empty")
+        if name in features:
+            raise ConfigError(f"{where}: 'name' = '{name}' is used by another feature")
+        _unknown(t, _FEATURE_KEYS, where)
+        if "shape" not in t:
+            raise ConfigError(f"{where}: 'shape' is missing; choose one of {', '.join(SHAPES)}")
+        shape = _choice(t["shape"], SHAPES, where, "shape")
+        if "region" not in t:
+            raise ConfigError(f"{where}: 'region' is missing")
+        region = _region(t["region"], regions, where, name)
+        outward = None
+        if "outward" in t:
+            if shape not in ("plane", "line"):
+                raise ConfigError(f"{where}: 'outward' applies to planes and lines, not to a {shape}")
+            outward = _vec3(t["outward"], where, "outward", nonzero=True)
+        elif shape == "plane":
+            raise ConfigError(f"{where}: 'outward' is missing; a plane needs the direction from the material into the air")
+        kind = t.get("kind")
+        if kind is not None:
+            if shape not in ("cylinder", "circle", "sphere", "cone"):
+                raise ConfigError(f"{where}: 'kind' applies to cylinders, circles, spheres and cones, not to a {shape}")
+            kind = _choice(kind, ("hole", "shaft"), where, "kind")
+        direction = None
+        if "direction" in t:
+            if shape not in ("cylinder", "cone", "line", "circle"):
+                raise ConfigError(f"{where}: 'direction' applies to cylinders, cones, circles and lines, not to a {shape}")
+            direction = _vec3(t["direction"], where, "direction", nonzero=True)
+        axis = _choice(t.get("axis", daxis), AXIS_METHODS, where, "axis")
+        sections = _sections(t.get("sections", dsec), where)
+        fit = _choice(t.get("datum_fit", dfit), DATUM_FITS, where, "datum_fit")
+        features[name] = Feature(name, shape, region, outward, kind, direction, axis, sections, fit)
+
+    raw_datums = doc.get("datums", {})
+    if not isinstance(raw_datums, Mapping):
+        raise ConfigError(f"{source}: [datums] must be a table of letter = feature name")
+    datums: dict[str, DatumRef] = {}
+    used: dict[str, str] = {}
+    for letter, v in raw_datums.items():
+        where = f"{source}: [datums] {letter}"
+        if not letter or not str(letter).replace("-", "").isalnum():
+            raise ConfigError(f"{where}: a datum letter must be letters or digits")
+        angle = 90.0
+        if isinstance(v, Mapping):
+            _unknown(v, {"feature", "angle"}, where)
+            if "feature" not in v:
+                raise ConfigError(f"{where}: 'feature' is missing")
+            fname = v["feature"]
+            if "angle" in v:
+                angle = _number(v["angle"], where, "angle")
+                if not 0.0 < angle <= 90.0:
+                    raise ConfigError(f"{where}: 'angle' must be in (0, 90] degrees, got {angle}")
+        else:
+            fname = v
+        if not isinstance(fname, str) or fname not in features:
+            raise ConfigError(f"{where}: names feature {fname!r}, which is not a [[feature]]")
+        shape = features[fname].shape
+        if shape not in DATUM_SHAPES:
+            raise ConfigError(f"{where}: a {shape} cannot be a datum feature; use a plane, cylinder, cone or circle")
+        if shape in ("cylinder", "circle", "cone") and features[fname].kind is None:
+            raise ConfigError(f"{where}: datum feature '{fname}' needs kind = \"hole\" or \"shaft\" (its datum is the "
+                              "maximum inscribed or minimum circumscribed feature, ISO 5459)")
+        if fname in used:
+            raise ConfigError(f"{where}: feature '{fname}' is already datum {used[fname]}; a datum letter is used twice for one feature")
+        used[fname] = letter
+        datums[str(letter)] = DatumRef(str(letter), fname, angle)
+
+    raw_tols = doc.get("tolerance", [])
+    if not isinstance(raw_tols, list) or not raw_tols:
+        raise ConfigError(f"{source}: no [[tolerance]] tables; list the drawing's callouts")
+    tols: list[Tolerance] = []
+    for k, t in enumerate(raw_tols):
+        if not isinstance(t, Mapping):
+            raise ConfigError(f"{source}: [[tolerance]] #{k + 1} must be a table")
+        where = f"{source}: [[tolerance]] #{k + 1}"
+        if isinstance(t.get("feature"), str):
+            where += f" ({t.get('characteristic', '?')} of '{t['feature']}')"
+        _unknown(t, _TOL_KEYS, where)
+        for key in ("feature", "characteristic", "tolerance"):
+            if key not in t:
+                raise ConfigError(f"{where}: '{key}' is missing")
+        fname = t["feature"]
+        if not isinstance(fname, str) or fname not in features:
+            raise ConfigError(f"{where}: 'feature' = {fname!r} is not a [[feature]]")
+        char = _choice(t["characteristic"], CHARACTERISTICS, where, "characteristic")
+        shape = features[fname].shape
+        if shape not in APPLIES_TO[char]:
+            raise ConfigError(f"{where}: 'characteristic' = {char!r} does not apply to a {shape}; "
+                              f"it applies to: {', '.join(APPLIES_TO[char])}")
+        tol = _number(t["tolerance"], where, "tolerance", positive=True)
+        raw_d = t.get("datums", [])
+        if isinstance(raw_d, str):
+            raw_d = [raw_d]
+        if not isinstance(raw_d, list) or not all(isinstance(x, str) for x in raw_d):
+            raise ConfigError(f"{where}: 'datums' must be a list of datum letters")
+        if len(raw_d) > 3:
+            raise ConfigError(f"{where}: 'datums' lists {len(raw_d)} datums; at most three (primary, secondary, tertiary)")
+        for j, letter in enumerate(raw_d):
+            if letter not in datums:
+                raise ConfigError(f"{where}: 'datums' names '{letter}', which is not in [datums]")
+            if letter in raw_d[:j]:
+                raise ConfigError(f"{where}: 'datums' uses datum '{letter}' twice")
+            if datums[letter].feature == fname:
+                raise ConfigError(f"{where}: 'datums' names '{letter}', the toleranced feature itself")
+        _check_datums(char, raw_d, datums, features, where)
+        angle = None
+        if char == "angularity":
+            if "angle" not in t:
+                raise ConfigError(f"{where}: 'angle' (the basic angle in degrees) is missing")
+            angle = _number(t["angle"], where, "angle")
+            if not 0.0 <= angle <= 90.0:
+                raise ConfigError(f"{where}: 'angle' must be in [0, 90] degrees, got {angle}")
+        elif "angle" in t:
+            raise ConfigError(f"{where}: 'angle' applies to angularity only")
+        npoint = ndir = None
+        if "nominal" in t:
+            nom = t["nominal"]
+            if not isinstance(nom, Mapping):
+                raise ConfigError(f"{where}: 'nominal' must be a table {{ point, direction }}")
+            _unknown(nom, {"point", "direction"}, f"{where}, nominal")
+            if "point" in nom:
+                npoint = _vec3(nom["point"], where, "nominal.point")
+            if "direction" in nom:
+                ndir = _vec3(nom["direction"], where, "nominal.direction", nonzero=True)
+        if char in ("position", "profile") and npoint is None:
+            raise ConfigError(f"{where}: 'nominal' needs a 'point' (the basic location in the datum frame)")
+        if char in ("position", "profile") and shape in ("plane", "cylinder", "cone") and ndir is None:
+            raise ConfigError(f"{where}: 'nominal' needs a 'direction' (the basic {'normal' if shape == 'plane' else 'axis'} in the datum frame)")
+        sections = _sections(t["sections"], where) if "sections" in t else None
+        tols.append(Tolerance(fname, char, tol, tuple(raw_d), npoint, ndir, angle, str(t.get("name", "")), sections, k))
+    return PartSpec(pname, features, datums, tuple(tols), source)
+
+
+def _check_datums(char: str, letters: list, datums: Mapping[str, DatumRef], features: Mapping[str, Feature], where: str) -> None:
+    n = len(letters)
+    if char in FORM:
+        if n:
+            raise ConfigError(f"{where}: 'datums': {char} is a form tolerance and takes no datums")
+        return
+    if char in ORIENTATION + ("position",) and n == 0:
+        raise ConfigError(f"{where}: 'datums' is missing; {char} needs at least a primary datum")
+    if char in ("coaxiality",) + RUNOUT:
+        if n == 0:
+            raise ConfigError(f"{where}: 'datums' is missing; {char} needs a datum axis")
+        first = features[datums[letters[0]].feature].shape
+        if first not in AXIAL:
+            raise ConfigError(f"{where}: 'datums': {char} needs a datum axis (a cylinder, cone or circle); "
+                              f"datum '{letters[0]}' is a {first}")
+        if n > 1:
+            raise ConfigError(f"{where}: 'datums': {char} takes one datum axis, got {n} datums")
+
+
+def load_part_spec(path: Any) -> PartSpec:
+    """Read and validate a PART.toml file."""
+    from .._util import load_toml
+
+    try:
+        return part_spec_from_dict(load_toml(path), str(path))
+    except GagekitError:
+        raise
+    except (TypeError, ValueError) as exc:  # pragma: no cover - defensive
+        raise ConfigError(f"{path}: {exc}") from None
+

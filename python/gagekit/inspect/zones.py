@@ -1,0 +1,458 @@
+"""Tolerance zones of each characteristic (ISO 1101:2017), evaluated exactly.
+
+``measured`` is the size of the smallest zone of the characteristic's kind that
+contains the toleranced feature, with the orientation and location the datums impose
+and every other degree of freedom optimised. ``tolerance`` is compared with it as a
+**width** (two parallel planes / lines, two concentric circles / cylinders / spheres --
+the radial separation) or a **diameter** (a cylinder or a sphere, the ISO ``⌀`` / ``S⌀``
+zones); each entry says which in ``zone``.
+
+Form (no datums)
+  flatness (ISO 12781): two parallel planes of least separation -- width.
+  straightness (ISO 12780): of a line with ``outward``: two parallel lines in the plane
+    of the line and ``outward`` -- width; of a line without ``outward`` and of a
+    cylinder's median line (always the median line, ``sections`` centres): the smallest
+    cylinder -- diameter.
+  roundness (ISO 12181): two concentric circles of least radial separation (minimum
+    zone) in the circle's plane; for a cylinder or cone, of each of ``sections`` sections
+    across the least-squares axis, the largest -- width.
+  cylindricity (ISO 12180): two coaxial cylinders of least radial separation -- width.
+  sphericity: two concentric spheres of least radial separation -- width.
+
+Orientation (ISO 1101 Sec. 18.9-18.11), the zone's orientation fixed by the datums as
+far as they fix it and free otherwise; the toleranced element is the surface of a plane
+or the derived axis of a cylinder / cone:
+  parallelism: plane to datum plane -- planes parallel to it (width); plane to datum axis
+    -- planes parallel to the axis, free to turn about it (width); axis to datum plane --
+    planes parallel to it (width); axis to datum axis -- a cylinder parallel to it
+    (diameter).
+  perpendicularity: plane to datum plane -- planes perpendicular to it, free to turn
+    about its normal (with a second datum plane: perpendicular to both) (width); plane to
+    datum axis -- planes perpendicular to it (width); axis to datum plane -- a cylinder
+    perpendicular to it (diameter); axis to datum axis -- planes perpendicular to it (width).
+  angularity (basic ``angle`` between feature and datum): plane -- planes at the angle,
+    free to turn about the datum's normal / axis (width); axis -- a cylinder at the
+    angle, free to turn (diameter).
+  With ``nominal.direction`` given, the zone's orientation is fixed to it (in the datum
+  frame) instead.
+
+Location
+  position: of an axis -- a cylinder at the basic line ``nominal`` (diameter); of a
+    sphere's centre -- a sphere (spherical diameter); of a circle's centre -- a cylinder
+    along ``nominal.direction`` (or the circle's normal) (diameter); of a plane -- two
+    parallel planes symmetric about the basic plane (width). Translations and the
+    rotation about z that the datum frame leaves free are optimised (exactly for
+    translations: minimum circumscribed circle / 1-D convex minimum; by a 720-point grid
+    and golden-section search for the rotation).
+  coaxiality (ISO 1101 Sec. 18.13): a cylinder coaxial with the datum axis containing the
+    derived axis (a circle's or sphere's centre: concentricity) -- diameter.
+  profile of a plane (ISO 1660): two planes symmetric about the basic plane (width); with
+    no datums the zone floats (= flatness).
+
+Run-out (ISO 1101 Sec. 18.15-18.16), relative to the datum axis:
+  circular-runout: the largest range, over ``sections`` sections across the datum axis,
+    of the points' distances to the datum axis (cylinder, circle: radial; cone: normal to
+    the cone of the least-squares half angle; plane: axial, over ``sections`` bands of
+    radius) -- width.
+  total-runout: the range of the same distances over the whole surface -- width.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any, Callable, Optional
+
+import numpy as np
+
+from .. import _core
+from ..errors import ConfigError, DegenerateGeometryError
+from ..form import fit_circle, fit_cylinder, fit_line, fit_sphere
+from .datums import DatumSystem, SimulatedDatum
+from .features import FeatureData, _basis, _unit
+from .spec import Tolerance
+
+__all__ = ["Measurement", "evaluate", "ZONE_KINDS"]
+
+#: The zone kinds and what ``tolerance`` means for them.
+ZONE_KINDS = {"width": "distance between the two bounding surfaces",
+              "diameter": "diameter of a cylindrical zone",
+              "spherical diameter": "diameter of a spherical zone"}
+
+
+@dataclass(frozen=True)
+class Measurement:
+    value: float
+    zone: str
+    element: str
+    n_points: int
+    details: dict = field(default_factory=dict)
+
+
+# -- small exact helpers ---------------------------------------------------------------
+
+
+def _slab(points: np.ndarray, mode: str, axis: Any = (0.0, 0.0, 1.0), angle: float = 0.0) -> tuple[float, np.ndarray]:
+    normal, _, _, width = _core.gdt_slab(np.ascontiguousarray(points), mode, tuple(float(a) for a in axis), float(angle))
+    return float(width), np.array(normal)
+
+
+def _plane_2d(points: np.ndarray, d: np.ndarray) -> np.ndarray:
+    u, v = _basis(d)
+    return np.ascontiguousarray(np.column_stack([points @ u, points @ v]))
+
+
+def _mec_radius(xy: np.ndarray) -> tuple[float, np.ndarray]:
+    """Minimum circumscribed circle of 2-D points (Welzl, exact): (radius, centre)."""
+    if len(xy) == 1:
+        return 0.0, xy[0]
+    if len(xy) == 2:
+        return 0.5 * float(np.linalg.norm(xy[1] - xy[0])), 0.5 * (xy[0] + xy[1])
+    if np.ptp(xy, axis=0).max() == 0.0:
+        return 0.0, xy[0]
+    c, r, _ = _core.form_circle_mc(np.ascontiguousarray(xy))
+    r = float(np.linalg.norm(xy - np.array(c), axis=1).max())
+    return r, np.array(c)
+
+
+def _cylinder_zone(points: np.ndarray, d: np.ndarray) -> float:
+    """Diameter of the smallest cylinder of direction d containing the points."""
+    return 2.0 * _mec_radius(_plane_2d(points, _unit(d)))[0]
+
+
+def _min_over_turn(f: Callable[[float], float], grid: int = 720) -> tuple[float, float]:
+    """Minimum of a continuous function of a turn angle: grid, then golden-section search
+    in the best three cells (deterministic)."""
+    step = 2 * math.pi / grid
+    vals = [f(k * step) for k in range(grid)]
+    cells = sorted(range(grid), key=lambda k: (vals[k], k))[:3]
+    best = (vals[cells[0]], cells[0] * step)
+    g = 0.5 * (math.sqrt(5.0) - 1.0)
+    for k in cells:
+        lo, hi = (k - 1) * step, (k + 1) * step
+        x1, x2 = hi - g * (hi - lo), lo + g * (hi - lo)
+        f1, f2 = f(x1), f(x2)
+        for _ in range(60):
+            if f1 <= f2:
+                hi, x2, f2 = x2, x1, f1
+                x1 = hi - g * (hi - lo)
+                f1 = f(x1)
+            else:
+                lo, x1, f1 = x1, x2, f2
+                x2 = lo + g * (hi - lo)
+                f2 = f(x2)
+        x = 0.5 * (lo + hi)
+        fx = f(x)
+        if fx < best[0]:
+            best = (fx, x)
+    return best
+
+
+def _cone_dir(a: np.ndarray, angle: float, phi: float) -> np.ndarray:
+    u, v = _basis(a)
+    return math.cos(angle) * a + math.sin(angle) * (math.cos(phi) * u + math.sin(phi) * v)
+
+
+def _rot_z(frame, psi: float) -> tuple[Callable, Callable]:
+    """Maps rotating nominal points / directions by psi about the frame's z axis."""
+    z = frame.axes[2]
+    c, s = math.cos(psi), math.sin(psi)
+    K = np.array([[0, -z[2], z[1]], [z[2], 0, -z[0]], [-z[1], z[0], 0]])
+    R = np.eye(3) + s * K + (1 - c) * (K @ K)
+    return (lambda p: frame.origin + R @ (p - frame.origin)), (lambda d: R @ d)
+
+
+# -- the evaluation ----------------------------------------------------------------------
+
+
+def evaluate(tol: Tolerance, fd: FeatureData, system: DatumSystem) -> Measurement:
+    """The measured value of one callout."""
+    char = tol.characteristic
+    fn = _DISPATCH[char]
+    return fn(tol, fd, system)
+
+
+def _flatness(tol, fd, system):
+    w, n = fd.min_zone()
+    return Measurement(w, "width", "surface", len(fd.points), {"zone_normal": n.tolist()})
+
+
+def _straightness(tol, fd, system):
+    if fd.shape == "line":
+        p0, d = fd.axis_line()
+        if fd.spec.outward is not None:
+            o = np.asarray(fd.spec.outward, dtype=float)
+            w = o - (o @ d) * d
+            if np.linalg.norm(w) < 1e-9:
+                raise ConfigError(f"{system.spec.source}: [[feature]] '{fd.name}': 'outward' is along the line; it must be the surface normal")
+            w = _unit(w)
+            q = fd.points - p0
+            xy = np.ascontiguousarray(np.column_stack([q @ d, q @ w]))
+            width, _, _, _ = _core.gdt_min_width_2d(xy)
+            return Measurement(float(width), "width", "line in the plane of its outward normal", len(fd.points))
+        fit = fit_line(fd.points, "min-circumscribed")
+        return Measurement(float(fit.form_error), "diameter", "line", len(fd.points))
+    count = tol.sections or fd.spec.sections
+    centres = fd.axis_points("median-line", count)
+    if len(centres) < 3:
+        value = 0.0
+    else:
+        value = float(fit_line(centres, "min-circumscribed").form_error)
+    return Measurement(value, "diameter", f"median line ({len(centres)} section centres)", len(fd.points))
+
+
+def _roundness(tol, fd, system):
+    if fd.shape == "circle":
+        d = _unit(fd.lsq().normal)
+        xy = _plane_2d(fd.points - np.array(fd.lsq().center), d)
+        w = fit_circle(xy, "mz").width
+        return Measurement(float(w), "width", "circle", len(fd.points))
+    count = tol.sections or fd.spec.sections
+    worst = 0.0
+    secs = fd.section_circles(count)
+    for _, xy in secs:
+        worst = max(worst, float(fit_circle(xy, "mz").width))
+    return Measurement(worst, "width", f"{len(secs)} sections", len(fd.points))
+
+
+def _cylindricity(tol, fd, system):
+    _, d = fd.axis_line()
+    fit = fit_cylinder(fd.points, "minimum-zone", seed=0, axis=tuple(d), max_tilt=10.0)
+    return Measurement(float(fit.form_error), "width", "surface", len(fd.points),
+                       {"axis_point": list(fit.axis_point), "axis_direction": list(fit.axis_direction)})
+
+
+def _sphericity(tol, fd, system):
+    c, r_in, r_out = _core.gdt_min_zone_sphere(np.ascontiguousarray(fd.points))
+    return Measurement(float(r_out - r_in), "width", "surface", len(fd.points), {"center": list(c)})
+
+
+def _element(fd: FeatureData) -> tuple[np.ndarray, str]:
+    if fd.shape == "plane":
+        return fd.points, "surface"
+    pts = fd.axis_points()
+    return pts, ("derived axis" if fd.spec.axis == "least-squares" else f"median line ({len(pts)} section centres)")
+
+
+def _direction(sim: SimulatedDatum) -> np.ndarray:
+    return sim.vector
+
+
+def _orientation(tol, fd, system):
+    char = tol.characteristic
+    sims = system.chain(tol.datums)
+    d1 = sims[0]
+    a = _direction(d1)
+    pts, element = _element(fd)
+    n_pts = len(fd.points)
+    if tol.nominal_direction is not None:
+        frame = system.frame(tol.datums)
+        nd = frame.direction_to_scan(tol.nominal_direction)
+        if fd.shape == "plane":
+            w, _ = _slab(pts, "fixed", nd)
+            return Measurement(w, "width", element, n_pts, {"zone_normal": nd.tolist()})
+        return Measurement(_cylinder_zone(pts, nd), "diameter", element, n_pts, {"zone_axis": nd.tolist()})
+    plane_datum = d1.type == "plane"
+    if fd.shape == "plane":
+        if char == "parallelism":
+            mode, axis, ang = ("fixed", a, 0.0) if plane_datum else ("perpendicular", a, 0.0)
+        elif char == "perpendicularity":
+            if plane_datum and len(sims) > 1 and sims[1].type == "plane":
+                mode, axis, ang = "fixed", _unit(np.cross(a, sims[1].vector)), 0.0
+            else:
+                mode, axis, ang = ("perpendicular", a, 0.0) if plane_datum else ("fixed", a, 0.0)
+        else:
+            theta = math.radians(tol.angle)
+            if plane_datum:
+                s = 1.0 if float(fd.plane_normal_out() @ a) >= 0 else -1.0
+                mode, axis, ang = "angle", s * a, theta
+            else:
+                s = 1.0 if float(fd.plane_normal_out() @ a) >= 0 else -1.0
+                mode, axis, ang = "angle", s * a, math.pi / 2 - theta
+        w, n = _slab(pts, mode, axis, ang)
+        return Measurement(w, "width", element, n_pts, {"zone_normal": n.tolist()})
+    # a derived axis
+    if char == "parallelism":
+        if plane_datum:
+            w, n = _slab(pts, "fixed", a)
+            return Measurement(w, "width", element, n_pts, {"zone_normal": n.tolist()})
+        return Measurement(_cylinder_zone(pts, a), "diameter", element, n_pts, {"zone_axis": a.tolist()})
+    if char == "perpendicularity":
+        if plane_datum:
+            return Measurement(_cylinder_zone(pts, a), "diameter", element, n_pts, {"zone_axis": a.tolist()})
+        w, n = _slab(pts, "fixed", a)
+        return Measurement(w, "width", element, n_pts, {"zone_normal": n.tolist()})
+    # angularity of an axis: a cylinder whose axis is at the basic angle, turned freely
+    theta = math.radians(tol.angle)
+    _, d_ls = fd.axis_line()
+    s = 1.0 if float(d_ls @ a) >= 0 else -1.0
+    cone = (math.pi / 2 - theta) if plane_datum else theta
+    value, phi = _min_over_turn(lambda ph: _cylinder_zone(pts, _cone_dir(s * a, cone, ph)))
+    return Measurement(value, "diameter", element, n_pts, {"zone_axis": _cone_dir(s * a, cone, phi).tolist()})
+
+
+def _free_perp(frame, D: Optional[np.ndarray]) -> np.ndarray:
+    """Orthonormal basis (rows) of the free translations, without their part along D."""
+    T = frame.free_translations
+    if len(T) == 0:
+        return np.zeros((0, 3))
+    if D is not None:
+        T = T - np.outer(T @ D, D)
+    u, s, vt = np.linalg.svd(T, full_matrices=False)
+    return vt[s > 1e-9]
+
+
+def _radius_free(w: np.ndarray, F: np.ndarray) -> float:
+    """min over s in span(F) of max_i |w_i - s|, w_i 3-D vectors normal to the zone axis."""
+    if len(F) == 0:
+        return float(np.linalg.norm(w, axis=1).max())
+    if len(F) >= 2:
+        # the zone's centre moves freely in the plane: the minimum circumscribed circle
+        xy = np.column_stack([w @ F[0], w @ F[1]])
+        return _mec_radius(np.ascontiguousarray(xy))[0]
+    f = F[0]
+    a = w @ f
+    b2 = np.maximum(np.einsum("ij,ij->i", w, w) - a * a, 0.0)
+    # convex in s: max_i sqrt((a_i - s)^2 + b_i^2); golden section on [min a, max a] to machine precision
+    lo, hi = float(a.min()), float(a.max())
+    g = 0.5 * (math.sqrt(5.0) - 1.0)
+    F_ = lambda s: float(np.sqrt(((a - s) ** 2 + b2).max()))  # noqa: E731
+    for _ in range(200):
+        if hi - lo <= 1e-15 * max(1.0, abs(lo), abs(hi)):
+            break
+        m1, m2 = hi - g * (hi - lo), lo + g * (hi - lo)
+        if F_(m1) <= F_(m2):
+            hi = m2
+        else:
+            lo = m1
+    return F_(0.5 * (lo + hi))
+
+
+def _position(tol, fd, system):
+    frame = system.frame(tol.datums)
+    rotate = frame.free_rotation
+    P0 = frame.point_to_scan(tol.nominal_point)
+    n_pts = len(fd.points)
+    if fd.shape == "plane":
+        return _plane_location(tol, fd, frame, "surface")
+    if fd.shape == "sphere":
+        c = np.array(fd.lsq().center)
+        F = _free_perp(frame, None)
+
+        def value(psi):
+            rp, _ = _rot_z(frame, psi)
+            return _radius_free((c - rp(P0))[None, :], F)
+
+        r = _min_over_turn(value)[0] if rotate else value(0.0)
+        return Measurement(2 * r, "spherical diameter", "centre (least-squares sphere)", n_pts, {"nominal": P0.tolist()})
+    if fd.shape == "circle":
+        D0 = frame.direction_to_scan(tol.nominal_direction) if tol.nominal_direction is not None else _unit(fd.lsq().normal)
+        pts, element = np.array(fd.lsq().center)[None, :], "centre (least-squares circle)"
+    else:
+        D0 = frame.direction_to_scan(tol.nominal_direction)
+        pts, element = _element(fd)
+
+    def value(psi):
+        rp, rd = _rot_z(frame, psi)
+        P, D = rp(P0), rd(D0)
+        q = pts - P
+        w = q - np.outer(q @ D, D)
+        return _radius_free(w, _free_perp(frame, D))
+
+    r = _min_over_turn(value)[0] if rotate else value(0.0)
+    return Measurement(2 * r, "diameter", element, n_pts, {"nominal_point": P0.tolist(), "nominal_direction": D0.tolist()})
+
+
+def _plane_location(tol, fd, frame, element):
+    P0 = frame.point_to_scan(tol.nominal_point)
+    N0 = frame.direction_to_scan(tol.nominal_direction)
+    pts = fd.points
+    T = frame.free_translations
+
+    def value(psi):
+        rp, rd = _rot_z(frame, psi)
+        P, N = rp(P0), rd(N0)
+        h = (pts - P) @ N
+        if len(T) and np.abs(T @ N).max() > 1e-9:
+            return float(h.max() - h.min())  # the offset is free: the zone floats along its normal
+        return 2.0 * float(np.abs(h).max())
+
+    if frame.free_rotation and abs(float(N0 @ frame.axes[2])) < 1.0 - 1e-12:
+        v = _min_over_turn(value)[0]
+    else:
+        v = value(0.0)
+    return Measurement(v, "width", element, len(pts), {"nominal_point": P0.tolist(), "nominal_normal": N0.tolist()})
+
+
+def _profile(tol, fd, system):
+    if not tol.datums:
+        w, n = fd.min_zone()
+        return Measurement(w, "width", "surface (no datums: the zone floats)", len(fd.points), {"zone_normal": n.tolist()})
+    return _plane_location(tol, fd, system.frame(tol.datums), "surface")
+
+
+def _coaxiality(tol, fd, system):
+    d = system.datum(tol.datums[:1])
+    if fd.shape in ("circle", "sphere"):
+        pts, element = np.array(fd.lsq().center)[None, :], "centre"
+    else:
+        pts, element = _element(fd)
+    q = pts - d.point
+    w = q - np.outer(q @ d.vector, d.vector)
+    return Measurement(2.0 * float(np.linalg.norm(w, axis=1).max()), "diameter", element, len(fd.points))
+
+
+def _runout(tol, fd, system):
+    d = system.datum(tol.datums[:1])
+    o, a = d.point, d.vector
+    q = fd.points - o
+    t = q @ a
+    r = np.linalg.norm(q - np.outer(t, a), axis=1)
+    total = tol.characteristic == "total-runout"
+    count = tol.sections or fd.spec.sections
+    if fd.shape == "plane":
+        dist, key, what = t, r, "axial"
+    elif fd.shape == "cone":
+        cone = fd.lsq()
+        half = 0.5 * cone.apex_angle
+        s = 1.0 if float(np.asarray(cone.direction) @ a) >= 0 else -1.0
+        dist, key, what = r * math.cos(half) - s * t * math.sin(half), t, "normal to the cone"
+    else:
+        dist, key, what = r, t, "radial"
+    if total:
+        return Measurement(float(np.ptp(dist)), "width", f"surface ({what})", len(fd.points))
+    if fd.shape == "circle":
+        return Measurement(float(np.ptp(dist)), "width", f"circle ({what})", len(fd.points))
+    lo, hi = float(key.min()), float(key.max())
+    if hi <= lo:
+        return Measurement(float(np.ptp(dist)), "width", f"1 section ({what})", len(fd.points))
+    k = np.minimum(((key - lo) / (hi - lo) * count).astype(np.int64), count - 1)
+    order = np.argsort(k, kind="stable")
+    ks, ds = k[order], dist[order]
+    bounds = np.searchsorted(ks, np.arange(count + 1))
+    worst, used = 0.0, 0
+    for i in range(count):
+        seg = ds[bounds[i]:bounds[i + 1]]
+        if len(seg) >= 2:
+            worst = max(worst, float(seg.max() - seg.min()))
+            used += 1
+    if used == 0:
+        raise DegenerateGeometryError(f"{system.spec.source}: [[tolerance]] #{tol.index + 1}: no section of '{fd.name}' holds 2 points")
+    return Measurement(worst, "width", f"{used} {'bands' if fd.shape == 'plane' else 'sections'} ({what})", len(fd.points))
+
+
+_DISPATCH = {
+    "flatness": _flatness,
+    "straightness": _straightness,
+    "roundness": _roundness,
+    "cylindricity": _cylindricity,
+    "sphericity": _sphericity,
+    "parallelism": _orientation,
+    "perpendicularity": _orientation,
+    "angularity": _orientation,
+    "position": _position,
+    "coaxiality": _coaxiality,
+    "profile": _profile,
+    "circular-runout": _runout,
+    "total-runout": _runout,
+}

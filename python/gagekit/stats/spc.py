@@ -1,0 +1,192 @@
+"""Statistical process control of individual measurements (one value per part).
+
+Capability (ISO 22514-2:2017, Secs. 6-7; AIAG *Statistical Process Control*, 2nd ed. 2005,
+Ch. IV), with specification limits LSL and/or USL:
+
+* overall (long-term) spread: the sample standard deviation ``s`` (n - 1 in the
+  denominator); performance indices ``Pp = (USL - LSL) / 6 s`` and
+  ``Ppk = min(USL - mean, mean - LSL) / 3 s``;
+* within (short-term) spread of an individuals chart: ``sigma = MRbar / d2`` with
+  ``d2 = 1.128`` for moving ranges of two; capability indices ``Cp`` and ``Cpk`` as above
+  with ``sigma``. With one limit only, Cp and Pp do not exist and Cpk, Ppk are the
+  one-sided ``Cpl = (mean - LSL) / 3 sigma`` or ``Cpu = (USL - mean) / 3 sigma``.
+
+Individuals / moving-range chart (AIAG Ch. II; Montgomery, *Introduction to Statistical
+Quality Control*, 7th ed., Sec. 6.4): centre ``mean``, limits ``mean +- 3 MRbar / d2``
+(``+- 2.660 MRbar``); MR chart centre ``MRbar``, upper limit ``D4 MRbar = 3.267 MRbar``.
+
+Western Electric rules (*Statistical Quality Control Handbook*, Western Electric, 1956,
+Sec. 1B), with the zones of the individuals chart's sigma:
+
+1. one point beyond 3 sigma;
+2. two of three consecutive points beyond 2 sigma on the same side;
+3. four of five consecutive points beyond 1 sigma on the same side;
+4. eight consecutive points on the same side of the centre line.
+
+A signal is reported at the point that completes the pattern.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Optional, Sequence
+
+import numpy as np
+
+D2 = 1.128  #: d2 for moving ranges of two observations
+D4 = 3.267  #: D4 for moving ranges of two observations
+
+RULES = {
+    1: "one point beyond 3 sigma",
+    2: "two of three points beyond 2 sigma, same side",
+    3: "four of five points beyond 1 sigma, same side",
+    4: "eight points in a row on one side of the centre line",
+}
+
+__all__ = ["D2", "D4", "RULES", "Capability", "ImrChart", "Signal", "capability", "imr_chart", "western_electric",
+           "trend_per_day"]
+
+
+@dataclass(frozen=True)
+class Signal:
+    """A Western Electric rule broken at the point ``index`` (0-based, in time order)."""
+
+    index: int
+    rule: int
+
+    def to_dict(self) -> dict:
+        return {"index": self.index, "rule": self.rule, "description": RULES[self.rule]}
+
+
+@dataclass(frozen=True)
+class ImrChart:
+    """Individuals and moving-range chart limits, and the rule violations."""
+
+    center: float
+    ucl: float
+    lcl: float
+    sigma: float
+    mr_center: float
+    mr_ucl: float
+    signals: tuple[Signal, ...] = field(default=())
+
+    def to_dict(self) -> dict:
+        return {"center": self.center, "ucl": self.ucl, "lcl": self.lcl, "sigma": self.sigma,
+                "mr_center": self.mr_center, "mr_ucl": self.mr_ucl, "signals": [s.to_dict() for s in self.signals]}
+
+
+@dataclass(frozen=True)
+class Capability:
+    """Summary statistics and capability of one characteristic against its limits.
+
+    Indices that do not exist for the data (one value, no spread, no limits) are absent
+    from :meth:`to_dict` and ``None`` here, with the reason in ``notes``."""
+
+    n: int
+    mean: float
+    minimum: float
+    maximum: float
+    lower: Optional[float]
+    upper: Optional[float]
+    sd: Optional[float] = None
+    sigma_within: Optional[float] = None
+    min_margin: Optional[float] = None
+    cp: Optional[float] = None
+    cpk: Optional[float] = None
+    pp: Optional[float] = None
+    ppk: Optional[float] = None
+    notes: tuple[str, ...] = ()
+
+    def to_dict(self) -> dict:
+        d = {"n": self.n, "mean": self.mean, "min": self.minimum, "max": self.maximum}
+        for k in ("lower", "upper", "sd", "sigma_within", "min_margin", "cp", "cpk", "pp", "ppk"):
+            v = getattr(self, k)
+            if v is not None:
+                d[k] = v
+        if self.notes:
+            d["notes"] = list(self.notes)
+        return d
+
+
+def _index(spread: Optional[float], mean: float, lower: Optional[float], upper: Optional[float]):
+    """(C, Ck) for a spread: two-sided or one-sided (ISO 22514-2, AIAG)."""
+    if spread is None or spread <= 0:
+        return None, None
+    c = (upper - lower) / (6 * spread) if lower is not None and upper is not None else None
+    sides = [x for x in ((upper - mean) if upper is not None else None, (mean - lower) if lower is not None else None)
+             if x is not None]
+    ck = min(sides) / (3 * spread) if sides else None
+    return c, ck
+
+
+def capability(values: Sequence[float], lower: Optional[float] = None, upper: Optional[float] = None) -> Capability:
+    """n, mean, sd, the smallest margin to a limit, Cp/Cpk (within) and Pp/Ppk (overall)."""
+    x = np.asarray(values, dtype=np.float64)
+    if x.ndim != 1 or len(x) == 0:
+        raise ValueError("capability needs at least one value")
+    if lower is not None and upper is not None and not lower < upper:
+        raise ValueError(f"the lower limit {lower} must be below the upper limit {upper}")
+    n, mean = len(x), float(x.mean())
+    notes = []
+    margins = [m for m in ((x - lower).min() if lower is not None else None, (upper - x).min() if upper is not None else None)
+               if m is not None]
+    min_margin = float(min(margins)) if margins else None
+    if lower is None and upper is None:
+        notes.append("no specification limits: no capability indices")
+    sd = sigma = None
+    if n >= 2:
+        sd = float(x.std(ddof=1))
+        sigma = float(np.abs(np.diff(x)).mean() / D2)
+        if sd == 0.0:
+            notes.append("all values equal: no spread, no capability indices")
+    else:
+        notes.append("one value: no spread, no capability indices")
+    cp, cpk = _index(sigma, mean, lower, upper)
+    pp, ppk = _index(sd, mean, lower, upper)
+    if sigma == 0.0 and sd and sd > 0:
+        notes.append("no point-to-point variation (MRbar = 0): no Cp/Cpk; see Pp/Ppk")
+    return Capability(n, mean, float(x.min()), float(x.max()), lower, upper, sd, sigma, min_margin,
+                      cp, cpk, pp, ppk, tuple(notes))
+
+
+def western_electric(x: Sequence[float], center: float, sigma: float) -> list[Signal]:
+    """The points completing each Western Electric pattern (rules 1-4, see module doc)."""
+    z = (np.asarray(x, dtype=np.float64) - center) / sigma if sigma > 0 else np.zeros(len(x))
+    out = []
+    for i in range(len(z)):
+        if abs(z[i]) > 3:
+            out.append(Signal(i, 1))
+        for rule, (count, window, k) in ((2, (2, 3, 2.0)), (3, (4, 5, 1.0))):
+            if i + 1 >= window:
+                w = z[i + 1 - window:i + 1]
+                side = math.copysign(1.0, z[i]) if z[i] != 0 else 0.0
+                if side and abs(z[i]) > k and np.sum(w * side > k) >= count:
+                    out.append(Signal(i, rule))
+        if i >= 7:
+            w = z[i - 7:i + 1]
+            if np.all(w > 0) or np.all(w < 0):
+                out.append(Signal(i, 4))
+    return out
+
+
+def imr_chart(x: Sequence[float]) -> Optional[ImrChart]:
+    """Individuals / moving-range chart of ``x`` in time order (None below two values)."""
+    x = np.asarray(x, dtype=np.float64)
+    if len(x) < 2:
+        return None
+    center = float(x.mean())
+    mr = float(np.abs(np.diff(x)).mean())
+    sigma = mr / D2
+    return ImrChart(center, center + 3 * sigma, center - 3 * sigma, sigma, mr, D4 * mr,
+                    tuple(western_electric(x, center, sigma)) if sigma > 0 else ())
+
+
+def trend_per_day(days: Sequence[float], values: Sequence[float]) -> Optional[float]:
+    """Least-squares slope of ``values`` against time in days (None without a time span)."""
+    t = np.asarray(days, dtype=np.float64)
+    y = np.asarray(values, dtype=np.float64)
+    if len(t) < 2 or np.ptp(t) == 0:
+        return None
+    tc = t - t.mean()
+    return float((tc * (y - y.mean())).sum() / (tc * tc).sum())

@@ -1,0 +1,25 @@
+//! GD&T zone kernels for inspecting a scan against its drawing (ISO 1101, ISO 5459).
+//!
+//! Points are flat row-major buffers (`[x0, y0, z0, x1, ...]`, mm). Every kernel is
+//! exact in the combinatorial sense (the optimum is attained at a vertex of the convex
+//! hull, found by exact predicates) and reports its value recomputed from the reported
+//! geometry, so a reported zone always contains the points it was computed from.
+//!
+//! - [`vec3`]: small 3-D vector helpers (basis of a direction, projections).
+//! - [`width2`]: minimum width of a 2-D set: convex hull and rotating calipers.
+//! - [`width3`]: width of a 3-D set in a fixed direction, the minimum over directions
+//!   perpendicular to an axis (orientation free about a datum), and over a cone of
+//!   directions at a basic angle to an axis (angularity).
+//! - [`datum`]: datum planes (constrained Chebyshev tangent plane on the air side,
+//!   ISO 5459) and axes of a fixed direction (maximum inscribed / minimum
+//!   circumscribed / least-squares cylinder along a given direction).
+//! - [`sphere`]: the minimum-zone sphere (sphericity) by sequential linear programming.
+
+pub mod datum;
+pub mod sphere;
+pub mod vec3;
+pub mod width2;
+pub mod width3;
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,111 @@
+//! Bindings of gagekit-gdt (GD&T zones and datum simulation, ISO 1101 / ISO 5459).
+
+use crate::arrays::rows;
+use crate::errors::run;
+use gagekit_core::GkError;
+use gagekit_gdt::datum::{self, AxisFit, Orientation, PlaneFit};
+use gagekit_gdt::width2;
+use numpy::PyReadonlyArray2;
+use pyo3::prelude::*;
+
+type V3 = (f64, f64, f64);
+
+fn v3(a: [f64; 3]) -> V3 {
+    (a[0], a[1], a[2])
+}
+
+fn arr(a: V3) -> [f64; 3] {
+    [a.0, a.1, a.2]
+}
+
+fn orientation(mode: &str, axis: V3, angle: f64) -> gagekit_core::Result<Orientation> {
+    Ok(match mode {
+        "free" => Orientation::Free,
+        "perpendicular" => Orientation::PerpendicularTo(arr(axis)),
+        "angle" => Orientation::AtAngle(arr(axis), angle),
+        "fixed" => Orientation::Fixed(arr(axis)),
+        other => return Err(GkError::config(format!("unknown orientation constraint {other:?}"))),
+    })
+}
+
+/// Minimum width of (n, 2) points: (width, normal, lo, hi).
+#[pyfunction]
+fn gdt_min_width_2d<'py>(py: Python<'py>, points: PyReadonlyArray2<'py, f64>) -> PyResult<(f64, (f64, f64), f64, f64)> {
+    let pts = rows(py, &points, 2, "points")?;
+    let w = run(py, || width2::min_width(pts))?;
+    Ok((w.width, (w.normal[0], w.normal[1]), w.lo, w.hi))
+}
+
+/// Thinnest slab of (n, 3) points with its normal constrained by `mode` ("free",
+/// "perpendicular" to `axis`, at `angle` rad to `axis`, "fixed" along `axis`):
+/// (normal, lo, hi, width).
+#[pyfunction]
+fn gdt_slab<'py>(py: Python<'py>, points: PyReadonlyArray2<'py, f64>, mode: &str, axis: V3, angle: f64) -> PyResult<(V3, f64, f64, f64)> {
+    let pts = rows(py, &points, 3, "points")?;
+    let mode = mode.to_string();
+    let s = run(py, move || datum::slab(pts, orientation(&mode, axis, angle)?))?;
+    Ok((v3(s.normal), s.lo, s.hi, s.width))
+}
+
+/// Simulated datum plane (ISO 5459): (point, normal out of the material, offset, deviation).
+#[pyfunction]
+#[allow(clippy::too_many_arguments)]
+fn gdt_datum_plane<'py>(
+    py: Python<'py>,
+    points: PyReadonlyArray2<'py, f64>,
+    outward: V3,
+    mode: &str,
+    axis: V3,
+    angle: f64,
+    fit: &str,
+) -> PyResult<(V3, V3, f64, f64)> {
+    let pts = rows(py, &points, 3, "points")?;
+    let (mode, fit) = (mode.to_string(), fit.to_string());
+    let d = run(py, move || {
+        let fit = match fit.as_str() {
+            "chebyshev" => PlaneFit::Chebyshev,
+            "least-squares" => PlaneFit::LeastSquares,
+            other => return Err(GkError::config(format!("unknown datum fit {other:?}"))),
+        };
+        datum::plane(pts, arr(outward), orientation(&mode, axis, angle)?, fit)
+    })?;
+    Ok((v3(d.point), v3(d.normal), d.offset, d.deviation))
+}
+
+/// Cylinder of a fixed axis direction: (point, direction, radius, r_min, r_max).
+#[pyfunction]
+fn gdt_axis_along<'py>(py: Python<'py>, points: PyReadonlyArray2<'py, f64>, direction: V3, fit: &str) -> PyResult<(V3, V3, f64, f64, f64)> {
+    let pts = rows(py, &points, 3, "points")?;
+    let fit = fit.to_string();
+    let a = run(py, move || {
+        let fit = match fit.as_str() {
+            "inscribed" => AxisFit::Inscribed,
+            "circumscribed" => AxisFit::Circumscribed,
+            "least-squares" => AxisFit::LeastSquares,
+            other => return Err(GkError::config(format!("unknown axis fit {other:?}"))),
+        };
+        datum::axis_along(pts, arr(direction), fit)
+    })?;
+    Ok((v3(a.point), v3(a.direction), a.radius, a.r_min, a.r_max))
+}
+
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(gdt_min_width_2d, m)?)?;
+    m.add_function(wrap_pyfunction!(gdt_slab, m)?)?;
+    m.add_function(wrap_pyfunction!(gdt_datum_plane, m)?)?;
+    m.add_function(wrap_pyfunction!(gdt_axis_along, m)?)?;
+    register_sphere(m)?;
+    Ok(())
+}
+
+/// Minimum-zone sphere of (n, 3) points: (center, r_in, r_out).
+#[pyfunction]
+fn gdt_min_zone_sphere<'py>(py: Python<'py>, points: PyReadonlyArray2<'py, f64>) -> PyResult<(V3, f64, f64)> {
+    let pts = rows(py, &points, 3, "points")?;
+    let z = run(py, || gagekit_gdt::sphere::min_zone(pts))?;
+    Ok((v3(z.center), z.r_in, z.r_out))
+}
+
+pub fn register_sphere(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(gdt_min_zone_sphere, m)?)
+}

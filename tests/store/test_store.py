@@ -1,0 +1,190 @@
+"""The results database on SQLite and on a real PostgreSQL server: schema, versions,
+idempotent writes, 8 concurrent writer processes, exports."""
+
+import json
+import multiprocessing
+import socket
+from datetime import datetime, timedelta, timezone
+
+import pytest
+import sqlalchemy as sa
+
+from gagekit.errors import SchemaVersionError, StoreError
+from gagekit.store import ResultStore, head_revision, known_revisions, upgrade
+from gagekit.store import models as m
+from gagekit.store.schema import create_engine
+from gagekit.batch.tasks import Outcome
+
+
+@pytest.fixture(params=["sqlite", "postgresql"])
+def db_url(request, tmp_path):
+    if request.param == "sqlite":
+        return f"sqlite:///{tmp_path / 'r.db'}"
+    return request.getfixturevalue("postgres_url")
+
+
+T0 = datetime(2026, 1, 5, 8, 0, tzinfo=timezone.utc)
+
+
+def gage_result(k: int) -> dict:
+    """A result shaped as `gage check --json` prints it (the detail rows come from it)."""
+    return {"status": "conforming", "objective": 1.0 + k, "largest_release": 0.0,
+            "transform": {"alpha": 0.0, "beta": 1e-3 * k, "gamma": 0.0, "dx": 0.1 * k, "dy": -0.2, "dz": 0.3, "matrix": []},
+            "gages": [{"name": f"g{j}", "region": "r", "points": 10, "filtered_points": 5, "allowance_before": 0.5 * j,
+                       "allowance_after": 0.25 * j + 0.01 * k, "q": 1.0, "slack": 0.0} for j in range(3)]}
+
+
+def outcome(k: int) -> Outcome:
+    return Outcome("ok", gage_result(k), None, T0 + timedelta(minutes=k), T0 + timedelta(minutes=k, seconds=2), 2.0, "w")
+
+
+def test_migrations_create_exactly_the_models(tmp_path):
+    from alembic.autogenerate import compare_metadata
+    from alembic.runtime.migration import MigrationContext
+
+    store = ResultStore(f"sqlite:///{tmp_path / 'a.db'}")
+    with store.engine.connect() as conn:
+        diff = compare_metadata(MigrationContext.configure(conn), m.Base.metadata)
+    store.close()
+    assert diff == []
+    assert store.revision == head_revision() == known_revisions()[-1]
+
+
+def test_migrations_match_models_on_postgresql(postgres_url):
+    from alembic.autogenerate import compare_metadata
+    from alembic.runtime.migration import MigrationContext
+
+    store = ResultStore(postgres_url)
+    with store.engine.connect() as conn:
+        diff = compare_metadata(MigrationContext.configure(conn), m.Base.metadata)
+    store.close()
+    assert diff == []
+
+
+def test_record_is_idempotent_and_keeps_every_path(db_url):
+    store = ResultStore(db_url)
+    sid = store.ensure_spec("gage", "a" * 64, {"spec": {}}, "x.toml", "casting")
+    assert store.ensure_spec("gage", "a" * 64, {"spec": {}}, "x.toml", "casting") == sid
+    assert store.record("gage", sid, "c" * 64, 100, T0, ["one.ply", "two.ply"], outcome(1)) is True
+    assert store.record("gage", sid, "c" * 64, 100, T0, ["three.ply"], outcome(2)) is False
+    found = store.find("c" * 64, sid)
+    assert found.status == "ok" and found.result == gage_result(1) and found.path == "one.ply"
+    with store.engine.connect() as conn:
+        assert conn.execute(sa.select(sa.func.count()).select_from(m.Result)).scalar() == 1
+        assert conn.execute(sa.select(sa.func.count()).select_from(m.GageAllowance)).scalar() == 3
+        paths = set(conn.execute(sa.select(m.ScanPath.path)).scalars())
+        check = conn.execute(sa.select(m.GageCheck.beta, m.GageCheck.dx)).one()
+    assert paths == {"one.ply", "two.ply", "three.ply"}
+    assert check == (1e-3, 0.1)
+    store.close()
+
+
+def _writer(url: str, spec_hash: str, ks: list, barrier) -> int:
+    store = ResultStore(url)
+    sid = store.ensure_spec("gage", spec_hash, {"spec": {"n": 1}}, None, None)
+    barrier.wait()
+    mine = sum(store.record("gage", sid, f"{k:064d}", 10 + k, T0, [f"scan_{k}.ply", f"copy_{k % 8}/scan_{k}.ply"], outcome(k))
+               for k in ks)
+    store.close()
+    return mine
+
+
+def test_eight_processes_write_200_results_and_lose_nothing(db_url):
+    """8 processes at once, each result offered by two of them: 200 rows, each once, intact."""
+    ctx = multiprocessing.get_context("fork")  # 8 real processes; fork spares 8 interpreter start-ups
+    procs = 8
+    owners = {w: [k for k in range(200) if k % procs == w or (k + 3) % procs == w] for w in range(procs)}
+    with ctx.Manager() as mgr:
+        barrier = mgr.Barrier(procs)
+        with ctx.Pool(procs) as pool:
+            inserted = pool.starmap(_writer, [(db_url, "b" * 64, owners[w], barrier) for w in range(procs)])
+    assert sum(inserted) == 200  # every result stored by exactly one writer
+    engine = create_engine(db_url)
+    with engine.connect() as conn:
+        rows = conn.execute(sa.select(m.Scan.content_hash, m.Result.result, m.Result.seconds)
+                            .join(m.Result, m.Result.scan_id == m.Scan.id)).all()
+        n_allow = conn.execute(sa.select(sa.func.count()).select_from(m.GageAllowance)).scalar()
+        n_paths = conn.execute(sa.select(sa.func.count()).select_from(m.ScanPath)).scalar()
+        n_scans = conn.execute(sa.select(sa.func.count()).select_from(m.Scan)).scalar()
+    engine.dispose()
+    assert len(rows) == 200 and n_scans == 200 and n_allow == 600 and n_paths == 400
+    got = {int(h): r for h, r, _ in rows}
+    assert got == {k: gage_result(k) for k in range(200)}
+
+
+def test_newer_schema_is_refused_naming_the_version(db_url):
+    ResultStore(db_url).close()
+    engine = create_engine(db_url)
+    with engine.begin() as conn:
+        conn.execute(sa.text("UPDATE alembic_version SET version_num = '0999'"))
+    engine.dispose()
+    with pytest.raises(SchemaVersionError, match=r"schema version 0999, newer than this gagekit knows"):
+        ResultStore(db_url)
+
+
+def test_older_schema_asks_for_db_upgrade(tmp_path):
+    url = f"sqlite:///{tmp_path / 'old.db'}"
+    engine = create_engine(url)
+    from alembic import command
+    from alembic.config import Config
+
+    from gagekit.store.schema import MIGRATIONS
+
+    revs = known_revisions()
+    if len(revs) < 2:
+        pytest.skip("a single schema revision: nothing older to upgrade from")
+    cfg = Config()
+    cfg.set_main_option("script_location", str(MIGRATIONS))
+    with engine.begin() as conn:
+        cfg.attributes["connection"] = conn
+        command.upgrade(cfg, revs[-2])
+    engine.dispose()
+    with pytest.raises(SchemaVersionError, match="gagekit db upgrade"):
+        ResultStore(url)
+    assert upgrade(url) == (revs[-2], revs[-1])
+    ResultStore(url).close()
+
+
+def test_a_foreign_database_is_refused(tmp_path):
+    import sqlite3
+
+    f = tmp_path / "other.db"
+    with sqlite3.connect(f) as c:
+        c.execute("CREATE TABLE invoices (id INTEGER)")
+    with pytest.raises(StoreError, match="not a gagekit results database"):
+        ResultStore(f"sqlite:///{f}")
+
+
+def test_unreachable_databases_name_their_url(tmp_path):
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    with pytest.raises(StoreError, match=rf"127.0.0.1:{port}/nowhere") as e:
+        ResultStore(f"postgresql://who:secret@127.0.0.1:{port}/nowhere")
+    assert "secret" not in str(e.value)
+    with pytest.raises(StoreError, match="does not exist"):
+        ResultStore(f"sqlite:///{tmp_path / 'no' / 'such' / 'r.db'}")
+    with pytest.raises(StoreError, match="unsupported database"):
+        ResultStore("mysql://x@localhost/db")
+
+
+@pytest.mark.parametrize("fmt", ["parquet", "csv"])
+def test_export_writes_every_table(db_url, tmp_path, fmt):
+    import pyarrow.csv as pacsv
+    import pyarrow.parquet as pq
+
+    from gagekit.store.export import export_tables
+
+    store = ResultStore(db_url)
+    sid = store.ensure_spec("gage", "d" * 64, {"spec": {"x": 1}}, "g.toml", "p")
+    for k in range(5):
+        store.record("gage", sid, f"{k:064d}", 5, T0, [f"s{k}.ply"], outcome(k))
+    store.close()
+    files = export_tables(db_url, tmp_path / "out", fmt)
+    assert {f.name for f in files} == {f"{t}.{fmt}" for t in m.TABLES}
+    read = pq.read_table if fmt == "parquet" else pacsv.read_csv
+    allow = read(tmp_path / "out" / f"gage_allowances.{fmt}")
+    results = read(tmp_path / "out" / f"results.{fmt}")
+    assert allow.num_rows == 15 and results.num_rows == 5
+    assert json.loads(results.column("result")[2].as_py()) == gage_result(2)
+    assert sorted(allow.column("allowance_after").to_pylist())[-1] == pytest.approx(0.54)
