@@ -100,3 +100,17 @@ def test_excel_bom_observations_csv(tmp_path, machine):
     f.write_bytes(("\ufeff" + ",".join(cols) + "\n" + row + "\n" + row + "\n").encode("utf-8"))
     obs = read_observations(f, machine)
     assert obs.commands.shape == (2, len(machine.joint_names))
+
+
+@pytest.mark.parametrize("comment", ["", "c", "cc", "ccc"])
+def test_ply_points_are_aligned_whatever_the_header_length(tmp_path, comment):
+    """The no-copy path maps the file only when the data starts on an 8-byte boundary:
+    kernels need aligned float64 (the header's length decides)."""
+    pts = np.arange(12.0).reshape(4, 3)
+    f = tmp_path / "a.ply"
+    f.write_bytes(f"ply\nformat binary_little_endian 1.0\ncomment {comment}\nelement vertex 4\nproperty double x\n"
+                  "property double y\nproperty double z\nend_header\n".encode() + pts.tobytes())
+    got = gagekit.read_points(f)
+    assert got.flags.aligned and got.flags.c_contiguous
+    np.testing.assert_array_equal(got, pts)
+    gagekit.convex_hull_indices(np.vstack([got, [[5.0, -1.0, 7.0]]]))  # a kernel accepts it
