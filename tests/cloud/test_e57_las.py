@@ -158,3 +158,54 @@ def test_geographic_las_needs_units(tmp_path):
     with pytest.raises(FileFormatError, match="degrees"):
         gagekit.read_points(f)
     assert gagekit.read_cloud(f, units="m").source_unit == "m"
+
+
+def _crc32c(data: bytes) -> int:
+    """CRC-32C (Castagnoli), the checksum of E57 pages (ASTM E2807, stored big-endian)."""
+    table = []
+    for i in range(256):
+        c = i
+        for _ in range(8):
+            c = (c >> 1) ^ 0x82F63B78 if c & 1 else c >> 1
+        table.append(c)
+    crc = 0xFFFFFFFF
+    for byte in data:
+        crc = table[(crc ^ byte) & 0xFF] ^ (crc >> 8)
+    return crc ^ 0xFFFFFFFF
+
+
+def test_spherical_without_range_is_an_error(tmp_path):
+    """tiny_spherical.e57 with its sphericalRange field renamed to intensity (same size,
+    page checksum recomputed): azimuth and elevation without range are directions only."""
+    b = bytearray((E57 / "tiny_spherical.e57").read_bytes())
+    old, new = b'<sphericalRange type="Float"/>', b'<intensity type="Float"/>'
+    i = b.index(old)
+    b[i : i + len(old)] = new.ljust(len(old))
+    page = i // 1024 * 1024
+    assert _crc32c(bytes((E57 / "tiny_spherical.e57").read_bytes()[page : page + 1020])).to_bytes(4, "big") == b[page + 1020 : page + 1024]
+    b[page + 1020 : page + 1024] = _crc32c(bytes(b[page : page + 1020])).to_bytes(4, "big")
+    f = tmp_path / "no_range.e57"
+    f.write_bytes(bytes(b))
+    with pytest.raises(FileFormatError, match="without sphericalRange"):
+        gagekit.read_points(f)
+
+
+def test_poses_of_every_scan_are_applied(tmp_path):
+    # a pose in a real file: pye57's translationWithoutRotation.e57, translation (4, 5, 6) m
+    (raw,) = _pye57_raw(E57 / "translationWithoutRotation.e57")
+    xyz = np.column_stack([raw["cartesianX"], raw["cartesianY"], raw["cartesianZ"]])
+    np.testing.assert_allclose(gagekit.read_points(E57 / "translationWithoutRotation.e57"), (xyz + [4, 5, 6]) * 1000)
+    # two scans written by pye57 (libE57), the first turned 90 degrees about z and moved
+    pye57 = pytest.importorskip("pye57")
+    f = tmp_path / "two.e57"
+    w = pye57.E57(str(f), mode="w")
+    local = {"cartesianX": np.array([1.0, 0.0, 0.5]), "cartesianY": np.array([0.0, 1.0, 0.25]), "cartesianZ": np.array([0.0, 0.0, 2.0])}
+    half = np.pi / 4  # quaternion (w, x, y, z) of a 90-degree turn about z
+    w.write_scan_raw(local, rotation=np.array([np.cos(half), 0, 0, np.sin(half)]), translation=np.array([1.0, 2.0, 3.0]))
+    w.write_scan_raw(local)
+    w.close()
+    cloud = gagekit.read_cloud(f)
+    p = np.column_stack([local["cartesianX"], local["cartesianY"], local["cartesianZ"]])
+    turned = np.column_stack([-p[:, 1], p[:, 0], p[:, 2]]) + [1.0, 2.0, 3.0]
+    assert cloud.scans == 2
+    np.testing.assert_allclose(cloud.points, np.vstack([turned, p]) * 1000, atol=1e-9)

@@ -163,7 +163,8 @@ def _to_mm(raw: Raw, p: Path, override: Optional[str]) -> Cloud:
         pts = pts * np.array([s, s, sz][: pts.shape[1]]) if sz != s else pts * s
     if len(pts) == 0:
         raise FileFormatError(f"{p}: the file holds no points")
-    _check_finite(pts, p)
+    if not raw.finite_checked or s != 1.0 or sz != 1.0:  # scaling can overflow to inf
+        _check_finite(pts, p)
     return Cloud(np.ascontiguousarray(pts), str(p), raw.format, unit, s, basis, sz,
                  raw.scans, raw.invalid_dropped, tuple(warns))
 
@@ -210,10 +211,10 @@ def _sniff(p: Path) -> str:
 
 
 def _check_finite(pts: np.ndarray, p: Path) -> None:
-    bad = ~np.isfinite(pts).all(axis=1)
-    if bad.any():
-        i = int(np.argmax(bad))
-        raise InvalidInputError(f"{p}: point {i} has a non-finite coordinate {pts[i].tolist()}")
+    if np.isfinite(pts).all():  # flat: several times faster than a per-row reduction
+        return
+    i = int(np.argmax(~np.isfinite(pts).all(axis=1)))
+    raise InvalidInputError(f"{p}: point {i} has a non-finite coordinate {pts[i].tolist()}")
 
 
 def _write_ply(p: Path, pts: np.ndarray, binary: bool) -> None:

@@ -24,7 +24,7 @@ __all__ = ["SHAPES", "SHAPES_3D", "fit_file", "load_points", "normalize_shape", 
 def text_columns(path: Union[str, Path]) -> int:
     """Number of numeric fields on the first data line of a text file (0 if none)."""
     try:
-        with open(path, encoding="utf-8", errors="replace") as fh:
+        with open(path, encoding="utf-8-sig", errors="replace") as fh:
             for _, line in zip(range(1000), fh):
                 fields = [f for f in re.split(r"[,;\s]+", line.strip()) if f]
                 if not fields or fields[0].startswith("#"):

@@ -29,18 +29,80 @@ pub struct Parsed {
     pub columns: Vec<usize>,
     /// Number of columns of the first data line.
     pub ncols: usize,
+    /// Whether the file was read with a decimal comma ([`Style::DecimalComma`]).
+    pub decimal_comma: bool,
 }
 
-fn is_sep(b: u8) -> bool {
-    matches!(b, b',' | b';' | b' ' | b'\t' | b'\r')
+/// How a file separates its values: the usual way (comma, semicolon, space, tab), or the
+/// way of locales with a decimal comma (`1,5;2,5;3,5` as a spreadsheet writes it in
+/// Germany or France, or `1,5 2,5 3,5`): then only semicolons and whitespace separate and
+/// a comma is the decimal mark.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Style {
+    Standard,
+    DecimalComma,
 }
 
-fn is_skipped(line: &[u8]) -> bool {
+fn is_sep(b: u8, style: Style) -> bool {
+    match style {
+        Style::Standard => matches!(b, b',' | b';' | b' ' | b'\t' | b'\r'),
+        Style::DecimalComma => matches!(b, b';' | b' ' | b'\t' | b'\r'),
+    }
+}
+
+fn is_hard(b: u8, style: Style) -> bool {
+    match style {
+        Style::Standard => matches!(b, b',' | b';'),
+        Style::DecimalComma => b == b';',
+    }
+}
+
+/// A token that reads as a number only with a decimal comma: digits, one comma, digits
+/// (an optional sign and exponent), e.g. `-1,5` or `2,5e3`.
+fn is_comma_decimal(t: &[u8]) -> bool {
+    let t = t.strip_prefix(b"-").or_else(|| t.strip_prefix(b"+")).unwrap_or(t);
+    let Some(c) = t.iter().position(|&b| b == b',') else { return false };
+    let (int, frac) = (&t[..c], &t[c + 1..]);
+    let frac_digits = frac.iter().take_while(|b| b.is_ascii_digit()).count();
+    let rest = &frac[frac_digits..];
+    !int.is_empty()
+        && int.iter().all(u8::is_ascii_digit)
+        && frac_digits > 0
+        && (rest.is_empty()
+            || (matches!(rest[0], b'e' | b'E') && rest.len() > 1 && {
+                let e = rest[1..].strip_prefix(b"-").or_else(|| rest[1..].strip_prefix(b"+")).unwrap_or(&rest[1..]);
+                !e.is_empty() && e.iter().all(u8::is_ascii_digit)
+            }))
+}
+
+/// The separator style of a file, from its first line that starts like a number: a
+/// semicolon with a decimal-comma number (`1,5;2,5`), or whitespace-separated tokens that
+/// all are decimal-comma numbers (`1,5 2,5 3,5`), mean [`Style::DecimalComma`].
+pub fn detect_style(line: &[u8]) -> Style {
+    let t = trim(line);
+    let tokens: Vec<&[u8]> = t
+        .split(|&b| matches!(b, b';' | b' ' | b'\t' | b'\r'))
+        .filter(|x| !x.is_empty())
+        .collect();
+    let any_comma_decimal = tokens.iter().any(|x| is_comma_decimal(x));
+    if t.contains(&b';') && any_comma_decimal {
+        return Style::DecimalComma;
+    }
+    if !t.contains(&b';')
+        && tokens.len() >= 2
+        && tokens.iter().all(|x| is_comma_decimal(x))
+    {
+        return Style::DecimalComma;
+    }
+    Style::Standard
+}
+
+pub(crate) fn is_skipped(line: &[u8]) -> bool {
     let t = trim(line);
     t.is_empty() || t[0] == b'#' || t.starts_with(b"//")
 }
 
-fn trim(mut s: &[u8]) -> &[u8] {
+pub(crate) fn trim(mut s: &[u8]) -> &[u8] {
     while let Some((&f, rest)) = s.split_first() {
         if f.is_ascii_whitespace() {
             s = rest;
@@ -60,19 +122,19 @@ fn trim(mut s: &[u8]) -> &[u8] {
 
 /// Split a line into fields: runs of separators count as one, except that
 /// a comma or semicolon always separates (so `1,,2` has an empty field).
-fn fields(line: &[u8]) -> Vec<&[u8]> {
+fn fields(line: &[u8], style: Style) -> Vec<&[u8]> {
     let line = trim(line);
     let mut out = Vec::new();
     let mut start = 0;
     let mut i = 0;
     while i < line.len() {
-        if is_sep(line[i]) {
+        if is_sep(line[i], style) {
             out.push(&line[start..i]);
             // swallow surrounding whitespace and at most one hard separator
-            let mut hard = matches!(line[i], b',' | b';');
+            let mut hard = is_hard(line[i], style);
             i += 1;
-            while i < line.len() && is_sep(line[i]) {
-                if matches!(line[i], b',' | b';') {
+            while i < line.len() && is_sep(line[i], style) {
+                if is_hard(line[i], style) {
                     if hard {
                         out.push(&line[i..i]); // empty field between two hard separators
                     }
@@ -91,14 +153,30 @@ fn fields(line: &[u8]) -> Vec<&[u8]> {
     out
 }
 
-fn parse_f64(s: &[u8]) -> Option<f64> {
+pub(crate) fn parse_f64(s: &[u8]) -> Option<f64> {
     fast_float2::parse::<f64, _>(s).ok()
+}
+
+/// A number in `style`: with [`Style::DecimalComma`] the comma is the decimal mark.
+fn parse_num(s: &[u8], style: Style) -> Option<f64> {
+    if style == Style::DecimalComma {
+        if let Some(c) = s.iter().position(|&b| b == b',') {
+            if s.len() > 64 || s[c + 1..].contains(&b',') {
+                return None;
+            }
+            let mut buf = [0u8; 64];
+            buf[..s.len()].copy_from_slice(s);
+            buf[c] = b'.';
+            return parse_f64(&buf[..s.len()]);
+        }
+    }
+    parse_f64(s)
 }
 
 /// Column indices named x, y, z (case-insensitive, units in brackets allowed)
 /// in a header line, if all the needed ones are present.
-fn header_columns(line: &[u8], dim: usize) -> Option<Vec<usize>> {
-    let names: Vec<String> = fields(line)
+fn header_columns(line: &[u8], dim: usize, style: Style) -> Option<Vec<usize>> {
+    let names: Vec<String> = fields(line, style)
         .iter()
         .map(|f| {
             let s = String::from_utf8_lossy(f).to_ascii_lowercase();
@@ -113,30 +191,44 @@ fn header_columns(line: &[u8], dim: usize) -> Option<Vec<usize>> {
 }
 
 /// Find `\n`-terminated lines. Returns the byte offsets of the line starts.
-fn line_starts(bytes: &[u8]) -> Vec<usize> {
+pub(crate) fn line_starts(bytes: &[u8]) -> Vec<usize> {
     let mut starts = vec![0];
     starts.extend(memchr::memchr_iter(b'\n', bytes).map(|i| i + 1).filter(|&i| i < bytes.len()));
     starts
 }
 
-fn line_at<'a>(bytes: &'a [u8], starts: &[usize], k: usize) -> &'a [u8] {
+pub(crate) fn line_at<'a>(bytes: &'a [u8], starts: &[usize], k: usize) -> &'a [u8] {
     let end = starts.get(k + 1).copied().unwrap_or(bytes.len());
     &bytes[starts[k]..end]
 }
 
 /// Parse an ASCII point cloud. `what` names the file in error messages.
+///
+/// A UTF-8 byte-order mark (as Excel writes "CSV UTF-8") is skipped; UTF-16 text is
+/// refused with a hint. The separator style (decimal comma or not) is decided once from
+/// the first line that starts like a number ([`detect_style`]).
 pub fn parse_ascii(bytes: &[u8], opts: &AsciiOptions, what: &str) -> Result<Parsed> {
     let dim = opts.dim;
     if !(2..=3).contains(&dim) {
         return Err(GkError::invalid(format!("{what}: dim must be 2 or 3, got {dim}")));
     }
-    if bytes.contains(&0) {
+    if bytes.starts_with(&[0xFF, 0xFE]) || bytes.starts_with(&[0xFE, 0xFF]) {
+        return Err(GkError::invalid(format!(
+            "{what}: UTF-16 text (as Excel's \"Unicode Text\"); save it as CSV UTF-8 or plain ASCII"
+        )));
+    }
+    let bytes = bytes.strip_prefix(&[0xEF, 0xBB, 0xBF]).unwrap_or(bytes);
+    if memchr::memchr(0, bytes).is_some() {
         return Err(GkError::invalid(format!(
             "{what}: this is a binary file, not an ASCII point list (XYZ/CSV/TXT)"
         )));
     }
     let starts = line_starts(bytes);
     let nlines = if bytes.is_empty() { 0 } else { starts.len() };
+    let style = (opts.skip_lines.min(nlines)..nlines)
+        .map(|k| trim(line_at(bytes, &starts, k)))
+        .find(|l| !is_skipped(l) && matches!(l[0], b'0'..=b'9' | b'-' | b'+' | b'.'))
+        .map_or(Style::Standard, detect_style);
 
     // Header: leading non-skipped lines whose first `dim` fields are not all numbers.
     let mut k = opts.skip_lines.min(nlines);
@@ -146,8 +238,8 @@ pub fn parse_ascii(bytes: &[u8], opts: &AsciiOptions, what: &str) -> Result<Pars
     while k < nlines {
         let line = line_at(bytes, &starts, k);
         if !is_skipped(line) {
-            let f = fields(line);
-            if f.len() >= dim && f[..dim].iter().all(|x| parse_f64(x).is_some()) {
+            let f = fields(line, style);
+            if f.len() >= dim && f[..dim].iter().all(|x| parse_num(x, style).is_some()) {
                 first_data = Some((k, f.len()));
                 break;
             }
@@ -168,8 +260,8 @@ pub fn parse_ascii(bytes: &[u8], opts: &AsciiOptions, what: &str) -> Result<Pars
     };
     // A header with one name per data column may name the x, y, z columns.
     let columns = header
-        .filter(|h| fields(h).len() == ncols)
-        .and_then(|h| header_columns(h, dim))
+        .filter(|h| fields(h, style).len() == ncols)
+        .and_then(|h| header_columns(h, dim, style))
         .unwrap_or_else(|| (0..dim).collect());
     let need = columns.iter().max().copied().unwrap_or(0) + 1;
     if ncols < need {
@@ -194,9 +286,9 @@ pub fn parse_ascii(bytes: &[u8], opts: &AsciiOptions, what: &str) -> Result<Pars
                 if is_skipped(line) {
                     continue;
                 }
-                let f = fields(line);
+                let f = fields(line, style);
                 for &c in &columns {
-                    let v = f.get(c).and_then(|x| parse_f64(x)).ok_or_else(|| {
+                    let v = f.get(c).and_then(|x| parse_num(x, style)).ok_or_else(|| {
                         GkError::invalid(format!(
                             "{what}: line {}: expected {} numbers, found {:?}",
                             k + 1,
@@ -220,7 +312,7 @@ pub fn parse_ascii(bytes: &[u8], opts: &AsciiOptions, what: &str) -> Result<Pars
     for p in parts {
         coords.extend(p?);
     }
-    Ok(Parsed { coords, header_lines, columns, ncols })
+    Ok(Parsed { coords, header_lines, columns, ncols, decimal_comma: style == Style::DecimalComma })
 }
 
 /// Write points as ASCII, one per line, values separated by `sep`, with an
@@ -310,6 +402,32 @@ mod tests {
         let text = write_ascii(&coords, 3, b' ', Some("x y z")).unwrap();
         let p = parse_ascii(&text, &AsciiOptions::default(), "big").unwrap();
         assert_eq!(p.coords, coords);
+    }
+
+    #[test]
+    fn decimal_comma_files() {
+        // issue 12: `1,5;2,5;3,5` was read as (1, 5, 2)
+        let p = parse("1,5;2,5;3,5\n-4,25;5;6,0e1\n").unwrap();
+        assert_eq!(p.coords, vec![1.5, 2.5, 3.5, -4.25, 5., 60.]);
+        assert!(p.decimal_comma);
+        let q = parse("X;Y;Z\n1,5;2;3\n").unwrap();
+        assert_eq!(q.coords, vec![1.5, 2., 3.]);
+        let r = parse("1,5 2,5 3,5\n1,0\t2,0\t3,0\n").unwrap();
+        assert_eq!(r.coords, vec![1.5, 2.5, 3.5, 1., 2., 3.]);
+        // plain comma-separated files keep their meaning
+        let s = parse("1,5,2\n1, 2, 3\n1;2;3\n").unwrap();
+        assert_eq!(s.coords, vec![1., 5., 2., 1., 2., 3., 1., 2., 3.]);
+        assert!(!s.decimal_comma);
+        // a decimal-comma file whose later line has two commas in a field is an error
+        assert!(parse("1,5;2,5;3,5\n1,2,3;4;5\n").is_err());
+    }
+
+    #[test]
+    fn byte_order_marks() {
+        let p = parse_ascii(b"\xEF\xBB\xBFx,y,z\n1,2,3\n", &AsciiOptions::default(), "bom.csv").unwrap();
+        assert_eq!((p.header_lines, p.coords), (1, vec![1., 2., 3.]));
+        let e = parse_ascii(b"\xFF\xFEx\x00", &AsciiOptions::default(), "u16.csv").unwrap_err();
+        assert!(e.message.contains("UTF-16"), "{}", e.message);
     }
 
     #[test]

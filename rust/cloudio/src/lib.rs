@@ -6,6 +6,15 @@
 //! columns ignored. With a header naming `x`, `y`, `z` columns those are used,
 //! otherwise the first columns. Errors name the 1-based line of the file.
 
-pub mod ascii;
+//!
+//! Also binary formats: PLY ([`read_ply`], ASCII and binary, counts checked against the
+//! file size) and E57 ([`read_e57`], through the pure-Rust `e57` crate).
 
-pub use ascii::{parse_ascii, write_ascii, AsciiOptions, Parsed};
+pub mod ascii;
+pub mod e57;
+mod e57_fast;
+pub mod ply;
+
+pub use ascii::{detect_style, parse_ascii, write_ascii, AsciiOptions, Parsed, Style};
+pub use e57::{read_e57, E57Points};
+pub use ply::{read_ply, read_ply_file, PlyFile, PlyPoints};

@@ -1,10 +1,10 @@
-//! Bindings of gagekit-cloudio: ASCII point-cloud reading and writing.
+//! Bindings of gagekit-cloudio: point-cloud reading (ASCII, PLY, E57) and ASCII writing.
 
 use crate::arrays::rows;
 use crate::errors::{invalid, run};
-use gagekit_cloudio::{parse_ascii, write_ascii, AsciiOptions};
+use gagekit_cloudio::{parse_ascii, read_e57, write_ascii, AsciiOptions, PlyFile};
 use gagekit_core::GkError;
-use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray2};
+use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray2};
 use pyo3::prelude::*;
 
 /// A parsed ASCII point file.
@@ -37,6 +37,72 @@ fn cloud_read_ascii<'py>(
     Ok(AsciiCloud { points: arr.into_any().unbind(), header_lines: parsed.header_lines, columns: parsed.columns })
 }
 
+/// The vertices of a PLY file.
+#[pyclass(frozen, get_all, module = "gagekit._core")]
+pub struct PlyCloud {
+    /// (n, 3) coordinates.
+    points: Py<PyAny>,
+    /// `ascii`, `binary_little_endian` or `binary_big_endian`.
+    format: &'static str,
+}
+
+/// Read the vertices of a PLY file (memory-mapped), decoded straight into numpy's
+/// allocation (one pass, no copy).
+#[pyfunction]
+fn cloud_read_ply(py: Python<'_>, path: String) -> PyResult<PlyCloud> {
+    let file = run(py, || PlyFile::open(std::path::Path::new(&path), &path))?;
+    let n = file.vertex_count();
+    // SAFETY: uninitialised until `read_into` has written every element; on an error the
+    // array is dropped without being seen by Python.
+    let arr = unsafe { PyArray2::<f64>::new(py, [n, 3], false) };
+    {
+        // SAFETY: the array was just created, is C-contiguous and nothing else refers to it.
+        let out = unsafe { arr.as_slice_mut() }.map_err(|e| invalid(e.to_string()))?;
+        run(py, || file.read_into(out))?;
+    }
+    Ok(PlyCloud { points: arr.into_any().unbind(), format: file.format_name() })
+}
+
+/// Where the vertices of a PLY file are, when they can be used without decoding.
+#[pyclass(frozen, get_all, module = "gagekit._core")]
+pub struct PlyLayout {
+    /// Number of vertices the header declares.
+    vertices: usize,
+    /// Byte offset of the first vertex when the file is in gagekit's own layout (binary
+    /// little-endian `double x, y, z` only; sizes and finiteness checked), else None.
+    direct_offset: Option<usize>,
+}
+
+/// Open and check a PLY file; see [`PlyLayout`]. Python then maps the file
+/// (copy-on-write) as the array: no copy at all.
+#[pyfunction]
+fn cloud_ply_layout(py: Python<'_>, path: String) -> PyResult<PlyLayout> {
+    run(py, || {
+        let f = PlyFile::open(std::path::Path::new(&path), &path)?;
+        Ok(PlyLayout { vertices: f.vertex_count(), direct_offset: f.direct_f64_offset()? })
+    })
+}
+
+/// The points of every scan of an E57 file.
+#[pyclass(frozen, get_all, module = "gagekit._core")]
+pub struct E57Cloud {
+    /// (n, 3) coordinates in metres, poses applied, invalid points dropped.
+    points: Py<PyAny>,
+    /// Number of scans.
+    scans: usize,
+    /// Points dropped because their invalid state was not 0.
+    invalid_dropped: usize,
+}
+
+/// Read every scan of an E57 file.
+#[pyfunction]
+fn cloud_read_e57(py: Python<'_>, path: String) -> PyResult<E57Cloud> {
+    let p = run(py, || read_e57(std::path::Path::new(&path), &path))?;
+    let n = p.coords.len() / 3;
+    let arr = PyArray1::from_vec(py, p.coords).reshape([n, 3])?;
+    Ok(E57Cloud { points: arr.into_any().unbind(), scans: p.scans, invalid_dropped: p.invalid_dropped })
+}
+
 /// Write points (n, d) as ASCII with separator `sep` and an optional header line.
 #[pyfunction]
 #[pyo3(signature = (path, points, sep=",", header=None))]
@@ -63,5 +129,11 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<AsciiCloud>()?;
     m.add_function(wrap_pyfunction!(cloud_read_ascii, m)?)?;
     m.add_function(wrap_pyfunction!(cloud_write_ascii, m)?)?;
+    m.add_class::<PlyCloud>()?;
+    m.add_class::<PlyLayout>()?;
+    m.add_class::<E57Cloud>()?;
+    m.add_function(wrap_pyfunction!(cloud_read_ply, m)?)?;
+    m.add_function(wrap_pyfunction!(cloud_ply_layout, m)?)?;
+    m.add_function(wrap_pyfunction!(cloud_read_e57, m)?)?;
     Ok(())
 }

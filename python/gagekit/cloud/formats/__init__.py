@@ -21,3 +21,4 @@ class Raw:
     scans: int = 1
     invalid_dropped: int = 0
     warnings: list = field(default_factory=list)
+    finite_checked: bool = False  # the (Rust) reader has already refused NaN and inf

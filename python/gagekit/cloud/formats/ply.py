@@ -1,4 +1,10 @@
-"""PLY (ASCII, binary little- and big-endian), read with ``plyfile``. No unit: mm."""
+"""PLY (ASCII, binary little- and big-endian), read by the Rust reader of
+``gagekit-cloudio``: the file is memory-mapped and the vertex ``x y z`` decoded in one
+parallel pass straight into the result; the header's element counts are checked against
+the file (more or less data than declared is an error). A file in gagekit's own layout
+(binary little-endian ``double x, y, z`` only, as :func:`gagekit.write_points` writes it)
+is not decoded at all: the result is a copy-on-write memory map of the file (changing the
+array never changes the file). No unit: mm."""
 
 from __future__ import annotations
 
@@ -6,19 +12,19 @@ from pathlib import Path
 
 import numpy as np
 
-from ...errors import FileFormatError
+from ... import _core
+from ...errors import FileFormatError, InvalidInputError
 from . import Raw
 
 
 def read(p: Path, dim: int) -> Raw:
-    from plyfile import PlyData  # maintained PLY reader (ASCII and binary)
-
     try:
-        ply = PlyData.read(str(p))
-        vertex = ply["vertex"].data
-        pts = np.column_stack([np.asarray(vertex[c], dtype=np.float64) for c in ("x", "y", "z")])
-    except KeyError as exc:
-        raise FileFormatError(f"{p}: PLY file without vertex x, y, z properties ({exc})") from None
-    except Exception as exc:  # plyfile raises several exception types for malformed files
-        raise FileFormatError(f"{p}: not a readable PLY file ({exc})") from None
-    return Raw(np.ascontiguousarray(pts), "ply")
+        layout = _core.cloud_ply_layout(str(p))
+        n, offset = layout.vertices, layout.direct_offset
+        if offset is not None:
+            pts = np.asarray(np.memmap(p, dtype="<f8", mode="c", offset=offset, shape=(n, 3))) if n else np.empty((0, 3))
+            return Raw(pts, "ply binary_little_endian", finite_checked=True)
+        cloud = _core.cloud_read_ply(str(p))
+    except InvalidInputError as exc:
+        raise FileFormatError(str(exc)) from None
+    return Raw(cloud.points, f"ply {cloud.format}", finite_checked=True)

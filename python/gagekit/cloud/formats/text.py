@@ -25,4 +25,4 @@ def read(p: Path, dim: int, nist: bool = False) -> Raw:
             raise FileFormatError(f"{p}: line 1: a NIST .ds file starts with the point count") from None
         if count != len(pts):
             raise FileFormatError(f"{p}: line 1 announces {count} points but the file holds {len(pts)}")
-    return Raw(pts, "nist-ds" if nist else "ascii")
+    return Raw(pts, "nist-ds" if nist else "ascii", finite_checked=True)
