@@ -52,8 +52,12 @@ def test_properties(seed, n, shift, angle):
     moved = pts @ R.T + shift
     for crit in ("mc", "mi", "mz"):
         a, b = gagekit.fit_sphere(pts, crit), gagekit.fit_sphere(moved, crit)
-        # invariance under rigid motion
-        assert abs(a.radius - b.radius) < 1e-7 * (1 + abs(shift)) and abs(a.form_error - b.form_error) < 1e-7 * (1 + abs(shift))
+        # invariance under rigid motion (the MI's centre can slide where fewer than four
+        # points bind it, so only its radius is unique)
+        tol = 1e-7 * (1 + abs(shift))
+        assert abs(a.radius - b.radius) < tol
+        if crit != "mi":
+            assert abs(a.form_error - b.form_error) < tol
     mc = gagekit.fit_sphere(pts, "mc")
     # containment and optimality of the MC: every point inside, the control points on it,
     # and the centre in the convex hull of the control points (the optimality condition)
