@@ -37,7 +37,7 @@ use crate::lanes::{
     best_exchange, bound_terms, exchange_values, rank_update, soa_kernel, soa_screen, soa_update,
     ExchangeIn, RankUpdate, Screen, Soa, LANES,
 };
-use gagekit_core::{GkError, Result};
+use gagekit_core::{interrupt, GkError, Result};
 use rand::seq::{index::sample, SliceRandom};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -626,7 +626,10 @@ impl<'p, 'a> Run<'p, 'a> {
     {
         let rr = self.p.r * self.p.r;
         let run_chunk = |ci: usize, dch: &mut [f64], ech: &mut [f64], bt: &mut [[f64; 3]]| {
-            f(ci * GEMM_CHUNK, dch, ech, bt)
+            // Ctrl-C: skip the remaining chunks (the run is abandoned; `search` reports it)
+            if !interrupt::requested() {
+                f(ci * GEMM_CHUNK, dch, ech, bt)
+            }
         };
         if self.needs_e() {
             self.bound_terms.resize(self.p.n_cand, [0.0; 3]);
@@ -1439,6 +1442,9 @@ impl<'p, 'a> Run<'p, 'a> {
             };
             let mut moved = false;
             for &i in &visit {
+                if interrupt::requested() {
+                    return moves; // Ctrl-C: `search` reports it after the starts return
+                }
                 let m = if self.c.is_spectral() {
                     self.visit_spectral(i)
                 } else {
@@ -1474,6 +1480,9 @@ impl<'p, 'a> Run<'p, 'a> {
         let n = self.p.n();
         let mut moves = 0;
         for _ in 0..rounds {
+            if interrupt::requested() {
+                break;
+            }
             let (best, best_value) = (self.design.clone(), self.value);
             let kick = (n / PERTURB_FRACTION).clamp(1, n);
             for i in sample(rng, n, kick).iter() {
@@ -1640,6 +1649,7 @@ pub fn search(p: &Problem, o: &Options) -> Result<Outcome> {
     };
     let runs: Vec<Result<(Vec<usize>, usize)>> =
         (0..starts).into_par_iter().map(one_start).collect();
+    interrupt::check()?;
     let mut best: Option<(f64, usize, Vec<usize>, Metrics, usize)> = None;
     let mut start_objectives = Vec::with_capacity(starts);
     for (s, res) in runs.into_iter().enumerate() {

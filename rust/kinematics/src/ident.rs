@@ -1,7 +1,7 @@
 //! Identifiability (Eq. 3.14), least squares with covariance (Eq. 3.18) and the closed-form
 //! rigid fit of a measurement frame (Step 1 of Sec. 3.1.5).
 
-use gagekit_core::{check_finite, GkError, Result};
+use gagekit_core::{check_coordinates, check_finite, GkError, Result};
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 
 /// What a design matrix over a rich set of commands reveals about the parameters.
@@ -156,7 +156,7 @@ fn pick_leaders(w: &DMatrix<f64>) -> Vec<usize> {
         let (c, v) = (0..a)
             .filter(|c| !picked.contains(c))
             .map(|c| (c, residual(&basis, c)))
-            .max_by(|x, y| x.1.norm().partial_cmp(&y.1.norm()).unwrap())
+            .max_by(|x, y| x.1.norm().total_cmp(&y.1.norm()))
             .unwrap();
         let nv = v.norm();
         basis.push(v / nv);
@@ -216,7 +216,7 @@ pub fn lstsq(a: &[f64], nrows: usize, ncols: usize, b: &[f64]) -> Result<Lstsq> 
     let vt = svd.v_t.as_ref().unwrap();
     let weakest: Vec<f64> = vt.row(imin).iter().copied().collect();
     let mut singular_values: Vec<f64> = s.iter().copied().collect();
-    singular_values.sort_by(|a, b| b.partial_cmp(a).unwrap());
+    singular_values.sort_by(|a, b| b.total_cmp(a));
     let condition_number = smax / smin;
     if smin.is_nan() || smin <= 1e-12 * smax {
         return Err(GkError::degenerate(format!(
@@ -268,8 +268,8 @@ pub fn rigid_fit(src: &[f64], dst: &[f64]) -> Result<RigidFit> {
             dst.len()
         )));
     }
-    check_finite(src, 3, "nominal positions")?;
-    check_finite(dst, 3, "measured positions")?;
+    check_coordinates(src, 3, "nominal positions")?;
+    check_coordinates(dst, 3, "measured positions")?;
     let n = src.len() / 3;
     if n < 3 {
         return Err(GkError::degenerate(format!("rigid fit: needs at least 3 points, got {n}")));
@@ -292,7 +292,10 @@ pub fn rigid_fit(src: &[f64], dst: &[f64]) -> Result<RigidFit> {
     let svd = h.svd(true, true);
     let (u, vt) = (svd.u.unwrap(), svd.v_t.unwrap());
     let mut sv: Vec<f64> = svd.singular_values.iter().copied().collect();
-    sv.sort_by(|a, b| b.partial_cmp(a).unwrap());
+    sv.sort_by(|a, b| b.total_cmp(a));
+    if sv.iter().any(|v| !v.is_finite()) {
+        return Err(GkError::numerical("rigid fit: the SVD of the cross-covariance is not finite"));
+    }
     if spread == 0.0 || sv[1] <= 1e-10 * sv[0] {
         return Err(GkError::degenerate(
             "rigid fit: the commanded positions are collinear (or coincide), so the measurement frame is undetermined",

@@ -12,6 +12,7 @@ fn class_name(kind: ErrorKind) -> &'static str {
         ErrorKind::Infeasible => "InfeasibleError",
         ErrorKind::Config => "ConfigError",
         ErrorKind::Numerical => "NumericalError",
+        ErrorKind::Interrupted => "InternalError", // never reaches here: `run` raises KeyboardInterrupt
     }
 }
 
@@ -38,9 +39,16 @@ where
     T: Send,
     F: FnOnce() -> gagekit_core::Result<T> + Send,
 {
+    install_sigint_action();
+    gagekit_core::interrupt::clear();
     let out = py.detach(|| catch_unwind(AssertUnwindSafe(f)));
     match out {
         Ok(Ok(v)) => Ok(v),
+        Ok(Err(e)) if e.kind == ErrorKind::Interrupted => {
+            // Python's own SIGINT handler has run too: raise what it raises (KeyboardInterrupt)
+            py.check_signals()?;
+            Err(pyo3::exceptions::PyKeyboardInterrupt::new_err("interrupted"))
+        }
         Ok(Err(e)) => Err(to_pyerr(py, e)),
         Err(payload) => {
             let what = payload
@@ -54,5 +62,20 @@ where
                 format!("internal error in a gagekit kernel (please report it): {what}"),
             ))
         }
+    }
+}
+
+/// Ctrl-C while a kernel runs without the GIL: Python's handler only sets a flag that the
+/// interpreter reads when the kernel returns, so a long kernel would ignore it. A SIGINT
+/// action (chained before Python's own handler, which still runs) also sets the kernels'
+/// cancel flag ([`gagekit_core::interrupt`]), which the long kernels poll between chunks.
+fn install_sigint_action() {
+    #[cfg(unix)]
+    {
+        static ONCE: std::sync::Once = std::sync::Once::new();
+        ONCE.call_once(|| {
+            // SAFETY: the action only stores to an atomic (async-signal-safe).
+            let _ = unsafe { signal_hook::low_level::register(signal_hook::consts::SIGINT, gagekit_core::interrupt::request) };
+        });
     }
 }
