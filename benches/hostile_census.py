@@ -39,7 +39,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from tests.hostile.mutants import damaged, is_finite_json, mutants, special_paths  # noqa: E402
+from tests.hostile.mutants import damaged, is_finite_json, mutants, spec_commands, special_paths  # noqa: E402
 
 CATS = ("tries", "clean", "ok", "tracebacks", "panics", "hangs", "wrong")
 TIME_LIMIT = 60.0
@@ -121,11 +121,6 @@ def _data():
     return gagekit.machine.example_machine_path(), data_path("casting_ok.ply"), data_path("casting_ok.toml")
 
 
-ZONES = "[[zone]]\ncount = 20\nX = [-1250.0, 0.0]\n\n[[zone]]\ncount = 20\nX = [0.0, 1250.0]\nY = [350.0, 1400.0]\n"
-EXCLUSIONS = ("tolerance = 0.02\ncommands = [[0.0, 0.0, 1000.0, 400.0, -500.0]]\n\n[[box]]\n"
-              "X = [-100.0, 100.0]\nY = [350.0, 600.0]\n")
-
-
 class Census:
     def __init__(self, show: int):
         self.rows: dict[str, Counter] = defaultdict(Counter)
@@ -160,17 +155,7 @@ def spec_cases(tmp: Path, quick: bool):
     machine, ply, toml = _data()
     cloud = tmp / "casting.npy"
     write_points(cloud, read_points(ply)[::10])
-    (tmp / "zones.toml").write_text(ZONES)
-    (tmp / "excl.toml").write_text(EXCLUSIONS)
-    design = ["machine", "design", machine, "--points", 40, "--candidates", 300, "--starts", 1,
-              "--out", tmp / "plan.csv", "--json"]
-    return {
-        "spec: machine": (machine, ["machine", "check", "SPEC", "--commands", 200, "--json"]),
-        "spec: gage": (toml, ["gage", "check", cloud, "SPEC", "--no-groups", "--json"]),
-        "spec: regions": (toml, ["cloud", "regions", cloud, "SPEC", "--json"]),
-        "spec: zones": (tmp / "zones.toml", [*design, "--zones", "SPEC"]),
-        "spec: exclusions": (tmp / "excl.toml", [*design, "--exclude", "SPEC"]),
-    }
+    return {f"spec: {k}": v for k, v in spec_commands(tmp, machine, toml, cloud).items()}
 
 
 def run_specs(c: Census, tmp: Path, quick: bool) -> None:

@@ -9,33 +9,12 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import numpy as np
 import pytest
 
 from gagekit.cloud import read_points, write_points
 
 from .conftest import CASTING_PLY, CASTING_TOML, EXAMPLE_MACHINE, check_outcome, gk, gk_inproc
-from .mutants import damaged, mutants, special_paths
-
-ZONES = """
-[[zone]]
-count = 20
-X = [-1250.0, 0.0]
-
-[[zone]]
-count = 20
-X = [0.0, 1250.0]
-Y = [350.0, 1400.0]
-"""
-
-EXCLUSIONS = """
-tolerance = 0.02
-commands = [[0.0, 0.0, 1000.0, 400.0, -500.0]]
-
-[[box]]
-X = [-100.0, 100.0]
-Y = [350.0, 600.0]
-"""
+from .mutants import damaged, mutants, spec_commands, special_paths
 
 STRIDE = 7
 
@@ -49,18 +28,7 @@ def small_cloud(tmp_path_factory) -> Path:
 
 
 def specs(tmp: Path, cloud: Path) -> dict:
-    """spec type -> (valid file, argv with SPEC standing for the file)"""
-    (tmp / "zones.toml").write_text(ZONES)
-    (tmp / "excl.toml").write_text(EXCLUSIONS)
-    design = ["machine", "design", EXAMPLE_MACHINE, "--points", 40, "--candidates", 300, "--starts", 1,
-              "--out", tmp / "plan.csv", "--json"]
-    return {
-        "machine": (EXAMPLE_MACHINE, ["machine", "check", "SPEC", "--commands", 200, "--json"]),
-        "gage": (CASTING_TOML, ["gage", "check", cloud, "SPEC", "--no-groups", "--json"]),
-        "regions": (CASTING_TOML, ["cloud", "regions", cloud, "SPEC", "--json"]),
-        "zones": (tmp / "zones.toml", [*design, "--zones", "SPEC"]),
-        "exclusions": (tmp / "excl.toml", [*design, "--exclude", "SPEC"]),
-    }
+    return spec_commands(tmp, EXAMPLE_MACHINE, CASTING_TOML, cloud)
 
 
 def cases(kind: str, valid: Path, stride: int):
