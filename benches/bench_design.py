@@ -116,7 +116,7 @@ def machine_case(n_cand: int, n: int, starts: int, budget: float, crits: str) ->
         tp, peer = peer_exchange(B, n, crit, 0, budget, w)
         print(f"machine {n}-point {crit} from {n_cand} candidates ({starts} starts): gagekit {tg:.2f} s "
               f"({cg:.1f} s CPU), plain exchange {tp:.2f} s, ratio {tp / tg:.1f}; "
-              f"objective {out['objective']:.6g} vs {peer:.6g}"
+              f"objective {out.objective:.6g} vs {peer:.6g}"
               + (" (peer stopped at its time budget)" if tp >= budget else ""), flush=True)
 
 

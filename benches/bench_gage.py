@@ -38,7 +38,8 @@ def line(case, tg, tp, peer):
 
 
 def highs_lp(args, params):
-    c, colptr, rowval, nzval, b, m = _core.gage_lp(*args, params)
+    lp = _core._testing.gage_lp(*args, params)
+    c, colptr, rowval, nzval, b, m = lp.c, lp.colptr, lp.rowval, lp.nzval, lp.b, lp.nrows
     A = csc_matrix((nzval, rowval, colptr), shape=(m, len(c)))
     return c, A, np.asarray(b)
 
@@ -46,7 +47,8 @@ def highs_lp(args, params):
 def bench_lp(label, args, repeat, generate=True):
     params = [0.0] * 6
     c, A, b = highs_lp(args, params)
-    tg, (x, obj, status, rows) = timed(lambda: _core.gage_lp_solve(*args, params, generate=generate), repeat)
+    tg, sol = timed(lambda: _core._testing.gage_lp_solve(*args, params, generate=generate), repeat)
+    x, obj, status, rows = sol.x, sol.objective, sol.status, sol.nrows
     tp, res = timed(lambda: linprog(c, A_ub=A, b_ub=b, bounds=(None, None), method="highs"), repeat)
     assert status == "solved" and res.status == 0 and abs(obj - res.fun) <= 1e-6 * (1 + abs(res.fun))
     how = "" if rows == A.shape[0] else f", clarabel on {rows} generated rows"

@@ -26,7 +26,7 @@ def test_hierarchy():
 
 def test_a_panic_is_an_internal_error_not_an_abort():
     with pytest.raises(InternalError, match="deliberate test panic"):
-        _core._panic_for_test()
+        _core._testing.panic_in_kernel()
     # the interpreter and the extension keep working afterwards
     assert len(gagekit.convex_hull_indices(np.eye(3))) == 3
 

@@ -45,7 +45,8 @@ def exact_extremes(prob, T):
 
 
 def highs(prob, params):
-    c, colptr, rowval, nzval, b, m = _core.gage_lp(*prob.args(), list(params))
+    lp = _core._testing.gage_lp(*prob.args(), list(params))
+    c, colptr, rowval, nzval, b, m = lp.c, lp.colptr, lp.rowval, lp.nzval, lp.b, lp.nrows
     A = csc_matrix((nzval, rowval, colptr), shape=(m, len(c)))
     res = linprog(c, A_ub=A, b_ub=b, bounds=(None, None), method="highs")
     assert res.status == 0, res.message
@@ -103,7 +104,8 @@ def test_clarabel_lp_agrees_with_highs(case, request):
     t = r.transform
     for params in ([0.0] * 6, [t.alpha, t.beta, t.gamma, t.dx, t.dy, t.dz]):
         ref = highs(prob, params)
-        x, obj, status, rows = _core.gage_lp_solve(*prob.args(), list(params))
+        sol = _core._testing.gage_lp_solve(*prob.args(), list(params))
+        x, obj, status, rows = sol.x, sol.objective, sol.status, sol.nrows
         assert status == "solved" and rows == len(ref.slack)
         assert obj == pytest.approx(ref.fun, rel=1e-7, abs=1e-7)
     # linearised about T*, the LP optimum is the exact Eq. 5.11 objective at T*

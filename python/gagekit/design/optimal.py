@@ -193,14 +193,14 @@ def search_design(
         np.ascontiguousarray(blocks.reshape(m * r, k)), r, groups, point_group, crit,
         weights=weights, starts=max(1, int(starts)), max_sweeps=50, seed=seed,
     )
-    design = np.asarray(out["design"], dtype=np.int64)
+    design = np.asarray(out.design, dtype=np.int64)
     points = cand[design].copy()
     point_blocks = blocks[design].copy()
     if do_refine:
         points, point_blocks = _refine(rows, points, point_blocks, zone_of_point, zone_boxes, lo, hi,
                                        crit, weights, feasible, len(cand) ** (1.0 / d))
     met = _core.design_metrics(np.ascontiguousarray(point_blocks.reshape(n * r, k)), weights=weights)
-    return _result(points, crit, met, zone_of_point, len(cand), out["start_objectives"])
+    return _result(points, crit, met, zone_of_point, len(cand), out.start_objectives)
 
 
 # ----------------------------------------------------------------------------- parsing
@@ -465,9 +465,9 @@ def _refine(rows, points, blocks, zone_of_point, zone_boxes, lo, hi, crit, weigh
                 np.ascontiguousarray(all_blocks.reshape(-1, k)), r, groups, list(range(n)), crit,
                 weights=weights, starts=1, max_sweeps=_refine_sweeps(crit), seed=0, initial=list(range(n)),
             )
-            chosen = np.asarray(out["design"])
+            chosen = np.asarray(out.design)
             moved = chosen != np.arange(n)
-            history.append(float(out["objective"]))
+            history.append(float(out.objective))
             if moved.any():
                 allp = np.concatenate([points, prop])
                 points, blocks = allp[chosen].copy(), all_blocks[chosen].copy()
@@ -477,25 +477,23 @@ def _refine(rows, points, blocks, zone_of_point, zone_boxes, lo, hi, crit, weigh
     return points, blocks
 
 
+def det_from_log(log_det: float) -> float:
+    """det((M^T M)^-1) from its logarithm: 0 or inf where it under- or overflows."""
+    return math.exp(log_det) if math.isfinite(log_det) and log_det < 700 else (math.inf if log_det > 0 else 0.0)
+
+
 def _result(points, crit, met, zone_of_point, n_cand, start_objectives) -> DesignResult:
-    log_det = float(met["log_det"])
-    det = math.exp(log_det) if math.isfinite(log_det) and log_det < 700 else (math.inf if log_det > 0 else 0.0)
-    values = {
-        "A": met["trace"],
-        "D": log_det,
-        "K": met["condition_number"],
-        "E": 1.0 / met["lambda_min"] if met["lambda_min"] > 0 else math.inf,
-        "I": met["i_value"] if met["i_value"] is not None else math.inf,
-    }
+    log_det = float(met.log_det)
+    det = det_from_log(log_det)
     return DesignResult(
         points=points,
         criterion=crit,
-        trace=float(met["trace"]),
+        trace=float(met.trace),
         det=det,
         log_det=log_det,
-        condition_number=float(met["condition_number"]),
-        objective=float(values[crit]),
-        lambda_min=float(met["lambda_min"]),
+        condition_number=float(met.condition_number),
+        objective=float(met.objective(crit)),
+        lambda_min=float(met.lambda_min),
         zone=zone_of_point,
         n_candidates=int(n_cand),
         start_objectives=tuple(float(v) for v in start_objectives),

@@ -90,16 +90,16 @@ def _support(points: np.ndarray, basis: np.ndarray, axis: int, free: list[bool],
     plane[0, axis] = -1.0
     sol = _core.gage_solve(np.ascontiguousarray(local), [0, len(local)], plane, np.ones(1), np.full(1, 10.0),
                            free, 0.3, 2.0 * extent + 1.0, groups=False)
-    if sol["s"][0] > 0 or sol["active_bounds"]:
+    if sol.s[0] > 0 or sol.active_bounds:
         raise NumericalError("alignment: the support-plane fit of a datum did not settle within its search range")
-    M = np.asarray(sol["matrix"])
+    M = np.asarray(sol.matrix)
     R, t = M[:3, :3], M[:3, 3]
     e = np.zeros(3)
     e[axis] = 1.0
     n_local = R.T @ e          # plane in local coords: n_local . r' + t[axis] <= 0 for all points
     n = basis @ n_local
     d = float(t[axis] - n @ c)
-    return n, d, float(sol["q"][0])
+    return n, d, float(sol.q[0])
 
 
 def _oriented(n: np.ndarray, towards: np.ndarray) -> np.ndarray:

@@ -307,28 +307,28 @@ def solve_problem(problem: GageProblem, *, groups: bool = True) -> GageCheckResu
     """Solve Eq. 5.11 for a prepared problem (Rust, clarabel, exact re-linearisation)."""
     spec = problem.spec
     sol = _core.gage_solve(*problem.args(), groups=groups)
-    p = sol["params"]
-    transform = Transform(*[float(v) for v in p], tuple(tuple(float(v) for v in r) for r in sol["matrix"]))
+    p = sol.params
+    transform = Transform(*[float(v) for v in p], tuple(tuple(float(v) for v in r) for r in sol.matrix))
     outcomes = tuple(
         GageOutcome(g.name, g.region, *problem.region_counts[g.region],
-                    float(sol["allowance_before"][i]), float(sol["allowance_after"][i]), float(sol["q"][i]),
-                    float(sol["s"][i]))
+                    float(sol.allowance_before[i]), float(sol.allowance_after[i]), float(sol.q[i]),
+                    float(sol.s[i]))
         for i, g in enumerate(spec.gages))
     names = [g.name for g in spec.gages]
-    limits = tuple(BoundLimit(mo, side, float(dual)) for mo, side, dual in sol["active_bounds"])
+    limits = tuple(BoundLimit(mo, side, float(dual)) for mo, side, dual in sol.active_bounds)
     return GageCheckResult(
         status="conforming" if all(o.slack == 0.0 for o in outcomes) else "nonconforming",
-        objective=float(sol["objective"]),
+        objective=float(sol.objective),
         transform=transform,
         limited_by_motion_bounds=bool(limits),
         bound_limits=limits,
         gages=outcomes,
-        infeasible_groups=tuple(tuple(names[i] for i in grp) for grp in sol["groups"]),
-        largest_release=float(sol["u"]),
+        infeasible_groups=tuple(tuple(names[i] for i in grp) for grp in sol.groups),
+        largest_release=float(sol.u),
         alignment=problem.alignment,
-        iterations=int(sol["iterations"]),
-        last_step=float(sol["last_step"]),
-        lp_status=str(sol["lp_status"]),
+        iterations=int(sol.iterations),
+        last_step=float(sol.last_step),
+        lp_status=str(sol.lp_status),
         motion=spec.motion.to_dict(),
         plot_data={"regions": problem.plot_points, "spec": spec},
     )

@@ -69,7 +69,7 @@ def _as_obs(machine: Machine, obs: Any, what: str) -> Observations:
 
 
 
-def _solve(a: np.ndarray, b: np.ndarray, names: list[str]) -> dict:
+def _solve(a: np.ndarray, b: np.ndarray, names: list[str]) -> _core.LeastSquares:
     try:
         return _core.machine_lstsq(np.ascontiguousarray(a), np.ascontiguousarray(b))
     except DegenerateGeometryError:
@@ -93,7 +93,7 @@ def _confounded(machine: Machine, structure: ModelStructure) -> list[int]:
     a = np.hstack([frame_columns(p), structure.reduce(machine.design_matrix(cmds))])
     powers = [1, 1, 1, 0, 0, 0] + [machine.parameter_length_powers[j] for j in structure.leaders]
     res = _core.machine_identifiability(a, machine.length_scale(cmds), powers)
-    lead = set(res["leaders"])
+    lead = set(res.leaders)
     return [k for k in range(len(structure.groups)) if 6 + k not in lead]
 
 
@@ -146,7 +146,7 @@ def identify(
     if method == "two-step":
         sol = _solve(m_red, nominal_res.reshape(-1), group_names)
         frame, iterations, cols = frame1, 1, list(range(n_groups))
-        x = np.asarray(sol["x"])
+        x = np.asarray(sol.x)
         values = x
         model_res = nominal_res.reshape(-1) - m_red @ x
         k = n_groups
@@ -158,7 +158,7 @@ def identify(
         for iterations in range(1, _MAX_ITER + 1):
             r = (frame.to_table(obs.measured) - p_nom).reshape(-1)
             sol = _solve(a, r, names)
-            x = np.asarray(sol["x"])
+            x = np.asarray(sol.x)
             small = x[len(cols) :]
             frame = frame.corrected(small)
             if np.abs(small[:3]).max() < 1e-13 and np.abs(small[3:]).max() < 1e-10:
@@ -173,7 +173,7 @@ def identify(
             )
         r = (frame.to_table(obs.measured) - p_nom).reshape(-1)
         sol = _solve(a, r, names)
-        x = np.asarray(sol["x"])
+        x = np.asarray(sol.x)
         frame = frame.corrected(x[len(cols) :])
         values = np.zeros(n_groups)
         values[cols] = x[: len(cols)]
@@ -182,8 +182,8 @@ def identify(
     dof = 3 * n - k
     if dof <= 0:
         raise DegenerateGeometryError(f"{n} observations give {3 * n} equations for {k} unknowns: measure more points")
-    sigma = math.sqrt(float(sol["rss"]) / dof)
-    cov = np.asarray(sol["cov_unscaled"]) * sigma**2
+    sigma = math.sqrt(float(sol.rss) / dof)
+    cov = np.asarray(sol.cov_unscaled) * sigma**2
     std = np.full(n_groups, np.nan)
     std[cols] = np.sqrt(np.diag(cov)[: len(cols)])
     gcov = np.zeros((n_groups, n_groups))
@@ -209,7 +209,7 @@ def identify(
         machine=machine.name,
         method=method,
         rank=st.rank,
-        condition_number=float(sol["condition_number"]),
+        condition_number=float(sol.condition_number),
         groups=groups,
         unidentifiable=tuple(st.no_effect),
         frame=frame,

@@ -201,18 +201,21 @@ class Machine:
         """(J, 2) joint ranges in file units."""
         return np.array([j.range for j in self.joints], dtype=np.float64)
 
-    def _spec(self) -> tuple[list, list]:
-        spec = []
-        for e in self.elements:
-            if isinstance(e, ShapeSpec):
-                spec.append(("shape", list(e.offset), 0))
-            else:
-                spec.append((e.kind, list(e.axis), e.terms))
-        return spec, list(self.tool)
+    def __post_init__(self) -> None:
+        # The Rust chain is built and validated once, here; every kinematic call reuses it.
+        spec = [("shape", list(e.offset), 0) if isinstance(e, ShapeSpec) else (e.kind, list(e.axis), e.terms)
+                for e in self.elements]
+        chain = _core.KinematicChain(spec, list(self.tool))
+        object.__setattr__(self, "_chain", chain)
+        object.__setattr__(self, "_labels", tuple(chain.parameter_labels))  # crosses the boundary once
 
-    @property
-    def _labels(self) -> list:
-        return _core.machine_parameter_labels(*self._spec())
+    def __getstate__(self) -> dict:
+        return {k: v for k, v in self.__dict__.items() if k not in ("_chain", "_labels")}
+
+    def __setstate__(self, state: dict) -> None:
+        for k, v in state.items():
+            object.__setattr__(self, k, v)
+        self.__post_init__()
 
     @property
     def parameter_names(self) -> list[str]:
@@ -293,24 +296,24 @@ class Machine:
     # ----- kinematics (Rust) ---------------------------------------------------------------
     def nominal(self, commands: Any) -> np.ndarray:
         """Nominal target positions (n, 3) in the table frame, mm (Eq. 3.1)."""
-        return _core.machine_nominal(*self._spec(), self._internal(commands))
+        return self._chain.nominal(self._internal(commands))
 
     def positions(self, commands: Any, params: Any) -> np.ndarray:
         """Target positions (n, 3) of the exactly perturbed chain (Eq. 3.7), mm."""
         p = np.ascontiguousarray(np.asarray(params, dtype=np.float64).reshape(-1))
         if p.shape[0] != self.n_parameters:
             raise InvalidInputError(f"parameters: expected {self.n_parameters} values, got {p.shape[0]}")
-        return _core.machine_exact(*self._spec(), self._internal(commands), p)
+        return self._chain.exact(self._internal(commands), p)
 
     def design_matrix(self, commands: Any) -> np.ndarray:
         """The design matrix M (3n, P) of Eq. 3.13: rows x, y, z of the volumetric error of
         each command in the table frame, columns ``parameter_names``; analytic first-order
         derivatives, assembled in parallel in Rust."""
-        return _core.machine_design_matrix(*self._spec(), self._internal(commands))
+        return self._chain.design_matrix(self._internal(commands))
 
     def command_jacobian(self, commands: Any) -> np.ndarray:
         """d(nominal position)/d(command), (3n, J), per file unit (mm, or deg/rad)."""
-        jac = _core.machine_command_jacobian(*self._spec(), self._internal(commands))
+        jac = self._chain.command_jacobian(self._internal(commands))
         return jac * self._angle_factor()
 
     def volumetric_error(self, commands: Any, params: Any) -> np.ndarray:
@@ -346,19 +349,19 @@ class Machine:
         m = self.design_matrix(cmds)
         res = _core.machine_identifiability(m, self.length_scale(cmds), self.parameter_length_powers, rtol)
         names = self.parameter_names
-        coef = np.asarray(res["coefficients"])
+        coef = np.asarray(res.coefficients)
         groups = []
-        for k, lead in enumerate(res["leaders"]):
+        for k, lead in enumerate(res.leaders):
             terms = {names[j]: float(_tidy(coef[k, j])) for j in np.flatnonzero(coef[k])}
             groups.append(Group(name=_group_name(names[lead], terms), leader=names[lead], terms=terms))
         return ModelStructure(
             parameters=tuple(names),
-            rank=int(res["rank"]),
+            rank=int(res.rank),
             groups=tuple(groups),
-            no_effect=tuple(names[j] for j in res["no_effect"]),
-            singular_values=tuple(float(s) for s in res["singular_values"]),
+            no_effect=tuple(names[j] for j in res.no_effect),
+            singular_values=tuple(float(s) for s in res.singular_values),
             coefficients=coef,
-            leaders=tuple(int(j) for j in res["leaders"]),
+            leaders=tuple(int(j) for j in res.leaders),
             n_commands=int(cmds.shape[0]),
         )
 

@@ -96,6 +96,23 @@ pub fn metrics(f: &[f64], k: usize, weights: Option<&[f64]>) -> Metrics {
     from_eigen(&vals, &vecs, k, weights)
 }
 
+/// Exact figures of the design whose stacked rows are `rows` (n x k, row-major, any n >= 1),
+/// validated: no empty matrix, finite rows, a k x k finite weight matrix.
+pub fn design_metrics(rows: &[f64], k: usize, weights: Option<&[f64]>) -> Result<Metrics> {
+    if k == 0 || rows.is_empty() {
+        return Err(GkError::invalid("an empty design matrix has no figures"));
+    }
+    gagekit_core::check_finite(rows, k, "design-matrix rows")?;
+    if let Some(w) = weights {
+        if w.len() != k * k {
+            return Err(GkError::invalid(format!("weight matrix: expected {k} x {k} values, got {}", w.len())));
+        }
+        gagekit_core::check_finite(w, k, "weight matrix")?;
+    }
+    let idx: Vec<usize> = (0..rows.len() / k).collect();
+    Ok(metrics(&information(rows, &idx, 1, k), k, weights))
+}
+
 /// [`metrics`] from eigenvalues (ascending) and eigenvectors (columns).
 pub fn from_eigen(vals: &[f64], vecs: &[f64], k: usize, weights: Option<&[f64]>) -> Metrics {
     let lmax = vals[k - 1].max(0.0);

@@ -18,6 +18,6 @@ pub mod exchange;
 mod lanes;
 pub mod qmc;
 
-pub use criteria::{information, metrics, Criterion, Metrics};
+pub use criteria::{design_metrics, information, metrics, Criterion, Metrics};
 pub use exchange::{search, Options, Outcome, Problem};
 pub use qmc::halton;

@@ -11,7 +11,7 @@ pub mod problem;
 pub mod solve;
 pub mod transform;
 
-pub use lp::{assemble, solve_linearised, solve_lp, Linearisation, LpData, LpSolution};
+pub use lp::{assemble, assemble_checked, solve_linearised, solve_lp, solve_single, Linearisation, LpData, LpSolution};
 pub use problem::{extremes, GageSet, Motion};
 pub use solve::{infeasible_groups, solve, solve_from, ActiveBound, Options, Solution};
 pub use transform::{matrix, MOTION_NAMES};

@@ -301,6 +301,26 @@ pub struct LpSolution {
     pub iterations: u32,
 }
 
+/// The single LP of Eq. 5.11 linearised about `p0`, validated and solved once (no
+/// re-linearisation, no polish): by constraint generation above the direct size limit when
+/// `generate` is true, else assembled whole. For comparisons with other LP solvers.
+pub fn solve_single(set: &GageSet, motion: &Motion, p0: &[f64; 6], generate: bool) -> Result<(LpData, LpSolution)> {
+    set.validate(motion)?;
+    if generate {
+        solve_linearised(set, motion, p0, None, set.radius(), false)
+    } else {
+        let lp = assemble(set, motion, p0, None);
+        let sol = solve_lp(&lp)?;
+        Ok((lp, sol))
+    }
+}
+
+/// The LP of Eq. 5.11 linearised about `p0`, validated and assembled whole.
+pub fn assemble_checked(set: &GageSet, motion: &Motion, p0: &[f64; 6]) -> Result<LpData> {
+    set.validate(motion)?;
+    Ok(assemble(set, motion, p0, None))
+}
+
 /// Solve an assembled LP with clarabel; every non-success status is an error.
 pub fn solve_lp(lp: &LpData) -> Result<LpSolution> {
     let p = CscMatrix::<f64>::zeros((lp.nvars, lp.nvars));

@@ -1,13 +1,24 @@
 //! Bindings of gagekit-cloudio: ASCII point-cloud reading and writing.
 
 use crate::arrays::rows;
-use crate::errors::{gagekit_err, run};
+use crate::errors::{invalid, run};
 use gagekit_cloudio::{parse_ascii, write_ascii, AsciiOptions};
 use gagekit_core::GkError;
 use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray2};
 use pyo3::prelude::*;
 
-/// Read an ASCII point file: returns (points (n, dim), header_lines, columns).
+/// A parsed ASCII point file.
+#[pyclass(frozen, get_all, module = "gagekit._core")]
+pub struct AsciiCloud {
+    /// (n, dim) coordinates.
+    points: Py<PyAny>,
+    /// Header lines skipped before the first point.
+    header_lines: usize,
+    /// Number of columns of each data line.
+    columns: Vec<usize>,
+}
+
+/// Read an ASCII point file.
 #[pyfunction]
 #[pyo3(signature = (path, dim=3, skip_lines=0))]
 fn cloud_read_ascii<'py>(
@@ -15,7 +26,7 @@ fn cloud_read_ascii<'py>(
     path: String,
     dim: usize,
     skip_lines: usize,
-) -> PyResult<(Bound<'py, PyAny>, usize, Vec<usize>)> {
+) -> PyResult<AsciiCloud> {
     let parsed = run(py, || {
         let bytes = std::fs::read(&path)
             .map_err(|e| GkError::invalid(format!("{path}: cannot be read ({e})")))?;
@@ -23,7 +34,7 @@ fn cloud_read_ascii<'py>(
     })?;
     let n = parsed.coords.len() / dim;
     let arr = PyArray1::from_vec(py, parsed.coords).reshape([n, dim])?;
-    Ok((arr.into_any(), parsed.header_lines, parsed.columns))
+    Ok(AsciiCloud { points: arr.into_any().unbind(), header_lines: parsed.header_lines, columns: parsed.columns })
 }
 
 /// Write points (n, d) as ASCII with separator `sep` and an optional header line.
@@ -40,7 +51,7 @@ fn cloud_write_ascii(
     let flat = rows(py, &points, dim, "points")?;
     let sep = match sep.as_bytes() {
         [b] => *b,
-        _ => return Err(gagekit_err(py, "InvalidInputError", format!("separator must be one character, got {sep:?}"))),
+        _ => return Err(invalid(format!("separator must be one character, got {sep:?}"))),
     };
     run(py, || {
         let text = write_ascii(flat, dim, sep, header.as_deref())?;
@@ -49,6 +60,7 @@ fn cloud_write_ascii(
 }
 
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<AsciiCloud>()?;
     m.add_function(wrap_pyfunction!(cloud_read_ascii, m)?)?;
     m.add_function(wrap_pyfunction!(cloud_write_ascii, m)?)?;
     Ok(())

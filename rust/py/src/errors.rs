@@ -1,35 +1,50 @@
-//! Mapping of kernel errors and panics to the exception classes of `gagekit.errors`.
+//! Mapping of kernel errors and panics to the exception classes of `gagekit.errors`, and the
+//! one wrapper every binding's kernel call goes through ([`run`]).
+//!
+//! The classes are imported once per interpreter (`import_exception!` caches the type object)
+//! and constructed lazily: building an error does not need the GIL.
 
 use gagekit_core::{ErrorKind, GkError};
 use pyo3::prelude::*;
-use pyo3::types::PyType;
 use std::panic::{catch_unwind, AssertUnwindSafe};
 
-fn class_name(kind: ErrorKind) -> &'static str {
-    match kind {
-        ErrorKind::InvalidInput => "InvalidInputError",
-        ErrorKind::DegenerateGeometry => "DegenerateGeometryError",
-        ErrorKind::Infeasible => "InfeasibleError",
-        ErrorKind::Config => "ConfigError",
-        ErrorKind::Numerical => "NumericalError",
-        ErrorKind::Interrupted => "InternalError", // never reaches here: `run` raises KeyboardInterrupt
+pyo3::import_exception!(gagekit.errors, InvalidInputError);
+pyo3::import_exception!(gagekit.errors, DegenerateGeometryError);
+pyo3::import_exception!(gagekit.errors, InfeasibleError);
+pyo3::import_exception!(gagekit.errors, ConfigError);
+pyo3::import_exception!(gagekit.errors, NumericalError);
+pyo3::import_exception!(gagekit.errors, InternalError);
+
+/// The gagekit exception of a kernel error.
+pub fn to_pyerr(e: GkError) -> PyErr {
+    let m = e.message;
+    match e.kind {
+        ErrorKind::InvalidInput => InvalidInputError::new_err(m),
+        ErrorKind::DegenerateGeometry => DegenerateGeometryError::new_err(m),
+        ErrorKind::Infeasible => InfeasibleError::new_err(m),
+        ErrorKind::Config => ConfigError::new_err(m),
+        ErrorKind::Numerical => NumericalError::new_err(m),
+        // `run` turns an interrupted kernel into KeyboardInterrupt before it gets here
+        ErrorKind::Interrupted => pyo3::exceptions::PyKeyboardInterrupt::new_err(m),
     }
 }
 
-/// Build a `gagekit.errors.<name>` exception carrying `message`.
-pub fn gagekit_err(py: Python<'_>, name: &str, message: String) -> PyErr {
-    let ty = py
-        .import("gagekit.errors")
-        .and_then(|m| m.getattr(name))
-        .and_then(|t| t.cast_into::<PyType>().map_err(PyErr::from));
-    match ty {
-        Ok(t) => PyErr::from_type(t, message),
-        Err(e) => e,
-    }
+/// An `InvalidInputError` raised by the conversion layer (shapes, contiguity).
+pub fn invalid(message: impl Into<String>) -> PyErr {
+    to_pyerr(GkError::invalid(message))
 }
 
-pub fn to_pyerr(py: Python<'_>, e: GkError) -> PyErr {
-    gagekit_err(py, class_name(e.kind), e.message)
+/// Build a `gagekit.errors.<name>` exception carrying `message` (by class name; kept for the
+/// form bindings: the other bindings use [`to_pyerr`] / [`invalid`]).
+pub fn gagekit_err(_py: Python<'_>, name: &str, message: String) -> PyErr {
+    match name {
+        "InvalidInputError" => InvalidInputError::new_err(message),
+        "DegenerateGeometryError" => DegenerateGeometryError::new_err(message),
+        "InfeasibleError" => InfeasibleError::new_err(message),
+        "ConfigError" => ConfigError::new_err(message),
+        "NumericalError" => NumericalError::new_err(message),
+        _ => InternalError::new_err(message),
+    }
 }
 
 /// Run a kernel with the GIL released, turning its errors and any panic into
@@ -41,26 +56,23 @@ where
 {
     install_sigint_action();
     gagekit_core::interrupt::clear();
-    let out = py.detach(|| catch_unwind(AssertUnwindSafe(f)));
-    match out {
+    match py.detach(|| catch_unwind(AssertUnwindSafe(f))) {
         Ok(Ok(v)) => Ok(v),
         Ok(Err(e)) if e.kind == ErrorKind::Interrupted => {
             // Python's own SIGINT handler has run too: raise what it raises (KeyboardInterrupt)
             py.check_signals()?;
             Err(pyo3::exceptions::PyKeyboardInterrupt::new_err("interrupted"))
         }
-        Ok(Err(e)) => Err(to_pyerr(py, e)),
+        Ok(Err(e)) => Err(to_pyerr(e)),
         Err(payload) => {
             let what = payload
                 .downcast_ref::<&str>()
                 .map(|s| s.to_string())
                 .or_else(|| payload.downcast_ref::<String>().cloned())
                 .unwrap_or_else(|| "unknown panic".to_string());
-            Err(gagekit_err(
-                py,
-                "InternalError",
-                format!("internal error in a gagekit kernel (please report it): {what}"),
-            ))
+            Err(InternalError::new_err(format!(
+                "internal error in a gagekit kernel (please report it): {what}"
+            )))
         }
     }
 }

@@ -1,11 +1,10 @@
 //! Bindings of gagekit-gage: the virtual-gage LP of Eq. 5.11 (array conversion only).
 
 use crate::arrays::{rows, values};
-use crate::errors::{gagekit_err, run};
+use crate::errors::{invalid, run};
 use gagekit_gage::{GageSet, Motion, Options, MOTION_NAMES};
-use numpy::{PyReadonlyArray1, PyReadonlyArray2};
+use numpy::{PyArray1, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
 
 /// Borrowed gage data checked for consistent lengths.
 struct Args<'a> {
@@ -29,8 +28,8 @@ fn args<'a>(
     max_angle: f64,
     max_shift: f64,
 ) -> PyResult<Args<'a>> {
-    let invalid = |m: &str| gagekit_err(py, "InvalidInputError", m.to_string());
-    let free: [bool; 6] = free.try_into().map_err(|_| invalid("free: expected six flags (alpha, beta, gamma, dx, dy, dz)"))?;
+    let free: [bool; 6] =
+        free.try_into().map_err(|_| invalid("free: expected six flags (alpha, beta, gamma, dx, dy, dz)"))?;
     Ok(Args {
         points: rows(py, points, 3, "gage points")?,
         offsets,
@@ -47,8 +46,33 @@ impl Args<'_> {
     }
 }
 
+/// The solution of Eq. 5.11 (Sec. 5.2): T*, allowances, slacks, limiting bounds, groups.
+#[pyclass(frozen, get_all, module = "gagekit._core")]
+pub struct GageSolution {
+    /// (alpha, beta, gamma, dx, dy, dz) of T*, rad and mm.
+    params: Vec<f64>,
+    /// T* as a 4x4 homogeneous matrix (row lists).
+    matrix: Vec<Vec<f64>>,
+    allowance_before: Vec<f64>,
+    allowance_after: Vec<f64>,
+    /// q_i: the largest allowance of each gage.
+    q: Vec<f64>,
+    /// s_i: the slack (release) of each gage.
+    s: Vec<f64>,
+    /// u: the largest release.
+    u: f64,
+    objective: f64,
+    lp_objective: f64,
+    iterations: usize,
+    last_step: f64,
+    lp_status: String,
+    /// (motion, "upper" | "lower", dual multiplier) of each motion bound that limits T*.
+    active_bounds: Vec<(String, String, f64)>,
+    /// Infeasible groups of gages (Eq. 5.10), as gage indices.
+    groups: Vec<Vec<usize>>,
+}
+
 /// Solve Eq. 5.11 with exact re-linearisation; optionally the infeasible groups (Eq. 5.10).
-/// Returns a dict of plain lists and numbers.
 #[pyfunction]
 #[pyo3(signature = (points, offsets, planes, f, g, free, max_angle, max_shift, tol=1e-10, slack_tol=1e-7, groups=true))]
 #[allow(clippy::too_many_arguments)]
@@ -65,7 +89,7 @@ fn gage_solve<'py>(
     tol: f64,
     slack_tol: f64,
     groups: bool,
-) -> PyResult<Bound<'py, PyDict>> {
+) -> PyResult<GageSolution> {
     let a = args(py, &points, offsets, &planes, &f, &g, free, max_angle, max_shift)?;
     let opts = Options { tol, slack_tol, ..Options::default() };
     let (sol, grp) = run(py, || {
@@ -74,34 +98,54 @@ fn gage_solve<'py>(
         let grp = if groups { gagekit_gage::infeasible_groups(&set, &a.motion, &opts, &sol)? } else { vec![] };
         Ok((sol, grp))
     })?;
-    let d = PyDict::new(py);
-    d.set_item("params", sol.params.to_vec())?;
-    d.set_item("matrix", sol.matrix.iter().map(|r| r.to_vec()).collect::<Vec<_>>())?;
-    d.set_item("allowance_before", sol.allowance_before)?;
-    d.set_item("allowance_after", sol.allowance_after)?;
-    d.set_item("q", sol.q)?;
-    d.set_item("s", sol.s)?;
-    d.set_item("u", sol.u)?;
-    d.set_item("objective", sol.objective)?;
-    d.set_item("lp_objective", sol.lp_objective)?;
-    d.set_item("iterations", sol.iterations)?;
-    d.set_item("last_step", sol.last_step)?;
-    d.set_item("lp_status", sol.lp_status)?;
-    let bounds: Vec<(String, String, f64)> = sol
-        .active_bounds
-        .iter()
-        .map(|b| (MOTION_NAMES[b.motion].to_string(), if b.side > 0 { "upper" } else { "lower" }.to_string(), b.dual))
-        .collect();
-    d.set_item("active_bounds", bounds)?;
-    d.set_item("groups", grp)?;
-    Ok(d)
+    Ok(GageSolution {
+        params: sol.params.to_vec(),
+        matrix: sol.matrix.iter().map(|r| r.to_vec()).collect(),
+        allowance_before: sol.allowance_before,
+        allowance_after: sol.allowance_after,
+        q: sol.q,
+        s: sol.s,
+        u: sol.u,
+        objective: sol.objective,
+        lp_objective: sol.lp_objective,
+        iterations: sol.iterations,
+        last_step: sol.last_step,
+        lp_status: sol.lp_status.to_string(),
+        active_bounds: sol
+            .active_bounds
+            .iter()
+            .map(|b| (MOTION_NAMES[b.motion].to_string(), if b.side > 0 { "upper" } else { "lower" }.to_string(), b.dual))
+            .collect(),
+        groups: grp,
+    })
 }
 
-/// The LP of Eq. 5.11 linearised about `params` (alpha, beta, gamma, dx, dy, dz), as
-/// (c, colptr, rowval, nzval, b, nrows): minimise c.x subject to A x <= b, x free.
-/// For comparisons with other LP solvers; `gage_lp_solve` solves the same LP.
+/// The LP of Eq. 5.11 linearised about given motions: minimise c.x subject to A x <= b,
+/// x free, A in compressed-column form (colptr, rowval, nzval) with `nrows` rows.
+#[pyclass(frozen, get_all, module = "gagekit._core._testing")]
+pub struct LinearProgram {
+    c: Py<PyArray1<f64>>,
+    colptr: Vec<usize>,
+    rowval: Vec<usize>,
+    nzval: Py<PyArray1<f64>>,
+    b: Py<PyArray1<f64>>,
+    nrows: usize,
+}
+
+/// The solution of one LP of Eq. 5.11 (clarabel).
+#[pyclass(frozen, get_all, module = "gagekit._core._testing")]
+pub struct LpResult {
+    x: Py<PyArray1<f64>>,
+    objective: f64,
+    status: String,
+    /// Rows of the LP actually solved (fewer than all with constraint generation).
+    nrows: usize,
+}
+
+/// Test and benchmark binding: the LP of Eq. 5.11 linearised about `params`
+/// (alpha, beta, gamma, dx, dy, dz), for comparisons with other LP solvers.
 #[pyfunction]
-#[allow(clippy::too_many_arguments, clippy::type_complexity)]
+#[allow(clippy::too_many_arguments)]
 fn gage_lp<'py>(
     py: Python<'py>,
     points: PyReadonlyArray2<'py, f64>,
@@ -113,18 +157,22 @@ fn gage_lp<'py>(
     max_angle: f64,
     max_shift: f64,
     params: [f64; 6],
-) -> PyResult<(Vec<f64>, Vec<usize>, Vec<usize>, Vec<f64>, Vec<f64>, usize)> {
+) -> PyResult<LinearProgram> {
     let a = args(py, &points, offsets, &planes, &f, &g, free, max_angle, max_shift)?;
-    let lp = run(py, || {
-        a.set().validate(&a.motion)?;
-        Ok(gagekit_gage::assemble(&a.set(), &a.motion, &params, None))
-    })?;
-    Ok((lp.c, lp.colptr, lp.rowval, lp.nzval, lp.b, lp.nrows))
+    let lp = run(py, || gagekit_gage::assemble_checked(&a.set(), &a.motion, &params))?;
+    Ok(LinearProgram {
+        c: PyArray1::from_vec(py, lp.c).unbind(),
+        colptr: lp.colptr,
+        rowval: lp.rowval,
+        nzval: PyArray1::from_vec(py, lp.nzval).unbind(),
+        b: PyArray1::from_vec(py, lp.b).unbind(),
+        nrows: lp.nrows,
+    })
 }
 
-/// Solve the single LP of `gage_lp` with clarabel (no re-linearisation, no polish),
-/// by constraint generation above 4000 points unless `generate` is false:
-/// returns (x, objective, status, rows of the LP solved).
+/// Test and benchmark binding: solve the single LP of `gage_lp` with clarabel (no
+/// re-linearisation, no polish), by constraint generation above 4000 points unless
+/// `generate` is false.
 #[pyfunction]
 #[pyo3(signature = (points, offsets, planes, f, g, free, max_angle, max_shift, params, generate=true))]
 #[allow(clippy::too_many_arguments)]
@@ -140,24 +188,27 @@ fn gage_lp_solve<'py>(
     max_shift: f64,
     params: [f64; 6],
     generate: bool,
-) -> PyResult<(Vec<f64>, f64, String, usize)> {
+) -> PyResult<LpResult> {
     let a = args(py, &points, offsets, &planes, &f, &g, free, max_angle, max_shift)?;
-    let (lp, sol) = run(py, || {
-        let set = a.set();
-        set.validate(&a.motion)?;
-        if generate {
-            gagekit_gage::solve_linearised(&set, &a.motion, &params, None, set.radius(), false)
-        } else {
-            let lp = gagekit_gage::assemble(&set, &a.motion, &params, None);
-            let sol = gagekit_gage::solve_lp(&lp)?;
-            Ok((lp, sol))
-        }
-    })?;
-    Ok((sol.x, sol.objective, sol.status.to_string(), lp.nrows))
+    let (lp, sol) = run(py, || gagekit_gage::solve_single(&a.set(), &a.motion, &params, generate))?;
+    Ok(LpResult {
+        x: PyArray1::from_vec(py, sol.x).unbind(),
+        objective: sol.objective,
+        status: sol.status.to_string(),
+        nrows: lp.nrows,
+    })
 }
 
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<GageSolution>()?;
     m.add_function(wrap_pyfunction!(gage_solve, m)?)?;
+    Ok(())
+}
+
+/// The test-only bindings of this module, for `gagekit._core._testing`.
+pub fn register_testing(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<LinearProgram>()?;
+    m.add_class::<LpResult>()?;
     m.add_function(wrap_pyfunction!(gage_lp, m)?)?;
     m.add_function(wrap_pyfunction!(gage_lp_solve, m)?)?;
     Ok(())

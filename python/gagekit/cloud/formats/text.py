@@ -13,7 +13,7 @@ from . import Raw
 
 def read(p: Path, dim: int, nist: bool = False) -> Raw:
     try:
-        pts, _header_lines, _cols = _core.cloud_read_ascii(str(p), dim, 1 if nist else 0)
+        pts = _core.cloud_read_ascii(str(p), dim, 1 if nist else 0).points
     except InvalidInputError as exc:
         raise FileFormatError(str(exc)) from None
     if nist:

@@ -22,6 +22,7 @@ from typing import Any, Optional
 import numpy as np
 
 from ... import _core
+from ...design.optimal import det_from_log
 from ..model import Machine, ModelStructure
 
 __all__ = ["ObserverSpace"]
@@ -106,13 +107,13 @@ class ObserverSpace:
         """tr, log det, det of (M^T M)^-1 and kappa(M) of a plan (scaled columns)."""
         b = self.rows(self.to_u(commands))
         met = _core.design_metrics(np.ascontiguousarray(b.reshape(-1, b.shape[2])))
-        ld = float(met["log_det"])
+        ld = float(met.log_det)
         return {
             "points": int(len(b)),
-            "trace": float(met["trace"]),
+            "trace": float(met.trace),
             "log_det": ld,
-            "det": math.exp(ld) if math.isfinite(ld) and ld < 700 else (0.0 if ld < 0 else math.inf),
-            "condition_number": float(met["condition_number"]),
+            "det": det_from_log(ld),
+            "condition_number": float(met.condition_number),
         }
 
     @property
