@@ -4,13 +4,21 @@ One line per case: case, gagekit time, Qhull time, ratio (Qhull / gagekit), vert
 and whether the two vertex sets agree. Times are the best of several runs.
 Goal (issue 2): at least 4x faster than Qhull on the 1M noisy patch.
 
-    python benches/bench_hull.py [--quick]
+    python benches/bench_hull.py [--quick] [--parry]
+
+With ``--parry``, the same point sets (raw float64 files in a temporary folder) also go to
+the Rust peer binary (benches/peers, parry3d-f64's quickhull next to gagekit-geometry's, plus
+degenerate sets); it prints: case, gagekit time and vertices, parry3d time and vertices (or
+its panic), ratio. parry3d never enters the shipped extension.
 """
 
 from __future__ import annotations
 
 import os
+import subprocess
 import sys
+import tempfile
+from pathlib import Path
 
 import numpy as np
 from scipy.spatial import ConvexHull
@@ -52,5 +60,24 @@ def main() -> None:
         print(f"{name:<18} {t_gk * 1e3:8.1f}ms {t_qh * 1e3:8.1f}ms {t_qh / t_gk:6.1f}x {len(idx):>9}  {agree}")
 
 
+def parry(quick: bool) -> None:
+    """The same patch and ball as above, hulled by gagekit-geometry and parry3d in Rust."""
+    sets = [("patch-1M", noisy_patch(1_000_000, 1)), ("gaussian-ball-1M", ball(1_000_000, 3))]
+    manifest = Path(__file__).parent / "peers" / "Cargo.toml"
+    with tempfile.TemporaryDirectory() as tmp:
+        files = []
+        for name, pts in sets:
+            if quick:
+                pts = pts[: len(pts) // 10]
+            f = Path(tmp) / f"{name}.f64"
+            np.ascontiguousarray(pts, dtype="<f8").tofile(f)
+            files.append(str(f))
+        subprocess.run(["cargo", "run", "--quiet", "--release", "--manifest-path", str(manifest), "--", "hull", *files],
+                       check=True)
+
+
 if __name__ == "__main__":
-    main()
+    if "--parry" in sys.argv:
+        parry("--quick" in sys.argv)
+    else:
+        main()

@@ -14,6 +14,7 @@ from gagekit.errors import ConfigError, DegenerateGeometryError, FileFormatError
 from gagekit.machine import Truth, load_machine, parse_machine, read_commands
 from gagekit.machine.observations import write_csv
 from gagekit.machine.tracking import History, read_cycles, read_history, simulate_cycles, track
+from gagekit.machine.tracking.simulate import SENSORS
 
 EXAMPLE = gagekit.machine.example_machine_path()
 
@@ -36,7 +37,7 @@ def cycles_csv(machine, tmp_path_factory):
 def test_tracking_recovers_the_thermal_story(machine, cycles_csv):
     c = read_cycles(cycles_csv / "cycles.csv", machine)
     assert c.cycle_ids == (1, 2, 3, 4, 5, 6) and c.measured.shape == (6, 60, 3)
-    assert set(c.temperatures) == {"temp_X", "temp_Z", "temp_Y", "temp_W"}
+    assert set(c.temperatures) == set(SENSORS) and len(SENSORS) == 10
     r = track(machine, c)
     rows = r.cycles
     noise_floor = 0.0089 * 2 * np.sqrt(2 / np.pi)  # mean norm of 3-D tracker noise
@@ -106,7 +107,7 @@ def test_simulate_thermal_mode_equals_simulate_cycles(cycles_csv, tmp_path):
     gk("simulate-cycles", EXAMPLE, plan, "--cycles", 2, "--seed", 4, "--out", tmp_path / "b.csv")
     assert (tmp_path / "a.csv").read_bytes() == (tmp_path / "b.csv").read_bytes()
     cyc = read_cycles(tmp_path / "a.csv", load_machine(EXAMPLE))
-    assert cyc.cycle_ids == (1, 2) and set(cyc.temperatures) == {"temp_X", "temp_Z", "temp_Y", "temp_W"}
+    assert cyc.cycle_ids == (1, 2) and set(cyc.temperatures) == set(SENSORS)
     bad = gk("simulate", EXAMPLE, "--points", 5, "--plan", plan, "--out", tmp_path / "c.csv", ok=False)
     assert bad.returncode == 2 and "either --points" in bad.stderr
 

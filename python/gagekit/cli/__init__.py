@@ -16,7 +16,7 @@ import typer
 
 from .. import __version__
 from ..errors import GagekitError
-from . import cloud, demo, form, gage, machine, machine_observer
+from . import cloud, demo, form, gage, machine, machine_export, machine_observer, studio
 
 app = typer.Typer(
     name="gagekit",
@@ -27,11 +27,13 @@ app = typer.Typer(
 )
 # Every sub-application and command is registered here, explicitly (no registration by import).
 machine_observer.register(machine.app)  # machine design, evaluate-plan, track, history, simulate-cycles
+machine_export.register(machine.app)  # machine export, compensate-nc, iso230-2
 app.add_typer(cloud.app, name="cloud")
 app.add_typer(form.app, name="form")
 app.add_typer(gage.app, name="gage")
 app.add_typer(machine.app, name="machine")
 app.command("demo")(demo.demo)
+app.command("studio")(studio.studio)
 
 
 def _version_callback(value: bool) -> None:

@@ -218,27 +218,40 @@ def _write_residuals(path: Path, m, cal, obs, tobs) -> None:
 @app.command("predict")
 def predict_cmd(
     machine_file: Path = MACHINE_ARG,
-    calibration: Path = typer.Argument(..., help="Calibration JSON from identify --out."),
+    calibration: Path = typer.Argument(..., help="Calibration JSON from identify --out (with --temperatures: a track --json result)."),
     commands: Path = typer.Argument(..., help="Commands CSV (joint columns)."),
     out: Path = typer.Option(
         ..., "--out", help="Errors CSV to write: joint columns, ex, ey, ez and their standard uncertainties ux, uy, uz (mm, table frame)."
     ),
+    temperatures: Optional[Path] = typer.Option(
+        None, "--temperatures", help="Temperatures CSV (the model's temp_* columns; rows averaged): predict from the tracking run's temperature model."
+    ),
     as_json: bool = JSON_OPTION,
 ) -> None:
-    """Predict the volumetric error at given commands (Eq. 3.9)."""
+    """Predict the volumetric error at given commands (Eq. 3.9), or from a cycle's temperatures alone."""
     from ..machine import load_calibration, load_machine, predict, predict_uncertainty, read_commands
     from ..machine.observations import write_csv
 
     _outputs(out)
     m = load_machine(machine_file)
-    cal = load_calibration(calibration)
     cmds = read_commands(commands, m)
-    with _warnings_to_stderr():
-        err = predict(m, cal, cmds)
-    u = predict_uncertainty(m, cal, cmds)
-    write_csv(out, m.joint_names + ["ex", "ey", "ez", "ux", "uy", "uz"], np.hstack([cmds, err, u]))
+    if temperatures is not None:
+        from ..machine.thermal import load_temperature_model, predict_from_temperatures, read_temperatures
+
+        model = load_temperature_model(calibration)
+        temps = read_temperatures(temperatures, model)
+        err = predict_from_temperatures(m, model, cmds, temps)
+        write_csv(out, m.joint_names + ["ex", "ey", "ez"], np.hstack([cmds, err]))
+    else:
+        cal = load_calibration(calibration)
+        with _warnings_to_stderr():
+            err = predict(m, cal, cmds)
+        u = predict_uncertainty(m, cal, cmds)
+        write_csv(out, m.joint_names + ["ex", "ey", "ez", "ux", "uy", "uz"], np.hstack([cmds, err, u]))
     length = np.linalg.norm(err, axis=1) if len(err) else np.zeros(1)
     result = {"points": int(len(err)), "out": str(out), "mean": float(length.mean()), "max": float(length.max())}
+    if temperatures is not None:
+        result["temperatures"] = dict(zip(model.sensors, map(float, temps)))
     emit(result, as_json, lambda r: f"wrote {r['points']} predicted errors to {r['out']} (mean {r['mean']:.4f} mm, max {r['max']:.4f} mm)")
 
 

@@ -35,12 +35,8 @@ class Box:
                 raise ConfigError(f"region '{self.name}': {attr} must be three numbers, got {raw!r}") from None
             if len(vals) != 3:
                 raise ConfigError(f"region '{self.name}': {attr} must be three numbers, got {len(vals)}")
-            if not all(np.isfinite(vals)):
-                raise ConfigError(f"region '{self.name}': {attr} must be finite, got {vals}")
             object.__setattr__(self, attr, vals)
-        for axis, s in zip("xyz", self.size):
-            if s <= 0:
-                raise ConfigError(f"region '{self.name}': size along its {axis} axis is {s} but must be positive")
+        _core.validate_box(self.name, self.center, self.size, self.rotation)  # finite, positive size (Rust)
 
     def row(self) -> list[float]:
         return [*self.center, *self.size, *self.rotation]

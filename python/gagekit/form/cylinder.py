@@ -219,7 +219,3 @@ def _with_arc(pts: np.ndarray, r: CylinderFit) -> CylinderFit:
         else:
             warnings.append(f"the points cover only {arc:.1f} degrees around the axis: axis and radius are poorly determined")
     return replace(r, arc_deg=float(arc), ill_posed=ill, warnings=tuple(warnings))
-
-
-def _minimax_available() -> bool:
-    return hasattr(_core, "form_cylinder_fit")

@@ -11,6 +11,9 @@ from .analysis import (
     build_problem,
     check_gages,
     corrected_cloud,
+    datum_alignment,
+    gage_distances,
+    region_in_scanner,
     solve_problem,
 )
 from .spec import AlignmentSpec, Gage, GageFileWarning, GageSpec, MotionSet, Region, load_gage_spec
@@ -32,6 +35,9 @@ __all__ = [
     "build_problem",
     "check_gages",
     "corrected_cloud",
+    "datum_alignment",
+    "gage_distances",
+    "region_in_scanner",
     "load_gage_spec",
     "solve_problem",
 ]

@@ -244,6 +244,59 @@ class GageProblem:
         return (self.points, self.offsets, self.planes, self.f, self.g, self.free, self.max_angle, self.max_shift)
 
 
+def _alignment(pts: np.ndarray, spec: GageSpec) -> Optional[Alignment]:
+    if spec.alignment is None:
+        return None
+    al = spec.alignment
+    names = list(dict.fromkeys([*al.primary, *al.secondary, *al.tertiary]))
+    cut = _cut(pts, [spec.region(n).box for n in names], ["scanner"] * len(names), spec.source)
+    groups_in = {}
+    for key, lst in (("primary", al.primary), ("secondary", al.secondary), ("tertiary", al.tertiary)):
+        allp = np.vstack([pts[cut[n].indices] for n in lst])
+        hull = np.vstack([pts[cut[n].hull] for n in lst])
+        groups_in[key] = (lst, allp, hull)
+    return fit_321(groups_in, pts.mean(axis=0))
+
+
+def datum_alignment(points, spec: SpecLike) -> Optional[Alignment]:
+    """The 3-2-1 frame of the spec's ``[alignment]`` found in the cloud (Eqs. 5.13-5.19),
+    or None when the spec has no ``[alignment]``."""
+    spec = _as_spec(spec)
+    pts = as_points(points, 3, "cloud")
+    if len(pts) == 0:
+        raise InvalidInputError("cloud: no points")
+    check_finite(pts, "cloud")
+    return _alignment(pts, spec)
+
+
+def region_in_scanner(region, alignment: Optional[Alignment]) -> Box:
+    """The box of a spec region in the scanner frame: part-frame boxes are carried
+    by the alignment's C = C_L^S (Eq. 5.17); scanner-frame boxes and every box of an
+    unaligned spec are returned as they are."""
+    if region.frame == "part" and alignment is not None:
+        return box_in_scanner(region.box, alignment.frame)
+    return region.box
+
+
+def gage_distances(points, spec: SpecLike, result: GageCheckResult) -> list:
+    """Per gage, ``(indices, e)``: the points of ``points`` (scanner frame) inside the
+    gage's region and their signed distances e_ij = p_i^T T* H [r_ij; 1] from the gage
+    plane at T* (Eq. 5.4; negative: short of material). Unlike the allowances of the
+    result, every point of the region counts here, not only its hull vertices."""
+    from ..cloud.regions import classify
+
+    spec = _as_spec(spec)
+    pts = as_points(points, 3, "cloud")
+    boxes = [region_in_scanner(spec.region(g.region), result.alignment) for g in spec.gages]
+    inside = classify(pts, boxes) if len(pts) else [np.zeros(0, dtype=np.int64) for _ in boxes]
+    out = []
+    for g, idx in zip(spec.gages, inside):
+        moved = corrected_cloud(pts[idx], result) if len(idx) else np.zeros((0, 3))
+        e = moved @ np.asarray(g.plane[:3]) + g.plane[3]
+        out.append((idx, e))
+    return out
+
+
 def build_problem(points, spec: SpecLike) -> GageProblem:
     """Align (Eqs. 5.13-5.19), cut the regions and hull-filter them (Sec. 5.4.1)."""
     spec = _as_spec(spec)
@@ -253,24 +306,12 @@ def build_problem(points, spec: SpecLike) -> GageProblem:
     check_finite(pts, "cloud")
     source = spec.source
 
-    alignment = None
-    C = np.eye(4)
-    if spec.alignment is not None:
-        al = spec.alignment
-        names = list(dict.fromkeys([*al.primary, *al.secondary, *al.tertiary]))
-        cut = _cut(pts, [spec.region(n).box for n in names], ["scanner"] * len(names), source)
-        groups_in = {}
-        for key, lst in (("primary", al.primary), ("secondary", al.secondary), ("tertiary", al.tertiary)):
-            allp = np.vstack([pts[cut[n].indices] for n in lst])
-            hull = np.vstack([pts[cut[n].hull] for n in lst])
-            groups_in[key] = (lst, allp, hull)
-        alignment = fit_321(groups_in, pts.mean(axis=0))
-        C = alignment.frame
+    alignment = _alignment(pts, spec)
     H = np.eye(4) if alignment is None else alignment.H
 
     region_names = list(dict.fromkeys(g.region for g in spec.gages))
     regions = [spec.region(n) for n in region_names]
-    boxes = [box_in_scanner(r.box, C) if (r.frame == "part" and alignment is not None) else r.box for r in regions]
+    boxes = [region_in_scanner(r, alignment) for r in regions]
     cut = _cut(pts, boxes, [r.frame for r in regions], source)
     filtered = {r.name: apply(H, pts[cut[r.name].hull]) for r in regions}
 
@@ -365,4 +406,5 @@ def corrected_cloud(points, result: GageCheckResult) -> np.ndarray:
 
 
 __all__ = ["GageOutcome", "Transform", "BoundLimit", "GageCheckResult", "GageProblem", "build_problem",
-           "solve_problem", "check_gages", "corrected_cloud", "box_in_scanner"]
+           "solve_problem", "check_gages", "corrected_cloud", "box_in_scanner", "datum_alignment",
+           "region_in_scanner", "gage_distances"]

@@ -8,6 +8,7 @@ from typing import Any, Optional, Sequence
 
 import numpy as np
 
+from .. import _core
 from ..errors import ConfigError, InvalidInputError
 from .calibration import Calibration
 from .model import Machine, ModelStructure
@@ -95,18 +96,18 @@ def compensate(
     if not axes:
         raise InvalidInputError("compensation axes: none given")
     idx = [machine.joint_names.index(a) for a in axes]
-    target = machine.nominal(c0)
     coef = _coefficients(machine, calibration, st)
     p = np.linalg.pinv(coef) @ np.array([g.value for g in calibration.groups])
-    c = c0.copy()
-    n = c.shape[0]
-    for _ in range(iterations):
-        actual = machine.nominal(c) + machine.volumetric_error(c, p)
-        miss = (actual - target).reshape(n, 3, 1)
-        jac = machine.command_jacobian(c).reshape(n, 3, -1)[:, :, idx]
-        step = np.linalg.pinv(jac) @ miss
-        c[:, idx] -= step[:, :, 0]
-    remaining = machine.nominal(c) + machine.volumetric_error(c, p) - target
+    n = c0.shape[0]
+    # Gauss-Newton on the commands of ``axes`` (Rust kernel, gagekit-kinematics chain/inverse.rs):
+    # c <- c - pinv(J_axes) (P(c) + M(c) p - P(c0)), minimum-norm steps for redundant axes
+    unit = machine._angle_factor()
+    c, remaining = _core.machine_compensate(
+        machine._chain, np.ascontiguousarray(c0 * unit), np.ascontiguousarray(p), idx, int(iterations)
+    )
+    c = c0 + (np.asarray(c) - c0 * unit) / unit  # joints not in ``axes`` stay bit-identical
+    c[:, [j for j in range(c.shape[1]) if j not in idx]] = c0[:, [j for j in range(c.shape[1]) if j not in idx]]
+    remaining = np.asarray(remaining)
     worst = float(np.linalg.norm(remaining, axis=1).max()) if n else 0.0
     if worst > 1e-6:
         warnings.warn(

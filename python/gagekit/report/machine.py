@@ -78,8 +78,11 @@ def add_tracking(report: Report, result) -> None:
                  "model kept (static, Table 4.5), observed change only (drift only, Table 4.6)")
     tm = result.temperature_model
     if tm and tm.get("fitted"):
-        report.text(f"Temperature model over {', '.join(tm['sensors'])}: leave-one-cycle-out mean residual "
-                    f"{tm['leave_one_cycle_out_mean'] * 1000:.1f} um.")
+        mean = {k: 1e3 * sum(c[k]["mean"] for c in result.cycles) / len(result.cycles) for k in ("full", "static", "drift_only")}
+        report.text(f"Temperature model ({tm.get('model', 'linear')}) over {', '.join(tm['sensors'])}: "
+                    f"leave-one-cycle-out mean residual {tm['leave_one_cycle_out_mean'] * 1000:.1f} um, against "
+                    f"{mean['full']:.1f} um re-identified each cycle, {mean['drift_only']:.1f} um drift-only and "
+                    f"{mean['static']:.1f} um static (means over the cycles).")
     report.figure(drift_figure(result), "parameter-drift", "Drift of the identified groups over the cycles (cf. Fig. 4.8)")
 
 

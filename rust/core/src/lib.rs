@@ -141,6 +141,23 @@ pub fn check_finite(coords: &[f64], dim: usize, what: &str) -> Result<()> {
     Ok(())
 }
 
+/// Rotation matrix (row-major) of a rotation vector v = axis * angle (rad), by Rodrigues'
+/// formula; the identity for v = 0 (the box regions of Sec. 5.4.1).
+pub fn rotation_from_vector(rv: [f64; 3]) -> [[f64; 3]; 3] {
+    let theta = (rv[0] * rv[0] + rv[1] * rv[1] + rv[2] * rv[2]).sqrt();
+    if theta == 0.0 {
+        return [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+    }
+    let (kx, ky, kz) = (rv[0] / theta, rv[1] / theta, rv[2] / theta);
+    let (s, c) = theta.sin_cos();
+    let v = 1.0 - c;
+    [
+        [c + kx * kx * v, kx * ky * v - kz * s, kx * kz * v + ky * s],
+        [ky * kx * v + kz * s, c + ky * ky * v, ky * kz * v - kx * s],
+        [kz * kx * v - ky * s, kz * ky * v + kx * s, c + kz * kz * v],
+    ]
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -1,8 +1,10 @@
 //! Point-set kernels: sampling regions (oriented boxes, Sec. 5.4.1) and the
-//! convex-hull filter (Eq. 5.21).
+//! convex-hull filter (Eq. 5.21), and a cell grid for interactive region queries.
 
+pub mod grid;
 pub mod hull;
 pub mod region;
 
+pub use grid::CellGrid;
 pub use hull::convex_hull_indices;
 pub use region::{classify, rotation_matrix, select, OrientedBox};

@@ -19,30 +19,15 @@ pub struct OrientedBox {
     pub rotation: [f64; 3],
 }
 
-/// Rotation matrix of a rotation vector (Rodrigues' formula), row-major.
-pub fn rotation_matrix(rv: [f64; 3]) -> [[f64; 3]; 3] {
-    let theta = (rv[0] * rv[0] + rv[1] * rv[1] + rv[2] * rv[2]).sqrt();
-    if theta == 0.0 {
-        return [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
-    }
-    let (kx, ky, kz) = (rv[0] / theta, rv[1] / theta, rv[2] / theta);
-    let (s, c) = theta.sin_cos();
-    let v = 1.0 - c;
-    [
-        [c + kx * kx * v, kx * ky * v - kz * s, kx * kz * v + ky * s],
-        [ky * kx * v + kz * s, c + ky * ky * v, ky * kz * v - kx * s],
-        [kz * kx * v - ky * s, kz * ky * v + kx * s, c + kz * kz * v],
-    ]
-}
+pub use gagekit_core::rotation_from_vector as rotation_matrix;
 
 impl OrientedBox {
     /// Validate the box: finite numbers and a positive size on every axis.
     pub fn validate(&self, name: &str) -> Result<()> {
-        let all = self.center.iter().chain(&self.size).chain(&self.rotation);
-        if all.clone().any(|v| !v.is_finite()) {
-            return Err(GkError::config(format!(
-                "region '{name}': centre, size and rotation must be finite numbers"
-            )));
+        for (what, v) in [("center", &self.center), ("size", &self.size), ("rotation", &self.rotation)] {
+            if v.iter().any(|x| !x.is_finite()) {
+                return Err(GkError::config(format!("region '{name}': {what} must be finite, got {v:?}")));
+            }
         }
         if let Some(axis) = self.size.iter().position(|&s| s <= 0.0) {
             return Err(GkError::config(format!(
@@ -55,7 +40,7 @@ impl OrientedBox {
     }
 
     /// A membership test with the rotation precomputed.
-    fn tester(&self) -> impl Fn(&[f64]) -> bool + Sync + '_ {
+    pub(crate) fn tester(&self) -> impl Fn(&[f64]) -> bool + Sync + '_ {
         let r = rotation_matrix(self.rotation);
         let half = [self.size[0] / 2.0, self.size[1] / 2.0, self.size[2] / 2.0];
         let c = self.center;

@@ -29,6 +29,8 @@ use gagekit_core::{check_coordinates, check_finite, GkError, Result};
 use nalgebra::{Matrix3, Rotation3, Unit, Vector3};
 use rayon::prelude::*;
 
+mod inverse;
+
 type V3 = Vector3<f64>;
 type M3 = Matrix3<f64>;
 
@@ -417,31 +419,34 @@ impl Machine {
     }
 }
 
+/// The example machine of the dissertation (B X Z Y W with shapes between, Eq. 3.1; 52
+/// parameters), for tests and benchmarks.
+pub fn example_machine() -> Machine {
+    let s = |z: f64| Element::Shape { offset: [0.0, 0.0, z] };
+    let pj = |a: [f64; 3]| Element::Prismatic { axis: a };
+    Machine::new(
+        vec![
+            Element::Rotary { axis: [0.0, 1.0, 0.0], terms: 1 },
+            s(0.0),
+            pj([1.0, 0.0, 0.0]),
+            s(0.0),
+            pj([0.0, 0.0, 1.0]),
+            s(0.0),
+            pj([0.0, 1.0, 0.0]),
+            s(-450.0),
+            pj([0.0, 0.0, 1.0]),
+            s(0.0),
+        ],
+        [0.0, 0.0, -312.035],
+    )
+    .unwrap()
+}
+
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
 
-    /// The example machine of the dissertation (B X Z Y W with shapes between, Eq. 3.1).
-    pub fn example() -> Machine {
-        let s = |z: f64| Element::Shape { offset: [0.0, 0.0, z] };
-        let pj = |a: [f64; 3]| Element::Prismatic { axis: a };
-        Machine::new(
-            vec![
-                Element::Rotary { axis: [0.0, 1.0, 0.0], terms: 1 },
-                s(0.0),
-                pj([1.0, 0.0, 0.0]),
-                s(0.0),
-                pj([0.0, 0.0, 1.0]),
-                s(0.0),
-                pj([0.0, 1.0, 0.0]),
-                s(-450.0),
-                pj([0.0, 0.0, 1.0]),
-                s(0.0),
-            ],
-            [0.0, 0.0, -312.035],
-        )
-        .unwrap()
-    }
+    pub use super::example_machine as example;
 
     /// A skewed chain: tilted axes, two rotary joints with several terms, offsets everywhere.
     fn skewed() -> Machine {

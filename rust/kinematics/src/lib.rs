@@ -13,5 +13,5 @@
 pub mod chain;
 pub mod ident;
 
-pub use chain::{Element, Machine, ParamLabel};
+pub use chain::{example_machine, Element, Machine, ParamLabel};
 pub use ident::{identifiability, lstsq, rigid_fit, Identifiability, Lstsq, RigidFit};

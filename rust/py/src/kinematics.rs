@@ -38,6 +38,13 @@ pub struct KinematicChain {
     n_parameters: usize,
 }
 
+impl KinematicChain {
+    /// The validated Rust chain (for the other binding modules, e.g. `nc`).
+    pub(crate) fn chain(&self) -> &Machine {
+        &self.machine
+    }
+}
+
 #[pymethods]
 impl KinematicChain {
     #[new]

@@ -12,6 +12,7 @@ mod form;
 mod gage;
 mod geometry;
 mod kinematics;
+mod nc;
 
 use pyo3::prelude::*;
 
@@ -39,6 +40,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     geometry::register(m)?;
     form::register(m)?;
     kinematics::register(m)?;
+    nc::register(m)?;
     gage::register(m)?;
     design::register(m)?;
     testing(m.py(), m)

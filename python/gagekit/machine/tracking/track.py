@@ -9,8 +9,10 @@ with the frame correction of ERRATA item 6) and kept; then, per cycle j:
   Table 4.6);
 * ``observed``: the errors left after the tracker placement (the "Observed" columns).
 
-With temperature columns, a linear model from the cycle-mean temperatures to each group
-(Sec. 7.2, item 4) and its leave-one-cycle-out prediction residuals.
+With temperature columns, a ridge model from the cycle-mean temperatures to each group
+(Sec. 7.2, item 4), its strength chosen by leave-one-cycle-out, and its nested
+leave-one-cycle-out prediction residuals (``temperature_model.leave_one_cycle_out_mean``, mm,
+beside the full, static and drift-only residuals of each cycle).
 """
 
 from __future__ import annotations
@@ -114,34 +116,75 @@ def track(machine: Machine, cycles: Cycles, structure: Optional[ModelStructure] 
     )
 
 
+#: Ridge strengths tried, relative to the mean squared norm of the standardised temperatures.
+_LAMBDAS = tuple(float(v) for v in np.logspace(-3, 3, 25))
+
+
+def _ridge(T: np.ndarray, P: np.ndarray, lam: float):
+    """Ridge regression of group values P (C, G) on temperatures T (C, S): standardised
+    temperatures, dual form (C x C) so that more sensors than cycles is fine. Returns
+    (T mean, T scale, P mean, coefficients (S, G) per standardised unit)."""
+    tm, pm = T.mean(axis=0), P.mean(axis=0)
+    sd = T.std(axis=0)
+    sd = np.where(sd > 1e-9, sd, 1.0)
+    X = (T - tm) / sd
+    k = X @ X.T
+    scale = max(float(np.trace(k)) / len(T), 1e-12)
+    B = X.T @ np.linalg.solve(k + lam * scale * np.eye(len(T)), P - pm)
+    return tm, sd, pm, B
+
+
+def _predict_groups(fit, t: np.ndarray) -> np.ndarray:
+    tm, sd, pm, B = fit
+    return pm + ((t - tm) / sd) @ B
+
+
+def _residual(m, resid_c, g) -> float:
+    return float(np.linalg.norm(resid_c - (m @ g).reshape(-1, 3), axis=1).mean())
+
+
+def _choose_lambda(T, P, m, resid, idx) -> float:
+    """Strength with the smallest leave-one-cycle-out mean residual over the cycles ``idx``."""
+    best, best_err = _LAMBDAS[0], np.inf
+    for lam in _LAMBDAS:
+        err = 0.0
+        for c in idx:
+            keep = [i for i in idx if i != c]
+            err += _residual(m, resid[c], _predict_groups(_ridge(T[keep], P[keep], lam), T[c]))
+        if err < best_err - 1e-15:
+            best, best_err = lam, err
+    return best
+
+
 def _temperature_model(cycles: Cycles, params, names, m, resid) -> dict:
-    """Linear model group = a + b . (T - T_mean) over cycle-mean temperatures, minimum-norm
-    least squares (more sensors than cycles is common), with leave-one-cycle-out residuals."""
+    """Ridge model group = a + b . (T - T_ref) over cycle-mean temperatures; its strength is
+    chosen by leave-one-cycle-out on the training cycles, so the reported leave-one-cycle-out
+    residuals are nested (the held-out cycle never chooses its own strength)."""
     sensors = list(cycles.temperatures)
     T = np.column_stack([cycles.temperatures[s] for s in sensors])  # (C, S)
     P = np.array(params)  # (C, G)
     C = len(P)
-    if C < 3:
-        return {"sensors": sensors, "fitted": False, "reason": "a temperature model needs at least 3 cycles"}
-
-    def fit(idx):
-        Tm, Pm = T[idx].mean(axis=0), P[idx].mean(axis=0)
-        B = np.linalg.pinv(T[idx] - Tm) @ (P[idx] - Pm)  # (S, G)
-        return Tm, Pm, B
-
-    Tm, Pm, B = fit(np.arange(C))
+    if C < 4:
+        return {"sensors": sensors, "fitted": False, "reason": "a temperature model needs at least 4 cycles (3 to choose its strength)"}
+    allc = list(range(C))
     loo = []
-    for c in range(C):
-        keep = np.array([i for i in range(C) if i != c])
-        tm, pm, b = fit(keep)
-        g = pm + (T[c] - tm) @ b
+    for c in allc:
+        keep = [i for i in allc if i != c]
+        lam = _choose_lambda(T, P, m, resid, keep)
+        g = _predict_groups(_ridge(T[keep], P[keep], lam), T[c])
         res = np.linalg.norm(resid[c] - (m @ g).reshape(-1, 3), axis=1)
-        loo.append({"cycle": cycles.cycle_ids[c], "mean": float(res.mean()), "max": float(res.max())})
+        loo.append({"cycle": cycles.cycle_ids[c], "mean": float(res.mean()), "max": float(res.max()), "lambda": lam})
+    lam = _choose_lambda(T, P, m, resid, allc)
+    tm, sd, pm, B = _ridge(T, P, lam)
+    coef = B / sd[:, None]  # per C
     return {
         "fitted": True,
+        "model": "ridge (standardised temperatures; strength by nested leave-one-cycle-out)",
+        "lambda": lam,
         "sensors": sensors,
-        "coefficients": {name: {s: float(B[k, i]) for k, s in enumerate(sensors)} for i, name in enumerate(names)},
-        "reference_temperatures": {s: float(v) for s, v in zip(sensors, Tm)},
+        "coefficients": {name: {s: float(coef[k, i]) for k, s in enumerate(sensors)} for i, name in enumerate(names)},
+        "intercept": {name: float(pm[i]) for i, name in enumerate(names)},
+        "reference_temperatures": {s: float(v) for s, v in zip(sensors, tm)},
         "leave_one_cycle_out": loo,
         "leave_one_cycle_out_mean": float(np.mean([x["mean"] for x in loo])),
     }

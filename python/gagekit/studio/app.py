@@ -1,0 +1,261 @@
+"""The studio's HTTP layer (Starlette): JSON in and out, over :class:`~.session.Session`.
+
+Endpoints (all JSON unless said otherwise; errors are ``{"error": message}`` with a
+4xx status, and spec errors also carry ``errors``: ``[{"table", "name", "index",
+"message"}]``):
+
+==========================  ==============================================================
+``GET  /``                  the client (``static/index.html``)
+``GET  /api/state``         scan information, the gage document and its validation
+``GET  /api/scan/points``   the displayed points: float32 x, y, z (octet-stream)
+``POST /api/scan``          ``{"path", "units"?}``: open another scan in the studio folder
+``GET  /api/files``         scans and gage files in the studio folder
+``POST /api/spec``          ``{"path"}``: open (or start) a gage file in the studio folder
+``POST /api/regions``       ``{"doc"}``: every region's count over all points, the datum frame
+``POST /api/select``        ``{"region"}``: count inside one box, bit mask of displayed points
+``POST /api/run``           ``{"doc", "groups"?}``: the gage check, T*, per-point distances
+``POST /api/save``          ``{"doc", "path"?}``: write the gage file (atomic)
+==========================  ==============================================================
+
+Requests name files relative to the studio folder; a path that leads outside it is
+refused (403). Request bodies are limited to :data:`MAX_BODY` bytes (413); a body that
+is not a JSON object is refused (400). When the server listens on another address than
+the loopback, every request must carry the access token (query ``token``, header
+``X-Studio-Token`` or the cookie set by the first page load).
+"""
+
+from __future__ import annotations
+
+import json
+import secrets
+from pathlib import Path
+from typing import Any, Optional
+
+from starlette.applications import Starlette
+from starlette.concurrency import run_in_threadpool
+from starlette.exceptions import HTTPException
+from starlette.middleware import Middleware
+from starlette.middleware.trustedhost import TrustedHostMiddleware
+from starlette.requests import Request
+from starlette.responses import FileResponse, JSONResponse, Response
+from starlette.routing import Mount, Route
+from starlette.staticfiles import StaticFiles
+from starlette.types import ASGIApp, Receive, Scope, Send
+
+from ..errors import ConfigError, GagekitError
+from .session import Session, SpecError
+
+STATIC = Path(__file__).with_name("static")
+MAX_BODY = 4 * 1024 * 1024
+"""Largest request body accepted (bytes): a gage document is a few kB."""
+SCAN_SUFFIXES = {".ply", ".xyz", ".csv", ".txt", ".asc", ".pts", ".ds", ".npy", ".las", ".laz", ".e57"}
+COOKIE = "gagekit_studio"
+LOOPBACK_HOSTS = ["127.0.0.1", "localhost", "::1", "[::1]"]
+
+
+class RequestError(Exception):
+    """A bad request: status and message for the client."""
+
+    def __init__(self, status: int, message: str) -> None:
+        super().__init__(message)
+        self.status = status
+        self.message = message
+
+
+class TokenMiddleware:
+    """Every request must carry the access token (constant-time comparison)."""
+
+    def __init__(self, app: ASGIApp, token: str) -> None:
+        self.app = app
+        self.token = token
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        if scope["type"] != "http":
+            await self.app(scope, receive, send)
+            return
+        request = Request(scope)
+        given = (request.query_params.get("token") or request.headers.get("x-studio-token")
+                 or request.cookies.get(COOKIE) or "")
+        if not secrets.compare_digest(given.encode(), self.token.encode()):
+            await JSONResponse({"error": "access token missing or wrong (see the terminal that started the studio)"},
+                               status_code=401)(scope, receive, send)
+            return
+        if request.query_params.get("token") and scope["path"] == "/":
+            async def send_with_cookie(message):
+                if message["type"] == "http.response.start":
+                    cookie = f"{COOKIE}={self.token}; Path=/; HttpOnly; SameSite=Strict"
+                    message.setdefault("headers", []).append((b"set-cookie", cookie.encode()))
+                await send(message)
+
+            await self.app(scope, receive, send_with_cookie)
+            return
+        await self.app(scope, receive, send)
+
+
+def confined(root: Path, rel: Any, suffixes: Optional[set] = None, what: str = "path") -> Path:
+    """``root / rel`` if it stays inside ``root`` (after resolving links), else 403."""
+    if not isinstance(rel, str) or not rel or len(rel) > 1024 or "\x00" in rel:
+        raise RequestError(400, f"{what}: expected a file name inside the studio folder")
+    p = Path(rel)
+    if p.is_absolute() or p.drive:
+        raise RequestError(403, f"{what}: '{rel}' is outside the studio folder (give a relative name)")
+    full = (root / p).resolve()
+    if full != root and root not in full.parents:
+        raise RequestError(403, f"{what}: '{rel}' is outside the studio folder")
+    if suffixes is not None and full.suffix.lower() not in suffixes:
+        raise RequestError(400, f"{what}: '{rel}' must end in one of {', '.join(sorted(suffixes))}")
+    return full
+
+
+async def read_json(request: Request) -> dict:
+    """The request's JSON object, or a RequestError (413 too large, 415, 400)."""
+    ctype = request.headers.get("content-type", "").split(";")[0].strip().lower()
+    if ctype != "application/json":
+        raise RequestError(415, "send the request body as application/json")
+    length = request.headers.get("content-length")
+    if length is not None:
+        try:
+            if int(length) > MAX_BODY:
+                raise RequestError(413, f"request body of {int(length)} bytes is larger than {MAX_BODY}")
+        except ValueError:
+            raise RequestError(400, "bad Content-Length") from None
+    body = bytearray()
+    async for chunk in request.stream():
+        body.extend(chunk)
+        if len(body) > MAX_BODY:
+            raise RequestError(413, f"request body larger than {MAX_BODY} bytes")
+    try:
+        data = json.loads(body.decode("utf-8"), parse_constant=_reject_constant)
+    except (UnicodeDecodeError, ValueError) as exc:
+        raise RequestError(400, f"malformed JSON: {exc}") from None
+    if not isinstance(data, dict):
+        raise RequestError(400, "expected a JSON object")
+    return data
+
+
+def _reject_constant(name: str):
+    raise ValueError(f"{name} is not a number")
+
+
+def _doc(data: dict) -> dict:
+    doc = data.get("doc")
+    if not isinstance(doc, dict):
+        raise RequestError(400, "expected 'doc': the gage document as a JSON object")
+    return doc
+
+
+def create_app(session: Session, root: Path, *, token: Optional[str] = None,
+               allowed_hosts: Optional[list] = None) -> Starlette:
+    """The studio application over ``session``; files named by requests must lie in ``root``."""
+    root = root.resolve()
+
+    async def index(request: Request) -> Response:
+        return FileResponse(STATIC / "index.html", headers={"Cache-Control": "no-store"})
+
+    async def state(request: Request) -> Response:
+        return JSONResponse({"scan": session.scan.info(), "spec": await run_in_threadpool(session.spec_model),
+                             "root": str(root), "max_body": MAX_BODY})
+
+    async def scan_points(request: Request) -> Response:
+        scan = session.scan
+        data = await run_in_threadpool(scan.lod_buffer)
+        return Response(data, media_type="application/octet-stream",
+                        headers={"X-Point-Count": str(len(scan.lod)), "Cache-Control": "no-store"})
+
+    async def open_scan(request: Request) -> Response:
+        data = await read_json(request)
+        path = confined(root, data.get("path"), SCAN_SUFFIXES, "scan")
+        units = data.get("units")
+        if units is not None and not isinstance(units, str):
+            raise RequestError(400, "units: expected a unit name such as \"mm\"")
+        return JSONResponse(await run_in_threadpool(session.replace_scan, path, units))
+
+    async def files(request: Request) -> Response:
+        def listing() -> dict:
+            scans, specs = [], []
+            for p in sorted(root.rglob("*"))[:5000]:
+                if not p.is_file() or any(part.startswith(".") for part in p.relative_to(root).parts):
+                    continue
+                rel = p.relative_to(root).as_posix()
+                if p.suffix.lower() in SCAN_SUFFIXES:
+                    scans.append(rel)
+                elif p.suffix.lower() == ".toml":
+                    specs.append(rel)
+            return {"scans": scans, "specs": specs}
+
+        return JSONResponse(await run_in_threadpool(listing))
+
+    async def open_spec(request: Request) -> Response:
+        data = await read_json(request)
+        path = confined(root, data.get("path"), {".toml"}, "gage file")
+        return JSONResponse(await run_in_threadpool(session.open_spec, path))
+
+    async def regions(request: Request) -> Response:
+        doc = _doc(await read_json(request))
+        return JSONResponse(await run_in_threadpool(session.regions, doc))
+
+    async def select(request: Request) -> Response:
+        data = await read_json(request)
+        return JSONResponse(await run_in_threadpool(session.select, data.get("region")))
+
+    async def run(request: Request) -> Response:
+        data = await read_json(request)
+        groups = data.get("groups", True)
+        if not isinstance(groups, bool):
+            raise RequestError(400, "groups: expected true or false")
+        return JSONResponse(await run_in_threadpool(session.run, _doc(data), groups))
+
+    async def save(request: Request) -> Response:
+        data = await read_json(request)
+        doc = _doc(data)
+        path = None if data.get("path") in (None, "") else confined(root, data.get("path"), {".toml"}, "gage file")
+        if path is not None and not path.parent.is_dir():
+            raise RequestError(400, f"gage file: folder '{path.parent.name}' does not exist")
+        return JSONResponse(await run_in_threadpool(session.save, doc, path))
+
+    async def request_error(request: Request, exc: RequestError) -> Response:
+        return JSONResponse({"error": exc.message}, status_code=exc.status)
+
+    async def spec_error(request: Request, exc: SpecError) -> Response:
+        return JSONResponse({"error": str(exc), "errors": exc.check.errors, "warnings": exc.check.warnings},
+                            status_code=422)
+
+    async def gagekit_error(request: Request, exc: GagekitError) -> Response:
+        status = 422 if isinstance(exc, ConfigError) else 400
+        body: dict = {"error": str(exc)}
+        if isinstance(exc, ConfigError):
+            from .specdoc import locate
+
+            body["errors"] = [locate(str(exc), session.source)]
+        return JSONResponse(body, status_code=status)
+
+    async def http_error(request: Request, exc: HTTPException) -> Response:
+        return JSONResponse({"error": exc.detail}, status_code=exc.status_code)
+
+    async def server_error(request: Request, exc: Exception) -> Response:
+        return JSONResponse({"error": f"internal error: {type(exc).__name__}: {exc}"}, status_code=500)
+
+    routes = [
+        Route("/", index),
+        Route("/api/state", state),
+        Route("/api/scan/points", scan_points),
+        Route("/api/scan", open_scan, methods=["POST"]),
+        Route("/api/files", files),
+        Route("/api/spec", open_spec, methods=["POST"]),
+        Route("/api/regions", regions, methods=["POST"]),
+        Route("/api/select", select, methods=["POST"]),
+        Route("/api/run", run, methods=["POST"]),
+        Route("/api/save", save, methods=["POST"]),
+        Mount("/static", StaticFiles(directory=STATIC), name="static"),
+    ]
+    middleware = []
+    if allowed_hosts:
+        middleware.append(Middleware(TrustedHostMiddleware, allowed_hosts=allowed_hosts))
+    if token:
+        middleware.append(Middleware(TokenMiddleware, token=token))
+    return Starlette(routes=routes, middleware=middleware, exception_handlers={
+        RequestError: request_error, SpecError: spec_error, GagekitError: gagekit_error,
+        HTTPException: http_error, Exception: server_error})
+
+
+__all__ = ["create_app", "confined", "read_json", "RequestError", "MAX_BODY"]

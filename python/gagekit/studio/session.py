@@ -1,0 +1,301 @@
+"""The studio's state on the server: one scan, one gage file, and the library calls
+each request needs. No geometry lives here: regions, alignment, the gage check and
+the distances come from :mod:`gagekit.cloud` and :mod:`gagekit.gage`.
+
+The scan stays whole on the server (every count and every check uses all of its
+points); the browser gets a level-of-detail subsample (LOD) for display: a fixed,
+seeded choice of at most ``lod_max`` points, so the same scan always shows the same
+points.
+"""
+
+from __future__ import annotations
+
+import base64
+import math
+import threading
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Optional
+
+import numpy as np
+
+from .._files import write_bytes
+from ..cloud.grid import IndexedCloud
+from ..cloud.io import read_points
+from ..cloud.regions import Box
+from ..errors import ConfigError, GagekitError, InvalidInputError
+from ..gage.analysis import check_gages, datum_alignment, gage_distances, region_in_scanner
+from ..gage.spec import Region
+from . import specdoc
+
+LOD_MAX = 2_000_000
+"""Most points sent to the browser for display."""
+LOD_SEED = 0
+
+
+def _b64(arr: np.ndarray) -> str:
+    return base64.b64encode(np.ascontiguousarray(arr).tobytes()).decode("ascii")
+
+
+@dataclass
+class Scan:
+    """A loaded scan: all points (indexed for region queries) and the LOD for display."""
+
+    path: Path
+    units: Optional[str]
+    cloud: IndexedCloud
+    lod: np.ndarray
+    """indices (ascending) of the displayed points"""
+    lod_cloud: IndexedCloud
+    origin: np.ndarray
+    """offset subtracted from the float32 display coordinates (centre of the bounding box)"""
+    load_seconds: float
+
+    @property
+    def points(self) -> np.ndarray:
+        return self.cloud.points
+
+    def info(self) -> dict:
+        pts = self.points
+        lo, hi = self.cloud.bounds
+        return {"name": self.path.name, "path": str(self.path), "units": self.units or "mm",
+                "count": int(len(pts)), "lod_count": int(len(self.lod)),
+                "bbox": {"min": lo.tolist(), "max": hi.tolist()}, "origin": self.origin.tolist(),
+                "load_seconds": round(self.load_seconds, 3)}
+
+    def lod_buffer(self) -> bytes:
+        """The displayed points as little-endian float32 x, y, z, minus :attr:`origin`."""
+        return np.ascontiguousarray(self.lod_cloud.points - self.origin, dtype="<f4").tobytes()
+
+
+def display_subsample(n: int, m: int, seed: int = LOD_SEED) -> np.ndarray:
+    """Ascending indices of at most ``m`` of ``n`` points: one point drawn (seeded) from
+    each of ``m`` equal runs of the file order, so the subsample spreads over the whole
+    scan and costs ``m`` random numbers, not ``n``."""
+    if n <= m:
+        return np.arange(n)
+    edges = (np.arange(m + 1, dtype=np.float64) * (n / m)).astype(np.int64)
+    width = np.maximum(edges[1:] - edges[:-1], 1)
+    return edges[:-1] + (np.random.default_rng(seed).random(m) * width).astype(np.int64)
+
+
+def load_scan(path: Path, units: Optional[str] = None, lod_max: int = LOD_MAX) -> Scan:
+    """Read a scan, index it, choose its display subsample."""
+    t0 = time.perf_counter()
+    pts = read_points(path, units=units)
+    cloud = IndexedCloud(pts)
+    lod = display_subsample(len(pts), lod_max)
+    lod_cloud = IndexedCloud(pts[lod])
+    lo, hi = cloud.bounds
+    origin = np.round((lo + hi) / 2.0, 3)
+    return Scan(path, units, cloud, lod, lod_cloud, origin, time.perf_counter() - t0)
+
+
+def box_of(table: Any, what: str = "region") -> Region:
+    """A region table of the client's document (``center``, ``size``, ``rotation`` in
+    rad, ``frame``) as a spec :class:`~gagekit.gage.spec.Region`."""
+    if not isinstance(table, dict):
+        raise InvalidInputError(f"{what}: expected a table with center, size and rotation")
+    frame = table.get("frame", "part")
+    if frame not in ("part", "scanner"):
+        raise ConfigError(f"{what}: frame must be \"part\" or \"scanner\", got {frame!r}")
+    for key in ("center", "size"):
+        if key not in table:
+            raise ConfigError(f"{what}: needs '{key}'")
+    name = table.get("name") if isinstance(table.get("name"), str) and table.get("name") else "region"
+    return Region(Box(table["center"], table["size"], table.get("rotation", (0.0, 0.0, 0.0)), name=name), frame)
+
+
+class Session:
+    """One scan, one gage file, the alignment found for it; safe to share between threads."""
+
+    def __init__(self, scan: Scan, spec_path: Optional[Path], lod_max: int = LOD_MAX) -> None:
+        self.lock = threading.RLock()
+        self.scan = scan
+        self.lod_max = lod_max
+        self.spec_path: Optional[Path] = None
+        self.spec_text = ""
+        self.alignment = None
+        self.alignment_key: Optional[str] = None
+        self.alignment_error: Optional[str] = None
+        self.open_spec(spec_path)
+
+    # ------------------------------------------------------------------ scan
+
+    def replace_scan(self, path: Path, units: Optional[str]) -> dict:
+        scan = load_scan(path, units, self.lod_max)
+        with self.lock:
+            self.scan = scan
+            self.alignment = None
+            self.alignment_key = None
+        return scan.info()
+
+    # ------------------------------------------------------------------ spec
+
+    @property
+    def source(self) -> str:
+        return self.spec_path.name if self.spec_path is not None else "new gage file"
+
+    def open_spec(self, path: Optional[Path]) -> dict:
+        text = ""
+        if path is not None and path.exists():
+            try:
+                text = path.read_text(encoding="utf-8")
+            except (OSError, UnicodeDecodeError) as exc:
+                raise ConfigError(f"{path}: cannot read the gage file ({exc})") from None
+        with self.lock:
+            self.spec_path = path
+            self.spec_text = text
+            self.alignment = None
+            self.alignment_key = None
+        return self.spec_model()
+
+    def spec_model(self) -> dict:
+        """The document for the client, with the reader's errors located by table."""
+        source = self.source
+        if self.spec_text.strip():
+            try:
+                doc = specdoc.parse_text(self.spec_text, source)
+            except ConfigError as exc:
+                return {"path": str(self.spec_path), "name": source, "doc": None, "parse_error": str(exc),
+                        "validation": {"valid": False, "errors": [specdoc.locate(str(exc), source)], "warnings": []}}
+        else:
+            doc = {"length_unit": "mm", "motion": {"free": ["alpha", "beta", "gamma", "dx", "dy", "dz"],
+                                                   "max_angle": 0.05, "max_shift": 20.0}}
+        check = specdoc.validate(doc, source)
+        return {"path": None if self.spec_path is None else str(self.spec_path), "name": source,
+                "exists": bool(self.spec_text), "doc": doc, "validation": check.to_dict()}
+
+    def save(self, doc: Any, path: Optional[Path]) -> dict:
+        """Write ``doc`` (atomically) to ``path`` or the open gage file; the unchanged
+        document writes the original text back byte for byte."""
+        target = path or self.spec_path
+        if target is None:
+            raise ConfigError("no gage file to save to: give a file name")
+        same = target == self.spec_path
+        original = self.spec_text if same else ""
+        text = specdoc.render(original, doc, target.name)
+        write_bytes(target, text.encode("utf-8"))  # atomic: temporary file, then rename
+        with self.lock:
+            self.spec_path = target
+            self.spec_text = text
+        check = specdoc.validate(doc, target.name)
+        return {"path": str(target), "name": target.name, "bytes": len(text.encode("utf-8")),
+                "unchanged": same and text == original, "validation": check.to_dict()}
+
+    # ------------------------------------------------------------------ regions
+
+    def _aligned(self, doc: Any):
+        """The alignment of ``doc``'s datums (cached on the datum tables), or None."""
+        if not isinstance(doc, dict) or not doc.get("alignment"):
+            return None, None
+        al = doc["alignment"]
+        names = set()
+        if isinstance(al, dict):
+            for v in al.values():
+                names.update(v if isinstance(v, list) else [v])
+        datums = [r for r in doc.get("region", []) if isinstance(r, dict) and r.get("name") in names]
+        key = repr((al, datums, doc.get("angle_unit"), str(self.scan.path)))
+        with self.lock:
+            if key == self.alignment_key:
+                return self.alignment, self.alignment_error
+        check = specdoc.validate(doc, self.source)
+        alignment, error = None, None
+        if check.spec is None:
+            error = check.errors[0]["message"]
+        else:
+            try:
+                alignment = datum_alignment(self.scan.points, check.spec)
+            except GagekitError as exc:
+                error = str(exc)
+        with self.lock:
+            self.alignment, self.alignment_error, self.alignment_key = alignment, error, key
+        return alignment, error
+
+    def regions(self, doc: Any) -> dict:
+        """Counts of every region of ``doc`` over all points, and the datum frame."""
+        alignment, error = self._aligned(doc)
+        tables = doc.get("region", []) if isinstance(doc, dict) else []
+        if not isinstance(tables, list):
+            raise ConfigError(f"{self.source}: regions must be given as [[region]] tables")
+        ang = math.pi / 180.0 if isinstance(doc, dict) and doc.get("angle_unit") == "deg" else 1.0
+        out = []
+        for k, t in enumerate(tables):
+            name = t.get("name") if isinstance(t, dict) else None
+            try:
+                region = box_of(_in_rad(t, ang), f"region '{name}'" if name else f"region #{k + 1}")
+                box = region_in_scanner(region, alignment)
+                out.append({"name": name, "count": self.scan.cloud.count(box), "error": None})
+            except GagekitError as exc:
+                out.append({"name": name, "count": None, "error": str(exc)})
+        return {"regions": out, "alignment": _alignment_dict(alignment), "alignment_error": error,
+                "validation": specdoc.validate(doc, self.source).to_dict()}
+
+    def select(self, table: Any) -> dict:
+        """Points inside one box (rotation in rad; a part-frame box is placed by the
+        alignment last found by :meth:`regions`): the count over all points and a bit
+        mask of the LOD points (little-endian bit order, one bit per displayed point)."""
+        region = box_of(table)
+        with self.lock:
+            alignment = self.alignment
+        box = region_in_scanner(region, alignment)
+        scan = self.scan
+        count = scan.cloud.count(box)
+        lod_idx = scan.lod_cloud.select(box)
+        mask = np.zeros(len(scan.lod), dtype=bool)
+        mask[lod_idx] = True
+        return {"count": int(count), "lod_count": int(len(lod_idx)),
+                "mask": _b64(np.packbits(mask, bitorder="little"))}
+
+    # ------------------------------------------------------------------ run
+
+    def run(self, doc: Any, groups: bool = True) -> dict:
+        """The gage check of ``doc`` on all points, and per displayed point the signed
+        distance to the nearest-binding gage plane at T* (NaN outside every gage region)."""
+        check = specdoc.validate(doc, self.source)
+        if check.spec is None:
+            raise SpecError(check)
+        scan = self.scan
+        t0 = time.perf_counter()
+        result = check_gages(scan.points, check.spec, groups=groups)
+        seconds = time.perf_counter() - t0
+        values = np.full(len(scan.lod), np.nan)
+        for idx, e in gage_distances(scan.lod_cloud.points, check.spec, result):
+            if len(idx):
+                cur = values[idx]
+                values[idx] = np.where(np.isnan(cur), e, np.minimum(cur, e))
+        H = np.eye(4) if result.alignment is None else result.alignment.H
+        view = result.transform.as_array() @ H
+        finite = values[np.isfinite(values)]
+        return {"result": result.to_dict(), "seconds": round(seconds, 3),
+                "validation": check.to_dict(),
+                "view_matrix": view.tolist(), "align_matrix": H.tolist(),
+                "values": _b64(values.astype("<f4")),
+                "value_range": [float(finite.min()), float(finite.max())] if len(finite) else None}
+
+
+class SpecError(GagekitError):
+    """The gage document has errors (carried located, for the client)."""
+
+    def __init__(self, check: "specdoc.Validation") -> None:
+        super().__init__(check.errors[0]["message"] if check.errors else "invalid gage document")
+        self.check = check
+
+
+def _in_rad(table: Any, factor: float) -> Any:
+    if factor == 1.0 or not isinstance(table, dict) or "rotation" not in table:
+        return table
+    rot = table["rotation"]
+    if not isinstance(rot, list):
+        return table
+    return dict(table, rotation=[v * factor if isinstance(v, (int, float)) else v for v in rot])
+
+
+def _alignment_dict(alignment) -> Optional[dict]:
+    if alignment is None:
+        return None
+    return {"H": np.asarray(alignment.H).tolist(), "C": np.asarray(alignment.frame).tolist()}
+
+
+__all__ = ["Session", "Scan", "load_scan", "box_of", "SpecError", "LOD_MAX"]

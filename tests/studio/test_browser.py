@@ -1,0 +1,157 @@
+"""The studio in headless Chromium (Debian's, driven by Playwright): open a scan, add a
+region by mouse, make it a gage, run, read the allowance, save, compare the file."""
+
+import re
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import gagekit
+from gagekit.cloud.regions import Box
+from gagekit.demo import data_path
+
+CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
+playwright = pytest.importorskip("playwright.sync_api", reason="playwright (pip) is needed for the browser tests")
+if not Path(CHROMIUM).exists():
+    pytest.skip("Debian's chromium is needed for the browser tests (apt-get install chromium)", allow_module_level=True)
+
+EXPECTED = Path(__file__).with_name("data") / "plate_expected.toml"
+ARGS = ["--no-sandbox", "--use-angle=swiftshader", "--enable-unsafe-swiftshader", "--ignore-gpu-blocklist"]
+
+
+class Studio:
+    """`gagekit studio` in a child process on a free port."""
+
+    def __init__(self, *args: str) -> None:
+        self.proc = subprocess.Popen([sys.executable, "-m", "gagekit", "studio", *args, "--no-browser", "--port", "0"],
+                                     stderr=subprocess.PIPE, stdout=subprocess.DEVNULL, text=True)
+        self.url = None
+        lines = []
+        for line in self.proc.stderr:
+            lines.append(line)
+            m = re.search(r"open (http://\S+)", line)
+            if m:
+                self.url = m.group(1)
+                break
+        assert self.url, "".join(lines)
+
+    def stop(self) -> None:
+        self.proc.terminate()
+        try:
+            self.proc.wait(timeout=10)
+        except subprocess.TimeoutExpired:
+            self.proc.kill()
+
+
+@pytest.fixture(scope="module")
+def browser():
+    with playwright.sync_playwright() as p:
+        b = p.chromium.launch(executable_path=CHROMIUM, args=ARGS)
+        yield b
+        b.close()
+
+
+def open_page(browser, url):
+    page = browser.new_page(viewport={"width": 1400, "height": 850})
+    problems = []
+    page.on("console", lambda m: problems.append(m.text) if m.type == "error" else None)
+    page.on("pageerror", lambda e: problems.append(str(e)))
+    page.goto(url)
+    page.wait_for_function("window.__studio && window.__studio.ready", timeout=60000)
+    return page, problems
+
+
+def not_blank(path: Path) -> None:
+    from PIL import Image
+
+    img = np.asarray(Image.open(path).convert("RGB")).astype(float)
+    view = img[:, : img.shape[1] - 490]                      # the 3-D view, left of the panel
+    assert view.std() > 10, "the 3-D view is blank"
+    background = np.array([0x20, 0x26, 0x2E], dtype=float)
+    drawn = (np.abs(view - background).sum(axis=2) > 30).mean()
+    assert drawn > 0.02, f"only {drawn:.1%} of the view differs from the background"
+
+
+def test_add_region_by_mouse_gage_run_save(browser, tmp_path):
+    plate = tmp_path / "plate.ply"
+    rng = np.random.default_rng(0)
+    top = np.column_stack([rng.uniform(0, 100, 6000), rng.uniform(0, 60, 6000), 10 + rng.normal(0, 0.02, 6000)])
+    bottom = np.column_stack([rng.uniform(0, 100, 3000), rng.uniform(0, 60, 3000), np.zeros(3000)])
+    sides = np.column_stack([rng.choice([0.0, 100.0], 2000), rng.uniform(0, 60, 2000), rng.uniform(0, 10, 2000)])
+    pts = np.vstack([top, bottom, sides])
+    gagekit.write_points(plate, pts)
+    studio = Studio(str(plate), str(tmp_path / "plate.toml"))
+    try:
+        page, problems = open_page(browser, studio.url)
+        # add a box by mouse: the button, then a click on the scan in the middle of the view
+        page.click("#add-box")
+        canvas = page.locator("#view canvas").bounding_box()
+        page.mouse.click(canvas["x"] + canvas["width"] / 2, canvas["y"] + canvas["height"] / 2)
+        page.wait_for_selector("#regions tbody tr[data-name='box1']", timeout=10000)
+        picked = page.evaluate("window.__studio.state.doc.region[0].center")
+        assert 0 <= picked[0] <= 100 and 0 <= picked[1] <= 60 and -0.5 <= picked[2] <= 10.5
+        # place it on the top face by typing numbers
+        for field, value in zip(("cx", "cy", "cz", "sx", "sy", "sz"), (50, 30, 10, 80, 40, 2)):
+            page.fill(f"#re-{field}", str(value))
+        box = Box((50, 30, 10), (80, 40, 2))
+        inside = gagekit.select(pts, box)
+        page.wait_for_function(f"document.querySelector('#re-count').textContent === '{len(inside):,}'", timeout=10000)
+        # make it a gage: material above z = 9.5, checked as placed (no motion free)
+        page.click("#gage-add")
+        page.select_option(".gage .g-preset", "+z")
+        page.fill(".gage .g-pos", "9.5")
+        for cb in page.locator("#free input").all():
+            cb.uncheck()
+        page.click("#run")
+        page.wait_for_selector("#results tbody tr", timeout=30000)
+        allowance = float(page.inner_text("#results tbody tr td.allow-after"))
+        assert allowance == pytest.approx(pts[inside, 2].min() - 9.5, abs=5e-5)
+        assert page.inner_text("#results tbody tr td.points") == str(len(inside))
+        page.fill("#save-path", "plate.toml")
+        page.click("#save")
+        page.wait_for_function("document.querySelector('#save-status').textContent.startsWith('saved')", timeout=10000)
+        assert (tmp_path / "plate.toml").read_text() == EXPECTED.read_text()
+        # the file reads as gage check reads it, with the same allowance
+        res = gagekit.check_gages(pts, tmp_path / "plate.toml")
+        assert res.gages[0].allowance_after == pytest.approx(allowance, abs=5e-5)
+        shot = tmp_path / "plate.png"
+        page.screenshot(path=str(shot))
+        not_blank(shot)
+        assert problems == [] and page.evaluate("window.__studio.errors") == []
+    finally:
+        studio.stop()
+
+
+def test_casting_opens_runs_and_saves_byte_identical(browser, tmp_path):
+    spec = tmp_path / "casting_ok.toml"
+    shutil.copy(data_path("casting_ok.toml"), spec)
+    original = spec.read_bytes()
+    studio = Studio(str(data_path("casting_ok.ply")), str(spec))
+    try:
+        page, problems = open_page(browser, studio.url)
+        assert page.locator("#regions tbody tr").count() == 13
+        page.click("#regions tbody tr[data-name='flange_top']")
+        page.wait_for_function("document.querySelector('#re-count').textContent === '3,084'", timeout=10000)
+        page.click("#run")
+        page.wait_for_selector("#results tbody tr", timeout=30000)
+        assert page.locator("#results tbody tr").count() == 8
+        assert page.inner_text("#run-status").startswith("conforming")
+        page.check("#apply-t")
+        page.click("#save")
+        page.wait_for_function("document.querySelector('#save-status').textContent.startsWith('saved')", timeout=10000)
+        assert "unchanged" in page.inner_text("#save-status")
+        assert spec.read_bytes() == original
+        shot = tmp_path / "casting.png"
+        page.screenshot(path=str(shot))
+        not_blank(shot)
+        # a spec error shows next to its table
+        page.fill("#re-sx", "-3")
+        page.wait_for_function("document.querySelector('.errors[data-table=region]').textContent.includes('size')",
+                               timeout=10000)
+        assert problems == [] and page.evaluate("window.__studio.errors") == []
+    finally:
+        studio.stop()
