@@ -7,7 +7,7 @@ import math
 from dataclasses import asdict, is_dataclass
 import sys
 from pathlib import Path
-from typing import Any, Iterator, Mapping, Sequence, Union
+from typing import Any, Iterator, Mapping, Optional, Sequence, Union
 
 import numpy as np
 
@@ -58,6 +58,52 @@ def to_jsonable(obj: Any) -> Any:
         return to_jsonable(obj.item())
     if isinstance(obj, float) and not math.isfinite(obj):
         return None
+    return obj
+
+
+def find_nonfinite(obj: Any, path: str = "") -> Optional[str]:
+    """The path (``a.b[3]``) of the first NaN or infinity in a result (dataclasses,
+    ``to_dict()`` objects, dicts, lists, numpy arrays and scalars), or None."""
+    if hasattr(obj, "to_dict") and callable(obj.to_dict):
+        return find_nonfinite(obj.to_dict(), path)
+    if is_dataclass(obj) and not isinstance(obj, type):
+        return find_nonfinite(asdict(obj), path)
+    if isinstance(obj, dict):
+        for k, v in obj.items():
+            hit = find_nonfinite(v, f"{path}.{k}" if path else str(k))
+            if hit is not None:
+                return hit
+        return None
+    if isinstance(obj, (list, tuple)):
+        for i, v in enumerate(obj):
+            hit = find_nonfinite(v, f"{path}[{i}]")
+            if hit is not None:
+                return hit
+        return None
+    if isinstance(obj, np.ndarray):
+        if obj.dtype.kind in "fc":
+            bad = ~np.isfinite(obj)
+            if bad.any():
+                idx = np.unravel_index(int(np.argmax(bad)), obj.shape)
+                return f"{path}[{', '.join(map(str, idx))}]"
+            return None
+        if obj.dtype.kind == "O":
+            return find_nonfinite(obj.tolist(), path)
+        return None
+    if isinstance(obj, (float, np.floating)) and not math.isfinite(float(obj)):
+        return path or "value"
+    return None
+
+
+def check_finite_result(obj: Any, what: str = "result") -> Any:
+    """Return ``obj`` if every number in it is finite; :class:`NumericalError` naming the
+    first NaN or infinity otherwise (a result is checked before it is returned or printed)."""
+    from .errors import NumericalError
+
+    hit = find_nonfinite(obj)
+    if hit is not None:
+        raise NumericalError(f"{what}: the computation produced a non-finite value at {hit} "
+                             "(NaN or infinity): the input is out of the range this method handles")
     return obj
 
 

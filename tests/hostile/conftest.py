@@ -65,3 +65,41 @@ def sim(tmp_path_factory):
     assert_ok(gk("machine", "simulate", EXAMPLE_MACHINE, "--points", 120, "--out", d / "obs.csv", "--seed", 1))
     assert_ok(gk("machine", "identify", EXAMPLE_MACHINE, d / "obs.csv", "--out", d / "cal.json"))
     return d
+
+
+def gk_inproc(*args) -> tuple[int, str, str]:
+    """Run the CLI in this process (fast, for hundreds of generated cases): (exit status,
+    stdout, stderr). An exception escaping ``main`` is a traceback: it propagates."""
+    import contextlib
+    import io
+
+    from gagekit.cli import main
+
+    out, err = io.StringIO(), io.StringIO()
+    code = 0
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        try:
+            main([str(a) for a in args])
+        except SystemExit as exc:
+            code = exc.code if isinstance(exc.code, int) else 1
+    return code, out.getvalue(), err.getvalue()
+
+
+def check_outcome(code: int, out: str, err: str, what: str) -> str:
+    """The contract for one case: a clean error ("clean") or a valid, finite JSON result
+    ("ok"). Anything else fails with ``what`` in the message."""
+    import json
+
+    from .mutants import is_finite_json
+
+    lines = [ln for ln in err.splitlines() if ln.strip()]
+    if code == 0:
+        assert not any(ln.startswith("gagekit: error") for ln in lines), (what, err)
+        data = json.loads(out)
+        assert is_finite_json(data), (what, out[:500])
+        return "ok"
+    assert code == 2, (what, code, err)
+    assert len(lines) == 1 and lines[0].startswith("gagekit: error: "), (what, err)
+    assert "internal error" not in lines[0], (what, lines[0])
+    assert out == "", (what, out[:200])
+    return "clean"

@@ -100,3 +100,40 @@ def is_finite_json(obj: Any) -> bool:
     if isinstance(obj, list):
         return all(is_finite_json(v) for v in obj)
     return obj is not None
+
+
+ZONES = """
+[[zone]]
+count = 20
+X = [-1250.0, 0.0]
+
+[[zone]]
+count = 20
+X = [0.0, 1250.0]
+Y = [350.0, 1400.0]
+"""
+
+EXCLUSIONS = """
+tolerance = 0.02
+commands = [[0.0, 0.0, 1000.0, 400.0, -500.0]]
+
+[[box]]
+X = [-100.0, 100.0]
+Y = [350.0, 600.0]
+"""
+
+
+def spec_commands(tmp: Path, machine: Path, gage_toml: Path, cloud: Path) -> dict:
+    """Spec type -> (a valid file, the command that reads it with ``SPEC`` standing for the
+    file): machine, gage, regions, zones and exclusions files."""
+    (tmp / "zones.toml").write_text(ZONES)
+    (tmp / "excl.toml").write_text(EXCLUSIONS)
+    design = ["machine", "design", machine, "--points", 40, "--candidates", 300, "--starts", 1,
+              "--out", tmp / "plan.csv", "--json"]
+    return {
+        "machine": (machine, ["machine", "check", "SPEC", "--commands", 200, "--json"]),
+        "gage": (gage_toml, ["gage", "check", cloud, "SPEC", "--no-groups", "--json"]),
+        "regions": (gage_toml, ["cloud", "regions", cloud, "SPEC", "--json"]),
+        "zones": (tmp / "zones.toml", [*design, "--zones", "SPEC"]),
+        "exclusions": (tmp / "excl.toml", [*design, "--exclude", "SPEC"]),
+    }

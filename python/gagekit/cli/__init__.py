@@ -72,8 +72,11 @@ def main(argv: Optional[list[str]] = None) -> None:
     slice"...) are held back: printed as ``gagekit: warning: ...`` lines after a
     successful run, dropped when the command fails, so the error line is never buried.
     """
+    import signal
     import warnings
 
+    if getattr(signal.getsignal(signal.SIGINT), "__name__", "") == "_stop":  # set while gagekit imported
+        signal.signal(signal.SIGINT, signal.default_int_handler)
     usage_error, no_args_help, exit_exc, abort_exc = _click_classes()
     args = list(sys.argv[1:] if argv is None else argv)
     command = typer.main.get_command(app)

@@ -6,7 +6,7 @@ from typing import Any, Callable
 
 import typer
 
-from .._util import dumps
+from .._util import check_finite_result, dumps
 from ..report.text import table
 
 __all__ = ["JSON_OPTION", "emit", "table"]
@@ -68,7 +68,10 @@ def read_cloud_cli(path: Any, units: Any = None, dim: int = 3) -> Any:
 
 
 def emit(result: Any, as_json: bool, human: Callable[[Any], str]) -> None:
-    """Print ``result`` as JSON or as the human-readable text ``human(result)``."""
+    """Print ``result`` as JSON or as the human-readable text ``human(result)``, after
+    checking that every number in it is finite (:class:`NumericalError` otherwise: never a
+    NaN, an infinity or a JSON null in place of a number)."""
+    check_finite_result(result)
     if as_json:
         typer.echo(dumps(result))
     else:

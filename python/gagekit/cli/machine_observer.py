@@ -133,15 +133,18 @@ def track_cmd(
     if report is not None:
         output_dir(report)
     m = load_machine(machine_file)
-    with _warnings_to_stderr():
-        cyc = read_cycles(cycles_csv, m)
-        res = track(m, cyc)
-    out = res.to_dict()
-    if history is not None:
-        h = History(history, m)
-        try:
+    # the history is opened (and a foreign, damaged, read-only or other machine's file refused)
+    # before the computation, so that no computed run is lost to a bad --history path
+    h = History(history, m) if history is not None else None
+    try:
+        with _warnings_to_stderr():
+            cyc = read_cycles(cycles_csv, m)
+            res = track(m, cyc)
+        out = res.to_dict()
+        if h is not None:
             out["history_run"] = h.append(cyc, res)
-        finally:
+    finally:
+        if h is not None:
             h.close()
     if report is not None:
         from .._files import atomic_dir, write_text

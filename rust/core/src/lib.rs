@@ -18,6 +18,8 @@ pub enum ErrorKind {
     Config,
     /// A numerical method did not converge or lost accuracy.
     Numerical,
+    /// The caller asked the kernel to stop (Ctrl-C): see [`interrupt`].
+    Interrupted,
 }
 
 /// The error every gagekit kernel returns.
@@ -46,6 +48,44 @@ impl GkError {
     pub fn numerical(message: impl Into<String>) -> Self {
         Self::new(ErrorKind::Numerical, message)
     }
+    pub fn interrupted() -> Self {
+        Self::new(ErrorKind::Interrupted, "interrupted")
+    }
+}
+
+/// Cooperative cancellation of long kernels (Ctrl-C answered within a second).
+///
+/// One process-wide flag: whoever handles the interrupt (the Python binding installs a
+/// SIGINT action that only stores to this atomic, which is async-signal-safe) calls
+/// [`interrupt::request`]; long kernels call [`interrupt::check`] between chunks of work
+/// (a few milliseconds each) and return [`ErrorKind::Interrupted`]. A request stops every
+/// kernel running in the process at that moment, as Ctrl-C stops the process.
+pub mod interrupt {
+    use super::{GkError, Result};
+    use std::sync::atomic::{AtomicBool, Ordering};
+
+    static REQUESTED: AtomicBool = AtomicBool::new(false);
+
+    /// Ask the running kernels to stop (safe to call from a signal handler).
+    pub fn request() {
+        REQUESTED.store(true, Ordering::Relaxed);
+    }
+    /// Forget a request (before a new kernel call starts).
+    pub fn clear() {
+        REQUESTED.store(false, Ordering::Relaxed);
+    }
+    /// Whether a stop was requested.
+    pub fn requested() -> bool {
+        REQUESTED.load(Ordering::Relaxed)
+    }
+    /// `Err(Interrupted)` once a stop was requested: `interrupt::check()?` between chunks.
+    pub fn check() -> Result<()> {
+        if requested() {
+            Err(GkError::interrupted())
+        } else {
+            Ok(())
+        }
+    }
 }
 
 impl fmt::Display for GkError {
@@ -57,6 +97,28 @@ impl fmt::Display for GkError {
 impl std::error::Error for GkError {}
 
 pub type Result<T> = std::result::Result<T, GkError>;
+
+/// Largest coordinate magnitude the machine and gage kernels accept: 1e9 (mm for
+/// positions, the joint unit for commands). A machine tool or a casting spans at most a
+/// few 1e4 mm; beyond 1e9 the squares and products of the least-squares and LP
+/// kernels lose every significant digit long before they overflow (1e154 squared is
+/// already infinite), so such input is refused up front instead of returning NaN.
+pub const MAX_COORDINATE: f64 = 1e9;
+
+/// [`check_finite`], then every value within +-[`MAX_COORDINATE`]; the message names
+/// the first offending point (0-based row).
+pub fn check_coordinates(coords: &[f64], dim: usize, what: &str) -> Result<()> {
+    check_finite(coords, dim, what)?;
+    if let Some(pos) = coords.iter().position(|v| v.abs() > MAX_COORDINATE) {
+        let row = pos / dim;
+        return Err(GkError::invalid(format!(
+            "{what}: point {row} has a coordinate of magnitude {:e}, beyond the supported {:e} (check the units)",
+            coords[pos].abs(),
+            MAX_COORDINATE
+        )));
+    }
+    Ok(())
+}
 
 /// Check that a flat row-major coordinate buffer holds finite values only.
 ///

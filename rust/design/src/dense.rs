@@ -508,6 +508,7 @@ fn skinny_body<'a, const FMA: bool, const NR: usize, const MR: usize>(
         let rows: [&[f64]; MR] = std::array::from_fn(|ii| &row(i + ii)[..k]);
         let mut acc = [[0.0f64; NR]; MR];
         for t in 0..k {
+            #[allow(clippy::unwrap_used, reason = "a slice of exactly NR values always converts to [f64; NR]")]
             let wt: &[f64; NR] = wp[t * NR..(t + 1) * NR].try_into().unwrap();
             for (acc_i, r_i) in acc.iter_mut().zip(rows.iter()) {
                 let x = r_i[t];

@@ -253,6 +253,7 @@ pub fn solve_linearised(
         .collect();
     let scale = lin.e0.iter().fold(1.0f64, |m, v| m.max(v.abs()));
     for _round in 0..200 {
+        gagekit_core::interrupt::check()?;
         let lp = build(motion, p0, &lin, &sel, set.f, set.g, forced_zero);
         let sol = solve_lp(&lp)?;
         let sol = finish(&lp, sol);

@@ -1,7 +1,7 @@
 //! The data of a virtual-gage problem (Eqs. 5.4, 5.11) and its exact evaluation.
 
 use crate::transform::{pull_back, rotation_and_derivatives};
-use gagekit_core::{check_finite, GkError, Result};
+use gagekit_core::{check_coordinates, GkError, Result};
 
 /// Gages with their point-sets, all in the part frame.
 ///
@@ -78,7 +78,7 @@ impl<'a> GageSet<'a> {
         {
             return Err(GkError::invalid("gage point offsets do not partition the point array"));
         }
-        check_finite(self.points, 3, "gage points")?;
+        check_coordinates(self.points, 3, "gage points")?;
         for i in 0..k {
             if self.offsets[i + 1] == self.offsets[i] {
                 return Err(GkError::invalid(format!("gage {i} has no points")));

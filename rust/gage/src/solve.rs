@@ -79,10 +79,78 @@ fn step_size(delta: &[f64], free: &[usize], radius: f64) -> f64 {
         .fold(0.0, f64::max)
 }
 
+/// The motion bounds the LPs actually see: the given ones, each capped at a
+/// scale set by the data (the lever arm `radius` plus the largest plane offset for
+/// shifts, one radian for angles), times `2^k` after `k` widenings.
+///
+/// An LP whose bound rows are 1e12 while its distance rows are 1e2 is badly scaled:
+/// the interior-point solver and the face polish then work at the bound's scale
+/// and return non-optimal points (issue 12: `max_shift = 1e12` gave a wrong
+/// nonconforming verdict). The problem is convex, so a bound that is not active at
+/// the optimum can be tightened without changing the optimum; [`solve_from`] starts
+/// from the capped bounds and widens a cap only while the solution sits on it, up to
+/// the user's bound. The answer therefore does not depend on how loose a bound is.
+fn capped_motion(motion: &Motion, set: &GageSet, widenings: [i32; 2]) -> Motion {
+    let offset = (0..set.len()).map(|i| set.offset(i).abs()).fold(0.0, f64::max);
+    let base_shift = 4.0 * (set.radius() + offset) + 1.0;
+    Motion {
+        free: motion.free,
+        max_angle: (2f64.powi(widenings[0])).min(motion.max_angle),
+        max_shift: (base_shift * 2f64.powi(widenings[1])).min(motion.max_shift),
+    }
+}
+
 /// Solve Eq. 5.11 by re-linearising about the exact transform until it moves
 /// less than `opts.tol`; `forced_zero = Some(k)` adds s_k = 0 (Eq. 5.10).
-/// Starts at `start` (all zeros for the plain analysis).
+/// Starts at `start` (all zeros for the plain analysis). Loose motion bounds are
+/// handled by [`capped_motion`]: the result is the same for any bound that is not
+/// limiting.
 pub fn solve_from(
+    set: &GageSet,
+    motion: &Motion,
+    opts: &Options,
+    start: [f64; 6],
+    forced_zero: Option<usize>,
+) -> Result<Solution> {
+    set.validate(motion)?;
+    for (m, v) in start.iter().enumerate() {
+        if v.abs() > motion.bound(m) && motion.free[m] {
+            return Err(GkError::invalid("start transform outside the motion bounds"));
+        }
+    }
+    // first caps: wide enough to hold the start
+    let mut widenings = [0i32; 2];
+    for (m, v) in start.iter().enumerate() {
+        let g = usize::from(m >= 3);
+        while v.abs() > capped_motion(motion, set, widenings).bound(m) && widenings[g] < 2100 {
+            widenings[g] += 1;
+        }
+    }
+    let mut from = start;
+    loop {
+        let eff = capped_motion(motion, set, widenings);
+        let sol = solve_bounded(set, &eff, opts, from, forced_zero)?;
+        // a cap below the user's bound on which the solution sits: widen it, go on from there
+        let mut widen = [false; 2];
+        for m in motion.free_indices() {
+            let (cap, g) = (eff.bound(m), usize::from(m >= 3));
+            widen[g] |= cap < motion.bound(m) && sol.params[m].abs() >= cap * (1.0 - 1e-9);
+        }
+        for g in 0..2 {
+            widenings[g] += i32::from(widen[g]);
+        }
+        if widen == [false; 2] {
+            return Ok(sol);
+        }
+        if widenings.iter().any(|&w| w > 2100) {
+            return Err(GkError::numerical("the gage LP kept reaching its motion bounds while they were widened"));
+        }
+        from = sol.params;
+    }
+}
+
+/// [`solve_from`] with the bounds as given.
+fn solve_bounded(
     set: &GageSet,
     motion: &Motion,
     opts: &Options,
@@ -109,6 +177,7 @@ pub fn solve_from(
     let mut step = f64::INFINITY;
     let mut iterations = 0;
     while iterations < opts.max_iter {
+        gagekit_core::interrupt::check()?;
         iterations += 1;
         let (lp, sol) = solve_linearised(set, motion, &p, forced_zero, radius, true)?;
         let delta = &sol.x[..lp.free.len()];

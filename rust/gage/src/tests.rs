@@ -231,3 +231,23 @@ fn three_gages_that_conflict_only_together_form_one_group() {
     // no group is a single gage: each one alone can be met
     assert!(groups.iter().all(|g| g.len() >= 2), "{groups:?}");
 }
+
+#[test]
+fn loose_bounds_do_not_change_the_answer() {
+    // issue 12: the LP was scaled by its bound rows, so max_shift = 1e12 returned a
+    // non-optimal point; the capped-and-widened bounds give the same optimum for any
+    // bound that is not limiting
+    let o = block(40.0, 2.0, 0.01, [0.3, -0.2, 0.5]);
+    let reference = solve(&o.set(), &four_axis(), &Options::default()).unwrap();
+    assert!(reference.active_bounds.is_empty());
+    for e in [5.0f64, 10.0, 30.0, 100.0, 1e3, 1e6, 1e10, 1e12, 1e50, 1e100, 1e200, 1e300] {
+        let m = Motion { max_shift: e, max_angle: 0.05, ..four_axis() };
+        let s = solve(&o.set(), &m, &Options::default()).unwrap();
+        assert_eq!(s.conforming(), reference.conforming(), "max_shift {e}");
+        assert!((s.objective - reference.objective).abs() <= 1e-7 * (1.0 + reference.objective.abs()), "max_shift {e}: {} vs {}", s.objective, reference.objective);
+        let m = Motion { max_angle: e, ..four_axis() };
+        let s = solve(&o.set(), &m, &Options::default()).unwrap();
+        assert!(s.objective <= reference.objective + 1e-7, "max_angle {e}");
+        assert!(s.objective.is_finite() && s.params.iter().all(|v| v.is_finite()));
+    }
+}

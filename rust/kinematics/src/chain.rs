@@ -25,7 +25,7 @@
 //!   the fixed frame (as printed, Eq. 3.5 adds [eps]x to R(B) unrotated, which is not a rigid
 //!   motion unless B = 0).
 
-use gagekit_core::{check_finite, GkError, Result};
+use gagekit_core::{check_coordinates, check_finite, GkError, Result};
 use nalgebra::{Matrix3, Rotation3, Unit, Vector3};
 use rayon::prelude::*;
 
@@ -167,7 +167,7 @@ impl Machine {
         if elements.is_empty() {
             return Err(GkError::config("the chain is empty"));
         }
-        check_finite(&tool, 3, "tool offset")?;
+        check_coordinates(&tool, 3, "tool offset")?;
         let mut axes = Vec::with_capacity(elements.len());
         let mut joint_index = Vec::with_capacity(elements.len());
         let mut param_offset = Vec::with_capacity(elements.len());
@@ -177,7 +177,7 @@ impl Machine {
             np += e.n_params();
             match e {
                 Element::Shape { offset } => {
-                    check_finite(offset, 3, &format!("chain element {k}: offset"))?;
+                    check_coordinates(offset, 3, &format!("chain element {k}: offset"))?;
                     axes.push(V3::zeros());
                     joint_index.push(usize::MAX);
                 }
@@ -229,7 +229,7 @@ impl Machine {
                 commands.len()
             )));
         }
-        check_finite(commands, nj, "commands")?;
+        check_coordinates(commands, nj, "commands")?;
         Ok(commands.len() / nj)
     }
 

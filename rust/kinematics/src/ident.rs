@@ -1,7 +1,7 @@
 //! Identifiability (Eq. 3.14), least squares with covariance (Eq. 3.18) and the closed-form
 //! rigid fit of a measurement frame (Step 1 of Sec. 3.1.5).
 
-use gagekit_core::{check_finite, GkError, Result};
+use gagekit_core::{check_coordinates, check_finite, GkError, Result};
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 
 /// What a design matrix over a rich set of commands reveals about the parameters.
@@ -77,7 +77,7 @@ pub fn identifiability(
     let rank = singular_values.iter().filter(|&&s| s > rtol * smax).count();
     // Row space of the equilibrated matrix: W = V_r^T (rank x active). Column c of W is what
     // parameter active[c] contributes to the identifiable directions.
-    let vt = svd.v_t.as_ref().unwrap();
+    let vt = svd.v_t.as_ref().ok_or_else(|| GkError::numerical("identifiability: the SVD returned no right singular vectors"))?;
     let w = vt.rows(0, rank).into_owned();
     let picked = pick_leaders(&w);
     let leaders: Vec<usize> = picked.iter().map(|&c| active[c]).collect();
@@ -153,11 +153,14 @@ fn pick_leaders(w: &DMatrix<f64>) -> Vec<usize> {
         }
     }
     while picked.len() < r {
-        let (c, v) = (0..a)
+        // r <= a columns, so a column is left while fewer than r are picked
+        let Some((c, v)) = (0..a)
             .filter(|c| !picked.contains(c))
             .map(|c| (c, residual(&basis, c)))
-            .max_by(|x, y| x.1.norm().partial_cmp(&y.1.norm()).unwrap())
-            .unwrap();
+            .max_by(|x, y| x.1.norm().total_cmp(&y.1.norm()))
+        else {
+            break;
+        };
         let nv = v.norm();
         basis.push(v / nv);
         picked.push(c);
@@ -213,17 +216,17 @@ pub fn lstsq(a: &[f64], nrows: usize, ncols: usize, b: &[f64]) -> Result<Lstsq> 
     let s = &svd.singular_values;
     let smax = s.max();
     let (imin, smin) = s.iter().enumerate().fold((0, f64::INFINITY), |acc, (i, &v)| if v < acc.1 { (i, v) } else { acc });
-    let vt = svd.v_t.as_ref().unwrap();
+    let vt = svd.v_t.as_ref().ok_or_else(|| GkError::numerical("least squares: the SVD returned no right singular vectors"))?;
     let weakest: Vec<f64> = vt.row(imin).iter().copied().collect();
     let mut singular_values: Vec<f64> = s.iter().copied().collect();
-    singular_values.sort_by(|a, b| b.partial_cmp(a).unwrap());
+    singular_values.sort_by(|a, b| b.total_cmp(a));
     let condition_number = smax / smin;
     if smin.is_nan() || smin <= 1e-12 * smax {
         return Err(GkError::degenerate(format!(
             "least squares: the design matrix is rank deficient (condition number {condition_number:.3e})"
         )));
     }
-    let u = svd.u.as_ref().unwrap();
+    let u = svd.u.as_ref().ok_or_else(|| GkError::numerical("least squares: the SVD returned no left singular vectors"))?;
     let bv = DVector::from_column_slice(b);
     let utb = u.transpose() * &bv;
     let k = ncols;
@@ -268,8 +271,8 @@ pub fn rigid_fit(src: &[f64], dst: &[f64]) -> Result<RigidFit> {
             dst.len()
         )));
     }
-    check_finite(src, 3, "nominal positions")?;
-    check_finite(dst, 3, "measured positions")?;
+    check_coordinates(src, 3, "nominal positions")?;
+    check_coordinates(dst, 3, "measured positions")?;
     let n = src.len() / 3;
     if n < 3 {
         return Err(GkError::degenerate(format!("rigid fit: needs at least 3 points, got {n}")));
@@ -290,9 +293,14 @@ pub fn rigid_fit(src: &[f64], dst: &[f64]) -> Result<RigidFit> {
         spread += a.norm_squared();
     }
     let svd = h.svd(true, true);
-    let (u, vt) = (svd.u.unwrap(), svd.v_t.unwrap());
+    let (Some(u), Some(vt)) = (svd.u, svd.v_t) else {
+        return Err(GkError::numerical("rigid fit: the SVD returned no singular vectors"));
+    };
     let mut sv: Vec<f64> = svd.singular_values.iter().copied().collect();
-    sv.sort_by(|a, b| b.partial_cmp(a).unwrap());
+    sv.sort_by(|a, b| b.total_cmp(a));
+    if sv.iter().any(|v| !v.is_finite()) {
+        return Err(GkError::numerical("rigid fit: the SVD of the cross-covariance is not finite"));
+    }
     if spread == 0.0 || sv[1] <= 1e-10 * sv[0] {
         return Err(GkError::degenerate(
             "rigid fit: the commanded positions are collinear (or coincide), so the measurement frame is undetermined",

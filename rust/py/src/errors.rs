@@ -24,6 +24,8 @@ pub fn to_pyerr(e: GkError) -> PyErr {
         ErrorKind::Infeasible => InfeasibleError::new_err(m),
         ErrorKind::Config => ConfigError::new_err(m),
         ErrorKind::Numerical => NumericalError::new_err(m),
+        // `run` turns an interrupted kernel into KeyboardInterrupt before it gets here
+        ErrorKind::Interrupted => pyo3::exceptions::PyKeyboardInterrupt::new_err(m),
     }
 }
 
@@ -52,8 +54,15 @@ where
     T: Send,
     F: FnOnce() -> gagekit_core::Result<T> + Send,
 {
+    install_sigint_action();
+    gagekit_core::interrupt::clear();
     match py.detach(|| catch_unwind(AssertUnwindSafe(f))) {
         Ok(Ok(v)) => Ok(v),
+        Ok(Err(e)) if e.kind == ErrorKind::Interrupted => {
+            // Python's own SIGINT handler has run too: raise what it raises (KeyboardInterrupt)
+            py.check_signals()?;
+            Err(pyo3::exceptions::PyKeyboardInterrupt::new_err("interrupted"))
+        }
         Ok(Err(e)) => Err(to_pyerr(e)),
         Err(payload) => {
             let what = payload
@@ -65,5 +74,20 @@ where
                 "internal error in a gagekit kernel (please report it): {what}"
             )))
         }
+    }
+}
+
+/// Ctrl-C while a kernel runs without the GIL: Python's handler only sets a flag that the
+/// interpreter reads when the kernel returns, so a long kernel would ignore it. A SIGINT
+/// action (chained before Python's own handler, which still runs) also sets the kernels'
+/// cancel flag ([`gagekit_core::interrupt`]), which the long kernels poll between chunks.
+fn install_sigint_action() {
+    #[cfg(unix)]
+    {
+        static ONCE: std::sync::Once = std::sync::Once::new();
+        ONCE.call_once(|| {
+            // SAFETY: the action only stores to an atomic (async-signal-safe).
+            let _ = unsafe { signal_hook::low_level::register(signal_hook::consts::SIGINT, gagekit_core::interrupt::request) };
+        });
     }
 }

@@ -43,6 +43,9 @@ impl<'p, 'a> Run<'p, 'a> {
             };
             let mut moved = false;
             for &i in &visit {
+                if interrupt::requested() {
+                    return moves; // Ctrl-C: `search` reports it after the starts return
+                }
                 let m = if self.c.is_spectral() {
                     self.visit_spectral(i)
                 } else {
@@ -78,6 +81,9 @@ impl<'p, 'a> Run<'p, 'a> {
         let n = self.p.n();
         let mut moves = 0;
         for _ in 0..rounds {
+            if interrupt::requested() {
+                break;
+            }
             let (best, best_value) = (self.design.clone(), self.value);
             let kick = (n / PERTURB_FRACTION).clamp(1, n);
             for i in sample(rng, n, kick).iter() {

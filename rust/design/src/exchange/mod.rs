@@ -45,7 +45,7 @@ use crate::lanes::{
     best_exchange, bound_terms, exchange_values, rank_update, soa_kernel, soa_screen, soa_update,
     ExchangeIn, RankUpdate, Screen, Soa, LANES,
 };
-use gagekit_core::{GkError, Result};
+use gagekit_core::{interrupt, GkError, Result};
 use rand::seq::{index::sample, SliceRandom};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -206,6 +206,7 @@ pub fn search(p: &Problem, o: &Options) -> Result<Outcome> {
     };
     let runs: Vec<Result<(Vec<usize>, usize)>> =
         (0..starts).into_par_iter().map(one_start).collect();
+    interrupt::check()?;
     let mut best: Option<(f64, usize, Vec<usize>, Metrics, usize)> = None;
     let mut start_objectives = Vec::with_capacity(starts);
     for (s, res) in runs.into_iter().enumerate() {

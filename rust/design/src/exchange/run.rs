@@ -207,7 +207,10 @@ impl<'p, 'a> Run<'p, 'a> {
     {
         let rr = self.p.r * self.p.r;
         let run_chunk = |ci: usize, dch: &mut [f64], ech: &mut [f64], bt: &mut [[f64; 3]]| {
-            f(ci * GEMM_CHUNK, dch, ech, bt)
+            // Ctrl-C: skip the remaining chunks (the run is abandoned; `search` reports it)
+            if !interrupt::requested() {
+                f(ci * GEMM_CHUNK, dch, ech, bt)
+            }
         };
         if self.needs_e() {
             self.bound_terms.resize(self.p.n_cand, [0.0; 3]);
