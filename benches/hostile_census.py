@@ -126,6 +126,7 @@ class Census:
         self.rows: dict[str, Counter] = defaultdict(Counter)
         self.examples: dict[tuple, list] = defaultdict(list)
         self.show = show
+        self.ok_labels: set = set()
 
     def add(self, group: str, label: str, outcome: tuple[str, str]) -> None:
         cat, detail = outcome
@@ -321,6 +322,10 @@ def run_outputs(c: Census, tmp: Path, quick: bool) -> None:
     ro.chmod(0o755)
 
 
+def census_ok(c: "Census", group: str, label: str) -> bool:
+    return (group, label) in c.ok_labels
+
+
 def run_history(c: Census, tmp: Path, quick: bool) -> None:
     import sqlite3
 
@@ -360,12 +365,15 @@ def run_history(c: Census, tmp: Path, quick: bool) -> None:
         "import sqlite3, sys, time; c = sqlite3.connect(sys.argv[1]); c.execute('BEGIN EXCLUSIVE');"
         "print('locked', flush=True); time.sleep(float(sys.argv[2]))"), str(h), "12"], stdout=subprocess.PIPE, text=True)
     locker.stdout.readline()
-    c.add(g, "locked: track", run_sub(["machine", "track", machine, cyc, "--history", h, "--json"], limit=60))
+    res = run_sub(["machine", "track", machine, cyc, "--history", h, "--json"], limit=60)
+    c.add(g, "locked: track", res)
+    c.ok_labels.add((g, "locked: track")) if res[0] == "ok" else None
     c.add(g, "locked: history", run_sub(["machine", "history", h, "--json"], limit=60))
     locker.kill()
     locker.wait()
+    stored = 2 + sum(1 for label in ("locked: track",) if census_ok(c, g, label))
     c.add(g, "after lock", run_inproc(["machine", "history", h, "--json"],
-                                        expect=lambda d: "" if len(d["runs"]) == 2 else f"{len(d['runs'])} runs"))
+                                        expect=lambda d: "" if len(d["runs"]) == stored else f"{len(d['runs'])} runs, expected {stored}"))
 
 
 def _count_rows(p: Path) -> int:

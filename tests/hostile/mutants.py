@@ -93,13 +93,15 @@ def special_paths(folder: Path) -> Iterator[tuple[str, Path]]:
 
 
 def is_finite_json(obj: Any) -> bool:
+    """No NaN or infinity anywhere (a JSON null is an absent optional value, e.g. "out": null:
+    the CLI refuses to print a non-finite number, so a null never stands for one)."""
     if isinstance(obj, float):
         return math.isfinite(obj)
     if isinstance(obj, dict):
         return all(is_finite_json(v) for v in obj.values())
     if isinstance(obj, list):
         return all(is_finite_json(v) for v in obj)
-    return obj is not None
+    return True
 
 
 ZONES = """

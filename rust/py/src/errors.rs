@@ -54,7 +54,7 @@ where
     T: Send,
     F: FnOnce() -> gagekit_core::Result<T> + Send,
 {
-    install_sigint_action();
+    install_sigint_action(py);
     gagekit_core::interrupt::clear();
     match py.detach(|| catch_unwind(AssertUnwindSafe(f))) {
         Ok(Ok(v)) => Ok(v),
@@ -81,13 +81,28 @@ where
 /// interpreter reads when the kernel returns, so a long kernel would ignore it. A SIGINT
 /// action (chained before Python's own handler, which still runs) also sets the kernels'
 /// cancel flag ([`gagekit_core::interrupt`]), which the long kernels poll between chunks.
-fn install_sigint_action() {
+fn install_sigint_action(py: Python<'_>) {
     #[cfg(unix)]
     {
         static ONCE: std::sync::Once = std::sync::Once::new();
+        if ONCE.is_completed() || !python_handles_sigint(py) {
+            return; // SIGINT ignored or left to the system (nohup, background jobs): keep it so
+        }
         ONCE.call_once(|| {
             // SAFETY: the action only stores to an atomic (async-signal-safe).
             let _ = unsafe { signal_hook::low_level::register(signal_hook::consts::SIGINT, gagekit_core::interrupt::request) };
         });
     }
+}
+
+/// Whether Python has a handler of its own for SIGINT (its default KeyboardInterrupt or a
+/// user's function), rather than SIG_IGN or SIG_DFL.
+#[cfg(unix)]
+fn python_handles_sigint(py: Python<'_>) -> bool {
+    let check = || -> PyResult<bool> {
+        let signal = py.import("signal")?;
+        let handler = signal.getattr("getsignal")?.call1((signal.getattr("SIGINT")?,))?;
+        Ok(handler.is_callable())
+    };
+    check().unwrap_or(false)
 }
