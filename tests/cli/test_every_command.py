@@ -44,6 +44,12 @@ RECIPES: dict[str, list] = {
     "machine simulate-cycles": [M, "T/plan.csv", "--cycles", 3, "--out", "T/cyc.csv"],
     "machine track": [M, "T/cyc.csv", "--history", "T/h.sqlite", "--report", "T/track"],
     "machine history": ["T/h.sqlite"],
+    "gage batch": [TOML, PLY, "--workers", 1, "--db", "sqlite:///T/batch.db"],
+    "form batch": ["circle", CIRCLE, "-c", "least-squares", "--workers", 1, "--db", "sqlite:///T/batch.db"],
+    "db upgrade": ["sqlite:///T/batch.db"],
+    "db export": ["sqlite:///T/batch.db", "--format", "csv", "--out", "T/export"],
+    "stats": ["--db", "sqlite:///T/batch.db"],
+    "inspect": [data_path("bracket.ply"), data_path("bracket.toml")],
     "demo": ["--quick", "--out", "T/demo"],
     "studio": None,  # a web server that runs until stopped: tests/studio runs it
 }
@@ -74,7 +80,8 @@ def folder(tmp_path_factory):
 
 @pytest.mark.parametrize("command", [c for c, r in RECIPES.items() if r is not None])
 def test_human_output(command, folder):
-    args = [str(a).replace("T/", f"{folder}/") if str(a).startswith("T/") else str(a) for a in RECIPES[command]]
+    args = [str(a).replace("T/", f"{folder}/", 1) if str(a).startswith(("T/", "sqlite:///T/")) else str(a)
+            for a in RECIPES[command]]
     proc = subprocess.run([sys.executable, "-m", "gagekit", *command.split(), *args], capture_output=True, text=True,
                           timeout=600)
     assert proc.returncode == 0, proc.stderr

@@ -128,7 +128,7 @@ def test_reads_after_a_killed_writer(tmp_path, cycles):
                           "import sqlite3, sys, time; c = sqlite3.connect(sys.argv[1], isolation_level=None);"
                           "c.execute('PRAGMA journal_mode=DELETE'); c.execute('BEGIN IMMEDIATE');"
                           "c.execute('PRAGMA cache_size=1');"
-                          "[c.execute('INSERT INTO calibrations (machine_id, kind, created, source, n_points) VALUES (1, \'track\', ?, ?, ?)', ('x' * 500, 'y' * 500, i))"
+                          "[c.execute('INSERT INTO calibrations (machine_id, kind, created, source, n_points) VALUES (1, ?, ?, ?, ?)', ('track', 'x' * 500, 'y' * 500, i))"
                           " for i in range(20000)];"
                           "print('writing', flush=True); time.sleep(60)", str(h)], stdout=subprocess.PIPE, text=True)
     assert w.stdout.readline().strip() == "writing"

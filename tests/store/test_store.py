@@ -91,7 +91,7 @@ def _writer(url: str, spec_hash: str, ks: list, barrier) -> int:
 
 def test_eight_processes_write_200_results_and_lose_nothing(db_url):
     """8 processes at once, each result offered by two of them: 200 rows, each once, intact."""
-    ctx = multiprocessing.get_context("fork")  # 8 real processes; fork spares 8 interpreter start-ups
+    ctx = multiprocessing.get_context("spawn")  # 8 real processes; spawn, not fork: a fork of this multi-threaded test process (Dask, SQLAlchemy pools) can deadlock in the child
     procs = 8
     owners = {w: [k for k in range(200) if k % procs == w or (k + 3) % procs == w] for w in range(procs)}
     with ctx.Manager() as mgr:
