@@ -54,6 +54,7 @@ fn lp_slopes(tan: &[Vec<f64>], h: &[f64], scale: f64) -> Result<Vec<f64>> {
     let mut rowval = Vec::new();
     let mut nzval = Vec::new();
     for j in 0..nv {
+        let start = rowval.len(); // this column's first entry
         for (i, t) in tan.iter().enumerate() {
             let (up, lo) = if j < k {
                 (-t[j] / scale, t[j] / scale)
@@ -72,7 +73,6 @@ fn lp_slopes(tan: &[Vec<f64>], h: &[f64], scale: f64) -> Result<Vec<f64>> {
             }
         }
         // row indices must be sorted within a column
-        let start = *colptr.last().unwrap();
         let mut pairs: Vec<(usize, f64)> =
             rowval[start..].iter().copied().zip(nzval[start..].iter().copied()).collect();
         pairs.sort_by_key(|p| p.0);

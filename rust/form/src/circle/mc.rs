@@ -103,10 +103,10 @@ fn through3(idx: [usize; 3], p: &[[f64; 2]]) -> (Disk, Vec<usize>) {
         let r2 = dist2(a, u).max(dist2(b, u)).max(dist2(c, u));
         return (Disk { c: u, r2 }, idx.to_vec());
     }
-    let pairs = [(0, 1), (0, 2), (1, 2)];
-    let (i, j) = pairs
+    // the longest of the three pairs (the last of equals, as `Iterator::max_by`)
+    let len2 = |(i, j): (usize, usize)| dist2(p[idx[i]], p[idx[j]]);
+    let (i, j) = [(0, 2), (1, 2)]
         .into_iter()
-        .max_by(|x, y| dist2(p[idx[x.0]], p[idx[x.1]]).total_cmp(&dist2(p[idx[y.0]], p[idx[y.1]])))
-        .unwrap();
+        .fold((0, 1), |best, x| if len2(x).total_cmp(&len2(best)).is_ge() { x } else { best });
     (diametral(p[idx[i]], p[idx[j]]), vec![idx[i], idx[j]])
 }

@@ -511,6 +511,7 @@ pub(crate) fn farthest_delaunay(q: &[[f64; 2]]) -> Vec<[usize; 3]> {
                 continue;
             };
             let t = tris[tn];
+            #[allow(clippy::unwrap_used, reason = "tn was found as the triangle of the directed edge (y, x), so y is one of its corners")]
             let s = t[(t.iter().position(|&w| w == y).unwrap() + 2) % 3];
             let inc = robust::incircle(coord(q[x]), coord(q[y]), coord(q[pv]), coord(q[s]));
             if inc < 0.0 {
