@@ -1,6 +1,7 @@
 //! Maximum inscribed circle (MI) constrained to lie within the minimum circumscribed
 //! circle (Eq. 6.2, Sec. 6.2.2).
 
+use super::mi_tiled::exact_tiled;
 use super::voronoi::Nearest;
 use super::{dist, mc, subset, Centered, Circle};
 use gagekit_core::Result;
@@ -21,7 +22,9 @@ use rayon::prelude::*;
 ///
 /// Above a few thousand points the candidates come from a subset that grows by the
 /// points falling inside its circle; the subset radius bounds the true one from above,
-/// so a subset circle with no input point inside it is the global optimum.
+/// so a subset circle with no input point inside it is the global optimum. When that
+/// does not settle (points spread over an area rather than along a curve), the
+/// candidates of all points are computed tile by tile ([`super::mi_tiled`]).
 pub fn max_inscribed(pts: &[f64]) -> Result<Circle> {
     let data = Centered::new(pts, WHAT, 3)?;
     data.require_not_collinear(WHAT)?;
@@ -35,6 +38,7 @@ pub fn max_inscribed(pts: &[f64]) -> Result<Circle> {
             // no point lies inside it
             let mut s = subset::initial(p, cmc, &[], false, true);
             for _ in 0..subset::MAX_ROUNDS {
+                gagekit_core::interrupt::check()?;
                 let q: Vec<[f64; 2]> = s.iter().map(|&i| p[i]).collect();
                 let (c, r, ctrl) = exact(&q, cmc, rmc, data.scale)?;
                 let (add, _, _) = subset::violators(p, c, Some(r), None, tol);
@@ -49,7 +53,12 @@ pub fn max_inscribed(pts: &[f64]) -> Result<Circle> {
                 }
             }
         }
-        let (c, _, ctrl) = exact(p, cmc, rmc, data.scale)?;
+        // all points: tile by tile above a few thousand (bounded memory), else at once
+        let (c, _, ctrl) = if p.len() > subset::SMALL {
+            exact_tiled(p, cmc, rmc, data.scale)?
+        } else {
+            exact(p, cmc, rmc, data.scale)?
+        };
         (c, ctrl)
     };
     let r_near = p
@@ -77,13 +86,27 @@ pub(crate) fn exact(
     rmc: f64,
     scale: f64,
 ) -> Result<([f64; 2], f64, Vec<usize>)> {
-    let mut nvd = Nearest::build(p, WHAT)?;
     let r0 = p
         .iter()
         .map(|q| dist(*q, cmc))
         .fold(f64::INFINITY, f64::min);
     // the MC centre is feasible with radius r0: only larger empty circles matter
-    nvd.extract(p, r0 - 1e-9 * scale);
+    exact_in(p, cmc, rmc, scale, r0 - 1e-9 * scale, &|_| true)
+}
+
+/// [`exact`] over the candidates whose centre satisfies `inside` and whose empty circle is
+/// at least `floor` (a lower bound of the optimum); the centre `cmc` with no control point
+/// when no candidate qualifies.
+pub(crate) fn exact_in(
+    p: &[[f64; 2]],
+    cmc: [f64; 2],
+    rmc: f64,
+    scale: f64,
+    floor: f64,
+    inside: &dyn Fn([f64; 2]) -> bool,
+) -> Result<([f64; 2], f64, Vec<usize>)> {
+    let mut nvd = Nearest::build(p, WHAT)?;
+    nvd.extract(p, floor);
     let tol = 1e-12 * scale;
     let g_mc = |c: [f64; 2]| rmc - dist(c, cmc);
 
@@ -93,7 +116,7 @@ pub(crate) fn exact(
 
     // three points: nearest-Voronoi vertices inside MC
     for v in &nvd.verts {
-        if v.rad > best_r && v.rad <= g_mc(v.c) + tol {
+        if v.rad > best_r && v.rad <= g_mc(v.c) + tol && inside(v.c) {
             best_r = v.rad;
             best_c = v.c;
             best_ctrl = v.sites.to_vec();
@@ -123,7 +146,7 @@ pub(crate) fn exact(
             }
             let c = e.at(t);
             let g = g_mc(c).min(e.rad(t));
-            if g > best_r {
+            if g > best_r && inside(c) {
                 best_r = g;
                 best_c = c;
                 best_ctrl = vec![e.a, e.b];
@@ -145,6 +168,9 @@ pub(crate) fn exact(
             pi[0] + (cmc[0] - pi[0]) / d * r,
             pi[1] + (cmc[1] - pi[1]) / d * r,
         ];
+        if !inside(c) {
+            continue;
+        }
         if witness.iter().any(|&k| dist(p[k], c) < r - tol) {
             continue;
         }

@@ -11,6 +11,7 @@ pub mod in_plane;
 mod lsq;
 mod mc;
 mod mi;
+mod mi_tiled;
 mod mz;
 mod subset;
 mod voronoi;

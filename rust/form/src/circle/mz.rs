@@ -53,6 +53,7 @@ pub fn min_zone(pts: &[f64]) -> Result<Zone> {
         let mut s = subset::initial(p, cmc, &mc_ctrl, true, true);
         let mut found = None;
         for _ in 0..subset::MAX_ROUNDS {
+            gagekit_core::interrupt::check()?;
             let q: Vec<[f64; 2]> = s.iter().map(|&i| p[i]).collect();
             let zs = exact(&q, data.scale)?;
             let (add, lo, hi) = subset::violators(p, zs.center, Some(zs.r_in), Some(zs.r_out), tol);

@@ -490,3 +490,57 @@ fn near_kernel_finds_the_exact_optimum_from_a_nearby_centre() {
         assert_eq!(n.control, m.control);
     }
 }
+
+/// Points for the tiled MI: uniform in a square (optimum outside the square, near MC),
+/// uniform in a disk (optimum in an inner gap), a lattice (many equal empty circles),
+/// clusters with empty space between them.
+fn area_set(seed: u64, n: usize, kind: u8) -> Vec<f64> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let side = (n as f64).sqrt().ceil() as usize;
+    let mut v = Vec::with_capacity(2 * n);
+    for i in 0..n {
+        let (x, y) = match kind {
+            0 => (rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0)),
+            1 => {
+                let r: f64 = rng.random_range(0.0f64..1.0).sqrt();
+                let a: f64 = rng.random_range(0.0..std::f64::consts::TAU);
+                (r * a.cos(), r * a.sin())
+            }
+            2 => ((i % side) as f64, (i / side) as f64),
+            _ => {
+                let c = (i % 5) as f64;
+                (100.0 * c.cos() + rng.random_range(-3.0..3.0), 100.0 * c.sin() + rng.random_range(-3.0..3.0))
+            }
+        };
+        v.push(x);
+        v.push(y);
+    }
+    v
+}
+
+#[test]
+fn tiled_mi_matches_exact_on_all_points() {
+    for (seed, kind, n) in [(1u64, 0u8, 20000usize), (2, 1, 20000), (3, 2, 10000), (4, 3, 20000), (5, 1, 4000)] {
+        let v = area_set(seed, n, kind);
+        let data = Centered::new(&v, "t", 3).unwrap();
+        let p = &data.pts;
+        let (cmc, _) = mc::welzl(p, data.scale);
+        let rmc = p.iter().map(|q| dist(*q, cmc)).fold(0.0, f64::max);
+        let (ce, re, _) = mi::exact(p, cmc, rmc, data.scale).unwrap();
+        let (ct, rt, ctrl) = mi_tiled::exact_tiled(p, cmc, rmc, data.scale).unwrap();
+        assert!((re - rt).abs() <= 1e-12 * data.scale, "kind {kind}: exact {re} vs tiled {rt}");
+        // the reported circle is empty and inside MC, and its control points lie on it
+        let nn = p.iter().map(|q| dist(*q, ct)).fold(f64::INFINITY, f64::min);
+        assert!((nn.min(rmc - dist(ct, cmc)) - rt).abs() <= 1e-12 * data.scale, "kind {kind}");
+        for &k in &ctrl {
+            assert!((dist(p[k], ct) - rt).abs() <= 1e-9 * data.scale, "kind {kind}: control {k}");
+        }
+        if kind != 2 {
+            // a unique optimum: the same centre
+            assert!(dist(ce, ct) <= 1e-9 * data.scale, "kind {kind}: {ce:?} vs {ct:?}");
+        }
+        // the public fit (subset rounds, then tiles) agrees
+        let m = max_inscribed(&v).unwrap();
+        assert!((m.radius - re).abs() <= 1e-12 * data.scale, "kind {kind}: fit {} vs {re}", m.radius);
+    }
+}
