@@ -5,8 +5,6 @@ See README.md for the command line; the public Python API is listed in ``__all__
 
 from __future__ import annotations
 
-from importlib.metadata import PackageNotFoundError, version as _version
-
 
 def _quiet_ctrl_c_while_the_cli_starts() -> None:
     """Run as the `gagekit` command (or ``python -m gagekit``), Ctrl-C during the imports
@@ -32,7 +30,9 @@ def _quiet_ctrl_c_while_the_cli_starts() -> None:
         pass
 
 
-_quiet_ctrl_c_while_the_cli_starts()
+_quiet_ctrl_c_while_the_cli_starts()  # first: before any slow import
+
+from importlib.metadata import PackageNotFoundError, version as _version  # noqa: E402
 
 from . import _core, cloud, design, form, gage, machine
 from .cloud import *  # noqa: F401,F403  (each subpackage lists its public names in __all__)

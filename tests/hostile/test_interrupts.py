@@ -10,6 +10,7 @@ import subprocess
 import sys
 import time
 
+import numpy as np
 import pytest
 
 from .conftest import EXAMPLE_MACHINE, leftovers
@@ -59,6 +60,84 @@ def test_design_answers_ctrl_c_within_a_second(tmp_path, after):
     assert dt < 1.0 * (os.cpu_count() or 1), f"answered Ctrl-C after {dt:.2f} s of CPU"
     assert p.returncode == 130 and se.strip() == "gagekit: error: interrupted", (p.returncode, se)
     assert not out.exists() and leftovers(tmp_path) == []
+
+
+@pytest.fixture(scope="module")
+def long_inputs(tmp_path_factory):
+    """Inputs of other long commands: 10^6 uniform points (a max-inscribed circle over an
+    area, seconds) and 200,000 tracker observations (an identification, seconds)."""
+    d = tmp_path_factory.mktemp("long")
+    rng = np.random.default_rng(0)
+    np.save(d / "uniform.npy", np.c_[rng.uniform(-1, 1, (10**6, 2)), np.zeros(10**6)])
+    subprocess.run([sys.executable, "-m", "gagekit", "machine", "simulate", str(EXAMPLE_MACHINE), "--points",
+                    "200000", "--out", str(d / "obs.csv")], check=True, capture_output=True)
+    return d
+
+
+@pytest.mark.parametrize("command", ["identify", "circle-mi"])
+def test_other_long_commands_answer_ctrl_c_within_a_second(long_inputs, tmp_path, command):
+    out = tmp_path / "out.json"
+    args = {
+        "identify": ["machine", "identify", EXAMPLE_MACHINE, long_inputs / "obs.csv", "--out", out],
+        "circle-mi": ["form", "fit", "circle", long_inputs / "uniform.npy", "-c", "max-inscribed", "--json"],
+    }[command]
+    p = _start(*args)
+    dt, so, se = _interrupt(p, 1.5)
+    if p.returncode == 0:
+        pytest.skip("finished before the signal")
+    assert dt < 1.0 * (os.cpu_count() or 1), f"answered Ctrl-C after {dt:.2f} s of CPU"
+    assert p.returncode == 130 and se.strip() == "gagekit: error: interrupted", (p.returncode, se)
+    assert so == "" and not out.exists() and leftovers(tmp_path) == []
+
+
+_HANDLERS = """
+import os, signal, sys, threading, time
+import numpy as np
+import gagekit
+
+rng = np.random.default_rng(0)
+pts = rng.uniform(-1, 1, (10**6, 2))
+gagekit.fit_circle(pts[:1000], "least-squares")  # a first kernel call, before the handlers
+t0 = time.process_time()
+ref = gagekit.fit_circle(pts, "max-inscribed")
+print("full", time.process_time() - t0)
+class Stop(Exception):
+    pass
+def raising(signum, frame):
+    raise Stop()
+hits = []
+def noting(signum, frame):
+    hits.append(signum)
+for name, handler in [("default", signal.default_int_handler), ("raising", raising), ("noting", noting)]:
+    signal.signal(signal.SIGINT, handler)  # set after the first kernel call
+    sent = []
+    threading.Timer(0.2, lambda: (sent.append(time.process_time()), os.kill(os.getpid(), signal.SIGINT))).start()
+    try:
+        c = gagekit.fit_circle(pts, "max-inscribed")
+        print(name, "returned", c.radius == ref.radius and tuple(c.center) == tuple(ref.center), len(hits))
+    except BaseException as e:
+        print(name, "raised", type(e).__name__, round(time.process_time() - sent[0], 3) if sent else -1)
+    time.sleep(0.3)
+"""
+
+
+def test_a_handler_set_after_the_first_kernel_call_still_stops_kernels(tmp_path):
+    """``signal.signal(SIGINT, ...)`` after a kernel call replaces the process's SIGINT
+    action; the next kernel call puts gagekit's action back in front of it. A handler that
+    raises stops the kernel with its exception; one that returns lets the kernel finish,
+    with the answer it gives without the signal."""
+    script = tmp_path / "handlers.py"
+    script.write_text(_HANDLERS)
+    p = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=300)
+    assert p.returncode == 0, p.stderr
+    got = {ln.split()[0]: ln.split()[1:] for ln in p.stdout.splitlines()}
+    # CPU time after the signal (all threads): a fraction of the whole fit's, which a
+    # kernel that missed the signal would use up before the handler could run
+    limit = min(1.0 * (os.cpu_count() or 1), 0.25 * float(got["full"][0]))
+    for name, exc in (("default", "KeyboardInterrupt"), ("raising", "Stop")):
+        assert got[name][:2] == ["raised", exc], got
+        assert float(got[name][2]) < limit, f"{name}: answered after {got[name][2]} s of CPU (limit {limit:.2f})"
+    assert got["noting"] == ["returned", "True", "1"], got
 
 
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGKILL])

@@ -75,14 +75,16 @@ def main(argv: Optional[list[str]] = None) -> None:
     import signal
     import warnings
 
-    if getattr(signal.getsignal(signal.SIGINT), "__name__", "") == "_stop":  # set while gagekit imported
-        signal.signal(signal.SIGINT, signal.default_int_handler)
     usage_error, no_args_help, exit_exc, abort_exc = _click_classes()
     args = list(sys.argv[1:] if argv is None else argv)
-    command = typer.main.get_command(app)
     code = 0
     with warnings.catch_warnings(record=True) as caught:
         try:
+            # Python's handler (KeyboardInterrupt) from here on, inside the `try` that turns
+            # it into the one line: Ctrl-C at any moment gives the same answer
+            if getattr(signal.getsignal(signal.SIGINT), "__name__", "") == "_stop":  # set while gagekit imported
+                signal.signal(signal.SIGINT, signal.default_int_handler)
+            command = typer.main.get_command(app)
             with command.make_context("gagekit", args) as ctx:
                 command.invoke(ctx)
         except GagekitError as exc:

@@ -86,6 +86,35 @@ pub mod interrupt {
             Ok(())
         }
     }
+
+    /// Run `f` (a computation on owned data that cannot check the flag itself, such as a
+    /// library's SVD of a tall matrix) on a thread of its own and wait for it, checking the
+    /// flag every 10 ms: `Err(Interrupted)` as soon as a stop is requested. The abandoned
+    /// computation then finishes in the background and its result is dropped (a CLI
+    /// process exits at once). The answer is `f`'s own, the same as a direct call.
+    pub fn run_detached<T, F>(f: F) -> Result<T>
+    where
+        T: Send + 'static,
+        F: FnOnce() -> T + Send + 'static,
+    {
+        let (tx, rx) = std::sync::mpsc::channel();
+        let spawned = std::thread::Builder::new().name("gagekit-detached".into()).spawn(move || {
+            let _ = tx.send(f());
+        });
+        if spawned.is_err() {
+            return Err(GkError::numerical("cannot start a thread for the computation"));
+        }
+        loop {
+            check()?;
+            match rx.recv_timeout(std::time::Duration::from_millis(10)) {
+                Ok(v) => return Ok(v),
+                Err(std::sync::mpsc::RecvTimeoutError::Timeout) => continue,
+                Err(std::sync::mpsc::RecvTimeoutError::Disconnected) => {
+                    return Err(GkError::numerical("the computation stopped without a result (a panic in its thread)"));
+                }
+            }
+        }
+    }
 }
 
 impl fmt::Display for GkError {

@@ -25,7 +25,11 @@
 //!   the fixed frame (as printed, Eq. 3.5 adds [eps]x to R(B) unrotated, which is not a rigid
 //!   motion unless B = 0).
 
-use gagekit_core::{check_coordinates, check_finite, GkError, Result};
+use gagekit_core::{check_coordinates, check_finite, interrupt, GkError, Result};
+
+/// Commands per parallel task of the per-point kernels; each task first checks for an
+/// interrupt (Ctrl-C answered within milliseconds, at the cost of one atomic load per task).
+const ROWS: usize = 256;
 use nalgebra::{Matrix3, Rotation3, Unit, Vector3};
 use rayon::prelude::*;
 
@@ -274,13 +278,17 @@ impl Machine {
     pub fn nominal_positions(&self, commands: &[f64]) -> Result<Vec<f64>> {
         let n = self.check_commands(commands)?;
         let mut out = vec![0.0; 3 * n];
-        out.par_chunks_mut(3).zip(commands.par_chunks(self.n_joints)).for_each(|(o, cmd)| {
-            let mut h = Rigid::identity();
-            for k in 0..self.elements.len() {
-                h = h.then(&self.nominal(k, cmd));
+        out.par_chunks_mut(3 * ROWS).zip(commands.par_chunks(self.n_joints * ROWS)).try_for_each(|(o, cmds)| {
+            interrupt::check()?;
+            for (o, cmd) in o.chunks_mut(3).zip(cmds.chunks(self.n_joints)) {
+                let mut h = Rigid::identity();
+                for k in 0..self.elements.len() {
+                    h = h.then(&self.nominal(k, cmd));
+                }
+                o.copy_from_slice(h.apply(&self.tool).as_slice());
             }
-            o.copy_from_slice(h.apply(&self.tool).as_slice());
-        });
+            Ok(())
+        })?;
         Ok(out)
     }
 
@@ -296,14 +304,18 @@ impl Machine {
         }
         check_finite(params, 1, "parameters")?;
         let mut out = vec![0.0; 3 * n];
-        out.par_chunks_mut(3).zip(commands.par_chunks(self.n_joints)).for_each(|(o, cmd)| {
-            let mut h = Rigid::identity();
-            for (k, e) in self.elements.iter().enumerate() {
-                let off = self.param_offset[k];
-                h = h.then(&self.exact(k, cmd, &params[off..off + e.n_params()]));
+        out.par_chunks_mut(3 * ROWS).zip(commands.par_chunks(self.n_joints * ROWS)).try_for_each(|(o, cmds)| {
+            interrupt::check()?;
+            for (o, cmd) in o.chunks_mut(3).zip(cmds.chunks(self.n_joints)) {
+                let mut h = Rigid::identity();
+                for (k, e) in self.elements.iter().enumerate() {
+                    let off = self.param_offset[k];
+                    h = h.then(&self.exact(k, cmd, &params[off..off + e.n_params()]));
+                }
+                o.copy_from_slice(h.apply(&self.tool).as_slice());
             }
-            o.copy_from_slice(h.apply(&self.tool).as_slice());
-        });
+            Ok(())
+        })?;
         Ok(out)
     }
 
@@ -385,12 +397,14 @@ impl Machine {
         let n = self.check_commands(commands)?;
         let p = self.n_params;
         let mut out = vec![0.0; 3 * n * p];
-        out.par_chunks_mut(3 * p * 64).zip(commands.par_chunks(self.n_joints * 64)).for_each(|(o, cmds)| {
+        out.par_chunks_mut(3 * p * 64).zip(commands.par_chunks(self.n_joints * 64)).try_for_each(|(o, cmds)| {
+            interrupt::check()?;
             let mut scratch = (Vec::new(), Vec::new(), Vec::new());
             for (blk, cmd) in o.chunks_mut(3 * p).zip(cmds.chunks(self.n_joints)) {
                 self.design_block(cmd, blk, &mut scratch);
             }
-        });
+            Ok(())
+        })?;
         Ok(out)
     }
 
@@ -400,27 +414,32 @@ impl Machine {
         let n = self.check_commands(commands)?;
         let nj = self.n_joints;
         let mut out = vec![0.0; 3 * n * nj];
-        out.par_chunks_mut(3 * nj).zip(commands.par_chunks(nj)).for_each(|(o, cmd)| {
+        out.par_chunks_mut(3 * nj * ROWS).zip(commands.par_chunks(nj * ROWS)).try_for_each(|(o, cmds)| {
+            interrupt::check()?;
             let (mut prefix, mut lever, mut nominal) = (Vec::new(), Vec::new(), Vec::new());
-            self.frames(cmd, &mut prefix, &mut lever, &mut nominal);
-            for (k, e) in self.elements.iter().enumerate() {
-                let col = match e {
-                    Element::Shape { .. } => continue,
-                    Element::Prismatic { .. } => prefix[k] * self.axes[k],
-                    Element::Rotary { .. } => (prefix[k] * self.axes[k]).cross(&lever[k]),
-                };
-                let j = self.joint_index[k];
-                for r in 0..3 {
-                    o[r * nj + j] = col[r];
+            for (o, cmd) in o.chunks_mut(3 * nj).zip(cmds.chunks(nj)) {
+                self.frames(cmd, &mut prefix, &mut lever, &mut nominal);
+                for (k, e) in self.elements.iter().enumerate() {
+                    let col = match e {
+                        Element::Shape { .. } => continue,
+                        Element::Prismatic { .. } => prefix[k] * self.axes[k],
+                        Element::Rotary { .. } => (prefix[k] * self.axes[k]).cross(&lever[k]),
+                    };
+                    let j = self.joint_index[k];
+                    for r in 0..3 {
+                        o[r * nj + j] = col[r];
+                    }
                 }
             }
-        });
+            Ok(())
+        })?;
         Ok(out)
     }
 }
 
 /// The example machine of the dissertation (B X Z Y W with shapes between, Eq. 3.1; 52
 /// parameters), for tests and benchmarks.
+#[allow(clippy::unwrap_used, reason = "a fixed chain of valid elements: Machine::new cannot fail on it (tested)")]
 pub fn example_machine() -> Machine {
     let s = |z: f64| Element::Shape { offset: [0.0, 0.0, z] };
     let pj = |a: [f64; 3]| Element::Prismatic { axis: a };

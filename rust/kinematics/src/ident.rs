@@ -1,7 +1,7 @@
 //! Identifiability (Eq. 3.14), least squares with covariance (Eq. 3.18) and the closed-form
 //! rigid fit of a measurement frame (Step 1 of Sec. 3.1.5).
 
-use gagekit_core::{check_coordinates, check_finite, GkError, Result};
+use gagekit_core::{check_coordinates, check_finite, interrupt, GkError, Result};
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 
 /// What a design matrix over a rich set of commands reveals about the parameters.
@@ -68,9 +68,7 @@ pub fn identifiability(
     for (c, &j) in active.iter().enumerate() {
         eq.set_column(c, &(full.column(j) / norms[j]));
     }
-    let svd = eq
-        .clone()
-        .try_svd(false, true, f64::EPSILON, 0)
+    let svd = svd_interruptible(eq.clone(), false)?
         .ok_or_else(|| GkError::numerical("identifiability: the SVD did not converge"))?;
     let singular_values: Vec<f64> = svd.singular_values.iter().copied().collect();
     let smax = singular_values[0];
@@ -169,6 +167,20 @@ fn pick_leaders(w: &DMatrix<f64>) -> Vec<usize> {
     picked
 }
 
+/// nalgebra's SVD (`try_svd(compute_u, true, EPSILON, 0)`), which cannot check for an
+/// interrupt while it runs: on a tall matrix (an identification over 10^5 observations takes
+/// seconds) it runs on a thread of its own so that Ctrl-C is answered at once
+/// ([`gagekit_core::interrupt::run_detached`]); the same computation either way.
+fn svd_interruptible(a: DMatrix<f64>, compute_u: bool) -> Result<Option<nalgebra::SVD<f64, nalgebra::Dyn, nalgebra::Dyn>>> {
+    let big = a.nrows() * a.ncols() >= 1 << 18; // ~ 40 ms and more
+    let svd = move || a.try_svd(compute_u, true, f64::EPSILON, 0);
+    if big {
+        gagekit_core::interrupt::run_detached(svd)
+    } else {
+        Ok(svd())
+    }
+}
+
 /// A least-squares solution with what is needed for its uncertainty.
 #[derive(Clone, Debug)]
 pub struct Lstsq {
@@ -203,7 +215,9 @@ pub fn lstsq(a: &[f64], nrows: usize, ncols: usize, b: &[f64]) -> Result<Lstsq> 
     }
     check_finite(a, ncols, "design matrix")?;
     check_finite(b, 1, "observations")?;
+    interrupt::check()?;
     let am = DMatrix::from_row_slice(nrows, ncols, a);
+    interrupt::check()?;
     let norms: Vec<f64> = (0..ncols).map(|j| am.column(j).norm()).collect();
     if let Some(j) = norms.iter().position(|&n| n == 0.0) {
         return Err(GkError::degenerate(format!("least squares: column {j} is zero")));
@@ -212,7 +226,8 @@ pub fn lstsq(a: &[f64], nrows: usize, ncols: usize, b: &[f64]) -> Result<Lstsq> 
     for (j, nj) in norms.iter().enumerate() {
         eq.column_mut(j).scale_mut(1.0 / nj);
     }
-    let svd = eq.try_svd(true, true, f64::EPSILON, 0).ok_or_else(|| GkError::numerical("least squares: SVD failed"))?;
+    interrupt::check()?;
+    let svd = svd_interruptible(eq, true)?.ok_or_else(|| GkError::numerical("least squares: SVD failed"))?;
     let s = &svd.singular_values;
     let smax = s.max();
     let (imin, smin) = s.iter().enumerate().fold((0, f64::INFINITY), |acc, (i, &v)| if v < acc.1 { (i, v) } else { acc });

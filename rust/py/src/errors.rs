@@ -49,60 +49,42 @@ pub fn gagekit_err(_py: Python<'_>, name: &str, message: String) -> PyErr {
 
 /// Run a kernel with the GIL released, turning its errors and any panic into
 /// gagekit exceptions (a panic becomes `gagekit.errors.InternalError`).
-pub fn run<T, F>(py: Python<'_>, f: F) -> PyResult<T>
+///
+/// Ctrl-C: the SIGINT action of [`crate::sigint`] stops the kernel at its next check
+/// ([`gagekit_core::interrupt`]); then Python's handler runs here. If it raises
+/// (KeyboardInterrupt, or a user's handler raising its own exception), that is what
+/// this call raises. If it returns (a handler that only takes note), the kernel runs
+/// again from the start: kernels are deterministic, so the answer is the same as if
+/// the signal had not come.
+pub fn run<T, F>(py: Python<'_>, mut f: F) -> PyResult<T>
 where
     T: Send,
-    F: FnOnce() -> gagekit_core::Result<T> + Send,
+    F: FnMut() -> gagekit_core::Result<T> + Send,
 {
-    install_sigint_action(py);
-    gagekit_core::interrupt::clear();
-    match py.detach(|| catch_unwind(AssertUnwindSafe(f))) {
-        Ok(Ok(v)) => Ok(v),
-        Ok(Err(e)) if e.kind == ErrorKind::Interrupted => {
-            // Python's own SIGINT handler has run too: raise what it raises (KeyboardInterrupt)
-            py.check_signals()?;
-            Err(pyo3::exceptions::PyKeyboardInterrupt::new_err("interrupted"))
-        }
-        Ok(Err(e)) => Err(to_pyerr(e)),
-        Err(payload) => {
-            let what = payload
-                .downcast_ref::<&str>()
-                .map(|s| s.to_string())
-                .or_else(|| payload.downcast_ref::<String>().cloned())
-                .unwrap_or_else(|| "unknown panic".to_string());
-            Err(InternalError::new_err(format!(
-                "internal error in a gagekit kernel (please report it): {what}"
-            )))
+    loop {
+        crate::sigint::ensure();
+        gagekit_core::interrupt::clear();
+        py.check_signals()?; // a Ctrl-C that came just before the clear
+        match py.detach(|| catch_unwind(AssertUnwindSafe(&mut f))) {
+            Ok(Ok(v)) => return Ok(v),
+            Ok(Err(e)) if e.kind == ErrorKind::Interrupted => {
+                // Python's handler for the SIGINT that stopped the kernel
+                py.check_signals()?;
+                // the handler returned (or this is not the main thread, whose handler
+                // raises there): the run goes on
+                continue;
+            }
+            Ok(Err(e)) => return Err(to_pyerr(e)),
+            Err(payload) => {
+                let what = payload
+                    .downcast_ref::<&str>()
+                    .map(|s| s.to_string())
+                    .or_else(|| payload.downcast_ref::<String>().cloned())
+                    .unwrap_or_else(|| "unknown panic".to_string());
+                return Err(InternalError::new_err(format!(
+                    "internal error in a gagekit kernel (please report it): {what}"
+                )));
+            }
         }
     }
-}
-
-/// Ctrl-C while a kernel runs without the GIL: Python's handler only sets a flag that the
-/// interpreter reads when the kernel returns, so a long kernel would ignore it. A SIGINT
-/// action (chained before Python's own handler, which still runs) also sets the kernels'
-/// cancel flag ([`gagekit_core::interrupt`]), which the long kernels poll between chunks.
-fn install_sigint_action(py: Python<'_>) {
-    #[cfg(unix)]
-    {
-        static ONCE: std::sync::Once = std::sync::Once::new();
-        if ONCE.is_completed() || !python_handles_sigint(py) {
-            return; // SIGINT ignored or left to the system (nohup, background jobs): keep it so
-        }
-        ONCE.call_once(|| {
-            // SAFETY: the action only stores to an atomic (async-signal-safe).
-            let _ = unsafe { signal_hook::low_level::register(signal_hook::consts::SIGINT, gagekit_core::interrupt::request) };
-        });
-    }
-}
-
-/// Whether Python has a handler of its own for SIGINT (its default KeyboardInterrupt or a
-/// user's function), rather than SIG_IGN or SIG_DFL.
-#[cfg(unix)]
-fn python_handles_sigint(py: Python<'_>) -> bool {
-    let check = || -> PyResult<bool> {
-        let signal = py.import("signal")?;
-        let handler = signal.getattr("getsignal")?.call1((signal.getattr("SIGINT")?,))?;
-        Ok(handler.is_callable())
-    };
-    check().unwrap_or(false)
 }

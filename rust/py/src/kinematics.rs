@@ -49,7 +49,7 @@ impl KinematicChain {
 impl KinematicChain {
     #[new]
     fn new(py: Python<'_>, spec: Spec, tool: [f64; 3]) -> PyResult<Self> {
-        let machine = run(py, || Machine::new(elements(spec)?, tool))?;
+        let machine = run(py, || Machine::new(elements(spec.clone())?, tool))?;
         let parameter_labels =
             machine.param_labels().into_iter().map(|l| (l.element, l.name, l.length_power)).collect();
         Ok(Self { n_joints: machine.n_joints(), n_parameters: machine.n_params(), machine, parameter_labels })

@@ -14,6 +14,7 @@ mod gdt;
 mod geometry;
 mod kinematics;
 mod nc;
+mod sigint;
 
 use pyo3::prelude::*;
 

@@ -7,7 +7,7 @@
 //! chain, minimum-norm steps when S is redundant), as `gagekit.machine.compensate` specifies.
 
 use super::{Element, Machine, Rigid, M3, V3};
-use gagekit_core::{check_finite, GkError, Result};
+use gagekit_core::{check_finite, interrupt, GkError, Result};
 use nalgebra::DMatrix;
 use rayon::prelude::*;
 
@@ -71,12 +71,14 @@ impl Machine {
         let n = self.check_commands(commands)?;
         self.check_params(params)?;
         let mut out = vec![0.0; 3 * n];
-        out.par_chunks_mut(3 * 256).zip(commands.par_chunks(self.n_joints * 256)).for_each(|(o, cmds)| {
+        out.par_chunks_mut(3 * 256).zip(commands.par_chunks(self.n_joints * 256)).try_for_each(|(o, cmds)| {
+            interrupt::check()?;
             let mut s: Scratch = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
             for (oi, cmd) in o.chunks_mut(3).zip(cmds.chunks(self.n_joints)) {
                 oi.copy_from_slice(self.point_state(cmd, params, &mut s).error.as_slice());
             }
-        });
+            Ok(())
+        })?;
         Ok(out)
     }
 
@@ -94,7 +96,8 @@ impl Machine {
         let nj = self.n_joints;
         let mut out = commands.to_vec();
         let mut left = vec![0.0; 3 * n];
-        out.par_chunks_mut(nj * 256).zip(left.par_chunks_mut(3 * 256)).for_each(|(cs, ls)| {
+        out.par_chunks_mut(nj * 256).zip(left.par_chunks_mut(3 * 256)).try_for_each(|(cs, ls)| {
+            interrupt::check()?;
             let mut s: Scratch = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
             let mut jac: Vec<V3> = Vec::with_capacity(joints.len());
             let mut step: Vec<f64> = Vec::with_capacity(joints.len());
@@ -116,7 +119,8 @@ impl Machine {
                 }
                 l.copy_from_slice((st.position + st.error - target).as_slice());
             }
-        });
+            Ok(())
+        })?;
         Ok((out, left))
     }
 }
