@@ -97,6 +97,30 @@ pub fn detect_style(line: &[u8]) -> Style {
     Style::Standard
 }
 
+/// The separator style of a file from its lines: [`detect_style`] of the first line that
+/// starts like a number (not a comment or a header).
+fn style_of<'a>(lines: impl Iterator<Item = &'a [u8]>) -> Style {
+    lines
+        .map(trim)
+        .find(|l| !is_skipped(l) && matches!(l[0], b'0'..=b'9' | b'-' | b'+' | b'.'))
+        .map_or(Style::Standard, detect_style)
+}
+
+/// Number of values on the first data line (every field a number) among the first
+/// `max_lines` lines of a text file's beginning `head`, read as [`parse_ascii`] reads it
+/// (byte-order mark, comments, separator style with decimal commas); 0 if there is none.
+/// `1,5;2,5` has 2 values, `1,5,2` has 3.
+pub fn data_columns(head: &[u8], max_lines: usize) -> usize {
+    let head = head.strip_prefix(&[0xEF, 0xBB, 0xBF]).unwrap_or(head);
+    let lines = || head.split(|&b| b == b'\n').take(max_lines);
+    let style = style_of(lines());
+    lines()
+        .filter(|l| !is_skipped(l))
+        .map(|l| fields(l, style))
+        .find(|f| !f.is_empty() && f.iter().all(|x| parse_num(x, style).is_some()))
+        .map_or(0, |f| f.len())
+}
+
 pub(crate) fn is_skipped(line: &[u8]) -> bool {
     let t = trim(line);
     t.is_empty() || t[0] == b'#' || t.starts_with(b"//")
@@ -225,10 +249,7 @@ pub fn parse_ascii(bytes: &[u8], opts: &AsciiOptions, what: &str) -> Result<Pars
     }
     let starts = line_starts(bytes);
     let nlines = if bytes.is_empty() { 0 } else { starts.len() };
-    let style = (opts.skip_lines.min(nlines)..nlines)
-        .map(|k| trim(line_at(bytes, &starts, k)))
-        .find(|l| !is_skipped(l) && matches!(l[0], b'0'..=b'9' | b'-' | b'+' | b'.'))
-        .map_or(Style::Standard, detect_style);
+    let style = style_of((opts.skip_lines.min(nlines)..nlines).map(|k| line_at(bytes, &starts, k)));
 
     // Header: leading non-skipped lines whose first `dim` fields are not all numbers.
     let mut k = opts.skip_lines.min(nlines);
@@ -402,6 +423,17 @@ mod tests {
         let text = write_ascii(&coords, 3, b' ', Some("x y z")).unwrap();
         let p = parse_ascii(&text, &AsciiOptions::default(), "big").unwrap();
         assert_eq!(p.coords, coords);
+    }
+
+    #[test]
+    fn data_columns_reads_as_the_parser() {
+        assert_eq!(data_columns(b"1,5;2,5\n3,5;4,5\n", 1000), 2);
+        assert_eq!(data_columns(b"1,5 2,5\n", 1000), 2);
+        assert_eq!(data_columns(b"1,5,2\n", 1000), 3);
+        assert_eq!(data_columns(b"\xEF\xBB\xBF# c\nx;y\n1,5;2,5;3\n", 1000), 3);
+        assert_eq!(data_columns(b"1 2 3 4\n", 1000), 4);
+        assert_eq!(data_columns(b"x y\nfoo bar\n", 1000), 0);
+        assert_eq!(data_columns(b"x y\n1 2\n", 1), 0);
     }
 
     #[test]

@@ -15,6 +15,6 @@ pub mod e57;
 mod e57_fast;
 pub mod ply;
 
-pub use ascii::{detect_style, parse_ascii, write_ascii, AsciiOptions, Parsed, Style};
+pub use ascii::{data_columns, detect_style, parse_ascii, write_ascii, AsciiOptions, Parsed, Style};
 pub use e57::{read_e57, E57Points};
 pub use ply::{read_ply, read_ply_file, PlyFile, PlyPoints};

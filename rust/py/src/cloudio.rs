@@ -2,7 +2,7 @@
 
 use crate::arrays::rows;
 use crate::errors::{invalid, run};
-use gagekit_cloudio::{parse_ascii, read_e57, write_ascii, AsciiOptions, PlyFile};
+use gagekit_cloudio::{data_columns, parse_ascii, read_e57, write_ascii, AsciiOptions, PlyFile};
 use gagekit_core::GkError;
 use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray2};
 use pyo3::prelude::*;
@@ -35,6 +35,13 @@ fn cloud_read_ascii<'py>(
     let n = parsed.coords.len() / dim;
     let arr = PyArray1::from_vec(py, parsed.coords).reshape([n, dim])?;
     Ok(AsciiCloud { points: arr.into_any().unbind(), header_lines: parsed.header_lines, columns: parsed.columns })
+}
+
+/// Number of values on the first data line of a text file's beginning `head` (its first
+/// 1000 lines), read as `cloud_read_ascii` reads it (decimal commas included); 0 if none.
+#[pyfunction]
+fn cloud_ascii_columns(head: &[u8]) -> usize {
+    data_columns(head, 1000)
 }
 
 /// The vertices of a PLY file.
@@ -128,6 +135,7 @@ fn cloud_write_ascii(
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<AsciiCloud>()?;
     m.add_function(wrap_pyfunction!(cloud_read_ascii, m)?)?;
+    m.add_function(wrap_pyfunction!(cloud_ascii_columns, m)?)?;
     m.add_function(wrap_pyfunction!(cloud_write_ascii, m)?)?;
     m.add_class::<PlyCloud>()?;
     m.add_class::<PlyLayout>()?;
