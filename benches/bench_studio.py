@@ -53,9 +53,9 @@ def make_scan(n: int, folder: Path) -> Path:
 
 
 def numpy_count(pts: np.ndarray, centre, size, rotvec) -> int:
-    from gagekit.gage.analysis import _rotvec_to_matrix
+    from gagekit._rotation import rotation_from_vector
 
-    R = _rotvec_to_matrix(rotvec)
+    R = rotation_from_vector(rotvec)
     local = (pts - np.asarray(centre)) @ R
     return int(np.all(np.abs(local) <= np.asarray(size) / 2, axis=1).sum())
 
