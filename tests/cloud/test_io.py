@@ -136,3 +136,20 @@ def test_e57_round_trip(tmp_path):
     e57.close()
     # E57 stores metres (ASTM E2807)
     np.testing.assert_allclose(gagekit.read_points(f), PTS * 1000.0, atol=1e-6)
+
+
+def test_written_binary_ply_is_aligned_and_read_without_a_copy(tmp_path):
+    """gagekit's PLY body starts at a multiple of 8 bytes (the header's comment line is
+    padded), so reading it back maps the file as the array (issue 13, reading speed)."""
+    from gagekit import _core
+
+    for n in (1, 7, 1000, 123457):
+        f = tmp_path / f"c{n}.ply"
+        pts = np.arange(3.0 * n).reshape(n, 3) + 0.25
+        gagekit.write_points(f, pts)
+        layout = _core.cloud_ply_layout(str(f))
+        assert layout.vertices == n and layout.direct_offset is not None and layout.direct_offset % 8 == 0
+        got = gagekit.read_points(f)
+        assert np.array_equal(got, pts)
+        assert isinstance(got.base, np.memmap) or isinstance(getattr(got.base, "base", None), np.memmap)
+        assert f.read_bytes().startswith(b"ply\nformat binary_little_endian 1.0\ncomment gagekit")

@@ -159,12 +159,15 @@ def _to_mm(raw: Raw, p: Path, override: Optional[str]) -> Cloud:
     else:
         unit, z_unit, basis = raw.unit, raw.z_unit or raw.unit, raw.unit_basis
     s, sz = _units.scale_to_mm(unit), _units.scale_to_mm(z_unit)
-    if s != 1.0 or sz != 1.0:
-        pts = pts * np.array([s, s, sz][: pts.shape[1]]) if sz != s else pts * s
     if len(pts) == 0:
         raise FileFormatError(f"{p}: the file holds no points")
-    if not raw.finite_checked or s != 1.0 or sz != 1.0:  # scaling can overflow to inf
+    if not raw.finite_checked:
         check_finite(pts, str(p))
+    if s != 1.0 or sz != 1.0:
+        # in place (the reader's own fresh array): one parallel pass, no second array;
+        # an overflow to infinity is an error naming the point
+        pts = np.require(pts, np.float64, ["C_CONTIGUOUS", "WRITEABLE"])
+        _core.cloud_scale_in_place(pts, [s, s, sz][: pts.shape[1]], str(p))
     return Cloud(np.ascontiguousarray(pts), str(p), raw.format, unit, s, basis, sz,
                  raw.scans, raw.invalid_dropped, tuple(warns))
 
@@ -211,10 +214,23 @@ def _sniff(p: Path) -> str:
 
 
 def _write_ply(p: Path, pts: np.ndarray, binary: bool) -> None:
-    from plyfile import PlyData, PlyElement
-
+    """Binary: little-endian ``double x, y, z`` with the body at an offset that is a
+    multiple of 8 (the header padded by its comment line), so that reading the file back
+    maps it as the array, with no copy (see :mod:`gagekit.cloud.formats.ply`)."""
     if pts.shape[1] != 3:
         raise InvalidInputError(f"{p}: PLY needs (n, 3) points, got {pts.shape}")
-    vertex = np.empty(len(pts), dtype=[("x", "<f8"), ("y", "<f8"), ("z", "<f8")])
-    vertex["x"], vertex["y"], vertex["z"] = pts.T
-    PlyData([PlyElement.describe(vertex, "vertex")], text=not binary).write(str(p))
+    if not binary:
+        from plyfile import PlyData, PlyElement
+
+        vertex = np.empty(len(pts), dtype=[("x", "<f8"), ("y", "<f8"), ("z", "<f8")])
+        vertex["x"], vertex["y"], vertex["z"] = pts.T
+        PlyData([PlyElement.describe(vertex, "vertex")], text=True).write(str(p))
+        return
+    rest = (f"element vertex {len(pts)}\nproperty double x\nproperty double y\nproperty double z\n"
+            "end_header\n")
+    head = "ply\nformat binary_little_endian 1.0\ncomment gagekit"
+    pad = -(len(head) + 1 + len(rest)) % 8
+    header = (head + " " * pad + "\n" + rest).encode("ascii")
+    with open(p, "wb") as fh:
+        fh.write(header)
+        np.ascontiguousarray(pts, dtype="<f8").tofile(fh)

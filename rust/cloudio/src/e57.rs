@@ -11,6 +11,7 @@
 //! the crate's point-by-point reader where that path does not apply.
 
 use gagekit_core::{GkError, Result};
+use rayon::prelude::*;
 use std::path::Path;
 
 /// The points of every scan of an E57 file, in metres.
@@ -62,13 +63,17 @@ pub fn read_e57(path: &Path, what: &str) -> Result<E57Points> {
         }
         // fast path: whole byte streams decoded at once (e57_fast), else the crate's reader
         if let Some((c, bad)) = crate::e57_fast::decode(&map, page, pc, what)? {
-            if let Some(i) = c.iter().position(|v| !v.is_finite()) {
+            if let Some(i) = c.par_iter().with_min_len(1 << 16).position_first(|v| !v.is_finite()) {
                 return Err(GkError::invalid(format!(
                     "{what}: scan {k}: point {} has a non-finite coordinate (NaN or inf)",
                     coords.len() / 3 + i / 3
                 )));
             }
-            coords.extend_from_slice(&c);
+            if coords.is_empty() {
+                coords = c; // the first scan: its buffer is the result (no copy)
+            } else {
+                coords.extend_from_slice(&c);
+            }
             invalid += bad;
             continue;
         }

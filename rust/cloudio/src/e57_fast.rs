@@ -245,24 +245,38 @@ pub(crate) fn decode(map: &[u8], page: usize, pc: &PointCloud, what: &str) -> Re
         }
         None => ([[1., 0., 0.], [0., 1., 0.], [0., 0., 1.]], [0.; 3]),
     };
-    let mut coords = Vec::with_capacity(3 * n);
-    let mut invalid = 0;
-    for i in 0..n {
-        if let Some(s) = &st {
-            if s[i] != 0.0 {
-                invalid += 1;
-                continue;
+    // valid points per block, then every block written into its place in parallel
+    const BLOCK: usize = 1 << 16;
+    let valid = |i: usize| st.as_ref().is_none_or(|s| s[i] == 0.0);
+    let counts: Vec<usize> = (0..n.div_ceil(BLOCK))
+        .into_par_iter()
+        .map(|b| (b * BLOCK..((b + 1) * BLOCK).min(n)).filter(|&i| valid(i)).count())
+        .collect();
+    let kept: usize = counts.iter().sum();
+    let invalid = n - kept;
+    let mut coords = vec![0.0; 3 * kept];
+    let mut parts: Vec<(usize, &mut [f64])> = Vec::with_capacity(counts.len());
+    let mut rest = &mut coords[..];
+    for (b, &c) in counts.iter().enumerate() {
+        let (head, tail) = rest.split_at_mut(3 * c);
+        parts.push((b, head));
+        rest = tail;
+    }
+    parts.into_par_iter().for_each(|(b, out)| {
+        let mut o = out.chunks_exact_mut(3);
+        for i in (b * BLOCK..((b + 1) * BLOCK).min(n)).filter(|&i| valid(i)) {
+            let p = if spherical {
+                let (rg, az, el) = (v[0][i], v[1][i], v[2][i]);
+                [rg * el.cos() * az.cos(), rg * el.cos() * az.sin(), rg * el.sin()]
+            } else {
+                [v[0][i], v[1][i], v[2][i]]
+            };
+            if let Some(q) = o.next() {
+                for k in 0..3 {
+                    q[k] = r[k][0] * p[0] + r[k][1] * p[1] + r[k][2] * p[2] + t[k];
+                }
             }
         }
-        let p = if spherical {
-            let (rg, az, el) = (v[0][i], v[1][i], v[2][i]);
-            [rg * el.cos() * az.cos(), rg * el.cos() * az.sin(), rg * el.sin()]
-        } else {
-            [v[0][i], v[1][i], v[2][i]]
-        };
-        for k in 0..3 {
-            coords.push(r[k][0] * p[0] + r[k][1] * p[1] + r[k][2] * p[2] + t[k]);
-        }
-    }
+    });
     Ok(Some((coords, invalid)))
 }

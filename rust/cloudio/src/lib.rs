@@ -14,7 +14,9 @@ pub mod ascii;
 pub mod e57;
 mod e57_fast;
 pub mod ply;
+pub mod scale;
 
 pub use ascii::{data_columns, detect_style, parse_ascii, write_ascii, AsciiOptions, Parsed, Style};
 pub use e57::{read_e57, E57Points};
 pub use ply::{read_ply, read_ply_file, PlyFile, PlyPoints};
+pub use scale::scale_in_place;

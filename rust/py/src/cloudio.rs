@@ -2,9 +2,9 @@
 
 use crate::arrays::rows;
 use crate::errors::{invalid, run};
-use gagekit_cloudio::{data_columns, parse_ascii, read_e57, write_ascii, AsciiOptions, PlyFile};
+use gagekit_cloudio::{data_columns, parse_ascii, scale_in_place, read_e57, write_ascii, AsciiOptions, PlyFile};
 use gagekit_core::GkError;
-use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray2};
+use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray2, PyReadwriteArray2};
 use pyo3::prelude::*;
 
 /// A parsed ASCII point file.
@@ -110,6 +110,15 @@ fn cloud_read_e57(py: Python<'_>, path: String) -> PyResult<E57Cloud> {
     Ok(E57Cloud { points: arr.into_any().unbind(), scans: p.scans, invalid_dropped: p.invalid_dropped })
 }
 
+/// Multiply the columns of a C-contiguous (n, d) float64 array by `scale` (d factors) in
+/// place: the unit conversion of a read cloud without a second array.
+#[pyfunction]
+fn cloud_scale_in_place(py: Python<'_>, mut points: PyReadwriteArray2<'_, f64>, scale: Vec<f64>, what: String) -> PyResult<()> {
+    let coords = points.as_slice_mut().map_err(|_| invalid("points: expected a C-contiguous float64 array"))?;
+    // not interruptible (a rerun would scale twice): one pass at memory speed
+    run(py, || scale_in_place(coords, &scale, &what))
+}
+
 /// Write points (n, d) as ASCII with separator `sep` and an optional header line.
 #[pyfunction]
 #[pyo3(signature = (path, points, sep=",", header=None))]
@@ -136,6 +145,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<AsciiCloud>()?;
     m.add_function(wrap_pyfunction!(cloud_read_ascii, m)?)?;
     m.add_function(wrap_pyfunction!(cloud_ascii_columns, m)?)?;
+    m.add_function(wrap_pyfunction!(cloud_scale_in_place, m)?)?;
     m.add_function(wrap_pyfunction!(cloud_write_ascii, m)?)?;
     m.add_class::<PlyCloud>()?;
     m.add_class::<PlyLayout>()?;
