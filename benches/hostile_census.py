@@ -39,7 +39,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from tests.hostile.mutants import damaged, is_finite_json, mutants, spec_commands, special_paths  # noqa: E402
+from tests.hostile.mutants import cpu_seconds, damaged, is_finite_json, mutants, spec_commands, special_paths  # noqa: E402
 
 CATS = ("tries", "clean", "ok", "tracebacks", "panics", "hangs", "wrong")
 TIME_LIMIT = 60.0
@@ -381,15 +381,6 @@ def _count_rows(p: Path) -> int:
         return sum(1 for _ in fh) - 1
 
 
-def _cpu_seconds(pid: int) -> float:
-    """User + system CPU time of a running process, all threads (Linux /proc)."""
-    try:
-        fields = open(f"/proc/{pid}/stat").read().rsplit(")", 1)[1].split()
-    except OSError:
-        return 0.0
-    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
-
-
 def run_interrupts(c: Census, tmp: Path, quick: bool) -> None:
     """SIGINT (Ctrl-C) and SIGKILL at several moments of long runs: the answer within a
     second, and the output file either the old one, absent, or complete.
@@ -428,7 +419,7 @@ def run_interrupts(c: Census, tmp: Path, quick: bool) -> None:
                     p = subprocess.Popen([sys.executable, "-m", "gagekit", *map(str, args)], stdout=so_h,
                                          stderr=se_h, text=True, env=env)
                 time.sleep(d)
-                cpu0 = _cpu_seconds(p.pid)
+                cpu0 = cpu_seconds(p.pid)
                 t0 = time.perf_counter()
                 p.send_signal(sig)
                 done = None

@@ -1,6 +1,7 @@
 """Generated malformed inputs: every spec type (TOML) mutated key by key, plus whole-file
-damage (empty, binary, Latin-1, truncated, a folder, a FIFO, missing). Shared by the tests
-and by ``benches/hostile_census.py``."""
+damage (empty, binary, Latin-1, truncated, a folder, a FIFO, missing); and the CPU clock of
+a child process for the interrupt cases. Shared by the tests and by
+``benches/hostile_census.py``."""
 
 from __future__ import annotations
 
@@ -139,3 +140,14 @@ def spec_commands(tmp: Path, machine: Path, gage_toml: Path, cloud: Path) -> dic
         "zones": (tmp / "zones.toml", [*design, "--zones", "SPEC"]),
         "exclusions": (tmp / "excl.toml", [*design, "--exclude", "SPEC"]),
     }
+
+
+def cpu_seconds(pid: int) -> float:
+    """User + system CPU time of a running process, all its threads (Linux /proc); 0 once
+    it has exited. The interrupt cases measure the answer to Ctrl-C in CPU time: on a
+    loaded, shared machine wall time measures the scheduler rather than the program."""
+    try:
+        fields = open(f"/proc/{pid}/stat").read().rsplit(")", 1)[1].split()
+    except OSError:
+        return 0.0
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")

@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 from .conftest import EXAMPLE_MACHINE, leftovers
+from .mutants import cpu_seconds
 
 
 def _start(*args):
@@ -22,27 +23,18 @@ def _start(*args):
                             stderr=subprocess.PIPE, text=True, env=env)
 
 
-def _cpu_seconds(pid: int) -> float:
-    """User + system CPU time of a process (Linux /proc), 0 once it has exited."""
-    try:
-        fields = open(f"/proc/{pid}/stat").read().rsplit(")", 1)[1].split()
-    except OSError:
-        return 0.0
-    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
-
-
 def _interrupt(p, after, sig=signal.SIGINT):
     """Send ``sig`` once the child has used ``after`` s of CPU (past the interpreter's and
     the imports' start-up, whatever the machine's load), or has finished. Returns the CPU
     time the child used after the signal (its threads together), stdout and stderr: CPU
     time, not wall time, so that a loaded test machine does not count as a slow answer."""
     deadline = time.monotonic() + 300
-    while p.poll() is None and _cpu_seconds(p.pid) < after and time.monotonic() < deadline:
+    while p.poll() is None and cpu_seconds(p.pid) < after and time.monotonic() < deadline:
         time.sleep(0.05)
     if p.returncode is not None:
         out, err = p.communicate()
         return 0.0, out, err
-    before = _cpu_seconds(p.pid)
+    before = cpu_seconds(p.pid)
     p.send_signal(sig)
     _, status, usage = os.wait4(p.pid, 0)
     p.returncode = os.waitstatus_to_exitcode(status)
