@@ -170,7 +170,9 @@ class SphereFit:
     """A fitted sphere (3-D) or circle (2-D). ``certificate``: distances to the centre;
     ``form_error`` = max - min (sphericity about this centre; the zone width for the
     minimum zone). Chebyshev spheres also give ``inner_radius`` / ``outer_radius`` (the
-    zone, minimum zone only) and ``control_points``."""
+    zone, minimum zone only), ``control_points`` and ``global_bound``: the certificate of
+    the global search (minimum zone: no centre gives a narrower zone; maximum inscribed:
+    no larger sphere; within 1e-9 mm of the value)."""
 
     criterion: str
     n_points: int
@@ -182,6 +184,7 @@ class SphereFit:
     inner_radius: Optional[float] = None
     outer_radius: Optional[float] = None
     control_points: Optional[tuple[int, ...]] = None
+    global_bound: Optional[float] = None
 
     def to_dict(self) -> dict[str, Any]:
         if self.control_points is None:
@@ -189,6 +192,8 @@ class SphereFit:
         radii: dict[str, Any] = {"radius": self.radius}
         if self.criterion == "minimum-zone":
             radii.update(inner_radius=self.inner_radius, outer_radius=self.outer_radius)
+        if self.global_bound is not None:
+            radii.update(global_bound=self.global_bound)
         return _fit_dict(self, **radii, center=list(self.center), control_points=list(self.control_points))
 
 
@@ -287,8 +292,11 @@ def fit_sphere(points: Any, criterion: str = "least-squares") -> SphereFit:
     Eq. 6.1). ``max-inscribed``: the largest sphere with no point inside, within the
     circumscribed one (the 3-D form of Eq. 6.2). ``minimum-zone`` (sphericity): two
     concentric spheres of least radial separation enclosing the points (the 3-D form of
-    Eq. 6.5). MI and MZ: sequential linear programming from the least-squares and MC
-    centres to a point where the Chebyshev conditions hold. Coplanar points raise
+    Eq. 6.5). MI and MZ are global: a certified branch and bound over the centre (interval
+    and linearised bounds of the distances on cubes of centres) to 1e-9 mm (or 1e-13 of
+    the part's size), then the exact local step (sequential linear programming) from its
+    best centre; MZ searches centres within the least-squares radius of the least-squares
+    centre, MI the whole MC sphere. Coplanar points raise
     :class:`DegenerateGeometryError` (except for the circumscribed sphere).
     """
     crit = normalize_criterion(criterion, ("least-squares", "min-circumscribed", "max-inscribed", "minimum-zone"), "sphere")
@@ -305,6 +313,7 @@ def fit_sphere(points: Any, criterion: str = "least-squares") -> SphereFit:
             inner_radius=float(z.r_in) if crit == "minimum-zone" else None,
             outer_radius=float(z.r_out) if crit == "minimum-zone" else None,
             control_points=tuple(int(i) for i in control),
+            global_bound=float(z.bound) if crit != "min-circumscribed" else None,
         )
     center, radius, ext = _core.form_sphere_lsq(pts)
     cert = _cert(ext)

@@ -223,8 +223,8 @@ def _cylindricity(tol, fd, system):
 
 
 def _sphericity(tol, fd, system):
-    c, r_in, r_out = _core.gdt_min_zone_sphere(np.ascontiguousarray(fd.points))
-    return Measurement(float(r_out - r_in), "width", "surface", len(fd.points), {"center": list(c)})
+    fit = fit_sphere(fd.points, "minimum-zone")
+    return Measurement(float(fit.outer_radius - fit.inner_radius), "width", "surface", len(fd.points), {"center": list(fit.center)})
 
 
 def _element(fd: FeatureData) -> tuple[np.ndarray, str]:

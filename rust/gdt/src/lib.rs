@@ -13,10 +13,11 @@
 //! - [`datum`]: datum planes (constrained Chebyshev tangent plane on the air side,
 //!   ISO 5459) and axes of a fixed direction (maximum inscribed / minimum
 //!   circumscribed / least-squares cylinder along a given direction).
-//! - [`sphere`]: the minimum-zone sphere (sphericity) by sequential linear programming.
+//!
+//! Sphericity uses the form crate's certified minimum-zone sphere
+//! (`gagekit_form::sphere::min_zone`).
 
 pub mod datum;
-pub mod sphere;
 pub mod vec3;
 pub mod width2;
 pub mod width3;

@@ -467,6 +467,9 @@ pub struct SphereResult {
     pub max_distance: f64,
     /// Linear programs of the MI / MZ searches (0 for MC).
     pub iterations: usize,
+    /// The certified global bound (MZ: no narrower zone; MI: no larger sphere; MC: the
+    /// radius), within 1e-9 mm of the value.
+    pub bound: f64,
 }
 
 /// Minimum circumscribed, maximum inscribed or minimum-zone sphere of (n, 3) points.
@@ -496,6 +499,7 @@ fn form_sphere_fit(py: Python<'_>, points: PyReadonlyArray2<'_, f64>, criterion:
         min_distance: e.min,
         max_distance: e.max,
         iterations: z.iterations,
+        bound: z.bound,
     })
 }
 

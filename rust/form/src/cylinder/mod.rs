@@ -304,7 +304,7 @@ pub(crate) fn fit_spread(
     };
     let max_tilt = opts.search.max_tilt.min(FRAC_PI_2);
     let free = max_tilt >= FRAC_PI_2 - 1e-12;
-    let region = if free { Region::half_sphere() } else { Region::cone(reference, max_tilt) };
+    let region = if free { Region::free() } else { Region::cone(reference, max_tilt) };
     let mut r = subset::fit_in(pts, crit, opts, lsq_fit.as_ref(), &region, spread)?;
     let reference = lsq::upper([reference[0], reference[1], reference[2]]);
     if !free {

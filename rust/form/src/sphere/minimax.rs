@@ -12,6 +12,7 @@
 //! a trust region grows after good steps and shrinks after poor ones; the search stops
 //! when the LP predicts no decrease beyond rounding.
 
+use super::global::{self, Goal};
 use super::{extremes, min_circumscribed, SphereZone};
 use crate::lp;
 use crate::lsq;
@@ -136,18 +137,20 @@ fn fit(pts: &[f64], kind: Kind) -> Result<SphereZone> {
     let size = q.iter().map(|p| p.norm()).fold(0.0, f64::max);
     let mcc = Vector3::from(mc.center) - c0;
     let pb = Problem { q, kind, mc: (mcc, mc.r_out), size };
-    let starts = [Vector3::new(ls.center[0], ls.center[1], ls.center[2]) - c0, mcc];
-    let mut best: Option<(f64, Vector3<f64>)> = None;
-    let mut iterations = 0;
-    for s in starts {
-        let (c, steps) = pb.descend(s);
-        iterations += steps;
-        let v = pb.value(&c).0;
-        if best.is_none_or(|b| v < b.0) {
-            best = Some((v, c));
+    // certified global search over the centre, then the exact local step from its best
+    // a local optimum first (the exact local step from the least-squares or MC centre),
+    // then the certified global search over the centre, then the local step from its best
+    let lsc = Vector3::new(ls.center[0], ls.center[1], ls.center[2]) - c0;
+    let (local, steps) = pb.descend(if kind == Kind::MinZone { lsc } else { mcc });
+    let cert = match kind {
+        Kind::MinZone => global::search(&pb.q, Goal::MinZone, lsc, ls.radius.max(1e-9 * size), size, local),
+        Kind::MaxInscribed => {
+            global::search(&pb.q, Goal::MaxInscribed { mc: mcc, r_mc: mc.r_out }, mcc, mc.r_out, size, local)
         }
-    }
-    let (_, c) = best.ok_or_else(|| GkError::numerical(format!("{what}: no solution")))?;
+    };
+    let (polished, more) = pb.descend(cert.center);
+    let iterations = steps + more;
+    let c = [polished, cert.center, local].into_iter().min_by(|a, b| pb.value(a).0.total_cmp(&pb.value(b).0)).unwrap_or(local);
     let center = [c[0] + c0[0], c[1] + c0[1], c[2] + c0[2]];
     let tol = 1e-9 * size;
     let (lo, hi, cin, cout) = extremes(pts, &center, tol);
@@ -163,7 +166,7 @@ fn fit(pts: &[f64], kind: Kind) -> Result<SphereZone> {
         return Err(GkError::numerical(format!("{what}: the search did not converge")));
     }
     let control_out = if kind == Kind::MinZone { cout } else { cin.clone() };
-    Ok(SphereZone { center, r_in, r_out, control_in: cin, control_out, iterations })
+    Ok(SphereZone { center, r_in, r_out, control_in: cin, control_out, iterations, bound: cert.bound, cubes: cert.cubes })
 }
 
 /// Minimum-zone sphere (sphericity) of 3-D points (flat, at least 4, not coplanar).
@@ -174,4 +177,21 @@ pub fn min_zone(pts: &[f64]) -> Result<SphereZone> {
 /// Maximum inscribed sphere within the minimum circumscribed one (3-D Eq. 6.2).
 pub fn max_inscribed(pts: &[f64]) -> Result<SphereZone> {
     fit(pts, Kind::MaxInscribed)
+}
+
+/// The old local-only search (tests): best value from the LS and MC starts.
+#[cfg(test)]
+pub(super) fn local_only(pts: &[f64], mz: bool) -> f64 {
+    let kind = if mz { Kind::MinZone } else { Kind::MaxInscribed };
+    let ls = lsq::sphere(pts, 3).unwrap();
+    let mc = min_circumscribed(pts).unwrap();
+    let c0 = lsq::centroid(pts, 3);
+    let c0 = Vector3::new(c0[0], c0[1], c0[2]);
+    let q: Vec<Vector3<f64>> = pts.chunks_exact(3).map(|p| Vector3::new(p[0], p[1], p[2]) - c0).collect();
+    let size = q.iter().map(|p| p.norm()).fold(0.0, f64::max);
+    let mcc = Vector3::from(mc.center) - c0;
+    let pb = Problem { q, kind, mc: (mcc, mc.r_out), size };
+    let starts = [Vector3::new(ls.center[0], ls.center[1], ls.center[2]) - c0, mcc];
+    let v = starts.iter().map(|s| pb.value(&pb.descend(*s).0).0).fold(f64::INFINITY, f64::min);
+    if mz { v } else { -v }
 }
