@@ -126,9 +126,62 @@ impl Problem {
     }
 }
 
-fn fit(pts: &[f64], kind: Kind) -> Result<SphereZone> {
-    let what = if kind == Kind::MinZone { "minimum-zone sphere" } else { "maximum inscribed sphere" };
-    // checks (finite, magnitude, at least 4 points, not coplanar) and the start
+/// Above this many points the global search runs on an active subset.
+const ACTIVE_ABOVE: usize = 4096;
+/// Points added per side (nearest, farthest) to the active subset in each round.
+const ACTIVE: usize = 512;
+
+/// The certified global search ([`global::search`]) over the cube (centre `m0`, half side
+/// `h0`). On many points it runs on an active subset: the points nearest to (and for MZ
+/// farthest from) the local optimum `start`. A subset's bound holds for all points (fewer
+/// constraints: the MZ width can only shrink, the MI radius only grow), so the subset's
+/// best centre is certified when its value on all points is within the tolerance of that
+/// bound; otherwise the points beyond the subset's extremes at that centre join it and
+/// the search runs again.
+fn certify(pb: &Problem, goal: Goal, m0: Vector3<f64>, h0: f64, start: Vector3<f64>) -> global::Certified {
+    let n = pb.q.len();
+    if n <= ACTIVE_ABOVE {
+        return global::search(&pb.q, goal, m0, h0, pb.size, start);
+    }
+    let tol = global::tolerance(pb.size);
+    let mz = goal == Goal::MinZone;
+    let mut active: Vec<usize> = Vec::new();
+    let mut centre = start;
+    let mut cubes = 0;
+    for _round in 0..20 {
+        // the points beyond the active subset's extremes at `centre` (all of them at first)
+        let d: Vec<f64> = pb.q.iter().map(|p| (p - centre).norm()).collect();
+        let (lo, hi) = active.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &i| (l.min(d[i]), h.max(d[i])));
+        let mut order: Vec<usize> = (0..n).collect();
+        order.sort_by(|&i, &j| d[i].total_cmp(&d[j]).then(i.cmp(&j)));
+        let before = active.len();
+        active.extend(order.iter().take(ACTIVE).filter(|&&i| d[i] < lo));
+        if mz {
+            active.extend(order.iter().rev().take(ACTIVE).filter(|&&i| d[i] > hi));
+        }
+        active.sort_unstable();
+        active.dedup();
+        if active.len() == before {
+            break; // nothing beyond: the last subset's answer stands (checked below)
+        }
+        let sub: Vec<Vector3<f64>> = active.iter().map(|&i| pb.q[i]).collect();
+        let cert = global::search(&sub, goal, m0, h0, pb.size, centre);
+        cubes += cert.cubes;
+        centre = cert.center;
+        // minimisation form: MZ the width, MI minus the radius
+        let bound = if mz { cert.bound } else { -cert.bound };
+        if pb.value(&centre).0 <= bound + tol {
+            return global::Certified { center: centre, bound: cert.bound, cubes };
+        }
+    }
+    let mut all = global::search(&pb.q, goal, m0, h0, pb.size, centre);
+    all.cubes += cubes;
+    all
+}
+
+/// The checks (finite, magnitude, at least 4 points, not coplanar), the least-squares
+/// and MC spheres, and the problem on the points centred on their centroid `c0`.
+fn setup(pts: &[f64], kind: Kind, what: &str) -> Result<(Problem, lsq::Sphere, SphereZone, Vector3<f64>)> {
     let ls = lsq::sphere(pts, 3).map_err(|e| GkError::new(e.kind, e.message.replacen("sphere", what, 1)))?;
     let mc = min_circumscribed(pts)?;
     let c0 = lsq::centroid(pts, 3);
@@ -137,16 +190,20 @@ fn fit(pts: &[f64], kind: Kind) -> Result<SphereZone> {
     let size = q.iter().map(|p| p.norm()).fold(0.0, f64::max);
     let mcc = Vector3::from(mc.center) - c0;
     let pb = Problem { q, kind, mc: (mcc, mc.r_out), size };
-    // certified global search over the centre, then the exact local step from its best
+    Ok((pb, ls, mc, c0))
+}
+
+fn fit(pts: &[f64], kind: Kind) -> Result<SphereZone> {
+    let what = if kind == Kind::MinZone { "minimum-zone sphere" } else { "maximum inscribed sphere" };
+    let (pb, ls, mc, c0) = setup(pts, kind, what)?;
+    let (mcc, size) = (pb.mc.0, pb.size);
     // a local optimum first (the exact local step from the least-squares or MC centre),
     // then the certified global search over the centre, then the local step from its best
     let lsc = Vector3::new(ls.center[0], ls.center[1], ls.center[2]) - c0;
     let (local, steps) = pb.descend(if kind == Kind::MinZone { lsc } else { mcc });
     let cert = match kind {
-        Kind::MinZone => global::search(&pb.q, Goal::MinZone, lsc, ls.radius.max(1e-9 * size), size, local),
-        Kind::MaxInscribed => {
-            global::search(&pb.q, Goal::MaxInscribed { mc: mcc, r_mc: mc.r_out }, mcc, mc.r_out, size, local)
-        }
+        Kind::MinZone => certify(&pb, Goal::MinZone, lsc, ls.radius.max(1e-9 * size), local),
+        Kind::MaxInscribed => certify(&pb, Goal::MaxInscribed { mc: mcc, r_mc: mc.r_out }, mcc, mc.r_out, local),
     };
     let (polished, more) = pb.descend(cert.center);
     let iterations = steps + more;
@@ -183,15 +240,8 @@ pub fn max_inscribed(pts: &[f64]) -> Result<SphereZone> {
 #[cfg(test)]
 pub(super) fn local_only(pts: &[f64], mz: bool) -> f64 {
     let kind = if mz { Kind::MinZone } else { Kind::MaxInscribed };
-    let ls = lsq::sphere(pts, 3).unwrap();
-    let mc = min_circumscribed(pts).unwrap();
-    let c0 = lsq::centroid(pts, 3);
-    let c0 = Vector3::new(c0[0], c0[1], c0[2]);
-    let q: Vec<Vector3<f64>> = pts.chunks_exact(3).map(|p| Vector3::new(p[0], p[1], p[2]) - c0).collect();
-    let size = q.iter().map(|p| p.norm()).fold(0.0, f64::max);
-    let mcc = Vector3::from(mc.center) - c0;
-    let pb = Problem { q, kind, mc: (mcc, mc.r_out), size };
-    let starts = [Vector3::new(ls.center[0], ls.center[1], ls.center[2]) - c0, mcc];
+    let (pb, ls, _, c0) = setup(pts, kind, "sphere").unwrap();
+    let starts = [Vector3::new(ls.center[0], ls.center[1], ls.center[2]) - c0, pb.mc.0];
     let v = starts.iter().map(|s| pb.value(&pb.descend(*s).0).0).fold(f64::INFINITY, f64::min);
     if mz { v } else { -v }
 }

@@ -8,7 +8,10 @@
 //! - `mc`: Welzl (move-to-front), exact, expected linear time.
 //! - `global`: MI and MZ globally, by a certified branch and bound over the centre
 //!   (interval bounds of the point distances on cubes of centres), to
-//!   [`global_tolerance`] (1e-9 mm); the bound it proves is reported (`bound`).
+//!   [`global_tolerance`] (1e-9 mm); the bound it proves is reported (`bound`). On more
+//!   than 4096 points it runs on an active subset (the points nearest to and farthest
+//!   from the centre), grown until the subset's certified centre is within the
+//!   tolerance of its bound on all points (a subset's bound holds for the whole set).
 //! - `minimax`: the exact local step from the branch and bound's best centre:
 //!   sequential linear programming with a trust region on the centre and radii (the 3-D
 //!   analogue of the cylinders' SLP); each step is a 4- or 5-variable LP ([`crate::lp`]),
