@@ -23,7 +23,7 @@ from ..errors import StoreError
 from . import models as m
 from .schema import _reason, create_engine, ensure_schema, safe_url, use_wal
 
-__all__ = ["ResultStore", "StoredResult", "spec_hash", "canonical_json", "now"]
+__all__ = ["ResultStore", "StoredResult", "spec_hash", "canonical_json", "now", "inspection_rows"]
 
 
 def now() -> datetime:
@@ -94,17 +94,27 @@ def _details(kind: str, result_id: int, result: Mapping[str, Any]) -> list[tuple
                "n_points": result["n_points"], "form_error": result["form_error"], "radius": result.get("radius")}
         return [(m.FormResult.__table__, [row])]
     if kind == "inspect":  # gagekit.inspect: each callout's measured value against its tolerance (upper limit)
-        rows, seen = [], set()
-        for t in result.get("tolerances", []):
-            name = t.get("name") or f"{t['characteristic']} of {t['feature']}"
-            base, k = name, 2
-            while name in seen:  # the same callout twice (other datums): numbered
-                name, k = f"{base} #{k}", k + 1
-            seen.add(name)
-            rows.append({"result_id": result_id, "tolerance": name, "characteristic": t["characteristic"],
-                         "value": t["measured"], "lower": None, "upper": t["tolerance"], "conforming": bool(t["pass"])})
+        rows = [{"result_id": result_id, **row} for row in inspection_rows(result)]
         return [(m.InspectionResult.__table__, rows)] if rows else []
     return []
+
+
+def inspection_rows(result: Mapping[str, Any]) -> list[dict]:
+    """The ``inspection_results`` rows of an inspection's JSON (``gagekit inspect --json``):
+    per callout its name (the callout's ``name``, else "characteristic of feature |datums|";
+    a repeated name is numbered), value against the tolerance as upper limit, and what it is."""
+    rows, seen = [], set()
+    for t in result.get("tolerances", []):
+        datums = list(t.get("datums") or [])
+        name = t.get("name") or (f"{t['characteristic']} of {t['feature']}" + (f" |{'|'.join(datums)}|" if datums else ""))
+        base, k = name, 2
+        while name in seen:  # the same callout twice: numbered
+            name, k = f"{base} #{k}", k + 1
+        seen.add(name)
+        rows.append({"tolerance": name, "characteristic": t["characteristic"], "value": t["measured"], "lower": None,
+                     "upper": t["tolerance"], "conforming": bool(t["pass"]), "feature": t.get("feature"),
+                     "datums": "|".join(datums), "zone": t.get("zone"), "n_points": t.get("n_points")})
+    return rows
 
 
 class ResultStore:
