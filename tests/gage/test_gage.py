@@ -71,11 +71,12 @@ def test_casting_ok_conforms_only_after_correction(ok):
     assert all(g.filtered_points < g.points / 5 for g in r.gages)
     # the 3-2-1 alignment recovers the simulated scanner pose of the locators, to
     # within the scanner noise (the support planes rest on the noise peaks)
-    from gagekit.data.make_castings import CASES, _rot
+    from gagekit._rotation import rotation_from_vector
+    from gagekit.data.make_castings import CASES
 
     rv, t = CASES["casting_ok"]["pose"]
     C = r.alignment.frame
-    assert np.abs(C[:3, :3] - _rot(rv)).max() < 1e-3
+    assert np.abs(C[:3, :3] - rotation_from_vector(rv)).max() < 1e-3
     assert np.abs(C[:3, 3] - np.asarray(t)).max() < 0.2
     np.testing.assert_allclose(r.alignment.H @ C, np.eye(4), atol=1e-12)
 

@@ -33,6 +33,8 @@ from typing import Optional
 
 import numpy as np
 
+from .._rotation import rotation_from_vector
+
 # Table 5.1: a x + b y + c z + d >= 0 on the material side
 TABLE_5_1 = [
     ("top of flange min", "flange_top", (0, 0, 1, -109.30)),
@@ -81,16 +83,6 @@ CASES = {
     "casting_short": dict(seed=54, shift=(1.5, 2.0), tilt=math.radians(-0.3), thin=4.8,
                           pose=((-0.02, 0.04, -0.9), (-120.0, 310.0, 48.0))),
 }
-
-
-def _rot(v) -> np.ndarray:
-    v = np.asarray(v, dtype=float)
-    th = np.linalg.norm(v)
-    if th == 0:
-        return np.eye(3)
-    k = v / th
-    K = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
-    return np.eye(3) + math.sin(th) * K + (1 - math.cos(th)) * K @ K
 
 
 def _faces(thin: float):
@@ -161,7 +153,7 @@ def make_casting(name: str = "casting_ok", density: float = 1.5, noise: float = 
         case["tilt"] = float(tilt)
     rng = np.random.default_rng(case["seed"] if seed is None else seed)
     beta = case["tilt"]
-    Rp = _rot((0.0, beta, 0.0))
+    Rp = rotation_from_vector((0.0, beta, 0.0))
     # lift so the lowest bottom corner stays on the pads
     tp = np.array([case["shift"][0], case["shift"][1], max(0.0, 100.0 * math.sin(beta))])
     parts, labels = [], []
@@ -176,7 +168,7 @@ def make_casting(name: str = "casting_ok", density: float = 1.5, noise: float = 
     pts = np.vstack(parts)
     _check_regions(pts, np.array(labels))
     rv, ts = case["pose"]
-    Rs = _rot(rv)
+    Rs = rotation_from_vector(rv)
     pts = pts @ Rs.T + np.asarray(ts)
     perm = rng.permutation(len(pts))
     return np.ascontiguousarray(pts[perm]), gage_document(Rs, np.asarray(ts))

@@ -31,6 +31,7 @@ from typing import Any, Callable, Optional, Sequence
 import numpy as np
 
 from .. import _core
+from .._util import check_finite
 from ..errors import InfeasibleError, InvalidInputError
 
 CRITERIA = ("A", "D", "K", "E", "I")
@@ -292,9 +293,7 @@ def _user_candidates(candidates: Any, lo: np.ndarray, hi: np.ndarray) -> np.ndar
         raise InvalidInputError(f"candidates: expected an (m, {d}) array, got shape {c.shape}")
     if len(c) == 0:
         raise InvalidInputError("candidates: the array is empty")
-    bad = ~np.isfinite(c).all(axis=1)
-    if bad.any():
-        raise InvalidInputError(f"candidates: point {int(np.argmax(bad))} has a non-finite coordinate")
+    check_finite(c, "candidates")
     tol = 1e-12 * np.maximum(1.0, np.abs(np.concatenate([lo, hi])).max())
     out = ((c < lo - tol) | (c > hi + tol)).any(axis=1)
     if out.any():

@@ -21,7 +21,6 @@ solved by constraint generation, with the same result.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Mapping, Optional, Union
@@ -29,6 +28,7 @@ from typing import Any, Mapping, Optional, Union
 import numpy as np
 
 from .. import _core
+from .._rotation import rotation_from_vector, rotation_vector
 from .._util import as_points, check_finite
 from ..cloud.regions import Box
 from ..errors import ConfigError, InvalidInputError
@@ -149,46 +149,11 @@ class GageCheckResult:
 # --------------------------------------------------------------------------- rotations
 
 
-def _rotvec_to_matrix(v) -> np.ndarray:
-    v = np.asarray(v, dtype=np.float64)
-    th = float(np.linalg.norm(v))
-    if th < 1e-300:
-        return np.eye(3)
-    k = v / th
-    K = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
-    return np.eye(3) + math.sin(th) * K + (1 - math.cos(th)) * (K @ K)
-
-
-def _matrix_to_rotvec(R: np.ndarray) -> np.ndarray:
-    # via the unit quaternion (Shepperd), robust for every angle
-    tr = np.trace(R)
-    cand = [tr, R[0, 0], R[1, 1], R[2, 2]]
-    i = int(np.argmax(cand))
-    if i == 0:
-        w = math.sqrt(1 + tr) / 2
-        x, y, z = (R[2, 1] - R[1, 2]) / (4 * w), (R[0, 2] - R[2, 0]) / (4 * w), (R[1, 0] - R[0, 1]) / (4 * w)
-    elif i == 1:
-        x = math.sqrt(1 + 2 * R[0, 0] - tr) / 2
-        w, y, z = (R[2, 1] - R[1, 2]) / (4 * x), (R[0, 1] + R[1, 0]) / (4 * x), (R[0, 2] + R[2, 0]) / (4 * x)
-    elif i == 2:
-        y = math.sqrt(1 + 2 * R[1, 1] - tr) / 2
-        w, x, z = (R[0, 2] - R[2, 0]) / (4 * y), (R[0, 1] + R[1, 0]) / (4 * y), (R[1, 2] + R[2, 1]) / (4 * y)
-    else:
-        z = math.sqrt(1 + 2 * R[2, 2] - tr) / 2
-        w, x, y = (R[1, 0] - R[0, 1]) / (4 * z), (R[0, 2] + R[2, 0]) / (4 * z), (R[1, 2] + R[2, 1]) / (4 * z)
-    if w < 0:
-        w, x, y, z = -w, -x, -y, -z
-    s = math.sqrt(x * x + y * y + z * z)
-    if s < 1e-300:
-        return np.zeros(3)
-    return np.array([x, y, z]) / s * (2 * math.atan2(s, w))
-
-
 def box_in_scanner(box: Box, C: np.ndarray) -> Box:
     """A part-frame box expressed in the scanner frame (C = C_L^S, part -> scanner)."""
-    R = C[:3, :3] @ _rotvec_to_matrix(box.rotation)
+    R = C[:3, :3] @ rotation_from_vector(box.rotation)
     center = C[:3, :3] @ np.asarray(box.center) + C[:3, 3]
-    return Box(tuple(center), box.size, tuple(_matrix_to_rotvec(R)), name=box.name)
+    return Box(tuple(center), box.size, tuple(rotation_vector(R)), name=box.name)
 
 
 # --------------------------------------------------------------------------- analysis

@@ -24,7 +24,8 @@ import numpy as np
 from .. import _core
 from ..errors import DegenerateGeometryError
 from ..form import fit_circle, fit_circle_3d, fit_cone, fit_cylinder, fit_line, fit_plane, fit_sphere
-from .spec import MIN_POINTS, Feature, _rotvec_matrix
+from .._rotation import rotation_from_vector
+from .spec import MIN_POINTS, Feature
 
 __all__ = ["FeatureData", "extract"]
 
@@ -53,7 +54,7 @@ class FeatureData:
 
     def box_axes(self) -> np.ndarray:
         """The region box's axes as rows (they move with the part)."""
-        return _rotvec_matrix(self.spec.region.rotation).T
+        return rotation_from_vector(self.spec.region.rotation).T
 
     # -- least-squares fits ------------------------------------------------------------
     def lsq(self):

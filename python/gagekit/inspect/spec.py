@@ -40,6 +40,7 @@ from typing import Any, Mapping, Optional
 
 import numpy as np
 
+from .._rotation import rotation_from_vector, rotation_vector
 from ..cloud.regions import Box
 from ..errors import ConfigError, GagekitError
 
@@ -163,51 +164,17 @@ class PartSpec:
         t = np.asarray(translation, dtype=float).reshape(3)
         feats = {}
         for name, f in self.features.items():
-            box_R = _rotvec_matrix(f.region.rotation)
+            box_R = rotation_from_vector(f.region.rotation)
             new_R = R @ box_R
             feats[name] = Feature(
                 f.name, f.shape,
-                Box(tuple(R @ np.array(f.region.center) + t), f.region.size, tuple(_matrix_rotvec(new_R)), name=f.region.name),
+                Box(tuple(R @ np.array(f.region.center) + t), f.region.size, tuple(rotation_vector(new_R)), name=f.region.name),
                 None if f.outward is None else tuple(R @ np.array(f.outward)),
                 f.kind,
                 None if f.direction is None else tuple(R @ np.array(f.direction)),
                 f.axis, f.sections, f.datum_fit,
             )
         return PartSpec(self.name, feats, self.datums, self.tolerances, self.source)
-
-
-def _rotvec_matrix(rv: Any) -> np.ndarray:
-    """Rodrigues: the rotation matrix of a rotation vector (the box convention: it turns
-    the cloud axes onto the box axes, so the box axes are its columns)."""
-    from ..machine.frame import rotation_from_vector
-
-    return rotation_from_vector(rv)
-
-
-def _matrix_rotvec(R: np.ndarray) -> np.ndarray:
-    """The rotation vector of a rotation matrix (via the unit quaternion, Shepperd's
-    method: stable for every angle up to pi)."""
-    t = np.trace(R)
-    k = int(np.argmax([t, R[0, 0], R[1, 1], R[2, 2]]))
-    if k == 0:
-        w = 0.5 * math.sqrt(1.0 + t)
-        x, y, z = (R[2, 1] - R[1, 2]) / (4 * w), (R[0, 2] - R[2, 0]) / (4 * w), (R[1, 0] - R[0, 1]) / (4 * w)
-    elif k == 1:
-        x = 0.5 * math.sqrt(1.0 + 2 * R[0, 0] - t)
-        w, y, z = (R[2, 1] - R[1, 2]) / (4 * x), (R[0, 1] + R[1, 0]) / (4 * x), (R[0, 2] + R[2, 0]) / (4 * x)
-    elif k == 2:
-        y = 0.5 * math.sqrt(1.0 + 2 * R[1, 1] - t)
-        w, x, z = (R[0, 2] - R[2, 0]) / (4 * y), (R[0, 1] + R[1, 0]) / (4 * y), (R[1, 2] + R[2, 1]) / (4 * y)
-    else:
-        z = 0.5 * math.sqrt(1.0 + 2 * R[2, 2] - t)
-        w, x, y = (R[1, 0] - R[0, 1]) / (4 * z), (R[0, 2] + R[2, 0]) / (4 * z), (R[1, 2] + R[2, 1]) / (4 * z)
-    if w < 0:
-        w, x, y, z = -w, -x, -y, -z
-    s = math.sqrt(x * x + y * y + z * z)
-    if s == 0.0:
-        return np.zeros(3)
-    angle = 2.0 * math.atan2(s, w)
-    return np.array([x, y, z]) * (angle / s)
 
 
 # -- parsing ---------------------------------------------------------------------------

@@ -24,6 +24,7 @@ from typing import Optional
 
 import numpy as np
 
+from .._rotation import rotations_about
 from .model import JointSpec, Machine, ShapeSpec
 
 __all__ = ["Twist", "element_twists", "frames", "compose", "transport"]
@@ -37,15 +38,6 @@ class Twist:
     index: int
     side: str
     values: np.ndarray
-
-
-def _rotation(axis: np.ndarray, angle: np.ndarray) -> np.ndarray:
-    """(n, 3, 3) rotations about the unit ``axis`` by ``angle`` (rad)."""
-    a = np.asarray(axis, dtype=np.float64)
-    k = np.array([[0.0, -a[2], a[1]], [a[2], 0.0, -a[0]], [-a[1], a[0], 0.0]])
-    s = np.sin(angle)[:, None, None]
-    c = np.cos(angle)[:, None, None]
-    return np.eye(3) + s * k + (1.0 - c) * (k @ k)
 
 
 def _element_transforms(machine: Machine, commands: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
@@ -63,7 +55,7 @@ def _element_transforms(machine: Machine, commands: np.ndarray) -> list[tuple[np
         if e.kind == "prismatic":
             out.append((np.broadcast_to(np.eye(3), (n, 3, 3)), q[:, None] * u))
         else:
-            out.append((_rotation(u, q), np.zeros((n, 3))))
+            out.append((rotations_about(u, q), np.zeros((n, 3))))
     return out
 
 

@@ -3,26 +3,16 @@ correction of Eq. 3.11 and the closed-form rigid fit (Kabsch/Horn)."""
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
-from typing import Sequence
+
 
 import numpy as np
 
 from .. import _core
+from .._rotation import rotation_from_vector
 from ..errors import FileFormatError, InvalidInputError
 
 __all__ = ["Frame", "rotation_from_vector", "frame_columns", "rigid_fit"]
-
-
-def rotation_from_vector(v: Sequence[float]) -> np.ndarray:
-    """Exact rotation matrix of the rotation vector ``v`` (axis times angle, rad; Rodrigues)."""
-    v = np.asarray(v, dtype=np.float64)
-    th = float(np.linalg.norm(v))
-    k = np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
-    if th < 1e-12:
-        return np.eye(3) + k + 0.5 * k @ k
-    return np.eye(3) + math.sin(th) / th * k + (1.0 - math.cos(th)) / th**2 * k @ k
 
 
 @dataclass(frozen=True)

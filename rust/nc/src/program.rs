@@ -95,136 +95,246 @@ fn fmt_g(g: f64) -> String {
     }
 }
 
-/// Interpret `text` (lines separated by `\n`).
+/// Interpret `text` (lines separated by `\n`): each line is read into its words
+/// ([`Interpreter::read_block`]), the modal state is updated, and a line that moves gets its
+/// end point ([`Interpreter::end_point`]) and its move ([`Interpreter::push_move`]).
 pub fn interpret(text: &[u8], opts: &Options) -> Result<Program> {
-    let nj = opts.letters.len();
-    let mut joint_of = [usize::MAX; 256];
-    for (j, &l) in opts.letters.iter().enumerate() {
-        joint_of[l.to_ascii_uppercase() as usize] = j;
-    }
-    let xyz: Vec<usize> = [b'X', b'Y', b'Z'].iter().map(|&c| joint_of[c as usize]).collect();
-    let mut prog = Program { n_joints: nj, ..Default::default() };
-    let mut pos: Vec<Option<f64>> = opts.start.clone();
-    let mut last_point: Option<usize> = if pos.iter().all(|p| p.is_some()) {
-        prog.points.extend(pos.iter().map(|p| p.unwrap()));
-        Some(0)
-    } else {
-        None
-    };
-    let mut motion: Option<u8> = None;
-    let mut incremental = false;
-    let mut plane = 17u8;
-    let mut ws: Vec<Word> = Vec::new();
-    let mut coords: Vec<Option<(f64, usize, usize)>> = Vec::with_capacity(nj);
-    let mut end: Vec<f64> = vec![0.0; nj];
+    let mut it = Interpreter::new(opts);
     let mut offset = 0usize;
     for (k, raw) in text.split(|&b| b == b'\n').enumerate() {
-        let lineno = k + 1;
         let start = offset;
         offset += raw.len() + 1;
         if start >= text.len() && raw.is_empty() {
             break;
         }
-        let err = |m: String| GkError::invalid(format!("line {lineno}: {m}"));
-        let mut line = Line { start, end: start + raw.len(), edits: Vec::new(), mv: None };
-        if !words(raw, lineno, &mut ws)? || ws.is_empty() {
-            prog.lines.push(line);
-            continue;
+        it.line(raw, start, k + 1)?;
+    }
+    Ok(it.prog)
+}
+
+/// The error for line `lineno`.
+fn at(lineno: usize, m: impl std::fmt::Display) -> GkError {
+    GkError::invalid(format!("line {lineno}: {m}"))
+}
+
+/// The words of one block, sorted by what they do.
+struct Block {
+    /// Per joint: (value, word start, word end).
+    coords: Vec<Option<(f64, usize, usize)>>,
+    new_motion: Option<u8>,
+    dwell: bool,
+    has_p: bool,
+    /// I, J, K, R of an arc to linearise.
+    ijkr: [Option<f64>; 4],
+    feed: Option<(usize, usize)>,
+    last_word_end: usize,
+}
+
+/// Modal state and output of the interpretation.
+struct Interpreter<'a> {
+    opts: &'a Options,
+    nj: usize,
+    /// Joint index of each (upper-case) letter, `usize::MAX` for none.
+    joint_of: [usize; 256],
+    xyz: Vec<usize>,
+    prog: Program,
+    /// Last known position of each joint.
+    pos: Vec<Option<f64>>,
+    /// Index of the last point, once every joint is known.
+    last_point: Option<usize>,
+    motion: Option<u8>,
+    incremental: bool,
+    plane: u8,
+    ws: Vec<Word>,
+    block: Block,
+    end: Vec<f64>,
+}
+
+impl<'a> Interpreter<'a> {
+    fn new(opts: &'a Options) -> Self {
+        let nj = opts.letters.len();
+        let mut joint_of = [usize::MAX; 256];
+        for (j, &l) in opts.letters.iter().enumerate() {
+            joint_of[l.to_ascii_uppercase() as usize] = j;
         }
-        coords.clear();
-        coords.resize(nj, None);
-        let mut new_motion = None;
-        let mut dwell = false;
-        let mut has_p = false;
-        let mut ijkr = [None::<f64>; 4];
-        let mut feed = None;
-        let mut last_word_end = 0usize;
-        for (i, w) in ws.iter().enumerate() {
-            last_word_end = w.end;
-            let j = joint_of[w.letter as usize];
+        let xyz: Vec<usize> = [b'X', b'Y', b'Z'].iter().map(|&c| joint_of[c as usize]).collect();
+        let mut prog = Program { n_joints: nj, ..Default::default() };
+        let pos: Vec<Option<f64>> = opts.start.clone();
+        let last_point = if pos.iter().all(|p| p.is_some()) {
+            prog.points.extend(pos.iter().map(|p| p.unwrap_or(0.0)));
+            Some(0)
+        } else {
+            None
+        };
+        let block = Block {
+            coords: Vec::with_capacity(nj),
+            new_motion: None,
+            dwell: false,
+            has_p: false,
+            ijkr: [None; 4],
+            feed: None,
+            last_word_end: 0,
+        };
+        Interpreter {
+            opts,
+            nj,
+            joint_of,
+            xyz,
+            prog,
+            pos,
+            last_point,
+            motion: None,
+            incremental: false,
+            plane: 17,
+            ws: Vec::new(),
+            block,
+            end: vec![0.0; nj],
+        }
+    }
+
+    /// One line: its words, the modal state, and its move if it has one.
+    fn line(&mut self, raw: &[u8], start: usize, lineno: usize) -> Result<()> {
+        let mut line = Line { start, end: start + raw.len(), edits: Vec::new(), mv: None };
+        if !words(raw, lineno, &mut self.ws)? || self.ws.is_empty() {
+            self.prog.lines.push(line);
+            return Ok(());
+        }
+        self.read_block(raw, lineno, &mut line)?;
+        let b = &self.block;
+        if b.has_p && !b.dwell {
+            return Err(at(lineno, "a P word is only supported with G4 (dwell)"));
+        }
+        if let Some(m) = b.new_motion {
+            self.motion = Some(m);
+        }
+        let moving = b.coords.iter().any(|c| c.is_some());
+        if b.dwell && moving {
+            return Err(at(lineno, "G4 with an axis word (dwell time as X?): give the dwell time with P"));
+        }
+        if !moving {
+            if b.ijkr.iter().any(|v| v.is_some()) {
+                return Err(at(lineno, "arc words without an end point"));
+            }
+            self.prog.lines.push(line);
+            return Ok(());
+        }
+        let m = self.motion.ok_or_else(|| at(lineno, "axis words without a motion mode (G0, G1)"))?;
+        self.end_point(lineno, &mut line)?;
+        self.push_move(m, lineno, &mut line)?;
+        self.prog.lines.push(line);
+        Ok(())
+    }
+
+    /// Sort the block's words: joint coordinates, G/M/F/S/T/P words, arc words; errors for
+    /// what is not supported. G91 and G2/G3 (when linearised) get their edits here.
+    fn read_block(&mut self, raw: &[u8], lineno: usize, line: &mut Line) -> Result<()> {
+        let b = &mut self.block;
+        b.coords.clear();
+        b.coords.resize(self.nj, None);
+        b.new_motion = None;
+        b.dwell = false;
+        b.has_p = false;
+        b.ijkr = [None; 4];
+        b.feed = None;
+        b.last_word_end = 0;
+        let arcs = self.opts.arc_tolerance.is_some();
+        let n_words = self.ws.len();
+        for (i, w) in self.ws.iter().enumerate() {
+            b.last_word_end = w.end;
+            let j = self.joint_of[w.letter as usize];
             if j != usize::MAX {
-                if coords[j].is_some() {
-                    return Err(err(format!("{} appears twice", w.letter as char)));
+                if b.coords[j].is_some() {
+                    return Err(at(lineno, format!("{} appears twice", w.letter as char)));
                 }
-                coords[j] = Some((w.value, w.start, w.end));
+                b.coords[j] = Some((w.value, w.start, w.end));
                 continue;
             }
             match w.letter {
                 b'N' if i == 0 => {}
-                b'N' => return Err(err("a block number N must come first".into())),
-                b'O' if ws.len() == 1 => {}
-                b'O' => return Err(err("O words (subprograms, macros) are not supported".into())),
-                b'G' => {
-                    let g = w.value;
-                    let gi = g as i64;
-                    if (g == 2.0 || g == 3.0) && opts.arc_tolerance.is_some() {
-                        new_motion = Some(gi as u8);
-                        line.edits.push(Edit::Linear(w.start + 1, w.end));
-                        continue;
-                    }
-                    if !ALLOWED_G.contains(&g) {
-                        return Err(err(g_error(g)));
-                    }
-                    match gi {
-                        0 | 1 => new_motion = Some(gi as u8),
-                        4 => dwell = true,
-                        17..=19 => plane = gi as u8,
-                        90 => incremental = false,
-                        91 => {
-                            incremental = true;
-                            line.edits.push(Edit::Absolute(w.start + 1, w.end));
-                        }
-                        _ => {}
-                    }
-                }
+                b'N' => return Err(at(lineno, "a block number N must come first")),
+                b'O' if n_words == 1 => {}
+                b'O' => return Err(at(lineno, "O words (subprograms, macros) are not supported")),
+                b'G' => Self::g_word(w, arcs, lineno, b, line, &mut self.plane, &mut self.incremental)?,
                 b'M' => {
                     let m = w.value as i64;
                     if m == 98 || m == 99 || m == 198 {
-                        return Err(err(format!("M{m}: subprogram calls are not supported")));
+                        return Err(at(lineno, format!("M{m}: subprogram calls are not supported")));
                     }
                 }
-                b'F' => feed = Some((w.start, w.end)),
+                b'F' => b.feed = Some((w.start, w.end)),
                 b'S' | b'T' => {}
-                b'P' => has_p = true,
-                b'I' | b'J' | b'K' | b'R' if opts.arc_tolerance.is_some() => {
-                    ijkr[(b"IJKR".iter().position(|&c| c == w.letter)).unwrap()] = Some(w.value);
+                b'P' => b.has_p = true,
+                b'I' | b'J' | b'K' | b'R' if arcs => {
+                    let k = b"IJKR".iter().position(|&c| c == w.letter).unwrap_or(0);
+                    b.ijkr[k] = Some(w.value);
                     line.edits.push(Edit::Drop(w.start, w.end));
                 }
                 _ => {
-                    let names: Vec<String> = opts.letters.iter().map(|&c| (c as char).to_string()).collect();
-                    return Err(err(format!(
-                        "word '{}' is not supported: the machine's axes are {}",
-                        String::from_utf8_lossy(&raw[w.start..w.end]).trim(),
-                        names.join(", ")
-                    )));
+                    let names: Vec<String> = self.opts.letters.iter().map(|&c| (c as char).to_string()).collect();
+                    return Err(at(
+                        lineno,
+                        format!(
+                            "word '{}' is not supported: the machine's axes are {}",
+                            String::from_utf8_lossy(&raw[w.start..w.end]).trim(),
+                            names.join(", ")
+                        ),
+                    ));
                 }
             }
         }
-        if has_p && !dwell {
-            return Err(err("a P word is only supported with G4 (dwell)".into()));
+        Ok(())
+    }
+
+    /// A G word: motion mode, dwell, plane, absolute/incremental.
+    fn g_word(
+        w: &Word,
+        arcs: bool,
+        lineno: usize,
+        b: &mut Block,
+        line: &mut Line,
+        plane: &mut u8,
+        incremental: &mut bool,
+    ) -> Result<()> {
+        let g = w.value;
+        let gi = g as i64;
+        if (g == 2.0 || g == 3.0) && arcs {
+            b.new_motion = Some(gi as u8);
+            line.edits.push(Edit::Linear(w.start + 1, w.end));
+            return Ok(());
         }
-        if let Some(m) = new_motion {
-            motion = Some(m);
+        if !ALLOWED_G.contains(&g) {
+            return Err(at(lineno, g_error(g)));
         }
-        let moving = coords.iter().any(|c| c.is_some());
-        if dwell && moving {
-            return Err(err("G4 with an axis word (dwell time as X?): give the dwell time with P".into()));
-        }
-        if !moving {
-            if ijkr.iter().any(|v| v.is_some()) {
-                return Err(err("arc words without an end point".into()));
+        match gi {
+            0 | 1 => b.new_motion = Some(gi as u8),
+            4 => b.dwell = true,
+            17..=19 => *plane = gi as u8,
+            90 => *incremental = false,
+            91 => {
+                *incremental = true;
+                line.edits.push(Edit::Absolute(w.start + 1, w.end));
             }
-            prog.lines.push(line);
-            continue;
+            _ => {}
         }
-        let m = motion.ok_or_else(|| err("axis words without a motion mode (G0, G1)".into()))?;
-        for j in 0..nj {
-            end[j] = match (coords[j], pos[j]) {
+        Ok(())
+    }
+
+    /// The block's end point in absolute coordinates (G91 added to the last position,
+    /// joints without a word keep theirs), with an edit for every joint word.
+    fn end_point(&mut self, lineno: usize, line: &mut Line) -> Result<()> {
+        for j in 0..self.nj {
+            self.end[j] = match (self.block.coords[j], self.pos[j]) {
                 (Some((v, s, e)), p) => {
                     line.edits.push(Edit::Coord(j, s, e));
-                    if incremental {
+                    if self.incremental {
                         p.ok_or_else(|| {
-                            err(format!("incremental {} move from an unknown position (give --start)", opts.letters[j] as char))
+                            at(
+                                lineno,
+                                format!(
+                                    "incremental {} move from an unknown position (give --start)",
+                                    self.opts.letters[j] as char
+                                ),
+                            )
                         })? + v
                     } else {
                         v
@@ -232,35 +342,52 @@ pub fn interpret(text: &[u8], opts: &Options) -> Result<Program> {
                 }
                 (None, Some(p)) => p,
                 (None, None) => {
-                    return Err(err(format!(
-                        "{} has no position yet: program it before the first move or give --start",
-                        opts.letters[j] as char
-                    )))
+                    return Err(at(
+                        lineno,
+                        format!(
+                            "{} has no position yet: program it before the first move or give --start",
+                            self.opts.letters[j] as char
+                        ),
+                    ))
                 }
             };
         }
-        let first = prog.points.len() / nj;
+        Ok(())
+    }
+
+    /// Append the move's points (a linearised arc's, then the end point) and its record.
+    fn push_move(&mut self, m: u8, lineno: usize, line: &mut Line) -> Result<()> {
+        let nj = self.nj;
+        let first = self.prog.points.len() / nj;
         let mut count = 1;
         if m == 2 || m == 3 {
-            let tol = opts.arc_tolerance.unwrap_or(0.0);
-            let from = last_point.ok_or_else(|| err("an arc needs a known start point".into()))?;
-            let p0: Vec<f64> = prog.points[from * nj..(from + 1) * nj].to_vec();
-            let pts = arc::linearize(&p0, &end, &xyz, plane, m == 2, ijkr, tol).map_err(|m| err(m))?;
+            let tol = self.opts.arc_tolerance.unwrap_or(0.0);
+            let from = self.last_point.ok_or_else(|| at(lineno, "an arc needs a known start point"))?;
+            let p0: Vec<f64> = self.prog.points[from * nj..(from + 1) * nj].to_vec();
+            let pts = arc::linearize(&p0, &self.end, &self.xyz, self.plane, m == 2, self.block.ijkr, tol)
+                .map_err(|m| at(lineno, m))?;
             count += pts.len() / nj;
-            prog.points.extend(pts);
+            self.prog.points.extend(pts);
         }
-        prog.points.extend_from_slice(&end);
+        self.prog.points.extend_from_slice(&self.end);
         line.edits.sort_by_key(|e| match *e {
             Edit::Coord(_, a, _) | Edit::Absolute(a, _) | Edit::Linear(a, _) | Edit::Drop(a, _) => a,
         });
-        line.mv = Some(Move { rapid: m == 0, from: last_point, first, count, insert_at: last_word_end, feed, incremental });
-        last_point = Some(first + count - 1);
+        line.mv = Some(Move {
+            rapid: m == 0,
+            from: self.last_point,
+            first,
+            count,
+            insert_at: self.block.last_word_end,
+            feed: self.block.feed,
+            incremental: self.incremental,
+        });
+        self.last_point = Some(first + count - 1);
         for j in 0..nj {
-            pos[j] = Some(end[j]);
+            self.pos[j] = Some(self.end[j]);
         }
-        prog.lines.push(line);
+        Ok(())
     }
-    Ok(prog)
 }
 
 #[cfg(test)]

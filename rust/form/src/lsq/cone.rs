@@ -1,0 +1,159 @@
+//! Least-squares cone (Forbes' parametrisation), from algebraic starts about each
+//! principal axis.
+
+use super::frame::{arr, centred3, centroid, check_points, orthonormal_basis, principal_axes, vec3, DEGENERATE};
+use super::lm::{det_sum, levenberg_marquardt, normal_equations};
+use super::Vector3;
+use gagekit_core::{GkError, Result};
+use nalgebra::{DMatrix, DVector};
+use std::f64::consts::{FRAC_PI_2, PI};
+
+/// A cone: a point on the axis, the unit axis direction, the signed
+/// orthogonal distance from that point to the surface (positive inside) and
+/// the half apex angle (rad; the radius grows along `direction`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Cone {
+    pub point: [f64; 3],
+    pub direction: [f64; 3],
+    pub distance: f64,
+    pub half_angle: f64,
+}
+
+/// Algebraic cone for a known axis direction `a` (centred points): with
+/// rho = s + t z about the axis through (x0, y0), x^2 + y^2 is linear in
+/// (1, z, z^2, x, y). Returns the axis point offset, s and t.
+fn algebraic_cone(q: &[[f64; 3]], a: &Vector3<f64>) -> Option<(Vector3<f64>, f64, f64)> {
+    let (u, v) = orthonormal_basis(a);
+    let mut m = DMatrix::<f64>::zeros(5, 5);
+    let mut b = DVector::<f64>::zeros(5);
+    for p in q {
+        let pv = vec3(p);
+        let (x, y, z) = (pv.dot(&u), pv.dot(&v), pv.dot(a));
+        let row = [1.0, z, z * z, x, y];
+        let rhs = x * x + y * y;
+        for i in 0..5 {
+            b[i] += row[i] * rhs;
+            for j in 0..5 {
+                m[(i, j)] += row[i] * row[j];
+            }
+        }
+    }
+    let c = m.lu().solve(&b)?;
+    if !(c[2] > 0.0) {
+        return None;
+    }
+    let (x0, y0) = (0.5 * c[3], 0.5 * c[4]);
+    let t = c[2].sqrt();
+    let s = c[1] / (2.0 * t);
+    (s.is_finite() && t.is_finite()).then(|| (u * x0 + v * y0, s, t))
+}
+
+/// Least-squares cone, minimising the squared orthogonal distances
+/// d = rho cos(psi) - z sin(psi) - D (Forbes' parametrisation), from
+/// algebraic starts about each principal axis.
+pub fn cone(pts: &[f64]) -> Result<Cone> {
+    check_points(pts, 3, 6, "cone")?;
+    let c = centroid(pts, 3);
+    let q = centred3(pts, 3, &c);
+    let (sv, axes) = principal_axes(&q);
+    if sv[0] == 0.0 || sv[1] <= DEGENERATE * sv[0] {
+        return Err(GkError::degenerate("cone: the points are coincident or collinear; no cone is determined"));
+    }
+    type S = (Vector3<f64>, Vector3<f64>, f64, f64); // point, direction, D, psi
+    let cost = |s: &S| {
+        let (cp, sp) = (s.3.cos(), s.3.sin());
+        det_sum(&q, |x| {
+            let d = vec3(x) - s.0;
+            let z = d.dot(&s.1);
+            ((d - s.1 * z).norm() * cp - z * sp - s.2).powi(2)
+        })
+    };
+    let eval = |s: &S| {
+        let (u, v) = orthonormal_basis(&s.1);
+        let (cp, sp) = (s.3.cos(), s.3.sin());
+        normal_equations::<6>(&q, |x| {
+            let d = vec3(x) - s.0;
+            let (xu, yv, z) = (d.dot(&u), d.dot(&v), d.dot(&s.1));
+            let rho = xu.hypot(yv);
+            let (cx, cy) = if rho > 0.0 { (xu / rho, yv / rho) } else { (0.0, 0.0) };
+            let r = rho * cp - z * sp - s.2;
+            // step (x0, y0, alpha, beta, dD, dpsi); a' = a + alpha u + beta v
+            (r, [-cp * cx, -cp * cy, -cp * cx * z - sp * xu, -cp * cy * z - sp * yv, -1.0, -rho * sp - z * cp])
+        })
+    };
+    let apply = |s: &S, st: &DVector<f64>| {
+        let (u, v) = orthonormal_basis(&s.1);
+        let l = s.0 + u * st[0] + v * st[1];
+        let a = (s.1 + u * st[2] + v * st[3]).normalize();
+        (l, a, s.2 + st[4], s.3 + st[5])
+    };
+    let mut best: Option<(S, f64)> = None;
+    for a in axes {
+        let Some((l0, s0, t0)) = algebraic_cone(&q, &a) else { continue };
+        // the algebraic fit gives rho = s0 + t0 z (up to the sign of t0)
+        for sign in [1.0, -1.0] {
+            let psi = (sign * t0).atan();
+            let start: S = (l0, a, s0 * psi.cos(), psi);
+            if let Ok((sol, _)) = levenberg_marquardt(start, 6, sv[0] / (q.len() as f64).sqrt(), 500, eval, cost, apply, "cone") {
+                let f = cost(&sol);
+                if f.is_finite() && best.as_ref().is_none_or(|b| f < b.1) {
+                    best = Some((sol, f));
+                }
+            }
+        }
+    }
+    let ((l, a, dd, psi), _) =
+        best.ok_or_else(|| GkError::degenerate("cone: the points do not determine a cone"))?;
+    Ok(canonical_cone(l, a, dd, psi, &c))
+}
+
+/// The reported form of a fitted cone (centred solution `l`, `a`, D, psi; centroid `c`):
+/// psi in [0, pi/2] with the radius growing along the direction, and the axis point
+/// nearest the centroid.
+fn canonical_cone(l: Vector3<f64>, a: Vector3<f64>, mut dd: f64, mut psi: f64, c: &[f64]) -> Cone {
+    // (psi, D) and (psi - pi, -D) give the same residuals up to sign: bring psi into [-pi/2, pi/2]
+    psi = psi.rem_euclid(2.0 * PI);
+    if psi > PI {
+        psi -= 2.0 * PI;
+    }
+    if psi > FRAC_PI_2 {
+        psi -= PI;
+        dd = -dd;
+    } else if psi < -FRAC_PI_2 {
+        psi += PI;
+        dd = -dd;
+    }
+    // report the point on the axis nearest the centroid; D moves with it
+    let z = -l.dot(&a);
+    let l = l + a * z;
+    let dd = dd + z * psi.sin();
+    let (a, psi) = if psi < 0.0 { (-a, -psi) } else { (a, psi) };
+    Cone { point: arr(&(l + vec3(c))), direction: arr(&a), distance: dd, half_angle: psi }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::lsq::cone_extent;
+
+    #[test]
+    fn exact_cone_and_canonical_form() {
+        // apex angle 2 * 0.3 rad about the axis (0, 0.6, 0.8) through (5, -2, 1)
+        let a = Vector3::new(0.0, 0.6, 0.8);
+        let (u, v) = orthonormal_basis(&a);
+        let pts: Vec<f64> = (0..60)
+            .flat_map(|i| {
+                let t = i as f64 * 2.399963;
+                let z = (i as f64 * 0.754_877_666).fract() * 10.0;
+                let p = Vector3::new(5.0, -2.0, 1.0) + a * z + (u * t.cos() + v * t.sin()) * (4.0 + z * 0.3f64.tan());
+                [p[0], p[1], p[2]]
+            })
+            .collect();
+        let c = cone(&pts).unwrap();
+        assert!((c.half_angle - 0.3).abs() < 1e-10, "{c:?}");
+        assert!((Vector3::from(c.direction) - a).norm() < 1e-10);
+        let e = cone_extent(&pts, &c);
+        assert!(e.max - e.min < 1e-9, "{e:?}");
+        assert!(cone(&[0.0; 18]).is_err());
+    }
+}

@@ -1,0 +1,144 @@
+//! Least-squares cylinder: Levenberg-Marquardt on the orthogonal distances (Forbes 1989),
+//! started from every principal axis of the data.
+
+use super::frame::{arr, centred3, centroid, check_points, orthonormal_basis, principal_axes, upper, vec3, DEGENERATE};
+use super::lm::{det_sum, levenberg_marquardt, normal_equations};
+use super::sphere::algebraic_sphere;
+use super::Vector3;
+use gagekit_core::{GkError, Result};
+use nalgebra::DVector;
+
+/// A cylinder: a point on the axis (the foot of the data centroid), unit axis
+/// direction, radius.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Cylinder {
+    pub point: [f64; 3],
+    pub direction: [f64; 3],
+    pub radius: f64,
+}
+
+/// Levenberg–Marquardt refinement of a cylinder from a starting axis, on
+/// centred points. Returns the cylinder (in centred coordinates) and its cost.
+fn refine_cylinder(
+    q: &[[f64; 3]],
+    l0: Vector3<f64>,
+    a0: Vector3<f64>,
+    r0: f64,
+    max_iter: usize,
+) -> Result<(Cylinder, f64)> {
+    type S = (Vector3<f64>, Vector3<f64>, f64);
+    let cost = |s: &S| det_sum(q, |x| ((vec3(x) - s.0).cross(&s.1).norm() - s.2).powi(2));
+    // Step (x0, y0, alpha, beta, dr) in the frame (u, v, a) of the current axis:
+    // point += x0 u + y0 v, direction = normalize(a + alpha u + beta v) (Forbes 1989).
+    let eval = |s: &S| {
+        let (u, v) = orthonormal_basis(&s.1);
+        normal_equations::<5>(q, |x| {
+            let d = vec3(x) - s.0;
+            let (xu, yv, z) = (d.dot(&u), d.dot(&v), d.dot(&s.1));
+            let rho = xu.hypot(yv);
+            let (cx, cy) = if rho > 0.0 { (xu / rho, yv / rho) } else { (0.0, 0.0) };
+            (rho - s.2, [-cx, -cy, -cx * z, -cy * z, -1.0])
+        })
+    };
+    let apply = |s: &S, st: &DVector<f64>| {
+        let (u, v) = orthonormal_basis(&s.1);
+        let l = s.0 + u * st[0] + v * st[1];
+        let a = (s.1 + u * st[2] + v * st[3]).normalize();
+        // keep the axis point at the foot of the centroid (origin of the centred data)
+        let l = l - a * l.dot(&a);
+        (l, a, s.2 + st[4])
+    };
+    let l0 = l0 - a0 * l0.dot(&a0);
+    let (s, _) = levenberg_marquardt((l0, a0, r0), 5, r0, max_iter, eval, cost, apply, "cylinder")?;
+    let f = cost(&s);
+    Ok((Cylinder { point: arr(&s.0), direction: arr(&s.1), radius: s.2.abs() }, f))
+}
+
+/// Least-squares cylinder, minimising the sum of squared orthogonal distances.
+///
+/// Starts from each principal axis of the data (and from `start_axis` when
+/// given): the projected points' least-squares circle gives the start
+/// position and radius; the lowest-cost refinement wins.
+pub fn cylinder(pts: &[f64], start_axis: Option<[f64; 3]>) -> Result<Cylinder> {
+    check_points(pts, 3, 5, "cylinder")?;
+    let c = centroid(pts, 3);
+    let q = centred3(pts, 3, &c);
+    let (sv, axes) = principal_axes(&q);
+    if sv[0] == 0.0 {
+        return Err(GkError::degenerate("cylinder: all points coincide"));
+    }
+    if sv[1] <= DEGENERATE * sv[0] {
+        return Err(GkError::degenerate("cylinder: the points are collinear; no cylinder is determined"));
+    }
+    let mut starts: Vec<Vector3<f64>> = axes.to_vec();
+    if let Some(a) = start_axis {
+        let a = vec3(&a);
+        if a.norm() > 0.0 && a.iter().all(|v| v.is_finite()) {
+            starts.insert(0, a.normalize());
+        }
+    }
+    // Phase 1: a few iterations from every start; phase 2: the best to convergence.
+    let mut best: Option<(Cylinder, f64)> = None;
+    let mut last_err = None;
+    for a in starts {
+        let (u, v) = orthonormal_basis(&a);
+        let q2: Vec<[f64; 3]> = q.iter().map(|x| [vec3(x).dot(&u), vec3(x).dot(&v), 0.0]).collect();
+        let Some((off, r)) = algebraic_sphere(&q2, 2) else { continue };
+        let l0 = u * off[0] + v * off[1];
+        match refine_cylinder(&q, l0, a, r, 6) {
+            Ok((cyl, f)) => {
+                if best.as_ref().is_none_or(|b| f < b.1) {
+                    best = Some((cyl, f));
+                }
+            }
+            Err(e) => last_err = Some(e),
+        }
+    }
+    if let Some((b, _)) = &best {
+        let (l, a) = (vec3(&b.point), vec3(&b.direction));
+        best = Some(refine_cylinder(&q, l, a, b.radius, 500)?);
+    }
+    let (cyl, _) = best.ok_or_else(|| {
+        last_err.unwrap_or_else(|| GkError::degenerate("cylinder: the points do not determine a cylinder"))
+    })?;
+    let p = vec3(&cyl.point) + vec3(&c);
+    Ok(Cylinder { point: arr(&p), direction: upper(cyl.direction), ..cyl })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::lsq::axis_extent;
+
+    fn cyl_points(n: usize, l: [f64; 3], a: [f64; 3], r: f64, noise: f64) -> Vec<f64> {
+        let a = vec3(&a).normalize();
+        let (u, v) = orthonormal_basis(&a);
+        let mut out = Vec::new();
+        for i in 0..n {
+            let t = i as f64 * 2.399963;
+            let z = (i as f64 * 0.618034).fract() * 40.0 - 20.0;
+            let rr = r + noise * ((i * 7919 % 13) as f64 / 6.0 - 1.0);
+            let p = vec3(&l) + a * z + (u * t.cos() + v * t.sin()) * rr;
+            out.extend_from_slice(&[p[0], p[1], p[2]]);
+        }
+        out
+    }
+
+    #[test]
+    fn exact_cylinder_far_from_origin() {
+        let l = [1e6, -2e6, 5e5];
+        let a = [0.3, -0.2, 0.9];
+        let pts = cyl_points(50, l, a, 12.5, 0.0);
+        let c = cylinder(&pts, None).unwrap();
+        assert!((c.radius - 12.5).abs() < 1e-8, "{}", c.radius);
+        let an = vec3(&a).normalize();
+        assert!(vec3(&c.direction).cross(&an).norm() < 1e-10);
+        let e = axis_extent(&pts, &c.point, &c.direction);
+        assert!(e.max - e.min < 1e-7);
+    }
+
+    #[test]
+    fn coincident_points() {
+        assert!(cylinder(&[0.0; 15], None).is_err());
+    }
+}

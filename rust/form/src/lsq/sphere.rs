@@ -1,0 +1,117 @@
+//! Least-squares circle (2-D) or sphere (3-D): Levenberg-Marquardt on the orthogonal
+//! distances from the algebraic (Kasa) start.
+
+use super::frame::{centred3, centroid, check_points, principal_axes, vec3, DEGENERATE};
+use super::lm::{det_sum, levenberg_marquardt, normal_equations};
+use super::Vector3;
+use gagekit_core::{GkError, Result};
+use nalgebra::{DMatrix, DVector};
+
+/// A circle in 2-D or a sphere in 3-D (`center.len()` = dimension).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Sphere {
+    pub center: Vec<f64>,
+    pub radius: f64,
+}
+
+/// Algebraic (Kåsa) fit of centred points: centre offset and radius.
+pub(crate) fn algebraic_sphere(q: &[[f64; 3]], dim: usize) -> Option<(Vector3<f64>, f64)> {
+    let p = dim + 1;
+    let mut a = DMatrix::<f64>::zeros(p, p);
+    let mut b = DVector::<f64>::zeros(p);
+    for x in q {
+        let row: Vec<f64> = (0..dim).map(|d| 2.0 * x[d]).chain([1.0]).collect();
+        let rhs: f64 = (0..dim).map(|d| x[d] * x[d]).sum();
+        for i in 0..p {
+            b[i] += row[i] * rhs;
+            for j in 0..p {
+                a[(i, j)] += row[i] * row[j];
+            }
+        }
+    }
+    let sol = a.lu().solve(&b)?;
+    let mut c = Vector3::zeros();
+    for d in 0..dim {
+        c[d] = sol[d];
+    }
+    let r2 = sol[dim] + c.norm_squared();
+    (r2 > 0.0 && sol.iter().all(|v| v.is_finite())).then(|| (c, r2.sqrt()))
+}
+
+/// Geometric least-squares circle (dim 2) or sphere (dim 3) of centred points.
+fn geometric_sphere(q: &[[f64; 3]], dim: usize, what: &str) -> Result<(Vector3<f64>, f64)> {
+    let start = algebraic_sphere(q, dim).ok_or_else(|| {
+        GkError::degenerate(format!("{what}: the points do not determine a {what}"))
+    })?;
+    let p = dim + 1;
+    let cost = |s: &(Vector3<f64>, f64)| det_sum(q, |x| ((vec3(x) - s.0).norm() - s.1).powi(2));
+    let eval = |s: &(Vector3<f64>, f64)| {
+        let row = |x: &[f64; 3]| {
+            let dv = vec3(x) - s.0;
+            let rho = dv.norm();
+            let g = |d: usize| if rho > 0.0 && d < dim { -dv[d] / rho } else { 0.0 };
+            (rho - s.1, [g(0), g(1), g(2), -1.0])
+        };
+        let (f, jtj, jtr) = normal_equations::<4>(q, row);
+        if dim == 2 {
+            // drop the z column: parameters (cx, cy, r)
+            let keep = [0usize, 1, 3];
+            let m = DMatrix::from_fn(3, 3, |i, j| jtj[(keep[i], keep[j])]);
+            let v = DVector::from_fn(3, |i, _| jtr[keep[i]]);
+            (f, m, v)
+        } else {
+            (f, jtj, jtr)
+        }
+    };
+    let apply = |s: &(Vector3<f64>, f64), st: &DVector<f64>| {
+        let mut c = s.0;
+        for d in 0..dim {
+            c[d] += st[d];
+        }
+        (c, s.1 + st[dim])
+    };
+    let (s, _) = levenberg_marquardt(start, p, start.1, 500, eval, cost, apply, what)?;
+    Ok((s.0, s.1.abs()))
+}
+
+/// Least-squares circle of 2-D points (dim 2) or sphere of 3-D points (dim 3),
+/// minimising the sum of squared orthogonal distances.
+pub fn sphere(pts: &[f64], dim: usize) -> Result<Sphere> {
+    let what = if dim == 2 { "circle" } else { "sphere" };
+    let n = check_points(pts, dim, dim + 1, what)?;
+    let _ = n;
+    let c = centroid(pts, dim);
+    let q = centred3(pts, dim, &c);
+    let (sv, _) = principal_axes(&q);
+    if sv[0] == 0.0 {
+        return Err(GkError::degenerate(format!("{what}: all points coincide")));
+    }
+    if sv[dim - 1] <= DEGENERATE * sv[0] {
+        let shape = if dim == 2 { "collinear" } else { "coplanar" };
+        return Err(GkError::degenerate(format!(
+            "{what}: the points are {shape}; a {what} through them is not determined"
+        )));
+    }
+    let (off, r) = geometric_sphere(&q, dim, what)?;
+    Ok(Sphere { center: (0..dim).map(|d| c[d] + off[d]).collect(), radius: r })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn circle_and_sphere() {
+        let pts: Vec<f64> = (0..7)
+            .flat_map(|i| {
+                let t = i as f64;
+                [3.0 + 2.0 * t.cos(), -1.0 + 2.0 * t.sin()]
+            })
+            .collect();
+        let s = sphere(&pts, 2).unwrap();
+        assert!((s.radius - 2.0).abs() < 1e-12 && (s.center[0] - 3.0).abs() < 1e-12);
+        assert!(sphere(&[0.0, 0.0, 1.0, 1.0, 2.0, 2.0], 2).is_err());
+        let flat = [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 1.0, 1.0, 0.0];
+        assert!(sphere(&flat, 3).is_err());
+    }
+}
