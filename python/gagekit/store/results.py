@@ -76,7 +76,23 @@ def _plain_insert(table: sa.Table):
     return stmt
 
 
-_SCAN_ID = sa.select(m.Scan.id).where(m.Scan.content_hash == sa.bindparam("h"))
+def _upsert_scan(conn: sa.Connection, row: dict) -> int:
+    """The id of the scan with this content hash, stored first if new: one statement
+    (INSERT ... ON CONFLICT DO UPDATE ... RETURNING, the update a no-op) instead of an
+    insert-or-ignore and a select - each statement is a trip through the driver, and in
+    a batch's parent the result collection waits for it."""
+    key = (conn.dialect.name, "scan-upsert")
+    stmt = _STATEMENTS.get(key)
+    if stmt is None:
+        if conn.dialect.name == "postgresql":
+            from sqlalchemy.dialects.postgresql import insert
+        else:
+            from sqlalchemy.dialects.sqlite import insert
+        ins = insert(m.Scan.__table__)
+        stmt = _STATEMENTS[key] = ins.on_conflict_do_update(
+            index_elements=["content_hash"], set_={"content_hash": ins.excluded.content_hash}).returning(m.Scan.__table__.c.id)
+    return conn.execute(stmt, row).scalar_one()
+
 
 
 def _details(kind: str, result_id: int, result: Mapping[str, Any]) -> list[tuple[sa.Table, list[dict]]]:
@@ -188,9 +204,7 @@ class ResultStore:
     # ------------------------------------------------------------------------ writes
 
     def _scan_id(self, conn: sa.Connection, content_hash: str, size: int, scanned: datetime) -> int:
-        _insert_ignore(conn, m.Scan.__table__, {"content_hash": content_hash, "size_bytes": size, "scanned": scanned,
-                                                "created": now()}, ["content_hash"])
-        return conn.execute(_SCAN_ID, {"h": content_hash}).scalar_one()
+        return _upsert_scan(conn, {"content_hash": content_hash, "size_bytes": size, "scanned": scanned, "created": now()})
 
     def add_paths(self, content_hash: str, size: int, scanned: datetime, paths: Iterable[str]) -> None:
         """Record more paths of a scan's content (one transaction)."""
