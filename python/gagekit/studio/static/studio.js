@@ -543,13 +543,7 @@ async function run() {
       (r.infeasible_groups.length ? `\ninfeasible groups: ${r.infeasible_groups.map((g) => g.join(" + ")).join("; ")}` : "") +
       (r.limited_by_motion_bounds ? `\nlimited by the motion bounds: ${r.bound_limits.map((b) => b.motion + " " + b.side).join(", ")}` : "");
     showValidation(res.validation);
-    const values = api.floats(res.values);
-    if (res.value_range) {
-      view.colourBy(values, res.value_range[0], res.value_range[1]);
-      $("legend").hidden = false;
-      $("legend-min").textContent = fmt(res.value_range[0], 3);
-      $("legend-max").textContent = fmt(res.value_range[1], 3);
-    }
+    showColours(res);
     $("apply-t").disabled = false;
     setApplyT($("apply-t").checked);
     studio.lastRunMs = performance.now() - t0;
