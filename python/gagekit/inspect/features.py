@@ -103,13 +103,13 @@ class FeatureData:
     def min_zone(self) -> tuple[float, np.ndarray]:
         """(width, normal) of the minimum zone of the points (flatness, ISO 12781; exact: the
         minimum width of the set, hull facets and antipodal edge pairs), computed once: the
-        flatness callout and the free datum plane share it. The normal points along
-        ``outward`` when the feature has one."""
+        flatness callout and the free datum plane share it. The normal points into the
+        material (against ``outward``) when the feature has one."""
         if "mz" not in self._cache:
             normal, _, _, width = _core.gdt_slab(self.points, "free", (0.0, 0.0, 1.0), 0.0)
             n = np.array(normal)
-            if self.spec.outward is not None and float(n @ np.asarray(self.spec.outward)) < 0:
-                n = -n  # the zone's normal reported out of the material
+            if self.spec.outward is not None and float(n @ np.asarray(self.spec.outward)) > 0:
+                n = -n  # the zone's normal reported into the material, as a datum frame's axis
             self._cache["mz"] = (float(width), n)
         return self._cache["mz"]
 
