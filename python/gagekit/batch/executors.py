@@ -129,8 +129,10 @@ class DaskCluster:
         for info in workers.values():
             per_host[info.get("host")] = per_host.get(info.get("host"), 0) + int(info.get("nthreads", 1))
         threads = {addr: per_host[info.get("host")] for addr, info in workers.items()}
+        #: worker address -> the thread cap it took (empty when the workers could not run it)
+        self.thread_caps: dict = {}
         try:
-            self.client.run(limit_dask_worker_threads, threads)
+            self.thread_caps = self.client.run(limit_dask_worker_threads, threads)
         except Exception:  # a worker without gagekit fails its scans with that message instead
             pass
 

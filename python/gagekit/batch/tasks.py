@@ -51,14 +51,13 @@ def limit_threads(threads: int) -> None:
     threadpool_limits(limits=n)
 
 
-def limit_dask_worker_threads(threads_on_host: dict) -> int:
-    """On a Dask worker: cap the kernels' threads at this host's cores shared by the
-    threads of every Dask worker on the host (``threads_on_host``: worker address ->
-    total Dask threads on its host). Returns the cap. Rayon's pool is sized at its first
-    use, so a worker that has already run kernels keeps its size."""
-    from distributed import get_worker
-
-    w = get_worker()
+def limit_dask_worker_threads(threads_on_host: dict, dask_worker: Any = None) -> int:
+    """On a Dask worker (through ``Client.run``, which hands the worker in as
+    ``dask_worker``): cap the kernels' threads at this host's cores shared by the threads
+    of every Dask worker on the host (``threads_on_host``: worker address -> total Dask
+    threads on its host). Returns the cap. Rayon's pool is sized at its first use, so a
+    worker that has already run kernels keeps its size."""
+    w = dask_worker
     total = max(1, int(threads_on_host.get(w.address, w.state.nthreads)))
     cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
     n = max(1, cores // total)
