@@ -22,6 +22,7 @@ import numpy as np
 from .. import _core
 from .._util import as_points
 from ..errors import ConfigError, InvalidInputError
+from .criteria import criterion_name
 
 __all__ = [
     "Certificate",
@@ -36,34 +37,6 @@ __all__ = [
     "fit_sphere",
     "fit_circle_3d",
 ]
-
-_CRITERIA = {
-    "least-squares": "least-squares",
-    "lsq": "least-squares",
-    "ls": "least-squares",
-    "l2": "least-squares",
-    "minimum-zone": "minimum-zone",
-    "mz": "minimum-zone",
-    "mzc": "minimum-zone",
-    "min-circumscribed": "min-circumscribed",
-    "mc": "min-circumscribed",
-    "mcc": "min-circumscribed",
-    "max-inscribed": "max-inscribed",
-    "mi": "max-inscribed",
-    "mic": "max-inscribed",
-}
-
-
-def normalize_criterion(criterion: str, allowed: tuple[str, ...], shape: str) -> str:
-    """The canonical criterion name, or a :class:`ConfigError` listing the choices."""
-    key = str(criterion).strip().lower().replace("_", "-")
-    name = _CRITERIA.get(key)
-    if name is None or name not in allowed:
-        raise ConfigError(
-            f"{shape}: unknown fit criterion {criterion!r}; choose one of {', '.join(allowed)}"
-        )
-    return name
-
 
 def _points(points: Any, dims: tuple[int, ...], shape: str) -> np.ndarray:
     try:
@@ -235,7 +208,7 @@ def fit_line(
     """
     from .search import outside_warning, search_settings
 
-    crit = normalize_criterion(criterion, ("least-squares", "minimum-zone"), "line")
+    crit = criterion_name(criterion, ("least-squares", "minimum-zone"), "line")
     pts = _points(points, (2, 3), "line")
     if crit == "minimum-zone" and pts.shape[1] == 3:
         # straightness in space: the thinnest cylinder around the points (MCC, Eq. 6.13);
@@ -249,9 +222,9 @@ def fit_line(
             tuple(int(i) for i in z.control), tilt_deg=math.degrees(z.tilt), warnings=warnings,
         )
     if crit == "minimum-zone":
-        point, normal, direction, width, up, lo, _ = _core.form_min_zone_flat(pts)
-        cert = _cert(_core.form_line_extent(pts, point, direction))
-        return LineFit(crit, len(pts), _vec(point), _vec(direction), float(width), cert, tuple(sorted({*up, *lo})))
+        z = _core.form_min_zone_flat(pts)
+        cert = Certificate(float(z.min_distance), float(z.max_distance))
+        return LineFit(crit, len(pts), _vec(z.point), _vec(z.direction), float(z.form_error), cert, tuple(z.control))
     point, direction, ext = _core.form_line_lsq(pts)
     cert = _cert(ext)
     form = cert.max_distance - cert.min_distance if pts.shape[1] == 2 else 2.0 * cert.max_distance
@@ -267,12 +240,12 @@ def fit_plane(points: Any, criterion: str = "least-squares") -> PlaneFit:
     an exact solve of the active constraints and re-linearisation until the tilt vanishes;
     the mid-plane is reported and ``form_error`` is recomputed from its normal.
     """
-    crit = normalize_criterion(criterion, ("least-squares", "minimum-zone"), "plane")
+    crit = criterion_name(criterion, ("least-squares", "minimum-zone"), "plane")
     pts = _points(points, (3,), "plane")
     if crit == "minimum-zone":
-        point, normal, _, width, up, lo, _ = _core.form_min_zone_flat(pts)
-        cert = _cert(_core.form_plane_extent(pts, point, normal))
-        return PlaneFit(crit, len(pts), _vec(point), _vec(normal), float(width), cert, tuple(sorted({*up, *lo})))
+        z = _core.form_min_zone_flat(pts)
+        cert = Certificate(float(z.min_distance), float(z.max_distance))
+        return PlaneFit(crit, len(pts), _vec(z.point), _vec(z.normal), float(z.form_error), cert, tuple(z.control))
     point, normal, ext = _core.form_plane_lsq(pts)
     cert = _cert(ext)
     return PlaneFit(crit, len(pts), _vec(point), _vec(normal), cert.max_distance - cert.min_distance, cert)
@@ -291,7 +264,7 @@ def fit_sphere(points: Any, criterion: str = "least-squares") -> SphereFit:
     centres to a point where the Chebyshev conditions hold. Coplanar points raise
     :class:`DegenerateGeometryError` (except for the circumscribed sphere).
     """
-    crit = normalize_criterion(criterion, ("least-squares", "min-circumscribed", "max-inscribed", "minimum-zone"), "sphere")
+    crit = criterion_name(criterion, ("least-squares", "min-circumscribed", "max-inscribed", "minimum-zone"), "sphere")
     pts = _points(points, (2, 3), "sphere")
     if crit != "least-squares":
         if pts.shape[1] != 3:
@@ -315,7 +288,7 @@ def fit_sphere(points: Any, criterion: str = "least-squares") -> SphereFit:
 def fit_circle_3d(points: Any, criterion: str = "least-squares") -> Circle3DFit:
     """Least-squares circle of (n, 3) points in space (NIST's convention): least-squares
     plane, projection of the points onto it, least-squares circle in that plane."""
-    crit = normalize_criterion(criterion, ("least-squares",), "3-D circle")
+    crit = criterion_name(criterion, ("least-squares",), "3-D circle")
     pts = _points(points, (3,), "3-D circle")
     center, normal, radius, ext = _core.form_circle3d_lsq(pts)
     cert = _cert(ext)
@@ -355,7 +328,7 @@ def fit_cone(points: Any, criterion: str = "least-squares") -> ConeFit:
     """Least-squares cone of (n, 3) points: orthogonal distances
     d = rho cos(psi) - z sin(psi) - D (Levenberg-Marquardt from algebraic cones about the
     principal axes); as the NIST reference fits define it."""
-    crit = normalize_criterion(criterion, ("least-squares",), "cone")
+    crit = criterion_name(criterion, ("least-squares",), "cone")
     pts = _points(points, (3,), "cone")
     point, direction, distance, half, ext = _core.form_cone_lsq(pts)
     cert = _cert(ext)
