@@ -238,8 +238,6 @@ def design_metrics(blocks: _F64, weights: Optional[_F64] = None) -> DesignMetric
 def design_halton(n: int, d: int, seed: int = 0) -> _F64: ...
 
 # -------------------------------------------------------------------------------- form
-_Ext = tuple[float, float]
-
 class CircleResult:
     """A complete 2-D circle fit (Sec. 6.2); arc in rad, lengths mm."""
     criterion: str
@@ -260,10 +258,47 @@ def form_circle_pso(
     points: _F64, criterion: str, seed: int = 0, particles: int = 20, max_iterations: int = 2000,
     stall_iterations: int = 100,
 ) -> CircleResult: ...
-def form_line_lsq(points: _F64) -> tuple[list[float], list[float], _Ext]: ...
-def form_plane_lsq(points: _F64) -> tuple[list[float], list[float], _Ext]: ...
-def form_sphere_lsq(points: _F64) -> tuple[list[float], float, _Ext]: ...
-def form_circle3d_lsq(points: _F64) -> tuple[list[float], list[float], float, _Ext]: ...
+class LineResult:
+    """A least-squares line with its certificate."""
+    point: list[float]
+    direction: list[float]
+    min_distance: float
+    max_distance: float
+    form_error: float
+
+def form_line_lsq(points: _F64) -> LineResult: ...
+
+class PlaneResult:
+    """A least-squares plane with its certificate."""
+    point: list[float]
+    normal: list[float]
+    min_distance: float
+    max_distance: float
+    form_error: float
+
+def form_plane_lsq(points: _F64) -> PlaneResult: ...
+
+class LeastSquaresSphereResult:
+    """A least-squares circle (2-D) or sphere (3-D) with its certificate."""
+    center: list[float]
+    radius: float
+    min_distance: float
+    max_distance: float
+    form_error: float
+
+def form_sphere_lsq(points: _F64) -> LeastSquaresSphereResult: ...
+
+class LeastSquaresCircle3Result:
+    """A least-squares circle in space with its certificate."""
+    center: list[float]
+    normal: list[float]
+    radius: float
+    min_distance: float
+    max_distance: float
+    form_error: float
+
+def form_circle3d_lsq(points: _F64) -> LeastSquaresCircle3Result: ...
+
 class LeastSquaresCylinderResult:
     """A least-squares cylinder with its certificate and arc (rad)."""
     point: list[float]
@@ -375,7 +410,17 @@ class SphereResult:
     iterations: int
 
 def form_sphere_fit(points: _F64, criterion: str) -> SphereResult: ...
-def form_cone_lsq(points: _F64) -> tuple[list[float], list[float], float, float, _Ext]: ...
+class ConeResult:
+    """A least-squares cone (half angle rad) with its certificate."""
+    point: list[float]
+    direction: list[float]
+    distance: float
+    half_angle: float
+    min_distance: float
+    max_distance: float
+    form_error: float
+
+def form_cone_lsq(points: _F64) -> ConeResult: ...
 
 # -------------------------------------------------------------------------------- gdt
 _V3 = tuple[float, float, float]

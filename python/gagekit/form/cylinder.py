@@ -20,7 +20,7 @@ import numpy as np
 from .. import _core
 from ..errors import ConfigError
 from .criteria import criterion_name
-from .fits import Certificate, _fit_dict, _points, _vec
+from .fits import Certificate, _cert, _fit_dict, _points, _vec
 from .search import DEFAULT_MAX_TILT, outside_warning, search_settings
 
 __all__ = ["CylinderFit", "fit_cylinder", "axis_angles", "DEFAULT_MAX_TILT"]
@@ -176,7 +176,7 @@ def fit_cylinder(
         arc = math.degrees(ls.arc)
         return CylinderFit(
             crit, len(pts), _vec(ls.point), _vec(ls.direction), float(ls.theta), float(ls.phi), float(ls.radius),
-            float(ls.form_error), Certificate(float(ls.min_distance), float(ls.max_distance)),
+            float(ls.form_error), _cert(ls),
             arc_deg=float(arc), warnings=tuple(_arc_warnings(crit, arc)),
         )
     for name, v in (("particles", particles), ("iterations", iterations), ("stall_iterations", stall_iterations), ("refine_starts", refine_starts), ("hop_rounds", hop_rounds)):
@@ -188,7 +188,7 @@ def fit_cylinder(
         pts, crit, int(seed), int(particles), int(iterations), int(stall_iterations),
         nominal, tilt_rad, int(refine_starts), int(hop_rounds),
     )
-    cert = Certificate(float(r.min_distance), float(r.max_distance))
+    cert = _cert(r)
     if crit == "min-circumscribed":
         radius, form_error, control = r.r_out, cert.max_distance - cert.min_distance, r.control_out
         inner = outer = None

@@ -183,8 +183,9 @@ class Circle3DFit:
         return _fit_dict(self, radius=self.radius, center=list(self.center), normal=list(self.normal))
 
 
-def _cert(ext: tuple[float, float]) -> Certificate:
-    return Certificate(float(ext[0]), float(ext[1]))
+def _cert(fit: Any) -> Certificate:
+    """The certificate of a result from Rust (its ``min_distance`` / ``max_distance``)."""
+    return Certificate(float(fit.min_distance), float(fit.max_distance))
 
 
 def fit_line(
@@ -215,7 +216,7 @@ def fit_line(
         # the zone is its diameter
         nominal, tilt_rad = search_settings(axis, max_tilt, "line")
         z = _core.form_line3_min_zone(pts, int(seed), nominal, tilt_rad)
-        cert = Certificate(float(z.min_distance), float(z.max_distance))
+        cert = _cert(z)
         warnings = () if z.outside is None else (outside_warning("minimum-zone", _Diameter(z.outside), max_tilt),)
         return LineFit(
             crit, len(pts), _vec(z.point), _vec(z.direction), float(z.form_error), cert,
@@ -223,12 +224,10 @@ def fit_line(
         )
     if crit == "minimum-zone":
         z = _core.form_min_zone_flat(pts)
-        cert = Certificate(float(z.min_distance), float(z.max_distance))
+        cert = _cert(z)
         return LineFit(crit, len(pts), _vec(z.point), _vec(z.direction), float(z.form_error), cert, tuple(z.control))
-    point, direction, ext = _core.form_line_lsq(pts)
-    cert = _cert(ext)
-    form = cert.max_distance - cert.min_distance if pts.shape[1] == 2 else 2.0 * cert.max_distance
-    return LineFit(crit, len(pts), _vec(point), _vec(direction), form, cert)
+    ls = _core.form_line_lsq(pts)
+    return LineFit(crit, len(pts), _vec(ls.point), _vec(ls.direction), float(ls.form_error), _cert(ls))
 
 
 def fit_plane(points: Any, criterion: str = "least-squares") -> PlaneFit:
@@ -244,11 +243,10 @@ def fit_plane(points: Any, criterion: str = "least-squares") -> PlaneFit:
     pts = _points(points, (3,), "plane")
     if crit == "minimum-zone":
         z = _core.form_min_zone_flat(pts)
-        cert = Certificate(float(z.min_distance), float(z.max_distance))
+        cert = _cert(z)
         return PlaneFit(crit, len(pts), _vec(z.point), _vec(z.normal), float(z.form_error), cert, tuple(z.control))
-    point, normal, ext = _core.form_plane_lsq(pts)
-    cert = _cert(ext)
-    return PlaneFit(crit, len(pts), _vec(point), _vec(normal), cert.max_distance - cert.min_distance, cert)
+    ls = _core.form_plane_lsq(pts)
+    return PlaneFit(crit, len(pts), _vec(ls.point), _vec(ls.normal), float(ls.form_error), _cert(ls))
 
 
 def fit_sphere(points: Any, criterion: str = "least-squares") -> SphereFit:
@@ -271,7 +269,7 @@ def fit_sphere(points: Any, criterion: str = "least-squares") -> SphereFit:
             raise ConfigError(f"sphere: {crit} needs (n, 3) points; for 2-D points use fit_circle")
         z = _core.form_sphere_fit(pts, crit)
         radius = {"min-circumscribed": z.r_out, "max-inscribed": z.r_in}.get(crit, 0.5 * (z.r_in + z.r_out))
-        cert = Certificate(float(z.min_distance), float(z.max_distance))
+        cert = _cert(z)
         control = z.control_out if crit != "minimum-zone" else list(z.control_in) + [i for i in z.control_out if i not in z.control_in]
         return SphereFit(
             crit, len(pts), _vec(z.center), float(radius), cert.max_distance - cert.min_distance, cert,
@@ -279,10 +277,9 @@ def fit_sphere(points: Any, criterion: str = "least-squares") -> SphereFit:
             outer_radius=float(z.r_out) if crit == "minimum-zone" else None,
             control_points=tuple(int(i) for i in control),
         )
-    center, radius, ext = _core.form_sphere_lsq(pts)
-    cert = _cert(ext)
+    ls = _core.form_sphere_lsq(pts)
     shape = "sphere" if pts.shape[1] == 3 else "circle"
-    return SphereFit(crit, len(pts), _vec(center), float(radius), cert.max_distance - cert.min_distance, cert, shape)
+    return SphereFit(crit, len(pts), _vec(ls.center), float(ls.radius), float(ls.form_error), _cert(ls), shape)
 
 
 def fit_circle_3d(points: Any, criterion: str = "least-squares") -> Circle3DFit:
@@ -290,11 +287,8 @@ def fit_circle_3d(points: Any, criterion: str = "least-squares") -> Circle3DFit:
     plane, projection of the points onto it, least-squares circle in that plane."""
     crit = criterion_name(criterion, ("least-squares",), "3-D circle")
     pts = _points(points, (3,), "3-D circle")
-    center, normal, radius, ext = _core.form_circle3d_lsq(pts)
-    cert = _cert(ext)
-    return Circle3DFit(
-        crit, len(pts), _vec(center), _vec(normal), float(radius), cert.max_distance - cert.min_distance, cert
-    )
+    ls = _core.form_circle3d_lsq(pts)
+    return Circle3DFit(crit, len(pts), _vec(ls.center), _vec(ls.normal), float(ls.radius), float(ls.form_error), _cert(ls))
 
 
 @dataclass(frozen=True)
@@ -330,9 +324,8 @@ def fit_cone(points: Any, criterion: str = "least-squares") -> ConeFit:
     principal axes); as the NIST reference fits define it."""
     crit = criterion_name(criterion, ("least-squares",), "cone")
     pts = _points(points, (3,), "cone")
-    point, direction, distance, half, ext = _core.form_cone_lsq(pts)
-    cert = _cert(ext)
+    c = _core.form_cone_lsq(pts)
     return ConeFit(
-        crit, len(pts), _vec(point), _vec(direction), float(distance), 2.0 * float(half),
-        cert.max_distance - cert.min_distance, cert,
+        crit, len(pts), _vec(c.point), _vec(c.direction), float(c.distance), 2.0 * float(c.half_angle),
+        float(c.form_error), _cert(c),
     )

@@ -219,7 +219,7 @@ def _cylindricity(tol, fd, system):
     _, d = fd.axis_line()
     fit = fit_cylinder(fd.points, "minimum-zone", seed=0, axis=tuple(d), max_tilt=10.0)
     return Measurement(float(fit.form_error), "width", "surface", len(fd.points),
-                       {"axis_point": list(fit.axis_point), "axis_direction": list(fit.axis_direction)})
+                       {"axis_point": list(fit.point), "axis_direction": list(fit.direction)})
 
 
 def _sphericity(tol, fd, system):

@@ -5,53 +5,55 @@ use crate::errors::run;
 use numpy::PyReadonlyArray2;
 use pyo3::prelude::*;
 
+/// Read-only attributes that mirror the fields of the kernel result a pyclass holds in
+/// `self.fit`: one getter per named field (converted on access), so the binding never
+/// restates the kernel's list of fields and types; `extra` holds the class's other getters.
+macro_rules! mirror {
+    ($class:ident { $($field:ident),* $(,)? } extra { $($extra:tt)* }) => {
+        #[pymethods]
+        impl $class {
+            $(
+                #[getter]
+                fn $field(&self, py: Python<'_>) -> PyResult<Py<PyAny>> {
+                    use pyo3::IntoPyObjectExt;
+                    self.fit.$field.clone().into_py_any(py)
+                }
+            )*
+            $($extra)*
+        }
+    };
+}
+
 // circles ------------------------------------------------------------------------------
 
 use gagekit_form::circle;
 use gagekit_form::criterion::FitCriterion;
 
-/// A 2-D circle fit, complete (Sec. 6.2): centre, radius, the zone or certificate, the
-/// control points, the arc covered and whether the fit is ill-posed.
-#[pyclass(frozen, get_all, module = "gagekit._core")]
+/// A 2-D circle fit, complete (Sec. 6.2): the fields of the kernel's
+/// [`circle::CircleFit`] (centre, radius, `r_in` / `r_out`: the zone for the minimum zone,
+/// else the certificate; control points; arc in rad, its centre, the ill-posed flag), read
+/// through [`mirror!`], plus the criterion's canonical name and `form_error`.
+#[pyclass(frozen, module = "gagekit._core")]
 pub struct CircleResult {
-    /// Canonical criterion name (the package's table).
-    pub criterion: String,
-    pub center: [f64; 2],
-    /// The fitted radius (minimum zone: the mean of `r_in` and `r_out`).
-    pub radius: f64,
-    /// Minimum zone: inner and outer zone radii; otherwise the certificate, min and max
-    /// distance of the points from the centre.
-    pub r_in: f64,
-    pub r_out: f64,
-    /// `r_out - r_in`.
-    pub form_error: f64,
-    pub control: Vec<usize>,
-    /// Minimum zone only: points on the inner / outer circle.
-    pub control_in: Vec<usize>,
-    pub control_out: Vec<usize>,
-    /// Arc (rad) covered, seen from `arc_center` (the least-squares centre for an MI of
-    /// a short arc), and whether the fit is ill-posed (MI of an arc below 90 degrees).
-    pub arc: f64,
-    pub arc_center: [f64; 2],
-    pub ill_posed: bool,
+    fit: circle::CircleFit,
 }
 
+mirror!(CircleResult {
+    center, radius, r_in, r_out, control, control_in, control_out, arc, arc_center, ill_posed
+} extra {
+    #[getter]
+    fn criterion(&self) -> &'static str {
+        self.fit.criterion.name()
+    }
+    #[getter]
+    fn form_error(&self) -> f64 {
+        self.fit.form_error()
+    }
+});
+
 impl From<circle::CircleFit> for CircleResult {
-    fn from(f: circle::CircleFit) -> Self {
-        Self {
-            criterion: f.criterion.name().to_string(),
-            center: f.center,
-            radius: f.radius,
-            r_in: f.r_in,
-            r_out: f.r_out,
-            form_error: f.form_error(),
-            control: f.control,
-            control_in: f.control_in,
-            control_out: f.control_out,
-            arc: f.arc,
-            arc_center: f.arc_center,
-            ill_posed: f.ill_posed,
-        }
+    fn from(fit: circle::CircleFit) -> Self {
+        Self { fit }
     }
 }
 
@@ -117,12 +119,6 @@ use crate::errors::invalid;
 use gagekit_form::lsq;
 use numpy::PyUntypedArrayMethods;
 
-type Ext = (f64, f64);
-
-fn ext(e: lsq::Extent) -> Ext {
-    (e.min, e.max)
-}
-
 /// Points as a flat slice of an (n, 2) or (n, 3) array, with its dimension.
 fn rows23<'a>(py: Python<'_>, points: &'a PyReadonlyArray2<'_, f64>) -> PyResult<(&'a [f64], usize)> {
     let dim = points.shape()[1];
@@ -132,48 +128,101 @@ fn rows23<'a>(py: Python<'_>, points: &'a PyReadonlyArray2<'_, f64>) -> PyResult
     Ok((rows(py, points, dim, "points")?, dim))
 }
 
-/// Least-squares line of 2-D or 3-D points: (point, direction, (min, max) distance).
+/// A least-squares line (2-D or 3-D) with its certificate: signed distances (2-D) or
+/// distances (3-D) to the line; `form_error` the spread (2-D) or twice the largest (3-D).
+#[pyclass(frozen, get_all, module = "gagekit._core")]
+pub struct LineResult {
+    pub point: Vec<f64>,
+    pub direction: Vec<f64>,
+    pub min_distance: f64,
+    pub max_distance: f64,
+    pub form_error: f64,
+}
+
+/// Least-squares line of (n, 2) or (n, 3) points (the principal axis through the centroid).
 #[pyfunction]
-fn form_line_lsq(py: Python<'_>, points: PyReadonlyArray2<'_, f64>) -> PyResult<(Vec<f64>, Vec<f64>, Ext)> {
+fn form_line_lsq(py: Python<'_>, points: PyReadonlyArray2<'_, f64>) -> PyResult<LineResult> {
     let (pts, dim) = rows23(py, &points)?;
-    run(py, || {
+    let (l, e) = run(py, || {
         let l = lsq::line(pts, dim)?;
         let e = lsq::line_extent(pts, dim, &l.point, &l.direction);
-        Ok((l.point, l.direction, ext(e)))
-    })
+        Ok((l, e))
+    })?;
+    Ok(LineResult { point: l.point, direction: l.direction, min_distance: e.min, max_distance: e.max, form_error: e.line_form_error(dim) })
 }
 
-/// Least-squares plane: (point, normal, (min, max) signed distance).
+/// A least-squares plane with its certificate (signed distances) and flatness about it.
+#[pyclass(frozen, get_all, module = "gagekit._core")]
+pub struct PlaneResult {
+    pub point: [f64; 3],
+    pub normal: [f64; 3],
+    pub min_distance: f64,
+    pub max_distance: f64,
+    pub form_error: f64,
+}
+
+/// Least-squares plane of (n, 3) points: the centroid and the direction of least spread.
 #[pyfunction]
-fn form_plane_lsq(py: Python<'_>, points: PyReadonlyArray2<'_, f64>) -> PyResult<([f64; 3], [f64; 3], Ext)> {
+fn form_plane_lsq(py: Python<'_>, points: PyReadonlyArray2<'_, f64>) -> PyResult<PlaneResult> {
     let pts = rows(py, &points, 3, "points")?;
-    run(py, || {
+    let (p, e) = run(py, || {
         let p = lsq::plane(pts)?;
-        Ok((p.point, p.normal, ext(lsq::plane_extent(pts, &p.point, &p.normal))))
-    })
+        let e = lsq::plane_extent(pts, &p.point, &p.normal);
+        Ok((p, e))
+    })?;
+    Ok(PlaneResult { point: p.point, normal: p.normal, min_distance: e.min, max_distance: e.max, form_error: e.spread() })
 }
 
-/// Least-squares circle (2-D) or sphere (3-D): (centre, radius, (min, max) distance to the centre).
+/// A least-squares circle (2-D) or sphere (3-D) with its certificate (distances to the
+/// centre) and form error about it.
+#[pyclass(frozen, get_all, module = "gagekit._core")]
+pub struct LeastSquaresSphereResult {
+    pub center: Vec<f64>,
+    pub radius: f64,
+    pub min_distance: f64,
+    pub max_distance: f64,
+    pub form_error: f64,
+}
+
+/// Least-squares circle of (n, 2) points or sphere of (n, 3) points.
 #[pyfunction]
-fn form_sphere_lsq(py: Python<'_>, points: PyReadonlyArray2<'_, f64>) -> PyResult<(Vec<f64>, f64, Ext)> {
+fn form_sphere_lsq(py: Python<'_>, points: PyReadonlyArray2<'_, f64>) -> PyResult<LeastSquaresSphereResult> {
     let (pts, dim) = rows23(py, &points)?;
-    run(py, || {
+    let (s, e) = run(py, || {
         let s = lsq::sphere(pts, dim)?;
         let e = lsq::center_extent(pts, dim, &s.center);
-        Ok((s.center, s.radius, ext(e)))
-    })
+        Ok((s, e))
+    })?;
+    Ok(LeastSquaresSphereResult { center: s.center, radius: s.radius, min_distance: e.min, max_distance: e.max, form_error: e.spread() })
 }
 
-/// Least-squares 3-D circle: (centre, normal, radius, (min, max) in-plane radial distance).
+/// A least-squares circle in space with its certificate (in-plane radial distances).
+#[pyclass(frozen, get_all, module = "gagekit._core")]
+pub struct LeastSquaresCircle3Result {
+    pub center: [f64; 3],
+    pub normal: [f64; 3],
+    pub radius: f64,
+    pub min_distance: f64,
+    pub max_distance: f64,
+    pub form_error: f64,
+}
+
+/// Least-squares circle of (n, 3) points (NIST: plane, projection, circle in the plane).
 #[pyfunction]
-fn form_circle3d_lsq(
-    py: Python<'_>,
-    points: PyReadonlyArray2<'_, f64>,
-) -> PyResult<([f64; 3], [f64; 3], f64, Ext)> {
+fn form_circle3d_lsq(py: Python<'_>, points: PyReadonlyArray2<'_, f64>) -> PyResult<LeastSquaresCircle3Result> {
     let pts = rows(py, &points, 3, "points")?;
-    run(py, || {
+    let (c, e) = run(py, || {
         let c = lsq::circle3(pts)?;
-        Ok((c.center, c.normal, c.radius, ext(lsq::circle3_extent(pts, &c.center, &c.normal))))
+        let e = lsq::circle3_extent(pts, &c.center, &c.normal);
+        Ok((c, e))
+    })?;
+    Ok(LeastSquaresCircle3Result {
+        center: c.center,
+        normal: c.normal,
+        radius: c.radius,
+        min_distance: e.min,
+        max_distance: e.max,
+        form_error: e.spread(),
     })
 }
 
@@ -274,36 +323,36 @@ impl OutsideResult {
 }
 
 /// A minimax cylinder (Sec. 6.3): axis, radii, control points, certificate, search
-/// diagnostics (angles rad, lengths mm).
-#[pyclass(frozen, get_all, module = "gagekit._core")]
+/// diagnostics (angles rad, lengths mm). Its attributes are the kernel's
+/// [`gagekit_form::cylinder::CylinderFit`] fields, read through [`mirror!`], plus the
+/// criterion's canonical name, the certificate (`min_distance`, `max_distance`) and the
+/// optimum outside the cone as an [`OutsideResult`].
+#[pyclass(frozen, module = "gagekit._core")]
 pub struct CylinderResult {
-    pub criterion: String,
-    pub point: [f64; 3],
-    pub direction: [f64; 3],
-    pub theta: f64,
-    pub phi: f64,
-    pub radius: f64,
-    pub r_in: f64,
-    pub r_out: f64,
-    pub control_in: Vec<usize>,
-    pub control_out: Vec<usize>,
-    /// Certificate: min and max 3-D distance of the points to the axis.
-    pub min_distance: f64,
-    pub max_distance: f64,
-    pub iterations: usize,
-    pub evaluations: usize,
-    /// Reference axis (nominal or least squares) and the tilt (rad) from it.
-    pub reference: [f64; 3],
-    pub tilt: f64,
-    pub outside: Option<Py<OutsideResult>>,
-    /// The axis lies on the boundary of the search cone.
-    pub at_limit: bool,
-    /// Arc (rad) covered around the axis, ill-posed flag (MIC below 90 degrees).
-    pub arc: f64,
-    pub ill_posed: bool,
-    /// The least-squares axis (point, direction), if it exists.
-    pub lsq_axis: Option<([f64; 3], [f64; 3])>,
+    fit: gagekit_form::cylinder::CylinderFit,
 }
+
+mirror!(CylinderResult {
+    point, direction, theta, phi, radius, r_in, r_out, control_in, control_out, iterations, evaluations,
+    reference, tilt, at_limit, arc, ill_posed, lsq_axis
+} extra {
+    #[getter]
+    fn criterion(&self) -> &'static str {
+        self.fit.criterion.fit_criterion().name()
+    }
+    #[getter]
+    fn min_distance(&self) -> f64 {
+        self.fit.extent.min
+    }
+    #[getter]
+    fn max_distance(&self) -> f64 {
+        self.fit.extent.max
+    }
+    #[getter]
+    fn outside(&self, py: Python<'_>) -> PyResult<Option<Py<OutsideResult>>> {
+        OutsideResult::wrap(py, self.fit.outside.clone())
+    }
+});
 
 fn search_of(axis: Option<[f64; 3]>, max_tilt: f64) -> gagekit_form::cylinder::Search {
     gagekit_form::cylinder::Search { axis, max_tilt }
@@ -336,30 +385,7 @@ fn form_cylinder_fit(
         let crit = FitCriterion::parse_for(criterion, &allowed, "cylinder")?;
         fit(pts, Criterion::from_fit(crit).unwrap_or(Criterion::MinZone), &opts)
     })?;
-    let outside = OutsideResult::wrap(py, r.outside)?;
-    Ok(CylinderResult {
-        criterion: r.criterion.fit_criterion().name().to_string(),
-        point: r.point,
-        direction: r.direction,
-        theta: r.theta,
-        phi: r.phi,
-        radius: r.radius,
-        r_in: r.r_in,
-        r_out: r.r_out,
-        control_in: r.control_in,
-        control_out: r.control_out,
-        min_distance: r.extent.min,
-        max_distance: r.extent.max,
-        iterations: r.iterations,
-        evaluations: r.evaluations,
-        reference: r.reference,
-        tilt: r.tilt,
-        outside,
-        at_limit: r.at_limit,
-        arc: r.arc,
-        ill_posed: r.ill_posed,
-        lsq_axis: r.lsq_axis,
-    })
+    Ok(CylinderResult { fit: r })
 }
 
 /// A minimum-zone line in space (straightness): the thinnest enclosing cylinder.
@@ -521,15 +547,37 @@ fn form_sphere_fit(py: Python<'_>, points: PyReadonlyArray2<'_, f64>, criterion:
     })
 }
 
-/// Least-squares cone: (axis point, axis direction, distance from the point to the
-/// surface, half apex angle (rad), (min, max) signed orthogonal distance of the points).
+/// A least-squares cone: axis point (nearest the centroid), direction (the radius grows
+/// along it), distance from the point to the surface, half apex angle (rad), certificate
+/// (signed orthogonal distances, positive outside) and form error.
+#[pyclass(frozen, get_all, module = "gagekit._core")]
+pub struct ConeResult {
+    pub point: [f64; 3],
+    pub direction: [f64; 3],
+    pub distance: f64,
+    pub half_angle: f64,
+    pub min_distance: f64,
+    pub max_distance: f64,
+    pub form_error: f64,
+}
+
+/// Least-squares cone of (n, 3) points (Forbes' parametrisation).
 #[pyfunction]
-fn form_cone_lsq(py: Python<'_>, points: PyReadonlyArray2<'_, f64>) -> PyResult<([f64; 3], [f64; 3], f64, f64, Ext)> {
+fn form_cone_lsq(py: Python<'_>, points: PyReadonlyArray2<'_, f64>) -> PyResult<ConeResult> {
     let pts = rows(py, &points, 3, "points")?;
-    run(py, || {
+    let (c, e) = run(py, || {
         let c = lsq::cone(pts)?;
         let e = lsq::cone_extent(pts, &c);
-        Ok((c.point, c.direction, c.distance, c.half_angle, ext(e)))
+        Ok((c, e))
+    })?;
+    Ok(ConeResult {
+        point: c.point,
+        direction: c.direction,
+        distance: c.distance,
+        half_angle: c.half_angle,
+        min_distance: e.min,
+        max_distance: e.max,
+        form_error: e.spread(),
     })
 }
 
@@ -549,6 +597,11 @@ fn register_3d(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<LeastSquaresCylinderResult>()?;
     m.add_class::<MinZoneFlatResult>()?;
     m.add_function(wrap_pyfunction!(form_min_zone_flat, m)?)?;
+    m.add_class::<LineResult>()?;
+    m.add_class::<PlaneResult>()?;
+    m.add_class::<LeastSquaresSphereResult>()?;
+    m.add_class::<LeastSquaresCircle3Result>()?;
+    m.add_class::<ConeResult>()?;
     m.add_function(wrap_pyfunction!(form_line_lsq, m)?)?;
     m.add_function(wrap_pyfunction!(form_plane_lsq, m)?)?;
     m.add_function(wrap_pyfunction!(form_sphere_lsq, m)?)?;
