@@ -18,7 +18,7 @@ from typing import Any, Optional
 import numpy as np
 
 from .. import _core
-from ..errors import ConfigError
+from ..errors import ConfigError, InvalidInputError
 from .criteria import criterion_name
 from .fits import Certificate, _cert, _fit_dict, _points, _vec
 from .search import DEFAULT_MAX_TILT, outside_warning, search_settings
@@ -29,12 +29,12 @@ _ALLOWED = ("least-squares", "min-circumscribed", "max-inscribed", "minimum-zone
 
 
 def axis_angles(direction: Any) -> tuple[float, float]:
-    """(theta, phi) of a direction, flipped into the upper half sphere (theta <= pi/2)."""
-    a = np.asarray(direction, dtype=float)
-    a = a / np.linalg.norm(a)
-    if a[2] < 0 or (a[2] == 0 and (a[1] < 0 or (a[1] == 0 and a[0] < 0))):
-        a = -a
-    return float(math.acos(min(1.0, max(-1.0, a[2])))), float(math.atan2(a[1], a[0]))
+    """(theta, phi) of a direction, flipped into the upper half sphere (theta <= pi/2;
+    Tables 6.2, 6.4), as the cylinder kernels compute them."""
+    a = np.asarray(direction, dtype=float).ravel()
+    if a.shape != (3,):
+        raise InvalidInputError(f"axis: expected a direction (x, y, z), got shape {np.shape(direction)}")
+    return _core.form_axis_angles((float(a[0]), float(a[1]), float(a[2])))
 
 
 @dataclass(frozen=True)

@@ -354,6 +354,17 @@ mirror!(CylinderResult {
     }
 });
 
+/// (theta, phi) of an axis direction flipped into the upper half sphere (Tables 6.2, 6.4).
+#[pyfunction]
+fn form_axis_angles(py: Python<'_>, direction: [f64; 3]) -> PyResult<(f64, f64)> {
+    run(py, || {
+        if !direction.iter().all(|x| x.is_finite()) || direction.iter().all(|x| *x == 0.0) {
+            return Err(gagekit_core::GkError::invalid(format!("axis: expected a finite non-zero direction, got {direction:?}")));
+        }
+        Ok(gagekit_form::cylinder::angles(&direction))
+    })
+}
+
 fn search_of(axis: Option<[f64; 3]>, max_tilt: f64) -> gagekit_form::cylinder::Search {
     gagekit_form::cylinder::Search { axis, max_tilt }
 }
@@ -584,6 +595,7 @@ fn form_cone_lsq(py: Python<'_>, points: PyReadonlyArray2<'_, f64>) -> PyResult<
 fn register_3d(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(form_cone_lsq, m)?)?;
     m.add_function(wrap_pyfunction!(form_cylinder_fit, m)?)?;
+    m.add_function(wrap_pyfunction!(form_axis_angles, m)?)?;
     m.add_function(wrap_pyfunction!(form_line3_min_zone, m)?)?;
     m.add_function(wrap_pyfunction!(form_criterion, m)?)?;
     m.add_function(wrap_pyfunction!(form_criteria, m)?)?;
