@@ -303,8 +303,6 @@ class LeastSquaresCylinderResult:
     """A least-squares cylinder with its certificate and arc (rad)."""
     point: list[float]
     direction: list[float]
-    theta: float
-    phi: float
     radius: float
     min_distance: float
     max_distance: float
@@ -355,7 +353,6 @@ class CylinderResult:
     ill_posed: bool
     lsq_axis: Optional[tuple[tuple[float, float, float], tuple[float, float, float]]]
 
-def form_axis_angles(direction: Sequence[float]) -> tuple[float, float]: ...
 def form_cylinder_fit(
     points: _F64, criterion: str, seed: int = 0, particles: int = 20, max_iterations: int = 300,
     stall_iterations: int = 6, axis: Optional[Sequence[float]] = None, max_tilt: float = ...,

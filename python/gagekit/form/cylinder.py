@@ -18,7 +18,7 @@ from typing import Any, Optional
 import numpy as np
 
 from .. import _core
-from ..errors import ConfigError, InvalidInputError
+from ..errors import ConfigError
 from .criteria import criterion_name
 from .fits import Certificate, _cert, _fit_dict, _points, _vec
 from .search import DEFAULT_MAX_TILT, outside_warning, search_settings
@@ -29,12 +29,12 @@ _ALLOWED = ("least-squares", "min-circumscribed", "max-inscribed", "minimum-zone
 
 
 def axis_angles(direction: Any) -> tuple[float, float]:
-    """(theta, phi) of a direction, flipped into the upper half sphere (theta <= pi/2;
-    Tables 6.2, 6.4), as the cylinder kernels compute them."""
-    a = np.asarray(direction, dtype=float).ravel()
-    if a.shape != (3,):
-        raise InvalidInputError(f"axis: expected a direction (x, y, z), got shape {np.shape(direction)}")
-    return _core.form_axis_angles((float(a[0]), float(a[1]), float(a[2])))
+    """(theta, phi) of a direction, flipped into the upper half sphere (theta <= pi/2)."""
+    a = np.asarray(direction, dtype=float)
+    a = a / np.linalg.norm(a)
+    if a[2] < 0 or (a[2] == 0 and (a[1] < 0 or (a[1] == 0 and a[0] < 0))):
+        a = -a
+    return float(math.acos(min(1.0, max(-1.0, a[2])))), float(math.atan2(a[1], a[0]))
 
 
 @dataclass(frozen=True)
@@ -174,8 +174,12 @@ def fit_cylinder(
     if crit == "least-squares":
         ls = _core.form_cylinder_lsq(pts)
         arc = math.degrees(ls.arc)
+        # the angles of the least-squares axis as numpy computed them before the kernel
+        # returned complete fits (its BLAS norm can differ from nalgebra's by an ulp, and
+        # the JSON stays byte-identical); the minimax cylinders report the kernel's
+        theta, phi = axis_angles(ls.direction)
         return CylinderFit(
-            crit, len(pts), _vec(ls.point), _vec(ls.direction), float(ls.theta), float(ls.phi), float(ls.radius),
+            crit, len(pts), _vec(ls.point), _vec(ls.direction), theta, phi, float(ls.radius),
             float(ls.form_error), _cert(ls),
             arc_deg=float(arc), warnings=tuple(_arc_warnings(crit, arc)),
         )

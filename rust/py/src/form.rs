@@ -231,8 +231,6 @@ fn form_circle3d_lsq(py: Python<'_>, points: PyReadonlyArray2<'_, f64>) -> PyRes
 pub struct LeastSquaresCylinderResult {
     pub point: [f64; 3],
     pub direction: [f64; 3],
-    pub theta: f64,
-    pub phi: f64,
     pub radius: f64,
     /// Certificate: min and max 3-D distance of the points to the axis.
     pub min_distance: f64,
@@ -255,8 +253,6 @@ fn form_cylinder_lsq(
     Ok(LeastSquaresCylinderResult {
         point: c.point,
         direction: c.direction,
-        theta: c.theta,
-        phi: c.phi,
         radius: c.radius,
         min_distance: c.extent.min,
         max_distance: c.extent.max,
@@ -353,17 +349,6 @@ mirror!(CylinderResult {
         OutsideResult::wrap(py, self.fit.outside.clone())
     }
 });
-
-/// (theta, phi) of an axis direction flipped into the upper half sphere (Tables 6.2, 6.4).
-#[pyfunction]
-fn form_axis_angles(py: Python<'_>, direction: [f64; 3]) -> PyResult<(f64, f64)> {
-    run(py, || {
-        if !direction.iter().all(|x| x.is_finite()) || direction.iter().all(|x| *x == 0.0) {
-            return Err(gagekit_core::GkError::invalid(format!("axis: expected a finite non-zero direction, got {direction:?}")));
-        }
-        Ok(gagekit_form::cylinder::angles(&direction))
-    })
-}
 
 fn search_of(axis: Option<[f64; 3]>, max_tilt: f64) -> gagekit_form::cylinder::Search {
     gagekit_form::cylinder::Search { axis, max_tilt }
@@ -595,7 +580,6 @@ fn form_cone_lsq(py: Python<'_>, points: PyReadonlyArray2<'_, f64>) -> PyResult<
 fn register_3d(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(form_cone_lsq, m)?)?;
     m.add_function(wrap_pyfunction!(form_cylinder_fit, m)?)?;
-    m.add_function(wrap_pyfunction!(form_axis_angles, m)?)?;
     m.add_function(wrap_pyfunction!(form_line3_min_zone, m)?)?;
     m.add_function(wrap_pyfunction!(form_criterion, m)?)?;
     m.add_function(wrap_pyfunction!(form_criteria, m)?)?;

@@ -1,7 +1,7 @@
 //! The least-squares cylinder as a complete fit: the axis of [`crate::lsq::cylinder`]
-//! with its angles (Tables 6.2, 6.4), certificate and the arc the points cover.
+//! with its certificate and the arc the points cover.
 
-use super::{angles, arc};
+use super::arc;
 use crate::lsq::{self, Extent};
 use gagekit_core::Result;
 
@@ -11,9 +11,6 @@ pub struct LeastSquaresCylinder {
     /// Point on the axis (the foot of the centroid) and unit direction (upper half sphere).
     pub point: [f64; 3],
     pub direction: [f64; 3],
-    /// Polar and azimuthal angle of `direction`.
-    pub theta: f64,
-    pub phi: f64,
     pub radius: f64,
     /// Certificate: min and max 3-D distance of the points to the axis.
     pub extent: Extent,
@@ -32,12 +29,9 @@ impl LeastSquaresCylinder {
 /// `start_axis` when given (see [`crate::lsq::cylinder`]).
 pub fn least_squares(pts: &[f64], start_axis: Option<[f64; 3]>) -> Result<LeastSquaresCylinder> {
     let c = lsq::cylinder(pts, start_axis)?;
-    let (theta, phi) = angles(&c.direction);
     Ok(LeastSquaresCylinder {
         point: c.point,
         direction: c.direction,
-        theta,
-        phi,
         radius: c.radius,
         extent: lsq::axis_extent(pts, &c.point, &c.direction),
         arc: arc(pts, &c.point, &c.direction),
@@ -60,6 +54,6 @@ mod tests {
         let f = least_squares(&pts, None).unwrap();
         assert!((f.radius - 5.0).abs() < 1e-9 && f.form_error() < 1e-9);
         assert!((f.arc - std::f64::consts::PI).abs() < 1e-9, "{}", f.arc);
-        assert!(f.theta.abs() < 1e-9 && f.direction[2] > 0.0);
+        assert!(f.direction[2] > 0.0 && (f.direction[2] - 1.0).abs() < 1e-12);
     }
 }
