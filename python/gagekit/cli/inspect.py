@@ -22,7 +22,7 @@ class DefaultScanGroup(TyperGroup):
     default_command = "scan"
 
     def parse_args(self, ctx: Any, args: list) -> list:
-        if args and args[0] not in self.commands and not args[0].startswith("-"):
+        if args and args[0] not in self.commands and args[0] not in ("--help", "-h"):
             args = [self.default_command, *args]
         return super().parse_args(ctx, args)
 
