@@ -54,7 +54,7 @@ def test_fixed_orientation_is_the_projection_fit():
     pts = short_bore()
     r = gagekit.fit_cylinder(pts, "mcc", axis=(0, 0, 2), max_tilt=0)
     assert r.tilt_deg < 1e-12
-    assert np.allclose(r.axis_direction, [0, 0, 1], atol=1e-15)
+    assert np.allclose(r.direction, [0, 0, 1], atol=1e-15)
     mc = gagekit.fit_circle(pts[:, :2], "mc")
     assert abs(r.radius - mc.radius) < 1e-9
 
@@ -63,7 +63,7 @@ def test_nominal_axis_is_the_reference():
     pts = short_bore()
     r = gagekit.fit_cylinder(pts, "mcc", axis=(0, 0, -1), max_tilt=2)
     assert r.tilt_deg <= 2 + 1e-9
-    assert math.isclose(r.tilt_deg, math.degrees(math.acos(abs(r.axis_direction[2]))), abs_tol=1e-9)
+    assert math.isclose(r.tilt_deg, math.degrees(math.acos(abs(r.direction[2]))), abs_tol=1e-9)
 
 
 @pytest.mark.parametrize("name", ["set1", "set3"])

@@ -300,10 +300,10 @@ class DatumSystem:
                                   radius=float(radius))
         crit = "max-inscribed" if fit == "inscribed" else "min-circumscribed"
         cyl = fit_cylinder(fd.points, crit, seed=0, axis=tuple(d_ls), max_tilt=10.0)
-        d = _unit(cyl.axis_direction)
+        d = _unit(cyl.direction)
         d = d if float(d @ d_ls) >= 0 else -d
         name = "maximum inscribed cylinder" if fit == "inscribed" else "minimum circumscribed cylinder"
-        return SimulatedDatum(ref.letter, fd.name, "axis", name, np.array(cyl.axis_point), d, before, radius=float(cyl.radius))
+        return SimulatedDatum(ref.letter, fd.name, "axis", name, np.array(cyl.point), d, before, radius=float(cyl.radius))
 
     # -- frame ---------------------------------------------------------------------------
     def frame(self, letters: tuple[str, ...]) -> DatumFrame:

@@ -88,8 +88,7 @@ class FeatureData:
         through the centre (circle) or the line (line), signed by :meth:`sign_hint`."""
         fit = self.lsq()
         if self.shape in ("cylinder", "cone"):
-            p, d = np.array(fit.axis_point if self.shape == "cylinder" else fit.point), _unit(
-                fit.axis_direction if self.shape == "cylinder" else fit.direction)
+            p, d = np.array(fit.point), _unit(fit.direction)
         elif self.shape == "circle":
             p, d = np.array(fit.center), _unit(fit.normal)
         elif self.shape == "line":
@@ -162,7 +161,7 @@ class FeatureData:
                 continue
             q = self.points[idx] - p0
             xy = np.ascontiguousarray(np.column_stack([q @ u, q @ v]))
-            c, _, _ = _core.form_circle_lsq(xy)
+            c = _core.form_circle_fit(xy, "least-squares").center
             h = float((q @ d).mean())
             out.append((p0 + c[0] * u + c[1] * v + h * d, xy))
         if len(out) < 2:

@@ -113,7 +113,7 @@ def _mec_radius(xy: np.ndarray) -> tuple[float, np.ndarray]:
         return 0.5 * float(np.linalg.norm(xy[1] - xy[0])), 0.5 * (xy[0] + xy[1])
     if np.ptp(xy, axis=0).max() == 0.0:
         return 0.0, xy[0]
-    c, r, _ = _core.form_circle_mc(np.ascontiguousarray(xy))
+    c = _core.form_circle_fit(np.ascontiguousarray(xy), "min-circumscribed").center
     r = float(np.linalg.norm(xy - np.array(c), axis=1).max())
     return r, np.array(c)
 
@@ -240,13 +240,13 @@ def _roundness(tol, fd, system):
     if fd.shape == "circle":
         d = _unit(fd.lsq().normal)
         xy = _plane_2d(fd.points - np.array(fd.lsq().center), d)
-        w = fit_circle(xy, "mz").width
+        w = fit_circle(xy, "mz").form_error
         return Measurement(float(w), "width", "circle", len(fd.points))
     count = tol.sections or fd.spec.sections
     worst = 0.0
     secs = fd.section_circles(count)
     for _, xy in secs:
-        worst = max(worst, float(fit_circle(xy, "mz").width))
+        worst = max(worst, float(fit_circle(xy, "mz").form_error))
     return Measurement(worst, "width", f"{len(secs)} sections", len(fd.points))
 
 
@@ -254,7 +254,7 @@ def _cylindricity(tol, fd, system):
     _, d = fd.axis_line()
     fit = fit_cylinder(fd.points, "minimum-zone", seed=0, axis=tuple(d), max_tilt=10.0)
     return Measurement(float(fit.form_error), "width", "surface", len(fd.points),
-                       {"axis_point": list(fit.axis_point), "axis_direction": list(fit.axis_direction)})
+                       {"axis_point": list(fit.point), "axis_direction": list(fit.direction)})
 
 
 def _sphericity(tol, fd, system):
