@@ -70,7 +70,7 @@ def main() -> None:
         for crit in ("lsq", "mc", "mi", "mz"):
             rep = 3 if n <= 100000 else 1
             tg, fit = timed(lambda: fit_circle(pts, crit), rep)
-            val = fit.width if crit == "mz" else fit.radius
+            val = fit.form_error if crit == "mz" else fit.radius
             if args.no_peer:
                 tp, pv = float("nan"), float("nan")
             else:

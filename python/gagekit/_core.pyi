@@ -240,22 +240,91 @@ def design_metrics(blocks: _F64, weights: Optional[_F64] = None) -> DesignMetric
 def design_halton(n: int, d: int, seed: int = 0) -> _F64: ...
 
 # -------------------------------------------------------------------------------- form
-_Ext = tuple[float, float]
+class CircleResult:
+    """A complete 2-D circle fit (Sec. 6.2); arc in rad, lengths mm."""
+    criterion: str
+    center: list[float]
+    radius: float
+    r_in: float
+    r_out: float
+    form_error: float
+    control: list[int]
+    control_in: list[int]
+    control_out: list[int]
+    arc: float
+    arc_center: list[float]
+    ill_posed: bool
 
-def form_circle_mc(points: _F64) -> tuple[tuple[float, float], float, _I64]: ...
-def form_circle_mi(points: _F64) -> tuple[tuple[float, float], float, _I64]: ...
-def form_circle_lsq(points: _F64) -> tuple[tuple[float, float], float, _I64]: ...
-def form_circle_mz(points: _F64) -> tuple[tuple[float, float], float, float, _I64, _I64]: ...
-def form_circle_angular_gap(points: _F64, center: tuple[float, float]) -> float: ...
-def form_line_lsq(points: _F64) -> tuple[list[float], list[float], _Ext]: ...
-def form_plane_lsq(points: _F64) -> tuple[list[float], list[float], _Ext]: ...
-def form_sphere_lsq(points: _F64) -> tuple[list[float], float, _Ext]: ...
-def form_circle3d_lsq(points: _F64) -> tuple[list[float], list[float], float, _Ext]: ...
-def form_cylinder_lsq(points: _F64, start_axis: Optional[Sequence[float]] = None) -> tuple[list[float], list[float], float, _Ext]: ...
-def form_min_zone_flat(points: _F64) -> tuple[list[float], list[float], list[float], float, list[int], list[int], int]: ...
-def form_plane_extent(points: _F64, point: Sequence[float], normal: Sequence[float]) -> _Ext: ...
-def form_line_extent(points: _F64, point: Sequence[float], direction: Sequence[float]) -> _Ext: ...
-def form_axis_extent(points: _F64, point: Sequence[float], direction: Sequence[float]) -> _Ext: ...
+def form_circle_fit(points: _F64, criterion: str) -> CircleResult: ...
+def form_circle_pso(
+    points: _F64, criterion: str, seed: int = 0, particles: int = 20, max_iterations: int = 2000,
+    stall_iterations: int = 100,
+) -> CircleResult: ...
+class LineResult:
+    """A least-squares line with its certificate."""
+    point: list[float]
+    direction: list[float]
+    min_distance: float
+    max_distance: float
+    form_error: float
+
+def form_line_lsq(points: _F64) -> LineResult: ...
+
+class PlaneResult:
+    """A least-squares plane with its certificate."""
+    point: list[float]
+    normal: list[float]
+    min_distance: float
+    max_distance: float
+    form_error: float
+
+def form_plane_lsq(points: _F64) -> PlaneResult: ...
+
+class LeastSquaresSphereResult:
+    """A least-squares circle (2-D) or sphere (3-D) with its certificate."""
+    center: list[float]
+    radius: float
+    min_distance: float
+    max_distance: float
+    form_error: float
+
+def form_sphere_lsq(points: _F64) -> LeastSquaresSphereResult: ...
+
+class LeastSquaresCircle3Result:
+    """A least-squares circle in space with its certificate."""
+    center: list[float]
+    normal: list[float]
+    radius: float
+    min_distance: float
+    max_distance: float
+    form_error: float
+
+def form_circle3d_lsq(points: _F64) -> LeastSquaresCircle3Result: ...
+
+class LeastSquaresCylinderResult:
+    """A least-squares cylinder with its certificate and arc (rad)."""
+    point: list[float]
+    direction: list[float]
+    radius: float
+    min_distance: float
+    max_distance: float
+    form_error: float
+    arc: float
+
+def form_cylinder_lsq(points: _F64, start_axis: Optional[Sequence[float]] = None) -> LeastSquaresCylinderResult: ...
+
+class MinZoneFlatResult:
+    """A minimum-zone plane (flatness) or 2-D line (straightness) with its certificate."""
+    point: list[float]
+    normal: list[float]
+    direction: list[float]
+    form_error: float
+    control: list[int]
+    min_distance: float
+    max_distance: float
+    iterations: int
+
+def form_min_zone_flat(points: _F64) -> MinZoneFlatResult: ...
 class OutsideResult:
     """A better optimum of the free search outside the search cone (radius or width, mm)."""
     value: float
@@ -322,7 +391,9 @@ class Circle3Result:
     min_distance: float
     max_distance: float
     out_of_plane: float
+    control: list[int]
     arc: float
+    ill_posed: bool
 
 def form_circle_in_plane(points: _F64, criterion: str) -> Circle3Result: ...
 
@@ -337,14 +408,20 @@ class SphereResult:
     min_distance: float
     max_distance: float
     iterations: int
+    bound: float
 
 def form_sphere_fit(points: _F64, criterion: str) -> SphereResult: ...
-def form_circle_pso(
-    points: _F64, criterion: str, seed: int = 0, particles: int = 20, max_iterations: int = 2000,
-    stall_iterations: int = 100,
-) -> tuple[tuple[float, float], float, float, list[int], list[int], int, int]: ...
-def form_cylinder_arc(points: _F64, point: Sequence[float], direction: Sequence[float]) -> float: ...
-def form_cone_lsq(points: _F64) -> tuple[list[float], list[float], float, float, _Ext]: ...
+class ConeResult:
+    """A least-squares cone (half angle rad) with its certificate."""
+    point: list[float]
+    direction: list[float]
+    distance: float
+    half_angle: float
+    min_distance: float
+    max_distance: float
+    form_error: float
+
+def form_cone_lsq(points: _F64) -> ConeResult: ...
 
 # -------------------------------------------------------------------------------- gdt
 _V3 = tuple[float, float, float]
@@ -353,4 +430,3 @@ def gdt_min_width_2d(points: _F64) -> tuple[float, tuple[float, float], float, f
 def gdt_slab(points: _F64, mode: str, axis: _V3, angle: float) -> tuple[_V3, float, float, float]: ...
 def gdt_datum_plane(points: _F64, outward: _V3, mode: str, axis: _V3, angle: float, fit: str) -> tuple[_V3, _V3, float, float]: ...
 def gdt_axis_along(points: _F64, direction: _V3, fit: str) -> tuple[_V3, _V3, float, float, float]: ...
-def gdt_min_zone_sphere(points: _F64) -> tuple[_V3, float, float]: ...

@@ -191,3 +191,39 @@ def test_units_are_passed_to_every_scan(tmp_path):
     assert summary["ok"] == 1 and got_mm[0]["result"]["radius"] == pytest.approx(2.5, abs=0.002)
     bad = gk("form", "batch", "circle", f, "--units", "furlong", "--db", url)
     assert bad.returncode == 2 and bad.stderr.startswith("gagekit: error: unknown unit 'furlong'")
+
+
+def test_dask_workers_sharing_a_host_cap_their_kernel_threads(dask_cluster):
+    """2 workers of 1 thread on this host: each runs its kernels (Rayon, BLAS) on
+    cores // 2 threads, as 2 local workers do."""
+    from gagekit.batch import DaskCluster
+
+    cluster = DaskCluster(dask_cluster.scheduler_address)
+    try:
+        cores = len(os.sched_getaffinity(0))
+        assert sorted(cluster.thread_caps.values()) == [max(1, cores // 2)] * 2
+        env = cluster.client.run(lambda: os.environ.get("RAYON_NUM_THREADS"))
+        assert set(env.values()) == {str(max(1, cores // 2))}
+    finally:
+        cluster.close()
+
+
+def _thread_pools(_):
+    from threadpoolctl import threadpool_info
+
+    return os.environ.get("RAYON_NUM_THREADS"), sorted({d["num_threads"] for d in threadpool_info()})
+
+
+def test_local_workers_cap_rayon_and_the_already_started_blas_pool():
+    """N workers on N cores run their kernels on one thread each: Rayon through the
+    environment (read at its first use), BLAS, which numpy started when the worker
+    imported gagekit, resized at run time."""
+    from gagekit.batch import LocalPool
+
+    cores = len(os.sched_getaffinity(0))
+    pool = LocalPool(cores)
+    try:
+        got = pool._pool.submit(_thread_pools, 0).result(timeout=120)
+    finally:
+        pool.close()
+    assert got == ("1", [1])

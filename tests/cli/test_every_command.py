@@ -46,10 +46,11 @@ RECIPES: dict[str, list] = {
     "machine history": ["T/h.sqlite"],
     "gage batch": [TOML, PLY, "--workers", 1, "--db", "sqlite:///T/batch.db"],
     "form batch": ["circle", CIRCLE, "-c", "least-squares", "--workers", 1, "--db", "sqlite:///T/batch.db"],
+    "inspect batch": [data_path("bracket.toml"), data_path("bracket.ply"), "--workers", 1, "--db", "sqlite:///T/batch.db"],
     "db upgrade": ["sqlite:///T/batch.db"],
     "db export": ["sqlite:///T/batch.db", "--format", "csv", "--out", "T/export"],
     "stats": ["--db", "sqlite:///T/batch.db"],
-    "inspect": [data_path("bracket.ply"), data_path("bracket.toml")],
+    "inspect scan": [data_path("bracket.ply"), data_path("bracket.toml")],  # `gagekit inspect SCAN PART` is the same
     "demo": ["--quick", "--out", "T/demo"],
     "studio": None,  # a web server that runs until stopped: tests/studio runs it
 }

@@ -88,3 +88,23 @@ def test_report_renders_in_chromium(report_dir):
     dom = browser._run(browser.chromium(), "--virtual-time-budget=10000", "--dump-dom", page.as_uri()).stdout
     assert 'class="plot-container plotly"' in dom and "gl-container" in dom
     assert "datum frame x" in dom and "deviation (um)" in dom
+
+
+def test_inspect_scan_is_the_default_subcommand_with_options_anywhere(tmp_path):
+    """`gagekit inspect SCAN PART`, `gagekit inspect --json SCAN PART` and
+    `gagekit inspect scan SCAN PART` are one command (`inspect batch` sits beside it)."""
+    import json
+    import subprocess
+    import sys
+
+    from gagekit.demo import data_path
+
+    scan, part = str(data_path("bracket.ply")), str(data_path("bracket.toml"))
+    outs = []
+    for args in ([scan, part, "--json"], ["--json", scan, part], ["scan", scan, part, "--json"]):
+        p = subprocess.run([sys.executable, "-m", "gagekit", "inspect", *args], capture_output=True, text=True, timeout=300)
+        assert p.returncode == 0, p.stderr
+        d = json.loads(p.stdout)
+        d.pop("seconds")
+        outs.append(d)
+    assert outs[0] == outs[1] == outs[2] and outs[0]["part"] == "bracket"

@@ -91,14 +91,14 @@ def _width(pts: np.ndarray, c) -> float:
 @given(point_sets, st.integers(0, 2**32 - 1))
 def test_mz_width_not_improved_by_nearby_centres(pts: np.ndarray, seed: int) -> None:
     mz = fit_circle(pts, "mz")
-    assert abs(_width(pts, mz.center) - mz.width) < 1e-12
+    assert abs(_width(pts, mz.center) - mz.form_error) < 1e-12
     rng = np.random.default_rng(seed)
     for scale in (1e-7, 1e-4, 1e-2, 1.0):
         for c in mz.center + scale * rng.normal(size=(50, 2)):
-            assert _width(pts, c) >= mz.width - 1e-10
+            assert _width(pts, c) >= mz.form_error - 1e-10
     # and it beats the other criteria's centres
     for crit in ("lsq", "mc", "mi"):
-        assert fit_circle(pts, crit).width >= mz.width - 1e-10
+        assert fit_circle(pts, crit).form_error >= mz.form_error - 1e-10
 
 
 @settings(max_examples=25, deadline=None)
@@ -113,7 +113,7 @@ def test_invariance_under_order_rigid_motion_and_translation(pts, angle, shift, 
         a, b = fit_circle(pts, crit), fit_circle(moved, crit)
         tol = 1e-9 * (1 + abs(shift) * 1e-3)  # 1e6 mm coordinates carry ~1e-10 mm rounding
         assert abs(a.radius - b.radius) < max(tol, 1e-9), crit
-        assert abs(a.width - b.width) < max(tol, 1e-9), crit
+        assert abs(a.form_error - b.form_error) < max(tol, 1e-9), crit
         if crit != "mi":  # MI centre need not be unique on symmetric sets
             assert np.allclose(rot @ np.array(a.center) + t, b.center, atol=max(tol, 1e-7) * 100)
 
@@ -142,7 +142,7 @@ def test_mc_two_points_and_duplicates() -> None:
     pts = np.array([[1, 0], [0, 1], [-1, 0], [0, -1], [1, 0], [0, 1]], float)
     for crit in ("mc", "mi", "mz", "lsq"):
         f = fit_circle(pts, crit)
-        assert abs(f.radius - 1.0) < 1e-12 and f.width < 1e-12
+        assert abs(f.radius - 1.0) < 1e-12 and f.form_error < 1e-12
 
 
 def test_short_arc_flags_mi_as_ill_posed() -> None:
@@ -169,7 +169,7 @@ def test_cli_circle(tmp_path: Path) -> None:
     assert res.exit_code == 0, res.output
     d = json.loads(res.stdout)
     assert set(d) == {"least-squares", "min-circumscribed", "max-inscribed", "minimum-zone"}
-    assert abs(d["minimum-zone"]["form_error"] - fit_circle(pts, "mz").width) < 1e-12
+    assert abs(d["minimum-zone"]["form_error"] - fit_circle(pts, "mz").form_error) < 1e-12
     res = runner.invoke(app, ["form", "circle", str(f), "-c", "mz"])
     assert res.exit_code == 0 and "minimum-zone" in res.stdout
     bad = tmp_path / "bad.txt"
@@ -206,11 +206,11 @@ def test_large_sets_run_by_subsets_stay_optimal(arc: float) -> None:
     # above a few thousand points MI and MZ are solved on growing subsets
     pts = _ring(np.random.default_rng(11), 20000, 0.05, arc)
     mz = fit_circle(pts, "mz")
-    assert abs(_width(pts, mz.center) - mz.width) < 1e-12
+    assert abs(_width(pts, mz.center) - mz.form_error) < 1e-12
     rng = np.random.default_rng(0)
     for scale in (1e-8, 1e-5, 1e-3):
         for c in mz.center + scale * rng.normal(size=(20, 2)):
-            assert _width(pts, c) >= mz.width - 1e-12
+            assert _width(pts, c) >= mz.form_error - 1e-12
     mi = fit_circle(pts, "mi")
     mc = fit_circle(pts, "mc")
     assert np.all(_radii(pts, mi.center) >= mi.radius - 1e-12)
@@ -219,3 +219,22 @@ def test_large_sets_run_by_subsets_stay_optimal(arc: float) -> None:
     for c in mi.center + 1e-4 * rng.normal(size=(40, 2)):
         g = min(_radii(pts, c).min(), mc.radius - math.dist(c, mc.center))
         assert g <= mi.radius + 1e-12
+
+
+def test_deprecated_aliases_and_canonical_criterion() -> None:
+    # one stored form of a criterion name; the old attribute names still answer, with a warning
+    pts = np.array([[1, 0], [0, 1], [-1, 0], [0, -1.1]], float)
+    f = fit_circle(pts, "MZ")
+    assert f.criterion == "minimum-zone" and f.to_dict()["criterion"] == "minimum-zone"
+    with pytest.warns(DeprecationWarning, match="form_error"):
+        assert f.width == f.form_error
+    from gagekit.form import fit_cylinder
+
+    t = np.linspace(0, 2 * np.pi, 40, endpoint=False)
+    cyl = np.column_stack([np.cos(t), np.sin(t), np.linspace(0, 5, 40)])
+    c = fit_cylinder(cyl)
+    with pytest.warns(DeprecationWarning, match="use point"):
+        assert c.axis_point == c.point
+    with pytest.warns(DeprecationWarning, match="use direction"):
+        assert c.axis_direction == c.direction
+    assert c.to_dict()["axis_point"] == list(c.point)

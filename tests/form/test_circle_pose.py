@@ -36,7 +36,7 @@ def test_nist_2d_file_fits_as_read():
     flat = np.delete(pts, const[-1], axis=1)
     for crit in CRITERIA:
         r3, r2 = gagekit.fit_circle(pts, crit), gagekit.fit_circle(flat, crit)
-        assert r3.radius == r2.radius and abs(r3.width - r2.width) < 1e-12  # certificate recomputed in 3-D
+        assert r3.radius == r2.radius and abs(r3.form_error - r2.form_error) < 1e-12  # certificate recomputed in 3-D
         assert np.delete(np.array(r3.center), const[-1]).tolist() == list(r2.center)
         assert abs(r3.normal[const[-1]]) == 1.0 and r3.out_of_plane == 0.0
 
@@ -53,7 +53,7 @@ def test_nist_3d_circles_every_criterion(name):
     assert mi.radius <= mc.radius
     if ls.arc_deg > 270:  # on a short arc the least-squares circle can be the largest
         assert mi.radius <= ls.radius <= mc.radius
-    assert mz.width <= ls.width + 1e-12 and mz.width <= mc.width + 1e-12
+    assert mz.form_error <= ls.form_error + 1e-12 and mz.form_error <= mc.form_error + 1e-12
     # certificates: the in-plane distances bound every point
     for f in (mc, mi, mz):
         n = np.array(f.normal)
@@ -79,7 +79,7 @@ def test_rigid_motion_moves_the_circle(seed, a, b, c, shift):
     for crit in CRITERIA:
         f2 = gagekit.fit_circle(flat[:, :2], crit)
         f3 = gagekit.fit_circle(moved, crit)
-        assert abs(f3.radius - f2.radius) < 1e-7 and abs(f3.width - f2.width) < 1e-7
+        assert abs(f3.radius - f2.radius) < 1e-7 and abs(f3.form_error - f2.form_error) < 1e-7
         c2 = np.array([*f2.center, 0.0]) @ R.T + shift
         assert np.linalg.norm(np.array(f3.center) - c2) < 1e-6
         assert abs(abs(np.dot(f3.normal, R[:, 2])) - 1) < 1e-9

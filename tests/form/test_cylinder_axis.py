@@ -54,7 +54,7 @@ def test_fixed_orientation_is_the_projection_fit():
     pts = short_bore()
     r = gagekit.fit_cylinder(pts, "mcc", axis=(0, 0, 2), max_tilt=0)
     assert r.tilt_deg < 1e-12
-    assert np.allclose(r.axis_direction, [0, 0, 1], atol=1e-15)
+    assert np.allclose(r.direction, [0, 0, 1], atol=1e-15)
     mc = gagekit.fit_circle(pts[:, :2], "mc")
     assert abs(r.radius - mc.radius) < 1e-9
 
@@ -63,7 +63,7 @@ def test_nominal_axis_is_the_reference():
     pts = short_bore()
     r = gagekit.fit_cylinder(pts, "mcc", axis=(0, 0, -1), max_tilt=2)
     assert r.tilt_deg <= 2 + 1e-9
-    assert math.isclose(r.tilt_deg, math.degrees(math.acos(abs(r.axis_direction[2]))), abs_tol=1e-9)
+    assert math.isclose(r.tilt_deg, math.degrees(math.acos(abs(r.direction[2]))), abs_tol=1e-9)
 
 
 @pytest.mark.parametrize("name", ["set1", "set3"])
@@ -94,6 +94,27 @@ def test_partial_arc_mcc_does_not_depend_on_the_seed():
     assert len({round(f.radius, 9) for f in fits}) == 1
     # the constraint is active there: said so
     assert all("boundary of the search cone" in f.warnings[0] for f in fits)
+
+
+def _arc(gen: int) -> np.ndarray:
+    rng = np.random.default_rng(gen)
+    t = rng.uniform(0, np.radians(120), 12)
+    z = rng.uniform(0, 40 if gen % 2 else 5, 12)
+    r = 10 if gen % 2 else 50
+    return np.column_stack([r * np.cos(t), r * np.sin(t), z])
+
+
+@pytest.mark.parametrize("gen, crit", [(1, "mcc"), (2, "mcc"), (3, "mic"), (7, "mic")])
+def test_free_search_does_not_depend_on_the_seed(gen, crit):
+    """Issue 12 item 11 with max_tilt=90 (the whole half sphere): these 120-degree arcs gave
+    two or three different cylinders over seeds 0..5 before the deterministic grid search."""
+    pts = _arc(gen)
+    fits = [gagekit.fit_cylinder(pts, crit, seed=s, max_tilt=90) for s in range(6)]
+    assert len({round(f.radius, 9) for f in fits}) == 1, [f.radius for f in fits]
+    # and the free optimum is no worse than the default cone's
+    cone = gagekit.fit_cylinder(pts, crit, seed=0)
+    better = fits[0].radius <= cone.radius + 1e-9 if crit == "mcc" else fits[0].radius >= cone.radius - 1e-9
+    assert better
 
 
 @pytest.mark.parametrize(

@@ -65,8 +65,8 @@ def test_cylinder_rigid_motion_and_order(seed, ang, shift):
     perm = rng.permutation(len(pts))
     r = gagekit.fit_cylinder(moved[perm])
     assert abs(r.radius - base.radius) < 1e-9
-    assert angle(r.axis_direction, R @ base.axis_direction) < 1e-9
-    assert line_dist(R @ base.axis_point + t, r.axis_point, r.axis_direction) < 1e-8
+    assert angle(r.direction, R @ base.direction) < 1e-9
+    assert line_dist(R @ base.point + t, r.point, r.direction) < 1e-8
     assert abs(r.form_error - base.form_error) < 1e-9
 
 

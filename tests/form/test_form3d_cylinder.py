@@ -52,7 +52,7 @@ def axis_distances(pts, point, direction):
 
 
 def check_certificate(r, pts):
-    d = axis_distances(pts, r.axis_point, r.axis_direction)
+    d = axis_distances(pts, r.point, r.direction)
     c = r.certificate
     assert abs(c.min_distance - d.min()) < CERT_TOL and abs(c.max_distance - d.max()) < CERT_TOL
     if r.criterion == "min-circumscribed":
@@ -65,7 +65,7 @@ def check_certificate(r, pts):
         assert abs(r.form_error - (r.outer_radius - r.inner_radius)) < CERT_TOL
     t, f = r.theta, r.phi
     a = [np.sin(t) * np.cos(f), np.sin(t) * np.sin(f), np.cos(t)]
-    assert np.allclose(a, r.axis_direction, atol=1e-14) and 0 <= t <= np.pi / 2
+    assert np.allclose(a, r.direction, atol=1e-14) and 0 <= t <= np.pi / 2
 
 
 @pytest.mark.parametrize("name", ["set1", "set3"])
@@ -148,7 +148,7 @@ def test_pso_circles_agree_with_exact_kernels():
         swarm = gagekit.fit_circle(pts, crit, method="pso", seed=2)
         assert swarm.method == "pso"
         assert abs(swarm.radius - exact.radius) < 1e-8
-        assert abs(swarm.width - exact.width) < 1e-8
+        assert abs(swarm.form_error - exact.form_error) < 1e-8
         assert set(exact.control_points) <= set(swarm.control_points)
     with pytest.raises(ConfigError):
         gagekit.fit_circle(pts, "lsq", method="pso")
@@ -238,10 +238,10 @@ def _project(pts, direction):
 def test_no_nearby_axis_is_better(name, crit, circ):
     pts = load_set(name)
     r = gagekit.fit_cylinder(pts, crit, seed=1)
-    a = np.array(r.axis_direction)
+    a = np.array(r.direction)
     # the projection along the reported axis reproduces the reported fit exactly
     c0 = gagekit.fit_circle(_project(pts, a), circ)
-    value = {"mc": c0.radius, "mi": -c0.radius, "mz": c0.width}
+    value = {"mc": c0.radius, "mi": -c0.radius, "mz": c0.form_error}
     reported = {"mcc": r.radius, "mic": -r.radius, "mzc": r.form_error}[crit]
     assert abs(value[circ] - reported) < 1e-10
     u = np.cross(a, [1.0, 0, 0])
@@ -251,7 +251,7 @@ def test_no_nearby_axis_is_better(name, crit, circ):
         for k in range(8):
             th = np.pi * k / 4
             c = gagekit.fit_circle(_project(pts, a + eps * (np.cos(th) * u + np.sin(th) * v)), circ)
-            val = {"mc": c.radius, "mi": -c.radius, "mz": c.width}[circ]
+            val = {"mc": c.radius, "mi": -c.radius, "mz": c.form_error}[circ]
             assert val >= reported - 1e-11, (eps, k, val, reported)
 
 
@@ -262,3 +262,11 @@ def test_set3_minimum_zone_reaches_the_best_known_basin(seed):
     # hopping for all of them.
     r = gagekit.fit_cylinder(load_set("set3"), "mzc", seed=seed)
     assert r.form_error < 0.00278829262
+
+
+def test_axis_angles_upper_half_sphere():
+    from gagekit.form import axis_angles
+
+    t, f = axis_angles([0.0, -1.0, -1.0])  # flipped into the upper half sphere
+    assert abs(t - np.pi / 4) < 1e-15 and abs(f - np.pi / 2) < 1e-15
+    assert axis_angles((0, 0, 2)) == (0.0, 0.0)

@@ -105,8 +105,8 @@ def test_cylinder(name):
     pts, ref = _load("cylinder", name)
     r = gagekit.fit_cylinder(pts, "least-squares")
     assert abs(2 * r.radius - ref[6]) < DIA_TOL
-    assert angle(r.axis_direction, ref[3:6]) < ANG_TOL
-    assert point_line_distance(ref[:3], r.axis_point, r.axis_direction) < POS_TOL
+    assert angle(r.direction, ref[3:6]) < ANG_TOL
+    assert point_line_distance(ref[:3], r.point, r.direction) < POS_TOL
 
 
 @pytest.mark.parametrize("name", _pairs("cylinder"))
@@ -115,8 +115,8 @@ def test_cylinder_translated_1e6(name):
     shift = np.array([1e6, -1e6, 5e5])
     r = gagekit.fit_cylinder(pts + shift, "lsq")
     assert abs(2 * r.radius - ref[6]) < DIA_TOL
-    assert angle(r.axis_direction, ref[3:6]) < ANG_TOL
-    assert point_line_distance(ref[:3] + shift, r.axis_point, r.axis_direction) < POS_TOL
+    assert angle(r.direction, ref[3:6]) < ANG_TOL
+    assert point_line_distance(ref[:3] + shift, r.point, r.direction) < POS_TOL
 
 
 @pytest.mark.parametrize("name", _pairs("cone"))

@@ -72,3 +72,19 @@ def test_properties(seed, n, shift, angle):
     # the zone is no wider than about the least-squares centre
     ls = gagekit.fit_sphere(pts, "lsq")
     assert gagekit.fit_sphere(pts, "mz").form_error <= ls.form_error + 1e-12
+
+
+def test_global_bound_certifies_mi_and_mz():
+    """Issue 13: MI and MZ are global (certified branch and bound over the centre); the
+    bound is within 1e-9 mm of the value, on the right side of it."""
+    rng = np.random.default_rng(7)
+    u = rng.normal(size=(400, 3))
+    u /= np.linalg.norm(u, axis=1)[:, None]
+    u = u[u[:, 2] > 0.3]  # a cap: the centre is loosely held along its axis
+    pts = np.array([4.0, -2.0, 9.0]) + (30.0 + rng.uniform(-0.02, 0.02, len(u)))[:, None] * u
+    mz = gagekit.fit_sphere(pts, "minimum-zone")
+    mi = gagekit.fit_sphere(pts, "max-inscribed")
+    assert mz.global_bound <= mz.form_error + 1e-15 and mz.form_error - mz.global_bound <= 1e-9
+    assert mi.global_bound >= mi.radius - 1e-15 and mi.global_bound - mi.radius <= 1e-9
+    assert mz.to_dict()["global_bound"] == mz.global_bound
+    assert gagekit.fit_sphere(pts, "min-circumscribed").global_bound is None

@@ -82,7 +82,7 @@ def test_record_is_idempotent_and_keeps_every_path(db_url):
 def _writer(url: str, spec_hash: str, ks: list, barrier) -> int:
     store = ResultStore(url)
     sid = store.ensure_spec("gage", spec_hash, {"spec": {"n": 1}}, None, None)
-    barrier.wait()
+    barrier.wait(timeout=300)  # a writer that failed to open the store breaks the barrier: an error, not a hang
     mine = sum(store.record("gage", sid, f"{k:064d}", 10 + k, T0, [f"scan_{k}.ply", f"copy_{k % 8}/scan_{k}.ply"], outcome(k))
                for k in ks)
     store.close()
@@ -122,27 +122,73 @@ def test_newer_schema_is_refused_naming_the_version(db_url):
         ResultStore(db_url)
 
 
-def test_older_schema_asks_for_db_upgrade(tmp_path):
-    url = f"sqlite:///{tmp_path / 'old.db'}"
-    engine = create_engine(url)
+def inspection_json(k: int) -> dict:
+    """An inspection result as `gagekit inspect --json` prints it (the parts the store reads)."""
+    tol = [("flatness", "A", [], 0.01, 0.002 * k), ("perpendicularity", "C", ["A"], 0.05, 0.039),
+           ("perpendicularity", "C", ["A", "B"], 0.05, 0.0), ("position", "bore", ["A", "B", "C"], 0.1, 0.0585)]
+    return {"part": "bracket", "n_points": 1000, "status": "conforming",
+            "tolerances": [{"feature": f, "characteristic": c, "tolerance": t, "measured": v, "pass": v <= t,
+                            "margin": t - v, "datums": d, "n_points": 100 + j, "zone": "diameter" if c == "position" else "width",
+                            "toleranced_element": "surface"} for j, (c, f, d, t, v) in enumerate(tol)]}
+
+
+def test_a_database_of_the_first_schema_is_upgraded_with_its_results(db_url):
+    """A database written by revision 0001 (built from the shipped Alembic history, filled
+    as 0001's gagekit filled it): refused until `db upgrade`, which adds the callout columns,
+    fills them from the stored JSON and renames the callouts as new results name them."""
     from alembic import command
     from alembic.config import Config
 
+    from gagekit.store.results import inspection_rows
     from gagekit.store.schema import MIGRATIONS
 
     revs = known_revisions()
-    if len(revs) < 2:
-        pytest.skip("a single schema revision: nothing older to upgrade from")
+    assert revs[:2] == ["0001", "0002"]
+    engine = create_engine(db_url)
     cfg = Config()
     cfg.set_main_option("script_location", str(MIGRATIONS))
     with engine.begin() as conn:
         cfg.attributes["connection"] = conn
-        command.upgrade(cfg, revs[-2])
+        command.upgrade(cfg, "0001")
+    with engine.begin() as conn:  # what 0001's ResultStore.record wrote for two inspections
+        conn.execute(sa.text("INSERT INTO specs (id, hash, kind, document, created) VALUES (1, 'h', 'inspect', '{}', :t)"),
+                     {"t": T0})
+        for k in (1, 2):
+            conn.execute(sa.text("INSERT INTO scans (id, content_hash, size_bytes, scanned, created) VALUES (:k, :h, 10, :t, :t)"),
+                         {"k": k, "h": f"c{k}", "t": T0})
+            conn.execute(sa.text("INSERT INTO results (id, scan_id, spec_id, path, status, result, started, finished, seconds) "
+                                 "VALUES (:k, :k, 1, :p, 'ok', :r, :t, :t, 1.0)"),
+                         {"k": k, "p": f"s{k}.ply", "r": json.dumps(inspection_json(k)), "t": T0})
+            for name, t in (("flatness of A", 0), ("perpendicularity of C", 1), ("perpendicularity of C #2", 2),
+                            ("position of bore", 3)):
+                tol = inspection_json(k)["tolerances"][t]
+                conn.execute(sa.text("INSERT INTO inspection_results (result_id, tolerance, characteristic, value, upper, "
+                                     "conforming) VALUES (:k, :n, :c, :v, :u, :ok)"),
+                             {"k": k, "n": name, "c": tol["characteristic"], "v": tol["measured"], "u": tol["tolerance"],
+                              "ok": tol["pass"]})
+        if conn.dialect.name == "postgresql":  # the ids were given: move the serial sequences past them
+            for table in ("specs", "scans", "results"):
+                conn.execute(sa.text(f"SELECT setval(pg_get_serial_sequence('{table}', 'id'), (SELECT max(id) FROM {table}))"))
     engine.dispose()
-    with pytest.raises(SchemaVersionError, match="gagekit db upgrade"):
-        ResultStore(url)
-    assert upgrade(url) == (revs[-2], revs[-1])
-    ResultStore(url).close()
+
+    with pytest.raises(SchemaVersionError, match=r"schema version 0001, older .*`gagekit db upgrade"):
+        ResultStore(db_url)
+    assert upgrade(db_url) == ("0001", head_revision())
+    store = ResultStore(db_url)
+    t = m.InspectionResult.__table__
+    with store.engine.connect() as conn:
+        got = [dict(r._mapping) for r in conn.execute(
+            sa.select(t.c.result_id, t.c.tolerance, t.c.characteristic, t.c.value, t.c.lower, t.c.upper, t.c.conforming,
+                      t.c.feature, t.c.datums, t.c.zone, t.c.n_points).order_by(t.c.result_id, t.c.id))]
+    # the upgraded rows are exactly the rows this gagekit writes for the same results
+    assert got == [{"result_id": k, **row} for k in (1, 2) for row in inspection_rows(inspection_json(k))]
+    assert [r["tolerance"] for r in got[:4]] == ["flatness of A", "perpendicularity of C |A|",
+                                                 "perpendicularity of C |A|B|", "position of bore |A|B|C|"]
+    # and new results land beside them
+    spec = store.ensure_spec("inspect", "h2", {"part": {}})
+    assert store.record("inspect", spec, "c3", 10, T0, ["s3.ply"], Outcome("ok", inspection_json(3), None, T0, T0, 1.0))
+    store.close()
+    assert upgrade(db_url) == (head_revision(), head_revision())
 
 
 def test_a_foreign_database_is_refused(tmp_path):

@@ -89,13 +89,19 @@ def test_select_counts_all_points_and_masks_the_shown_ones(client, session):
     box = gagekit.gage.region_in_scanner(gagekit.gage.Region(Box(table["center"], table["size"]), "part"), session.alignment)
     inside = gagekit.select(session.scan.points, box)
     assert res["count"] == len(inside) == 3084
-    mask = np.unpackbits(np.frombuffer(base64.b64decode(res["mask"]), dtype=np.uint8), bitorder="little")
-    shown = np.flatnonzero(mask[: len(session.scan.lod)])
+    # 3084 of 120929 points inside, about 1300 of the 50000 shown: sent as their positions
+    assert "mask" not in res
+    shown = np.frombuffer(base64.b64decode(res["indices"]), dtype="<u4")
     assert res["lod_count"] == len(shown)
     assert np.array_equal(session.scan.lod[shown], np.intersect1d(session.scan.lod, inside))
     scanner = {"center": [414.327902, -205.123776, 65.868523], "size": [14, 14, 3], "rotation": [0.03, -0.02, 0.55],
                "frame": "scanner"}
     assert client.post("/api/select", json={"region": scanner}).json()["count"] == 852
+    # a box holding most of the scan: a bit mask is smaller than the positions
+    big = client.post("/api/select", json={"region": {"center": [400, -150, 130], "size": [1e3, 1e3, 1e3],
+                                                      "frame": "scanner"}}).json()
+    mask = np.unpackbits(np.frombuffer(base64.b64decode(big["mask"]), dtype=np.uint8), bitorder="little")
+    assert "indices" not in big and big["count"] == 120929 and mask[: len(session.scan.lod)].all()
 
 
 def test_run_matches_the_library_and_colours_every_gage_point(client, session):

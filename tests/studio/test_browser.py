@@ -155,3 +155,74 @@ def test_casting_opens_runs_and_saves_byte_identical(browser, tmp_path):
         assert problems == [] and page.evaluate("window.__studio.errors") == []
     finally:
         studio.stop()
+
+
+def test_drawing_features_tolerances_inspection_and_save(browser, tmp_path):
+    """A drawing (PART.toml): the bracket's features as regions, the inspection run on the
+    server (its table equals gagekit.inspect), a new feature added by mouse with a flatness
+    tolerance typed in, run again, saved: the file is the original with only additions,
+    and `gagekit inspect` reads it."""
+    import difflib
+
+    from gagekit.inspect import inspect, load_part_spec
+
+    scan, part = tmp_path / "bracket.ply", tmp_path / "bracket.toml"
+    shutil.copy(data_path("bracket.ply"), scan)
+    shutil.copy(data_path("bracket.toml"), part)
+    original = part.read_text()
+    pts = gagekit.read_points(scan)
+    studio = Studio(str(scan), str(part))
+    try:
+        page, problems = open_page(browser, studio.url)
+        assert page.locator("#regions tbody tr").count() == 11
+        assert page.inner_text("#run-title") == "Inspection"
+        page.click("#run")
+        page.wait_for_selector("#callouts tbody tr", timeout=60000)
+        want = inspect(pts, load_part_spec(part))
+        rows = page.locator("#callouts tbody tr")
+        assert rows.count() == len(want.tolerances) == 20
+        bore = page.locator("#callouts tbody tr[data-feature='bore'][data-characteristic='position'] td.measured")
+        pos = next(t for t in want.tolerances if t.feature == "bore" and t.characteristic == "position")
+        assert float(bore.inner_text()) == pytest.approx(pos.measured, abs=5e-5)
+        assert page.inner_text("#run-status").startswith("nonconforming: 18/20 callouts pass")
+        assert not page.locator("#legend").is_hidden()
+        # unchanged: saved byte for byte
+        page.click("#save")
+        page.wait_for_function("document.querySelector('#save-status').textContent.includes('unchanged')", timeout=10000)
+        assert part.read_text() == original
+
+        # a new feature, added by mouse, placed on the top face by typing numbers
+        page.click("#add-box")
+        canvas = page.locator("#view canvas").bounding_box()
+        page.mouse.click(canvas["x"] + canvas["width"] / 2, canvas["y"] + canvas["height"] / 2)
+        page.wait_for_selector("#regions tbody tr[data-name='F1']", timeout=10000)
+        for field, value in zip(("cx", "cy", "cz", "sx", "sy", "sz"), (50, 40, 40, 20, 20, 1)):
+            page.fill(f"#re-{field}", str(value))
+        inside = gagekit.select(pts, Box((50, 40, 40), (20, 20, 1)))
+        page.wait_for_function(f"document.querySelector('#re-count').textContent === '{len(inside):,}'", timeout=10000)
+        assert page.input_value("#fe-shape") == "plane" and page.input_value("#fe-oz") == "1"
+        page.click("#tol-add")
+        page.select_option("#tolerances .tol .t-char", "flatness")
+        page.fill("#tolerances .tol .t-tol", "0.05")
+        page.click("#run")
+        page.wait_for_function("document.querySelectorAll('#callouts tbody tr').length === 21", timeout=60000)
+        flat = page.locator("#callouts tbody tr[data-feature='F1'] td.measured")
+        page.fill("#save-path", "edited.toml")
+        page.click("#save")
+        page.wait_for_function("document.querySelector('#save-status').textContent.startsWith('saved edited.toml')",
+                               timeout=10000)
+        text = (tmp_path / "edited.toml").read_text()
+        ops = difflib.SequenceMatcher(None, original.splitlines(), text.splitlines()).get_opcodes()
+        assert {op for op, *_ in ops} == {"equal", "insert"}            # the original's lines all kept as they were
+        spec = load_part_spec(tmp_path / "edited.toml")
+        assert spec.features["F1"].region.center == (50.0, 40.0, 40.0) and spec.features["F1"].shape == "plane"
+        result = inspect(pts, spec)
+        f1 = next(t for t in result.tolerances if t.feature == "F1")
+        assert f1.characteristic == "flatness" and f1.tolerance == 0.05
+        assert float(flat.inner_text()) == pytest.approx(f1.measured, abs=5e-5)
+        shot = tmp_path / "bracket.png"
+        page.screenshot(path=str(shot))
+        not_blank(shot)
+        assert problems == [] and page.evaluate("window.__studio.errors") == []
+    finally:
+        studio.stop()

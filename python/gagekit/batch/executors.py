@@ -9,7 +9,8 @@ own errors never raise, see :func:`gagekit.batch.tasks.execute`).
   each worker caps its kernel threads at cores / workers. A worker that dies breaks the
   whole pool (a property of the standard library), so the pool is started again and the
   unfinished scans resubmitted.
-* :class:`DaskCluster` - ``dask.distributed.Client`` on ``tcp://host:8786``; the scheduler
+* :class:`DaskCluster` - ``dask.distributed.Client`` on ``tcp://host:8786``; each worker
+  caps its kernel threads at its host's cores / the Dask threads on that host; the scheduler
   reschedules the tasks of a worker that dies (``distributed.scheduler.allowed-failures``)
   and a task that failed for other reasons is retried once. Workers must see the scan
   files at the same paths (a shared file system) and have gagekit installed.
@@ -23,7 +24,7 @@ import os
 from typing import Any, Iterable, Optional
 
 from ..errors import ClusterError, ConfigError, InvalidInputError
-from .tasks import execute, limit_threads, warm_up
+from .tasks import execute, limit_dask_worker_threads, limit_threads, warm_up
 
 __all__ = ["WorkerLost", "LocalPool", "DaskCluster", "default_workers"]
 
@@ -116,8 +117,24 @@ class DaskCluster:
         except (TimeoutError, OSError):
             self.client.close()
             raise ClusterError(f"the Dask scheduler at {address} has no workers (waited {wait_for_workers:g} s)") from None
-        n = len(self.client.scheduler_info().get("workers", {}))
+        workers = self.client.scheduler_info().get("workers", {})
+        n = len(workers)
         self.description = f"Dask scheduler {address} ({n} worker{'s' if n != 1 else ''})"
+        self._limit_threads(workers)
+
+    def _limit_threads(self, workers: dict) -> None:
+        """Workers sharing a host share its cores: each runs its kernels on
+        cores / (Dask threads on the host) threads (Rayon and BLAS), as local workers do."""
+        per_host: dict = {}
+        for info in workers.values():
+            per_host[info.get("host")] = per_host.get(info.get("host"), 0) + int(info.get("nthreads", 1))
+        threads = {addr: per_host[info.get("host")] for addr, info in workers.items()}
+        #: worker address -> the thread cap it took (empty when the workers could not run it)
+        self.thread_caps: dict = {}
+        try:
+            self.thread_caps = self.client.run(limit_dask_worker_threads, threads)
+        except Exception:  # a worker without gagekit fails its scans with that message instead
+            pass
 
     def warm(self) -> None:
         """Import the kernels on every worker now."""

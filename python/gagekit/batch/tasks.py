@@ -5,7 +5,7 @@ Runs in a local worker process or on a Dask worker; imports only what the task n
 (unreadable file, infeasible problem, degenerate points) becomes an ``error`` outcome
 with its message, as does an unexpected exception (named as an internal error), so the
 batch goes on. Results are exactly the dictionaries the single-scan commands print with
-``--json`` (``gage check``, ``form fit``).
+``--json`` (``gage check``, ``form fit``, ``inspect``).
 """
 
 from __future__ import annotations
@@ -18,7 +18,7 @@ from dataclasses import dataclass
 from datetime import datetime, timezone
 from typing import Any, Callable, Mapping, Optional
 
-__all__ = ["Outcome", "execute", "TASKS", "limit_threads", "warm_up"]
+__all__ = ["Outcome", "execute", "TASKS", "limit_threads", "limit_dask_worker_threads", "warm_up"]
 
 
 @dataclass(frozen=True)
@@ -36,9 +36,33 @@ class Outcome:
 
 def limit_threads(threads: int) -> None:
     """Cap the kernels' threads in this worker process (Rayon, BLAS), so that N workers on
-    N cores do not each start N threads. Must run before the first kernel call."""
+    N cores do not each start N threads (idle Rayon and OpenBLAS threads spin, taking
+    the core another worker needs).
+
+    The environment variables reach Rayon's pool, which starts at the first kernel call;
+    the BLAS library was loaded with numpy before this runs (the worker imports gagekit
+    to unpickle this very function), so its pool is resized at run time with
+    threadpoolctl."""
+    n = max(1, int(threads))
     for var in ("RAYON_NUM_THREADS", "OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
-        os.environ[var] = str(max(1, int(threads)))
+        os.environ[var] = str(n)
+    from threadpoolctl import threadpool_limits
+
+    threadpool_limits(limits=n)
+
+
+def limit_dask_worker_threads(threads_on_host: dict, dask_worker: Any = None) -> int:
+    """On a Dask worker (through ``Client.run``, which hands the worker in as
+    ``dask_worker``): cap the kernels' threads at this host's cores shared by the threads
+    of every Dask worker on the host (``threads_on_host``: worker address -> total Dask
+    threads on its host). Returns the cap. Rayon's pool is sized at its first use, so a
+    worker that has already run kernels keeps its size."""
+    w = dask_worker
+    total = max(1, int(threads_on_host.get(w.address, w.state.nthreads)))
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+    n = max(1, cores // total)
+    limit_threads(n)
+    return n
 
 
 def warm_up(seconds: float = 0.2) -> int:
@@ -79,8 +103,20 @@ def _form(path: str, document: Mapping[str, Any], options: Mapping[str, Any]) ->
                                     units=options.get("units")))
 
 
-#: the kinds of batch and their worker functions (``inspect`` registers itself here)
-TASKS: dict[str, Callable[[str, Mapping[str, Any], Mapping[str, Any]], dict]] = {"gage": _gage, "form": _form}
+def _inspect(path: str, document: Mapping[str, Any], options: Mapping[str, Any]) -> dict:
+    """What ``gagekit inspect SCAN PART.toml --json`` prints (the drawing is ``document["part"]``)."""
+    from .._util import check_finite_result, to_jsonable
+    from ..inspect import inspect, part_spec_from_dict
+
+    spec = part_spec_from_dict(document["part"], options.get("source") or "part spec")
+    result = inspect(_read(path, options.get("units")), spec)
+    check_finite_result(result)
+    return to_jsonable(result)
+
+
+#: the kinds of batch and their worker functions
+TASKS: dict[str, Callable[[str, Mapping[str, Any], Mapping[str, Any]], dict]] = {
+    "gage": _gage, "form": _form, "inspect": _inspect}
 
 
 def execute(kind: str, path: str, document: Mapping[str, Any], options: Mapping[str, Any]) -> Outcome:

@@ -38,7 +38,9 @@ app.command("stats")(stats.stats)
 gage.app.command("batch")(batch.gage_batch)
 form.app.command("batch")(batch.form_batch)
 app.command("demo")(demo.demo)
-app.command("inspect")(inspect_cmd.inspect)
+inspect_cmd.app.command("scan")(inspect_cmd.inspect)
+inspect_cmd.app.command("batch")(batch.inspect_batch)
+app.add_typer(inspect_cmd.app, name="inspect")
 app.command("studio")(studio.studio)
 
 

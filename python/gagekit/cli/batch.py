@@ -1,6 +1,7 @@
-"""`gagekit gage batch`, `gagekit form batch`: many scans, local workers or a Dask cluster.
+"""`gagekit gage batch`, `gagekit form batch`, `gagekit inspect batch`: many scans, local
+workers or a Dask cluster.
 
-Registered on the ``gage`` and ``form`` groups by :mod:`gagekit.cli`. Each scan's result is
+Registered on the ``gage``, ``form`` and ``inspect`` groups by :mod:`gagekit.cli`. Each scan's result is
 exactly what the single-scan command prints with ``--json``; results go to the results
 database (``--db``, default ``gagekit.db`` beside the ``--report`` folder, else in the
 current one), and a batch run again skips what is stored there.
@@ -64,6 +65,9 @@ def _human_line(ev) -> str:
     what = ""
     if ev.result is not None:
         what = ev.result.get("status") or f"form error {ev.result.get('form_error', float('nan')):.6g} mm"
+        tols = ev.result.get("tolerances")
+        if isinstance(tols, list):
+            what += f" ({sum(bool(t.get('pass')) for t in tols)}/{len(tols)} callouts pass)"
     elif ev.error:
         what = f"stored error: {ev.error}"
     return f"{ev.status:<8} {ev.scan}  {what}".rstrip()
@@ -162,3 +166,26 @@ def form_batch(
     name = normalize_shape(shape)
     job = Job("form", {"shape": name, "criterion": criterion, "seed": seed}, _units(units), source=None, part=part)
     run(job, scans, db, report, workers, scheduler, as_json, retry_failed, f"Form batch: {name} ({criterion})")
+
+
+def inspect_batch(
+    part: Path = typer.Argument(..., help="The drawing (TOML), as for `gagekit inspect`."),
+    scans: List[str] = SCANS_ARG,
+    units: Optional[str] = UNITS_OPTION,
+    workers: Optional[int] = WORKERS_OPTION,
+    scheduler: Optional[str] = SCHEDULER_OPTION,
+    db: Optional[str] = DB_OPTION,
+    report: Optional[Path] = REPORT_OPTION,
+    as_json: bool = JSON_LINES,
+    retry_failed: bool = RETRY_OPTION,
+    part_name: Optional[str] = PART_OPTION,
+) -> None:
+    """GD&T inspection (ISO 1101 / ISO 5459) of many scans: each result as `gagekit inspect --json` prints it."""
+    from .._util import load_toml
+    from ..batch import Job
+    from ..inspect import part_spec_from_dict
+
+    doc = load_toml(part)
+    spec = part_spec_from_dict(doc, str(part))  # a bad drawing stops the batch before it starts
+    job = Job("inspect", {"part": doc}, _units(units), source=str(part), part=part_name or spec.name)
+    run(job, scans, db, report, workers, scheduler, as_json, retry_failed, f"Inspection batch: {part.name}")

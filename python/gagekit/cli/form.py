@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-from enum import Enum
 from pathlib import Path
 from typing import Any, Optional
 
@@ -17,14 +16,6 @@ app = typer.Typer(help="Form of lines, planes, circles, spheres and cylinders (C
 # circles ------------------------------------------------------------------------------
 
 
-class _CircleCriterion(str, Enum):
-    lsq = "lsq"
-    mc = "mc"
-    mi = "mi"
-    mz = "mz"
-    all = "all"
-
-
 def _read_xy(path: Path, units: Optional[str] = None) -> np.ndarray:
     from ..form.files import read_xy
 
@@ -34,23 +25,25 @@ def _read_xy(path: Path, units: Optional[str] = None) -> np.ndarray:
 @app.command("circle")
 def circle(
     file: Path = typer.Argument(..., help="Points: any file read_points reads (NIST .ds too); 2-D, or 3-D in any pose."),
-    criterion: _CircleCriterion = typer.Option(_CircleCriterion.lsq, "--criterion", "-c",
-                                               help="lsq, mc (min circumscribed), mi (max inscribed), mz (min zone), or all."),
+    criterion: str = typer.Option("lsq", "--criterion", "-c",
+                                  help="lsq, mc (min circumscribed), mi (max inscribed), mz (min zone), any name "
+                                       "of the criterion table, or all."),
     units: Optional[str] = UNITS_OPTION,
     as_json: bool = JSON_OPTION,
 ) -> None:
     """Fit a circle (Sec. 6.2): least squares, MC, MI or minimum zone (roundness); points in
     space are fitted in their least-squares plane."""
     from ..form.circle import fit_circle
+    from ..form.criteria import CIRCLE_CRITERIA
 
     pts = _read_xy(file, units)
-    crits = ["lsq", "mc", "mi", "mz"] if criterion.value == "all" else [criterion.value]
+    crits = list(CIRCLE_CRITERIA.values()) if criterion.strip().lower() == "all" else [criterion]
     fits = [fit_circle(pts, c) for c in crits]
     result = fits[0] if len(fits) == 1 else {f.to_dict()["criterion"]: f for f in fits}
 
     def human(_: object) -> str:
         xyz = ["x", "y", "z"][: len(fits[0].center)]
-        rows = [[f.to_dict()["criterion"], *f.center, f.radius, f.width,
+        rows = [[f.criterion, *f.center, f.radius, f.form_error,
                  " ".join(map(str, f.control_points))] for f in fits]
         text = table(["criterion", *xyz, "radius", "form error", "control points"], rows)
         notes = [w for f in fits for w in f.warnings]

@@ -1,13 +1,35 @@
-"""`gagekit inspect`: a scan against its drawing -- GD&T callouts with datum frames."""
+"""`gagekit inspect`: a scan against its drawing -- GD&T callouts with datum frames.
+
+``gagekit inspect SCAN PART.toml`` (short for ``gagekit inspect scan SCAN PART.toml``)
+inspects one scan; ``gagekit inspect batch PART.toml SCAN...`` many (:mod:`.batch`).
+"""
 
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Optional
+from typing import Any, Optional
 
 import typer
+from typer.core import TyperGroup
 
 from ._common import JSON_OPTION, UNITS_OPTION, emit, read_cloud_cli, table
+
+
+class DefaultScanGroup(TyperGroup):
+    """``inspect``'s sub-commands, where a first argument that names none of them (a scan
+    file) is the single-scan command's: ``inspect SCAN PART`` = ``inspect scan SCAN PART``."""
+
+    default_command = "scan"
+
+    def parse_args(self, ctx: Any, args: list) -> list:
+        if args and args[0] not in self.commands and args[0] not in ("--help", "-h"):
+            args = [self.default_command, *args]
+        return super().parse_args(ctx, args)
+
+
+app = typer.Typer(cls=DefaultScanGroup, no_args_is_help=True,
+                  help="GD&T inspection against the drawing (ISO 1101, ISO 5459): `inspect SCAN PART.toml` for one "
+                       "scan, `inspect batch PART.toml SCAN...` for many.")
 
 
 def human(result) -> str:

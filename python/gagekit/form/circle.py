@@ -8,6 +8,7 @@ the nearest-point Voronoi diagram for MI, nearest and farthest Voronoi diagrams 
 from __future__ import annotations
 
 import math
+import warnings as _warnings
 from dataclasses import dataclass, field
 from typing import Any, Optional
 
@@ -15,17 +16,9 @@ import numpy as np
 
 from .. import _core
 from ..errors import ConfigError
+from .criteria import CIRCLE_CRITERIA, criterion_name
 
 __all__ = ["CircleFit", "fit_circle", "CIRCLE_CRITERIA"]
-
-#: Canonical criterion codes and the long names accepted as aliases.
-CIRCLE_CRITERIA: dict[str, str] = {
-    "lsq": "least-squares",
-    "mc": "min-circumscribed",
-    "mi": "max-inscribed",
-    "mz": "minimum-zone",
-}
-_ALIASES = {**{k: k for k in CIRCLE_CRITERIA}, **{v: k for k, v in CIRCLE_CRITERIA.items()}}
 
 #: Below this arc (degrees) the maximum inscribed circle is ill-posed.
 MIN_ARC_DEG = 90.0
@@ -35,13 +28,15 @@ MIN_ARC_DEG = 90.0
 class CircleFit:
     """A fitted 2-D circle.
 
-    ``radius`` is the fitted radius; for the minimum zone it is the mean of ``r_in`` and
-    ``r_out``. ``r_in`` / ``r_out`` are the smallest / largest distance of the points from
-    ``center`` (for MZ the inner and outer zone circles), ``width = r_out - r_in`` is the
-    roundness (peak-to-valley radial deviation about ``center``). ``control_points`` are
-    input indices of the points that fix the fit (for MZ ``control_in`` + ``control_out``).
-    ``arc_deg`` is the arc the points cover seen from the centre; ``warnings`` explains
-    when the result is ill-posed (MI of an arc below 90 degrees).
+    ``criterion`` is the canonical name (``least-squares``, ``min-circumscribed``,
+    ``max-inscribed``, ``minimum-zone``). ``radius`` is the fitted radius; for the minimum
+    zone it is the mean of ``r_in`` and ``r_out``. ``r_in`` / ``r_out`` are the smallest /
+    largest distance of the points from ``center`` (for MZ the inner and outer zone
+    circles), ``form_error = r_out - r_in`` is the roundness (peak-to-valley radial
+    deviation about ``center``). ``control_points`` are input indices of the points that
+    fix the fit (for MZ ``control_in`` + ``control_out``). ``arc_deg`` is the arc the
+    points cover seen from the centre; ``warnings`` explains when the result is ill-posed
+    (MI of an arc below 90 degrees). ``width`` is a deprecated alias of ``form_error``.
 
     For points in space (any pose) ``center`` is 3-D, ``normal`` the unit normal of the
     least-squares plane the circle was fitted in, ``r_in`` / ``r_out`` (the certificate)
@@ -54,7 +49,7 @@ class CircleFit:
     radius: float
     r_in: float
     r_out: float
-    width: float
+    form_error: float
     control_points: tuple[int, ...]
     n_points: int
     method: str = "exact"
@@ -66,20 +61,26 @@ class CircleFit:
     normal: Optional[tuple[float, float, float]] = None
     out_of_plane: Optional[float] = None
 
+    @property
+    def width(self) -> float:
+        """Deprecated alias of :attr:`form_error`."""
+        _warnings.warn("CircleFit.width is deprecated; use form_error", DeprecationWarning, stacklevel=2)
+        return self.form_error
+
     def to_dict(self) -> dict[str, Any]:
         d: dict[str, Any] = {
             "shape": "circle",
-            "criterion": CIRCLE_CRITERIA[self.criterion],
+            "criterion": self.criterion,
             "method": self.method,
             "n_points": self.n_points,
-            "form_error": self.width,
+            "form_error": self.form_error,
             "center": list(self.center),
             "radius": self.radius,
         }
         if self.normal is not None:
             d["normal"] = list(self.normal)
             d["out_of_plane"] = self.out_of_plane
-        if self.criterion == "mz":
+        if self.criterion == "minimum-zone":
             d["inner_radius"] = self.r_in
             d["outer_radius"] = self.r_out
             d["control_in"] = list(self.control_in)
@@ -90,14 +91,6 @@ class CircleFit:
         d["ill_posed"] = self.ill_posed
         d["warnings"] = list(self.warnings)
         return d
-
-
-def _criterion(criterion: str) -> str:
-    key = _ALIASES.get(str(criterion).strip().lower())
-    if key is None:
-        choices = ", ".join(f"{k} ({v})" for k, v in CIRCLE_CRITERIA.items())
-        raise ConfigError(f"unknown circle criterion {criterion!r}; choose one of {choices}")
-    return key
 
 
 def fit_circle(points: Any, criterion: str = "lsq", method: str = "exact", seed: int = 0, **options: Any) -> CircleFit:
@@ -148,41 +141,30 @@ def fit_circle(points: Any, criterion: str = "lsq", method: str = "exact", seed:
         if method != "exact":
             raise ConfigError("method 'pso' fits 2-D points; fit points in space with method 'exact'")
         return _fit_in_plane(pts, crit)
-    n = int(pts.shape[0])
-    control_in: tuple[int, ...] = ()
-    control_out: tuple[int, ...] = ()
     if method == "pso":
-        # 3-D fits helper: PSO over the centre (Eqs. 6.1, 6.4, 6.5) as a cross-check
+        # PSO over the centre (Eqs. 6.1, 6.4, 6.5) as a cross-check
         allowed = {"seed", "particles", "iterations", "stall_iterations"}
-        if set(options) - allowed or crit == "lsq":
+        if set(options) - allowed or crit == "least-squares":
             raise ConfigError(
                 "method 'pso' fits mc, mi and mz and takes the options seed, particles, "
                 "iterations, stall_iterations"
             )
-        center, r_in, r_out, cin, cout, _, _ = _core.form_circle_pso(
+        r = _core.form_circle_pso(
             pts, crit, int(options.get("seed", 0)), int(options.get("particles", 20)),
             int(options.get("iterations", 2000)), int(options.get("stall_iterations", 100)),
         )
-        control_in, control_out = tuple(cin), tuple(cout)
-        control = {"mc": control_out, "mi": control_in}.get(crit, control_in + tuple(i for i in control_out if i not in control_in))
-        radius = {"mc": r_out, "mi": r_in}.get(crit, 0.5 * (r_in + r_out))
-        if crit != "mz":
-            control_in = control_out = ()
-            d = np.hypot(pts[:, 0] - center[0], pts[:, 1] - center[1])
-            r_in, r_out = float(d.min()), float(d.max())
-        return _result(crit, method, pts, center, radius, r_in, r_out, control, control_in, control_out)
-    if crit == "mz":
-        center, r_in, r_out, cin, cout = _core.form_circle_mz(pts)
-        control_in, control_out = tuple(int(i) for i in cin), tuple(int(i) for i in cout)
-        control = control_in + tuple(i for i in control_out if i not in control_in)
-        radius = 0.5 * (r_in + r_out)
     else:
-        fn = {"lsq": _core.form_circle_lsq, "mc": _core.form_circle_mc, "mi": _core.form_circle_mi}[crit]
-        center, radius, ctrl = fn(pts)
-        control = tuple(int(i) for i in ctrl)
-        d = np.hypot(pts[:, 0] - center[0], pts[:, 1] - center[1])
-        r_in, r_out = float(d.min()), float(d.max())
-    return _result(crit, method, pts, center, radius, r_in, r_out, control, control_in, control_out)
+        r = _core.form_circle_fit(pts, crit)
+    return _result(r, method, int(pts.shape[0]))
+
+
+def _criterion(criterion: str) -> str:
+    """The canonical name (the package's one table); the error lists the circle codes."""
+    try:
+        return criterion_name(criterion, shape="circle")
+    except ConfigError:
+        choices = ", ".join(f"{k} ({v})" for k, v in CIRCLE_CRITERIA.items())
+        raise ConfigError(f"unknown circle criterion {criterion!r}; choose one of {choices}") from None
 
 
 def _circle_points(points: Any) -> np.ndarray:
@@ -195,71 +177,54 @@ def _fit_in_plane(pts: np.ndarray, crit: str) -> CircleFit:
     """A circle in space: the 2-D fit in the least-squares plane, in Rust."""
     r = _core.form_circle_in_plane(pts, crit)
     arc = math.degrees(r.arc)
-    if crit == "mi" and arc < 270.0:
-        # as in 2-D: MI's own centre can sit anywhere inside a short arc
-        arc = math.degrees(_core.form_circle_in_plane(pts, "lsq").arc)
-    if crit == "mz":
-        control_in, control_out = tuple(r.control_in), tuple(r.control_out)
-        control = control_in + tuple(i for i in control_out if i not in control_in)
-    else:
-        control_in = control_out = ()
-        control = tuple(r.control_out)
-    ill_posed, warnings = _arc_warnings(crit, arc)
+    mz = crit == "minimum-zone"
     return CircleFit(
         criterion=crit,
         center=tuple(float(v) for v in r.center),
         radius=float(r.radius),
         r_in=float(r.min_distance),
         r_out=float(r.max_distance),
-        width=float(r.max_distance - r.min_distance),
-        control_points=tuple(int(i) for i in control),
+        form_error=float(r.max_distance - r.min_distance),
+        control_points=tuple(int(i) for i in r.control),
         n_points=int(pts.shape[0]),
-        control_in=tuple(int(i) for i in control_in),
-        control_out=tuple(int(i) for i in control_out),
+        control_in=tuple(int(i) for i in r.control_in) if mz else (),
+        control_out=tuple(int(i) for i in r.control_out) if mz else (),
         arc_deg=float(arc),
-        ill_posed=ill_posed,
-        warnings=tuple(warnings),
+        ill_posed=bool(r.ill_posed),
+        warnings=tuple(_arc_warnings(crit, arc)),
         normal=(float(r.normal[0]), float(r.normal[1]), float(r.normal[2])),
         out_of_plane=float(r.out_of_plane),
     )
 
 
-def _arc_warnings(crit: str, arc: float) -> tuple[bool, list[str]]:
-    warnings: list[str] = []
-    ill_posed = False
-    if crit == "mi" and arc < MIN_ARC_DEG:
-        ill_posed = True
-        warnings.append(
+def _arc_warnings(crit: str, arc: float) -> list[str]:
+    """The reader's explanation of a short arc (the ill-posed flag itself is Rust's)."""
+    if arc >= MIN_ARC_DEG:
+        return []
+    if crit == "max-inscribed":
+        return [
             f"the points cover only {arc:.1f} degrees of arc (< {MIN_ARC_DEG:.0f}): the maximum "
             "inscribed circle is ill-posed and its radius is not a meaningful size"
-        )
-    elif arc < MIN_ARC_DEG:
-        warnings.append(f"the points cover only {arc:.1f} degrees of arc: centre and radius are poorly determined")
-    return ill_posed, warnings
+        ]
+    return [f"the points cover only {arc:.1f} degrees of arc: centre and radius are poorly determined"]
 
 
-def _result(crit, method, pts, center, radius, r_in, r_out, control, control_in, control_out) -> CircleFit:
-    gap = _core.form_circle_angular_gap(pts, (float(center[0]), float(center[1])))
-    arc = math.degrees(2.0 * math.pi - gap)
-    if crit == "mi" and arc < 270.0:
-        # MI's own centre can sit anywhere inside a short arc: judge the arc about the
-        # least-squares centre instead
-        ref = _core.form_circle_lsq(pts)[0]
-        arc = math.degrees(2.0 * math.pi - _core.form_circle_angular_gap(pts, (float(ref[0]), float(ref[1]))))
-    ill_posed, warnings = _arc_warnings(crit, arc)
+def _result(r: Any, method: str, n_points: int) -> CircleFit:
+    """The Python view of a complete 2-D fit from Rust (``_core.CircleResult``)."""
+    arc = math.degrees(r.arc)
     return CircleFit(
-        criterion=crit,
-        center=(float(center[0]), float(center[1])),
-        radius=float(radius),
-        r_in=float(r_in),
-        r_out=float(r_out),
-        width=float(r_out - r_in),
-        control_points=tuple(control),
-        n_points=int(pts.shape[0]),
+        criterion=str(r.criterion),
+        center=(float(r.center[0]), float(r.center[1])),
+        radius=float(r.radius),
+        r_in=float(r.r_in),
+        r_out=float(r.r_out),
+        form_error=float(r.form_error),
+        control_points=tuple(int(i) for i in r.control),
+        n_points=n_points,
         method=method,
-        control_in=control_in,
-        control_out=control_out,
+        control_in=tuple(int(i) for i in r.control_in),
+        control_out=tuple(int(i) for i in r.control_out),
         arc_deg=float(arc),
-        ill_posed=ill_posed,
-        warnings=tuple(warnings),
+        ill_posed=bool(r.ill_posed),
+        warnings=tuple(_arc_warnings(str(r.criterion), arc)),
     )

@@ -22,6 +22,7 @@ import numpy as np
 from .. import _core
 from .._util import as_points
 from ..errors import ConfigError, InvalidInputError
+from .criteria import criterion_name
 
 __all__ = [
     "Certificate",
@@ -36,34 +37,6 @@ __all__ = [
     "fit_sphere",
     "fit_circle_3d",
 ]
-
-_CRITERIA = {
-    "least-squares": "least-squares",
-    "lsq": "least-squares",
-    "ls": "least-squares",
-    "l2": "least-squares",
-    "minimum-zone": "minimum-zone",
-    "mz": "minimum-zone",
-    "mzc": "minimum-zone",
-    "min-circumscribed": "min-circumscribed",
-    "mc": "min-circumscribed",
-    "mcc": "min-circumscribed",
-    "max-inscribed": "max-inscribed",
-    "mi": "max-inscribed",
-    "mic": "max-inscribed",
-}
-
-
-def normalize_criterion(criterion: str, allowed: tuple[str, ...], shape: str) -> str:
-    """The canonical criterion name, or a :class:`ConfigError` listing the choices."""
-    key = str(criterion).strip().lower().replace("_", "-")
-    name = _CRITERIA.get(key)
-    if name is None or name not in allowed:
-        raise ConfigError(
-            f"{shape}: unknown fit criterion {criterion!r}; choose one of {', '.join(allowed)}"
-        )
-    return name
-
 
 def _points(points: Any, dims: tuple[int, ...], shape: str) -> np.ndarray:
     try:
@@ -170,7 +143,9 @@ class SphereFit:
     """A fitted sphere (3-D) or circle (2-D). ``certificate``: distances to the centre;
     ``form_error`` = max - min (sphericity about this centre; the zone width for the
     minimum zone). Chebyshev spheres also give ``inner_radius`` / ``outer_radius`` (the
-    zone, minimum zone only) and ``control_points``."""
+    zone, minimum zone only), ``control_points`` and ``global_bound``: the certificate of
+    the global search (minimum zone: no centre gives a narrower zone; maximum inscribed:
+    no larger sphere; within 1e-9 mm of the value)."""
 
     criterion: str
     n_points: int
@@ -182,6 +157,7 @@ class SphereFit:
     inner_radius: Optional[float] = None
     outer_radius: Optional[float] = None
     control_points: Optional[tuple[int, ...]] = None
+    global_bound: Optional[float] = None
 
     def to_dict(self) -> dict[str, Any]:
         if self.control_points is None:
@@ -189,6 +165,8 @@ class SphereFit:
         radii: dict[str, Any] = {"radius": self.radius}
         if self.criterion == "minimum-zone":
             radii.update(inner_radius=self.inner_radius, outer_radius=self.outer_radius)
+        if self.global_bound is not None:
+            radii.update(global_bound=self.global_bound)
         return _fit_dict(self, **radii, center=list(self.center), control_points=list(self.control_points))
 
 
@@ -210,8 +188,9 @@ class Circle3DFit:
         return _fit_dict(self, radius=self.radius, center=list(self.center), normal=list(self.normal))
 
 
-def _cert(ext: tuple[float, float]) -> Certificate:
-    return Certificate(float(ext[0]), float(ext[1]))
+def _cert(fit: Any) -> Certificate:
+    """The certificate of a result from Rust (its ``min_distance`` / ``max_distance``)."""
+    return Certificate(float(fit.min_distance), float(fit.max_distance))
 
 
 def fit_line(
@@ -235,27 +214,25 @@ def fit_line(
     """
     from .search import outside_warning, search_settings
 
-    crit = normalize_criterion(criterion, ("least-squares", "minimum-zone"), "line")
+    crit = criterion_name(criterion, ("least-squares", "minimum-zone"), "line")
     pts = _points(points, (2, 3), "line")
     if crit == "minimum-zone" and pts.shape[1] == 3:
         # straightness in space: the thinnest cylinder around the points (MCC, Eq. 6.13);
         # the zone is its diameter
         nominal, tilt_rad = search_settings(axis, max_tilt, "line")
         z = _core.form_line3_min_zone(pts, int(seed), nominal, tilt_rad)
-        cert = Certificate(float(z.min_distance), float(z.max_distance))
+        cert = _cert(z)
         warnings = () if z.outside is None else (outside_warning("minimum-zone", _Diameter(z.outside), max_tilt),)
         return LineFit(
             crit, len(pts), _vec(z.point), _vec(z.direction), float(z.form_error), cert,
             tuple(int(i) for i in z.control), tilt_deg=math.degrees(z.tilt), warnings=warnings,
         )
     if crit == "minimum-zone":
-        point, normal, direction, width, up, lo, _ = _core.form_min_zone_flat(pts)
-        cert = _cert(_core.form_line_extent(pts, point, direction))
-        return LineFit(crit, len(pts), _vec(point), _vec(direction), float(width), cert, tuple(sorted({*up, *lo})))
-    point, direction, ext = _core.form_line_lsq(pts)
-    cert = _cert(ext)
-    form = cert.max_distance - cert.min_distance if pts.shape[1] == 2 else 2.0 * cert.max_distance
-    return LineFit(crit, len(pts), _vec(point), _vec(direction), form, cert)
+        z = _core.form_min_zone_flat(pts)
+        cert = _cert(z)
+        return LineFit(crit, len(pts), _vec(z.point), _vec(z.direction), float(z.form_error), cert, tuple(z.control))
+    ls = _core.form_line_lsq(pts)
+    return LineFit(crit, len(pts), _vec(ls.point), _vec(ls.direction), float(ls.form_error), _cert(ls))
 
 
 def fit_plane(points: Any, criterion: str = "least-squares") -> PlaneFit:
@@ -267,15 +244,14 @@ def fit_plane(points: Any, criterion: str = "least-squares") -> PlaneFit:
     an exact solve of the active constraints and re-linearisation until the tilt vanishes;
     the mid-plane is reported and ``form_error`` is recomputed from its normal.
     """
-    crit = normalize_criterion(criterion, ("least-squares", "minimum-zone"), "plane")
+    crit = criterion_name(criterion, ("least-squares", "minimum-zone"), "plane")
     pts = _points(points, (3,), "plane")
     if crit == "minimum-zone":
-        point, normal, _, width, up, lo, _ = _core.form_min_zone_flat(pts)
-        cert = _cert(_core.form_plane_extent(pts, point, normal))
-        return PlaneFit(crit, len(pts), _vec(point), _vec(normal), float(width), cert, tuple(sorted({*up, *lo})))
-    point, normal, ext = _core.form_plane_lsq(pts)
-    cert = _cert(ext)
-    return PlaneFit(crit, len(pts), _vec(point), _vec(normal), cert.max_distance - cert.min_distance, cert)
+        z = _core.form_min_zone_flat(pts)
+        cert = _cert(z)
+        return PlaneFit(crit, len(pts), _vec(z.point), _vec(z.normal), float(z.form_error), cert, tuple(z.control))
+    ls = _core.form_plane_lsq(pts)
+    return PlaneFit(crit, len(pts), _vec(ls.point), _vec(ls.normal), float(ls.form_error), _cert(ls))
 
 
 def fit_sphere(points: Any, criterion: str = "least-squares") -> SphereFit:
@@ -287,41 +263,41 @@ def fit_sphere(points: Any, criterion: str = "least-squares") -> SphereFit:
     Eq. 6.1). ``max-inscribed``: the largest sphere with no point inside, within the
     circumscribed one (the 3-D form of Eq. 6.2). ``minimum-zone`` (sphericity): two
     concentric spheres of least radial separation enclosing the points (the 3-D form of
-    Eq. 6.5). MI and MZ: sequential linear programming from the least-squares and MC
-    centres to a point where the Chebyshev conditions hold. Coplanar points raise
+    Eq. 6.5). MI and MZ are global: a certified branch and bound over the centre (interval
+    and linearised bounds of the distances on cubes of centres) to 1e-9 mm (or 1e-13 of
+    the part's size), then the exact local step (sequential linear programming) from its
+    best centre; MZ searches centres within the least-squares radius of the least-squares
+    centre, MI the whole MC sphere. Coplanar points raise
     :class:`DegenerateGeometryError` (except for the circumscribed sphere).
     """
-    crit = normalize_criterion(criterion, ("least-squares", "min-circumscribed", "max-inscribed", "minimum-zone"), "sphere")
+    crit = criterion_name(criterion, ("least-squares", "min-circumscribed", "max-inscribed", "minimum-zone"), "sphere")
     pts = _points(points, (2, 3), "sphere")
     if crit != "least-squares":
         if pts.shape[1] != 3:
             raise ConfigError(f"sphere: {crit} needs (n, 3) points; for 2-D points use fit_circle")
         z = _core.form_sphere_fit(pts, crit)
         radius = {"min-circumscribed": z.r_out, "max-inscribed": z.r_in}.get(crit, 0.5 * (z.r_in + z.r_out))
-        cert = Certificate(float(z.min_distance), float(z.max_distance))
+        cert = _cert(z)
         control = z.control_out if crit != "minimum-zone" else list(z.control_in) + [i for i in z.control_out if i not in z.control_in]
         return SphereFit(
             crit, len(pts), _vec(z.center), float(radius), cert.max_distance - cert.min_distance, cert,
             inner_radius=float(z.r_in) if crit == "minimum-zone" else None,
             outer_radius=float(z.r_out) if crit == "minimum-zone" else None,
             control_points=tuple(int(i) for i in control),
+            global_bound=float(z.bound) if crit != "min-circumscribed" else None,
         )
-    center, radius, ext = _core.form_sphere_lsq(pts)
-    cert = _cert(ext)
+    ls = _core.form_sphere_lsq(pts)
     shape = "sphere" if pts.shape[1] == 3 else "circle"
-    return SphereFit(crit, len(pts), _vec(center), float(radius), cert.max_distance - cert.min_distance, cert, shape)
+    return SphereFit(crit, len(pts), _vec(ls.center), float(ls.radius), float(ls.form_error), _cert(ls), shape)
 
 
 def fit_circle_3d(points: Any, criterion: str = "least-squares") -> Circle3DFit:
     """Least-squares circle of (n, 3) points in space (NIST's convention): least-squares
     plane, projection of the points onto it, least-squares circle in that plane."""
-    crit = normalize_criterion(criterion, ("least-squares",), "3-D circle")
+    crit = criterion_name(criterion, ("least-squares",), "3-D circle")
     pts = _points(points, (3,), "3-D circle")
-    center, normal, radius, ext = _core.form_circle3d_lsq(pts)
-    cert = _cert(ext)
-    return Circle3DFit(
-        crit, len(pts), _vec(center), _vec(normal), float(radius), cert.max_distance - cert.min_distance, cert
-    )
+    ls = _core.form_circle3d_lsq(pts)
+    return Circle3DFit(crit, len(pts), _vec(ls.center), _vec(ls.normal), float(ls.radius), float(ls.form_error), _cert(ls))
 
 
 @dataclass(frozen=True)
@@ -355,11 +331,10 @@ def fit_cone(points: Any, criterion: str = "least-squares") -> ConeFit:
     """Least-squares cone of (n, 3) points: orthogonal distances
     d = rho cos(psi) - z sin(psi) - D (Levenberg-Marquardt from algebraic cones about the
     principal axes); as the NIST reference fits define it."""
-    crit = normalize_criterion(criterion, ("least-squares",), "cone")
+    crit = criterion_name(criterion, ("least-squares",), "cone")
     pts = _points(points, (3,), "cone")
-    point, direction, distance, half, ext = _core.form_cone_lsq(pts)
-    cert = _cert(ext)
+    c = _core.form_cone_lsq(pts)
     return ConeFit(
-        crit, len(pts), _vec(point), _vec(direction), float(distance), 2.0 * float(half),
-        cert.max_distance - cert.min_distance, cert,
+        crit, len(pts), _vec(c.point), _vec(c.direction), float(c.distance), 2.0 * float(c.half_angle),
+        float(c.form_error), _cert(c),
     )

@@ -220,7 +220,9 @@ def _alignment(pts: np.ndarray, spec: GageSpec) -> Optional[Alignment]:
         allp = np.vstack([pts[cut[n].indices] for n in lst])
         hull = np.vstack([pts[cut[n].hull] for n in lst])
         groups_in[key] = (lst, allp, hull)
-    return fit_321(groups_in, pts.mean(axis=0))
+    # the cloud's centroid only tells the part side of each datum: a BLAS product
+    # (1 ms at 1 M points) instead of numpy's strided mean over axis 0 (30 ms)
+    return fit_321(groups_in, np.ones(len(pts)) @ pts / len(pts))
 
 
 def datum_alignment(points, spec: SpecLike) -> Optional[Alignment]:

@@ -16,7 +16,9 @@ Eqs. 5.13-5.15):
   Sec. B.3); as primary its direction is free (for a circle: its least-squares normal;
   a cone's datum axis is its least-squares axis), after a datum plane it is perpendicular
   to that plane (the 2-D maximum inscribed / minimum circumscribed circle of the points
-  projected along the plane's normal, exact);
+  projected along the plane's normal, exact) or, given as ``D = { feature = ..., angle =
+  60 }``, at that basic angle to the plane, free to turn about its normal (the best
+  cylinder over the turn; the axis's lean then fixes the frame's x);
 - ``datum_fit = "least-squares"`` replaces each criterion by least squares.
 
 **Datum frame.** z: the primary plane's normal into the material, or the primary axis
@@ -43,8 +45,8 @@ import numpy as np
 
 from .. import _core
 from ..errors import ConfigError
-from ..form import fit_cylinder
-from .features import FeatureData, _unit
+from ..form import fit_cylinder, fit_sphere
+from .features import FeatureData, _basis, _unit, cone_dir, golden_min
 from .spec import DatumRef, PartSpec
 
 __all__ = ["SimulatedDatum", "DatumFrame", "DatumSystem"]
@@ -56,8 +58,8 @@ MAX_MISALIGN_DEG = 30.0
 
 @dataclass(frozen=True)
 class SimulatedDatum:
-    """A simulated datum: a plane (``point``, ``vector`` = normal out of the material) or
-    an axis (``point``, ``vector`` = direction). ``precedence``: the datums it was
+    """A simulated datum: a plane (``point``, ``vector`` = normal out of the material), an
+    axis (``point``, ``vector`` = direction) or a point (a sphere's centre; ``vector`` 0). ``precedence``: the datums it was
     constrained by. ``radius``: the fitted cylinder's radius (axes); ``deviation``: the
     largest distance of the feature's points from a datum plane."""
 
@@ -74,7 +76,8 @@ class SimulatedDatum:
     def to_dict(self) -> dict[str, Any]:
         d: dict[str, Any] = {"letter": self.letter, "feature": self.feature, "type": self.type, "method": self.method,
                              "constrained_by": list(self.precedence), "point": self.point.tolist()}
-        d["normal" if self.type == "plane" else "direction"] = self.vector.tolist()
+        if self.type != "point":
+            d["normal" if self.type == "plane" else "direction"] = self.vector.tolist()
         if self.radius is not None:
             d["radius"] = self.radius
         if self.deviation is not None:
@@ -118,6 +121,42 @@ def _angle_deg(a: np.ndarray, b: np.ndarray) -> float:
     return math.degrees(math.acos(min(1.0, abs(float(a @ b)))))
 
 
+#: Half width (rad) of the turn searched about the datum plane's normal around the
+#: least-squares axis, for a datum axis at a basic angle to the plane.
+CONE_TURN = math.radians(10.0)
+
+
+def _axis_on_cone(points: np.ndarray, a: np.ndarray, tilt: float, d_ls: np.ndarray, fit: str):
+    """(point, direction, radius) of the datum axis constrained at ``tilt`` (rad) from the
+    plane normal ``a`` and free to turn about it (ISO 5459: the orientation constraint of
+    the secondary datum, one rotation left): the maximum inscribed (minimum
+    circumscribed) cylinder over the turn, by a 41-point grid of the turn within
+    ``CONE_TURN`` of the least-squares axis's and golden-section search in the best
+    cell; each value is the exact fixed-direction cylinder (2-D Welzl / Voronoi). The
+    least-squares option takes the direction on the cone nearest the least-squares axis."""
+    u, v = _basis(a)
+    phi0 = math.atan2(float(d_ls @ v), float(d_ls @ u))
+    if fit == "least-squares":
+        d = cone_dir(a, tilt, phi0)
+        point, direction, radius, _, _ = _core.gdt_axis_along(points, tuple(d), fit)
+        return point, direction, radius
+    sign = -1.0 if fit == "inscribed" else 1.0  # maximise the inscribed radius
+
+    def value(phi: float) -> float:
+        return sign * float(_core.gdt_axis_along(points, tuple(cone_dir(a, tilt, phi)), fit)[2])
+
+    grid = 40
+    step = 2 * CONE_TURN / grid
+    phis = [phi0 - CONE_TURN + k * step for k in range(grid + 1)]
+    vals = [value(p) for p in phis]
+    k = min(range(grid + 1), key=lambda i: (vals[i], i))
+    fx, x = golden_min(value, phis[max(k - 1, 0)], phis[min(k + 1, grid)])
+    if vals[k] < fx:
+        x = phis[k]
+    point, direction, radius, _, _ = _core.gdt_axis_along(points, tuple(cone_dir(a, tilt, x)), fit)
+    return point, direction, radius
+
+
 class DatumSystem:
     """Simulates datums on demand and caches them by precedence (a datum constrained by
     A differs from the same feature constrained by D)."""
@@ -147,7 +186,25 @@ class DatumSystem:
         where = f"{self.spec.source}: datum {ref.letter} (feature '{fd.name}')"
         if fd.shape == "plane":
             return self._plane(ref, fd, prior, before, where)
+        if fd.shape == "sphere":
+            return self._point(ref, fd, before)
         return self._axis(ref, fd, prior, before, where)
+
+    def _point(self, ref, fd: FeatureData, before) -> SimulatedDatum:
+        """A datum point: the centre of the maximum inscribed sphere of a spherical hole, of
+        the minimum circumscribed sphere of a ball (ISO 5459 Sec. B.3: the associated
+        sphere), or of the least-squares sphere; both Chebyshev spheres are exact / certified
+        global (:func:`gagekit.form.fit_sphere`). A datum point is not constrained by
+        the datums before it (a sphere has no orientation)."""
+        if fd.spec.datum_fit == "least-squares":
+            crit, name = "least-squares", "least-squares sphere"
+        elif fd.spec.kind == "hole":
+            crit, name = "max-inscribed", "maximum inscribed sphere"
+        else:
+            crit, name = "min-circumscribed", "minimum circumscribed sphere"
+        s = fd.lsq() if crit == "least-squares" else fit_sphere(fd.points, crit)
+        return SimulatedDatum(ref.letter, fd.name, "point", f"centre of the {name}", np.array(s.center), np.zeros(3), before,
+                              radius=float(s.radius))
 
     def _plane(self, ref, fd: FeatureData, prior, before, where) -> SimulatedDatum:
         out = np.asarray(fd.spec.outward, dtype=float)
@@ -214,13 +271,22 @@ class DatumSystem:
                               "use a plane perpendicular to it as the secondary datum")
         if planes:
             a = planes[0].vector
-            if _angle_deg(d_ls, a) > MAX_MISALIGN_DEG:
+            tilt = 90.0 - ref.angle  # basic angle between the axis and the plane's normal
+            got = _angle_deg(d_ls, a)
+            if abs(got - tilt) > MAX_MISALIGN_DEG:
+                how = "perpendicular to it" if ref.angle == 90.0 else f"at its basic angle of {ref.angle:g} degrees to it"
                 raise ConfigError(f"{where}: a datum axis behind the datum plane {planes[0].letter} is taken "
-                                  f"perpendicular to it; this axis is {_angle_deg(d_ls, a):.0f} degrees from its normal")
+                                  f"{how}; this axis is {90.0 - got:.0f} degrees from the plane "
+                                  f"(set it as {ref.letter} = {{ feature = \"{fd.name}\", angle = ... }})")
             d0 = a if float(a @ d_ls) >= 0 else -a
-            point, direction, radius, _, _ = _core.gdt_axis_along(fd.points, tuple(d0), fit)
-            method = {"inscribed": "maximum inscribed", "circumscribed": "minimum circumscribed"}.get(fit, "least-squares")
-            method += f" {'cylinder' if fd.shape != 'circle' else 'circle'}, perpendicular to {planes[0].letter}"
+            kind_name = {"inscribed": "maximum inscribed", "circumscribed": "minimum circumscribed"}.get(fit, "least-squares")
+            kind_name += f" {'cylinder' if fd.shape != 'circle' else 'circle'}"
+            if ref.angle == 90.0:
+                point, direction, radius, _, _ = _core.gdt_axis_along(fd.points, tuple(d0), fit)
+                method = f"{kind_name}, perpendicular to {planes[0].letter}"
+            else:
+                point, direction, radius = _axis_on_cone(fd.points, d0, math.radians(tilt), d_ls, fit)
+                method = f"{kind_name}, at {ref.angle:g} degrees to {planes[0].letter}"
             return SimulatedDatum(ref.letter, fd.name, "axis", method, np.array(point), np.array(direction), before, radius=float(radius))
         if fd.shape == "cone" or (fd.shape == "cylinder" and fit == "least-squares"):
             r = fd.lsq()
@@ -234,10 +300,10 @@ class DatumSystem:
                                   radius=float(radius))
         crit = "max-inscribed" if fit == "inscribed" else "min-circumscribed"
         cyl = fit_cylinder(fd.points, crit, seed=0, axis=tuple(d_ls), max_tilt=10.0)
-        d = _unit(cyl.axis_direction)
+        d = _unit(cyl.direction)
         d = d if float(d @ d_ls) >= 0 else -d
         name = "maximum inscribed cylinder" if fit == "inscribed" else "minimum circumscribed cylinder"
-        return SimulatedDatum(ref.letter, fd.name, "axis", name, np.array(cyl.axis_point), d, before, radius=float(cyl.radius))
+        return SimulatedDatum(ref.letter, fd.name, "axis", name, np.array(cyl.point), d, before, radius=float(cyl.radius))
 
     # -- frame ---------------------------------------------------------------------------
     def frame(self, letters: tuple[str, ...]) -> DatumFrame:
@@ -267,15 +333,45 @@ class DatumSystem:
             u, v = _basis(d)
             return [u, v]
 
-        z = -first.vector if first.type == "plane" else first.vector
+        z = -first.vector if first.type == "plane" else (first.vector if first.type == "axis" else None)
         x = y = None
         if first.type == "plane":
             constrain(first.vector, first.point)
-        else:
+        elif first.type == "axis":
             for n in axis_rows(first.vector):
                 constrain(n, first.point)
+        else:
+            for n in np.eye(3):
+                constrain(n, first.point)
         axis_seen = first if first.type == "axis" else None
+        point_seen = first if first.type == "point" else None
         for k, s in enumerate(sims[1:], start=1):
+            if s.type == "point":
+                # a datum point: locks the translations; after an axis, fixes the turn about it
+                if axis_seen is not None and z is not None and x is None and y is None:
+                    w = s.point - axis_seen.point
+                    w = w - (w @ z) * z
+                    if np.linalg.norm(w) > 1e-9:
+                        x = _unit(w)
+                for n in np.eye(3):
+                    constrain(n, s.point)
+                point_seen = point_seen or s
+                continue
+            if z is None:
+                # behind a primary datum point: the first plane or axis gives z
+                z = -s.vector if s.type == "plane" else s.vector
+                if s.type == "plane":
+                    constrain(s.vector, s.point)
+                else:
+                    if point_seen is not None:
+                        w = point_seen.point - s.point
+                        w = w - (w @ z) * z
+                        if np.linalg.norm(w) > 1e-9:
+                            x = _unit(w)
+                    for n in axis_rows(s.vector):
+                        constrain(n, s.point)
+                    axis_seen = axis_seen or s
+                continue
             if s.type == "plane":
                 inward = -s.vector
                 if abs(float(inward @ z)) > 0.999:
@@ -294,9 +390,15 @@ class DatumSystem:
                     w = w - (w @ z) * z
                     if np.linalg.norm(w) > 1e-9:
                         x = _unit(w)
+                elif x is None and y is None and abs(float(s.vector @ z)) < 0.999:
+                    # an axis at a basic angle to the primary plane: its lean fixes x
+                    x = _unit(s.vector - (s.vector @ z) * z)
                 for n in axis_rows(s.vector):
                     constrain(n, s.point)
                 axis_seen = axis_seen or s
+        if z is None:
+            # a datum point alone: every rotation is free; z and x from its region box
+            z = self.feats[first.feature].box_axes()[2]
         free_rotation = x is None and y is None
         if free_rotation:
             box = self.feats[first.feature].box_axes()

@@ -16,8 +16,9 @@ or cone's **derived axis**:
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
-from typing import Any, Optional
+from typing import Any, Callable, Optional
 
 import numpy as np
 
@@ -27,7 +28,7 @@ from ..form import fit_circle, fit_circle_3d, fit_cone, fit_cylinder, fit_line, 
 from .._rotation import rotation_from_vector
 from .spec import MIN_POINTS, Feature
 
-__all__ = ["FeatureData", "extract"]
+__all__ = ["FeatureData", "extract", "cone_dir", "golden_min"]
 
 
 def _unit(v: Any) -> np.ndarray:
@@ -87,8 +88,7 @@ class FeatureData:
         through the centre (circle) or the line (line), signed by :meth:`sign_hint`."""
         fit = self.lsq()
         if self.shape in ("cylinder", "cone"):
-            p, d = np.array(fit.axis_point if self.shape == "cylinder" else fit.point), _unit(
-                fit.axis_direction if self.shape == "cylinder" else fit.direction)
+            p, d = np.array(fit.point), _unit(fit.direction)
         elif self.shape == "circle":
             p, d = np.array(fit.center), _unit(fit.normal)
         elif self.shape == "line":
@@ -100,11 +100,16 @@ class FeatureData:
         return p, d
 
     def min_zone(self) -> tuple[float, np.ndarray]:
-        """(width, normal) of the minimum zone of the points (flatness, ISO 12781), computed
-        once: the flatness callout and the free datum plane share it."""
+        """(width, normal) of the minimum zone of the points (flatness, ISO 12781; exact: the
+        minimum width of the set, hull facets and antipodal edge pairs), computed once: the
+        flatness callout and the free datum plane share it. The normal points into the
+        material (against ``outward``) when the feature has one."""
         if "mz" not in self._cache:
             normal, _, _, width = _core.gdt_slab(self.points, "free", (0.0, 0.0, 1.0), 0.0)
-            self._cache["mz"] = (float(width), np.array(normal))
+            n = np.array(normal)
+            if self.spec.outward is not None and float(n @ np.asarray(self.spec.outward)) > 0:
+                n = -n  # the zone's normal reported into the material, as a datum frame's axis
+            self._cache["mz"] = (float(width), n)
         return self._cache["mz"]
 
     def plane_normal_out(self) -> np.ndarray:
@@ -156,7 +161,7 @@ class FeatureData:
                 continue
             q = self.points[idx] - p0
             xy = np.ascontiguousarray(np.column_stack([q @ u, q @ v]))
-            c, _, _ = _core.form_circle_lsq(xy)
+            c = _core.form_circle_fit(xy, "least-squares").center
             h = float((q @ d).mean())
             out.append((p0 + c[0] * u + c[1] * v + h * d, xy))
         if len(out) < 2:
@@ -208,6 +213,31 @@ def _basis(d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     a = -1.0 / (s + d[2])
     b = d[0] * d[1] * a
     return np.array([1.0 + s * d[0] * d[0] * a, s * b, -s * d[0]]), np.array([b, s + d[1] * d[1] * a, -d[1]])
+
+
+def cone_dir(a: np.ndarray, angle: float, phi: float) -> np.ndarray:
+    """The unit direction at ``angle`` (rad) from the unit ``a``, turned by ``phi`` about it."""
+    u, v = _basis(a)
+    return math.cos(angle) * a + math.sin(angle) * (math.cos(phi) * u + math.sin(phi) * v)
+
+
+def golden_min(f: Callable[[float], float], lo: float, hi: float, iterations: int = 60) -> tuple[float, float]:
+    """(value, x) of the minimum of ``f`` on [lo, hi] by golden-section search (a unimodal
+    bracket; deterministic)."""
+    g = 0.5 * (math.sqrt(5.0) - 1.0)
+    x1, x2 = hi - g * (hi - lo), lo + g * (hi - lo)
+    f1, f2 = f(x1), f(x2)
+    for _ in range(iterations):
+        if f1 <= f2:
+            hi, x2, f2 = x2, x1, f1
+            x1 = hi - g * (hi - lo)
+            f1 = f(x1)
+        else:
+            lo, x1, f1 = x1, x2, f2
+            x2 = lo + g * (hi - lo)
+            f2 = f(x2)
+    x = 0.5 * (lo + hi)
+    return f(x), x
 
 
 def extract(points: np.ndarray, features: dict[str, Feature], source: str = "part") -> dict[str, FeatureData]:

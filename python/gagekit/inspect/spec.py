@@ -18,7 +18,7 @@ All lengths are millimetres in the scan's frame, angles degrees. Layout::
 
     [datums]
     A = "A"                      # letter -> feature name
-    B = { feature = "side", angle = 90.0 }   # basic angle to the primary (secondary planes)
+    B = { feature = "side", angle = 90.0 }   # basic angle to the primary plane (secondary planes, axes)
 
     [[tolerance]]
     feature = "bore"
@@ -81,7 +81,7 @@ APPLIES_TO: dict[str, tuple[str, ...]] = {
 }
 
 #: Shapes that can serve as a datum feature (plane -> a plane; the others -> an axis).
-DATUM_SHAPES = ("plane", "cylinder", "cone", "circle")
+DATUM_SHAPES = ("plane", "cylinder", "cone", "circle", "sphere")
 AXIAL = ("cylinder", "cone", "circle")
 AXIS_METHODS = ("least-squares", "median-line")
 DATUM_FITS = ("chebyshev", "least-squares")
@@ -119,7 +119,8 @@ class Feature:
 
 @dataclass(frozen=True)
 class DatumRef:
-    """A datum letter: its feature and (for a secondary plane) the basic angle to the primary."""
+    """A datum letter: its feature and (for a secondary plane or axis) the basic angle to
+    the primary plane (90: perpendicular)."""
 
     letter: str
     feature: str
@@ -319,8 +320,8 @@ def part_spec_from_dict(doc: Mapping[str, Any], source: str = "part") -> PartSpe
             raise ConfigError(f"{where}: names feature {fname!r}, which is not a [[feature]]")
         shape = features[fname].shape
         if shape not in DATUM_SHAPES:
-            raise ConfigError(f"{where}: a {shape} cannot be a datum feature; use a plane, cylinder, cone or circle")
-        if shape in ("cylinder", "circle", "cone") and features[fname].kind is None:
+            raise ConfigError(f"{where}: a {shape} cannot be a datum feature; use a plane, cylinder, cone, circle or sphere")
+        if shape in ("cylinder", "circle", "cone", "sphere") and features[fname].kind is None:
             raise ConfigError(f"{where}: datum feature '{fname}' needs kind = \"hole\" or \"shaft\" (its datum is the "
                               "maximum inscribed or minimum circumscribed feature, ISO 5459)")
         if fname in used:
@@ -402,6 +403,9 @@ def _check_datums(char: str, letters: list, datums: Mapping[str, DatumRef], feat
         return
     if char in ORIENTATION + ("position",) and n == 0:
         raise ConfigError(f"{where}: 'datums' is missing; {char} needs at least a primary datum")
+    if char in ORIENTATION and features[datums[letters[0]].feature].shape == "sphere":
+        raise ConfigError(f"{where}: 'datums': {char} needs a primary datum plane or axis; datum '{letters[0]}' is a "
+                          "sphere (a datum point fixes no orientation)")
     if char in ("coaxiality",) + RUNOUT:
         if n == 0:
             raise ConfigError(f"{where}: 'datums' is missing; {char} needs a datum axis")

@@ -42,8 +42,11 @@ Location
     along ``nominal.direction`` (or the circle's normal) (diameter); of a plane -- two
     parallel planes symmetric about the basic plane (width). Translations and the
     rotation about z that the datum frame leaves free are optimised (exactly for
-    translations: minimum circumscribed circle / 1-D convex minimum; by a 720-point grid
-    and golden-section search for the rotation).
+    translations: minimum circumscribed circle / 1-D convex minimum; for the rotation
+    alone, of a centre or of an axis along z, exactly -- the minimum of an upper envelope
+    of sinusoids; otherwise by a 720-point grid and golden-section search, see
+    ``_exact_turn``). Relative to a lone datum point every rotation is free: only the
+    distance of a centre from it is located.
   coaxiality (ISO 1101 Sec. 18.13): a cylinder coaxial with the datum axis containing the
     derived axis (a circle's or sphere's centre: concentricity) -- diameter.
   profile of a plane (ISO 1660): two planes symmetric about the basic plane (width); with
@@ -69,7 +72,7 @@ from .. import _core
 from ..errors import ConfigError, DegenerateGeometryError
 from ..form import fit_circle, fit_cylinder, fit_line, fit_sphere
 from .datums import DatumSystem, SimulatedDatum
-from .features import FeatureData, _basis, _unit
+from .features import FeatureData, _basis, _unit, cone_dir, golden_min
 from .spec import Tolerance
 
 __all__ = ["Measurement", "evaluate", "ZONE_KINDS"]
@@ -110,9 +113,60 @@ def _mec_radius(xy: np.ndarray) -> tuple[float, np.ndarray]:
         return 0.5 * float(np.linalg.norm(xy[1] - xy[0])), 0.5 * (xy[0] + xy[1])
     if np.ptp(xy, axis=0).max() == 0.0:
         return 0.0, xy[0]
-    c, r, _ = _core.form_circle_mc(np.ascontiguousarray(xy))
+    c = _core.form_circle_fit(np.ascontiguousarray(xy), "min-circumscribed").center
     r = float(np.linalg.norm(xy - np.array(c), axis=1).max())
     return r, np.array(c)
+
+
+def _min_max_sinusoids(a: np.ndarray, b: np.ndarray, phi: np.ndarray) -> tuple[float, float]:
+    """Exact (value, psi) of min over psi of max_i f_i(psi), f_i = a_i - b_i cos(psi - phi_i):
+    the minimum of the upper envelope lies at the minimum of one sinusoid or where two
+    cross, (a_i - a_j) = r cos(psi - d); every candidate is scored on every f_i."""
+    cand = [phi]
+    i, j = np.triu_indices(len(a), 1)
+    if len(i):
+        c1 = b[i] * np.cos(phi[i]) - b[j] * np.cos(phi[j])
+        s1 = b[i] * np.sin(phi[i]) - b[j] * np.sin(phi[j])
+        r, d, rhs = np.hypot(c1, s1), np.arctan2(s1, c1), a[i] - a[j]
+        ok = (r > 0) & (np.abs(rhs) <= r)
+        t = np.arccos(np.clip(rhs[ok] / r[ok], -1.0, 1.0))
+        cand += [d[ok] + t, d[ok] - t]
+    psi = np.concatenate(cand)
+    env = (a[None, :] - b[None, :] * np.cos(psi[:, None] - phi[None, :])).max(axis=1)
+    k = int(np.argmin(env))
+    return float(env[k]), float(psi[k])
+
+
+def _exact_turn(pts: np.ndarray, frame, P0: np.ndarray, D0: Optional[np.ndarray]) -> Optional[tuple[float, float]]:
+    """Exact minimum over the free turn psi about the frame's z of the largest distance of
+    ``pts`` to the nominal point (``D0`` None) or to the nominal line (``D0`` along z),
+    when no translation is free: each squared distance is a sinusoid in psi (the nominal
+    turns about z through the origin), so the optimum is an envelope vertex
+    (:func:`_min_max_sinusoids`). ``None`` where that does not hold: with free translations
+    the inner problem is a minimum enclosing circle whose radius is not a sinusoid of psi,
+    and a nominal line not along z moves its perpendicular plane with psi (the distances
+    are then quartic trigonometric functions) -- those keep the grid and golden-section
+    search, to 1e-15 rad of the cell's minimum."""
+    z = frame.axes[2]
+    if len(frame.free_translations):
+        return None
+    if D0 is not None and abs(abs(float(D0 @ z)) - 1.0) > 1e-12:
+        return None
+    o = frame.origin
+    u, v = frame.axes[0], frame.axes[1]
+    q = pts - o
+    b0 = np.asarray(P0, dtype=float) - o
+    if D0 is not None:  # distances to a line along z: only the components normal to z count
+        q = q - np.outer(q @ z, z)
+        b0 = b0 - (b0 @ z) * z
+    # |q_i - R(psi) b0|^2 = |q_i|^2 + |b0|^2 - 2 q_i . R(psi) b0; R turns about z
+    bz, bu, bv = b0 @ z, b0 @ u, b0 @ v
+    qz, qu, qv = q @ z, q @ u, q @ v
+    a = np.einsum("ij,ij->i", q, q) + b0 @ b0 - 2.0 * qz * bz
+    # q.(R b0)_perp = (qu bu + qv bv) cos psi + (qv bu - qu bv) sin psi = m cos(psi - phi)
+    cc, ss = qu * bu + qv * bv, qv * bu - qu * bv
+    value, psi = _min_max_sinusoids(a, 2.0 * np.hypot(cc, ss), np.arctan2(ss, cc))
+    return math.sqrt(max(value, 0.0)), psi
 
 
 def _cylinder_zone(points: np.ndarray, d: np.ndarray) -> float:
@@ -127,30 +181,11 @@ def _min_over_turn(f: Callable[[float], float], grid: int = 720) -> tuple[float,
     vals = [f(k * step) for k in range(grid)]
     cells = sorted(range(grid), key=lambda k: (vals[k], k))[:3]
     best = (vals[cells[0]], cells[0] * step)
-    g = 0.5 * (math.sqrt(5.0) - 1.0)
     for k in cells:
-        lo, hi = (k - 1) * step, (k + 1) * step
-        x1, x2 = hi - g * (hi - lo), lo + g * (hi - lo)
-        f1, f2 = f(x1), f(x2)
-        for _ in range(60):
-            if f1 <= f2:
-                hi, x2, f2 = x2, x1, f1
-                x1 = hi - g * (hi - lo)
-                f1 = f(x1)
-            else:
-                lo, x1, f1 = x1, x2, f2
-                x2 = lo + g * (hi - lo)
-                f2 = f(x2)
-        x = 0.5 * (lo + hi)
-        fx = f(x)
+        fx, x = golden_min(f, (k - 1) * step, (k + 1) * step)
         if fx < best[0]:
             best = (fx, x)
     return best
-
-
-def _cone_dir(a: np.ndarray, angle: float, phi: float) -> np.ndarray:
-    u, v = _basis(a)
-    return math.cos(angle) * a + math.sin(angle) * (math.cos(phi) * u + math.sin(phi) * v)
 
 
 def _rot_z(frame, psi: float) -> tuple[Callable, Callable]:
@@ -205,13 +240,13 @@ def _roundness(tol, fd, system):
     if fd.shape == "circle":
         d = _unit(fd.lsq().normal)
         xy = _plane_2d(fd.points - np.array(fd.lsq().center), d)
-        w = fit_circle(xy, "mz").width
+        w = fit_circle(xy, "mz").form_error
         return Measurement(float(w), "width", "circle", len(fd.points))
     count = tol.sections or fd.spec.sections
     worst = 0.0
     secs = fd.section_circles(count)
     for _, xy in secs:
-        worst = max(worst, float(fit_circle(xy, "mz").width))
+        worst = max(worst, float(fit_circle(xy, "mz").form_error))
     return Measurement(worst, "width", f"{len(secs)} sections", len(fd.points))
 
 
@@ -219,12 +254,12 @@ def _cylindricity(tol, fd, system):
     _, d = fd.axis_line()
     fit = fit_cylinder(fd.points, "minimum-zone", seed=0, axis=tuple(d), max_tilt=10.0)
     return Measurement(float(fit.form_error), "width", "surface", len(fd.points),
-                       {"axis_point": list(fit.axis_point), "axis_direction": list(fit.axis_direction)})
+                       {"axis_point": list(fit.point), "axis_direction": list(fit.direction)})
 
 
 def _sphericity(tol, fd, system):
-    c, r_in, r_out = _core.gdt_min_zone_sphere(np.ascontiguousarray(fd.points))
-    return Measurement(float(r_out - r_in), "width", "surface", len(fd.points), {"center": list(c)})
+    fit = fit_sphere(fd.points, "minimum-zone")
+    return Measurement(float(fit.outer_radius - fit.inner_radius), "width", "surface", len(fd.points), {"center": list(fit.center)})
 
 
 def _element(fd: FeatureData) -> tuple[np.ndarray, str]:
@@ -287,8 +322,8 @@ def _orientation(tol, fd, system):
     _, d_ls = fd.axis_line()
     s = 1.0 if float(d_ls @ a) >= 0 else -1.0
     cone = (math.pi / 2 - theta) if plane_datum else theta
-    value, phi = _min_over_turn(lambda ph: _cylinder_zone(pts, _cone_dir(s * a, cone, ph)))
-    return Measurement(value, "diameter", element, n_pts, {"zone_axis": _cone_dir(s * a, cone, phi).tolist()})
+    value, phi = _min_over_turn(lambda ph: _cylinder_zone(pts, cone_dir(s * a, cone, ph)))
+    return Measurement(value, "diameter", element, n_pts, {"zone_axis": cone_dir(s * a, cone, phi).tolist()})
 
 
 def _free_perp(frame, D: Optional[np.ndarray]) -> np.ndarray:
@@ -329,6 +364,9 @@ def _radius_free(w: np.ndarray, F: np.ndarray) -> float:
 
 
 def _position(tol, fd, system):
+    sims = system.chain(tol.datums)
+    if len(sims) == 1 and sims[0].type == "point":
+        return _position_about_point(tol, fd, system, sims[0])
     frame = system.frame(tol.datums)
     rotate = frame.free_rotation
     P0 = frame.point_to_scan(tol.nominal_point)
@@ -343,7 +381,8 @@ def _position(tol, fd, system):
             rp, _ = _rot_z(frame, psi)
             return _radius_free((c - rp(P0))[None, :], F)
 
-        r = _min_over_turn(value)[0] if rotate else value(0.0)
+        exact = _exact_turn(c[None, :], frame, P0, None) if rotate else None
+        r = exact[0] if exact else (_min_over_turn(value)[0] if rotate else value(0.0))
         return Measurement(2 * r, "spherical diameter", "centre (least-squares sphere)", n_pts, {"nominal": P0.tolist()})
     if fd.shape == "circle":
         D0 = frame.direction_to_scan(tol.nominal_direction) if tol.nominal_direction is not None else _unit(fd.lsq().normal)
@@ -359,8 +398,24 @@ def _position(tol, fd, system):
         w = q - np.outer(q @ D, D)
         return _radius_free(w, _free_perp(frame, D))
 
-    r = _min_over_turn(value)[0] if rotate else value(0.0)
+    exact = _exact_turn(pts, frame, P0, D0) if rotate else None
+    r = exact[0] if exact else (_min_over_turn(value)[0] if rotate else value(0.0))
     return Measurement(2 * r, "diameter", element, n_pts, {"nominal_point": P0.tolist(), "nominal_direction": D0.tolist()})
+
+
+def _position_about_point(tol, fd, system, datum):
+    """Position relative to a lone datum point: every rotation about it is free, so only
+    the distance from the point is located (the zone is a spherical shell about it; for a
+    centre, a sphere of diameter ``2 | |c - o| - |nominal| |``)."""
+    if fd.shape not in ("sphere", "circle"):
+        raise ConfigError(f"{system.spec.source}: [[tolerance]] #{tol.index + 1}: position of a {fd.shape} relative to the "
+                          f"datum point {datum.letter} alone is not defined (every rotation about it is free); add a datum "
+                          "plane or axis")
+    c = np.array(fd.lsq().center)
+    r0 = float(np.linalg.norm(np.asarray(tol.nominal_point, dtype=float)))
+    value = 2.0 * abs(float(np.linalg.norm(c - datum.point)) - r0)
+    return Measurement(value, "spherical diameter" if fd.shape == "sphere" else "diameter", "centre", len(fd.points),
+                       {"datum_point": datum.point.tolist(), "nominal_distance": r0})
 
 
 def _plane_location(tol, fd, frame, element):

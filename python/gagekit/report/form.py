@@ -11,8 +11,8 @@ from .html import Report
 
 def radial_deviation(points: np.ndarray, fit) -> tuple[np.ndarray, np.ndarray]:
     """Angle about the fitted axis (deg) and distance to the axis (mm) of each point."""
-    a = np.asarray(fit.axis_direction, dtype=float)
-    d = np.asarray(points, dtype=float) - np.asarray(fit.axis_point, dtype=float)
+    a = np.asarray(fit.direction, dtype=float)
+    d = np.asarray(points, dtype=float) - np.asarray(fit.point, dtype=float)
     radial = d - np.outer(d @ a, a)
     e1 = np.cross(a, [1.0, 0, 0] if abs(a[0]) < 0.9 else [0, 1.0, 0])
     e1 /= np.linalg.norm(e1)

@@ -71,8 +71,9 @@ def _datum_table(result) -> str:
     rows = []
     for d in result.datums:
         vec = "normal" if d.type == "plane" else "direction"
+        orient = "point (no orientation)" if d.type == "point" else f"{vec}: " + ", ".join(f"{v:.9f}" for v in d.vector)
         rows.append([d.letter + ("" if not d.precedence else f" (after {'|'.join(d.precedence)})"), d.feature, d.method,
-                     ", ".join(f"{v:.6f}" for v in d.point), f"{vec}: " + ", ".join(f"{v:.9f}" for v in d.vector)])
+                     ", ".join(f"{v:.6f}" for v in d.point), orient])
     if not rows:
         return ""
     body = "".join("<tr>" + "".join(f"<td>{html.escape(str(c))}</td>" for c in r) + "</tr>" for r in rows)

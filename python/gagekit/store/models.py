@@ -163,6 +163,14 @@ class InspectionResult(Base):
     lower: Mapped[Optional[float]] = mapped_column(Float, nullable=True)
     upper: Mapped[Optional[float]] = mapped_column(Float, nullable=True)
     conforming: Mapped[bool] = mapped_column(Boolean, nullable=False)
+    # since revision 0002: what the callout is, beyond its name (NULL only where a result's
+    # JSON could not say, which no result written by gagekit is)
+    feature: Mapped[Optional[str]] = mapped_column(String(200), nullable=True)
+    datums: Mapped[Optional[str]] = mapped_column(String(64), nullable=True)
+    """the datum reference frame as written in a feature control frame, e.g. ``A|B|C``"""
+    zone: Mapped[Optional[str]] = mapped_column(String(32), nullable=True)
+    """``width``, ``diameter`` or ``spherical diameter``: what ``value`` and ``upper`` are"""
+    n_points: Mapped[Optional[int]] = mapped_column(Integer, nullable=True)
 
 
 # ----------------------------------------------------------------------------- machines

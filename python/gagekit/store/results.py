@@ -23,7 +23,7 @@ from ..errors import StoreError
 from . import models as m
 from .schema import _reason, create_engine, ensure_schema, safe_url, use_wal
 
-__all__ = ["ResultStore", "StoredResult", "spec_hash", "canonical_json", "now"]
+__all__ = ["ResultStore", "StoredResult", "spec_hash", "canonical_json", "now", "inspection_rows"]
 
 
 def now() -> datetime:
@@ -76,7 +76,23 @@ def _plain_insert(table: sa.Table):
     return stmt
 
 
-_SCAN_ID = sa.select(m.Scan.id).where(m.Scan.content_hash == sa.bindparam("h"))
+def _upsert_scan(conn: sa.Connection, row: dict) -> int:
+    """The id of the scan with this content hash, stored first if new: one statement
+    (INSERT ... ON CONFLICT DO UPDATE ... RETURNING, the update a no-op) instead of an
+    insert-or-ignore and a select - each statement is a trip through the driver, and in
+    a batch's parent the result collection waits for it."""
+    key = (conn.dialect.name, "scan-upsert")
+    stmt = _STATEMENTS.get(key)
+    if stmt is None:
+        if conn.dialect.name == "postgresql":
+            from sqlalchemy.dialects.postgresql import insert
+        else:
+            from sqlalchemy.dialects.sqlite import insert
+        ins = insert(m.Scan.__table__)
+        stmt = _STATEMENTS[key] = ins.on_conflict_do_update(
+            index_elements=["content_hash"], set_={"content_hash": ins.excluded.content_hash}).returning(m.Scan.__table__.c.id)
+    return conn.execute(stmt, row).scalar_one()
+
 
 
 def _details(kind: str, result_id: int, result: Mapping[str, Any]) -> list[tuple[sa.Table, list[dict]]]:
@@ -94,17 +110,27 @@ def _details(kind: str, result_id: int, result: Mapping[str, Any]) -> list[tuple
                "n_points": result["n_points"], "form_error": result["form_error"], "radius": result.get("radius")}
         return [(m.FormResult.__table__, [row])]
     if kind == "inspect":  # gagekit.inspect: each callout's measured value against its tolerance (upper limit)
-        rows, seen = [], set()
-        for t in result.get("tolerances", []):
-            name = t.get("name") or f"{t['characteristic']} of {t['feature']}"
-            base, k = name, 2
-            while name in seen:  # the same callout twice (other datums): numbered
-                name, k = f"{base} #{k}", k + 1
-            seen.add(name)
-            rows.append({"result_id": result_id, "tolerance": name, "characteristic": t["characteristic"],
-                         "value": t["measured"], "lower": None, "upper": t["tolerance"], "conforming": bool(t["pass"])})
+        rows = [{"result_id": result_id, **row} for row in inspection_rows(result)]
         return [(m.InspectionResult.__table__, rows)] if rows else []
     return []
+
+
+def inspection_rows(result: Mapping[str, Any]) -> list[dict]:
+    """The ``inspection_results`` rows of an inspection's JSON (``gagekit inspect --json``):
+    per callout its name (the callout's ``name``, else "characteristic of feature |datums|";
+    a repeated name is numbered), value against the tolerance as upper limit, and what it is."""
+    rows, seen = [], set()
+    for t in result.get("tolerances", []):
+        datums = list(t.get("datums") or [])
+        name = t.get("name") or (f"{t['characteristic']} of {t['feature']}" + (f" |{'|'.join(datums)}|" if datums else ""))
+        base, k = name, 2
+        while name in seen:  # the same callout twice: numbered
+            name, k = f"{base} #{k}", k + 1
+        seen.add(name)
+        rows.append({"tolerance": name, "characteristic": t["characteristic"], "value": t["measured"], "lower": None,
+                     "upper": t["tolerance"], "conforming": bool(t["pass"]), "feature": t.get("feature"),
+                     "datums": "|".join(datums), "zone": t.get("zone"), "n_points": t.get("n_points")})
+    return rows
 
 
 class ResultStore:
@@ -178,9 +204,7 @@ class ResultStore:
     # ------------------------------------------------------------------------ writes
 
     def _scan_id(self, conn: sa.Connection, content_hash: str, size: int, scanned: datetime) -> int:
-        _insert_ignore(conn, m.Scan.__table__, {"content_hash": content_hash, "size_bytes": size, "scanned": scanned,
-                                                "created": now()}, ["content_hash"])
-        return conn.execute(_SCAN_ID, {"h": content_hash}).scalar_one()
+        return _upsert_scan(conn, {"content_hash": content_hash, "size_bytes": size, "scanned": scanned, "created": now()})
 
     def add_paths(self, content_hash: str, size: int, scanned: datetime, paths: Iterable[str]) -> None:
         """Record more paths of a scan's content (one transaction)."""

@@ -125,10 +125,24 @@ def use_wal(engine: Engine) -> None:
     never corrupts the file, and a batch run again redoes exactly those scans."""
     if engine.dialect.name != "sqlite":
         return
+    import sqlite3
+    import time
+
     raw = engine.raw_connection()  # outside a transaction (no BEGIN): the mode cannot change inside one
     try:
         cur = raw.cursor()
-        cur.execute("PRAGMA journal_mode = WAL")
+        deadline = time.monotonic() + SQLITE_TIMEOUT
+        while True:
+            try:
+                if cur.execute("PRAGMA journal_mode").fetchone()[0].lower() != "wal":
+                    cur.execute("PRAGMA journal_mode = WAL")
+                break
+            except sqlite3.OperationalError as exc:
+                # changing the mode while another process writes (creating the schema, say)
+                # fails at once with "locked", SQLite's busy timeout does not wait for it
+                if "locked" not in str(exc) or time.monotonic() > deadline:
+                    raise
+                time.sleep(0.05)
         cur.close()
     finally:
         raw.close()

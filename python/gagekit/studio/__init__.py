@@ -1,4 +1,4 @@
-"""gagekit studio: set up virtual gages on the scan itself, in the browser.
+"""gagekit studio: set up virtual gages and inspections on the scan itself, in the browser.
 
 The dissertation's closing recommendation (Sec. 7.2, item 5): "a better user
 interface that helps the user to define virtual gages should be developed". The
@@ -8,6 +8,11 @@ rotated and resized with handles or typed numbers, each region a gage (Table 5.1
 plane, weights) or a datum of the 3-2-1 alignment (Eqs. 5.13-5.19), the gage
 check of Eq. 5.11 run on the server, its allowances as a table and a colour map,
 T* applied to the view, and the gage file saved in the format ``gage check`` reads.
+With a drawing (PART.toml) the regions are inspection features instead (shape,
+outward side or hole/shaft, datum letter, tolerance callouts with datums and
+nominals), inspected on the server with :func:`gagekit.inspect` (ISO 1101 /
+ISO 5459): the callout table, each feature's deviations as a colour map, and the
+drawing saved in the format ``gagekit inspect`` reads.
 
 The server (:mod:`.app`, Starlette on uvicorn) is a thin layer over
 :mod:`gagekit.cloud` and :mod:`gagekit.gage` (:mod:`.session`); the client is plain
@@ -40,10 +45,11 @@ def _is_loopback(host: str) -> bool:
 
 def serve(scan: Path, spec: Optional[Path] = None, *, units: Optional[str] = None, port: int = 8765,
           host: Optional[str] = None, open_browser: bool = True, root: Optional[Path] = None,
-          lod_max: int = LOD_MAX, echo: Callable[[str], None] = print) -> None:
+          lod_max: int = LOD_MAX, echo: Callable[[str], None] = print, kind: str = "gage") -> None:
     """Load ``scan`` (and ``spec``), then serve the studio until interrupted.
 
-    Without ``host`` the server listens on 127.0.0.1 only and accepts only loopback
+    ``kind`` is what a ``spec`` that does not exist yet becomes: a gage file
+    (``"gage"``) or a drawing (``"part"``). Without ``host`` the server listens on 127.0.0.1 only and accepts only loopback
     Host headers. With ``host`` it listens there and every request must carry a
     freshly generated access token, printed with the address.
     """
@@ -68,7 +74,7 @@ def serve(scan: Path, spec: Optional[Path] = None, *, units: Optional[str] = Non
         allowed = None
     echo(f"gagekit studio: reading {scan} ...")
     loaded = load_scan(scan.resolve(), units, lod_max)
-    session = Session(loaded, spec.resolve() if spec is not None else None, lod_max)
+    session = Session(loaded, spec.resolve() if spec is not None else None, lod_max, kind=kind)
     app = create_app(session, root, token=token, allowed_hosts=allowed)
 
     family = socket.AF_INET6 if ":" in bind.strip("[]") else socket.AF_INET

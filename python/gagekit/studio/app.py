@@ -6,14 +6,18 @@ Endpoints (all JSON unless said otherwise; errors are ``{"error": message}`` wit
 
 ==========================  ==============================================================
 ``GET  /``                  the client (``static/index.html``)
-``GET  /api/state``         scan information, the gage document and its validation
+``GET  /api/state``         scan information, the document (gage file or drawing), its validation,
+                            the inspection's shapes and which characteristics apply to each
 ``GET  /api/scan/points``   the displayed points: float32 x, y, z (octet-stream)
 ``POST /api/scan``          ``{"path", "units"?}``: open another scan in the studio folder
 ``GET  /api/files``         scans and gage files in the studio folder
-``POST /api/spec``          ``{"path"}``: open (or start) a gage file in the studio folder
+``POST /api/spec``          ``{"path", "kind"?}``: open (or start: kind "gage" or "part") a
+                            gage file or a drawing (PART.toml) in the studio folder
 ``POST /api/regions``       ``{"doc"}``: every region's count over all points, the datum frame
-``POST /api/select``        ``{"region"}``: count inside one box, bit mask of displayed points
-``POST /api/run``           ``{"doc", "groups"?}``: the gage check, T*, per-point distances
+``POST /api/select``        ``{"region"}``: count inside one box, the displayed points inside
+                            (``indices`` or a bit ``mask``, whichever is smaller)
+``POST /api/run``           ``{"doc", "groups"?}``: the gage check, T*, per-point distances;
+                            for a drawing the inspection and per-point deviations
 ``POST /api/save``          ``{"doc", "path"?}``: write the gage file (atomic)
 ==========================  ==============================================================
 
@@ -153,8 +157,11 @@ def create_app(session: Session, root: Path, *, token: Optional[str] = None,
         return FileResponse(STATIC / "index.html", headers={"Cache-Control": "no-store"})
 
     async def state(request: Request) -> Response:
+        from ..inspect import APPLIES_TO, SHAPES
+
         return JSONResponse({"scan": session.scan.info(), "spec": await run_in_threadpool(session.spec_model),
-                             "root": str(root), "max_body": MAX_BODY})
+                             "root": str(root), "max_body": MAX_BODY,
+                             "inspection": {"shapes": list(SHAPES), "applies_to": APPLIES_TO}})
 
     async def scan_points(request: Request) -> Response:
         scan = session.scan
@@ -188,7 +195,10 @@ def create_app(session: Session, root: Path, *, token: Optional[str] = None,
     async def open_spec(request: Request) -> Response:
         data = await read_json(request)
         path = confined(root, data.get("path"), {".toml"}, "gage file")
-        return JSONResponse(await run_in_threadpool(session.open_spec, path))
+        kind = data.get("kind", "gage")
+        if kind not in ("gage", "part"):
+            raise RequestError(400, "kind: expected \"gage\" (a gage file) or \"part\" (a drawing, PART.toml)")
+        return JSONResponse(await run_in_threadpool(session.open_spec, path, kind))
 
     async def regions(request: Request) -> Response:
         doc = _doc(await read_json(request))

@@ -29,8 +29,9 @@ from ..gage.analysis import check_gages, datum_alignment, gage_distances, region
 from ..gage.spec import Region
 from . import specdoc
 
-LOD_MAX = 2_000_000
-"""Most points sent to the browser for display."""
+LOD_MAX = 1_000_000
+"""Most points sent to the browser for display (a million points draw in under a second
+even on a software renderer; every count and check uses all points)."""
 LOD_SEED = 0
 
 
@@ -110,7 +111,7 @@ def box_of(table: Any, what: str = "region") -> Region:
 class Session:
     """One scan, one gage file, the alignment found for it; safe to share between threads."""
 
-    def __init__(self, scan: Scan, spec_path: Optional[Path], lod_max: int = LOD_MAX) -> None:
+    def __init__(self, scan: Scan, spec_path: Optional[Path], lod_max: int = LOD_MAX, kind: str = "gage") -> None:
         self.lock = threading.RLock()
         self.scan = scan
         self.lod_max = lod_max
@@ -119,7 +120,7 @@ class Session:
         self.alignment = None
         self.alignment_key: Optional[str] = None
         self.alignment_error: Optional[str] = None
-        self.open_spec(spec_path)
+        self.open_spec(spec_path, kind)
 
     # ------------------------------------------------------------------ scan
 
@@ -137,7 +138,7 @@ class Session:
     def source(self) -> str:
         return self.spec_path.name if self.spec_path is not None else "new gage file"
 
-    def open_spec(self, path: Optional[Path]) -> dict:
+    def open_spec(self, path: Optional[Path], kind: str = "gage") -> dict:
         text = ""
         if path is not None and path.exists():
             try:
@@ -147,6 +148,7 @@ class Session:
         with self.lock:
             self.spec_path = path
             self.spec_text = text
+            self.new_kind = kind if kind in ("gage", "part") else "gage"
             self.alignment = None
             self.alignment_key = None
         return self.spec_model()
@@ -160,21 +162,25 @@ class Session:
             except ConfigError as exc:
                 return {"path": str(self.spec_path), "name": source, "doc": None, "parse_error": str(exc),
                         "validation": {"valid": False, "errors": [specdoc.locate(str(exc), source)], "warnings": []}}
+        elif getattr(self, "new_kind", "gage") == "part":
+            doc = {"part": {"name": self.spec_path.stem if self.spec_path is not None else "part"}}
         else:
             doc = {"length_unit": "mm", "motion": {"free": ["alpha", "beta", "gamma", "dx", "dy", "dz"],
                                                    "max_angle": 0.05, "max_shift": 20.0}}
         check = specdoc.validate(doc, source)
         return {"path": None if self.spec_path is None else str(self.spec_path), "name": source,
-                "exists": bool(self.spec_text), "doc": doc, "validation": check.to_dict()}
+                "exists": bool(self.spec_text), "kind": specdoc.kind_of(doc), "doc": doc,
+                "validation": check.to_dict()}
 
     def save(self, doc: Any, path: Optional[Path]) -> dict:
-        """Write ``doc`` (atomically) to ``path`` or the open gage file; the unchanged
-        document writes the original text back byte for byte."""
+        """Write ``doc`` (atomically) to ``path`` or the open file, as the open file's text
+        with the edits applied; the unchanged document writes the original text back byte
+        for byte."""
         target = path or self.spec_path
         if target is None:
             raise ConfigError("no gage file to save to: give a file name")
         same = target == self.spec_path
-        original = self.spec_text if same else ""
+        original = self.spec_text  # "save as" too keeps the open file's comments and layout
         text = specdoc.render(original, doc, target.name)
         write_bytes(target, text.encode("utf-8"))  # atomic: temporary file, then rename
         with self.lock:
@@ -214,7 +220,10 @@ class Session:
         return alignment, error
 
     def regions(self, doc: Any) -> dict:
-        """Counts of every region of ``doc`` over all points, and the datum frame."""
+        """Counts of every region of ``doc`` over all points, and the datum frame (for a
+        drawing: every feature's region, in the scan's frame)."""
+        if specdoc.kind_of(doc) == "part":
+            return self._feature_regions(doc)
         alignment, error = self._aligned(doc)
         tables = doc.get("region", []) if isinstance(doc, dict) else []
         if not isinstance(tables, list):
@@ -232,10 +241,30 @@ class Session:
         return {"regions": out, "alignment": _alignment_dict(alignment), "alignment_error": error,
                 "validation": specdoc.validate(doc, self.source).to_dict()}
 
+    def _feature_regions(self, doc: dict) -> dict:
+        tables = doc.get("feature", [])
+        if not isinstance(tables, list):
+            raise ConfigError(f"{self.source}: features must be given as [[feature]] tables")
+        out = []
+        for k, t in enumerate(tables):
+            name = t.get("name") if isinstance(t, dict) else None
+            try:
+                region = t.get("region") if isinstance(t, dict) else None
+                box = box_of(dict(region, frame="scanner") if isinstance(region, dict) else region,
+                             f"feature '{name}'" if name else f"feature #{k + 1}").box
+                out.append({"name": name, "count": self.scan.cloud.count(box), "error": None})
+            except GagekitError as exc:
+                out.append({"name": name, "count": None, "error": str(exc)})
+        return {"regions": out, "alignment": None, "alignment_error": None,
+                "validation": specdoc.validate(doc, self.source).to_dict()}
+
     def select(self, table: Any) -> dict:
         """Points inside one box (rotation in rad; a part-frame box is placed by the
-        alignment last found by :meth:`regions`): the count over all points and a bit
-        mask of the LOD points (little-endian bit order, one bit per displayed point)."""
+        alignment last found by :meth:`regions`): the count over all points and which
+        displayed points are inside, as whichever is smaller: ``indices`` (little-endian
+        uint32 positions in the displayed points, ascending) or ``mask`` (one bit per
+        displayed point, little-endian bit order). The client's work then grows with the
+        box, not with the scan."""
         region = box_of(table)
         with self.lock:
             alignment = self.alignment
@@ -243,10 +272,14 @@ class Session:
         scan = self.scan
         count = scan.cloud.count(box)
         lod_idx = scan.lod_cloud.select(box)
-        mask = np.zeros(len(scan.lod), dtype=bool)
-        mask[lod_idx] = True
-        return {"count": int(count), "lod_count": int(len(lod_idx)),
-                "mask": _b64(np.packbits(mask, bitorder="little"))}
+        out = {"count": int(count), "lod_count": int(len(lod_idx))}
+        if 32 * len(lod_idx) < len(scan.lod):
+            out["indices"] = _b64(lod_idx.astype("<u4"))
+        else:
+            mask = np.zeros(len(scan.lod), dtype=bool)
+            mask[lod_idx] = True
+            out["mask"] = _b64(np.packbits(mask, bitorder="little"))
+        return out
 
     # ------------------------------------------------------------------ run
 
@@ -256,6 +289,8 @@ class Session:
         check = specdoc.validate(doc, self.source)
         if check.spec is None:
             raise SpecError(check)
+        if specdoc.kind_of(doc) == "part":
+            return self._inspect(check)
         scan = self.scan
         t0 = time.perf_counter()
         result = check_gages(scan.points, check.spec, groups=groups)
@@ -271,6 +306,30 @@ class Session:
         return {"result": result.to_dict(), "seconds": round(seconds, 3),
                 "validation": check.to_dict(),
                 "view_matrix": view.tolist(), "align_matrix": H.tolist(),
+                "values": _b64(values.astype("<f4")),
+                "value_range": [float(finite.min()), float(finite.max())] if len(finite) else None}
+
+
+    def _inspect(self, check: "specdoc.Validation") -> dict:
+        """The inspection of the drawing (:func:`gagekit.inspect`) on all points, and per
+        displayed point of a feature its signed deviation from the feature's least-squares
+        fit (mm; NaN outside every feature)."""
+        from .._util import check_finite_result, to_jsonable
+        from ..inspect import inspect
+
+        scan = self.scan
+        result = inspect(scan.points, check.spec)
+        check_finite_result(result)
+        values = np.full(len(scan.lod), np.nan)
+        for name, fd in result.feature_data.items():
+            pos = np.searchsorted(scan.lod, fd.indices)
+            pos = np.minimum(pos, len(scan.lod) - 1)
+            shown = scan.lod[pos] == fd.indices
+            if shown.any():
+                values[pos[shown]] = fd.deviations()[shown]
+        finite = values[np.isfinite(values)]
+        return {"kind": "part", "result": to_jsonable(result), "seconds": round(result.seconds, 3),
+                "validation": check.to_dict(), "view_matrix": np.eye(4).tolist(), "align_matrix": np.eye(4).tolist(),
                 "values": _b64(values.astype("<f4")),
                 "value_range": [float(finite.min()), float(finite.max())] if len(finite) else None}
 

@@ -1,5 +1,10 @@
-"""The gage file as the studio edits it: the original text, its plain document, and
-the edits written back with formatting kept.
+"""The gage file (or PART.toml drawing) as the studio edits it: the original text, its
+plain document, and the edits written back with formatting kept.
+
+Two kinds of document: a gage file (``[[region]]``, ``[[gage]]``, ``[alignment]``: the
+reader of ``gagekit gage check``) and a drawing (``[[feature]]``, ``[datums]``,
+``[[tolerance]]``: the reader of ``gagekit inspect``, :mod:`gagekit.inspect.spec`).
+:func:`kind_of` tells them apart; validation uses the matching reader.
 
 The studio's client works on the plain document (the TOML tables as JSON: the
 ``[motion]`` and ``[alignment]`` tables, the ``[[region]]`` and ``[[gage]]`` lists).
@@ -21,15 +26,27 @@ from dataclasses import dataclass, field
 from typing import Any, Optional
 
 import tomlkit
-from tomlkit.items import AoT, Table
+from tomlkit.items import AoT, InlineTable, Table
 
 from ..errors import ConfigError
 from ..gage.spec import GageFileWarning, GageSpec
 
-FLOAT_KEYS = {"center", "size", "rotation", "plane", "max_angle", "max_shift", "weight", "slack_weight"}
-"""Keys whose numbers the spec reads as floats: new values are written as floats (``50.0``)."""
+FLOAT_KEYS = {"center", "size", "rotation", "plane", "max_angle", "max_shift", "weight", "slack_weight",
+              "outward", "direction", "tolerance", "point", "angle"}
+"""Keys whose numbers the readers take as floats: new values are written as floats (``50.0``)."""
 
-TOP_ORDER = ("description", "length_unit", "angle_unit", "motion", "alignment", "region", "gage")
+INLINE_KEYS = {"region", "nominal"}
+"""Tables written inline (``region = { center = [...], size = [...] }``), as a drawing has them."""
+
+TOP_ORDER = ("description", "length_unit", "angle_unit", "motion", "alignment", "part", "region", "gage", "feature",
+             "datums", "tolerance")
+
+PART_KEYS = {"part", "feature", "datums", "tolerance"}
+
+
+def kind_of(doc: Any) -> str:
+    """``"part"`` for a drawing (any of [part], [[feature]], [datums], [[tolerance]]), else ``"gage"``."""
+    return "part" if isinstance(doc, dict) and PART_KEYS & set(doc) else "gage"
 
 _LOCATORS = [
     (re.compile(r"^(?P<table>region|gage) '(?P<name>[^']*)'"), None),
@@ -38,6 +55,9 @@ _LOCATORS = [
     (re.compile(r"^no gages"), "gage"),
     (re.compile(r"^regions must"), "region"),
     (re.compile(r"^(?:region|size along|\w+ must be three)"), "region"),
+    (re.compile(r"^\[\[(?P<table>feature|tolerance)\]\] #(?P<num>\d+)"), None),
+    (re.compile(r"^\[(?P<table>datums|part)\]"), None),
+    (re.compile(r"^no \[\[(?P<table>feature|tolerance)\]\]"), None),
 ]
 
 
@@ -52,9 +72,9 @@ def parse_text(text: str, source: str) -> dict:
 def locate(message: str, source: str) -> dict:
     """``{"table", "name", "index", "message"}`` for a spec-reader error message.
 
-    ``table`` is ``region``, ``gage``, ``motion``, ``alignment`` or ``top``; ``name``
-    or ``index`` (1-based) names the ``[[region]]``/``[[gage]]`` entry when the
-    message does.
+    ``table`` is ``region``, ``gage``, ``motion``, ``alignment`` (gage files),
+    ``feature``, ``tolerance``, ``datums``, ``part`` (drawings) or ``top``; ``name``
+    or ``index`` (1-based) names the entry when the message does.
     """
     text = message[len(source) + 2:] if message.startswith(source + ": ") else message
     out: dict[str, Any] = {"table": "top", "name": None, "index": None, "message": text}
@@ -82,11 +102,14 @@ class Validation:
 
 
 def validate(doc: Any, source: str) -> Validation:
-    """Read ``doc`` with the gage-spec reader of ``gage check`` (:meth:`GageSpec.from_dict`)."""
+    """Read ``doc`` with the reader of ``gage check`` (:meth:`GageSpec.from_dict`) or, for a
+    drawing, of ``gagekit inspect`` (:func:`gagekit.inspect.part_spec_from_dict`)."""
+    from ..inspect import part_spec_from_dict
+
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", GageFileWarning)
         try:
-            spec = GageSpec.from_dict(doc, source)
+            spec: Any = part_spec_from_dict(doc, source) if kind_of(doc) == "part" else GageSpec.from_dict(doc, source)
             errors: list = []
         except ConfigError as exc:
             spec, errors = None, [locate(str(exc), source)]
@@ -130,6 +153,11 @@ def _new_table(values: dict) -> Table:
 
 
 def _item(key: str, value: Any):
+    if isinstance(value, dict) and key in INLINE_KEYS:
+        t = tomlkit.inline_table()
+        for k, v in value.items():
+            t.append(k, _item(k, v))
+        return t
     if isinstance(value, dict):
         return _new_table(value)
     if isinstance(value, list) and value and all(isinstance(v, dict) for v in value):
@@ -155,7 +183,7 @@ def _merge_table(old, new: dict) -> None:
                 old.append(key, _item(key, value))
         elif old_plain[key] == value:
             continue
-        elif isinstance(value, dict) and isinstance(old[key], Table):
+        elif isinstance(value, dict) and isinstance(old[key], (Table, InlineTable)):
             _merge_table(old[key], value)
         elif isinstance(old[key], AoT) and isinstance(value, list) and all(isinstance(v, dict) for v in value):
             _merge_aot(old, key, value)
@@ -172,6 +200,15 @@ def _merge_aot(parent, key: str, new: list) -> None:
     new_names = [t.get("name") for t in new]
     named = all(isinstance(n, str) for n in old_names + new_names)
     if not named or len(set(old_names)) != len(old_names) or len(set(new_names)) != len(new_names):
+        if len(new) >= len(aot):  # unnamed tables ([[tolerance]]): edited in place, new ones appended
+            for i, values in enumerate(new):
+                if i < len(aot):
+                    _merge_table(aot[i], values)
+                else:
+                    if len(aot) and not aot[-1].as_string().endswith("\n\n"):
+                        aot[-1].add(tomlkit.nl())
+                    aot.append(_new_table(values))
+            return
         parent[key] = _item(key, new)
         return
     for i in reversed(range(len(aot))):

@@ -30,13 +30,16 @@ pub struct MinZone {
     pub normal: Vec<f64>,
     /// Unit direction of a 2-D line (empty for planes).
     pub direction: Vec<f64>,
-    /// Separation of the two bounding planes (lines).
-    pub width: f64,
+    /// Separation of the two bounding planes (lines): the flatness (straightness).
+    pub form_error: f64,
     /// Points touching the upper / lower bound (indices into the input).
     pub control_upper: Vec<usize>,
     pub control_lower: Vec<usize>,
     /// LP solves used.
     pub iterations: usize,
+    /// Certificate: min and max signed distance of the points to the mid-plane
+    /// (mid-line), recomputed from `point` and `normal` (`direction` for a line).
+    pub extent: lsq::Extent,
 }
 
 fn dot(a: &[f64], b: &[f64]) -> f64 {
@@ -195,7 +198,12 @@ fn min_zone(pts: &[f64], dim: usize) -> Result<MinZone> {
     let mid = 0.5 * (lo + hi);
     let point: Vec<f64> = (0..dim).map(|d| c[d] + mid * normal[d]).collect();
     let direction = if dim == 2 { vec![normal[1], -normal[0]] } else { Vec::new() };
-    Ok(MinZone { point, normal, direction, width, control_upper, control_lower, iterations })
+    let extent = if dim == 3 {
+        lsq::plane_extent(pts, &[point[0], point[1], point[2]], &[normal[0], normal[1], normal[2]])
+    } else {
+        lsq::line_extent(pts, 2, &point, &direction)
+    };
+    Ok(MinZone { point, normal, direction, form_error: width, control_upper, control_lower, iterations, extent })
 }
 
 /// Minimum-zone plane of 3-D points (flatness).
@@ -224,7 +232,8 @@ mod tests {
             }
         }
         let z = plane(&pts).unwrap();
-        assert!((z.width - 0.02).abs() < 1e-12, "{}", z.width);
+        assert!((z.form_error - 0.02).abs() < 1e-12, "{}", z.form_error);
+        assert!((z.extent.max - z.extent.min - z.form_error).abs() < 1e-15 && (z.extent.max - 0.01).abs() < 1e-12);
     }
 
     #[test]
@@ -239,7 +248,7 @@ mod tests {
         let z = line2(&pts).unwrap();
         let l = lsq::line(&pts, 2).unwrap();
         let e = lsq::line_extent(&pts, 2, &l.point, &l.direction);
-        assert!(z.width < e.max - e.min);
+        assert!(z.form_error < e.max - e.min);
         // no small rotation improves the width
         let w = |ang: f64| {
             let (c, s) = (ang.cos(), ang.sin());
@@ -248,7 +257,7 @@ mod tests {
             d.iter().cloned().fold(f64::MIN, f64::max) - d.iter().cloned().fold(f64::MAX, f64::min)
         };
         for k in [-1e-4, -1e-7, 1e-7, 1e-4] {
-            assert!(w(k) >= z.width - 1e-13, "{k}: {} < {}", w(k), z.width);
+            assert!(w(k) >= z.form_error - 1e-13, "{k}: {} < {}", w(k), z.form_error);
         }
     }
 }

@@ -7,7 +7,7 @@
 //! is n.p = max_i n.p_i and its largest distance is the width of the set along n; so
 //! the optimal orientation is the one of least width among the allowed ones:
 //!
-//! - primary (free): the minimum-zone normal (`gagekit_form::minzone::plane`, the
+//! - primary (free): the minimum-width normal ([`crate::min_width3`], exact: the
 //!   flatness zone; the datum is its outer plane; dissertation Eq. 5.13);
 //! - secondary, perpendicular to the primary direction: the least width of the set
 //!   projected along it ([`crate::width3::perpendicular_to`], Eq. 5.14);
@@ -25,6 +25,7 @@
 //! fixed direction (perpendicularity of an axis to a datum plane, parallelism of an
 //! axis to a datum axis).
 
+use crate::min_width3;
 use crate::vec3::{self, check_points, dot, V3};
 use crate::width3::{self, Slab};
 use gagekit_core::{GkError, Result};
@@ -70,10 +71,7 @@ pub fn plane(pts: &[f64], outward: V3, orientation: Orientation, fit: PlaneFit) 
     let out = vec3::unit(outward, "datum plane: outward")?;
     let normal = match (fit, orientation) {
         (_, Orientation::Fixed(n)) => vec3::unit(n, WHAT)?,
-        (PlaneFit::Chebyshev, Orientation::Free) => {
-            let z = gagekit_form::minzone::plane(pts)?;
-            [z.normal[0], z.normal[1], z.normal[2]]
-        }
+        (PlaneFit::Chebyshev, Orientation::Free) => min_width3::min_width(pts)?.normal,
         (PlaneFit::Chebyshev, Orientation::PerpendicularTo(a)) => width3::perpendicular_to(pts, a)?.normal,
         (PlaneFit::Chebyshev, Orientation::AtAngle(a, t)) => width3::on_cone(pts, a, t)?.normal,
         (PlaneFit::LeastSquares, Orientation::Free) => {
@@ -156,10 +154,7 @@ pub fn axis_along(pts: &[f64], direction: V3, fit: AxisFit) -> Result<Axis> {
 /// The thinnest slab of the points with its orientation constrained (see [`width3`]).
 pub fn slab(pts: &[f64], orientation: Orientation) -> Result<Slab> {
     match orientation {
-        Orientation::Free => {
-            let z = gagekit_form::minzone::plane(pts)?;
-            width3::along(pts, [z.normal[0], z.normal[1], z.normal[2]])
-        }
+        Orientation::Free => min_width3::min_width(pts),
         Orientation::PerpendicularTo(a) => width3::perpendicular_to(pts, a),
         Orientation::AtAngle(a, t) => width3::on_cone(pts, a, t),
         Orientation::Fixed(n) => width3::along(pts, n),

@@ -10,13 +10,17 @@
 //! - [`width3`]: width of a 3-D set in a fixed direction, the minimum over directions
 //!   perpendicular to an axis (orientation free about a datum), and over a cone of
 //!   directions at a basic angle to an axis (angularity).
+//! - [`min_width3`]: the minimum width of a 3-D set (flatness; a free datum plane),
+//!   exact: hull facets and antipodal edge pairs.
 //! - [`datum`]: datum planes (constrained Chebyshev tangent plane on the air side,
 //!   ISO 5459) and axes of a fixed direction (maximum inscribed / minimum
 //!   circumscribed / least-squares cylinder along a given direction).
-//! - [`sphere`]: the minimum-zone sphere (sphericity) by sequential linear programming.
+//!
+//! Sphericity uses the form crate's certified minimum-zone sphere
+//! (`gagekit_form::sphere::min_zone`).
 
 pub mod datum;
-pub mod sphere;
+pub mod min_width3;
 pub mod vec3;
 pub mod width2;
 pub mod width3;

@@ -39,12 +39,36 @@ impl OrientedBox {
         Ok(())
     }
 
-    /// A membership test with the rotation precomputed.
+    /// The axis-aligned bounding box (cloud frame) of the box, widened by a relative
+    /// 1e-9 so that rounding never puts a point of the box outside it.
+    pub fn aabb(&self) -> ([f64; 3], [f64; 3]) {
+        let r = rotation_matrix(self.rotation);
+        let half = [self.size[0] / 2.0, self.size[1] / 2.0, self.size[2] / 2.0];
+        let mut lo = [0.0; 3];
+        let mut hi = [0.0; 3];
+        for i in 0..3 {
+            let e: f64 = (0..3).map(|k| r[i][k].abs() * half[k]).sum();
+            let pad = 1e-9 * (e + self.center[i].abs()) + f64::MIN_POSITIVE;
+            lo[i] = self.center[i] - e - pad;
+            hi[i] = self.center[i] + e + pad;
+        }
+        (lo, hi)
+    }
+
+    /// A membership test with the rotation precomputed. Points outside the box's
+    /// axis-aligned bounding box are rejected by three comparisons (most points of a
+    /// scan lie outside a sampling region); the others get the exact test.
     pub(crate) fn tester(&self) -> impl Fn(&[f64]) -> bool + Sync + '_ {
         let r = rotation_matrix(self.rotation);
         let half = [self.size[0] / 2.0, self.size[1] / 2.0, self.size[2] / 2.0];
         let c = self.center;
+        let (lo, hi) = self.aabb();
         move |p: &[f64]| {
+            // `&` (not `&&`): six comparisons without branches, then one well-predicted branch
+            let near = (p[0] >= lo[0]) & (p[0] <= hi[0]) & (p[1] >= lo[1]) & (p[1] <= hi[1]) & (p[2] >= lo[2]) & (p[2] <= hi[2]);
+            if !near {
+                return false;
+            }
             let d = [p[0] - c[0], p[1] - c[1], p[2] - c[2]];
             // local = R^T d: column k of R dotted with d.
             (0..3).all(|k| {
@@ -79,6 +103,87 @@ pub fn select(points: &[f64], b: &OrientedBox) -> Result<Vec<usize>> {
     Ok(parts.concat())
 }
 
+/// The boxes' bounding boxes binned on a coarse x-y grid over their union: a point
+/// is tested only against the boxes whose bin it falls in (a few of the many regions
+/// of a spec), and a point outside the union against none. Bins are found with the
+/// same monotone formula for box limits and points, so no box that holds a point is
+/// ever left out.
+struct BoxBins {
+    lo: [f64; 3],
+    hi: [f64; 3],
+    inv: [f64; 2],
+    n: [usize; 2],
+    start: Vec<usize>,
+    items: Vec<usize>,
+}
+
+const BINS: usize = 32;
+
+impl BoxBins {
+    fn new(boxes: &[OrientedBox]) -> Self {
+        let aabbs: Vec<_> = boxes.iter().map(|b| b.aabb()).collect();
+        let mut lo = [f64::INFINITY; 3];
+        let mut hi = [f64::NEG_INFINITY; 3];
+        for (l, h) in &aabbs {
+            for i in 0..3 {
+                lo[i] = lo[i].min(l[i]);
+                hi[i] = hi[i].max(h[i]);
+            }
+        }
+        let mut n = [1usize; 2];
+        let mut inv = [0.0; 2];
+        for i in 0..2 {
+            let span = hi[i] - lo[i];
+            if span > 0.0 && span.is_finite() {
+                n[i] = BINS;
+                inv[i] = BINS as f64 / span;
+            }
+        }
+        let mut lists = vec![Vec::new(); n[0] * n[1]];
+        let bins = Self { lo, hi, inv, n, start: Vec::new(), items: Vec::new() };
+        for (k, (l, h)) in aabbs.iter().enumerate() {
+            let (x0, y0) = (bins.bin(0, l[0]), bins.bin(1, l[1]));
+            let (x1, y1) = (bins.bin(0, h[0]), bins.bin(1, h[1]));
+            for x in x0..=x1 {
+                for y in y0..=y1 {
+                    lists[x * n[1] + y].push(k);
+                }
+            }
+        }
+        let mut start = Vec::with_capacity(lists.len() + 1);
+        let mut items = Vec::new();
+        for l in lists {
+            start.push(items.len());
+            items.extend(l);
+        }
+        start.push(items.len());
+        Self { start, items, ..bins }
+    }
+
+    #[inline]
+    fn bin(&self, axis: usize, v: f64) -> usize {
+        // truncation is the floor for the positive values; no libm call in the hot loop
+        let f = (v - self.lo[axis]) * self.inv[axis];
+        if f > 0.0 {
+            (f as usize).min(self.n[axis] - 1)
+        } else {
+            0
+        }
+    }
+
+    /// The boxes (ascending) whose bounding boxes may hold `p`.
+    #[inline]
+    fn candidates(&self, p: &[f64]) -> &[usize] {
+        let outside = (p[0] < self.lo[0]) | (p[0] > self.hi[0]) | (p[1] < self.lo[1]) | (p[1] > self.hi[1])
+            | (p[2] < self.lo[2]) | (p[2] > self.hi[2]);
+        if outside {
+            return &[];
+        }
+        let b = self.bin(0, p[0]) * self.n[1] + self.bin(1, p[1]);
+        &self.items[self.start[b]..self.start[b + 1]]
+    }
+}
+
 /// For each box, the ascending indices of the points inside it. A point may
 /// fall in several boxes. One parallel pass over the points.
 pub fn classify(points: &[f64], boxes: &[OrientedBox]) -> Result<Vec<Vec<usize>>> {
@@ -86,16 +191,20 @@ pub fn classify(points: &[f64], boxes: &[OrientedBox]) -> Result<Vec<Vec<usize>>
     for (i, b) in boxes.iter().enumerate() {
         b.validate(&format!("#{i}"))?;
     }
-    let testers: Vec<_> = boxes.iter().map(|b| b.tester()).collect();
     let nb = boxes.len();
+    if nb == 0 {
+        return Ok(Vec::new());
+    }
+    let testers: Vec<_> = boxes.iter().map(|b| b.tester()).collect();
+    let bins = BoxBins::new(boxes);
     let parts: Vec<Vec<Vec<usize>>> = points
         .par_chunks(3 * CHUNK)
         .enumerate()
         .map(|(ci, chunk)| {
             let mut out = vec![Vec::new(); nb];
             for (i, p) in chunk.chunks_exact(3).enumerate() {
-                for (k, t) in testers.iter().enumerate() {
-                    if t(p) {
+                for &k in bins.candidates(p) {
+                    if testers[k](p) {
                         out[k].push(ci * CHUNK + i);
                     }
                 }
@@ -160,6 +269,66 @@ mod tests {
         for (b, got) in boxes.iter().zip(all) {
             assert_eq!(select(&pts, b).unwrap(), got);
         }
+    }
+
+    #[test]
+    fn bounding_box_prefilter_changes_no_answer() {
+        // points on and just beside the faces of rotated boxes: the prefiltered test
+        // must agree with the plain one (R^T (p - c) within half the size) everywhere
+        let mut seed = 12345u64;
+        let mut rnd = || {
+            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            ((seed >> 11) as f64) / ((1u64 << 53) as f64) * 2.0 - 1.0
+        };
+        for _ in 0..200 {
+            let b = OrientedBox {
+                center: [100.0 * rnd(), 100.0 * rnd(), 1e3 * rnd()],
+                size: [1.0 + 5.0 * rnd().abs(), 0.1 + rnd().abs(), 2.0 + rnd().abs()],
+                rotation: [3.0 * rnd(), 3.0 * rnd(), 3.0 * rnd()],
+            };
+            let r = rotation_matrix(b.rotation);
+            let t = b.tester();
+            for _ in 0..500 {
+                // a point given in box coordinates, near a face or a corner
+                let mut l = [0.0; 3];
+                for k in 0..3 {
+                    let h = b.size[k] / 2.0;
+                    l[k] = if rnd() > 0.0 { h * rnd().signum() * (1.0 + 1e-12 * rnd()) } else { h * rnd() };
+                }
+                let p: Vec<f64> = (0..3).map(|i| b.center[i] + (0..3).map(|k| r[i][k] * l[k]).sum::<f64>()).collect();
+                let d = [p[0] - b.center[0], p[1] - b.center[1], p[2] - b.center[2]];
+                let plain = (0..3).all(|k| (r[0][k] * d[0] + r[1][k] * d[1] + r[2][k] * d[2]).abs() <= b.size[k] / 2.0);
+                assert_eq!(t(&p), plain, "{b:?} {p:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn binned_classify_matches_select_for_many_boxes() {
+        let mut seed = 99u64;
+        let mut rnd = || {
+            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            ((seed >> 11) as f64) / ((1u64 << 53) as f64)
+        };
+        let mut pts = Vec::new();
+        for _ in 0..20_000 {
+            // on a lattice, so many points sit exactly on box faces and bin edges
+            pts.extend([(40.0 * rnd()).round() / 4.0, (40.0 * rnd()).round() / 4.0, (8.0 * rnd()).round() / 4.0]);
+        }
+        let mut boxes: Vec<OrientedBox> = (0..25)
+            .map(|_| OrientedBox {
+                center: [(10.0 * rnd() * 4.0).round() / 4.0, (10.0 * rnd() * 4.0).round() / 4.0, 1.0],
+                size: [(8.0 * rnd()).round() / 2.0 + 0.5, (8.0 * rnd()).round() / 2.0 + 0.5, 2.0],
+                rotation: if rnd() < 0.5 { [0.0; 3] } else { [0.0, 0.0, rnd()] },
+            })
+            .collect();
+        boxes.push(OrientedBox { center: [5.0, 5.0, 1.0], size: [0.5, 0.5, 0.5], rotation: [0.0; 3] });
+        let all = classify(&pts, &boxes).unwrap();
+        for (b, got) in boxes.iter().zip(&all) {
+            assert_eq!(&select(&pts, b).unwrap(), got);
+        }
+        assert!(all.iter().map(|v| v.len()).sum::<usize>() > 1000);
+        assert!(classify(&pts, &[]).unwrap().is_empty());
     }
 
     #[test]

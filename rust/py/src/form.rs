@@ -1,93 +1,107 @@
 //! Bindings of gagekit-form.
 
-use crate::arrays::{indices, rows};
+use crate::arrays::rows;
 use crate::errors::run;
-use numpy::{PyArray1, PyReadonlyArray2};
+use numpy::PyReadonlyArray2;
 use pyo3::prelude::*;
+
+/// Read-only attributes that mirror the fields of the kernel result a pyclass holds in
+/// `self.fit`: one getter per named field (converted on access), so the binding never
+/// restates the kernel's list of fields and types; `extra` holds the class's other getters.
+macro_rules! mirror {
+    ($class:ident { $($field:ident),* $(,)? } extra { $($extra:tt)* }) => {
+        #[pymethods]
+        impl $class {
+            $(
+                #[getter]
+                fn $field(&self, py: Python<'_>) -> PyResult<Py<PyAny>> {
+                    use pyo3::IntoPyObjectExt;
+                    self.fit.$field.clone().into_py_any(py)
+                }
+            )*
+            $($extra)*
+        }
+    };
+}
 
 // circles ------------------------------------------------------------------------------
 
 use gagekit_form::circle;
+use gagekit_form::criterion::FitCriterion;
 
-type CircleOut<'py> = ((f64, f64), f64, Bound<'py, PyArray1<i64>>);
-type ZoneOut<'py> = (
-    (f64, f64),
-    f64,
-    f64,
-    Bound<'py, PyArray1<i64>>,
-    Bound<'py, PyArray1<i64>>,
-);
-
-fn circle_out(py: Python<'_>, c: circle::Circle) -> CircleOut<'_> {
-    ((c.center[0], c.center[1]), c.radius, indices(py, c.control))
+/// A 2-D circle fit, complete (Sec. 6.2): the fields of the kernel's
+/// [`circle::CircleFit`] (centre, radius, `r_in` / `r_out`: the zone for the minimum zone,
+/// else the certificate; control points; arc in rad, its centre, the ill-posed flag), read
+/// through [`mirror!`], plus the criterion's canonical name and `form_error`.
+#[pyclass(frozen, module = "gagekit._core")]
+pub struct CircleResult {
+    fit: circle::CircleFit,
 }
 
-/// Minimum circumscribed circle of (n, 2) points: (center, radius, control indices).
-#[pyfunction]
-fn form_circle_mc<'py>(
-    py: Python<'py>,
-    points: PyReadonlyArray2<'py, f64>,
-) -> PyResult<CircleOut<'py>> {
-    let pts = rows(py, &points, 2, "points")?;
-    Ok(circle_out(py, run(py, || circle::min_circumscribed(pts))?))
+mirror!(CircleResult {
+    center, radius, r_in, r_out, control, control_in, control_out, arc, arc_center, ill_posed
+} extra {
+    #[getter]
+    fn criterion(&self) -> &'static str {
+        self.fit.criterion.name()
+    }
+    #[getter]
+    fn form_error(&self) -> f64 {
+        self.fit.form_error()
+    }
+});
+
+impl From<circle::CircleFit> for CircleResult {
+    fn from(fit: circle::CircleFit) -> Self {
+        Self { fit }
+    }
 }
 
-/// Maximum inscribed circle within MC (Eq. 6.2): (center, radius, control indices).
+/// Circle of (n, 2) points by the exact kernels: `criterion` is any name of the
+/// criterion table (least squares, MC Eq. 6.1, MI Eq. 6.2, MZ Eqs. 6.5-6.8).
 #[pyfunction]
-fn form_circle_mi<'py>(
-    py: Python<'py>,
-    points: PyReadonlyArray2<'py, f64>,
-) -> PyResult<CircleOut<'py>> {
-    let pts = rows(py, &points, 2, "points")?;
-    Ok(circle_out(py, run(py, || circle::max_inscribed(pts))?))
-}
-
-/// Geometric least-squares circle: (center, radius, control indices).
-#[pyfunction]
-fn form_circle_lsq<'py>(
-    py: Python<'py>,
-    points: PyReadonlyArray2<'py, f64>,
-) -> PyResult<CircleOut<'py>> {
-    let pts = rows(py, &points, 2, "points")?;
-    Ok(circle_out(py, run(py, || circle::least_squares(pts))?))
-}
-
-/// Minimum zone circle: (center, r_in, r_out, control_in, control_out).
-#[pyfunction]
-fn form_circle_mz<'py>(
-    py: Python<'py>,
-    points: PyReadonlyArray2<'py, f64>,
-) -> PyResult<ZoneOut<'py>> {
-    let pts = rows(py, &points, 2, "points")?;
-    let z = run(py, || circle::min_zone(pts))?;
-    Ok((
-        (z.center[0], z.center[1]),
-        z.r_in,
-        z.r_out,
-        indices(py, z.control_in),
-        indices(py, z.control_out),
-    ))
-}
-
-/// Largest angular gap (rad) of the points seen from `center`.
-#[pyfunction]
-fn form_circle_angular_gap(
-    py: Python<'_>,
-    points: PyReadonlyArray2<'_, f64>,
-    center: (f64, f64),
-) -> PyResult<f64> {
+fn form_circle_fit(py: Python<'_>, points: PyReadonlyArray2<'_, f64>, criterion: &str) -> PyResult<CircleResult> {
     let pts = rows(py, &points, 2, "points")?;
     run(py, || {
-        Ok(circle::max_angular_gap(pts, [center.0, center.1]))
+        let crit = FitCriterion::parse_for(criterion, &FitCriterion::ALL, "circle")?;
+        circle::fit(pts, crit)
     })
+    .map(CircleResult::from)
+}
+
+/// 2-D circle by the PSO over the centre (Eqs. 6.1, 6.4, 6.5; a cross-check of the
+/// exact kernels) for MC, MI or MZ.
+#[pyfunction]
+#[pyo3(signature = (points, criterion, seed=0, particles=20, max_iterations=2000, stall_iterations=100))]
+fn form_circle_pso(
+    py: Python<'_>,
+    points: PyReadonlyArray2<'_, f64>,
+    criterion: &str,
+    seed: u64,
+    particles: usize,
+    max_iterations: usize,
+    stall_iterations: usize,
+) -> PyResult<CircleResult> {
+    use gagekit_form::circle_pso::{fit, Kind};
+    let pts = rows(py, &points, 2, "points")?;
+    let settings = gagekit_pso::Settings { seed, particles, max_iterations, stall_iterations, ..Default::default() };
+    run(py, || {
+        let allowed = [FitCriterion::MinCircumscribed, FitCriterion::MaxInscribed, FitCriterion::MinZone];
+        let crit = FitCriterion::parse_for(criterion, &allowed, "circle (PSO)")?;
+        let kind = match crit {
+            FitCriterion::MinCircumscribed => Kind::MinCircumscribed,
+            FitCriterion::MaxInscribed => Kind::MaxInscribed,
+            _ => Kind::MinZone,
+        };
+        circle::from_zone(pts, crit, fit(pts, kind, &settings)?.zone)
+    })
+    .map(CircleResult::from)
 }
 
 fn register_circles(m: &Bound<'_, PyModule>) -> PyResult<()> {
-    m.add_function(wrap_pyfunction!(form_circle_mc, m)?)?;
-    m.add_function(wrap_pyfunction!(form_circle_mi, m)?)?;
-    m.add_function(wrap_pyfunction!(form_circle_lsq, m)?)?;
-    m.add_function(wrap_pyfunction!(form_circle_mz, m)?)?;
-    m.add_function(wrap_pyfunction!(form_circle_angular_gap, m)?)?;
+    m.add_class::<CircleResult>()?;
+    m.add_function(wrap_pyfunction!(form_circle_fit, m)?)?;
+    m.add_function(wrap_pyfunction!(form_circle_pso, m)?)?;
     Ok(())
 }
 
@@ -101,130 +115,190 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
 
 // 3-D fits (lines, planes, spheres, 3-D circles, cylinders) ------------------
 
-use crate::errors::gagekit_err;
+use crate::errors::invalid;
 use gagekit_form::lsq;
 use numpy::PyUntypedArrayMethods;
-
-type Ext = (f64, f64);
-
-fn ext(e: lsq::Extent) -> Ext {
-    (e.min, e.max)
-}
 
 /// Points as a flat slice of an (n, 2) or (n, 3) array, with its dimension.
 fn rows23<'a>(py: Python<'_>, points: &'a PyReadonlyArray2<'_, f64>) -> PyResult<(&'a [f64], usize)> {
     let dim = points.shape()[1];
     if dim != 2 && dim != 3 {
-        return Err(gagekit_err(
-            py,
-            "InvalidInputError",
-            format!("points: expected an (n, 2) or (n, 3) array, got shape {:?}", points.shape()),
-        ));
+        return Err(invalid(format!("points: expected an (n, 2) or (n, 3) array, got shape {:?}", points.shape())));
     }
     Ok((rows(py, points, dim, "points")?, dim))
 }
 
-/// Least-squares line of 2-D or 3-D points: (point, direction, (min, max) distance).
+/// A least-squares line (2-D or 3-D) with its certificate: signed distances (2-D) or
+/// distances (3-D) to the line; `form_error` the spread (2-D) or twice the largest (3-D).
+#[pyclass(frozen, get_all, module = "gagekit._core")]
+pub struct LineResult {
+    pub point: Vec<f64>,
+    pub direction: Vec<f64>,
+    pub min_distance: f64,
+    pub max_distance: f64,
+    pub form_error: f64,
+}
+
+/// Least-squares line of (n, 2) or (n, 3) points (the principal axis through the centroid).
 #[pyfunction]
-fn form_line_lsq(py: Python<'_>, points: PyReadonlyArray2<'_, f64>) -> PyResult<(Vec<f64>, Vec<f64>, Ext)> {
+fn form_line_lsq(py: Python<'_>, points: PyReadonlyArray2<'_, f64>) -> PyResult<LineResult> {
     let (pts, dim) = rows23(py, &points)?;
-    run(py, || {
+    let (l, e) = run(py, || {
         let l = lsq::line(pts, dim)?;
         let e = lsq::line_extent(pts, dim, &l.point, &l.direction);
-        Ok((l.point, l.direction, ext(e)))
-    })
+        Ok((l, e))
+    })?;
+    Ok(LineResult { point: l.point, direction: l.direction, min_distance: e.min, max_distance: e.max, form_error: e.line_form_error(dim) })
 }
 
-/// Least-squares plane: (point, normal, (min, max) signed distance).
+/// A least-squares plane with its certificate (signed distances) and flatness about it.
+#[pyclass(frozen, get_all, module = "gagekit._core")]
+pub struct PlaneResult {
+    pub point: [f64; 3],
+    pub normal: [f64; 3],
+    pub min_distance: f64,
+    pub max_distance: f64,
+    pub form_error: f64,
+}
+
+/// Least-squares plane of (n, 3) points: the centroid and the direction of least spread.
 #[pyfunction]
-fn form_plane_lsq(py: Python<'_>, points: PyReadonlyArray2<'_, f64>) -> PyResult<([f64; 3], [f64; 3], Ext)> {
+fn form_plane_lsq(py: Python<'_>, points: PyReadonlyArray2<'_, f64>) -> PyResult<PlaneResult> {
     let pts = rows(py, &points, 3, "points")?;
-    run(py, || {
+    let (p, e) = run(py, || {
         let p = lsq::plane(pts)?;
-        Ok((p.point, p.normal, ext(lsq::plane_extent(pts, &p.point, &p.normal))))
-    })
+        let e = lsq::plane_extent(pts, &p.point, &p.normal);
+        Ok((p, e))
+    })?;
+    Ok(PlaneResult { point: p.point, normal: p.normal, min_distance: e.min, max_distance: e.max, form_error: e.spread() })
 }
 
-/// Least-squares circle (2-D) or sphere (3-D): (centre, radius, (min, max) distance to the centre).
+/// A least-squares circle (2-D) or sphere (3-D) with its certificate (distances to the
+/// centre) and form error about it.
+#[pyclass(frozen, get_all, module = "gagekit._core")]
+pub struct LeastSquaresSphereResult {
+    pub center: Vec<f64>,
+    pub radius: f64,
+    pub min_distance: f64,
+    pub max_distance: f64,
+    pub form_error: f64,
+}
+
+/// Least-squares circle of (n, 2) points or sphere of (n, 3) points.
 #[pyfunction]
-fn form_sphere_lsq(py: Python<'_>, points: PyReadonlyArray2<'_, f64>) -> PyResult<(Vec<f64>, f64, Ext)> {
+fn form_sphere_lsq(py: Python<'_>, points: PyReadonlyArray2<'_, f64>) -> PyResult<LeastSquaresSphereResult> {
     let (pts, dim) = rows23(py, &points)?;
-    run(py, || {
+    let (s, e) = run(py, || {
         let s = lsq::sphere(pts, dim)?;
         let e = lsq::center_extent(pts, dim, &s.center);
-        Ok((s.center, s.radius, ext(e)))
-    })
+        Ok((s, e))
+    })?;
+    Ok(LeastSquaresSphereResult { center: s.center, radius: s.radius, min_distance: e.min, max_distance: e.max, form_error: e.spread() })
 }
 
-/// Least-squares 3-D circle: (centre, normal, radius, (min, max) in-plane radial distance).
+/// A least-squares circle in space with its certificate (in-plane radial distances).
+#[pyclass(frozen, get_all, module = "gagekit._core")]
+pub struct LeastSquaresCircle3Result {
+    pub center: [f64; 3],
+    pub normal: [f64; 3],
+    pub radius: f64,
+    pub min_distance: f64,
+    pub max_distance: f64,
+    pub form_error: f64,
+}
+
+/// Least-squares circle of (n, 3) points (NIST: plane, projection, circle in the plane).
 #[pyfunction]
-fn form_circle3d_lsq(
-    py: Python<'_>,
-    points: PyReadonlyArray2<'_, f64>,
-) -> PyResult<([f64; 3], [f64; 3], f64, Ext)> {
+fn form_circle3d_lsq(py: Python<'_>, points: PyReadonlyArray2<'_, f64>) -> PyResult<LeastSquaresCircle3Result> {
     let pts = rows(py, &points, 3, "points")?;
-    run(py, || {
+    let (c, e) = run(py, || {
         let c = lsq::circle3(pts)?;
-        Ok((c.center, c.normal, c.radius, ext(lsq::circle3_extent(pts, &c.center, &c.normal))))
+        let e = lsq::circle3_extent(pts, &c.center, &c.normal);
+        Ok((c, e))
+    })?;
+    Ok(LeastSquaresCircle3Result {
+        center: c.center,
+        normal: c.normal,
+        radius: c.radius,
+        min_distance: e.min,
+        max_distance: e.max,
+        form_error: e.spread(),
     })
 }
 
-/// Least-squares cylinder: (axis point, axis direction, radius, (min, max) distance to the axis).
+/// A least-squares cylinder, complete: axis, angles, radius, certificate, arc covered.
+#[pyclass(frozen, get_all, module = "gagekit._core")]
+pub struct LeastSquaresCylinderResult {
+    pub point: [f64; 3],
+    pub direction: [f64; 3],
+    pub radius: f64,
+    /// Certificate: min and max 3-D distance of the points to the axis.
+    pub min_distance: f64,
+    pub max_distance: f64,
+    pub form_error: f64,
+    /// Arc (rad) the points cover around the axis.
+    pub arc: f64,
+}
+
+/// Least-squares cylinder of (n, 3) points (from the principal axes and `start_axis`).
 #[pyfunction]
 #[pyo3(signature = (points, start_axis=None))]
 fn form_cylinder_lsq(
     py: Python<'_>,
     points: PyReadonlyArray2<'_, f64>,
     start_axis: Option<[f64; 3]>,
-) -> PyResult<([f64; 3], [f64; 3], f64, Ext)> {
+) -> PyResult<LeastSquaresCylinderResult> {
     let pts = rows(py, &points, 3, "points")?;
-    run(py, || {
-        let c = lsq::cylinder(pts, start_axis)?;
-        Ok((c.point, c.direction, c.radius, ext(lsq::axis_extent(pts, &c.point, &c.direction))))
+    let c = run(py, || gagekit_form::cylinder::least_squares(pts, start_axis))?;
+    Ok(LeastSquaresCylinderResult {
+        point: c.point,
+        direction: c.direction,
+        radius: c.radius,
+        min_distance: c.extent.min,
+        max_distance: c.extent.max,
+        form_error: c.form_error(),
+        arc: c.arc,
     })
 }
 
-/// Minimum-zone plane (dim 3) or 2-D line (dim 2): (point, normal, direction, width,
-/// upper control points, lower control points, LP solves).
+/// A minimum-zone plane (flatness) or 2-D line (straightness), with its certificate.
+#[pyclass(frozen, get_all, module = "gagekit._core")]
+pub struct MinZoneFlatResult {
+    /// A point on the mid-plane (mid-line), its unit normal, and a 2-D line's direction
+    /// (empty for planes).
+    pub point: Vec<f64>,
+    pub normal: Vec<f64>,
+    pub direction: Vec<f64>,
+    /// Separation of the two bounding planes (lines).
+    pub form_error: f64,
+    /// Points on the upper and lower bound, sorted and merged.
+    pub control: Vec<usize>,
+    /// Certificate: min and max signed distance of the points to the mid-plane (mid-line).
+    pub min_distance: f64,
+    pub max_distance: f64,
+    /// Linear programs solved.
+    pub iterations: usize,
+}
+
+/// Minimum-zone plane of (n, 3) points or line of (n, 2) points (LP, then the exact
+/// solve of the active constraints).
 #[pyfunction]
-#[allow(clippy::type_complexity)]
-fn form_min_zone_flat(
-    py: Python<'_>,
-    points: PyReadonlyArray2<'_, f64>,
-) -> PyResult<(Vec<f64>, Vec<f64>, Vec<f64>, f64, Vec<usize>, Vec<usize>, usize)> {
+fn form_min_zone_flat(py: Python<'_>, points: PyReadonlyArray2<'_, f64>) -> PyResult<MinZoneFlatResult> {
     let (pts, dim) = rows23(py, &points)?;
-    run(py, || {
-        let z = if dim == 3 { gagekit_form::minzone::plane(pts)? } else { gagekit_form::minzone::line2(pts)? };
-        Ok((z.point, z.normal, z.direction, z.width, z.control_upper, z.control_lower, z.iterations))
+    let z = run(py, || if dim == 3 { gagekit_form::minzone::plane(pts) } else { gagekit_form::minzone::line2(pts) })?;
+    let mut control: Vec<usize> = z.control_upper.iter().chain(&z.control_lower).copied().collect();
+    control.sort_unstable();
+    control.dedup();
+    Ok(MinZoneFlatResult {
+        point: z.point,
+        normal: z.normal,
+        direction: z.direction,
+        form_error: z.form_error,
+        control,
+        min_distance: z.extent.min,
+        max_distance: z.extent.max,
+        iterations: z.iterations,
     })
-}
-
-/// Certificate of a plane: (min, max) signed distance of 3-D points to it.
-#[pyfunction]
-fn form_plane_extent(py: Python<'_>, points: PyReadonlyArray2<'_, f64>, point: [f64; 3], normal: [f64; 3]) -> PyResult<Ext> {
-    let pts = rows(py, &points, 3, "points")?;
-    Ok(ext(lsq::plane_extent(pts, &point, &normal)))
-}
-
-/// Certificate of a line: (min, max) signed (2-D) or unsigned (3-D) distance to it.
-#[pyfunction]
-fn form_line_extent(py: Python<'_>, points: PyReadonlyArray2<'_, f64>, point: Vec<f64>, direction: Vec<f64>) -> PyResult<Ext> {
-    let (pts, dim) = rows23(py, &points)?;
-    if point.len() != dim || direction.len() != dim {
-        return Err(gagekit_err(py, "InvalidInputError", format!("line: point and direction must have {dim} coordinates")));
-    }
-    Ok(ext(lsq::line_extent(pts, dim, &point, &direction)))
-}
-
-/// Certificate of a cylinder axis: (min, max) distance of 3-D points to it.
-#[pyfunction]
-fn form_axis_extent(py: Python<'_>, points: PyReadonlyArray2<'_, f64>, point: [f64; 3], direction: [f64; 3]) -> PyResult<Ext> {
-    let pts = rows(py, &points, 3, "points")?;
-    Ok(ext(lsq::axis_extent(pts, &point, &direction)))
-}
-
-fn config_err(py: Python<'_>, msg: String) -> PyErr {
-    gagekit_err(py, "ConfigError", msg)
 }
 
 /// A better optimum of the free search outside the search cone.
@@ -238,42 +312,43 @@ pub struct OutsideResult {
 }
 
 impl OutsideResult {
-    fn new(o: gagekit_form::cylinder::Outside) -> Self {
-        Self { value: o.value, direction: o.direction, tilt: o.tilt }
+    /// The Python object of a kernel's optional better optimum outside the cone.
+    fn wrap(py: Python<'_>, o: Option<gagekit_form::cylinder::Outside>) -> PyResult<Option<Py<Self>>> {
+        o.map(|o| Py::new(py, Self { value: o.value, direction: o.direction, tilt: o.tilt })).transpose()
     }
 }
 
 /// A minimax cylinder (Sec. 6.3): axis, radii, control points, certificate, search
-/// diagnostics (angles rad, lengths mm).
-#[pyclass(frozen, get_all, module = "gagekit._core")]
+/// diagnostics (angles rad, lengths mm). Its attributes are the kernel's
+/// [`gagekit_form::cylinder::CylinderFit`] fields, read through [`mirror!`], plus the
+/// criterion's canonical name, the certificate (`min_distance`, `max_distance`) and the
+/// optimum outside the cone as an [`OutsideResult`].
+#[pyclass(frozen, module = "gagekit._core")]
 pub struct CylinderResult {
-    pub criterion: String,
-    pub point: [f64; 3],
-    pub direction: [f64; 3],
-    pub theta: f64,
-    pub phi: f64,
-    pub radius: f64,
-    pub r_in: f64,
-    pub r_out: f64,
-    pub control_in: Vec<usize>,
-    pub control_out: Vec<usize>,
-    /// Certificate: min and max 3-D distance of the points to the axis.
-    pub min_distance: f64,
-    pub max_distance: f64,
-    pub iterations: usize,
-    pub evaluations: usize,
-    /// Reference axis (nominal or least squares) and the tilt (rad) from it.
-    pub reference: [f64; 3],
-    pub tilt: f64,
-    pub outside: Option<Py<OutsideResult>>,
-    /// The axis lies on the boundary of the search cone.
-    pub at_limit: bool,
-    /// Arc (rad) covered around the axis, ill-posed flag (MIC below 90 degrees).
-    pub arc: f64,
-    pub ill_posed: bool,
-    /// The least-squares axis (point, direction), if it exists.
-    pub lsq_axis: Option<([f64; 3], [f64; 3])>,
+    fit: gagekit_form::cylinder::CylinderFit,
 }
+
+mirror!(CylinderResult {
+    point, direction, theta, phi, radius, r_in, r_out, control_in, control_out, iterations, evaluations,
+    reference, tilt, at_limit, arc, ill_posed, lsq_axis
+} extra {
+    #[getter]
+    fn criterion(&self) -> &'static str {
+        self.fit.criterion.fit_criterion().name()
+    }
+    #[getter]
+    fn min_distance(&self) -> f64 {
+        self.fit.extent.min
+    }
+    #[getter]
+    fn max_distance(&self) -> f64 {
+        self.fit.extent.max
+    }
+    #[getter]
+    fn outside(&self, py: Python<'_>) -> PyResult<Option<Py<OutsideResult>>> {
+        OutsideResult::wrap(py, self.fit.outside.clone())
+    }
+});
 
 fn search_of(axis: Option<[f64; 3]>, max_tilt: f64) -> gagekit_form::cylinder::Search {
     gagekit_form::cylinder::Search { axis, max_tilt }
@@ -298,50 +373,15 @@ fn form_cylinder_fit(
     refine_starts: usize,
     hop_rounds: usize,
 ) -> PyResult<CylinderResult> {
-    use gagekit_form::criterion::FitCriterion as F;
     use gagekit_form::cylinder::{fit, Criterion, Options};
     let pts = rows(py, &points, 3, "points")?;
-    let allowed = [F::MinCircumscribed, F::MaxInscribed, F::MinZone];
-    let crit = match F::parse_for(criterion, &allowed, "cylinder") {
-        Ok(F::MinCircumscribed) => Criterion::MinCircumscribed,
-        Ok(F::MaxInscribed) => Criterion::MaxInscribed,
-        Ok(_) => Criterion::MinZone,
-        Err(e) => return Err(config_err(py, e.message)),
-    };
     let opts = Options { seed, particles, max_iterations, stall_iterations, search: search_of(axis, max_tilt), refine_starts, hop_rounds };
-    let r = run(py, || fit(pts, crit, &opts))?;
-    let name = match crit {
-        Criterion::MinCircumscribed => F::MinCircumscribed,
-        Criterion::MaxInscribed => F::MaxInscribed,
-        Criterion::MinZone => F::MinZone,
-    };
-    let outside = match r.outside {
-        Some(o) => Some(Py::new(py, OutsideResult::new(o))?),
-        None => None,
-    };
-    Ok(CylinderResult {
-        criterion: name.name().to_string(),
-        point: r.point,
-        direction: r.direction,
-        theta: r.theta,
-        phi: r.phi,
-        radius: r.radius,
-        r_in: r.r_in,
-        r_out: r.r_out,
-        control_in: r.control_in,
-        control_out: r.control_out,
-        min_distance: r.extent.min,
-        max_distance: r.extent.max,
-        iterations: r.iterations,
-        evaluations: r.evaluations,
-        reference: r.reference,
-        tilt: r.tilt,
-        outside,
-        at_limit: r.at_limit,
-        arc: r.arc,
-        ill_posed: r.ill_posed,
-        lsq_axis: r.lsq_axis,
-    })
+    let r = run(py, || {
+        let allowed = [FitCriterion::MinCircumscribed, FitCriterion::MaxInscribed, FitCriterion::MinZone];
+        let crit = FitCriterion::parse_for(criterion, &allowed, "cylinder")?;
+        fit(pts, Criterion::from_fit(crit).unwrap_or(Criterion::MinZone), &opts)
+    })?;
+    Ok(CylinderResult { fit: r })
 }
 
 /// A minimum-zone line in space (straightness): the thinnest enclosing cylinder.
@@ -374,10 +414,7 @@ fn form_line3_min_zone(
     let pts = rows(py, &points, 3, "points")?;
     let opts = Options { seed, stall_iterations: 50, refine_starts: 4, search: search_of(axis, max_tilt), ..Options::default() };
     let z = run(py, || gagekit_form::straightness::line3(pts, &opts))?;
-    let outside = match z.outside.clone() {
-        Some(o) => Some(Py::new(py, OutsideResult::new(o))?),
-        None => None,
-    };
+    let outside = OutsideResult::wrap(py, z.outside.clone())?;
     Ok(Line3Result {
         point: z.point,
         direction: z.direction,
@@ -396,13 +433,14 @@ fn form_line3_min_zone(
 #[pyfunction]
 #[pyo3(signature = (name, allowed=Vec::new(), shape="fit"))]
 fn form_criterion(py: Python<'_>, name: &str, allowed: Vec<String>, shape: &str) -> PyResult<String> {
-    use gagekit_form::criterion::FitCriterion as F;
-    let allowed: Vec<F> = if allowed.is_empty() {
-        F::ALL.to_vec()
-    } else {
-        allowed.iter().map(|a| a.parse::<F>()).collect::<Result<_, _>>().map_err(|e| config_err(py, e.message))?
-    };
-    F::parse_for(name, &allowed, shape).map(|c| c.name().to_string()).map_err(|e| config_err(py, e.message))
+    run(py, || {
+        let allowed: Vec<FitCriterion> = if allowed.is_empty() {
+            FitCriterion::ALL.to_vec()
+        } else {
+            allowed.iter().map(|a| a.parse::<FitCriterion>()).collect::<Result<_, _>>()?
+        };
+        FitCriterion::parse_for(name, &allowed, shape).map(|c| c.name().to_string())
+    })
 }
 
 /// The criterion table: (alias, canonical name, circle code) for every accepted spelling.
@@ -426,19 +464,25 @@ pub struct Circle3Result {
     pub max_distance: f64,
     /// Largest distance of a point from the circle's plane.
     pub out_of_plane: f64,
-    /// Arc (rad) covered seen from the centre.
+    /// Points that fix the fit (minimum zone: `control_in`, then the rest of `control_out`).
+    pub control: Vec<usize>,
+    /// Arc (rad) covered seen from the centre (the least-squares centre for an MI of a
+    /// short arc), and whether the fit is ill-posed (MI of an arc below 90 degrees).
     pub arc: f64,
+    pub ill_posed: bool,
 }
 
 /// Circle of (n, 3) points in any pose: least-squares plane, projection, 2-D fit of
 /// `criterion` (any name of the criterion table).
 #[pyfunction]
 fn form_circle_in_plane(py: Python<'_>, points: PyReadonlyArray2<'_, f64>, criterion: &str) -> PyResult<Circle3Result> {
-    use gagekit_form::criterion::FitCriterion as F;
     let pts = rows(py, &points, 3, "points")?;
-    let crit = F::parse_for(criterion, &F::ALL, "circle").map_err(|e| config_err(py, e.message))?;
-    let c = run(py, || gagekit_form::circle::in_plane::fit(pts, crit))?;
+    let c = run(py, || {
+        let crit = FitCriterion::parse_for(criterion, &FitCriterion::ALL, "circle")?;
+        gagekit_form::circle::in_plane::fit(pts, crit)
+    })?;
     Ok(Circle3Result {
+        control: c.zone.control(),
         center: c.center,
         normal: c.normal,
         radius: c.radius,
@@ -450,6 +494,7 @@ fn form_circle_in_plane(py: Python<'_>, points: PyReadonlyArray2<'_, f64>, crite
         max_distance: c.extent.max,
         out_of_plane: c.out_of_plane,
         arc: c.arc,
+        ill_posed: c.ill_posed,
     })
 }
 
@@ -467,24 +512,26 @@ pub struct SphereResult {
     pub max_distance: f64,
     /// Linear programs of the MI / MZ searches (0 for MC).
     pub iterations: usize,
+    /// The certified global bound (MZ: no narrower zone; MI: no larger sphere; MC: the
+    /// radius), within 1e-9 mm of the value.
+    pub bound: f64,
 }
 
 /// Minimum circumscribed, maximum inscribed or minimum-zone sphere of (n, 3) points.
 #[pyfunction]
 fn form_sphere_fit(py: Python<'_>, points: PyReadonlyArray2<'_, f64>, criterion: &str) -> PyResult<SphereResult> {
-    use gagekit_form::criterion::FitCriterion as F;
     use gagekit_form::sphere;
+    use FitCriterion as F;
     let pts = rows(py, &points, 3, "points")?;
-    let allowed = [F::MinCircumscribed, F::MaxInscribed, F::MinZone];
-    let crit = F::parse_for(criterion, &allowed, "sphere").map_err(|e| config_err(py, e.message))?;
-    let (z, e) = run(py, || {
+    let (crit, z, e) = run(py, || {
+        let crit = F::parse_for(criterion, &[F::MinCircumscribed, F::MaxInscribed, F::MinZone], "sphere")?;
         let z = match crit {
             F::MinCircumscribed => sphere::min_circumscribed(pts),
             F::MaxInscribed => sphere::max_inscribed(pts),
             _ => sphere::min_zone(pts),
         }?;
         let e = lsq::center_extent(pts, 3, &z.center);
-        Ok((z, e))
+        Ok((crit, z, e))
     })?;
     Ok(SphereResult {
         criterion: crit.name().to_string(),
@@ -496,59 +543,46 @@ fn form_sphere_fit(py: Python<'_>, points: PyReadonlyArray2<'_, f64>, criterion:
         min_distance: e.min,
         max_distance: e.max,
         iterations: z.iterations,
+        bound: z.bound,
     })
 }
 
-/// 2-D circle by the PSO over the centre (Eqs. 6.1, 6.4, 6.5; cross-check of the
-/// exact kernels): (center, r_in, r_out, control_in, control_out, iterations, evaluations).
-#[pyfunction]
-#[pyo3(signature = (points, criterion, seed=0, particles=20, max_iterations=2000, stall_iterations=100))]
-#[allow(clippy::type_complexity)]
-fn form_circle_pso(
-    py: Python<'_>,
-    points: PyReadonlyArray2<'_, f64>,
-    criterion: &str,
-    seed: u64,
-    particles: usize,
-    max_iterations: usize,
-    stall_iterations: usize,
-) -> PyResult<((f64, f64), f64, f64, Vec<usize>, Vec<usize>, usize, usize)> {
-    use gagekit_form::circle_pso::{fit, Kind};
-    let pts = rows(py, &points, 2, "points")?;
-    let kind = match criterion {
-        "mc" => Kind::MinCircumscribed,
-        "mi" => Kind::MaxInscribed,
-        "mz" => Kind::MinZone,
-        other => return Err(config_err(py, format!("circle (PSO): no swarm fit for criterion {other:?} (mc, mi, mz)"))),
-    };
-    let settings = gagekit_pso::Settings { seed, particles, max_iterations, stall_iterations, ..Default::default() };
-    let r = run(py, || fit(pts, kind, &settings))?;
-    let z = r.zone;
-    Ok(((z.center[0], z.center[1]), z.r_in, z.r_out, z.control_in, z.control_out, r.iterations, r.evaluations))
+/// A least-squares cone: axis point (nearest the centroid), direction (the radius grows
+/// along it), distance from the point to the surface, half apex angle (rad), certificate
+/// (signed orthogonal distances, positive outside) and form error.
+#[pyclass(frozen, get_all, module = "gagekit._core")]
+pub struct ConeResult {
+    pub point: [f64; 3],
+    pub direction: [f64; 3],
+    pub distance: f64,
+    pub half_angle: f64,
+    pub min_distance: f64,
+    pub max_distance: f64,
+    pub form_error: f64,
 }
 
-/// Angle (rad) the points cover around an axis (2 pi minus the largest angular gap).
+/// Least-squares cone of (n, 3) points (Forbes' parametrisation).
 #[pyfunction]
-fn form_cylinder_arc(py: Python<'_>, points: PyReadonlyArray2<'_, f64>, point: [f64; 3], direction: [f64; 3]) -> PyResult<f64> {
+fn form_cone_lsq(py: Python<'_>, points: PyReadonlyArray2<'_, f64>) -> PyResult<ConeResult> {
     let pts = rows(py, &points, 3, "points")?;
-    run(py, || Ok(gagekit_form::cylinder::arc(pts, &point, &direction)))
-}
-
-/// Least-squares cone: (axis point, axis direction, distance from the point to the
-/// surface, half apex angle (rad), (min, max) signed orthogonal distance of the points).
-#[pyfunction]
-fn form_cone_lsq(py: Python<'_>, points: PyReadonlyArray2<'_, f64>) -> PyResult<([f64; 3], [f64; 3], f64, f64, Ext)> {
-    let pts = rows(py, &points, 3, "points")?;
-    run(py, || {
+    let (c, e) = run(py, || {
         let c = lsq::cone(pts)?;
         let e = lsq::cone_extent(pts, &c);
-        Ok((c.point, c.direction, c.distance, c.half_angle, ext(e)))
+        Ok((c, e))
+    })?;
+    Ok(ConeResult {
+        point: c.point,
+        direction: c.direction,
+        distance: c.distance,
+        half_angle: c.half_angle,
+        min_distance: e.min,
+        max_distance: e.max,
+        form_error: e.spread(),
     })
 }
 
 fn register_3d(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(form_cone_lsq, m)?)?;
-    m.add_function(wrap_pyfunction!(form_cylinder_arc, m)?)?;
     m.add_function(wrap_pyfunction!(form_cylinder_fit, m)?)?;
     m.add_function(wrap_pyfunction!(form_line3_min_zone, m)?)?;
     m.add_function(wrap_pyfunction!(form_criterion, m)?)?;
@@ -560,11 +594,14 @@ fn register_3d(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(form_sphere_fit, m)?)?;
     m.add_class::<Circle3Result>()?;
     m.add_class::<SphereResult>()?;
-    m.add_function(wrap_pyfunction!(form_circle_pso, m)?)?;
-    m.add_function(wrap_pyfunction!(form_plane_extent, m)?)?;
-    m.add_function(wrap_pyfunction!(form_line_extent, m)?)?;
-    m.add_function(wrap_pyfunction!(form_axis_extent, m)?)?;
+    m.add_class::<LeastSquaresCylinderResult>()?;
+    m.add_class::<MinZoneFlatResult>()?;
     m.add_function(wrap_pyfunction!(form_min_zone_flat, m)?)?;
+    m.add_class::<LineResult>()?;
+    m.add_class::<PlaneResult>()?;
+    m.add_class::<LeastSquaresSphereResult>()?;
+    m.add_class::<LeastSquaresCircle3Result>()?;
+    m.add_class::<ConeResult>()?;
     m.add_function(wrap_pyfunction!(form_line_lsq, m)?)?;
     m.add_function(wrap_pyfunction!(form_plane_lsq, m)?)?;
     m.add_function(wrap_pyfunction!(form_sphere_lsq, m)?)?;

@@ -94,18 +94,5 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(gdt_slab, m)?)?;
     m.add_function(wrap_pyfunction!(gdt_datum_plane, m)?)?;
     m.add_function(wrap_pyfunction!(gdt_axis_along, m)?)?;
-    register_sphere(m)?;
     Ok(())
-}
-
-/// Minimum-zone sphere of (n, 3) points: (center, r_in, r_out).
-#[pyfunction]
-fn gdt_min_zone_sphere<'py>(py: Python<'py>, points: PyReadonlyArray2<'py, f64>) -> PyResult<(V3, f64, f64)> {
-    let pts = rows(py, &points, 3, "points")?;
-    let z = run(py, || gagekit_gdt::sphere::min_zone(pts))?;
-    Ok((v3(z.center), z.r_in, z.r_out))
-}
-
-pub fn register_sphere(m: &Bound<'_, PyModule>) -> PyResult<()> {
-    m.add_function(wrap_pyfunction!(gdt_min_zone_sphere, m)?)
 }

@@ -38,3 +38,5 @@ export function bytes(b64) {
 }
 
 export function floats(b64) { return new Float32Array(bytes(b64).buffer); }
+
+export function uint32s(b64) { return new Uint32Array(bytes(b64).buffer); }

@@ -10,7 +10,7 @@ const NORMALS = { "+x": [1, 0, 0], "-x": [-1, 0, 0], "+y": [0, 1, 0], "-y": [0, 
 const $ = (id) => document.getElementById(id);
 
 const studio = window.__studio = { ready: false, errors: [], firstRenderMs: null, selectMs: [] };
-const state = { scan: null, spec: null, doc: null, selected: null, counts: [], align: null, run: null, applyT: false };
+const state = { scan: null, spec: null, doc: null, kind: "gage", selected: null, counts: [], align: null, run: null, applyT: false, inspection: null };
 let view;
 
 // ------------------------------------------------------------------ helpers
@@ -18,8 +18,27 @@ let view;
 const round = (v, d) => { const f = 10 ** d; return Math.round(v * f) / f; };
 const fmt = (v, d = 4) => (v == null || Number.isNaN(v) ? "–" : Number(v).toFixed(d));
 const angleFactor = () => (state.doc && state.doc.angle_unit === "deg" ? Math.PI / 180 : 1);
-const regions = () => (state.doc.region = state.doc.region || []);
+const isPart = () => state.kind === "part";
+const features = () => (state.doc.feature = state.doc.feature || []);
+const tolerances = () => (state.doc.tolerance = state.doc.tolerance || []);
+// the boxes: a gage file's [[region]] tables, or a drawing's feature regions (inline
+// tables of [[feature]], in the scan's frame) carrying their feature's name unseen by JSON
+function regions() {
+  if (!isPart()) return (state.doc.region = state.doc.region || []);
+  return features().map((f) => {
+    if (!f.region || typeof f.region !== "object" || Array.isArray(f.region)) f.region = { center: [0, 0, 0], size: [1, 1, 1] };
+    Object.defineProperty(f.region, "name", { value: f.name, enumerable: false, configurable: true, writable: true });
+    Object.defineProperty(f.region, "frame", { value: "scanner", enumerable: false, configurable: true, writable: true });
+    return f.region;
+  });
+}
 const gages = () => (state.doc.gage = state.doc.gage || []);
+const VEC_KEYS = { outward: "fe-o", direction: "fe-d" };
+
+function datumLetterOf(name) {
+  const d = state.doc.datums || {};
+  return Object.keys(d).find((k) => d[k] === name || (d[k] && d[k].feature === name)) || "";
+}
 const identity = () => [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]];
 const mulPoint = (M, p) => [0, 1, 2].map((i) => M[i][0] * p[0] + M[i][1] * p[1] + M[i][2] * p[2] + M[i][3]);
 
@@ -51,6 +70,8 @@ function showValidation(v) {
   };
   (v && v.errors || []).forEach((e) => put(e, false));
   (v && v.warnings || []).forEach((e) => put(e, true));
+  (v && v.errors || []).forEach((e) => { if (e.table === "feature" && e.index) bad.add(features()[e.index - 1] && features()[e.index - 1].name); });
+  (v && v.errors || []).forEach((e) => { if (e.table === "tolerance" && e.index) { const t = tolerances()[e.index - 1]; if (t) bad.add(t.feature); } });
   state.counts.forEach((c) => { if (c && c.error) bad.add(c.name); });
   document.querySelectorAll("#regions tbody tr").forEach((tr) => tr.classList.toggle("bad", bad.has(tr.dataset.name)));
 }
@@ -65,6 +86,21 @@ function renderScan() {
 function renderRegions() {
   const tb = $("regions").tBodies[0];
   tb.textContent = "";
+  const heads = isPart() ? ["name", "shape", "datum", "points", "tolerances"] : ["name", "frame", "datum", "points", "gages"];
+  $("regions").tHead.rows[0].querySelectorAll("th").forEach((th, k) => { th.textContent = heads[k]; });
+  if (isPart()) {
+    features().forEach((f, i) => {
+      const tr = tb.insertRow();
+      tr.dataset.name = f.name;
+      tr.dataset.index = i;
+      if (i === state.selected) tr.classList.add("sel");
+      const c = state.counts[i], n = tolerances().filter((t) => t.feature === f.name).length;
+      [f.name, f.shape || "–", datumLetterOf(f.name) || "–", c && c.count != null ? c.count.toLocaleString() : "–", n || "–"]
+        .forEach((v, k) => { const td = tr.insertCell(); td.textContent = v; if (k >= 3) td.className = "num"; });
+      tr.addEventListener("click", () => selectRegion(i));
+    });
+    return;
+  }
   regions().forEach((r, i) => {
     const tr = tb.insertRow();
     tr.dataset.name = r.name;
@@ -91,7 +127,118 @@ function renderEditor() {
   ["x", "y", "z"].forEach((a, k) => {
     $(`re-c${a}`).value = r.center[k]; $(`re-s${a}`).value = r.size[k]; $(`re-r${a}`).value = rot[k];
   });
+  if (isPart()) { renderFeature(); return; }
   renderGages();
+}
+
+// ------------------------------------------------------------------ drawing: feature and its tolerances
+
+function renderFeature() {
+  const f = features()[state.selected];
+  if (!f) return;
+  const shapes = state.inspection.shapes;
+  $("fe-shape").innerHTML = shapes.map((s) => `<option>${s}</option>`).join("");
+  $("fe-shape").value = f.shape || "plane";
+  $("fe-kind").value = f.kind || "";
+  Object.entries(VEC_KEYS).forEach(([key, id]) => {
+    const v = Array.isArray(f[key]) ? f[key] : ["", "", ""];
+    ["x", "y", "z"].forEach((a, k) => { $(`${id}${a}`).value = v[k]; });
+  });
+  $("fe-datum").value = datumLetterOf(f.name);
+  renderTolerances();
+}
+
+function renderTolerances() {
+  const box = $("tolerances");
+  box.textContent = "";
+  const f = features()[state.selected];
+  if (!f) return;
+  const applies = state.inspection.applies_to;
+  const chars = Object.keys(applies).filter((c) => applies[c].includes(f.shape || "plane"));
+  tolerances().forEach((t, ti) => {
+    if (t.feature !== f.name) return;
+    const card = document.createElement("div");
+    card.className = "tol";
+    card.dataset.characteristic = t.characteristic || "";
+    const opts = [...new Set([t.characteristic, ...chars].filter(Boolean))];
+    card.innerHTML = `
+      <div class="head"><select class="t-char">${opts.map((c) => `<option>${c}</option>`).join("")}</select><button class="t-del danger" title="remove this tolerance">×</button></div>
+      <div class="grid">
+        <label>tolerance (mm)</label><input class="t-tol" type="number" step="any" min="0">
+        <label title="datum letters of the feature control frame, in order of precedence">datums</label><input class="t-datums" type="text" placeholder="e.g. A, B, C">
+        <label title="in the datum frame (position, profile)">nominal point</label><span class="xyz"><input class="t-px" type="number" step="any"><input class="t-py" type="number" step="any"><input class="t-pz" type="number" step="any"></span>
+        <label title="in the datum frame (position, profile)">nominal direction</label><span class="xyz"><input class="t-dx" type="number" step="any"><input class="t-dy" type="number" step="any"><input class="t-dz" type="number" step="any"></span>
+        <label title="angularity: basic angle to the datum (deg)">angle (deg)</label><input class="t-angle" type="number" step="any">
+      </div>`;
+    const q = (c) => card.querySelector(c);
+    q(".t-char").value = t.characteristic || chars[0];
+    if (!t.characteristic) t.characteristic = chars[0];
+    q(".t-tol").value = t.tolerance != null ? t.tolerance : "";
+    q(".t-datums").value = (t.datums || []).join(", ");
+    const nom = t.nominal || {};
+    ["x", "y", "z"].forEach((a, k) => {
+      q(`.t-p${a}`).value = Array.isArray(nom.point) ? nom.point[k] : "";
+      q(`.t-d${a}`).value = Array.isArray(nom.direction) ? nom.direction[k] : "";
+    });
+    q(".t-angle").value = t.angle != null ? t.angle : "";
+    q(".t-char").addEventListener("change", () => { t.characteristic = q(".t-char").value; card.dataset.characteristic = t.characteristic; changed(false); });
+    q(".t-tol").addEventListener("input", () => { const v = parseFloat(q(".t-tol").value); if (!Number.isNaN(v)) { t.tolerance = v; changed(false); } });
+    q(".t-datums").addEventListener("change", () => {
+      const d = q(".t-datums").value.split(/[\s,|]+/).map((x) => x.trim()).filter(Boolean);
+      if (d.length) t.datums = d; else delete t.datums;
+      changed(false);
+    });
+    const readNominal = () => {
+      const get = (p) => ["x", "y", "z"].map((a) => parseFloat(q(`.t-${p}${a}`).value));
+      const p = get("p"), d = get("d"), n = {};
+      if (p.every((v) => !Number.isNaN(v))) n.point = p;
+      if (d.every((v) => !Number.isNaN(v))) n.direction = d;
+      if (Object.keys(n).length) t.nominal = n; else delete t.nominal;
+      changed(false);
+    };
+    ["x", "y", "z"].forEach((a) => { q(`.t-p${a}`).addEventListener("change", readNominal); q(`.t-d${a}`).addEventListener("change", readNominal); });
+    q(".t-angle").addEventListener("change", () => { const v = parseFloat(q(".t-angle").value); if (Number.isNaN(v)) delete t.angle; else t.angle = v; changed(false); });
+    q(".t-del").addEventListener("click", () => { tolerances().splice(ti, 1); if (!tolerances().length) delete state.doc.tolerance; renderTolerances(); changed(true); });
+    box.appendChild(card);
+  });
+}
+
+function bindFeature() {
+  const f = () => features()[state.selected];
+  $("fe-shape").addEventListener("change", () => {
+    const x = f(); if (!x) return;
+    x.shape = $("fe-shape").value;
+    if (!["plane", "line"].includes(x.shape)) delete x.outward;
+    else if (!x.outward) x.outward = [0, 0, 1];
+    if (!["cylinder", "circle", "sphere", "cone"].includes(x.shape)) delete x.kind;
+    if (!["cylinder", "cone", "circle", "line"].includes(x.shape)) delete x.direction;
+    renderFeature(); changed(true);
+  });
+  $("fe-kind").addEventListener("change", () => { const x = f(); if (!x) return; if ($("fe-kind").value) x.kind = $("fe-kind").value; else delete x.kind; changed(true); });
+  Object.entries(VEC_KEYS).forEach(([key, id]) => ["x", "y", "z"].forEach((a) => $(`${id}${a}`).addEventListener("change", () => {
+    const x = f(); if (!x) return;
+    const v = ["x", "y", "z"].map((b) => parseFloat($(`${id}${b}`).value));
+    if (v.every((c) => !Number.isNaN(c))) x[key] = v; else if (v.every(Number.isNaN)) delete x[key];
+    changed(false);
+  })));
+  $("fe-datum").addEventListener("change", () => {
+    const x = f(); if (!x) return;
+    const letter = $("fe-datum").value.trim();
+    const d = state.doc.datums = state.doc.datums || {};
+    const old = datumLetterOf(x.name);
+    let entry = x.name;
+    if (old) { entry = d[old]; delete d[old]; }
+    if (letter) d[letter] = entry;
+    if (!Object.keys(d).length) delete state.doc.datums;
+    changed(true);
+  });
+  $("tol-add").addEventListener("click", () => {
+    const x = f(); if (!x) return;
+    const applies = state.inspection.applies_to;
+    const c = Object.keys(applies).find((k) => applies[k].includes(x.shape || "plane"));
+    tolerances().push({ feature: x.name, characteristic: c, tolerance: 0.1 });
+    renderTolerances(); changed(true);
+  });
 }
 
 function renderGages() {
@@ -218,7 +365,7 @@ async function recount() {
     studio.selectMs.push(performance.now() - t0);
     $("re-count").textContent = res.count.toLocaleString();
     $("status").textContent = `${r.name}: ${res.count.toLocaleString()} points inside (${res.lod_count.toLocaleString()} shown)`;
-    view.highlight(api.bytes(res.mask));
+    view.highlight(res.indices ? { indices: api.uint32s(res.indices) } : { mask: api.bytes(res.mask) });
     studio.lastCount = res.count;
   } catch (e) {
     $("re-count").textContent = "–";
@@ -259,8 +406,11 @@ function addBoxAt(scannerPoint) {
   const H = state.align ? state.align.H : identity();
   const centre = mulPoint(H, scannerPoint).map((v) => round(v, 3));
   const s = round(Math.max(view.diagonal * 0.05, 1e-3), 1) || 1;
-  const r = { name: uniqueName("box"), frame: "part", center: centre, size: [s, s, s] };
-  regions().push(r);
+  if (isPart()) { // a new feature: a plane until told otherwise, its region in the scan's frame
+    features().push({ name: uniqueName("F"), shape: "plane", outward: [0, 0, 1], region: { center: scannerPoint.map((v) => round(v, 3)), size: [s, s, s] } });
+  } else {
+    regions().push({ name: uniqueName("box"), frame: "part", center: centre, size: [s, s, s] });
+  }
   state.selected = regions().length - 1;
   changed(true);
   renderEditor();
@@ -296,6 +446,15 @@ function bindEditor() {
   $("re-name").addEventListener("change", () => {
     const r = regions()[state.selected], name = $("re-name").value.trim();
     if (!r || !name || name === r.name) return;
+    if (isPart()) {
+      const fe = features()[state.selected], d = state.doc.datums || {};
+      tolerances().forEach((t) => { if (t.feature === fe.name) t.feature = name; });
+      Object.keys(d).forEach((k) => { if (d[k] === fe.name) d[k] = name; else if (d[k] && d[k].feature === fe.name) d[k].feature = name; });
+      fe.name = name;
+      $("re-title").textContent = name;
+      changed(true);
+      return;
+    }
     gages().forEach((g) => { if (g.region === r.name) g.region = name; });
     const al = state.doc.alignment || {};
     ROLES.forEach((k) => { if (Array.isArray(al[k])) al[k] = al[k].map((n) => (n === r.name ? name : n)); });
@@ -322,6 +481,16 @@ function bindEditor() {
   $("re-delete").addEventListener("click", () => {
     const r = regions()[state.selected];
     if (!r) return;
+    if (isPart()) {
+      const fe = features()[state.selected], d = state.doc.datums || {};
+      features().splice(state.selected, 1);
+      state.doc.tolerance = tolerances().filter((t) => t.feature !== fe.name);
+      if (!state.doc.tolerance.length) delete state.doc.tolerance;
+      Object.keys(d).forEach((k) => { if (d[k] === fe.name || (d[k] && d[k].feature === fe.name)) delete d[k]; });
+      if (state.doc.datums && !Object.keys(d).length) delete state.doc.datums;
+      state.selected = null; view.select(null); renderEditor(); changed(true); view.highlight(null);
+      return;
+    }
     regions().splice(state.selected, 1);
     state.doc.gage = gages().filter((g) => g.region !== r.name);
     const al = state.doc.alignment;
@@ -357,6 +526,7 @@ async function run() {
     const res = await api.post("/api/run", { doc: state.doc });
     state.run = res;
     const r = res.result;
+    if (res.kind === "part") { showInspection(res); studio.lastRunMs = performance.now() - t0; return; }
     $("run-status").textContent = `${r.status} (${res.seconds} s on ${state.scan.count.toLocaleString()} points)`;
     const tb = $("results").tBodies[0];
     tb.textContent = "";
@@ -373,13 +543,7 @@ async function run() {
       (r.infeasible_groups.length ? `\ninfeasible groups: ${r.infeasible_groups.map((g) => g.join(" + ")).join("; ")}` : "") +
       (r.limited_by_motion_bounds ? `\nlimited by the motion bounds: ${r.bound_limits.map((b) => b.motion + " " + b.side).join(", ")}` : "");
     showValidation(res.validation);
-    const values = api.floats(res.values);
-    if (res.value_range) {
-      view.colourBy(values, res.value_range[0], res.value_range[1]);
-      $("legend").hidden = false;
-      $("legend-min").textContent = fmt(res.value_range[0], 3);
-      $("legend-max").textContent = fmt(res.value_range[1], 3);
-    }
+    showColours(res);
     $("apply-t").disabled = false;
     setApplyT($("apply-t").checked);
     studio.lastRunMs = performance.now() - t0;
@@ -389,6 +553,35 @@ async function run() {
   } finally {
     $("run").disabled = false;
   }
+}
+
+function showColours(res) {
+  const values = api.floats(res.values);
+  if (res.value_range) {
+    view.colourBy(values, res.value_range[0], res.value_range[1]);
+    $("legend").hidden = false;
+    $("legend-min").textContent = fmt(res.value_range[0], 3);
+    $("legend-max").textContent = fmt(res.value_range[1], 3);
+  }
+}
+
+function showInspection(res) {
+  const r = res.result, tols = r.tolerances;
+  $("run-status").textContent = `${r.status}: ${tols.filter((t) => t.pass).length}/${tols.length} callouts pass (${res.seconds} s on ${state.scan.count.toLocaleString()} points)`;
+  const tb = $("callouts").tBodies[0];
+  tb.textContent = "";
+  tols.forEach((t) => {
+    const tr = tb.insertRow();
+    tr.dataset.feature = t.feature;
+    tr.dataset.characteristic = t.characteristic;
+    const cells = [[t.feature, "feature"], [t.characteristic + (t.zone === "diameter" ? " ⌀" : ""), "characteristic"],
+      [(t.datums || []).join("|") || "–", "datums"], [fmt(t.tolerance), "num tolerance"], [fmt(t.measured), "num measured"],
+      [fmt(t.margin), "num margin"], [t.pass ? "pass" : "FAIL", t.pass ? "pass" : "fail"]];
+    cells.forEach(([v, cls]) => { const td = tr.insertCell(); td.textContent = v; td.className = cls; });
+  });
+  showValidation(res.validation);
+  $("legend-caption").textContent = "deviation from the feature's least-squares fit (mm)";
+  showColours(res);
 }
 
 function setApplyT(on) {
@@ -439,12 +632,21 @@ async function start() {
   const st = await api.get("/api/state");
   state.scan = st.scan;
   state.spec = st.spec;
-  state.doc = st.spec.doc || { length_unit: "mm" };
+  state.kind = st.spec.kind || "gage";
+  state.inspection = st.inspection;
+  state.doc = st.spec.doc || (isPart() ? { part: { name: "part" } } : { length_unit: "mm" });
+  document.body.classList.toggle("part-mode", isPart());
+  if (isPart()) {
+    $("run-title").textContent = "Inspection";
+    $("file-title").textContent = "Drawing (PART.toml)";
+    $("add-box").title = "Then click on the scan where the feature's region goes";
+  }
   view = new View($("view"), { boxChanged: onBoxChanged, boxPicked: selectRegion, pointPicked: addBoxAt,
     missed: () => { $("status").textContent = "no scan point there: click on the points (Esc to cancel)"; } });
   studio.view = view;
   bindToolbar();
   bindEditor();
+  bindFeature();
   renderScan();
   const xyz = await api.points();
   view.setPoints(xyz, state.scan.origin, state.scan.bbox);
@@ -455,7 +657,7 @@ async function start() {
   renderAll();
   showValidation(st.spec.validation);
   if (st.spec.parse_error) document.querySelector('.errors[data-table="top"]').textContent = st.spec.parse_error;
-  $("save-path").placeholder = st.spec.path ? st.spec.name : "gages.toml";
+  $("save-path").placeholder = st.spec.path ? st.spec.name : (isPart() ? "part.toml" : "gages.toml");
   await refreshRegions();
   view.viewAlong("iso");
   studio.ready = true;

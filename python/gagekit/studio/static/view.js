@@ -83,6 +83,7 @@ export class View {
       colours[3 * i] = 85 + 110 * t; colours[3 * i + 1] = 95 + 110 * t; colours[3 * i + 2] = 110 + 110 * t;
     }
     this.baseColours = colours.slice();
+    this.lit = null; this.litAll = false;
     geom.setAttribute("color", new THREE.BufferAttribute(colours, 3, true));
     geom.computeBoundingSphere();
     const mat = new THREE.PointsMaterial({ size: 2, sizeAttenuation: false, vertexColors: THREE.VertexColors });
@@ -97,16 +98,27 @@ export class View {
     this.viewAlong("iso");
   }
 
-  // mask: Uint8Array of packed bits (little-endian), one per displayed point
-  highlight(mask) {
+  // sel: {indices: Uint32Array of displayed points} (the work grows with the box, not the
+  // scan: only the points lit before and now are touched), {mask: Uint8Array of packed
+  // bits, little-endian, one per displayed point}, or null (none)
+  highlight(sel) {
     if (!this.points) return;
     const attr = this.points.geometry.getAttribute("color");
     const c = attr.array, base = this.valueColours || this.baseColours, n = c.length / 3;
-    c.set(base);
-    if (mask) {
-      for (let i = 0; i < n; i++) {
-        if (mask[i >> 3] & (1 << (i & 7))) { c[3 * i] = 255; c[3 * i + 1] = 120; c[3 * i + 2] = 20; }
-      }
+    const lit = (i) => { c[3 * i] = 255; c[3 * i + 1] = 120; c[3 * i + 2] = 20; };
+    if (this.lit && !this.litAll) {
+      for (const i of this.lit) { c[3 * i] = base[3 * i]; c[3 * i + 1] = base[3 * i + 1]; c[3 * i + 2] = base[3 * i + 2]; }
+    } else {
+      c.set(base);
+    }
+    this.lit = null; this.litAll = false;
+    if (sel && sel.indices) {
+      for (const i of sel.indices) lit(i);
+      this.lit = sel.indices;
+    } else if (sel && sel.mask) {
+      const mask = sel.mask;
+      for (let i = 0; i < n; i++) if (mask[i >> 3] & (1 << (i & 7))) lit(i);
+      this.lit = []; this.litAll = true;
     }
     attr.needsUpdate = true;
     this.requestRender();
@@ -114,6 +126,7 @@ export class View {
 
   // values: Float32Array per displayed point (NaN: in no gage region); null clears
   colourBy(values, lo, hi) {
+    this.lit = null; this.litAll = false; // the base colours change: the next highlight redraws all
     if (!values) { this.valueColours = null; this.highlight(null); return; }
     const n = values.length, c = this.baseColours.slice();
     const neg = Math.min(lo, -1e-9), pos = Math.max(hi, 1e-9);

@@ -4,7 +4,8 @@
 //! to 3-D. Points with an exactly constant coordinate lie in a coordinate plane,
 //! which is then used exactly (its 2-D fit is the fit of the other two coordinates).
 
-use super::{least_squares, max_angular_gap, max_inscribed, min_circumscribed, min_zone, Zone};
+use super::complete::{arc_of, MIN_ARC_DEG};
+use super::{least_squares, max_inscribed, min_circumscribed, min_zone, Zone};
 use crate::criterion::FitCriterion;
 use crate::lsq::{self, Extent};
 use gagekit_core::Result;
@@ -26,8 +27,11 @@ pub struct PlaneCircle {
     pub extent: Extent,
     /// Largest distance of a point from the plane (how planar the points are).
     pub out_of_plane: f64,
-    /// Arc (rad) the points cover seen from the centre.
+    /// Arc (rad) the points cover seen from the centre (from the least-squares centre
+    /// for a maximum inscribed circle of an arc below 270 degrees, as in 2-D).
     pub arc: f64,
+    /// A maximum inscribed circle of an arc below [`MIN_ARC_DEG`] (Sec. 6.2.2).
+    pub ill_posed: bool,
 }
 
 /// The plane: origin, in-plane unit vectors u, v and the normal.
@@ -81,7 +85,8 @@ pub fn fit(pts: &[f64], crit: FitCriterion) -> Result<PlaneCircle> {
     let normal = lsq::upper([nrm[0], nrm[1], nrm[2]]);
     let extent = lsq::circle3_extent(pts, &center, &normal);
     let out_of_plane = lsq::plane_extent(pts, &center, &normal);
-    let arc = std::f64::consts::TAU - max_angular_gap(&flat, zone.center);
+    let (arc, _) = arc_of(&flat, crit, zone.center)?;
+    let ill_posed = crit == FitCriterion::MaxInscribed && arc.to_degrees() < MIN_ARC_DEG;
     Ok(PlaneCircle {
         center,
         normal,
@@ -90,6 +95,7 @@ pub fn fit(pts: &[f64], crit: FitCriterion) -> Result<PlaneCircle> {
         extent,
         out_of_plane: out_of_plane.max.max(-out_of_plane.min),
         arc,
+        ill_posed,
     })
 }
 
@@ -123,7 +129,7 @@ mod tests {
             assert!(f.out_of_plane < 1e-9);
         }
         let mz = fit(&pts, FitCriterion::MinZone).unwrap();
-        assert!((mz.extent.max - mz.extent.min - mz.zone.width()).abs() < 1e-9);
+        assert!((mz.extent.max - mz.extent.min - mz.zone.form_error()).abs() < 1e-9);
     }
 
     #[test]

@@ -7,6 +7,7 @@
 //! All fits work on data translated to the middle of its bounding box, so a part
 //! 10^6 mm away from the origin is fitted as accurately as one at the origin.
 
+mod complete;
 pub mod in_plane;
 mod lsq;
 mod mc;
@@ -21,6 +22,7 @@ mod tests;
 
 use gagekit_core::{GkError, Result};
 
+pub use complete::{fit, from_circle, from_zone, CircleFit, MIN_ARC_DEG};
 pub use lsq::least_squares;
 pub use mc::min_circumscribed;
 pub use mi::{max_inscribed, max_inscribed_near};
@@ -50,8 +52,15 @@ pub struct Zone {
 
 impl Zone {
     /// Radial separation of the two circles (the roundness error).
-    pub fn width(&self) -> f64 {
+    pub fn form_error(&self) -> f64 {
         self.r_out - self.r_in
+    }
+
+    /// The points that fix the zone: `control_in`, then those of `control_out` not in it.
+    pub fn control(&self) -> Vec<usize> {
+        let mut c = self.control_in.clone();
+        c.extend(self.control_out.iter().filter(|i| !self.control_in.contains(i)));
+        c
     }
 }
 

@@ -205,7 +205,7 @@ fn mz_matches_grid_search() {
         let v = random_set(200 + seed, 5 + (seed as usize % 40), (seed % 3) as u8);
         let p = pts2(&v);
         let z = min_zone(&v).unwrap();
-        let w = z.width();
+        let w = z.form_error();
         assert!((f_r(&p, z.center) - w).abs() < 1e-12);
         let mc = min_circumscribed(&v).unwrap();
         let brute = mz_brute(&p, mc.center, 2.0 * mc.radius);
@@ -262,7 +262,7 @@ fn lsq_perfect_circle_and_errors() {
     }
     assert!(min_zone(&[0.0, 0.0, 1.0, 1.0, 2.0, 2.0, 3.0, 3.0]).is_err());
     let z = min_zone(&[1.0, 0.0, 0.0, 1.0, -1.0, 0.0, 0.0, -1.0]).unwrap();
-    assert!(z.width().abs() < 1e-15 && z.center[0].abs() < 1e-15);
+    assert!(z.form_error().abs() < 1e-15 && z.center[0].abs() < 1e-15);
 }
 
 #[test]
@@ -328,9 +328,9 @@ fn mz_matches_unpruned_candidates_near_perfect_circles() {
         assert!(wb <= w0 + 1e-15, "unpruned {wb} > f(0) {w0}");
         // equal up to the rounding of the Voronoi geometry (~1e-13 of the part size)
         assert!(
-            z.width() <= wb + 5e-12,
+            z.form_error() <= wb + 5e-12,
             "seed {seed}: MZ {} at {:?} > unpruned {wb} at {cb:?}",
-            z.width(),
+            z.form_error(),
             z.center
         );
         assert!(
@@ -375,12 +375,12 @@ fn subset_iteration_matches_exact_on_all_points() {
         let z = min_zone(&v).unwrap();
         let zf = mz::exact(p, data.scale).unwrap();
         assert!(
-            (z.width() - zf.width()).abs() < 1e-12,
+            (z.form_error() - zf.form_error()).abs() < 1e-12,
             "seed {seed}: {} vs {}",
-            z.width(),
-            zf.width()
+            z.form_error(),
+            zf.form_error()
         );
-        assert!((f_r(&pts2(&v), z.center) - z.width()).abs() < 1e-12);
+        assert!((f_r(&pts2(&v), z.center) - z.form_error()).abs() < 1e-12);
         let m = max_inscribed(&v).unwrap();
         let (cmc, _) = mc::welzl(p, data.scale);
         let rmc = p.iter().map(|q| dist(*q, cmc)).fold(0.0, f64::max);
@@ -400,7 +400,7 @@ fn extreme_coordinates_give_results_or_clear_errors() {
         0.0, 0.0, 1e-300, 0.0, 0.0, 1e-300, 1e-300, 1e-300, 5e-301, 2e-300,
     ];
     for r in [
-        min_zone(&tiny).map(|z| z.width()),
+        min_zone(&tiny).map(|z| z.form_error()),
         max_inscribed(&tiny).map(|c| c.radius),
     ] {
         match r {
@@ -413,7 +413,7 @@ fn extreme_coordinates_give_results_or_clear_errors() {
     assert!(min_circumscribed(&huge).is_err() && least_squares(&huge).is_err());
     assert!((min_circumscribed(&big).unwrap().radius - 1e100).abs() < 1e88);
     for r in [
-        min_zone(&huge).map(|z| z.width()),
+        min_zone(&huge).map(|z| z.form_error()),
         max_inscribed(&huge).map(|c| c.radius),
     ] {
         if let Err(e) = r {
@@ -426,7 +426,7 @@ fn extreme_coordinates_give_results_or_clear_errors() {
     }
     let square = [1.0, 1.0, -1.0, 1.0, -1.0, -1.0, 1.0, -1.0, 1.0, 1.0];
     let z = min_zone(&square).unwrap();
-    assert!(z.width().abs() < 1e-15);
+    assert!(z.form_error().abs() < 1e-15);
 }
 
 /// Points 30 mm along a shallow noisy arc of radius `r` (sagitta 4e-3 mm of noise).
@@ -445,7 +445,7 @@ fn min_zone_of_nearly_straight_points_is_finite_or_degenerate() {
     // moderately shallow arcs: the true zone (width 4e-3 mm of radial noise)
     for r in [1e3, 1e4] {
         let z = min_zone(&shallow_arc(r)).unwrap();
-        assert!((z.width() - 4e-3).abs() < 1e-9, "R {r}: width {}", z.width());
+        assert!((z.form_error() - 4e-3).abs() < 1e-9, "R {r}: width {}", z.form_error());
         assert!((z.center[1] + r).abs() < 1e-3 * r);
     }
     // all but straight: an error, never a zone of width 0 around a centre at 1e18 mm
@@ -467,7 +467,7 @@ fn min_zone_of_nearly_straight_points_is_finite_or_degenerate() {
             .collect();
         match min_zone(&pts) {
             Ok(z) => {
-                assert!(z.width() > 1e-4, "width {} at centre {:?}", z.width(), z.center);
+                assert!(z.form_error() > 1e-4, "width {} at centre {:?}", z.form_error(), z.center);
                 assert!(z.center[0].hypot(z.center[1]) < 1e4 * 31.0);
                 for p in pts.chunks_exact(2) {
                     let d = (p[0] - z.center[0]).hypot(p[1] - z.center[1]);

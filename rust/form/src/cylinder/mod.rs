@@ -49,6 +49,7 @@ use gagekit_core::{check_finite, GkError, Result};
 use nalgebra::Vector3;
 use std::f64::consts::FRAC_PI_2;
 
+mod least_squares;
 mod mic_search;
 mod projection;
 mod search;
@@ -57,6 +58,7 @@ mod subset;
 #[cfg(test)]
 mod tests;
 
+pub use least_squares::{least_squares, LeastSquaresCylinder};
 pub use projection::{angles, arc, axis, project};
 use search::Region;
 
@@ -84,6 +86,30 @@ pub enum Criterion {
     MaxInscribed,
     /// Minimum zone: two coaxial cylinders of least radial separation (Eq. 6.14).
     MinZone,
+}
+
+impl Criterion {
+    /// The cylinder criterion of a fit criterion of the package's table (least squares
+    /// is no minimax cylinder: `None`).
+    pub fn from_fit(c: crate::criterion::FitCriterion) -> Option<Self> {
+        use crate::criterion::FitCriterion as F;
+        match c {
+            F::MinCircumscribed => Some(Self::MinCircumscribed),
+            F::MaxInscribed => Some(Self::MaxInscribed),
+            F::MinZone => Some(Self::MinZone),
+            F::LeastSquares => None,
+        }
+    }
+
+    /// Its entry of the package's criterion table.
+    pub fn fit_criterion(self) -> crate::criterion::FitCriterion {
+        use crate::criterion::FitCriterion as F;
+        match self {
+            Self::MinCircumscribed => F::MinCircumscribed,
+            Self::MaxInscribed => F::MaxInscribed,
+            Self::MinZone => F::MinZone,
+        }
+    }
 }
 
 /// Where the axis direction is searched: within `max_tilt` (rad, in [0, pi/2]) of
@@ -304,7 +330,7 @@ pub(crate) fn fit_spread(
     };
     let max_tilt = opts.search.max_tilt.min(FRAC_PI_2);
     let free = max_tilt >= FRAC_PI_2 - 1e-12;
-    let region = if free { Region::half_sphere() } else { Region::cone(reference, max_tilt) };
+    let region = if free { Region::free() } else { Region::cone(reference, max_tilt) };
     let mut r = subset::fit_in(pts, crit, opts, lsq_fit.as_ref(), &region, spread)?;
     let reference = lsq::upper([reference[0], reference[1], reference[2]]);
     if !free {

@@ -22,18 +22,27 @@ pub(super) type Basis = (Vector3<f64>, Vector3<f64>, Vector3<f64>);
 pub(super) struct Region {
     pub basis: Basis,
     pub s_max: f64,
+    /// The user's free search (`max_tilt` 90): also the deterministic grid search of
+    /// [`half_sphere_search`], so that the result does not depend on the seed. The
+    /// check for a better optimum outside a cone runs without it.
+    pub exhaustive: bool,
 }
 
 impl Region {
     /// The whole upper half sphere (Sec. 6.4).
     pub fn half_sphere() -> Self {
-        Self { basis: (Vector3::x(), Vector3::y(), Vector3::z()), s_max: FRAC_PI_2 }
+        Self { basis: (Vector3::x(), Vector3::y(), Vector3::z()), s_max: FRAC_PI_2, exhaustive: false }
+    }
+
+    /// The whole upper half sphere, searched exhaustively (`max_tilt` 90).
+    pub fn free() -> Self {
+        Self { exhaustive: true, ..Self::half_sphere() }
     }
 
     /// Directions within `half_angle` of the unit vector `w`.
     pub fn cone(w: Vector3<f64>, half_angle: f64) -> Self {
         let (u, v) = orthonormal_basis(&w);
-        Self { basis: (u, v, w), s_max: half_angle.min(FRAC_PI_2) }
+        Self { basis: (u, v, w), s_max: half_angle.min(FRAC_PI_2), exhaustive: false }
     }
 
     fn dir(&self, s: f64, g: f64) -> Vector3<f64> {
@@ -119,6 +128,9 @@ pub(super) fn fit_direct(
         if value < best.0 {
             best = (value, slp::Axis::new(a, Vector3::zeros()));
         }
+    }
+    if region.exhaustive {
+        evaluations += half_sphere_search(&pb, opts.hop_rounds, &mut best);
     }
     let mut r = result(&pb, pts, &best.1.dir)?;
     r.iterations = swarm.iterations;
@@ -244,6 +256,64 @@ fn along_boundary(pb: &Problem<'_>, best: &mut (f64, slp::Axis)) -> usize {
                 *best = found;
             }
         }
+    }
+    evaluations
+}
+
+/// Rings of the exhaustive grid over the half sphere ([`half_sphere_search`]).
+const HALF_SPHERE_RINGS: usize = 12;
+/// Local searches started from the best directions of that grid.
+const HALF_SPHERE_STARTS: usize = 12;
+
+/// The free search (`max_tilt` 90, the whole half sphere; issue 12: a 120-degree arc's
+/// MCC hung on the swarm's seed): the exact objective on a deterministic grid of
+/// directions (rings every 7.5 degrees of tilt, 6 k directions on ring k), local
+/// searches and basin hopping from its best distinct directions, all independent of the
+/// seed. The seeded swarm's optimum (`best`) is kept only when it is lower by more than
+/// 1e-9 of the part's size, so that a seed can only improve a result, not perturb it at
+/// the rounding level. Returns the evaluations spent.
+fn half_sphere_search(pb: &Problem<'_>, rounds: usize, best: &mut (f64, slp::Axis)) -> usize {
+    let region = pb.region;
+    let mut grid = vec![region.basis.2];
+    for ring in 1..=HALF_SPHERE_RINGS {
+        let s = region.s_max * ring as f64 / HALF_SPHERE_RINGS as f64;
+        for k in 0..6 * ring {
+            grid.push(region.dir(s, 2.0 * PI * k as f64 / (6 * ring) as f64));
+        }
+    }
+    let values: Vec<f64> = grid.par_iter().map(|a| objective(&pb.q, a, pb.crit, pb.size)).collect();
+    let mut order: Vec<usize> = (0..grid.len()).filter(|&i| values[i].is_finite()).collect();
+    order.sort_by(|&i, &j| values[i].total_cmp(&values[j]).then(i.cmp(&j)));
+    // distinct: at least one grid step (7.5 degrees) apart, as axes (a and -a alike)
+    let step = (region.s_max / HALF_SPHERE_RINGS as f64).cos();
+    let mut starts: Vec<Vector3<f64>> = Vec::new();
+    for i in order {
+        if starts.len() >= HALF_SPHERE_STARTS {
+            break;
+        }
+        if starts.iter().all(|b| grid[i].dot(b).abs() < step) {
+            starts.push(grid[i]);
+        }
+    }
+    let mut evaluations = grid.len();
+    let Some(&first) = starts.first() else { return evaluations };
+    let mut det = match pb.exact(&first) {
+        Some(found) => found,
+        None => (f64::INFINITY, slp::Axis::new(first, Vector3::zeros())),
+    };
+    evaluations += refine(pb, &starts, &mut det);
+    evaluations += hop(pb, rounds, &mut det);
+    if pb.crit == Criterion::MaxInscribed && fit2d(&pb.q, &det.1.dir, pb.crit).is_ok_and(|(_, _, z)| z.control_in.len() < 3) {
+        // as in fit_direct: a partial arc's MIC, searched on the exact values
+        let inside = |a: &Vector3<f64>| region.contains(a);
+        let (value, a, evals) = nelder_mead_search(&pb.q, pb.size, &starts, (det.0, det.1.dir), rounds, &inside);
+        evaluations += evals;
+        if value < det.0 {
+            det = (value, slp::Axis::new(a, Vector3::zeros()));
+        }
+    }
+    if !(best.0 < det.0 - 1e-9 * pb.size) {
+        *best = det;
     }
     evaluations
 }

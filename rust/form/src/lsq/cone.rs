@@ -39,7 +39,7 @@ fn algebraic_cone(q: &[[f64; 3]], a: &Vector3<f64>) -> Option<(Vector3<f64>, f64
         }
     }
     let c = m.lu().solve(&b)?;
-    if !(c[2] > 0.0) {
+    if c[2].is_nan() || c[2] <= 0.0 {
         return None;
     }
     let (x0, y0) = (0.5 * c[3], 0.5 * c[4]);

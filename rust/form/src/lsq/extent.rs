@@ -12,6 +12,23 @@ pub struct Extent {
 }
 
 impl Extent {
+    /// `max - min`: the form error about a feature whose certificate holds signed
+    /// distances (planes, 2-D lines, cones) or distances to a centre or an axis (circles,
+    /// spheres, cylinders).
+    pub fn spread(&self) -> f64 {
+        self.max - self.min
+    }
+
+    /// The straightness of a line: the spread of the signed distances in 2-D, the
+    /// diameter of the enclosing cylinder about the line (twice the largest distance) in 3-D.
+    pub fn line_form_error(&self, dim: usize) -> f64 {
+        if dim == 2 {
+            self.spread()
+        } else {
+            2.0 * self.max
+        }
+    }
+
     pub(crate) fn of(it: impl Iterator<Item = f64>) -> Extent {
         it.fold(Extent { min: f64::INFINITY, max: f64::NEG_INFINITY }, |e, d| Extent {
             min: e.min.min(d),

@@ -1,5 +1,5 @@
-//! Least-squares circle (2-D) or sphere (3-D): Levenberg-Marquardt on the orthogonal
-//! distances from the algebraic (Kasa) start.
+//! Least-squares sphere: Levenberg-Marquardt on the orthogonal distances from the
+//! algebraic (Kasa) start; 2-D points go to the circle kernel ([`crate::circle::least_squares`]).
 
 use super::frame::{centred3, centroid, check_points, principal_axes, vec3, DEGENERATE};
 use super::lm::{det_sum, levenberg_marquardt, normal_equations};
@@ -38,48 +38,29 @@ pub(crate) fn algebraic_sphere(q: &[[f64; 3]], dim: usize) -> Option<(Vector3<f6
     (r2 > 0.0 && sol.iter().all(|v| v.is_finite())).then(|| (c, r2.sqrt()))
 }
 
-/// Geometric least-squares circle (dim 2) or sphere (dim 3) of centred points.
-fn geometric_sphere(q: &[[f64; 3]], dim: usize, what: &str) -> Result<(Vector3<f64>, f64)> {
-    let start = algebraic_sphere(q, dim).ok_or_else(|| {
-        GkError::degenerate(format!("{what}: the points do not determine a {what}"))
-    })?;
-    let p = dim + 1;
+/// Geometric least-squares sphere of centred 3-D points.
+fn geometric_sphere(q: &[[f64; 3]]) -> Result<(Vector3<f64>, f64)> {
+    let start = algebraic_sphere(q, 3).ok_or_else(|| GkError::degenerate("sphere: the points do not determine a sphere"))?;
     let cost = |s: &(Vector3<f64>, f64)| det_sum(q, |x| ((vec3(x) - s.0).norm() - s.1).powi(2));
     let eval = |s: &(Vector3<f64>, f64)| {
-        let row = |x: &[f64; 3]| {
+        normal_equations::<4>(q, |x: &[f64; 3]| {
             let dv = vec3(x) - s.0;
             let rho = dv.norm();
-            let g = |d: usize| if rho > 0.0 && d < dim { -dv[d] / rho } else { 0.0 };
+            let g = |d: usize| if rho > 0.0 { -dv[d] / rho } else { 0.0 };
             (rho - s.1, [g(0), g(1), g(2), -1.0])
-        };
-        let (f, jtj, jtr) = normal_equations::<4>(q, row);
-        if dim == 2 {
-            // drop the z column: parameters (cx, cy, r)
-            let keep = [0usize, 1, 3];
-            let m = DMatrix::from_fn(3, 3, |i, j| jtj[(keep[i], keep[j])]);
-            let v = DVector::from_fn(3, |i, _| jtr[keep[i]]);
-            (f, m, v)
-        } else {
-            (f, jtj, jtr)
-        }
+        })
     };
-    let apply = |s: &(Vector3<f64>, f64), st: &DVector<f64>| {
-        let mut c = s.0;
-        for d in 0..dim {
-            c[d] += st[d];
-        }
-        (c, s.1 + st[dim])
-    };
-    let (s, _) = levenberg_marquardt(start, p, start.1, 500, eval, cost, apply, what)?;
+    let apply = |s: &(Vector3<f64>, f64), st: &DVector<f64>| (s.0 + Vector3::new(st[0], st[1], st[2]), s.1 + st[3]);
+    let (s, _) = levenberg_marquardt(start, 4, start.1, 500, eval, cost, apply, "sphere")?;
     Ok((s.0, s.1.abs()))
 }
 
 /// Least-squares circle of 2-D points (dim 2) or sphere of 3-D points (dim 3),
-/// minimising the sum of squared orthogonal distances.
+/// minimising the sum of squared orthogonal distances. The circle is the one 2-D
+/// least-squares circle of the package, [`crate::circle::least_squares`].
 pub fn sphere(pts: &[f64], dim: usize) -> Result<Sphere> {
     let what = if dim == 2 { "circle" } else { "sphere" };
-    let n = check_points(pts, dim, dim + 1, what)?;
-    let _ = n;
+    check_points(pts, dim, dim + 1, what)?;
     let c = centroid(pts, dim);
     let q = centred3(pts, dim, &c);
     let (sv, _) = principal_axes(&q);
@@ -92,8 +73,12 @@ pub fn sphere(pts: &[f64], dim: usize) -> Result<Sphere> {
             "{what}: the points are {shape}; a {what} through them is not determined"
         )));
     }
-    let (off, r) = geometric_sphere(&q, dim, what)?;
-    Ok(Sphere { center: (0..dim).map(|d| c[d] + off[d]).collect(), radius: r })
+    if dim == 2 {
+        let circle = crate::circle::least_squares(pts)?;
+        return Ok(Sphere { center: circle.center.to_vec(), radius: circle.radius });
+    }
+    let (off, r) = geometric_sphere(&q)?;
+    Ok(Sphere { center: (0..3).map(|d| c[d] + off[d]).collect(), radius: r })
 }
 
 #[cfg(test)]

@@ -128,5 +128,5 @@ pub fn min_circumscribed(pts: &[f64]) -> Result<SphereZone> {
     let r = pts.chunks_exact(3).map(|q| dist(q, &center)).fold(0.0, f64::max);
     ctrl.sort_unstable();
     let _ = extremes;
-    Ok(SphereZone { center, r_in: r, r_out: r, control_in: ctrl.clone(), control_out: ctrl, iterations: 0 })
+    Ok(SphereZone { center, r_in: r, r_out: r, control_in: ctrl.clone(), control_out: ctrl, iterations: 0, bound: r, cubes: 0 })
 }

@@ -12,6 +12,7 @@
 //! a trust region grows after good steps and shrinks after poor ones; the search stops
 //! when the LP predicts no decrease beyond rounding.
 
+use super::global::{self, Goal};
 use super::{extremes, min_circumscribed, SphereZone};
 use crate::lp;
 use crate::lsq;
@@ -125,9 +126,62 @@ impl Problem {
     }
 }
 
-fn fit(pts: &[f64], kind: Kind) -> Result<SphereZone> {
-    let what = if kind == Kind::MinZone { "minimum-zone sphere" } else { "maximum inscribed sphere" };
-    // checks (finite, magnitude, at least 4 points, not coplanar) and the start
+/// Above this many points the global search runs on an active subset.
+const ACTIVE_ABOVE: usize = 4096;
+/// Points added per side (nearest, farthest) to the active subset in each round.
+const ACTIVE: usize = 512;
+
+/// The certified global search ([`global::search`]) over the cube (centre `m0`, half side
+/// `h0`). On many points it runs on an active subset: the points nearest to (and for MZ
+/// farthest from) the local optimum `start`. A subset's bound holds for all points (fewer
+/// constraints: the MZ width can only shrink, the MI radius only grow), so the subset's
+/// best centre is certified when its value on all points is within the tolerance of that
+/// bound; otherwise the points beyond the subset's extremes at that centre join it and
+/// the search runs again.
+fn certify(pb: &Problem, goal: Goal, m0: Vector3<f64>, h0: f64, start: Vector3<f64>) -> global::Certified {
+    let n = pb.q.len();
+    if n <= ACTIVE_ABOVE {
+        return global::search(&pb.q, goal, m0, h0, pb.size, start);
+    }
+    let tol = global::tolerance(pb.size);
+    let mz = goal == Goal::MinZone;
+    let mut active: Vec<usize> = Vec::new();
+    let mut centre = start;
+    let mut cubes = 0;
+    for _round in 0..20 {
+        // the points beyond the active subset's extremes at `centre` (all of them at first)
+        let d: Vec<f64> = pb.q.iter().map(|p| (p - centre).norm()).collect();
+        let (lo, hi) = active.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &i| (l.min(d[i]), h.max(d[i])));
+        let mut order: Vec<usize> = (0..n).collect();
+        order.sort_by(|&i, &j| d[i].total_cmp(&d[j]).then(i.cmp(&j)));
+        let before = active.len();
+        active.extend(order.iter().take(ACTIVE).filter(|&&i| d[i] < lo));
+        if mz {
+            active.extend(order.iter().rev().take(ACTIVE).filter(|&&i| d[i] > hi));
+        }
+        active.sort_unstable();
+        active.dedup();
+        if active.len() == before {
+            break; // nothing beyond: the last subset's answer stands (checked below)
+        }
+        let sub: Vec<Vector3<f64>> = active.iter().map(|&i| pb.q[i]).collect();
+        let cert = global::search(&sub, goal, m0, h0, pb.size, centre);
+        cubes += cert.cubes;
+        centre = cert.center;
+        // minimisation form: MZ the width, MI minus the radius
+        let bound = if mz { cert.bound } else { -cert.bound };
+        if pb.value(&centre).0 <= bound + tol {
+            return global::Certified { center: centre, bound: cert.bound, cubes };
+        }
+    }
+    let mut all = global::search(&pb.q, goal, m0, h0, pb.size, centre);
+    all.cubes += cubes;
+    all
+}
+
+/// The checks (finite, magnitude, at least 4 points, not coplanar), the least-squares
+/// and MC spheres, and the problem on the points centred on their centroid `c0`.
+fn setup(pts: &[f64], kind: Kind, what: &str) -> Result<(Problem, lsq::Sphere, SphereZone, Vector3<f64>)> {
     let ls = lsq::sphere(pts, 3).map_err(|e| GkError::new(e.kind, e.message.replacen("sphere", what, 1)))?;
     let mc = min_circumscribed(pts)?;
     let c0 = lsq::centroid(pts, 3);
@@ -136,18 +190,24 @@ fn fit(pts: &[f64], kind: Kind) -> Result<SphereZone> {
     let size = q.iter().map(|p| p.norm()).fold(0.0, f64::max);
     let mcc = Vector3::from(mc.center) - c0;
     let pb = Problem { q, kind, mc: (mcc, mc.r_out), size };
-    let starts = [Vector3::new(ls.center[0], ls.center[1], ls.center[2]) - c0, mcc];
-    let mut best: Option<(f64, Vector3<f64>)> = None;
-    let mut iterations = 0;
-    for s in starts {
-        let (c, steps) = pb.descend(s);
-        iterations += steps;
-        let v = pb.value(&c).0;
-        if best.is_none_or(|b| v < b.0) {
-            best = Some((v, c));
-        }
-    }
-    let (_, c) = best.ok_or_else(|| GkError::numerical(format!("{what}: no solution")))?;
+    Ok((pb, ls, mc, c0))
+}
+
+fn fit(pts: &[f64], kind: Kind) -> Result<SphereZone> {
+    let what = if kind == Kind::MinZone { "minimum-zone sphere" } else { "maximum inscribed sphere" };
+    let (pb, ls, mc, c0) = setup(pts, kind, what)?;
+    let (mcc, size) = (pb.mc.0, pb.size);
+    // a local optimum first (the exact local step from the least-squares or MC centre),
+    // then the certified global search over the centre, then the local step from its best
+    let lsc = Vector3::new(ls.center[0], ls.center[1], ls.center[2]) - c0;
+    let (local, steps) = pb.descend(if kind == Kind::MinZone { lsc } else { mcc });
+    let cert = match kind {
+        Kind::MinZone => certify(&pb, Goal::MinZone, lsc, ls.radius.max(1e-9 * size), local),
+        Kind::MaxInscribed => certify(&pb, Goal::MaxInscribed { mc: mcc, r_mc: mc.r_out }, mcc, mc.r_out, local),
+    };
+    let (polished, more) = pb.descend(cert.center);
+    let iterations = steps + more;
+    let c = [polished, cert.center, local].into_iter().min_by(|a, b| pb.value(a).0.total_cmp(&pb.value(b).0)).unwrap_or(local);
     let center = [c[0] + c0[0], c[1] + c0[1], c[2] + c0[2]];
     let tol = 1e-9 * size;
     let (lo, hi, cin, cout) = extremes(pts, &center, tol);
@@ -163,7 +223,7 @@ fn fit(pts: &[f64], kind: Kind) -> Result<SphereZone> {
         return Err(GkError::numerical(format!("{what}: the search did not converge")));
     }
     let control_out = if kind == Kind::MinZone { cout } else { cin.clone() };
-    Ok(SphereZone { center, r_in, r_out, control_in: cin, control_out, iterations })
+    Ok(SphereZone { center, r_in, r_out, control_in: cin, control_out, iterations, bound: cert.bound, cubes: cert.cubes })
 }
 
 /// Minimum-zone sphere (sphericity) of 3-D points (flat, at least 4, not coplanar).
@@ -174,4 +234,14 @@ pub fn min_zone(pts: &[f64]) -> Result<SphereZone> {
 /// Maximum inscribed sphere within the minimum circumscribed one (3-D Eq. 6.2).
 pub fn max_inscribed(pts: &[f64]) -> Result<SphereZone> {
     fit(pts, Kind::MaxInscribed)
+}
+
+/// The old local-only search (tests): best value from the LS and MC starts.
+#[cfg(test)]
+pub(super) fn local_only(pts: &[f64], mz: bool) -> f64 {
+    let kind = if mz { Kind::MinZone } else { Kind::MaxInscribed };
+    let (pb, ls, _, c0) = setup(pts, kind, "sphere").unwrap();
+    let starts = [Vector3::new(ls.center[0], ls.center[1], ls.center[2]) - c0, pb.mc.0];
+    let v = starts.iter().map(|s| pb.value(&pb.descend(*s).0).0).fold(f64::INFINITY, f64::min);
+    if mz { v } else { -v }
 }

@@ -6,13 +6,19 @@
 //! carries its certificate: min and max distance of the points to the reported centre.
 //!
 //! - `mc`: Welzl (move-to-front), exact, expected linear time.
-//! - `minimax`: MI and MZ by sequential linear programming with a trust region on the
-//!   centre and radii (the 3-D analogue of the cylinders' SLP), from the least-squares
-//!   and MC centres; each step is a 4- or 5-variable LP ([`crate::lp`]). The steps stop
-//!   where the LP predicts no decrease: a local minimax optimum (the Chebyshev
-//!   conditions hold at the control points); for the near-spherical sets of form
-//!   inspection it is the global one.
+//! - `global`: MI and MZ globally, by a certified branch and bound over the centre
+//!   (interval bounds of the point distances on cubes of centres), to
+//!   [`global_tolerance`] (1e-9 mm); the bound it proves is reported (`bound`). On more
+//!   than 4096 points it runs on an active subset (the points nearest to and farthest
+//!   from the centre), grown until the subset's certified centre is within the
+//!   tolerance of its bound on all points (a subset's bound holds for the whole set).
+//! - `minimax`: the exact local step from the branch and bound's best centre:
+//!   sequential linear programming with a trust region on the centre and radii (the 3-D
+//!   analogue of the cylinders' SLP); each step is a 4- or 5-variable LP ([`crate::lp`]),
+//!   and the steps stop where the LP predicts no decrease (the Chebyshev conditions
+//!   hold at the control points).
 
+mod global;
 mod mc;
 mod minimax;
 
@@ -28,8 +34,20 @@ pub struct SphereZone {
     pub r_out: f64,
     pub control_in: Vec<usize>,
     pub control_out: Vec<usize>,
-    /// Linear programs (MI, MZ) or 0 (MC).
+    /// Linear programs of the final local step (MI, MZ) or 0 (MC).
     pub iterations: usize,
+    /// The certificate of the global search: MZ, no centre in the searched cube gives a
+    /// zone narrower than `bound`; MI, no inscribed sphere larger than `bound`; MC, the
+    /// radius itself (Welzl is exact). Within [`global_tolerance`] of the value.
+    pub bound: f64,
+    /// Cubes of centres the branch and bound evaluated (0 for MC).
+    pub cubes: usize,
+}
+
+/// The tolerance to which the MI and MZ spheres are certified global: 1e-9 mm, or
+/// 1e-13 of the part's size when larger.
+pub fn global_tolerance(size: f64) -> f64 {
+    global::tolerance(size)
 }
 
 /// Distance between 3-D points.

@@ -47,6 +47,38 @@ pub fn convex_hull_indices(points: &[f64]) -> Result<Vec<usize>> {
     Ok(out)
 }
 
+/// The triangulated hull of a solid point set: `triangles` (original indices,
+/// counter-clockwise seen from outside) and `neighbors[f][i]`, the triangle across the
+/// edge `(triangles[f][i], triangles[f][(i + 1) % 3])`. Coplanar triangles of one facet
+/// are kept apart (their shared edges lie inside the facet).
+#[derive(Debug, Clone)]
+pub struct HullMesh {
+    pub triangles: Vec<[usize; 3]>,
+    pub neighbors: Vec<[usize; 3]>,
+}
+
+/// The triangulated convex hull of `points` (row-major, `n x 3`), or `None` when the
+/// points are exactly coplanar or collinear (no solid hull). Same checks, prefilter and
+/// exact quickhull as [`convex_hull_indices`].
+pub fn convex_hull_mesh(points: &[f64]) -> Result<Option<HullMesh>> {
+    validate(points)?;
+    let n = points.len() / 3;
+    if n < 4 {
+        return Ok(None);
+    }
+    let candidates: Vec<usize> = if n >= PREFILTER_MIN { prefilter::survivors(points) } else { (0..n).collect() };
+    let ids = distinct(points, candidates);
+    if ids.len() < 4 {
+        return Ok(None);
+    }
+    let p: Vec<P3> = ids.iter().map(|&i| pt(points, i)).collect();
+    let Simplex::Solid(init) = simplex(&p) else { return Ok(None) };
+    let h = quickhull::hull3d(&p, init)?;
+    let triangles = h.faces.iter().map(|f| f.map(|k| ids[k as usize])).collect();
+    let neighbors = h.nbrs.iter().map(|g| g.map(|k| k as usize)).collect();
+    Ok(Some(HullMesh { triangles, neighbors }))
+}
+
 /// Largest and smallest non-zero coordinate magnitude for which the
 /// predicates' floating-point filters cannot overflow or underflow.
 const MAX_COORD: f64 = 1e100;

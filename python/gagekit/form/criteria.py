@@ -1,0 +1,31 @@
+"""Fit criterion names: the package's one table of names and aliases is Rust's
+(``gagekit_form::criterion``, read through ``_core.form_criteria``); every part of the
+package (form, gage, inspect, the CLI) parses names here, and stores the canonical name
+(``least-squares``, ``min-circumscribed``, ``max-inscribed``, ``minimum-zone``).
+"""
+
+from __future__ import annotations
+
+from typing import Iterable
+
+from .. import _core
+
+__all__ = ["ALIASES", "CIRCLE_CRITERIA", "CRITERIA", "criterion_name"]
+
+_TABLE = _core.form_criteria()
+
+#: Every accepted spelling (lower case, '-' for '_') and the canonical name it stands for.
+ALIASES: dict[str, str] = {alias: name for alias, name, _ in _TABLE}
+
+#: The canonical names, in the order of the documentation.
+CRITERIA: tuple[str, ...] = tuple(dict.fromkeys(name for _, name, _ in _TABLE))
+
+#: The short codes of the 2-D circle fits (lsq, mc, mi, mz) and their canonical names.
+CIRCLE_CRITERIA: dict[str, str] = {code: name for _, name, code in _TABLE}
+
+
+def criterion_name(criterion: object, allowed: Iterable[str] = (), shape: str = "fit") -> str:
+    """The canonical name of ``criterion`` (any alias of the table), or a
+    :class:`~gagekit.errors.ConfigError` listing the names ``allowed`` (all when empty)
+    for ``shape``."""
+    return _core.form_criterion(str(criterion), list(allowed), shape)
