@@ -213,6 +213,8 @@ fn offset(q: [f64; 2], k: [f64; 2], c: [f64; 2], dk: f64) -> f64 {
     }
 }
 
+/// The Sec. 6.2.3 candidates, best first: the MC centre, then the three cases of
+/// Eq. 6.6-6.8 ([`case_13`], [`case_31`], [`case_22`]), each pruned by the best zone so far.
 fn solve(
     p: &[[f64; 2]],
     nvd: &Nearest,
@@ -221,21 +223,24 @@ fn solve(
     (cmc, mc_ctrl, rmc): Mc,
 ) -> Vec<Cand> {
     let tol = 1e-12 * scale;
-    // lower bound of max_i |c - p_i|
-    let r_lb = |c: [f64; 2]| mc_ctrl.iter().map(|&k| dist(p[k], c)).fold(rmc, f64::max);
-
     let (j0, r0) = nvd.nearest(p, cmc);
-    let mut top = vec![Cand {
+    let top = vec![Cand {
         c: cmc,
         w: rmc - r0,
         inner: vec![j0],
         outer: mc_ctrl.clone(),
     }];
+    let top = merge(top.clone(), case_13(p, nvd, fvd, tol, (cmc, mc_ctrl.clone(), rmc), top[0].w));
+    let top = case_31(p, nvd, fvd, tol, cmc, j0, top);
+    let c22 = case_22(p, nvd, fvd, scale, tol, (cmc, mc_ctrl, rmc), &top[0]);
+    merge(top, c22)
+}
 
-    // case 1+3 (Eq. 6.6): nearest-Voronoi vertices
-    let w = top[0].w;
-    let c13 = nvd
-        .verts
+/// Case 1+3 (Eq. 6.6): nearest-Voronoi vertices whose zone can still beat `w`.
+fn case_13(p: &[[f64; 2]], nvd: &Nearest, fvd: &Farthest, tol: f64, (_cmc, mc_ctrl, rmc): Mc, w: f64) -> Vec<Cand> {
+    // lower bound of max_i |c - p_i|
+    let r_lb = |c: [f64; 2]| mc_ctrl.iter().map(|&k| dist(p[k], c)).fold(rmc, f64::max);
+    nvd.verts
         .par_iter()
         .with_min_len(512)
         .filter(|v| r_lb(v.c) - v.rad < w + tol)
@@ -249,12 +254,22 @@ fn solve(
                 outer,
             }]
         })
-        .reduce_with(merge);
-    top = merge(top, c13.unwrap_or_default());
+        .reduce_with(merge)
+        .unwrap_or_default()
+}
 
-    // case 3+1 (Eq. 6.7): farthest-Voronoi vertices, visited around the MC centre so
-    // that the previous nearest point is both a close start for the walk and a witness
-    // (r(u) <= |u - p_prev|) that rules most vertices out without any walk
+/// Case 3+1 (Eq. 6.7): farthest-Voronoi vertices, visited around the MC centre so that
+/// the previous nearest point is both a close start for the walk and a witness
+/// (r(u) <= |u - p_prev|) that rules most vertices out without any walk.
+fn case_31(
+    p: &[[f64; 2]],
+    nvd: &Nearest,
+    fvd: &Farthest,
+    tol: f64,
+    cmc: [f64; 2],
+    j0: usize,
+    mut top: Vec<Cand>,
+) -> Vec<Cand> {
     let mut order: Vec<usize> = (0..fvd.verts.len()).collect();
     let ang = |k: &usize| {
         let c = fvd.verts[*k].c;
@@ -280,13 +295,24 @@ fn solve(
         };
         top = merge(top, vec![cand]);
     }
+    top
+}
 
-    // case 2+2 (Eq. 6.8): crossings of nearest and farthest Voronoi edges. Each edge is
-    // first clipped to where a zone narrower than the best so far is still possible,
-    // judged against witness points (f_r >= |c - p_k| - |c - p_j| for any k, j).
-    let w = top[0].w + tol;
+/// Case 2+2 (Eq. 6.8): crossings of nearest and farthest Voronoi edges. Each edge is
+/// first clipped to where a zone narrower than `best` is still possible, judged against
+/// witness points (f_r >= |c - p_k| - |c - p_j| for any k, j).
+fn case_22(
+    p: &[[f64; 2]],
+    nvd: &Nearest,
+    fvd: &Farthest,
+    scale: f64,
+    tol: f64,
+    (cmc, mc_ctrl, rmc): Mc,
+    best: &Cand,
+) -> Vec<Cand> {
+    let w = best.w + tol;
     let margin = 1e-9 * scale;
-    let (outer_w, inner_w) = witnesses(p, cmc, &mc_ctrl, &top[0]);
+    let (outer_w, inner_w) = witnesses(p, cmc, &mc_ctrl, best);
     let mut fe: Vec<VEdge> = fvd
         .edges
         .par_iter()
@@ -301,8 +327,7 @@ fn solve(
         .collect();
     fe.sort_by(|a, b| a.rad_min().total_cmp(&b.rad_min()));
     let fe_rmin: Vec<f64> = fe.iter().map(|f| f.rad_min()).collect();
-    let c22 = nvd
-        .edges
+    nvd.edges
         .par_iter()
         .with_min_len(512)
         .filter_map(|e0| {
@@ -336,8 +361,8 @@ fn solve(
             }
             (!local.is_empty()).then(|| merge(Vec::new(), local))
         })
-        .reduce_with(merge);
-    merge(top, c22.unwrap_or_default())
+        .reduce_with(merge)
+        .unwrap_or_default()
 }
 
 /// Witness points for clipping: outer ones (far from the centre: the MC control points,
