@@ -152,6 +152,23 @@ def read_text(path: PathLike, what: str = "file") -> str:
         raise decode_error(exc, p) from None
 
 
+def csv_rows(text: str, path: PathLike) -> Iterator[tuple[int, list[str]]]:
+    """(line number, cells) of CSV ``text`` (read from ``path``); a line the csv module
+    refuses (a field over its size limit, a NUL byte) is a FileFormatError naming it."""
+    import csv
+    import io
+
+    reader = csv.reader(io.StringIO(text))
+    while True:
+        try:
+            row = next(reader)
+        except StopIteration:
+            return
+        except csv.Error as exc:
+            raise FileFormatError(f"{path}, line {reader.line_num}: not a CSV line ({exc})") from None
+        yield reader.line_num, row
+
+
 @contextlib.contextmanager
 def reading(path: PathLike, what: str = "file") -> Iterator[Path]:
     """Check ``path`` with :func:`input_file`, then map every ``OSError`` and

@@ -24,8 +24,6 @@ The standard's test has five cycles in each direction; any n >= 2 is accepted (r
 
 from __future__ import annotations
 
-import csv
-import io
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -95,11 +93,11 @@ class Iso230Result:
 
 def read_runs(path: Union[str, Path]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(targets (m,), deviations up (m, n), deviations down (m, n)) from a runs CSV."""
-    from .._files import read_text
+    from .._files import csv_rows, read_text
 
     p = Path(path)
     text = read_text(p, "interferometer runs")
-    rows = [r for r in csv.reader(io.StringIO(text)) if r and "".join(r).strip() and not r[0].lstrip().startswith("#")]
+    rows = [r for _, r in csv_rows(text, p) if r and "".join(r).strip() and not r[0].lstrip().startswith("#")]
     if not rows:
         raise FileFormatError(f"{p}: empty file (expected the header target,direction,cycle,measured)")
     header = [h.strip().lower() for h in rows[0]]

@@ -10,7 +10,6 @@ are allowed and ignored, so an observations file is also a commands file).
 from __future__ import annotations
 
 import csv
-import io
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Optional, Sequence, Union
@@ -58,13 +57,13 @@ class Observations:
 
 
 def _read_table(path: Union[str, Path]) -> tuple[list[str], np.ndarray]:
-    from .._files import read_text
+    from .._files import csv_rows, read_text
 
     p = Path(path)
     text = read_text(p, "CSV file")
     rows = []
     header: Optional[list[str]] = None
-    for lineno, row in enumerate(csv.reader(io.StringIO(text)), start=1):
+    for lineno, row in csv_rows(text, p):
         if not row or not "".join(row).strip() or row[0].lstrip().startswith("#"):
             continue
         cells = [c.strip() for c in row]
