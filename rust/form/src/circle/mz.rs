@@ -224,20 +224,29 @@ fn solve(
 ) -> Vec<Cand> {
     let tol = 1e-12 * scale;
     let (j0, r0) = nvd.nearest(p, cmc);
+    let w0 = rmc - r0;
     let top = vec![Cand {
         c: cmc,
-        w: rmc - r0,
+        w: w0,
         inner: vec![j0],
         outer: mc_ctrl.clone(),
     }];
-    let top = merge(top.clone(), case_13(p, nvd, fvd, tol, (cmc, mc_ctrl.clone(), rmc), top[0].w));
+    let top = merge(top, case_13(p, nvd, fvd, tol, &mc_ctrl, rmc, w0));
     let top = case_31(p, nvd, fvd, tol, cmc, j0, top);
     let c22 = case_22(p, nvd, fvd, scale, tol, (cmc, mc_ctrl, rmc), &top[0]);
     merge(top, c22)
 }
 
 /// Case 1+3 (Eq. 6.6): nearest-Voronoi vertices whose zone can still beat `w`.
-fn case_13(p: &[[f64; 2]], nvd: &Nearest, fvd: &Farthest, tol: f64, (_cmc, mc_ctrl, rmc): Mc, w: f64) -> Vec<Cand> {
+fn case_13(
+    p: &[[f64; 2]],
+    nvd: &Nearest,
+    fvd: &Farthest,
+    tol: f64,
+    mc_ctrl: &[usize],
+    rmc: f64,
+    w: f64,
+) -> Vec<Cand> {
     // lower bound of max_i |c - p_i|
     let r_lb = |c: [f64; 2]| mc_ctrl.iter().map(|&k| dist(p[k], c)).fold(rmc, f64::max);
     nvd.verts
