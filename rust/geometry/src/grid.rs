@@ -134,10 +134,10 @@ impl CellGrid {
     /// Index ranges (inclusive) of the cells that meet the box's bounding box,
     /// or None when it misses the grid.
     fn cell_range(&self, b: &OrientedBox) -> Option<[(usize, usize); 3]> {
-        let r = crate::region::rotation_matrix(b.rotation);
+        let ext = b.half_extents();
         let mut out = [(0, 0); 3];
         for i in 0..3 {
-            let e: f64 = (0..3).map(|k| r[i][k].abs() * b.size[k] / 2.0).sum();
+            let e = ext[i];
             let lo = ((b.center[i] - e - self.margin - self.origin[i]) / self.cell).floor();
             let hi = ((b.center[i] + e + self.margin - self.origin[i]) / self.cell).floor();
             if hi < 0.0 || lo > (self.dims[i] - 1) as f64 {

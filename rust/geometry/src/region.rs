@@ -39,15 +39,21 @@ impl OrientedBox {
         Ok(())
     }
 
+    /// Half the extent of the box along each cloud axis: sum over k of |R_ik| size_k / 2.
+    pub fn half_extents(&self) -> [f64; 3] {
+        let r = rotation_matrix(self.rotation);
+        let half = [self.size[0] / 2.0, self.size[1] / 2.0, self.size[2] / 2.0];
+        std::array::from_fn(|i| (0..3).map(|k| r[i][k].abs() * half[k]).sum())
+    }
+
     /// The axis-aligned bounding box (cloud frame) of the box, widened by a relative
     /// 1e-9 so that rounding never puts a point of the box outside it.
     pub fn aabb(&self) -> ([f64; 3], [f64; 3]) {
-        let r = rotation_matrix(self.rotation);
-        let half = [self.size[0] / 2.0, self.size[1] / 2.0, self.size[2] / 2.0];
+        let ext = self.half_extents();
         let mut lo = [0.0; 3];
         let mut hi = [0.0; 3];
         for i in 0..3 {
-            let e: f64 = (0..3).map(|k| r[i][k].abs() * half[k]).sum();
+            let e = ext[i];
             let pad = 1e-9 * (e + self.center[i].abs()) + f64::MIN_POSITIVE;
             lo[i] = self.center[i] - e - pad;
             hi[i] = self.center[i] + e + pad;
