@@ -9,30 +9,22 @@ SQLite transaction per scan) into a fresh database. Workers are started before t
 starts (a process start with its imports costs 1-3 s here, the same for every case; a
 plant's cluster is long-lived).
 
-Every case runs ``--rounds`` times, the cases interleaved, and the best run of each case is
-kept (this machine's speed drifts by 10-20 % between runs of the same case; interleaving
-lets the drift touch every case alike). Lines (case, gagekit time, peer time, ratio):
+Every case runs ``--rounds`` times, each round starting one case later (with 4 rounds every case
+runs once in every position), and the best run of each case is kept: this machine's speed drifts by
+10-20 % between runs of the same case. Lines (case, gagekit time, peer time, ratio):
 
 * ``2 local workers vs 1``: ratio = speed-up (goal >= 1.7);
-* ``... vs local pool 2``: ratio = Dask time / pool time (goal <= 1.15), three deployments:
+* ``... vs local pool 2``: ratio = Dask time / pool time (goal <= 1.15), two deployments:
 
   - ``Dask scheduler + 2 workers (no nanny)``: as a plant runs a cluster, ``dask scheduler``
     in its own process and two ``dask worker --nthreads 1 --no-nanny`` processes;
-  - ``Dask LocalCluster 2x1, no malloc trim``: ``LocalCluster(n_workers=2,
-    threads_per_worker=1)`` with ``distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_``
-    unset (``null``). Dask's nanny sets ``MALLOC_TRIM_THRESHOLD_=65536`` in the workers it
-    spawns (to hand freed memory back to the system at once); setting it also freezes glibc's
-    mmap threshold at 128 kB, so every scan-sized array is a fresh mapping whose pages fault
-    in again: 16 scans in one process, 6,000 page faults without the setting, 85,000-100,000
-    with it, 10-15 % more time. For a cluster that runs gagekit, unset it in the Dask
-    configuration (or run workers with ``--no-nanny``);
-  - ``Dask LocalCluster 2x1, Dask's defaults``: the same with the nanny's setting, for
-    reference. Its scheduler and nannies live in the batch's own process, on the same 2
-    cores as the workers;
+  - ``Dask LocalCluster 2x1``: ``LocalCluster(n_workers=2, threads_per_worker=1)``, Dask's
+    defaults: its scheduler and the workers' nannies run in the batch's own process, on the
+    same 2 cores as the workers;
 * ``database writes vs batch``: write time (wall clock, in the batch's parent process, while
   the workers keep both cores busy), batch time, share in % (goal < 2 %).
 
-    python benches/bench_batch.py [--scans 64] [--points 1000000] [--rounds 3] [--cache DIR]
+    python benches/bench_batch.py [--scans 64] [--points 1000000] [--rounds 4] [--cache DIR]
 """
 
 from __future__ import annotations
@@ -97,28 +89,21 @@ def run(job, paths, executor, db) -> BatchSummary:
 
 
 def line(case, tg, tp, ratio, note):
-    print(f"{case:<46}{tg:>9.3f}{tp:>9.3f}{ratio:>8.2f}  {note}")
+    print(f"{case:<56}{tg:>9.3f}{tp:>9.3f}{ratio:>8.2f}  {note}")
 
 
-#: the nanny's default for the worker processes it spawns (distributed.yaml) that the tuned
-#: LocalCluster leaves out; see the module docstring
-NO_TRIM = {"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None}
-
-
-def local_cluster(tuned: bool):
-    import dask.config
+def local_cluster():
     from distributed import LocalCluster
 
-    with dask.config.set(NO_TRIM if tuned else {}):
-        return LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None,
-                            host="127.0.0.1", env={"RAYON_NUM_THREADS": "1"})
+    return LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None, host="127.0.0.1",
+                        env={"RAYON_NUM_THREADS": "1"})
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--scans", type=int, default=64)
     ap.add_argument("--points", type=int, default=1_000_000)
-    ap.add_argument("--rounds", type=int, default=3, help="rounds of every case, interleaved; the best of each is kept")
+    ap.add_argument("--rounds", type=int, default=4, help="rounds of every case, interleaved; the best of each is kept")
     ap.add_argument("--cache", type=Path, default=Path(tempfile.gettempdir()) / "gagekit-bench-batch")
     a = ap.parse_args()
     folder = a.cache / f"{a.scans}x{a.points}"
@@ -135,28 +120,31 @@ def main() -> None:
     def case(name, executor, r):
         runs.setdefault(name, []).append(run(job, paths, executor, work / f"{name}-{r}.db"))
 
-    for r in range(a.rounds):
-        case("one", LocalPool(1), r)
-        case("two", LocalPool(2), r)
+    def dask_case(r):
         with dask_services(2) as address:
             case("dask", DaskCluster(address), r)
-        for tuned in (False, True):
-            with local_cluster(tuned) as cluster:
-                case("local-cluster-tuned" if tuned else "local-cluster", DaskCluster(cluster.scheduler_address), r)
+
+    def local_cluster_case(r):
+        with local_cluster() as cluster:
+            case("local-cluster", DaskCluster(cluster.scheduler_address), r)
+
+    order = [lambda r: case("one", LocalPool(1), r), lambda r: case("two", LocalPool(2), r), dask_case,
+             local_cluster_case]
+    for r in range(a.rounds):  # each round starts one case later: every case runs in every position
+        for k in range(len(order)):
+            order[(k + r) % len(order)](r)
+            time.sleep(1.0)  # the last case's processes are gone before the next starts
     best = {k: min(v, key=lambda s: s.seconds) for k, v in runs.items()}
     spread = {k: f"{min(s.seconds for s in v):.2f}-{max(s.seconds for s in v):.2f} s" for k, v in runs.items()}
     one, two, dask = best["one"], best["two"], best["dask"]
     print(f"# best of {a.rounds} interleaved rounds per case (all rounds: "
           + ", ".join(f"{k} {v}" for k, v in spread.items()) + f"); load average {os.getloadavg()[0]:.1f}")
-    print(f"{'case':<46}{'gagekit':>9}{'peer':>9}{'ratio':>8}")
+    print(f"{'case':<56}{'gagekit':>9}{'peer':>9}{'ratio':>8}")
     line("2 local workers vs 1", two.seconds, one.seconds, one.seconds / two.seconds, "speed-up (goal >= 1.7)")
-    for key, name in (("dask", "Dask scheduler + 2 workers (no nanny)"),
-                      ("local-cluster-tuned", "Dask LocalCluster 2x1, no malloc trim"),
-                      ("local-cluster", "Dask LocalCluster 2x1, Dask's defaults")):
+    for key, name in (("dask", "Dask scheduler + 2 workers (no nanny)"), ("local-cluster", "Dask LocalCluster 2x1")):
         s = best[key]
         line(f"{name} vs local pool 2", s.seconds, two.seconds, s.seconds / two.seconds, "Dask / pool (goal <= 1.15)")
-    for key, name in (("one", "1 worker"), ("two", "2 workers"), ("dask", "Dask"),
-                      ("local-cluster-tuned", "LocalCluster, no trim"), ("local-cluster", "LocalCluster")):
+    for key, name in (("one", "1 worker"), ("two", "2 workers"), ("dask", "Dask"), ("local-cluster", "LocalCluster")):
         s = best[key]
         line(f"database writes vs batch ({name})", s.write_seconds, s.seconds, 100 * s.write_seconds / s.seconds,
              "% of batch time (goal < 2)")
