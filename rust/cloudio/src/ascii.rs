@@ -226,13 +226,9 @@ pub(crate) fn line_at<'a>(bytes: &'a [u8], starts: &[usize], k: usize) -> &'a [u
     &bytes[starts[k]..end]
 }
 
-/// Parse an ASCII point cloud. `what` names the file in error messages.
-///
-/// A UTF-8 byte-order mark (as Excel writes "CSV UTF-8") is skipped; UTF-16 text is
-/// refused with a hint. The separator style (decimal comma or not) is decided once from
-/// the first line that starts like a number ([`detect_style`]).
-pub fn parse_ascii(bytes: &[u8], opts: &AsciiOptions, what: &str) -> Result<Parsed> {
-    let dim = opts.dim;
+/// The text of `bytes`, after the checks of [`parse_ascii`]: `dim` is 2 or 3, the text
+/// is not UTF-16 nor binary (no NUL byte); a UTF-8 byte-order mark is skipped.
+fn checked_text<'a>(bytes: &'a [u8], dim: usize, what: &str) -> Result<&'a [u8]> {
     if !(2..=3).contains(&dim) {
         return Err(GkError::invalid(format!("{what}: dim must be 2 or 3, got {dim}")));
     }
@@ -247,17 +243,44 @@ pub fn parse_ascii(bytes: &[u8], opts: &AsciiOptions, what: &str) -> Result<Pars
             "{what}: this is a binary file, not an ASCII point list (XYZ/CSV/TXT)"
         )));
     }
-    let starts = line_starts(bytes);
-    let nlines = if bytes.is_empty() { 0 } else { starts.len() };
-    let style = style_of((opts.skip_lines.min(nlines)..nlines).map(|k| line_at(bytes, &starts, k)));
+    Ok(bytes)
+}
 
-    // Header: leading non-skipped lines whose first `dim` fields are not all numbers.
-    let mut k = opts.skip_lines.min(nlines);
+/// The lines of a text with its separator style, and the file's name for error messages.
+struct Lines<'a> {
+    bytes: &'a [u8],
+    starts: Vec<usize>,
+    nlines: usize,
+    style: Style,
+    what: &'a str,
+}
+
+impl<'a> Lines<'a> {
+    /// Line `k` (0-based) with its line break.
+    fn at(&self, k: usize) -> &'a [u8] {
+        line_at(self.bytes, &self.starts, k)
+    }
+}
+
+/// The lines before the first data line: the last header line, the number of header lines.
+struct Preamble<'a> {
+    header: Option<&'a [u8]>,
+    header_lines: usize,
+    /// Index of the first data line and its number of fields.
+    first: usize,
+    ncols: usize,
+}
+
+/// Header: leading non-skipped lines (from line `from`) whose first `dim` fields are not
+/// all numbers (at most 50), up to the first data line.
+fn preamble<'a>(lines: &Lines<'a>, from: usize, dim: usize) -> Result<Preamble<'a>> {
+    let (style, what) = (lines.style, lines.what);
+    let mut k = from;
     let mut header: Option<&[u8]> = None;
     let mut header_lines = 0;
     let mut first_data = None;
-    while k < nlines {
-        let line = line_at(bytes, &starts, k);
+    while k < lines.nlines {
+        let line = lines.at(k);
         if !is_skipped(line) {
             let f = fields(line, style);
             if f.len() >= dim && f[..dim].iter().all(|x| parse_num(x, style).is_some()) {
@@ -279,8 +302,15 @@ pub fn parse_ascii(bytes: &[u8], opts: &AsciiOptions, what: &str) -> Result<Pars
     let Some((first, ncols)) = first_data else {
         return Err(GkError::invalid(format!("{what}: no points found (the file is empty or has only header lines)")));
     };
-    // A header with one name per data column may name the x, y, z columns.
-    let columns = header
+    Ok(Preamble { header, header_lines, first, ncols })
+}
+
+/// The columns of the coordinates and the number of columns a data line needs: a header
+/// with one name per data column may name the x, y, z columns, else the first `dim`.
+fn coordinate_columns(lines: &Lines, pre: &Preamble, dim: usize) -> Result<(Vec<usize>, usize)> {
+    let (style, what, ncols) = (lines.style, lines.what, pre.ncols);
+    let columns = pre
+        .header
         .filter(|h| fields(h, style).len() == ncols)
         .and_then(|h| header_columns(h, dim, style))
         .unwrap_or_else(|| (0..dim).collect());
@@ -288,51 +318,78 @@ pub fn parse_ascii(bytes: &[u8], opts: &AsciiOptions, what: &str) -> Result<Pars
     if ncols < need {
         return Err(GkError::invalid(format!(
             "{what}: line {}: expected at least {need} columns, found {ncols}",
-            first + 1
+            pre.first + 1
         )));
     }
+    Ok((columns, need))
+}
 
-    // Parallel parse of lines first..nlines in chunks.
+/// The coordinates (`columns`, finite numbers) of the non-skipped lines `lo..hi`.
+fn parse_lines(lines: &Lines, lo: usize, hi: usize, columns: &[usize], need: usize, dim: usize) -> Result<Vec<f64>> {
+    let (style, what) = (lines.style, lines.what);
+    let mut out = Vec::with_capacity((hi - lo) * dim);
+    for k in lo..hi {
+        let line = lines.at(k);
+        if is_skipped(line) {
+            continue;
+        }
+        let f = fields(line, style);
+        for &c in columns {
+            let v = f.get(c).and_then(|x| parse_num(x, style)).ok_or_else(|| {
+                GkError::invalid(format!(
+                    "{what}: line {}: expected {} numbers, found {:?}",
+                    k + 1,
+                    need,
+                    String::from_utf8_lossy(trim(line))
+                ))
+            })?;
+            if !v.is_finite() {
+                return Err(GkError::invalid(format!(
+                    "{what}: line {}: non-finite coordinate ({v}); remove NaN/inf values",
+                    k + 1
+                )));
+            }
+            out.push(v);
+        }
+    }
+    Ok(out)
+}
+
+/// Parallel parse of lines `first..` in chunks ([`parse_lines`]), concatenated in order;
+/// the error of the first failing chunk.
+fn parse_data(lines: &Lines, first: usize, columns: &[usize], need: usize, dim: usize) -> Result<Vec<f64>> {
+    let nlines = lines.nlines;
     let data_lines = nlines - first;
     let chunk = (data_lines / (rayon::current_num_threads() * 8)).clamp(4096, 1 << 20);
     let parts: Vec<Result<Vec<f64>>> = (first..nlines)
         .step_by(chunk)
         .collect::<Vec<_>>()
         .into_par_iter()
-        .map(|lo| {
-            let hi = (lo + chunk).min(nlines);
-            let mut out = Vec::with_capacity((hi - lo) * dim);
-            for k in lo..hi {
-                let line = line_at(bytes, &starts, k);
-                if is_skipped(line) {
-                    continue;
-                }
-                let f = fields(line, style);
-                for &c in &columns {
-                    let v = f.get(c).and_then(|x| parse_num(x, style)).ok_or_else(|| {
-                        GkError::invalid(format!(
-                            "{what}: line {}: expected {} numbers, found {:?}",
-                            k + 1,
-                            need,
-                            String::from_utf8_lossy(trim(line))
-                        ))
-                    })?;
-                    if !v.is_finite() {
-                        return Err(GkError::invalid(format!(
-                            "{what}: line {}: non-finite coordinate ({v}); remove NaN/inf values",
-                            k + 1
-                        )));
-                    }
-                    out.push(v);
-                }
-            }
-            Ok(out)
-        })
+        .map(|lo| parse_lines(lines, lo, (lo + chunk).min(nlines), columns, need, dim))
         .collect();
     let mut coords = Vec::with_capacity(data_lines * dim);
     for p in parts {
         coords.extend(p?);
     }
+    Ok(coords)
+}
+
+/// Parse an ASCII point cloud. `what` names the file in error messages.
+///
+/// A UTF-8 byte-order mark (as Excel writes "CSV UTF-8") is skipped; UTF-16 text is
+/// refused with a hint. The separator style (decimal comma or not) is decided once from
+/// the first line that starts like a number ([`detect_style`]).
+pub fn parse_ascii(bytes: &[u8], opts: &AsciiOptions, what: &str) -> Result<Parsed> {
+    let dim = opts.dim;
+    let bytes = checked_text(bytes, dim, what)?;
+    let starts = line_starts(bytes);
+    let nlines = if bytes.is_empty() { 0 } else { starts.len() };
+    let style = style_of((opts.skip_lines.min(nlines)..nlines).map(|k| line_at(bytes, &starts, k)));
+    let lines = Lines { bytes, starts, nlines, style, what };
+    let pre = preamble(&lines, opts.skip_lines.min(nlines), dim)?;
+    let (columns, need) = coordinate_columns(&lines, &pre, dim)?;
+    let coords = parse_data(&lines, pre.first, &columns, need, dim)?;
+    let (header_lines, ncols) = (pre.header_lines, pre.ncols);
     Ok(Parsed { coords, header_lines, columns, ncols, decimal_comma: style == Style::DecimalComma })
 }
 

@@ -154,15 +154,12 @@ fn decode_field(stream: &[u8], t: &RecordDataType, n: usize) -> Option<Vec<f64>>
     Some(out)
 }
 
-/// Decode one scan: (x, y, z per valid point with the pose applied, invalid count), or
-/// `None` when this fast path does not apply.
-pub(crate) fn decode(map: &[u8], page: usize, pc: &PointCloud, what: &str) -> Result<Option<(Vec<f64>, usize)>> {
-    let n = usize::try_from(pc.records).unwrap_or(usize::MAX);
-    if page <= CRC || n > map.len() {
-        return Ok(None);
-    }
+/// The prototype fields of a scan's coordinates: the x, y, z fields (or range,
+/// azimuth, elevation), the invalid-state field if any, and whether they are spherical;
+/// `None` when the scan has neither a Cartesian nor a spherical triple.
+fn coordinate_fields(pc: &PointCloud) -> Option<([usize; 3], Option<usize>, bool)> {
     let find = |name: RecordName| pc.prototype.iter().position(|r| r.name == name);
-    let (fields, state, spherical) = match (
+    match (
         find(RecordName::CartesianX),
         find(RecordName::CartesianY),
         find(RecordName::CartesianZ),
@@ -170,10 +167,16 @@ pub(crate) fn decode(map: &[u8], page: usize, pc: &PointCloud, what: &str) -> Re
         find(RecordName::SphericalAzimuth),
         find(RecordName::SphericalElevation),
     ) {
-        (Some(x), Some(y), Some(z), ..) => ([x, y, z], find(RecordName::CartesianInvalidState), false),
-        (_, _, _, Some(r), Some(a), Some(e)) => ([r, a, e], find(RecordName::SphericalInvalidState), true),
-        _ => return Ok(None),
-    };
+        (Some(x), Some(y), Some(z), ..) => Some(([x, y, z], find(RecordName::CartesianInvalidState), false)),
+        (_, _, _, Some(r), Some(a), Some(e)) => Some(([r, a, e], find(RecordName::SphericalInvalidState), true)),
+        _ => None,
+    }
+}
+
+/// The bit streams of every prototype field of a `CompressedVector` section (each at
+/// least as long as `n` values need), concatenated over its data packets; `None` on a
+/// section or packet this fast path does not handle.
+fn read_streams(map: &[u8], page: usize, pc: &PointCloud, n: usize, what: &str) -> Result<Option<Vec<Vec<u8>>>> {
     let nf = pc.prototype.len();
     // section header
     let mut rd = Logical::new(map, page, pc.file_offset as usize, what);
@@ -187,67 +190,81 @@ pub(crate) fn decode(map: &[u8], page: usize, pc: &PointCloud, what: &str) -> Re
     let need: Vec<usize> = pc.prototype.iter().map(|r| (bits(&r.data_type) * n).div_ceil(8)).collect();
     let mut lens = vec![0usize; nf];
     while streams.iter().zip(&need).any(|(s, &k)| s.len() < k) {
-        let start = rd.pos;
-        let head: [u8; 6] = rd.bytes()?;
-        if head[0] != 1 {
-            return Ok(None); // an index or ignored packet before the data ends
-        }
-        let packet_len = u16::from_le_bytes([head[2], head[3]]) as usize + 1;
-        let count = u16::from_le_bytes([head[4], head[5]]) as usize;
-        if count != nf {
+        if read_packet(&mut rd, &mut lens, &mut streams)?.is_none() {
             return Ok(None);
         }
-        let mut sizes = Vec::with_capacity(2 * nf);
-        rd.read_into(2 * nf, &mut sizes)?;
-        for (i, l) in lens.iter_mut().enumerate() {
-            *l = u16::from_le_bytes([sizes[2 * i], sizes[2 * i + 1]]) as usize;
-        }
-        if 6 + 2 * nf + lens.iter().sum::<usize>() > packet_len {
-            return Ok(None);
-        }
-        for (s, &l) in streams.iter_mut().zip(&lens) {
-            rd.read_into(l, s)?;
-        }
-        // next packet: packet_len logical bytes after this one's start
-        let mut probe = Logical::new(map, page, start, what);
-        probe.skip(packet_len);
-        rd.pos = probe.pos;
     }
-    let decoded: Option<Vec<Vec<f64>>> = fields
-        .par_iter()
-        .map(|&f| decode_field(&streams[f], &pc.prototype[f].data_type, n))
-        .collect();
-    let Some(v) = decoded else { return Ok(None) };
-    let st = match state {
-        Some(s) => match decode_field(&streams[s], &pc.prototype[s].data_type, n) {
-            Some(x) => Some(x),
-            None => return Ok(None),
-        },
-        None => None,
+    Ok(Some(streams))
+}
+
+/// Append the buffers of the data packet at `rd` to `streams` (one per prototype field;
+/// `lens` is scratch for their lengths) and move `rd` to the next packet; `None` when the
+/// packet is not a data packet of this prototype or its sizes are inconsistent.
+fn read_packet(rd: &mut Logical, lens: &mut [usize], streams: &mut [Vec<u8>]) -> Result<Option<()>> {
+    let nf = streams.len();
+    let start = rd.pos;
+    let head: [u8; 6] = rd.bytes()?;
+    if head[0] != 1 {
+        return Ok(None); // an index or ignored packet before the data ends
+    }
+    let packet_len = u16::from_le_bytes([head[2], head[3]]) as usize + 1;
+    let count = u16::from_le_bytes([head[4], head[5]]) as usize;
+    if count != nf {
+        return Ok(None);
+    }
+    let mut sizes = Vec::with_capacity(2 * nf);
+    rd.read_into(2 * nf, &mut sizes)?;
+    for (i, l) in lens.iter_mut().enumerate() {
+        *l = u16::from_le_bytes([sizes[2 * i], sizes[2 * i + 1]]) as usize;
+    }
+    if 6 + 2 * nf + lens.iter().sum::<usize>() > packet_len {
+        return Ok(None);
+    }
+    for (s, &l) in streams.iter_mut().zip(lens.iter()) {
+        rd.read_into(l, s)?;
+    }
+    // next packet: packet_len logical bytes after this one's start
+    let mut probe = Logical::new(rd.map, rd.page, start, rd.what);
+    probe.skip(packet_len);
+    rd.pos = probe.pos;
+    Ok(Some(()))
+}
+
+/// The scan pose as a rotation matrix (from its unit quaternion (w, x, y, z), normalised
+/// here) and a translation; the identity without a pose.
+fn pose(pc: &PointCloud, what: &str) -> Result<([[f64; 3]; 3], [f64; 3])> {
+    let Some(tr) = &pc.transform else {
+        return Ok(([[1., 0., 0.], [0., 1., 0.], [0., 0., 1.]], [0.; 3]));
     };
-    // pose: unit quaternion (w, x, y, z) and translation
-    let (r, t) = match &pc.transform {
-        Some(tr) => {
-            let q = &tr.rotation;
-            let norm = (q.w * q.w + q.x * q.x + q.y * q.y + q.z * q.z).sqrt();
-            if !(norm > 0.0) {
-                return Err(GkError::invalid(format!("{what}: a scan pose has a zero rotation quaternion")));
-            }
-            let (w, x, y, z) = (q.w / norm, q.x / norm, q.y / norm, q.z / norm);
-            (
-                [
-                    [1. - 2. * (y * y + z * z), 2. * (x * y - w * z), 2. * (x * z + w * y)],
-                    [2. * (x * y + w * z), 1. - 2. * (x * x + z * z), 2. * (y * z - w * x)],
-                    [2. * (x * z - w * y), 2. * (y * z + w * x), 1. - 2. * (x * x + y * y)],
-                ],
-                [tr.translation.x, tr.translation.y, tr.translation.z],
-            )
-        }
-        None => ([[1., 0., 0.], [0., 1., 0.], [0., 0., 1.]], [0.; 3]),
-    };
-    // valid points per block, then every block written into its place in parallel
+    let q = &tr.rotation;
+    let norm = (q.w * q.w + q.x * q.x + q.y * q.y + q.z * q.z).sqrt();
+    if !(norm > 0.0) {
+        return Err(GkError::invalid(format!("{what}: a scan pose has a zero rotation quaternion")));
+    }
+    let (w, x, y, z) = (q.w / norm, q.x / norm, q.y / norm, q.z / norm);
+    Ok((
+        [
+            [1. - 2. * (y * y + z * z), 2. * (x * y - w * z), 2. * (x * z + w * y)],
+            [2. * (x * y + w * z), 1. - 2. * (x * x + z * z), 2. * (y * z - w * x)],
+            [2. * (x * z - w * y), 2. * (y * z + w * x), 1. - 2. * (x * x + y * y)],
+        ],
+        [tr.translation.x, tr.translation.y, tr.translation.z],
+    ))
+}
+
+/// The valid points (state 0, or every point without a state field) of the decoded
+/// fields `v` (x, y, z or range, azimuth, elevation when `spherical`), posed by `r` and
+/// `t`, flat: (coordinates, invalid count). Valid points are counted per block, then
+/// every block is written into its place in parallel.
+fn place_points(
+    v: &[Vec<f64>],
+    st: Option<&[f64]>,
+    spherical: bool,
+    (r, t): ([[f64; 3]; 3], [f64; 3]),
+    n: usize,
+) -> (Vec<f64>, usize) {
     const BLOCK: usize = 1 << 16;
-    let valid = |i: usize| st.as_ref().is_none_or(|s| s[i] == 0.0);
+    let valid = |i: usize| st.is_none_or(|s| s[i] == 0.0);
     let counts: Vec<usize> = (0..n.div_ceil(BLOCK))
         .into_par_iter()
         .map(|b| (b * BLOCK..((b + 1) * BLOCK).min(n)).filter(|&i| valid(i)).count())
@@ -278,5 +295,30 @@ pub(crate) fn decode(map: &[u8], page: usize, pc: &PointCloud, what: &str) -> Re
             }
         }
     });
-    Ok(Some((coords, invalid)))
+    (coords, invalid)
+}
+
+/// Decode one scan: (x, y, z per valid point with the pose applied, invalid count), or
+/// `None` when this fast path does not apply.
+pub(crate) fn decode(map: &[u8], page: usize, pc: &PointCloud, what: &str) -> Result<Option<(Vec<f64>, usize)>> {
+    let n = usize::try_from(pc.records).unwrap_or(usize::MAX);
+    if page <= CRC || n > map.len() {
+        return Ok(None);
+    }
+    let Some((fields, state, spherical)) = coordinate_fields(pc) else { return Ok(None) };
+    let Some(streams) = read_streams(map, page, pc, n, what)? else { return Ok(None) };
+    let decoded: Option<Vec<Vec<f64>>> = fields
+        .par_iter()
+        .map(|&f| decode_field(&streams[f], &pc.prototype[f].data_type, n))
+        .collect();
+    let Some(v) = decoded else { return Ok(None) };
+    let st = match state {
+        Some(s) => match decode_field(&streams[s], &pc.prototype[s].data_type, n) {
+            Some(x) => Some(x),
+            None => return Ok(None),
+        },
+        None => None,
+    };
+    let rt = pose(pc, what)?;
+    Ok(Some(place_points(&v, st.as_deref(), spherical, rt, n)))
 }

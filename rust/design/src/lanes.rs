@@ -91,20 +91,11 @@ fn times_matrix<const R: usize>(c: &[[V; R]; R], m: &[f64]) -> [[V; R]; R] {
     out
 }
 
-/// [`exchange_values`] from the lane-layout c = B F^-1 O^T, f = B F^-1 W F^-1 O^T, d and e.
+/// Per lane, the lower triangle of P = I + B F_-^-1 B^T = I + d + (c Qi) c^T, from the
+/// lanes' `dj` (d), `cq` (c Qi) and `c`.
 #[inline(always)]
-fn lane_values<const R: usize>(
-    c: &[[V; R]; R],
-    f: &[[V; R]; R],
-    dj: &[[V; R]; R],
-    ej: &[[V; R]; R],
-    qi: &[f64],
-    qeq: &[f64],
-    value_minus: f64,
-) -> V {
-    let x = (qi, qeq, value_minus);
-    let cq = times_matrix::<R>(c, x.0); // c Qi
-    let mut pm = [[Z; R]; R]; // I + B F_-^-1 B^T
+fn exchanged_p<const R: usize>(dj: &[[V; R]; R], cq: &[[V; R]; R], c: &[[V; R]; R]) -> [[V; R]; R] {
+    let mut pm = [[Z; R]; R];
     for a in 0..R {
         for q in 0..=a {
             let mut v = dj[a][q];
@@ -119,6 +110,13 @@ fn lane_values<const R: usize>(
             }
         }
     }
+    pm
+}
+
+/// Per lane, the Cholesky factor L (P = L L^T) of the lower triangle `pm`, in place. Returns
+/// the lanes where P is not positive definite (a pivot not above 0, replaced by 1 to go on).
+#[inline(always)]
+fn cholesky_lanes<const R: usize>(pm: &mut [[V; R]; R]) -> [bool; LANES] {
     let mut bad = [false; LANES];
     for a in 0..R {
         let mut v = pm[a][a];
@@ -146,8 +144,19 @@ fn lane_values<const R: usize>(
             }
         }
     }
-    let cqe = times_matrix::<R>(c, x.1);
-    // e- = e_j + f cQ^T + cQ f^T + c (Qi e_O Qi) c^T
+    bad
+}
+
+/// Per lane, e- = e_j + f cQ^T + cQ f^T + c (Qi e_O Qi) c^T, from `ej`, `f`, `cq` (c Qi),
+/// `cqe` (c Qi e_O Qi) and `c`.
+#[inline(always)]
+fn exchanged_e<const R: usize>(
+    ej: &[[V; R]; R],
+    f: &[[V; R]; R],
+    cq: &[[V; R]; R],
+    cqe: &[[V; R]; R],
+    c: &[[V; R]; R],
+) -> [[V; R]; R] {
     let mut em = [[Z; R]; R];
     for a in 0..R {
         for q in 0..R {
@@ -162,6 +171,13 @@ fn lane_values<const R: usize>(
             em[a][q] = v;
         }
     }
+    em
+}
+
+/// Per lane, tr(P^-1 e-) with P = L L^T: column q of L^-T L^-1 e- by forward then back
+/// substitution, summing its q-th entry.
+#[inline(always)]
+fn trace_solve<const R: usize>(pm: &[[V; R]; R], em: &[[V; R]; R]) -> V {
     let mut t = Z;
     for q in 0..R {
         let mut y = [Z; R];
@@ -191,9 +207,29 @@ fn lane_values<const R: usize>(
             t[l] += y[q][l];
         }
     }
+    t
+}
+
+/// [`exchange_values`] from the lane-layout c = B F^-1 O^T, f = B F^-1 W F^-1 O^T, d and e.
+#[inline(always)]
+fn lane_values<const R: usize>(
+    c: &[[V; R]; R],
+    f: &[[V; R]; R],
+    dj: &[[V; R]; R],
+    ej: &[[V; R]; R],
+    qi: &[f64],
+    qeq: &[f64],
+    value_minus: f64,
+) -> V {
+    let cq = times_matrix::<R>(c, qi); // c Qi
+    let mut pm = exchanged_p::<R>(dj, &cq, c); // I + B F_-^-1 B^T
+    let bad = cholesky_lanes::<R>(&mut pm);
+    let cqe = times_matrix::<R>(c, qeq);
+    let em = exchanged_e::<R>(ej, f, &cq, &cqe, c);
+    let t = trace_solve::<R>(&pm, &em);
     let mut out = Z;
     for l in 0..LANES {
-        let v = x.2 - t[l];
+        let v = value_minus - t[l];
         out[l] = if !bad[l] && v > 0.0 { v } else { f64::INFINITY };
     }
     out

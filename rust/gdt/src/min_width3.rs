@@ -16,6 +16,7 @@
 use crate::vec3::{self, check_points, cross, dot, norm, sub, V3};
 use crate::width3::{self, Slab};
 use gagekit_core::Result;
+use gagekit_geometry::HullMesh;
 use rayon::prelude::*;
 
 /// An edge between two hull triangles: its end (relative to the centroid), its unit
@@ -39,50 +40,58 @@ fn in_cone(e: &Edge, m: V3) -> bool {
     a >= -s && b >= -s && dot(m, vec3::add(e.n1, e.n2)) > 0.0
 }
 
-/// The thinnest slab of free orientation containing the points (at least 3).
-pub fn min_width(pts: &[f64]) -> Result<Slab> {
-    const WHAT: &str = "minimum width";
-    check_points(pts, 3, WHAT)?;
-    let Some(mesh) = gagekit_geometry::convex_hull_mesh(pts)? else {
-        // exactly coplanar (or collinear): width 0 normal to their plane
-        let p = gagekit_form::lsq::plane(pts)?;
-        return width3::along(pts, [p.normal[0], p.normal[1], p.normal[2]]);
-    };
-    let c = vec3::centroid(pts);
-    let at = |i: usize| sub(vec3::at(pts, i), c);
+/// Point `i` of `pts` relative to `c`.
+fn rel(pts: &[f64], c: V3, i: usize) -> V3 {
+    sub(vec3::at(pts, i), c)
+}
+
+/// The width of the (relative) hull vertices `vp` along the unit `m`.
+fn width_along(vp: &[V3], m: V3) -> f64 {
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for p in vp {
+        let d = dot(*p, m);
+        lo = lo.min(d);
+        hi = hi.max(d);
+    }
+    hi - lo
+}
+
+/// The hull's vertices (each once, relative to `c`).
+fn hull_vertices(mesh: &HullMesh, pts: &[f64], c: V3) -> Vec<V3> {
     let mut verts: Vec<usize> = mesh.triangles.iter().flatten().copied().collect();
     verts.sort_unstable();
     verts.dedup();
-    let vp: Vec<V3> = verts.iter().map(|&i| at(i)).collect();
-    let width_along = |m: V3| {
-        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
-        for p in &vp {
-            let d = dot(*p, m);
-            lo = lo.min(d);
-            hi = hi.max(d);
-        }
-        hi - lo
-    };
-    let normals: Vec<Option<V3>> = mesh
-        .triangles
+    verts.iter().map(|&i| rel(pts, c, i)).collect()
+}
+
+/// The outward unit normal of each hull triangle (`None` for a degenerate one).
+fn facet_normals(mesh: &HullMesh, pts: &[f64], c: V3) -> Vec<Option<V3>> {
+    mesh.triangles
         .iter()
         .map(|t| {
-            let (p0, p1, p2) = (at(t[0]), at(t[1]), at(t[2]));
+            let (p0, p1, p2) = (rel(pts, c, t[0]), rel(pts, c, t[1]), rel(pts, c, t[2]));
             let n = cross(sub(p1, p0), sub(p2, p0));
             let l = norm(n);
             // outward: away from the centroid (the origin here), inside the hull
             let s = if dot(n, p0) >= 0.0 { 1.0 } else { -1.0 };
             (l > 0.0).then(|| vec3::scale(n, s / l))
         })
-        .collect();
-    // face-vertex candidates
-    let mut best = normals
+        .collect()
+}
+
+/// Face-vertex candidates: the narrowest width along a facet normal, and that normal
+/// (ties to the first facet).
+fn best_face(normals: &[Option<V3>], vp: &[V3]) -> Option<(f64, V3)> {
+    normals
         .par_iter()
         .enumerate()
-        .filter_map(|(f, n)| n.map(|n| (width_along(n), f, n)))
+        .filter_map(|(f, n)| n.map(|n| (width_along(vp, n), f, n)))
         .min_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)))
-        .map(|(w, _, n)| (w, n));
-    // edges between two non-coplanar triangles, each once
+        .map(|(w, _, n)| (w, n))
+}
+
+/// The hull's edges between two non-coplanar triangles, each once.
+fn hull_edges(mesh: &HullMesh, normals: &[Option<V3>], pts: &[f64], c: V3) -> Vec<Edge> {
     let mut edges = Vec::new();
     for (f, t) in mesh.triangles.iter().enumerate() {
         for i in 0..3 {
@@ -94,16 +103,22 @@ pub fn min_width(pts: &[f64]) -> Result<Slab> {
             if norm(cross(n1, n2)) <= 1e-12 && dot(n1, n2) > 0.0 {
                 continue; // inside a flat facet: its face candidate covers it
             }
-            let a = at(t[i]);
-            let e = sub(at(t[(i + 1) % 3]), a);
+            let a = rel(pts, c, t[i]);
+            let e = sub(rel(pts, c, t[(i + 1) % 3]), a);
             let l = norm(e);
             if l > 0.0 {
                 edges.push(Edge { a, dir: vec3::scale(e, 1.0 / l), n1, n2 });
             }
         }
     }
-    // edge-edge candidates
-    let pair = edges
+    edges
+}
+
+/// Edge-edge candidates: the narrowest width along the common normal of two
+/// non-parallel edges that lies in both edges' cones, with that normal (ties to the
+/// first edge).
+fn best_edge_pair(edges: &[Edge], vp: &[V3]) -> Option<(f64, V3)> {
+    edges
         .par_iter()
         .enumerate()
         .filter_map(|(i, e1)| {
@@ -124,15 +139,32 @@ pub fn min_width(pts: &[f64]) -> Result<Slab> {
                 if local.is_some_and(|b| dot(m, sub(e1.a, e2.a)) >= b.0) {
                     continue;
                 }
-                let w = width_along(m);
+                let w = width_along(vp, m);
                 if local.is_none_or(|b| w < b.0) {
                     local = Some((w, m));
                 }
             }
             local.map(|(w, m)| (w, i, m))
         })
-        .min_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
-    if let Some((w, _, m)) = pair {
+        .min_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)))
+        .map(|(w, _, m)| (w, m))
+}
+
+/// The thinnest slab of free orientation containing the points (at least 3).
+pub fn min_width(pts: &[f64]) -> Result<Slab> {
+    const WHAT: &str = "minimum width";
+    check_points(pts, 3, WHAT)?;
+    let Some(mesh) = gagekit_geometry::convex_hull_mesh(pts)? else {
+        // exactly coplanar (or collinear): width 0 normal to their plane
+        let p = gagekit_form::lsq::plane(pts)?;
+        return width3::along(pts, [p.normal[0], p.normal[1], p.normal[2]]);
+    };
+    let c = vec3::centroid(pts);
+    let vp = hull_vertices(&mesh, pts, c);
+    let normals = facet_normals(&mesh, pts, c);
+    let mut best = best_face(&normals, &vp);
+    let edges = hull_edges(&mesh, &normals, pts, c);
+    if let Some((w, m)) = best_edge_pair(&edges, &vp) {
         if best.is_none_or(|b| w < b.0) {
             best = Some((w, m));
         }
