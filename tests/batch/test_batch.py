@@ -139,6 +139,59 @@ def test_batch_that_cannot_run_says_why_in_one_line(casting_set, tmp_path, args,
     assert len(err) == 1 and err[0].startswith("gagekit: error: ") and message.format(**fill) in err[0], err
 
 
+_NO_GAGEKIT = "import sys; sys.modules['gagekit'] = None; "  # this process cannot import gagekit
+
+
+def _dask_process(code: str, *args: str) -> subprocess.Popen:
+    return subprocess.Popen([sys.executable, "-c", "import sys; " + code + f"sys.argv = ['dask', *{list(args)!r}]; main()"],
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+
+
+@pytest.mark.parametrize("where", ["scheduler", "worker"])
+def test_a_cluster_without_gagekit_is_refused_at_connect(casting_set, tmp_path, where):
+    """A scheduler (it unpickles every task) or a worker that cannot import gagekit: one
+    error line naming the cluster and the node, exit 2, nothing stored - not every scan
+    failing with Dask's deserialization message."""
+    import socket
+    import time
+
+    from servers import free_port
+
+    port = free_port()
+    address = f"tcp://127.0.0.1:{port}"
+    scheduler = ("from distributed.cli.dask_scheduler import main; ", "--host", "127.0.0.1", "--port", str(port),
+                 "--no-dashboard")
+    worker = ("from distributed.cli.dask_worker import main; ", address, "--nthreads", "1", "--no-nanny",
+              "--no-dashboard")
+    procs = []
+    try:
+        code, *args = scheduler
+        procs.append(_dask_process((_NO_GAGEKIT if where == "scheduler" else "") + code, *args))
+        deadline = time.monotonic() + 60
+        while True:
+            try:
+                socket.create_connection(("127.0.0.1", port), timeout=1).close()
+                break
+            except OSError:
+                assert time.monotonic() < deadline, "the Dask scheduler did not start"
+                time.sleep(0.2)
+        code, *args = worker
+        procs.append(_dask_process((_NO_GAGEKIT if where == "worker" else "") + code, *args))
+        gages, scans = casting_set
+        db = tmp_path / "r.db"
+        proc = gk("gage", "batch", gages, *scans[:2], "--scheduler", address, "--db", f"sqlite:///{db}", "--json")
+    finally:
+        for p in reversed(procs):
+            p.terminate()
+            p.wait(timeout=30)
+    assert proc.returncode == 2, proc.stdout + proc.stderr
+    assert proc.stdout == ""
+    err = proc.stderr.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith(f"gagekit: error: the Dask cluster at {address} cannot run gagekit"), err
+    named = "the scheduler cannot import gagekit" if where == "scheduler" else "worker tcp://127.0.0.1:"
+    assert named in err[0] and "install gagekit" in err[0], err
+
+
 def test_gage_batch_on_dask_and_postgresql(casting_set, dask_cluster, postgres_url):
     """The same results on a real LocalCluster (2 worker processes) into a real PostgreSQL."""
     gages, scans = casting_set

@@ -25,7 +25,7 @@ import time
 from typing import Any, Iterable, Optional
 
 from ..errors import ClusterError, ConfigError, InvalidInputError
-from .tasks import execute, limit_dask_worker_threads, limit_threads, warm_up
+from .tasks import execute, gagekit_version, limit_dask_worker_threads, limit_threads, warm_up
 
 __all__ = ["WorkerLost", "LocalPool", "DaskCluster", "default_workers"]
 
@@ -121,11 +121,45 @@ class DaskCluster:
         workers = self.client.scheduler_info().get("workers", {})
         n = len(workers)
         self.description = f"Dask scheduler {address} ({n} worker{'s' if n != 1 else ''})"
+        try:
+            self._check_environment()
+        except ClusterError:
+            self.client.close()
+            raise
         self._limit_threads(workers)
         from distributed import as_completed
 
         self._completed = as_completed(loop=self.client.loop)
         self._ready: set = set()  # finished futures not yet asked for
+
+    def _check_environment(self) -> None:
+        """The scheduler (it unpickles every submitted task) and every worker must import
+        the gagekit this client runs, in the same version (the same scan gives the same
+        result on any node). Checked once at connect: a wrong deployment is one clear
+        error, not every scan failing with Dask's deserialization message."""
+        from .. import __version__ as mine
+
+        problems = []
+        try:
+            theirs = self.client.run_on_scheduler(gagekit_version)
+            if theirs != mine:
+                problems.append(f"the scheduler runs gagekit {theirs}")
+        except Exception as exc:
+            problems.append(f"the scheduler cannot import gagekit ({_first_line(exc)})")
+        try:
+            found = self.client.run(gagekit_version, on_error="return")
+        except Exception as exc:  # the scheduler could not even forward the call
+            found = {"every worker": exc}
+        for addr, theirs in sorted(found.items()):
+            if isinstance(theirs, BaseException):
+                problems.append(f"worker {addr} cannot import gagekit ({_first_line(theirs)})")
+            elif theirs != mine:
+                problems.append(f"worker {addr} runs gagekit {theirs}")
+        if problems:
+            more = f" and {len(problems) - 3} more" if len(problems) > 3 else ""
+            raise ClusterError(f"the Dask cluster at {self.address} cannot run gagekit {mine}'s tasks: "
+                               f"{'; '.join(problems[:3])}{more}; install gagekit {mine} on the scheduler and "
+                               "every worker")
 
     def _limit_threads(self, workers: dict) -> None:
         """Workers sharing a host share its cores: each runs its kernels on
@@ -138,7 +172,7 @@ class DaskCluster:
         self.thread_caps: dict = {}
         try:
             self.thread_caps = self.client.run(limit_dask_worker_threads, threads)
-        except Exception:  # a worker without gagekit fails its scans with that message instead
+        except Exception:  # a worker that left since the environment check: its scans go elsewhere
             pass
 
     def warm(self) -> None:
@@ -185,3 +219,8 @@ class DaskCluster:
 
     def close(self) -> None:
         self.client.close()
+
+
+def _first_line(exc: BaseException) -> str:
+    text = str(exc).strip()
+    return f"{type(exc).__name__}: {text.splitlines()[0]}" if text else type(exc).__name__

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 from datetime import datetime, timezone
 from typing import Any, Callable, Mapping, Optional
 
-__all__ = ["Outcome", "execute", "TASKS", "limit_threads", "limit_dask_worker_threads", "warm_up"]
+__all__ = ["Outcome", "execute", "TASKS", "limit_threads", "limit_dask_worker_threads", "warm_up", "gagekit_version"]
 
 
 @dataclass(frozen=True)
@@ -72,6 +72,15 @@ def warm_up(seconds: float = 0.2) -> int:
 
     time.sleep(seconds)
     return os.getpid()
+
+
+def gagekit_version(dask_worker: Any = None, dask_scheduler: Any = None) -> str:
+    """The gagekit version this process runs (on a Dask worker or scheduler, through
+    ``Client.run`` / ``Client.run_on_scheduler``: unpickling this very function proves that
+    gagekit can be imported there)."""
+    from .. import __version__
+
+    return __version__
 
 
 def _read(path: str, units: Optional[str]):

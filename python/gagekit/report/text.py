@@ -21,7 +21,8 @@ def table(headers: list[str], rows: list[list[Any]]) -> str:
 
 def _fmt(v: Any) -> str:
     if isinstance(v, float):
-        return f"{v:.4f}"
+        s = f"{v:.4f}"
+        return s[1:] if s.startswith("-") and float(s) == 0.0 else s  # -1e-13 prints 0.0000, not -0.0000
     return str(v)
 
 
