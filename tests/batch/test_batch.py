@@ -139,12 +139,12 @@ def test_batch_that_cannot_run_says_why_in_one_line(casting_set, tmp_path, args,
     assert len(err) == 1 and err[0].startswith("gagekit: error: ") and message.format(**fill) in err[0], err
 
 
-_NO_GAGEKIT = "import sys; sys.modules['gagekit'] = None; "  # this process cannot import gagekit
-
-
-def _dask_process(code: str, *args: str) -> subprocess.Popen:
-    return subprocess.Popen([sys.executable, "-c", "import sys; " + code + f"sys.argv = ['dask', *{list(args)!r}]; main()"],
-                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+def _dask_process(without_gagekit: bool, module: str, *args: str) -> subprocess.Popen:
+    """``dask scheduler`` / ``dask worker`` (``module``) in a process of its own, optionally
+    one that cannot import gagekit."""
+    block = "sys.modules['gagekit'] = None; " if without_gagekit else ""
+    code = f"import sys; {block}from {module} import main; sys.argv = ['dask', *{list(args)!r}]; main()"
+    return subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
 
 
 @pytest.mark.parametrize("where", ["scheduler", "worker"])
@@ -152,34 +152,19 @@ def test_a_cluster_without_gagekit_is_refused_at_connect(casting_set, tmp_path, 
     """A scheduler (it unpickles every task) or a worker that cannot import gagekit: one
     error line naming the cluster and the node, exit 2, nothing stored - not every scan
     failing with Dask's deserialization message."""
-    import socket
-    import time
-
     from servers import free_port
 
     port = free_port()
     address = f"tcp://127.0.0.1:{port}"
-    scheduler = ("from distributed.cli.dask_scheduler import main; ", "--host", "127.0.0.1", "--port", str(port),
-                 "--no-dashboard")
-    worker = ("from distributed.cli.dask_worker import main; ", address, "--nthreads", "1", "--no-nanny",
-              "--no-dashboard")
-    procs = []
+    # the worker and the batch's client retry until the scheduler listens
+    procs = [_dask_process(where == "scheduler", "distributed.cli.dask_scheduler", "--host", "127.0.0.1", "--port",
+                           str(port), "--no-dashboard"),
+             _dask_process(where == "worker", "distributed.cli.dask_worker", address, "--nthreads", "1", "--no-nanny",
+                           "--no-dashboard")]
     try:
-        code, *args = scheduler
-        procs.append(_dask_process((_NO_GAGEKIT if where == "scheduler" else "") + code, *args))
-        deadline = time.monotonic() + 60
-        while True:
-            try:
-                socket.create_connection(("127.0.0.1", port), timeout=1).close()
-                break
-            except OSError:
-                assert time.monotonic() < deadline, "the Dask scheduler did not start"
-                time.sleep(0.2)
-        code, *args = worker
-        procs.append(_dask_process((_NO_GAGEKIT if where == "worker" else "") + code, *args))
         gages, scans = casting_set
-        db = tmp_path / "r.db"
-        proc = gk("gage", "batch", gages, *scans[:2], "--scheduler", address, "--db", f"sqlite:///{db}", "--json")
+        proc = gk("gage", "batch", gages, *scans[:2], "--scheduler", address, "--db",
+                  f"sqlite:///{tmp_path / 'r.db'}", "--json")
     finally:
         for p in reversed(procs):
             p.terminate()

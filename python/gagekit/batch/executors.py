@@ -176,10 +176,9 @@ class DaskCluster:
             pass
 
     def warm(self) -> None:
-        """Import the kernels on every worker now, and this module on the scheduler: the
-        scheduler unpickles every submitted task, so its first gagekit task imports gagekit
-        there (0.4 s once per scheduler; the benchmark times batches without it)."""
-        self.client.run(warm_up, 0.0)
+        """Import the kernels on every worker now, through the scheduler: it unpickles every
+        submitted task, so its first gagekit task imports gagekit there too (0.4 s once per
+        scheduler; the benchmark times batches without it)."""
         workers = list(self.client.scheduler_info().get("workers", {}))
         self.client.gather([self.client.submit(warm_up, 0.0, pure=False, workers=[w]) for w in workers])
 

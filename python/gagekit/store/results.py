@@ -51,6 +51,16 @@ class StoredResult:
 _STATEMENTS: dict = {}
 
 
+def _dialect_insert(conn: sa.Connection):
+    """The ``insert`` of the connection's dialect (PostgreSQL or SQLite): the one with
+    ``ON CONFLICT`` clauses."""
+    if conn.dialect.name == "postgresql":
+        from sqlalchemy.dialects.postgresql import insert
+    else:
+        from sqlalchemy.dialects.sqlite import insert
+    return insert
+
+
 def _insert_ignore(conn: sa.Connection, table: sa.Table, rows: Union[dict, list], keys: Sequence[str],
                    returning: Optional[sa.Column] = None):
     """INSERT ... ON CONFLICT (keys) DO NOTHING [RETURNING col] on SQLite and PostgreSQL
@@ -58,11 +68,7 @@ def _insert_ignore(conn: sa.Connection, table: sa.Table, rows: Union[dict, list]
     key = (conn.dialect.name, table.name, tuple(keys), None if returning is None else returning.name)
     stmt = _STATEMENTS.get(key)
     if stmt is None:
-        if conn.dialect.name == "postgresql":
-            from sqlalchemy.dialects.postgresql import insert
-        else:
-            from sqlalchemy.dialects.sqlite import insert
-        stmt = insert(table).on_conflict_do_nothing(index_elements=list(keys))
+        stmt = _dialect_insert(conn)(table).on_conflict_do_nothing(index_elements=list(keys))
         if returning is not None:
             stmt = stmt.returning(returning)
         _STATEMENTS[key] = stmt
@@ -84,15 +90,10 @@ def _upsert_scan(conn: sa.Connection, row: dict) -> int:
     key = (conn.dialect.name, "scan-upsert")
     stmt = _STATEMENTS.get(key)
     if stmt is None:
-        if conn.dialect.name == "postgresql":
-            from sqlalchemy.dialects.postgresql import insert
-        else:
-            from sqlalchemy.dialects.sqlite import insert
-        ins = insert(m.Scan.__table__)
+        ins = _dialect_insert(conn)(m.Scan.__table__)
         stmt = _STATEMENTS[key] = ins.on_conflict_do_update(
             index_elements=["content_hash"], set_={"content_hash": ins.excluded.content_hash}).returning(m.Scan.__table__.c.id)
     return conn.execute(stmt, row).scalar_one()
-
 
 
 def _details(kind: str, result_id: int, result: Mapping[str, Any]) -> list[tuple[sa.Table, list[dict]]]:
