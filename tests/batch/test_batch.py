@@ -265,3 +265,12 @@ def test_local_workers_cap_rayon_and_the_already_started_blas_pool():
     finally:
         pool.close()
     assert got == ("1", [1])
+
+
+def test_the_human_line_of_a_failed_scan_names_its_path_once(tmp_path):
+    bad = tmp_path / "notes.xyz"
+    bad.write_text("0 1 0\n1 0 0\n0 -1 x\n")
+    proc = gk("form", "batch", "circle", bad, "--db", f"sqlite:///{tmp_path / 'r.db'}")
+    assert proc.returncode == 0, proc.stderr
+    line = next(ln for ln in proc.stdout.splitlines() if ln.startswith("error"))
+    assert line.count(str(bad)) == 1 and "line 3" in line, line

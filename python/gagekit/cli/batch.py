@@ -61,7 +61,8 @@ def _units(units: Optional[str]) -> dict:
 
 def _human_line(ev) -> str:
     if ev.status == "error":
-        return f"error    {ev.scan}: {ev.error}"
+        # the readers' messages begin with the file's path: not twice on the line
+        return f"error    {ev.scan}: {ev.error.removeprefix(f'{ev.scan}: ')}"
     what = ""
     if ev.result is not None:
         what = ev.result.get("status") or f"form error {ev.result.get('form_error', float('nan')):.6g} mm"
