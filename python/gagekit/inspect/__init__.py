@@ -68,7 +68,7 @@ def inspect(points: Any, spec: Union[PartSpec, str, Any]) -> InspectionResult:
         fd = feats[tol.feature]
         m = evaluate(tol, fd, system)
         results.append(CalloutResult(tol.feature, tol.characteristic, tol.tolerance, float(m.value), m.zone, tol.datums,
-                                     m.n_points, m.element, tol.name, tol.angle, m.details))
+                                     m.n_points, m.element, tol.name, tol.angle, m.details, m.margin, m.extra))
     refs = sorted({t.datums for t in spec.tolerances if t.datums and t.characteristic in ("position", "profile")} |
                   {t.datums for t in spec.tolerances if t.datums}, key=lambda d: (-len(d), d))
     frames = []

@@ -61,7 +61,9 @@ class FeatureData:
     def lsq(self):
         if "lsq" not in self._cache:
             p, shape = self.points, self.shape
-            if shape == "plane":
+            if shape in ("slot", "tab"):
+                fit = self.width_fit()
+            elif shape == "plane":
                 fit = fit_plane(p)
             elif shape == "line":
                 fit = fit_line(p)
@@ -75,6 +77,34 @@ class FeatureData:
                 fit = fit_cone(p)
             self._cache["lsq"] = fit
         return self._cache["lsq"]
+
+    def faces(self) -> tuple[np.ndarray, np.ndarray]:
+        """The two faces of a slot or tab: the points split at the largest gap of their
+        heights along ``direction`` (first face: the lower heights)."""
+        if "faces" not in self._cache:
+            d = _unit(self.spec.direction)
+            h = self.points @ d
+            order = np.argsort(h, kind="stable")
+            gaps = np.diff(h[order])
+            k = int(np.argmax(gaps)) + 1
+            if k < 3 or len(h) - k < 3:
+                raise DegenerateGeometryError(
+                    f"feature '{self.name}': a {self.shape} needs two faces across its 'direction' with at least 3 points each; "
+                    f"its points split into {k} and {len(h) - k} (check the region and the direction)")
+            self._cache["faces"] = (np.ascontiguousarray(self.points[np.sort(order[:k])]),
+                                    np.ascontiguousarray(self.points[np.sort(order[k:])]))
+        return self._cache["faces"]
+
+    def width_fit(self) -> "WidthFit":
+        """Two parallel least-squares planes of a slot or tab (one normal for both faces:
+        the eigenvector of least variance of the pooled, per-face centred points)."""
+        a, b = self.faces()
+        ca, cb = a.mean(axis=0), b.mean(axis=0)
+        q = np.vstack([a - ca, b - cb])
+        n = np.linalg.svd(q, full_matrices=False)[2][2]
+        if float(n @ (cb - ca)) < 0:
+            n = -n
+        return WidthFit(self.shape, ca, cb, n, float((cb - ca) @ n), len(self.points))
 
     def sign_hint(self) -> np.ndarray:
         """The direction that fixes the sign of an axis: the feature's ``direction``, else
@@ -176,7 +206,14 @@ class FeatureData:
         if "dev" in self._cache:
             return self._cache["dev"]
         fit, p = self.lsq(), self.points
-        if self.shape == "plane":
+        if self.shape in ("slot", "tab"):
+            # from each face's plane, positive into the air (out of the slot's walls, off the tab)
+            h = (p - fit.point) @ fit.normal
+            half = 0.5 * fit.size
+            side = np.where(h >= 0, 1.0, -1.0)
+            dev = side * h - half
+            dev = dev if self.shape == "tab" else -dev
+        elif self.shape == "plane":
             dev = (p - np.array(fit.point)) @ self.plane_normal_out()
         elif self.shape == "line":
             p0, d = self.axis_line()
@@ -205,6 +242,29 @@ class FeatureData:
         if self.shape in ("cylinder", "cone"):
             d["derived_axis"] = {"method": self.spec.axis, "points": self.axis_points().tolist()}
         return d
+
+
+@dataclass(frozen=True)
+class WidthFit:
+    """Least-squares slot / tab: two parallel planes through the face centroids
+    ``point_a``, ``point_b`` with the common ``normal`` (from face a to face b); ``size``
+    their distance (ISO 14405-1 GG of a width)."""
+
+    shape: str
+    point_a: np.ndarray
+    point_b: np.ndarray
+    normal: np.ndarray
+    size: float
+    n_points: int
+
+    @property
+    def point(self) -> np.ndarray:
+        """A point of the median plane."""
+        return 0.5 * (self.point_a + self.point_b)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"criterion": "least-squares", "median_point": self.point.tolist(), "normal": self.normal.tolist(),
+                "size": self.size, "n_points": self.n_points}
 
 
 def _basis(d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

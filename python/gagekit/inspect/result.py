@@ -26,13 +26,22 @@ class CalloutResult:
     name: str = ""
     angle: float | None = None
     details: dict = field(default_factory=dict)
+    #: the margin of a two-sided callout (size, distance, angle) or of a zone with a
+    #: material bonus, else ``None`` (``tolerance - measured``)
+    margin_value: float | None = None
+    #: further top-level JSON keys: ``upper_limit``, ``lower_limit``, ``local_sizes``, ``bonus``, ...
+    extra: dict = field(default_factory=dict)
 
     @property
     def passed(self) -> bool:
+        if self.margin_value is not None:
+            return self.margin_value >= 0.0
         return self.measured <= self.tolerance
 
     @property
     def margin(self) -> float:
+        if self.margin_value is not None:
+            return self.margin_value
         return self.tolerance - self.measured
 
     def to_dict(self) -> dict[str, Any]:
@@ -52,6 +61,7 @@ class CalloutResult:
             d["name"] = self.name
         if self.angle is not None:
             d["angle"] = self.angle
+        d.update(self.extra)
         if self.details:
             d["details"] = self.details
         return d

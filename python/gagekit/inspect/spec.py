@@ -28,6 +28,27 @@ All lengths are millimetres in the scan's frame, angles degrees. Layout::
     nominal = { point = [50, 30, 0], direction = [0, 0, 1] }   # in the datum frame
     angle = 45.0                 # angularity: basic angle between feature and datum
 
+    [[tolerance]]                # a size (ISO 14405-1), :mod:`.sizes`
+    feature = "bore"
+    characteristic = "size"
+    nominal = 20.0
+    upper = 0.021                # limit deviations (mm), or fit = "H7" (ISO 286)
+    lower = 0.0
+    modifier = "LP"              # LP LS GG GX GN CC CA CV, or SX SN SA SM SD SR
+    envelope = true              # ISO (E) / ASME Rule #1 ([part] standard = "asme")
+
+    [[tolerance]]                # distance / angle between two features
+    feature = "top"
+    characteristic = "distance"
+    to = "A"
+    nominal = 40.0
+    upper = 0.1
+    lower = -0.1
+
+    position, orientation and straightness callouts of a feature of size take
+    ``material = "MMC" | "LMC"`` (ISO 2692, bonus) and datums at MMB / LMB as
+    ``datums = ["A", "B(M)"]`` (datum shift).
+
 Every mistake raises :class:`~gagekit.errors.ConfigError` naming the file, the table and
 the key.
 """
@@ -56,12 +77,20 @@ __all__ = [
     "part_spec_from_dict",
 ]
 
-SHAPES = ("plane", "cylinder", "circle", "sphere", "line", "cone")
+SHAPES = ("plane", "cylinder", "circle", "sphere", "line", "cone", "slot", "tab")
 FORM = ("flatness", "straightness", "roundness", "cylindricity", "sphericity")
 ORIENTATION = ("parallelism", "perpendicularity", "angularity")
 LOCATION = ("position", "coaxiality", "profile")
 RUNOUT = ("circular-runout", "total-runout")
-CHARACTERISTICS = FORM + ORIENTATION + LOCATION + RUNOUT
+SIZES = ("size", "distance", "angle")
+CHARACTERISTICS = FORM + ORIENTATION + LOCATION + RUNOUT + SIZES
+#: Features of size (ISO 14405-1): a size callout applies to them; ``material`` needs one.
+FEATURES_OF_SIZE = ("cylinder", "circle", "sphere", "cone", "slot", "tab")
+#: Size modifiers (ISO 14405-1 Table 1) and rank-order statistics (applied to the two-point sizes).
+SIZE_MODIFIERS = ("LP", "LS", "GG", "GX", "GN", "CC", "CA", "CV")
+RANK_ORDER = ("SX", "SN", "SA", "SM", "SD", "SR")
+STANDARDS = ("iso", "asme")
+MATERIAL = ("MMC", "LMC")
 
 #: Which feature shapes each characteristic applies to.
 APPLIES_TO: dict[str, tuple[str, ...]] = {
@@ -78,6 +107,9 @@ APPLIES_TO: dict[str, tuple[str, ...]] = {
     "profile": ("plane",),
     "circular-runout": ("cylinder", "cone", "circle", "plane"),
     "total-runout": ("cylinder", "cone", "plane"),
+    "size": FEATURES_OF_SIZE,
+    "distance": ("plane", "cylinder", "cone", "circle", "sphere", "slot", "tab"),
+    "angle": ("plane", "cylinder", "cone", "circle", "line", "slot", "tab"),
 }
 
 #: Shapes that can serve as a datum feature (plane -> a plane; the others -> an axis).
@@ -85,11 +117,12 @@ DATUM_SHAPES = ("plane", "cylinder", "cone", "circle", "sphere")
 AXIAL = ("cylinder", "cone", "circle")
 AXIS_METHODS = ("least-squares", "median-line")
 DATUM_FITS = ("chebyshev", "least-squares")
-MIN_POINTS = {"plane": 3, "line": 2, "circle": 3, "sphere": 4, "cylinder": 5, "cone": 6}
+MIN_POINTS = {"plane": 3, "line": 2, "circle": 3, "sphere": 4, "cylinder": 5, "cone": 6, "slot": 6, "tab": 6}
 
 _FEATURE_KEYS = {"name", "shape", "region", "outward", "kind", "direction", "axis", "sections", "datum_fit"}
-_TOL_KEYS = {"feature", "characteristic", "tolerance", "datums", "nominal", "angle", "name", "sections"}
-_PART_KEYS = {"name", "datum_fit", "axis", "sections"}
+_TOL_KEYS = {"feature", "characteristic", "tolerance", "datums", "nominal", "angle", "name", "sections",
+             "upper", "lower", "fit", "modifier", "angles", "envelope", "to", "material"}
+_PART_KEYS = {"name", "datum_fit", "axis", "sections", "standard"}
 _TOP_KEYS = {"part", "feature", "datums", "tolerance", "region"}
 
 
@@ -141,6 +174,26 @@ class Tolerance:
     name: str = ""
     sections: Optional[int] = None
     index: int = 0
+    # sizes, distances, angles (ISO 14405): nominal size and limit deviations (mm; degrees for angles)
+    size_nominal: Optional[float] = None
+    upper: Optional[float] = None
+    lower: Optional[float] = None
+    fit: Optional[str] = None
+    modifier: Optional[str] = None
+    angles: Optional[int] = None
+    envelope: Optional[bool] = None
+    to: Optional[str] = None
+    # material conditions (ISO 2692): "MMC" / "LMC" of the toleranced feature; per datum "" / "M" / "L"
+    material: Optional[str] = None
+    datum_material: tuple[str, ...] = ()
+
+    @property
+    def upper_limit(self) -> Optional[float]:
+        return None if self.size_nominal is None or self.upper is None else self.size_nominal + self.upper
+
+    @property
+    def lower_limit(self) -> Optional[float]:
+        return None if self.size_nominal is None or self.lower is None else self.size_nominal + self.lower
 
     @property
     def label(self) -> str:
@@ -156,6 +209,7 @@ class PartSpec:
     datums: dict[str, DatumRef]
     tolerances: tuple[Tolerance, ...]
     source: str = "part"
+    standard: str = "iso"
 
     def moved(self, rotation: Any, translation: Any) -> "PartSpec":
         """The same drawing for the part moved by the rigid motion p -> R p + t: regions,
@@ -175,7 +229,7 @@ class PartSpec:
                 None if f.direction is None else tuple(R @ np.array(f.direction)),
                 f.axis, f.sections, f.datum_fit,
             )
-        return PartSpec(self.name, feats, self.datums, self.tolerances, self.source)
+        return PartSpec(self.name, feats, self.datums, self.tolerances, self.source, self.standard)
 
 
 # -- parsing ---------------------------------------------------------------------------
@@ -251,6 +305,7 @@ def part_spec_from_dict(doc: Mapping[str, Any], source: str = "part") -> PartSpe
     dfit = _choice(part.get("datum_fit", "chebyshev"), DATUM_FITS, f"{source}: [part]", "datum_fit")
     daxis = _choice(part.get("axis", "least-squares"), AXIS_METHODS, f"{source}: [part]", "axis")
     dsec = _sections(part.get("sections", 10), f"{source}: [part]")
+    standard = _choice(part.get("standard", "iso"), STANDARDS, f"{source}: [part]", "standard")
     regions = {b.name: b for b in regions_from_tables(doc.get("region", []), source)}
 
     raw_features = doc.get("feature", [])
@@ -274,6 +329,9 @@ def part_spec_from_dict(doc: Mapping[str, Any], source: str = "part") -> PartSpe
             raise ConfigError(f"{where}: 'region' is missing")
         region = _region(t["region"], regions, where, name)
         outward = None
+        if shape in ("slot", "tab") and "direction" not in t:
+            raise ConfigError(f"{where}: 'direction' is missing; a {shape} needs the direction across its width "
+                              "(roughly normal to its two faces)")
         if "outward" in t:
             if shape not in ("plane", "line"):
                 raise ConfigError(f"{where}: 'outward' applies to planes and lines, not to a {shape}")
@@ -287,8 +345,9 @@ def part_spec_from_dict(doc: Mapping[str, Any], source: str = "part") -> PartSpe
             kind = _choice(kind, ("hole", "shaft"), where, "kind")
         direction = None
         if "direction" in t:
-            if shape not in ("cylinder", "cone", "line", "circle"):
-                raise ConfigError(f"{where}: 'direction' applies to cylinders, cones, circles and lines, not to a {shape}")
+            if shape not in ("cylinder", "cone", "line", "circle", "slot", "tab"):
+                raise ConfigError(f"{where}: 'direction' applies to cylinders, cones, circles, lines, slots and tabs, "
+                                  f"not to a {shape}")
             direction = _vec3(t["direction"], where, "direction", nonzero=True)
         axis = _choice(t.get("axis", daxis), AXIS_METHODS, where, "axis")
         sections = _sections(t.get("sections", dsec), where)
@@ -340,7 +399,7 @@ def part_spec_from_dict(doc: Mapping[str, Any], source: str = "part") -> PartSpe
         if isinstance(t.get("feature"), str):
             where += f" ({t.get('characteristic', '?')} of '{t['feature']}')"
         _unknown(t, _TOL_KEYS, where)
-        for key in ("feature", "characteristic", "tolerance"):
+        for key in ("feature", "characteristic") + (() if t.get("characteristic") in SIZES else ("tolerance",)):
             if key not in t:
                 raise ConfigError(f"{where}: '{key}' is missing")
         fname = t["feature"]
@@ -351,12 +410,12 @@ def part_spec_from_dict(doc: Mapping[str, Any], source: str = "part") -> PartSpe
         if shape not in APPLIES_TO[char]:
             raise ConfigError(f"{where}: 'characteristic' = {char!r} does not apply to a {shape}; "
                               f"it applies to: {', '.join(APPLIES_TO[char])}")
-        tol = _number(t["tolerance"], where, "tolerance", positive=True)
         raw_d = t.get("datums", [])
         if isinstance(raw_d, str):
             raw_d = [raw_d]
         if not isinstance(raw_d, list) or not all(isinstance(x, str) for x in raw_d):
             raise ConfigError(f"{where}: 'datums' must be a list of datum letters")
+        raw_d, dmat = _datum_modifiers(raw_d, datums, features, where)
         if len(raw_d) > 3:
             raise ConfigError(f"{where}: 'datums' lists {len(raw_d)} datums; at most three (primary, secondary, tertiary)")
         for j, letter in enumerate(raw_d):
@@ -367,6 +426,23 @@ def part_spec_from_dict(doc: Mapping[str, Any], source: str = "part") -> PartSpe
             if datums[letter].feature == fname:
                 raise ConfigError(f"{where}: 'datums' names '{letter}', the toleranced feature itself")
         _check_datums(char, raw_d, datums, features, where)
+        if char in SIZES:
+            tols.append(_size_callout(t, k, fname, char, features, tuple(raw_d), dmat, standard, where))
+            continue
+        material = None
+        if "material" in t:
+            material = _choice(t["material"], MATERIAL, where, "material")
+            if char not in ORIENTATION + ("position", "straightness") or shape not in FEATURES_OF_SIZE:
+                raise ConfigError(f"{where}: 'material' applies to position, orientation and straightness callouts of a "
+                                  f"feature of size ({', '.join(FEATURES_OF_SIZE)}), not to {char} of a {shape}")
+        for key in ("upper", "lower", "fit", "modifier", "angles", "envelope", "to"):
+            if key in t:
+                raise ConfigError(f"{where}: '{key}' applies to size, distance and angle callouts, not to {char}")
+        if any(dmat) and char not in ORIENTATION + ("position",):
+            raise ConfigError(f"{where}: 'datums': a datum at MMB / LMB applies to position and orientation callouts")
+        tol = _number(t["tolerance"], where, "tolerance")
+        if tol < 0 or (tol == 0 and material is None):
+            raise ConfigError(f"{where}: 'tolerance' must be positive (0 only with material = \"MMC\" / \"LMC\"), got {tol!r}")
         angle = None
         if char == "angularity":
             if "angle" not in t:
@@ -391,12 +467,113 @@ def part_spec_from_dict(doc: Mapping[str, Any], source: str = "part") -> PartSpe
         if char in ("position", "profile") and shape in ("plane", "cylinder", "cone") and ndir is None:
             raise ConfigError(f"{where}: 'nominal' needs a 'direction' (the basic {'normal' if shape == 'plane' else 'axis'} in the datum frame)")
         sections = _sections(t["sections"], where) if "sections" in t else None
-        tols.append(Tolerance(fname, char, tol, tuple(raw_d), npoint, ndir, angle, str(t.get("name", "")), sections, k))
-    return PartSpec(pname, features, datums, tuple(tols), source)
+        tols.append(Tolerance(fname, char, tol, tuple(raw_d), npoint, ndir, angle, str(t.get("name", "")), sections, k,
+                              material=material, datum_material=dmat))
+    return PartSpec(pname, features, datums, tuple(tols), source, standard)
+
+
+def _datum_modifiers(raw: list, datums: Mapping[str, DatumRef], features: Mapping[str, Feature],
+                     where: str) -> tuple[list, tuple[str, ...]]:
+    """Split ``"B(M)"`` / ``"B(L)"`` into the letter and its material boundary (MMB / LMB,
+    ISO 2692 / ASME Y14.5 Sec. 7); the datum feature must be a feature of size."""
+    letters, mods = [], []
+    for x in raw:
+        x = x.strip()
+        mod = ""
+        if x.endswith(")") and "(" in x:
+            x, m = x[:-1].split("(", 1)
+            x, m = x.strip(), m.strip().upper()
+            if m not in ("M", "L"):
+                raise ConfigError(f"{where}: 'datums': '{x}({m})' -- a datum's material boundary is (M) or (L)")
+            mod = m
+            if x in datums and features[datums[x].feature].shape not in FEATURES_OF_SIZE:
+                raise ConfigError(f"{where}: 'datums': datum '{x}' is a {features[datums[x].feature].shape}, not a feature "
+                                  "of size; (M) / (L) apply to datum features of size")
+        letters.append(x)
+        mods.append(mod)
+    return letters, tuple(mods)
+
+
+def _size_callout(t: Mapping, k: int, fname: str, char: str, features: Mapping[str, Feature], datums: tuple,
+                  dmat: tuple, standard: str, where: str) -> Tolerance:
+    """A size (ISO 14405-1), distance or angle (ISO 14405-2, ASME Y14.5) callout."""
+    from .iso286 import fit_deviations
+
+    if datums:
+        raise ConfigError(f"{where}: 'datums': a {char} takes no datums")
+    for key in ("material", "angle"):
+        if key in t:
+            raise ConfigError(f"{where}: '{key}' does not apply to a {char} callout")
+    if "nominal" not in t:
+        raise ConfigError(f"{where}: 'nominal' (the nominal {'angle in degrees' if char == 'angle' else 'size in mm'}) is missing")
+    nominal = _number(t["nominal"], where, "nominal")
+    if char == "size" and nominal <= 0:
+        raise ConfigError(f"{where}: 'nominal' must be a positive size, got {nominal!r}")
+    fit = None
+    if "fit" in t:
+        if char != "size":
+            raise ConfigError(f"{where}: 'fit' (ISO 286) applies to sizes only")
+        if "upper" in t or "lower" in t or "tolerance" in t:
+            raise ConfigError(f"{where}: give either 'fit' or 'upper' and 'lower', not both")
+        fit = str(t["fit"])
+        upper, lower = fit_deviations(fit, nominal, f"{where}: 'fit'")
+    elif "upper" in t or "lower" in t:
+        if "tolerance" in t:
+            raise ConfigError(f"{where}: give either 'tolerance' (+-) or 'upper' and 'lower', not both")
+        for key in ("upper", "lower"):
+            if key not in t:
+                raise ConfigError(f"{where}: '{key}' is missing (the {key} limit deviation)")
+        upper, lower = _number(t["upper"], where, "upper"), _number(t["lower"], where, "lower")
+    elif "tolerance" in t:
+        half = _number(t["tolerance"], where, "tolerance", positive=True)
+        upper, lower = half, -half
+    else:
+        raise ConfigError(f"{where}: the limits are missing: give 'upper' and 'lower' (deviations), "
+                          + ("'fit' (e.g. \"H7\") " if char == "size" else "") + "or 'tolerance' (+-)")
+    if upper < lower:
+        raise ConfigError(f"{where}: 'upper' ({upper:g}) is below 'lower' ({lower:g})")
+    shape = features[fname].shape
+    modifier = angles = envelope = to = None
+    if char == "size":
+        modifier = str(t.get("modifier", "LP")).upper()
+        _choice(modifier, SIZE_MODIFIERS + RANK_ORDER, where, "modifier")
+        if "angles" in t:
+            angles = t["angles"]
+            if isinstance(angles, bool) or not isinstance(angles, int) or angles < 1:
+                raise ConfigError(f"{where}: 'angles' must be a positive integer, got {angles!r}")
+        if "envelope" in t:
+            if not isinstance(t["envelope"], bool):
+                raise ConfigError(f"{where}: 'envelope' must be true or false, got {t['envelope']!r}")
+            envelope = bool(t["envelope"])
+        else:
+            envelope = standard == "asme"  # ASME Y14.5 Rule #1: the envelope applies unless stated otherwise
+        if envelope and shape in ("cylinder", "circle", "sphere", "cone") and features[fname].kind is None:
+            raise ConfigError(f"{where}: the envelope requirement needs the feature's kind = \"hole\" or \"shaft\" "
+                              f"(its MMC size is the upper or the lower limit); set it on '{fname}'")
+    else:
+        for key in ("modifier", "angles", "envelope"):
+            if key in t:
+                raise ConfigError(f"{where}: '{key}' applies to sizes, not to a {char}")
+        if "to" not in t:
+            raise ConfigError(f"{where}: 'to' (the second feature of the {char}) is missing")
+        to = t["to"]
+        if not isinstance(to, str) or to not in features:
+            raise ConfigError(f"{where}: 'to' = {to!r} is not a [[feature]]")
+        if to == fname:
+            raise ConfigError(f"{where}: 'to' names the feature itself")
+        other = features[to].shape
+        if other not in APPLIES_TO[char]:
+            raise ConfigError(f"{where}: 'to': a {char} to a {other} is not defined; it applies to: {', '.join(APPLIES_TO[char])}")
+    sections = _sections(t["sections"], where) if "sections" in t else None
+    return Tolerance(fname, char, upper - lower, (), None, None, None, str(t.get("name", "")), sections, k,
+                     size_nominal=nominal, upper=upper, lower=lower, fit=fit, modifier=modifier, angles=angles,
+                     envelope=envelope, to=to, datum_material=dmat)
 
 
 def _check_datums(char: str, letters: list, datums: Mapping[str, DatumRef], features: Mapping[str, Feature], where: str) -> None:
     n = len(letters)
+    if char in SIZES:
+        return
     if char in FORM:
         if n:
             raise ConfigError(f"{where}: 'datums': {char} is a form tolerance and takes no datums")

@@ -90,6 +90,11 @@ class Measurement:
     element: str
     n_points: int
     details: dict = field(default_factory=dict)
+    #: two-sided callouts (sizes, distances, angles) and material conditions: the margin
+    #: to the nearer limit / to the zone with its bonus; ``None``: ``tolerance - value``
+    margin: Optional[float] = None
+    #: top-level JSON keys of the callout (limits, local sizes, bonus, ...)
+    extra: dict = field(default_factory=dict)
 
 
 # -- small exact helpers ---------------------------------------------------------------
@@ -203,6 +208,10 @@ def _rot_z(frame, psi: float) -> tuple[Callable, Callable]:
 def evaluate(tol: Tolerance, fd: FeatureData, system: DatumSystem) -> Measurement:
     """The measured value of one callout."""
     char = tol.characteristic
+    if char in ("size", "distance", "angle"):
+        from . import sizes
+
+        return {"size": sizes.evaluate_size, "distance": sizes.evaluate_distance, "angle": sizes.evaluate_angle}[char](tol, fd, system)
     fn = _DISPATCH[char]
     return fn(tol, fd, system)
 

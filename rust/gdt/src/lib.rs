@@ -15,12 +15,15 @@
 //! - [`datum`]: datum planes (constrained Chebyshev tangent plane on the air side,
 //!   ISO 5459) and axes of a fixed direction (maximum inscribed / minimum
 //!   circumscribed / least-squares cylinder along a given direction).
+//! - [`size`]: local sizes of features of size (ISO 14405-1): two-point sizes in
+//!   sections, widths between two faces, the distance of two convex hulls.
 //!
 //! Sphericity uses the form crate's certified minimum-zone sphere
 //! (`gagekit_form::sphere::min_zone`).
 
 pub mod datum;
 pub mod min_width3;
+pub mod size;
 pub mod vec3;
 pub mod width2;
 pub mod width3;

@@ -4,8 +4,9 @@ use crate::arrays::rows;
 use crate::errors::run;
 use gagekit_core::GkError;
 use gagekit_gdt::datum::{self, AxisFit, Orientation, PlaneFit};
+use gagekit_gdt::size::{self, Sections};
 use gagekit_gdt::width2;
-use numpy::PyReadonlyArray2;
+use numpy::{PyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 
 type V3 = (f64, f64, f64);
@@ -89,7 +90,63 @@ fn gdt_axis_along<'py>(py: Python<'py>, points: PyReadonlyArray2<'py, f64>, dire
     Ok((v3(a.point), v3(a.direction), a.radius, a.r_min, a.r_max))
 }
 
+/// Two-point sizes (ISO 14405-1) about an axis: (sizes, section index, direction angle,
+/// sections used); directions from `reference` projected normal to the axis; `kind` "axial" (cylinder, circle, cone) or "great-circles" (sphere).
+#[pyfunction]
+#[allow(clippy::type_complexity)]
+fn gdt_two_point_sizes<'py>(
+    py: Python<'py>,
+    points: PyReadonlyArray2<'py, f64>,
+    origin: V3,
+    axis: V3,
+    reference: V3,
+    kind: &str,
+    sections: usize,
+    angles: usize,
+) -> PyResult<(Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<i64>>, Bound<'py, PyArray1<f64>>, usize)> {
+    let pts = rows(py, &points, 3, "points")?;
+    let kind = kind.to_string();
+    let t = run(py, move || {
+        let kind = match kind.as_str() {
+            "axial" => Sections::Axial,
+            "great-circles" => Sections::GreatCircles,
+            other => return Err(GkError::config(format!("unknown section kind {other:?}"))),
+        };
+        size::two_point_sizes(pts, arr(origin), arr(axis), arr(reference), kind, sections, angles)
+    })?;
+    let sec: Vec<i64> = t.section.iter().map(|&k| k as i64).collect();
+    Ok((PyArray1::from_vec(py, t.sizes), PyArray1::from_vec(py, sec), PyArray1::from_vec(py, t.angle), t.sections_used))
+}
+
+/// Two-point sizes of a width: each point of `face_a` to the opposite point of `face_b`
+/// along `normal`, interpolated on `face_b`'s triangulation.
+#[pyfunction]
+fn gdt_width_sizes<'py>(
+    py: Python<'py>,
+    face_a: PyReadonlyArray2<'py, f64>,
+    face_b: PyReadonlyArray2<'py, f64>,
+    normal: V3,
+) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    let a = rows(py, &face_a, 3, "face_a")?;
+    let b = rows(py, &face_b, 3, "face_b")?;
+    let s = run(py, move || size::width_sizes(a, b, arr(normal)))?;
+    Ok(PyArray1::from_vec(py, s))
+}
+
+/// Distance between the convex hulls of two point sets and the unit direction from the
+/// first to the second (GJK).
+#[pyfunction]
+fn gdt_hull_distance<'py>(py: Python<'py>, a: PyReadonlyArray2<'py, f64>, b: PyReadonlyArray2<'py, f64>) -> PyResult<(f64, V3)> {
+    let a = rows(py, &a, 3, "a")?;
+    let b = rows(py, &b, 3, "b")?;
+    let (d, n) = run(py, move || size::hull_distance(a, b))?;
+    Ok((d, v3(n)))
+}
+
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(gdt_two_point_sizes, m)?)?;
+    m.add_function(wrap_pyfunction!(gdt_width_sizes, m)?)?;
+    m.add_function(wrap_pyfunction!(gdt_hull_distance, m)?)?;
     m.add_function(wrap_pyfunction!(gdt_min_width_2d, m)?)?;
     m.add_function(wrap_pyfunction!(gdt_slab, m)?)?;
     m.add_function(wrap_pyfunction!(gdt_datum_plane, m)?)?;
