@@ -335,11 +335,41 @@ def read_grid_csv(path: Union[str, Path], machine: Machine):
 def interpolate_grid(grid: Grid, table: np.ndarray, commands: np.ndarray, machine: Machine) -> np.ndarray:
     """Multilinear interpolation of a (shape..., k) table at commands (n, J): what a grid
     compensation (FANUC 3-D, trilinear) does between the nodes."""
-    from scipy.interpolate import RegularGridInterpolator
-
     idx = [machine.joint_names.index(a) for a in grid.axes]
-    f = RegularGridInterpolator(grid.values, table, method="linear", bounds_error=True)
-    return f(commands[:, idx])
+    return multilinear(grid.values, table, commands[:, idx])
+
+
+def multilinear(values: tuple[np.ndarray, ...], table: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """Multilinear interpolation on a regular (rectilinear) grid: ``values`` the ascending
+    node coordinates per axis, ``table`` (len(values[0]), ..., len(values[-1]), k...), ``points``
+    (n, d) inside the grid. Each point blends the 2^d vertices of its cell with the interior
+    division ratios (the trilinear rule of FANUC's A-79351E for d = 3); an axis with one node
+    holds that node's value. Points outside the grid are refused."""
+    pts = np.asarray(points, dtype=float).reshape(len(points), len(values))
+    table = np.asarray(table, dtype=float)
+    lo_idx, frac = [], []
+    for d, v in enumerate(values):
+        v = np.asarray(v, dtype=float)
+        x = pts[:, d]
+        if np.any((x < v[0]) | (x > v[-1])) or not np.all(np.isfinite(x)):
+            raise InvalidInputError(f"interpolation: a point lies outside the grid on axis {d} [{v[0]:g}, {v[-1]:g}]")
+        if len(v) == 1:
+            lo_idx.append(np.zeros(len(x), dtype=np.intp))
+            frac.append(np.zeros(len(x)))
+            continue
+        i = np.clip(np.searchsorted(v, x, side="right") - 1, 0, len(v) - 2)
+        lo_idx.append(i)
+        frac.append((x - v[i]) / (v[i + 1] - v[i]))
+    out = np.zeros((len(pts),) + table.shape[len(values):])
+    for corner in range(1 << len(values)):
+        weight = np.ones(len(pts))
+        index = []
+        for d, v in enumerate(values):
+            up = (corner >> d) & 1
+            index.append(np.minimum(lo_idx[d] + up, len(v) - 1))
+            weight = weight * (frac[d] if up else 1.0 - frac[d])
+        out += weight.reshape((-1,) + (1,) * (out.ndim - 1)) * table[tuple(index)]
+    return out
 
 
 # ----- isg-csv -------------------------------------------------------------------------------
