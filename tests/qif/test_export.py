@@ -151,3 +151,19 @@ def test_spec_keys_round_trip():
     doc = tomllib.loads(part_from_model(read_model(CTC01)).toml)
     spec = part_spec_from_dict(doc, "x")
     assert spec.qif["qpid"] and all(f.qif_id for f in spec.features.values())
+
+
+def test_gage_check_results_validate(tmp_path, qif_schema):
+    out = tmp_path / "gage.qif"
+    proc = _gagekit("gage", "check", data_path("casting_ok.ply"), data_path("casting_ok.toml"), "--no-groups", "--json",
+                    "--qif-results", out)
+    res = json.loads(proc.stdout)
+    tree = assert_valid(qif_schema, out)
+    ms = _measurements(tree)
+    assert len(ms) == len(res["gages"]) > 0
+    for m, g in zip(ms, res["gages"]):
+        assert float(m.findtext("q:Value", namespaces=NS)) == g["allowance_after"]
+        assert m.findtext("q:Status/q:CharacteristicStatusEnum", namespaces=NS) == ("PASS" if g["slack"] == 0 else "FAIL")
+    T = np.array(res["transform"]["matrix"])
+    z = [float(v) for v in tree.findtext(".//q:Transform/q:Rotation/q:ZDirection", namespaces=NS).split()]
+    assert z == T[:3, 2].tolist()

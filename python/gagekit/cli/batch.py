@@ -23,7 +23,7 @@ from typing import Callable, List, Optional
 import typer
 
 from ._common import UNITS_OPTION
-from .qif import INSTRUMENT_OPTION, QIF_RESULTS_OPTION, write_results
+from .qif import INSTRUMENT_OPTION, QIF_RESULTS_OPTION, check_output, write_results
 
 SCANS_ARG = typer.Argument(..., help="Scan files, folders (searched for scan files) or glob patterns ('scans/*.ply').")
 WORKERS_OPTION = typer.Option(None, "--workers", "-w", help="Local worker processes (default: one per core).")
@@ -195,12 +195,7 @@ def inspect_batch(
     from ..batch import Job
     from ..inspect import part_spec_from_dict
 
-    if qif_results is not None:
-        from .._files import output_file
-        from ..qif._xml import etree
-
-        etree()  # the extra, checked before the work
-        output_file(qif_results)
+    check_output(qif_results)
     doc = load_toml(part)
     spec = part_spec_from_dict(doc, str(part))  # a bad drawing stops the batch before it starts
     job = Job("inspect", {"part": doc}, _units(units), source=str(part), part=part_name or spec.name)

@@ -13,7 +13,7 @@ import typer
 from typer.core import TyperGroup
 
 from ._common import JSON_OPTION, UNITS_OPTION, emit, read_cloud_cli, table
-from .qif import INSTRUMENT_OPTION, QIF_RESULTS_OPTION, write_results
+from .qif import INSTRUMENT_OPTION, QIF_RESULTS_OPTION, check_output, write_results
 
 
 class DefaultScanGroup(TyperGroup):
@@ -56,12 +56,7 @@ def inspect(
     """
     from ..inspect import inspect as run_inspect, load_part_spec
 
-    if qif_results is not None:
-        from .._files import output_file
-        from ..qif._xml import etree
-
-        etree()  # the extra, checked before the work
-        output_file(qif_results)
+    check_output(qif_results)
     spec = load_part_spec(part)
     pts = read_cloud_cli(scan, units).points
     result = run_inspect(pts, spec)

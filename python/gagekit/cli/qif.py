@@ -73,6 +73,17 @@ def _rel(model: Path, out: Path) -> str:
     return rel.replace(os.sep, "/")
 
 
+def check_output(path: Optional[Path]) -> None:
+    """--qif-results, checked before the work: the extra is installed, the file writable."""
+    if path is None:
+        return
+    from .._files import output_file
+    from ..qif._xml import etree
+
+    etree()
+    output_file(path)
+
+
 def write_results(path: Optional[Path], runs: list, spec: Any, spec_path: Any, instrument: str) -> None:
     """--qif-results of the inspection commands (nothing when the option is not given)."""
     if path is None:

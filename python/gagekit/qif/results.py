@@ -43,7 +43,8 @@ from .. import __version__
 from ..errors import ConfigError
 from . import _xml as X
 
-__all__ = ["write_inspection_results", "inspection_results_document", "QIF_TYPE"]
+__all__ = ["write_inspection_results", "inspection_results_document", "write_gage_results", "gage_results_document",
+           "QIF_TYPE"]
 
 #: gagekit characteristic -> QIF characteristic type (self-contained documents)
 QIF_TYPE = {
@@ -142,6 +143,21 @@ def _status(parent: Any, ok: bool, kind: str = "Characteristic") -> None:
 # -- the plan part: definitions, nominals, items ----------------------------------------
 
 
+def _characteristics(root: Any, ids: _Ids, designator: str, year: str, title: str) -> Any:
+    """A new Characteristics element with its FormalStandardId: the ISO standard the
+    characteristics follow, in StandardsDefinitions."""
+    sd = _new("StandardsDefinitions", n=1)
+    std = X.sub(sd, "Standard", id=ids())
+    X.sub(X.sub(std, "Organization"), "StandardsOrganizationEnum", "ISO")
+    X.sub(std, "Designator", designator)
+    X.sub(std, "Year", year)
+    X.sub(std, "Title", title)
+    _place(root, sd)
+    ch = _new("Characteristics")
+    X.sub(ch, "FormalStandardId", std.get("id"))
+    return ch
+
+
 class _Plan:
     """What the results point at: per callout its characteristic item id and QIF type,
     per feature its feature item id (or None), per datum tuple its DRF id."""
@@ -189,14 +205,7 @@ def _self_contained(root: Any, spec: Any, ids: _Ids, device: str, zones: dict) -
                 X.sub(sd, "ReferencedComponent", "NOMINAL")
                 X.sub(X.sub(d, "Precedence"), "PrecedenceEnum", ("PRIMARY", "SECONDARY", "TERTIARY")[k])
         _place(root, dr)
-    sd = _new("StandardsDefinitions", n=1)
-    std = X.sub(sd, "Standard", id=ids())
-    X.sub(X.sub(std, "Organization"), "StandardsOrganizationEnum", "ISO")
-    X.sub(std, "Designator", "1101")
-    X.sub(std, "Year", "2017")
-    _place(root, sd)
-    ch = _new("Characteristics")
-    X.sub(ch, "FormalStandardId", std.get("id"))
+    ch = _characteristics(root, ids, "1101", "2017", "Geometrical product specifications (GPS) -- Geometrical tolerancing")
     cdefs = X.sub(ch, "CharacteristicDefinitions", n=len(spec.tolerances))
     cnoms = X.sub(ch, "CharacteristicNominals", n=len(spec.tolerances))
     citems = X.sub(ch, "CharacteristicItems", n=len(spec.tolerances))
@@ -485,3 +494,90 @@ def write_inspection_results(path: Any, runs: Sequence[dict], spec: Any, spec_pa
     data = X.etree().tostring(tree, xml_declaration=True, encoding="UTF-8", pretty_print=True)
     return write_bytes(path, data)
 
+
+
+# -- virtual gages (gage check) ---------------------------------------------------------
+
+
+def gage_results_document(scan: Any, result: dict, instrument: str = "") -> Any:
+    """A self-contained QIF document of a virtual-gage check (Ch. 5): each gage is a
+    ``UserDefinedLinearCharacteristic`` whose value is its stock allowance at T*
+    (``allowance_after``, mm; the smallest signed distance of its points from the gage
+    plane, negative = short of material), with the lower limit 0 and status PASS when the
+    gage is met (slack 0); T* is the results' ``ActualTransform`` (part frame, Eq. 5.11)."""
+    et = X.etree()
+    gages = result.get("gages", [])
+    if not gages:
+        raise ConfigError("the gage check has no gages to write")
+    root = et.Element(X.Q + "QIFDocument", nsmap={None: X.NS, "xsi": "http://www.w3.org/2001/XMLSchema-instance"})
+    root.set("versionQIF", "3.0.0")
+    ids = _Ids(0)
+    digest = hashlib.sha256(json.dumps([str(scan)] + [g.get("allowance_after") for g in gages]).encode()).hexdigest()
+    _place(root, _new("QPId", str(uuid.uuid5(uuid.NAMESPACE_URL, "gagekit-gage:" + digest))))
+    _header(root)
+    _units_block(root)
+    device = ids()
+    mres = _place(root, _new("MeasurementResources"))
+    devs = X.sub(mres, "MeasurementDevices", n=1)
+    dev = X.sub(devs, "MeasurementDevice", id=device)
+    X.sub(dev, "Name", instrument or "point-cloud scanner")
+    X.sub(dev, "Description", "the instrument that acquired the checked point cloud")
+    # the gages are virtual gages for machining stock (dissertation Ch. 5) against the
+    # datums of ISO 5459; that is the standard named
+    ch = _characteristics(root, ids, "5459", "2011", "Geometrical product specifications (GPS) -- Datums and datum systems")
+    cdefs = X.sub(ch, "CharacteristicDefinitions", n=len(gages))
+    cnoms = X.sub(ch, "CharacteristicNominals", n=len(gages))
+    citems = X.sub(ch, "CharacteristicItems", n=len(gages))
+    items = []
+    for g in gages:
+        di, ni, ii = ids(), ids(), ids()
+        d = X.sub(cdefs, "UserDefinedLinearCharacteristicDefinition", id=di)
+        tol = X.sub(d, "Tolerance")
+        X.sub(tol, "MinValue", "0")
+        X.sub(tol, "DefinedAsLimit", "true")
+        X.sub(d, "WhatToMeasure", f"stock allowance of virtual gage '{g['name']}' on region '{g['region']}' at the "
+                                  "optimal correction T* (gagekit gage check, dissertation Eq. 5.4 and 5.11)")
+        n = X.sub(cnoms, "UserDefinedLinearCharacteristicNominal", id=ni)
+        X.sub(n, "CharacteristicDefinitionId", di)
+        X.sub(n, "Name", str(g["name"]))
+        it = X.sub(citems, "UserDefinedLinearCharacteristicItem", id=ii)
+        X.sub(it, "Name", str(g["name"]))
+        _id_list(it, "MeasurementDeviceIds", [device])
+        X.sub(it, "CharacteristicNominalId", ni)
+        items.append(ii)
+    _place(root, ch)
+    res_el = _place(root, _new("Results"))
+    mset = X.sub(res_el, "MeasurementResultsSet", n=1)
+    mr = X.sub(mset, "MeasurementResults", id=ids())
+    X.sub(mr, "ThisResultsInstanceQPId", str(uuid.uuid5(uuid.NAMESPACE_URL, "gagekit-gage-results:" + digest)))
+    refs = X.sub(mr, "ExternalFileReferences", n=1)
+    ref = X.sub(refs, "ExternalFileReference")
+    X.sub(ref, "URI", Path(str(scan)).resolve().as_uri() if Path(str(scan)).exists() else str(scan))
+    X.sub(X.sub(ref, "FileSpec"), "OtherFileSpec", (Path(str(scan)).suffix.lstrip(".") or "points").upper())
+    X.sub(ref, "Description", "point cloud checked with virtual gages")
+    mc = X.sub(mr, "MeasuredCharacteristics")
+    cm = X.sub(mc, "CharacteristicMeasurements", n=len(gages))
+    for g, item in zip(gages, items):
+        el = X.sub(cm, "UserDefinedLinearCharacteristicMeasurement", id=ids())
+        _status(el, float(g.get("slack", 0.0)) == 0.0)
+        X.sub(el, "CharacteristicItemId", item)
+        X.sub(el, "MeasurementDeviceIds", n=1).append(_new("Id", device))
+        X.sub(el, "Value", _num(g["allowance_after"]))
+    T = np.asarray(result.get("transform", {}).get("matrix", np.eye(4)), dtype=float)
+    at = X.sub(mr, "ActualTransforms", n=1)
+    tr = X.sub(at, "Transform", id=ids())
+    rot = X.sub(tr, "Rotation")
+    for k, nme in enumerate(("XDirection", "YDirection", "ZDirection")):
+        X.sub(rot, nme, X.vec(T[:3, k]))
+    X.sub(tr, "Origin", X.vec(T[:3, 3]))
+    _status(mr, result.get("status") == "conforming", "Inspection")
+    root.set("idMax", str(ids.last))
+    return root.getroottree()
+
+
+def write_gage_results(path: Any, scan: Any, result: dict, instrument: str = "") -> Path:
+    """Write the virtual-gage QIF document (atomically)."""
+    from .._files import write_bytes
+
+    tree = gage_results_document(scan, result, instrument)
+    return write_bytes(path, X.etree().tostring(tree, xml_declaration=True, encoding="UTF-8", pretty_print=True))
