@@ -226,13 +226,13 @@ def _rows(machine: Machine, obs: InstrumentObservations, index: int) -> _Block:
     jac = machine.command_jacobian(c).reshape(len(c), 3, -1)
     lin = [k for k, j in enumerate(machine.joints) if j.kind == "prismatic"]
     shifted = c.copy()
-    for i in range(len(c)):
-        shifted[i, lin] += np.linalg.lstsq(jac[i][:, lin], target[i] - nom[i], rcond=None)[0]
+    shifted[:, lin] += np.einsum("nij,nj->ni", np.linalg.pinv(jac[:, :, lin]), target - nom)
     m = machine.design_matrix(shifted)
-    nn = np.zeros((3 * len(c), 3 * len(uniq)))
-    for row, i in enumerate(ids):
-        k = uniq.index(int(i))
-        nn[3 * row : 3 * row + 3, 3 * k : 3 * k + 3] = -np.eye(3)
+    nn = np.zeros((len(c), 3, len(uniq), 3))
+    slot = np.searchsorted(np.array(uniq), ids)
+    for a in range(3):
+        nn[np.arange(len(c)), a, slot, a] = -1.0
+    nn = nn.reshape(3 * len(c), 3 * len(uniq))
     base = np.array([s0[int(i)] for i in ids]) - nom  # M p - dS = S0 - nominal
     names = [f"{src}: sphere {i}.{a}" for i in uniq for a in "xyz"]
     if obs.kind == "sphere":
@@ -279,12 +279,10 @@ class MixedResult:
 RANK_RTOL = 1e-6
 
 
-def _seen(a: np.ndarray, k: int, rtol: float = RANK_RTOL) -> np.ndarray:
-    """Which of the first k columns of a (weighted, equilibrated) are estimable."""
-    _, s, vt = np.linalg.svd(a, full_matrices=False)
-    r = int((s > rtol * s[0]).sum())
-    v = vt[:r]
-    resid = 1.0 - (v[:, :k] ** 2).sum(axis=0)
+def _seen(vt: np.ndarray, r: int, k: int) -> np.ndarray:
+    """Which of the first k columns are estimable: their unit vectors lie in the row space
+    (the first r right singular vectors of the weighted, equilibrated matrix)."""
+    resid = 1.0 - (vt[:r, :k] ** 2).sum(axis=0)
     return resid < 1e-6
 
 
@@ -328,13 +326,20 @@ def identify_mixed(
     norms = np.linalg.norm(full, axis=0)
     norms[norms == 0] = 1.0
     eq = full / norms
-    seen = _seen(eq, k)
-    u, sv, vt = np.linalg.svd(eq, full_matrices=False)
+    # the SVD of the tall, thin, equilibrated matrix through its normal matrix (k x k): eq^T eq =
+    # V S^2 V^T; with columns of unit norm the squared condition stays far inside double
+    # precision, and one matrix product is all that touches the 3n rows
+    lam, v = np.linalg.eigh(eq.T @ eq)
+    order = np.argsort(lam)[::-1]
+    lam, v = np.clip(lam[order], 0.0, None), v[:, order]
+    sv = np.sqrt(lam)
+    vt = v.T
+    qtb = (vt @ (eq.T @ rhs)) / np.where(sv > 0, sv, 1.0)  # = U^T rhs on the row space
     r = int((sv > RANK_RTOL * sv[0]).sum())
     if r == 0:
         raise DegenerateGeometryError("the observations see none of the unknowns")
-    pinv = (vt[:r].T / sv[:r]) @ u[:, :r].T
-    x = (pinv @ rhs) / norms
+    seen = _seen(vt, r, k)
+    x = (vt[:r].T @ (qtb[:r] / sv[:r])) / norms
     cov = ((vt[:r].T / sv[:r] ** 2) @ vt[:r]) / np.outer(norms, norms)  # unit weight: sigmas as given
     resid = rhs - full @ x
     dof = max(len(rhs) - r, 1)
