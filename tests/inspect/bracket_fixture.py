@@ -22,7 +22,9 @@ def bracket():
 
 
 def key(t) -> str:
-    """The EXPECTED key of a callout."""
+    """The EXPECTED (EXPECTED_SIZES: the callout's name) key of a callout."""
+    if t.name:
+        return t.name
     base = f"{t.characteristic} of {t.feature}"
     if t.feature == "C":
         base += " to " + "|".join(t.datums)

@@ -67,6 +67,31 @@ EXPECTED = {
     "position of pin": 2 * PX,
 }
 
+#: bracket_sizes.toml's callouts beyond bracket.toml's (by name): sizes, distances, angles,
+#: material conditions. The bore's three lobes keep every two-point size 2 R = 20 while its
+#: maximum inscribed cylinder is 2 (R - A3); the pin's four lobes give two-point sizes
+#: 6 +- 2 A4 and a maximum inscribed circle of 2 (3 - A4).
+BORE_GX = 2 * (10 - A3)
+PIN_GX = 2 * (3 - A4)
+EXPECTED_SIZES = {
+    "size of bore": 20.0,                       # LP (every two-point size 20), envelope GX = BORE_GX
+    "size of boss": 24.0,                       # 24 js6, LP of a perfect cylinder
+    "GN of boss-top": 16.0,
+    "GG of ball": 16.0,
+    "size of pin": 6 + 2 * A4,                  # LP: the local size nearest a limit, the largest
+    "distance of ball from A": 75 + BZ,         # the ball's centre above A
+    "distance of bore from boss": math.hypot(40 - DX, DY),  # the bore's mid-point from the boss axis
+    "angle of chamfer": 45 + math.degrees(DELTA),
+    "angle of bore to A": 90 - math.degrees(ALPHA),
+    "position of bore at MMC": 2 * math.hypot(DX + 15 * math.sin(ALPHA), DY),
+    "position of pin 0 at MMC": 2 * PX,
+    # A|D(M): the turn about D is free, so only the pin's distance from D's axis is located;
+    # the boss (perfect, 24.000) may shift on its 24 js6 MMB gauge (24.0065) by 0.00325
+    "position of pin to A|D(M)": 2 * (abs(math.hypot(40 - PX, 25) - math.hypot(40, 25)) - 0.0065 / 2),
+}
+#: the bonuses: the bore's GX over its MMC size 19.988, the pin's GX over 5.97
+BONUS = {"position of bore at MMC": BORE_GX - 19.988, "position of pin 0 at MMC": PIN_GX - 5.97}
+
 
 def _grid(a0, a1, b0, b1, step):
     na = max(2, int(round((a1 - a0) / step)) + 1)

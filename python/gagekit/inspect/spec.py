@@ -56,7 +56,7 @@ the key.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any, Mapping, Optional
 
 import numpy as np
@@ -119,11 +119,13 @@ AXIS_METHODS = ("least-squares", "median-line")
 DATUM_FITS = ("chebyshev", "least-squares")
 MIN_POINTS = {"plane": 3, "line": 2, "circle": 3, "sphere": 4, "cylinder": 5, "cone": 6, "slot": 6, "tab": 6}
 
-_FEATURE_KEYS = {"name", "shape", "region", "outward", "kind", "direction", "axis", "sections", "datum_fit"}
-_TOL_KEYS = {"feature", "characteristic", "tolerance", "datums", "nominal", "angle", "name", "sections",
+_FEATURE_KEYS = {"name", "shape", "region", "outward", "kind", "direction", "axis", "sections", "datum_fit", "qif_id"}
+_TOL_KEYS = {"feature", "characteristic", "tolerance", "datums", "nominal", "angle", "name", "sections", "qif_id", "qpid",
              "upper", "lower", "fit", "modifier", "angles", "envelope", "to", "material"}
 _PART_KEYS = {"name", "datum_fit", "axis", "sections", "standard"}
-_TOP_KEYS = {"part", "feature", "datums", "tolerance", "region"}
+_TOP_KEYS = {"part", "feature", "datums", "tolerance", "region", "qif"}
+#: the [qif] table of a drawing imported from a QIF model (``gagekit qif import``)
+_QIF_KEYS = {"model", "qpid", "units"}
 
 
 @dataclass(frozen=True)
@@ -139,6 +141,7 @@ class Feature:
     axis: str = "least-squares"
     sections: int = 10
     datum_fit: str = "chebyshev"
+    qif_id: str = ""  # the QIF feature nominal this feature came from (gagekit qif import)
 
     def to_dict(self) -> dict[str, Any]:
         d: dict[str, Any] = {"name": self.name, "shape": self.shape, "region": self.region.to_dict()}
@@ -174,6 +177,8 @@ class Tolerance:
     name: str = ""
     sections: Optional[int] = None
     index: int = 0
+    qif_id: str = ""  # the QIF characteristic nominal this callout came from (gagekit qif import)
+    qpid: str = ""  # the QPId of the QIF model document
     # sizes, distances, angles (ISO 14405): nominal size and limit deviations (mm; degrees for angles)
     size_nominal: Optional[float] = None
     upper: Optional[float] = None
@@ -209,7 +214,8 @@ class PartSpec:
     datums: dict[str, DatumRef]
     tolerances: tuple[Tolerance, ...]
     source: str = "part"
-    standard: str = "iso"
+    qif: Optional[dict] = None  # [qif]: model, qpid, units of an imported QIF model
+    standard: str = "iso"  # [part] standard: "iso" or "asme" (ASME Rule #1 on sizes)
 
     def moved(self, rotation: Any, translation: Any) -> "PartSpec":
         """The same drawing for the part moved by the rigid motion p -> R p + t: regions,
@@ -227,9 +233,9 @@ class PartSpec:
                 None if f.outward is None else tuple(R @ np.array(f.outward)),
                 f.kind,
                 None if f.direction is None else tuple(R @ np.array(f.direction)),
-                f.axis, f.sections, f.datum_fit,
+                f.axis, f.sections, f.datum_fit, f.qif_id,
             )
-        return PartSpec(self.name, feats, self.datums, self.tolerances, self.source, self.standard)
+        return PartSpec(self.name, feats, self.datums, self.tolerances, self.source, self.qif, self.standard)
 
 
 # -- parsing ---------------------------------------------------------------------------
@@ -255,9 +261,16 @@ def _number(v: Any, where: str, key: str, positive: bool = False) -> float:
     return float(v)
 
 
+#: The most sections a median line, run-out or banded measurement may take: each section
+#: needs points of its own, and a larger count only loops over empty slices.
+MAX_SECTIONS = 10_000
+
+
 def _sections(v: Any, where: str) -> int:
     if isinstance(v, bool) or not isinstance(v, int) or v < 1:
         raise ConfigError(f"{where}: 'sections' must be a positive integer, got {v!r}")
+    if v > MAX_SECTIONS:
+        raise ConfigError(f"{where}: 'sections' = {v} is more than {MAX_SECTIONS} (each section needs points of its own)")
     return int(v)
 
 
@@ -352,7 +365,8 @@ def part_spec_from_dict(doc: Mapping[str, Any], source: str = "part") -> PartSpe
         axis = _choice(t.get("axis", daxis), AXIS_METHODS, where, "axis")
         sections = _sections(t.get("sections", dsec), where)
         fit = _choice(t.get("datum_fit", dfit), DATUM_FITS, where, "datum_fit")
-        features[name] = Feature(name, shape, region, outward, kind, direction, axis, sections, fit)
+        features[name] = Feature(name, shape, region, outward, kind, direction, axis, sections, fit,
+                                 _qif_ref(t.get("qif_id", ""), where, "qif_id"))
 
     raw_datums = doc.get("datums", {})
     if not isinstance(raw_datums, Mapping):
@@ -427,7 +441,8 @@ def part_spec_from_dict(doc: Mapping[str, Any], source: str = "part") -> PartSpe
                 raise ConfigError(f"{where}: 'datums' names '{letter}', the toleranced feature itself")
         _check_datums(char, raw_d, datums, features, where)
         if char in SIZES:
-            tols.append(_size_callout(t, k, fname, char, features, tuple(raw_d), dmat, standard, where))
+            ids = {key: _qif_ref(t.get(key, ""), where, key) for key in ("qif_id", "qpid")}
+            tols.append(replace(_size_callout(t, k, fname, char, features, tuple(raw_d), dmat, standard, where), **ids))
             continue
         material = None
         if "material" in t:
@@ -467,9 +482,10 @@ def part_spec_from_dict(doc: Mapping[str, Any], source: str = "part") -> PartSpe
         if char in ("position", "profile") and shape in ("plane", "cylinder", "cone") and ndir is None:
             raise ConfigError(f"{where}: 'nominal' needs a 'direction' (the basic {'normal' if shape == 'plane' else 'axis'} in the datum frame)")
         sections = _sections(t["sections"], where) if "sections" in t else None
+        ids = {key: _qif_ref(t.get(key, ""), where, key) for key in ("qif_id", "qpid")}
         tols.append(Tolerance(fname, char, tol, tuple(raw_d), npoint, ndir, angle, str(t.get("name", "")), sections, k,
-                              material=material, datum_material=dmat))
-    return PartSpec(pname, features, datums, tuple(tols), source, standard)
+                              material=material, datum_material=dmat, **ids))
+    return PartSpec(pname, features, datums, tuple(tols), source, _qif_table(doc.get("qif"), source), standard)
 
 
 def _datum_modifiers(raw: list, datums: Mapping[str, DatumRef], features: Mapping[str, Feature],
@@ -568,6 +584,21 @@ def _size_callout(t: Mapping, k: int, fname: str, char: str, features: Mapping[s
     return Tolerance(fname, char, upper - lower, (), None, None, None, str(t.get("name", "")), sections, k,
                      size_nominal=nominal, upper=upper, lower=lower, fit=fit, modifier=modifier, angles=angles,
                      envelope=envelope, to=to, datum_material=dmat)
+
+
+def _qif_ref(v: Any, where: str, key: str) -> str:
+    if isinstance(v, bool) or not isinstance(v, (str, int)):
+        raise ConfigError(f"{where}: '{key}' must be a string (a QIF id or QPId), got {v!r}")
+    return str(v)
+
+
+def _qif_table(t: Any, source: str) -> Optional[dict]:
+    if t is None:
+        return None
+    if not isinstance(t, Mapping):
+        raise ConfigError(f"{source}: [qif] must be a table {{ model, qpid, units }}")
+    _unknown(t, _QIF_KEYS, f"{source}: [qif]")
+    return {k: _qif_ref(v, f"{source}: [qif]", k) for k, v in t.items()}
 
 
 def _check_datums(char: str, letters: list, datums: Mapping[str, DatumRef], features: Mapping[str, Feature], where: str) -> None:

@@ -213,7 +213,12 @@ def evaluate(tol: Tolerance, fd: FeatureData, system: DatumSystem) -> Measuremen
 
         return {"size": sizes.evaluate_size, "distance": sizes.evaluate_distance, "angle": sizes.evaluate_angle}[char](tol, fd, system)
     fn = _DISPATCH[char]
-    return fn(tol, fd, system)
+    m = fn(tol, fd, system)
+    if tol.material is not None or any(tol.datum_material):
+        from .material import apply_material
+
+        m = apply_material(tol, fd, system, m)
+    return m
 
 
 def _flatness(tol, fd, system):

@@ -128,8 +128,10 @@ def inspection_rows(result: Mapping[str, Any]) -> list[dict]:
         while name in seen:  # the same callout twice: numbered
             name, k = f"{base} #{k}", k + 1
         seen.add(name)
-        rows.append({"tolerance": name, "characteristic": t["characteristic"], "value": t["measured"], "lower": None,
-                     "upper": t["tolerance"], "conforming": bool(t["pass"]), "feature": t.get("feature"),
+        # sizes, distances, angles carry their limits; a material condition its zone with the bonus
+        upper = t.get("upper_limit", t.get("tolerance_zone", t["tolerance"]))
+        rows.append({"tolerance": name, "characteristic": t["characteristic"], "value": t["measured"],
+                     "lower": t.get("lower_limit"), "upper": upper, "conforming": bool(t["pass"]), "feature": t.get("feature"),
                      "datums": "|".join(datums), "zone": t.get("zone"), "n_points": t.get("n_points")})
     return rows
 

@@ -41,6 +41,10 @@ use spade::{DelaunayTriangulation, FloatTriangulation, HasPosition, Point2, Tria
 /// spacings of its section lie across a gap of the scan: no size there.
 pub const GAP_FACTOR: f64 = 10.0;
 
+/// Profile points whose angles differ by at most this (rad) are one direction (the same
+/// angle of several rings in a slice, up to rounding).
+pub const MERGE_RAD: f64 = 1e-9;
+
 /// How the points are cut into sections.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Sections {
@@ -68,13 +72,14 @@ fn profile_size(mut prof: Vec<(f64, f64)>, angles: usize) -> Vec<(f64, f64)> {
         return Vec::new();
     }
     prof.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
-    // merge points of (exactly) equal angle: their mean radius
+    // merge points of one direction (angles within MERGE_RAD: the same angle of
+    // several rings of a slice, up to rounding): their mean radius
     let mut merged: Vec<(f64, f64)> = Vec::with_capacity(prof.len());
     let mut k = 0;
     while k < prof.len() {
         let mut j = k + 1;
         let mut s = prof[k].1;
-        while j < prof.len() && prof[j].0 == prof[k].0 {
+        while j < prof.len() && prof[j].0 - prof[k].0 <= MERGE_RAD {
             s += prof[j].1;
             j += 1;
         }
