@@ -152,3 +152,30 @@ def test_files_and_cli(machine, tmp_path):
     assert "EXOB" in json.loads(r.stdout)["instruments"]["sphere"]["location_errors_seen"]
     r = cli("check", mf, "--observations", "laser")
     assert r.returncode == 2 and r.stderr.startswith("gagekit: error: ") and len(r.stderr.splitlines()) == 1
+
+
+def test_kinematics_export(machine, tmp_path):
+    from gagekit.machine.export_kinematics import export_kinematics
+
+    c = simulate_sphere(machine, "B", POSITIONS, SPHERE, {"W": -500.0}, LOCATION)
+    cal = identify_mixed(machine, [_sphere_obs(c)]).calibration
+    res = export_kinematics(machine, cal, tmp_path / "kin.txt", at={"W": -500.0}, stamp="test")
+    (b,) = res.axes
+    # the X and Z joints move the tool along +x and +z: the axis line moves by EXOB, EZOB
+    assert b.point["X"] - b.nominal_point["X"] == pytest.approx(LOCATION["EXOB"], abs=1e-8)
+    assert b.point["Z"] - b.nominal_point["Z"] == pytest.approx(LOCATION["EZOB"], abs=1e-8)
+    assert b.direction[0] == pytest.approx(-LOCATION["ECOB"], abs=1e-10) and b.direction[2] == pytest.approx(LOCATION["EAOB"], abs=1e-10)
+    hal = (tmp_path / "kin_linuxcnc.hal").read_text()
+    setp = {ln.split()[1]: float(ln.split()[2]) for ln in hal.splitlines() if ln.startswith("setp")}
+    assert setp["xyzbc-trt-kins.x-offset"] == pytest.approx(b.point["X"], abs=1e-6)
+    assert setp["xyzbc-trt-kins.z-offset"] == pytest.approx(b.point["Z"], abs=1e-6)
+    tab = (tmp_path / "kin_heidenhain.tab").read_text().splitlines()
+    trans = [ln.split() for ln in tab if ln.split()[:2] == ["0", "Trans"]][0]
+    assert float(trans[2]) == pytest.approx(b.point["X"], abs=1e-6) and float(trans[7]) == pytest.approx(np.degrees(LOCATION["ECOB"]), abs=1e-7)
+    sie = (tmp_path / "kin_siemens.txt").read_text()
+    assert "$MC_TRAFO5_PART_OFFSET_1[0]=" in sie and "$MC_TRAFO5_AXIS1_1[1]=" in sie
+    cli = lambda *a: subprocess.run([sys.executable, "-m", "gagekit", "machine", *map(str, a)], capture_output=True, text=True)  # noqa: E731
+    cal.save(tmp_path / "cal.json")
+    r = cli("export", example_machine_path(), tmp_path / "cal.json", "--format", "kinematics", "--out", tmp_path / "k.txt", "--at", "W=-500", "--json")
+    assert r.returncode == 0, r.stderr
+    assert len(json.loads(r.stdout)["files"]) == 3

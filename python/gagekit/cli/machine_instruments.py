@@ -142,3 +142,19 @@ def identify_mixed_cmd(m, observations, unknowns, out, test, residuals, as_json)
         return "\n".join(lines)
 
     emit(res, as_json, human)
+
+
+def export_kinematics_cmd(m, cal, out, at, stamp, as_json) -> None:
+    """`machine export --format kinematics`: three controller files, all or nothing."""
+    from ..machine.export_kinematics import export_kinematics
+
+    res = export_kinematics(m, cal, out, at=at, stamp=stamp)
+
+    def human(r) -> str:
+        lines = [f"wrote {', '.join(r.files)}"]
+        for a in r.axes:
+            moved = ", ".join(f"{k} {a.point[k]:.4f} (nominal {a.nominal_point[k]:.4f})" for k in a.point)
+            lines.append(f"{a.joint} axis line: {moved}; direction {', '.join(f'{v:.7f}' for v in a.direction)}")
+        return "\n".join(lines)
+
+    emit(res, as_json, human)
