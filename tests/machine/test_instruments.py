@@ -179,3 +179,35 @@ def test_kinematics_export(machine, tmp_path):
     r = cli("export", example_machine_path(), tmp_path / "cal.json", "--format", "kinematics", "--out", tmp_path / "k.txt", "--at", "W=-500", "--json")
     assert r.returncode == 0, r.stderr
     assert len(json.loads(r.stdout)["files"]) == 3
+
+
+def test_ballbar_run_as_an_observation(machine, tmp_path):
+    """A ballbar file with plane, radius and centre joints joins the identification: alone it
+    sees little at one place (reported honestly), with tracker data it sharpens the XY
+    squareness and the X, Y scale groups; backlash and servo drop out (both directions averaged)."""
+    from gagekit.machine.simulate_instruments import simulate_ballbar
+
+    truth = Truth.random(machine, seed=4)
+    at = np.array([0.0, 0.0, 1500.0, 1400.0, -500.0])
+    run = simulate_ballbar(machine, truth.parameters, "XY", 150.0, at, points=360, backlash={"X": 0.004}, lag={"Y": 0.001},
+                           noise_um=0.1, seed=4)
+    lines = ["# kind = ballbar", "# plane = XY", "# radius = 150", "# at = B=0,X=0,Z=1500,Y=1400,W=-500", "# sigma_um = 0.1",
+             "angle_deg,deviation_um,direction"]
+    lines += [f"{float(a)!r},{float(d)!r},{'ccw' if s > 0 else 'cw'}" for a, d, s in zip(run.angles_deg, run.deviations_um, run.directions)]
+    f = tmp_path / "bb.csv"
+    f.write_text("\n".join(lines) + "\n")
+    bb = read_instrument(f, machine)
+    assert bb.kind == "ballbar" and len(bb) == 361  # 360 averaged angles and the centre
+    alone = identify_mixed(machine, [bb])
+    assert alone.unknowns == "groups" and alone.instruments[0]["residual_rms_um"] < 0.5  # backlash, servo gone
+    tracker = simulate(machine, truth, machine.sample_commands(120, seed=5), seed=6)
+    t_obs = InstrumentObservations("tracker", tracker.commands, tracker.measured, sigma=0.0089)
+    t_only = identify_mixed(machine, [t_obs])
+    mixed = identify_mixed(machine, [t_obs, bb])
+    sq = next(k for k in t_only.groups if k.startswith("T2.alpha"))
+    assert mixed.groups[sq]["std"] < 0.9 * t_only.groups[sq]["std"]  # 13.2 -> 11.1 urad: one circle, one place
+    true = truth.group_values(machine)[sq]
+    assert abs(mixed.groups[sq]["value"] - true) < 3 * mixed.groups[sq]["std"]
+    (tmp_path / "bad.csv").write_text("# kind = ballbar\n# plane = XY\nangle_deg,deviation_um,direction\n0,1,cw\n")
+    with pytest.raises(FileFormatError):
+        read_instrument(tmp_path / "bad.csv", machine)
