@@ -211,3 +211,28 @@ def test_ballbar_run_as_an_observation(machine, tmp_path):
     (tmp_path / "bad.csv").write_text("# kind = ballbar\n# plane = XY\nangle_deg,deviation_um,direction\n0,1,cw\n")
     with pytest.raises(FileFormatError):
         read_instrument(tmp_path / "bad.csv", machine)
+
+
+def test_design_for_instruments(machine, tmp_path):
+    from gagekit.machine.instrument_design import design_instrument
+
+    d = design_instrument(machine, "sphere", 12, at={"W": -500.0})
+    assert len(d["positions"]) == 12 and set(d["unknowns"]) == {"sphere x", "sphere y", "sphere z", "EXOB", "EZOB", "EAOB", "ECOB"}
+    # the I-optimal positions identify the location errors at least as well as 12 even ones
+    from gagekit.machine.instruments import identify_mixed as ident
+
+    def std(pos):
+        c = simulate_sphere(machine, "B", np.asarray(pos), SPHERE, {"W": -500.0}, {})
+        loc = ident(machine, [_sphere_obs(c)]).location
+        return sum(loc[k]["std"] ** 2 * (1e6 if k[1] in "XYZ" else 1e12) for k in LOCATION)
+
+    d2 = design_instrument(machine, "sphere", 12, sphere=SPHERE, at={"W": -500.0})
+    assert std(d2["positions"]) <= std(POSITIONS) * 1.05
+    cli = lambda *a: subprocess.run([sys.executable, "-m", "gagekit", "machine", *map(str, a)], capture_output=True, text=True)  # noqa: E731
+    r = cli("design", example_machine_path(), "--instrument", "sphere", "--points", 8, "--at", "W=-500", "--out", tmp_path / "p.csv", "--json")
+    assert r.returncode == 0, r.stderr
+    assert read_instrument(tmp_path / "p.csv", machine).kind == "sphere"
+    r = cli("design", example_machine_path(), "--instrument", "ballbar", "--points", 5, "--at", "W=-500", "--out", tmp_path / "b.csv")
+    assert r.returncode == 0 and "ballbar plan" in r.stdout, r.stderr
+    r = cli("design", example_machine_path(), "--instrument", "laser", "--out", tmp_path / "x.csv")
+    assert r.returncode == 2 and len(r.stderr.splitlines()) == 1
