@@ -9,9 +9,12 @@
 //! - [`ridge`]: leave-one-cycle-out errors of the temperature ridge model of thermal tracking
 //!   (Sec. 4.3.4), every strength from one eigendecomposition per training set.
 //!
+//! - [`ballbar`]: circular tests with a ballbar (ISO 230-4:2022): G, F, H and the diagnostics.
+//!
 //! Linear algebra uses nalgebra: the matrices here are at most a few thousand rows by ~60
 //! columns, where nalgebra's SVD takes milliseconds and compiles far faster than faer.
 
+pub mod ballbar;
 pub mod chain;
 pub mod ident;
 pub mod ridge;
