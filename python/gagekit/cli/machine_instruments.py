@@ -142,3 +142,59 @@ def identify_mixed_cmd(m, observations, unknowns, out, test, residuals, as_json)
         return "\n".join(lines)
 
     emit(res, as_json, human)
+
+
+def export_kinematics_cmd(m, cal, out, at, stamp, as_json) -> None:
+    """`machine export --format kinematics`: three controller files, all or nothing."""
+    from ..machine.export_kinematics import export_kinematics
+
+    res = export_kinematics(m, cal, out, at=at, stamp=stamp)
+
+    def human(r) -> str:
+        lines = [f"wrote {', '.join(r.files)}"]
+        for a in r.axes:
+            moved = ", ".join(f"{k} {a.point[k]:.4f} (nominal {a.nominal_point[k]:.4f})" for k in a.point)
+            lines.append(f"{a.joint} axis line: {moved}; direction {', '.join(f'{v:.7f}' for v in a.direction)}")
+        return "\n".join(lines)
+
+    emit(res, as_json, human)
+
+
+def design_instrument_cmd(m, instrument, points, criterion, sphere, at, radius, seed, out, as_json) -> None:
+    """`machine design --instrument sphere|rtest|ballbar`: an optimal probing or circle plan."""
+    import numpy as np
+
+    from .._files import write_text
+    from ..errors import InvalidInputError
+    from ..machine.instrument_design import design_instrument
+    from .machine_export import _number, parse_assignments
+
+    fixed = {k: _number(v, f"--at {k}") for k, v in parse_assignments(at, "--at").items()}
+    s = None
+    if sphere is not None:
+        parts = sphere.split(",")
+        if len(parts) != 3:
+            raise InvalidInputError(f"--sphere: expected x,y,z in mm, got {sphere!r}")
+        s = np.array([_number(v, "--sphere") for v in parts])
+    d = design_instrument(m, instrument.lower(), points, criterion, sphere=s, at=fixed, radius=radius, seed=seed)
+    if "commands" in d:
+        rows = [",".join(d["joint_names"])] + [",".join(repr(float(v)) for v in row) for row in d["commands"]]
+        lines = [f"# kind = {d['instrument']}", f"# {d['criterion']}-optimal probing positions of {d['joint']}, sphere at {d['sphere']} (table frame, mm)"]
+        write_text(out, "\n".join(lines + rows) + "\n")
+        result = {k: v for k, v in d.items() if k not in ("commands", "joint_names")}
+    else:
+        head = "plane," + ",".join(m.joint_names)
+        rows = [f"{c['plane']}," + ",".join(repr(c["centre"][j]) for j in m.joint_names) for c in d["circles"]]
+        write_text(out, f"# {d['criterion']}-optimal ballbar circles, radius {d['radius']} mm\n" + "\n".join([head] + rows) + "\n")
+        result = dict(d)
+    result["out"] = str(out)
+
+    def human(r) -> str:
+        if "positions" in r:
+            return (f"{r['criterion']}-optimal {r['instrument']} plan: {r['joint']} at {', '.join(f'{v:g}' for v in r['positions'])} "
+                    f"(unknowns {', '.join(r['unknowns'])}; trace {r['trace']:.4g}, condition {r['condition_number']:.3g}) -> {r['out']}")
+        circles = "; ".join(f"{c['plane']} about " + ", ".join(f"{k} {v:.1f}" for k, v in c["centre"].items()) for c in r["circles"])
+        return (f"{r['criterion']}-optimal ballbar plan ({r['combinations_seen']} of {r['groups']} group combinations seen): "
+                f"{circles} -> {r['out']}")
+
+    emit(result, as_json, human)
