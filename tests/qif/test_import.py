@@ -82,13 +82,20 @@ def test_ctc05_inch_model_in_mm():
 
 
 def test_material_modifiers_written_for_issue_25(tmp_path):
-    """CTC 3's MMC positions apply to patterns (listed); the single-hole position 2055 made
-    MMC is written with issue 25's key, as a comment while this gagekit lacks it."""
+    """CTC 3's MMC pattern positions 2068, 2077 (datums B(M), C(M)) and the single-hole
+    position 2055 made MMC are written with issue 25's keys, as comments while this
+    gagekit lacks them."""
     import gzip
 
-    s = part_from_model(read_model(CTC03)).summary
-    un = {e["qif_id"]: e for e in s["unsupported"]}
-    assert "2 features" in un["2068"]["reason"] and "4 features" in un["2077"]["reason"]
+    from gagekit.inspect.spec import _TOL_KEYS
+
+    draft = part_from_model(read_model(CTC03))
+    if "material" not in _TOL_KEYS:
+        un = {e["qif_id"]: e for e in draft.summary["unsupported"]}
+        for q in ("2068", "2077"):
+            assert un[q]["toml"] == "comment" and "material condition MMC" in un[q]["reason"]
+        assert draft.toml.count('# material = "MMC"') >= 6  # 2 + 4 pattern members
+        assert '# datums = ["A", "B(M)", "C(M)"]' in draft.toml
     text = gzip.decompress(CTC03.read_bytes()).decode()
     head, tail = text.split('<PositionCharacteristicDefinition id="2054">', 1)
     tail = tail.replace("<MaterialCondition>NONE</MaterialCondition>", "<MaterialCondition>MAXIMUM</MaterialCondition>", 1)
@@ -96,8 +103,6 @@ def test_material_modifiers_written_for_issue_25(tmp_path):
     f.write_text(head + '<PositionCharacteristicDefinition id="2054">' + tail)
     draft = part_from_model(read_model(f))
     entry = next(e for e in draft.summary["evaluated"] + draft.summary["unsupported"] if e["qif_id"] == "2055")
-    from gagekit.inspect.spec import _TOL_KEYS
-
     if "material" in _TOL_KEYS:
         assert entry in draft.summary["evaluated"]
     else:
