@@ -9,6 +9,7 @@ from typing import Optional
 import typer
 
 from ._common import CHUNK_OPTION, JSON_OPTION, MEMORY_OPTION, UNITS_OPTION, emit, open_scan_cli
+from .qif import INSTRUMENT_OPTION, QIF_RESULTS_OPTION, check_output
 
 app = typer.Typer(help="Virtual gages: can a scanned casting be machined to print? (Ch. 5)", no_args_is_help=True)
 
@@ -24,6 +25,8 @@ def check(
     units: Optional[str] = UNITS_OPTION,
     memory: Optional[str] = MEMORY_OPTION,
     chunk: Optional[int] = CHUNK_OPTION,
+    qif_results: Optional[Path] = QIF_RESULTS_OPTION,
+    instrument: str = INSTRUMENT_OPTION,
 ) -> None:
     """Find the correction T* of the machining frame (Eq. 5.11) and every gage's allowance.
 
@@ -40,6 +43,7 @@ def check(
         output_dir(report)
     if out_cloud is not None:
         output_file(out_cloud)
+    check_output(qif_results)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         spec = GageSpec.load(gages)
@@ -59,4 +63,10 @@ def check(
         write_report(result, report)
     if out_cloud is not None:
         write_points(out_cloud, corrected_cloud(pts, result))
+    if qif_results is not None:
+        from .._util import check_finite_result, to_jsonable
+        from ..qif.results import write_gage_results
+
+        check_finite_result(result)
+        write_gage_results(qif_results, cloud, to_jsonable(result), instrument)
     emit(result, as_json, human)

@@ -13,6 +13,7 @@ import typer
 from typer.core import TyperGroup
 
 from ._common import CHUNK_OPTION, JSON_OPTION, MEMORY_OPTION, UNITS_OPTION, emit, open_scan_cli, table
+from .qif import INSTRUMENT_OPTION, QIF_RESULTS_OPTION, check_output, write_results
 
 
 class DefaultScanGroup(TyperGroup):
@@ -48,6 +49,8 @@ def inspect(
     report: Optional[Path] = typer.Option(None, "--report", help="Write report.html (callouts, datum frame, 3-D deviation view) and result.json into DIR."),
     memory: Optional[str] = MEMORY_OPTION,
     chunk: Optional[int] = CHUNK_OPTION,
+    qif_results: Optional[Path] = QIF_RESULTS_OPTION,
+    instrument: str = INSTRUMENT_OPTION,
 ) -> None:
     """Evaluate every GD&T callout of PART.toml on the scan (ISO 1101 zones, ISO 5459 datums).
 
@@ -58,6 +61,7 @@ def inspect(
     from ..cloud.stream import CloudStream
     from ..inspect import inspect_stream
 
+    check_output(qif_results)
     spec = load_part_spec(part)
     cloud = open_scan_cli(scan, units, memory, chunk)
     result = inspect_stream(cloud, spec) if isinstance(cloud, CloudStream) else run_inspect(cloud.points, spec)
@@ -65,4 +69,9 @@ def inspect(
         from ..report.inspect import write_report
 
         write_report(result, report)
+    if qif_results is not None:
+        from .._util import check_finite_result, to_jsonable
+
+        check_finite_result(result)
+        write_results(qif_results, [{"scan": str(scan), "result": to_jsonable(result)}], spec, part, instrument)
     emit(result, as_json, human)

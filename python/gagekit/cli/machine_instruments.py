@@ -88,3 +88,57 @@ def register(app: typer.Typer) -> None:
     """Add this module's commands to the ``machine`` sub-application ``app``."""
     for name, fn in COMMANDS:
         app.command(name)(fn)
+
+
+def check_observations(m, kinds_text: str, as_json: bool) -> None:
+    """`machine check --observations KIND[,KIND]`: what each instrument sees."""
+    from ..errors import InvalidInputError
+    from ..machine.instruments import KINDS, instrument_view
+
+    kinds = [k.strip().lower() for k in kinds_text.split(",") if k.strip()]
+    bad = [k for k in kinds if k not in KINDS]
+    if not kinds or bad:
+        raise InvalidInputError(f"--observations: expected {', '.join(KINDS)} or a comma list of them, got {kinds_text!r}")
+    view = instrument_view(m, list(dict.fromkeys(kinds)))
+    result = {"machine": m.name, "instruments": view}
+
+    def human(r) -> str:
+        lines = []
+        for label, v in r["instruments"].items():
+            lines.append(f"{label}: sees {len(v['groups_seen'])} of {len(v['groups_seen']) + len(v['groups_not_seen'])} groups")
+            lines += [f"  not seen: {g}" for g in v["groups_not_seen"]]
+            lines.append(f"  rotary-axis location errors seen: {', '.join(v['location_errors_seen']) or 'none'}"
+                         f"; not seen: {', '.join(v['location_errors_not_seen']) or 'none'}")
+        return "\n".join(lines)
+
+    emit(result, as_json, human)
+
+
+def identify_mixed_cmd(m, observations, unknowns, out, test, residuals, as_json) -> None:
+    """`machine identify` with several files or non-tracker kinds: one joint solve."""
+    from ..errors import InvalidInputError
+    from ..machine.instruments import identify_mixed
+
+    if test is not None or residuals is not None:
+        raise InvalidInputError("--test and --residuals apply to a single tracker file; mixed observations report each instrument's residual RMS")
+    res = identify_mixed(m, observations, unknowns=unknowns)
+    if out is not None:
+        res.calibration.save(out)
+
+    def human(r) -> str:
+        d = r.to_dict()
+        lines = [f"mixed identification ({d['unknowns']}), condition number {d['condition_number']:.1f}"]
+        for i in d["instruments"]:
+            lines.append(f"  {i['kind']:8s} {i['readings']:6d} readings, sigma {i['sigma_um']:.2f} um, residual RMS {i['residual_rms_um']:.2f} um  ({i['source']})")
+        lines.append("rotary-axis location errors (ISO 230-7):")
+        for n, v in d["location_errors"].items():
+            if "value" in v:
+                scale, unit = (1e3, "um") if v["unit"] == "mm" else (1e6, "urad")
+                lines.append(f"  {n}  {scale * v['value']:10.3f} +/- {scale * v['std']:.3f} {unit}")
+            else:
+                lines.append(f"  {n}  not seen")
+        seen = sum(1 for g in d["groups"].values() if "value" in g)
+        lines.append(f"groups seen: {seen} of {len(d['groups'])}" + (f"; calibration written to {out}" if out else ""))
+        return "\n".join(lines)
+
+    emit(res, as_json, human)
