@@ -98,7 +98,10 @@ def whole_read_bytes(path: PathLike) -> int:
     format has a count (PLY, .npy, E57 records, LAS), else its size (text: about one byte
     of file per byte of float64)."""
     p = Path(path)
-    size = p.stat().st_size
+    try:
+        size = p.stat().st_size
+    except OSError:
+        return 0  # the reader words the error (missing, no permission...)
     suffix = p.suffix.lower()
     try:
         if suffix == ".ply":
