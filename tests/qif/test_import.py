@@ -125,3 +125,24 @@ def test_cli_import_json(tmp_path):
     assert doc["qif"]["qpid"] == s["qpid"]
     # the model path is recorded relative to the PART.toml
     assert (out.parent / doc["qif"]["model"]).resolve() == CTC01.resolve()
+
+
+def test_pmi_linear_unit_applies_to_tolerances_not_geometry(tmp_path):
+    """FileUnits may give the PMI a unit of its own (NIST FTC 6: geometry mm, PMI inch): a
+    tolerance without a linearUnit is in the PMI unit, the geometry in the linear unit."""
+    import gzip
+
+    text = gzip.decompress(CTC01.read_bytes()).decode()
+    old = "</LinearUnit>\n      <MassUnit>"
+    assert old in text
+    text = text.replace(old, "</LinearUnit>\n      <PMILinearUnit>\n        <SIUnitName>meter</SIUnitName>\n"
+                        "        <UnitName>inch</UnitName>\n        <UnitConversion>\n          <Factor>0.0254</Factor>\n"
+                        "        </UnitConversion>\n      </PMILinearUnit>\n      <MassUnit>", 1)
+    text = text.replace('<ToleranceValue linearUnit="mm">0.2</ToleranceValue>', "<ToleranceValue>0.2</ToleranceValue>", 1)
+    f = tmp_path / "pmi.qif"
+    f.write_text(text)
+    m = read_model(f)
+    assert m.units.linear == 1.0 and m.units.pmi_linear == 25.4
+    flat = next(c for c in m.characteristics if c.id == "1470")
+    assert abs(flat.tolerance - 0.2 * 25.4) < 1e-12
+    assert m.features["2156"].geometry["point"].tolist() == [-325.0, -175.0, 0.0]  # mm, as the file says

@@ -33,6 +33,7 @@ import copy
 import datetime as _dt
 import hashlib
 import json
+import math
 import uuid
 from pathlib import Path
 from typing import Any, Optional, Sequence
@@ -167,8 +168,10 @@ class _Plan:
         self.feature_items: dict = {}  # feature name -> item id
         self.drfs: dict = {}         # datums tuple -> DRF id
         self.device = ""
-        self.scale = 1.0             # mm per file unit
+        self.scale = 1.0             # mm per file unit (geometry)
+        self.pmi_scale = 1.0         # mm per file PMI linear unit (characteristic values)
         self.angle_scale = 1.0       # degrees per file PMI angle unit
+        self.geom_angle_scale = 1.0  # degrees per file geometric angle unit
 
 
 def _self_contained(root: Any, spec: Any, ids: _Ids, device: str, zones: dict) -> _Plan:
@@ -241,7 +244,9 @@ def _from_model(root: Any, spec: Any, model: Any, ids: _Ids, device: str) -> _Pl
     plan = _Plan()
     plan.device = device
     plan.scale = model.units.linear
+    plan.pmi_scale = model.units.pmi_linear or model.units.linear
     plan.angle_scale = model.units.pmi_angle
+    plan.geom_angle_scale = model.units.angle
     by_id = {el.get("id"): el for el in root.iter() if isinstance(el.tag, str) and el.get("id") is not None}
     # the model's frames: the datums tuple of each DRF
     for did, fr in model.drfs.items():
@@ -336,9 +341,10 @@ def _measured_feature(parent: Any, name: str, fd: dict, plan: _Plan, ids: _Ids) 
         X.sub(ax, "Direction", dr("axis_direction") or dr("direction"))
         if shape == "cylinder" and ls.get("radius") is not None:
             X.sub(el, "Diameter", _num(2 * ls["radius"] * s))
-        if shape == "cone":
-            X.sub(el, "HalfAngle", _num(ls.get("half_angle_deg", 0.0)))
-            X.sub(el, "FullAngle", _num(2 * ls.get("half_angle_deg", 0.0)))
+        if shape == "cone":  # gagekit: full apex angle in rad; QIF: the file's angular unit
+            full = math.degrees(float(ls.get("apex_angle", 0.0))) / plan.geom_angle_scale
+            X.sub(el, "HalfAngle", _num(full / 2))
+            X.sub(el, "FullAngle", _num(full))
     elif shape == "circle":
         X.sub(el, "Location", pt("center"))
         if ls.get("normal") is not None:
@@ -417,7 +423,7 @@ def _results(results_el: Any, runs: Sequence[dict], spec: Any, plan: _Plan, ids:
                 _id_list(el, "FeatureMeasurementIds", [fmeas[t.feature]])
             X.sub(el, "MeasurementDeviceIds", n=1).append(_new("Id", plan.device))
             angular = t.characteristic == "angle"
-            value = float(r["measured"]) / (plan.angle_scale if angular else plan.scale)
+            value = float(r["measured"]) / (plan.angle_scale if angular else plan.pmi_scale)
             X.sub(el, "Value", _num(value))
         if len(at):
             at.set("n", str(len(at)))

@@ -120,9 +120,9 @@ class _Importer:
             g = f.geometry
             if f.kind == "Plane":
                 t["outward"] = [float(x) for x in g["normal"]]
-            if f.kind in ("Cylinder", "Circle", "Sphere") and f.internal is not None:
+            if f.kind in ("Cylinder", "Cone", "Circle", "Sphere") and f.internal is not None:
                 t["kind"] = "hole" if f.internal else "shaft"
-            if f.kind == "Cylinder" or f.kind == "Line":
+            if f.kind in ("Cylinder", "Cone", "Line"):
                 t["direction"] = [float(x) for x in g["direction"]]
             if f.kind == "Circle":
                 t["direction"] = [float(x) for x in g["normal"]]
@@ -144,7 +144,7 @@ class _Importer:
                 self.datum_problem[d.label] = f"datum {d.label} is defined on {len(d.feature_ids)} features (a common datum)"
                 continue
             f = self.m.features[d.feature_ids[0]]
-            if f.kind not in ("Plane", "Cylinder", "Circle", "Sphere"):
+            if f.kind not in ("Plane", "Cylinder", "Cone", "Circle", "Sphere"):
                 self.datum_problem[d.label] = f"datum {d.label} is a {f.kind} feature, which gagekit cannot simulate as a datum"
                 continue
             if f.kind != "Plane" and f.internal is None:
@@ -214,7 +214,7 @@ class _Importer:
             self.listed.append((c, "the definition gives no positive ToleranceValue"))
             return
         f = self.m.features[c.feature_ids[0]]
-        axial = f.kind in ("Cylinder", "Circle")
+        axial = f.kind in ("Cylinder", "Cone", "Circle")
         if c.zone in ("NonDiametricalZone", "PlanarZone") and axial and char == "position":
             self.listed.append((c, f"a {c.zone} (two parallel planes) about an axis; gagekit's position zone of an axis is a cylinder"))
             return
@@ -353,7 +353,7 @@ class _Importer:
                 continue
             if f.kind == "Plane":
                 p, d = g["location"], g["normal"]
-            elif f.kind == "Cylinder":
+            elif f.kind in ("Cylinder", "Cone"):
                 p, d = g["point"], g["direction"]
             elif f.kind == "Circle":
                 p, d = g["center"], g["normal"]
