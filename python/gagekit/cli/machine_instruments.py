@@ -30,6 +30,8 @@ def ballbar_cmd(
         None, "--pitch", help="Pitch of the cyclic error, mm (default: the pitch that explains most).", callback=_positive
     ),
     report: Optional[Path] = typer.Option(None, "--report", help="Directory for report.html with the polar plot."),
+    machine_file: Optional[Path] = typer.Option(None, "--machine", help="Machine file: name the groups behind squareness and scale mismatch (with --at)."),
+    at: Optional[str] = typer.Option(None, "--at", help="With --machine: the circle centre's joint positions, e.g. B=0,X=0,Z=1500,Y=1400,W=-500."),
     as_json: bool = JSON_OPTION,
 ) -> None:
     """Circular test with a ballbar, ISO 230-4:2022: G, F, H and the diagnostics with their share of G."""
@@ -39,6 +41,17 @@ def ballbar_cmd(
     if report is not None:
         output_dir(report)
     res = analyse_ballbar(read_ballbar(run), plane, radius, feed=feed, pitch=pitch)
+    groups = None
+    if machine_file is not None or at is not None:
+        from ..errors import InvalidInputError
+        from ..machine import load_machine
+        from ..machine.ballbar import group_sensitivities
+        from .machine_export import _number, parse_assignments
+
+        if machine_file is None or at is None:
+            raise InvalidInputError("--machine and --at go together (the circle centre's joint positions)")
+        fixed = {k: _number(v, f"--at {k}") for k, v in parse_assignments(at, "--at").items()}
+        groups = group_sensitivities(load_machine(machine_file), plane, radius, fixed)
     if report is not None:
         from ..report import Report
         from ..report.ballbar import add_ballbar
@@ -48,9 +61,15 @@ def ballbar_cmd(
         with atomic_dir(report) as tmp:
             rep.write(tmp)
 
+    if groups is not None:
+        result = {**res.to_dict(), "groups_per_unit": groups}
+    else:
+        result = res
+
     def human(r) -> str:
-        d = r.to_dict()
+        d = r if isinstance(r, dict) else r.to_dict()
         g = d["circular_deviation_um"]
+        axes = d["axes"]
         lines = [
             f"ballbar, plane {d['plane']}, radius {d['radius_mm']:g} mm, readings {d['n_readings']} (ISO 230-4:2022, um)",
             "G " + ", ".join(f"{k} {v:.3f}" for k, v in g.items())
@@ -68,16 +87,20 @@ def ballbar_cmd(
             lines.append(f"servo mismatch {s['value']:.3f} ms at {s['feed_mm_per_min']:g} mm/min ({100 * s['fraction_of_G']:.0f} % of G; {s['sign']})")
         if "cyclic_error_um" in d:
             c = d["cyclic_error_um"]
-            ax1, ax2 = r.axes
+            ax1, ax2 = axes
             lines.append(
                 f"cyclic error, pitch {c['pitch_mm']:.3f} mm ({c['pitch_source']}): {ax1} {c[ax1]['amplitude']:.3f}, "
                 f"{ax2} {c[ax2]['amplitude']:.3f} um"
             )
         c = d["centre_offset_um"]["both"]
         lines.append(f"centre offset x {c['x']:.3f}, y {c['y']:.3f} um; residual RMS {d['residual_rms_um']:.3f} um")
+        for key, label in (("squareness_um_per_m", "squareness"), ("scale_mismatch_um_per_m", "scale mismatch")):
+            if "groups_per_unit" in d:
+                terms = ", ".join(f"{v:+.4g} x ({k})" for k, v in d["groups_per_unit"][key].items())
+                lines.append(f"{label} (um/m) = {terms}")
         return "\n".join(lines)
 
-    emit(res, as_json, human)
+    emit(result, as_json, human)
 
 
 #: (command name, function) of this module, in help order.

@@ -246,13 +246,27 @@ def extract(points: np.ndarray, features: dict[str, Feature], source: str = "par
 
     names = list(features)
     idx = classify(points, [features[n].region for n in names])
+    return _feature_data(features, [(ids, points[ids]) for ids in idx], source)
+
+
+def extract_stream(chunks, features: dict[str, Feature], source: str = "part") -> tuple[int, dict[str, FeatureData]]:
+    """:func:`extract` of a streamed scan (chunks in file order, :mod:`gagekit.cloud.streamed`):
+    (number of points, the features), the same points and point numbers as a whole read."""
+    from ..cloud.streamed import cut_stream
+
+    names = list(features)
+    p = cut_stream(chunks, [features[n].region for n in names], ["all"] * len(names))
+    return p.count, _feature_data(features, [(r.index_array(), r.point_array()) for r in p.regions], source)
+
+
+def _feature_data(features: dict[str, Feature], cut: list, source: str) -> dict[str, FeatureData]:
     out: dict[str, FeatureData] = {}
-    for name, ids in zip(names, idx):
+    for name, (ids, pts) in zip(list(features), cut):
         f = features[name]
         need = MIN_POINTS[f.shape]
         if len(ids) < need:
             raise DegenerateGeometryError(
                 f"{source}: [[feature]] '{name}': 'region' holds {len(ids)} point(s) of the scan; a {f.shape} needs at "
                 f"least {need} (check the region's center, size and rotation, and the scan's units)")
-        out[name] = FeatureData(f, ids, np.ascontiguousarray(points[ids]))
+        out[name] = FeatureData(f, ids, np.ascontiguousarray(pts))
     return out

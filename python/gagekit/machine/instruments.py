@@ -153,7 +153,7 @@ def read_instrument(path: Union[str, Path], machine: Machine) -> InstrumentObser
 def _read_ballbar_kind(p: Path, machine: Machine, meta: dict, sigma: float) -> InstrumentObservations:
     """A ballbar run as an observation: commands on the circle, mean deviation of both
     directions per angle (mm) in ``readings`` (n, 1), the circle centre's commands last."""
-    from .ballbar import PLANES, read_ballbar
+    from .ballbar import PLANES, circle_commands, read_ballbar
 
     for key in ("plane", "radius", "at"):
         if key not in meta:
@@ -179,21 +179,15 @@ def _read_ballbar_kind(p: Path, machine: Machine, meta: dict, sigma: float) -> I
     missing = [j for j in machine.joint_names if j not in at]
     if missing:
         raise FileFormatError(f"{p}: at must give every joint of the machine (missing {', '.join(missing)})")
-    idx = []
     for name in PLANES[plane]:
         if name not in machine.joint_names or machine.joints[machine.joint_names.index(name)].kind != "prismatic":
             raise InvalidInputError(f"{p}: plane {plane} needs prismatic joints named {' and '.join(PLANES[plane])}")
-        idx.append(machine.joint_names.index(name))
     run = read_ballbar(p)
     ang = np.round(np.mod(run.angles_deg, 360.0), 9)
     uniq = np.unique(ang)
     dev = np.array([run.deviations_um[ang == a].mean() for a in uniq]) * 1e-3  # both directions averaged
     centre = np.array([at[j] for j in machine.joint_names])
-    cmds = np.repeat(centre[None, :], len(uniq), axis=0)
-    t = np.radians(uniq)
-    cmds[:, idx[0]] += radius * np.cos(t)
-    cmds[:, idx[1]] += radius * np.sin(t)
-    cmds = np.vstack([cmds, centre[None, :]])
+    cmds = circle_commands(machine, plane, radius, centre, np.radians(uniq))
     return InstrumentObservations("ballbar", machine.commands_array(cmds, str(p)), np.append(dev, 0.0)[:, None],
                                   None, np.array([[radius]]), sigma, str(p))
 
@@ -275,12 +269,10 @@ def _rows(machine: Machine, obs: InstrumentObservations, index: int) -> _Block:
         return _Block("tracker", m, frame_columns(nom), r.reshape(-1), obs.sigma, names, src)
     if obs.kind == "ballbar":
         radius = float(obs.directions[0, 0])
+        from .ballbar import radial_rows
+
         n = len(c) - 1
-        d = nom[:n] - nom[n]
-        length = np.linalg.norm(d, axis=1)
-        u = d / length[:, None]
-        m3 = m.reshape(len(c), 3, -1)
-        rows = np.einsum("ni,nik->nk", u, m3[:n] - m3[n][None])
+        rows, length = radial_rows(machine, c, m)
         b = obs.readings[:n, 0] - (length - radius)
         names = [f"{src}: ballbar length"]
         return _Block("ballbar", rows, np.ones((n, 1)), b, obs.sigma, names, src, m)
