@@ -23,7 +23,7 @@ import numpy as np
 
 from ..errors import ConfigError
 
-__all__ = ["datum_alignment", "surface_sample", "main_datums"]
+__all__ = ["datum_alignment", "surface_sample", "main_datums", "cad_frame"]
 
 
 def main_datums(spec) -> tuple[str, ...]:
@@ -39,25 +39,31 @@ def main_datums(spec) -> tuple[str, ...]:
     return best
 
 
-def surface_sample(model, per_triangle: int = 4) -> np.ndarray:
-    """Points on the CAD surface: its vertices and, per triangle, a small fixed pattern of
-    interior points (barycentric), so that a face's datum is simulated on its whole area."""
+def surface_sample(model, per_triangle: int = 4) -> tuple[np.ndarray, np.ndarray]:
+    """Points on the CAD surface and their faces: a fixed pattern of interior points of
+    every triangle (barycentric), so that a face's datum is simulated on its whole area."""
     v, t = model.vertices, model.triangles
     a, b, c = v[t[:, 0]], v[t[:, 1]], v[t[:, 2]]
     pats = [(1 / 3, 1 / 3), (2 / 3, 1 / 6), (1 / 6, 2 / 3), (1 / 6, 1 / 6)][:per_triangle]
-    pts = [v]
-    for u, w in pats:
-        pts.append(a + u * (b - a) + w * (c - a))
-    return np.ascontiguousarray(np.concatenate(pts))
+    pts = np.concatenate([a + u * (b - a) + w * (c - a) for u, w in pats])
+    return np.ascontiguousarray(pts), np.tile(model.triangle_face, len(pats))
 
 
-def _frame(points: np.ndarray, spec, letters: tuple[str, ...]):
+def _frame(points: np.ndarray, spec, letters: tuple[str, ...], cad=None):
     from ..inspect.datums import DatumSystem
     from ..inspect.features import extract
 
     needed = {spec.datums[k].feature for k in letters}
-    feats = extract(points, {n: spec.features[n] for n in needed}, spec.source)
+    feats = extract(points, {n: spec.features[n] for n in needed}, spec.source, cad)
     return DatumSystem(spec, feats).frame(letters)
+
+
+def cad_frame(model, spec, letters: tuple[str, ...]):
+    """The datum frame ``letters`` simulated on the CAD surface: the nominal frame."""
+    from .features import CadContext
+
+    pts, face = surface_sample(model)
+    return _frame(pts, spec, letters, CadContext(model, np.zeros(len(pts)), face))
 
 
 def datum_alignment(points: np.ndarray, model, spec, max_distance: Optional[float]) -> tuple[np.ndarray, dict[str, Any]]:
@@ -69,18 +75,25 @@ def datum_alignment(points: np.ndarray, model, spec, max_distance: Optional[floa
     letters = main_datums(spec)
     fit = model.mesh.best_fit(points, None, [True] * 6, max_distance, True)
     m0 = np.array(fit.matrix)
-    scan_frame = _frame(transform(points, m0), spec, letters)
-    cad_frame = _frame(surface_sample(model), spec, letters)
+    moved = transform(points, m0)
+    cad = None
+    if any(spec.features[spec.datums[k].feature].faces for k in letters):
+        from .features import CadContext
+
+        d = model.distances(moved, max_distance)
+        cad = CadContext(model, d.distance, d.face)
+    scan_frame = _frame(moved, spec, letters, cad)
+    nominal = cad_frame(model, spec, letters)
     # R maps the scan frame's axes onto the CAD frame's: R = A_cad^T A_scan (rows are axes)
-    R = cad_frame.axes.T @ scan_frame.axes
+    R = nominal.axes.T @ scan_frame.axes
     u, _, vt = np.linalg.svd(R)
     R = u @ np.diag([1.0, 1.0, np.linalg.det(u @ vt)]) @ vt
-    t = cad_frame.origin - R @ scan_frame.origin
-    free = cad_frame.free_translations
+    t = nominal.origin - R @ scan_frame.origin
+    free = nominal.free_translations
     if len(free):
         t = t - free.T @ (free @ t)  # the datums leave these translations free: keep the best fit's
     m1 = np.eye(4)
     m1[:3, :3], m1[:3, 3] = R, t
-    info = {"datums": list(letters), "scan_frame": scan_frame.to_dict(), "cad_frame": cad_frame.to_dict(),
+    info = {"datums": list(letters), "scan_frame": scan_frame.to_dict(), "cad_frame": nominal.to_dict(),
             "prealignment": m0.tolist()}
     return m1 @ m0, info

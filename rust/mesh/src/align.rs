@@ -2,12 +2,13 @@
 //! squared signed distances (point-to-plane ICP, Chen and Medioni 1992, with Tukey
 //! biweights, Zhang 1994), from any initial pose.
 //!
-//! Start: the given pose and, unless degrees of freedom are locked, the four proper
-//! rotations that put the scan's principal axes on the surface's (area-weighted, exact
-//! per triangle) and their sign flips, centroid on centroid. Each start is iterated on a
-//! fixed subsample of 3000 points; the one with the smallest median |distance| wins (ties:
-//! the first), then iterations run on 30 000, 300 000 and all points, each point starting
-//! its query from its previous nearest triangle.
+//! Start: the given pose and, unless degrees of freedom are locked, the 24 rotations that
+//! put the scan's principal axes on the surface's (area-weighted, exact per triangle) in
+//! every order and sign (the cube group), centroid on centroid. Each start is screened by
+//! 10 iterations on 400 points, the 3 best by their median |distance| are iterated (30) on
+//! 2000; the smallest median |distance| wins (ties: the first), then iterations run on
+//! 30 000, 300 000 and all points, each point starting its query from its previous
+//! nearest triangle.
 //!
 //! Iteration: linearise d_i(p) = d_i + J_i . delta over the free parameters (translations
 //! and Rz Ry Rx angles, [`crate::rigid`]), J_i = [g_i, g_i . (dR/da x_i)] with g_i the
@@ -28,7 +29,10 @@ use rayon::prelude::*;
 /// Points per chunk of the parallel passes (fixed: results never depend on threads).
 const CHUNK: usize = 256;
 /// Sample sizes of the start search and of the refinement stages.
-const START_SAMPLE: usize = 3000;
+const SCREEN_SAMPLE: usize = 400;
+const START_SAMPLE: usize = 2000;
+/// Starts iterated further after the screening.
+const KEEP_STARTS: usize = 3;
 const STAGES: [usize; 3] = [30_000, 300_000, usize::MAX];
 
 /// The points, the mesh, the initial pose and the free parameters of a fit.
@@ -38,6 +42,9 @@ pub struct Frame<'a> {
     pub base: Pose,
     pub bound2: f64,
     pub free: Vec<usize>,
+    /// subtracted from every distance: the zone's centre surface is the CAD surface
+    /// offset by this (ISO 1101 UZ); 0 for the CAD surface itself
+    pub offset: f64,
 }
 
 /// One point's distance after the motion, its gradient and the point before the step.
@@ -61,7 +68,7 @@ impl<'a> Frame<'a> {
             None => f64::INFINITY,
         };
         let free: Vec<usize> = (0..6).filter(|&k| free[k]).collect();
-        Ok(Self { mesh, points, base, bound2, free })
+        Ok(Self { mesh, points, base, bound2, free, offset: 0.0 })
     }
 
     pub fn n(&self) -> usize {
@@ -93,7 +100,7 @@ impl<'a> Frame<'a> {
                 if let Some(hit) = hit {
                     h[k] = hit.slot;
                     prev = Some(hit.slot);
-                    o[k] = Some(Eval { index: i, d: hit.distance, g: hit.gradient, x });
+                    o[k] = Some(Eval { index: i, d: hit.distance - self.offset, g: hit.gradient, x });
                 }
             }
             Ok(())
@@ -287,8 +294,9 @@ fn point_moments(points: &[f64]) -> (V3, [[f64; 3]; 3]) {
     (mean, cov)
 }
 
-/// The principal-axes starts: the scan's axes onto the surface's, with the four sign
-/// patterns of a proper rotation.
+/// The principal-axes starts: the scan's axes onto the surface's, in each of the 24
+/// rotations of the cube group (the axes' order and signs: a scan's point density can
+/// reorder its principal axes), centroid on centroid.
 pub fn principal_starts(mesh: &TriMesh, points: &[f64], initial: &Pose) -> Vec<Pose> {
     let moved: Vec<f64> = points.chunks_exact(3).flat_map(|p| initial.apply([p[0], p[1], p[2]])).collect();
     let (ms, cs) = point_moments(&moved);
@@ -296,16 +304,35 @@ pub fn principal_starts(mesh: &TriMesh, points: &[f64], initial: &Pose) -> Vec<P
     let (_, u) = principal_axes(ms, cs);
     let (_, v) = principal_axes(mm, cm);
     let mut out = Vec::new();
-    for s in [[1.0, 1.0, 1.0], [-1.0, -1.0, 1.0], [-1.0, 1.0, -1.0], [1.0, -1.0, -1.0]] {
-        // R = V S U^T
-        let mut r = [[0.0; 3]; 3];
-        for i in 0..3 {
-            for j in 0..3 {
-                r[i][j] = (0..3).map(|k| v[i][k] * s[k] * u[j][k]).sum();
+    for perm in [[0, 1, 2], [1, 2, 0], [2, 0, 1], [0, 2, 1], [2, 1, 0], [1, 0, 2]] {
+        for signs in [[1.0, 1.0, 1.0], [1.0, -1.0, -1.0], [-1.0, 1.0, -1.0], [-1.0, -1.0, 1.0],
+                      [-1.0, -1.0, -1.0], [-1.0, 1.0, 1.0], [1.0, -1.0, 1.0], [1.0, 1.0, -1.0]] {
+            // P e_k = signs[k] e_perm[k]; keep the proper ones (det R = det P = +1)
+            let mut pm = [[0.0; 3]; 3];
+            for k in 0..3 {
+                pm[perm[k]][k] = signs[k];
             }
+            let det = pm[0][0] * (pm[1][1] * pm[2][2] - pm[1][2] * pm[2][1]) - pm[0][1] * (pm[1][0] * pm[2][2] - pm[1][2] * pm[2][0])
+                + pm[0][2] * (pm[1][0] * pm[2][1] - pm[1][1] * pm[2][0]);
+            if det < 0.0 {
+                continue;
+            }
+            // R = V P U^T
+            let mut vp = [[0.0; 3]; 3];
+            for i in 0..3 {
+                for j in 0..3 {
+                    vp[i][j] = (0..3).map(|k| v[i][k] * pm[k][j]).sum();
+                }
+            }
+            let mut r = [[0.0; 3]; 3];
+            for i in 0..3 {
+                for j in 0..3 {
+                    r[i][j] = (0..3).map(|k| vp[i][k] * u[j][k]).sum();
+                }
+            }
+            let rm = apply(&r, ms);
+            out.push(Pose { r, t: [mm[0] - rm[0], mm[1] - rm[1], mm[2] - rm[2]] }.after(initial));
         }
-        let t = [mm[0] - apply(&r, ms)[0], mm[1] - apply(&r, ms)[1], mm[2] - apply(&r, ms)[2]];
-        out.push(Pose { r, t }.after(initial));
     }
     out
 }
@@ -337,22 +364,38 @@ pub fn best_fit(mesh: &TriMesh, points: &[f64], opt: &FitOptions) -> Result<Best
     if opt.search && opt.free.iter().all(|&f| f) {
         starts.extend(principal_starts(mesh, points, &opt.initial));
     }
-    let idx0 = sample(n, START_SAMPLE);
-    let mut best: Option<(f64, usize, Pose, [f64; 6])> = None;
+    // screen every start briefly on a small sample, then iterate the best few further
+    let screen = sample(n, SCREEN_SAMPLE);
+    let mut scored: Vec<(f64, usize, [f64; 6])> = Vec::new();
     let mut iterations = 0;
     for (k, s) in starts.iter().enumerate() {
         let frame = Frame::new(mesh, points, *s, opt.max_distance, opt.free)?;
         let mut p = [0.0; 6];
+        let mut hints = vec![u32::MAX; screen.len()];
+        match iterate(&frame, &screen, &mut p, &mut hints, if starts.len() > 1 { 10 } else { 0 }) {
+            Ok((it, med)) => {
+                iterations += it;
+                scored.push((med, k, p));
+            }
+            Err(e) if e.kind == gagekit_core::ErrorKind::DegenerateGeometry && starts.len() > 1 => continue,
+            Err(e) => return Err(e),
+        }
+    }
+    scored.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    let idx0 = sample(n, START_SAMPLE);
+    let mut best: Option<(f64, usize, Pose, [f64; 6])> = None;
+    for &(_, k, p0) in scored.iter().take(KEEP_STARTS) {
+        let frame = Frame::new(mesh, points, starts[k], opt.max_distance, opt.free)?;
+        let mut p = p0;
         let mut hints = vec![u32::MAX; idx0.len()];
-        let res = iterate(&frame, &idx0, &mut p, &mut hints, 40);
-        let (it, med) = match res {
+        let (it, med) = match iterate(&frame, &idx0, &mut p, &mut hints, 30) {
             Ok(v) => v,
             Err(e) if e.kind == gagekit_core::ErrorKind::DegenerateGeometry && starts.len() > 1 => continue,
             Err(e) => return Err(e),
         };
         iterations += it;
         if best.as_ref().map_or(true, |b| med < b.0) {
-            best = Some((med, k, *s, p));
+            best = Some((med, k, starts[k], p));
         }
     }
     let (_, start, base, mut p) =

@@ -117,9 +117,22 @@ fn solve_step(frame: &Frame, ev: &[Option<Eval>], w: &[usize], p: &[f64; 6], rad
     Ok((step, sol.x[nf]))
 }
 
-/// The minimax alignment from `initial` (e.g. the best fit); see the module docs.
-pub fn minimax(mesh: &TriMesh, points: &[f64], initial: Pose, free: [bool; 6], max_distance: Option<f64>) -> Result<Minimax> {
-    let frame = Frame::new(mesh, points, initial, max_distance, free)?;
+/// The minimax alignment from `initial` (e.g. the best fit); see the module docs. With
+/// `offset` the zone is centred on the surface offset outwards by it (ISO 1101 UZ): the
+/// largest |d - offset| is minimised.
+pub fn minimax(
+    mesh: &TriMesh,
+    points: &[f64],
+    initial: Pose,
+    free: [bool; 6],
+    max_distance: Option<f64>,
+    offset: f64,
+) -> Result<Minimax> {
+    if !offset.is_finite() {
+        return Err(GkError::invalid(format!("minimax: offset must be finite, got {offset}")));
+    }
+    let mut frame = Frame::new(mesh, points, initial, max_distance, free)?;
+    frame.offset = offset;
     let n = frame.n();
     let idx = sample(n, usize::MAX);
     let mut hints = vec![u32::MAX; n];

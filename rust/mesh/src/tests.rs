@@ -217,7 +217,7 @@ fn minimax_is_certified_and_below_the_best_fit() {
     let s = moved(&scan, &pose);
     let fit = best_fit(&mesh, &s, &FitOptions::default()).unwrap();
     let bf_max = mesh.distances(&moved(&s, &fit.pose), &Query::default()).unwrap().distance.iter().fold(0.0f64, |m, d| m.max(d.abs()));
-    let mm = minimax(&mesh, &s, fit.pose, [true; 6], None).unwrap();
+    let mm = minimax(&mesh, &s, fit.pose, [true; 6], None, 0.0).unwrap();
     let check = mesh.distances(&moved(&s, &mm.pose), &Query::default()).unwrap().distance.iter().fold(0.0f64, |m, d| m.max(d.abs()));
     assert!((check - mm.max_abs).abs() < 1e-12);
     assert!(mm.max_abs <= bf_max + 1e-12, "{} > {}", mm.max_abs, bf_max);
@@ -257,4 +257,16 @@ proptest! {
             prop_assert!((x - y).abs() < 1e-9);
         }
     }
+}
+
+#[test]
+fn minimax_with_an_offset_centres_the_zone_on_the_offset_surface() {
+    let h = [20.0, 12.0, 7.0];
+    let (v, t) = box_mesh(h);
+    let mesh = TriMesh::new(&v, &t).unwrap();
+    // the scan is the box grown by 0.05 everywhere (plus bumps of 0.01): offset 0.05 leaves 0.01
+    let scan = box_scan([h[0] + 0.05, h[1] + 0.05, h[2] + 0.05], 1.0, 0.01);
+    let m0 = minimax(&mesh, &scan, Pose::IDENTITY, [true; 6], None, 0.0).unwrap();
+    let m1 = minimax(&mesh, &scan, Pose::IDENTITY, [true; 6], None, 0.05).unwrap();
+    assert!(m0.max_abs > 0.05 && m1.max_abs <= 0.0100001, "{} {}", m0.max_abs, m1.max_abs);
 }

@@ -159,8 +159,10 @@ impl Mesh {
         })
     }
 
-    /// Minimax (Chebyshev) alignment from `initial`, with its LP certificate.
-    #[pyo3(signature = (points, initial=None, free=[true; 6], max_distance=None))]
+    /// Minimax (Chebyshev) alignment from `initial`, with its LP certificate; `offset`: the
+    /// zone's centre surface is the CAD surface offset outwards by it (ISO 1101 UZ).
+    #[pyo3(signature = (points, initial=None, free=[true; 6], max_distance=None, offset=0.0))]
+    #[allow(clippy::too_many_arguments)]
     fn minimax(
         &self,
         py: Python<'_>,
@@ -168,11 +170,12 @@ impl Mesh {
         initial: Option<PyReadonlyArray2<'_, f64>>,
         free: [bool; 6],
         max_distance: Option<f64>,
+        offset: f64,
     ) -> PyResult<MeshMinimax> {
         let pts = rows(py, &points, 3, "points")?;
         let init = pose_of(initial)?;
         let mesh = self.mesh.clone();
-        let m = run(py, || minimax(&mesh, pts, init, free, max_distance))?;
+        let m = run(py, || minimax(&mesh, pts, init, free, max_distance, offset))?;
         Ok(MeshMinimax {
             matrix: rows4(&m.pose),
             max_abs: m.max_abs,
