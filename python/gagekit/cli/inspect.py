@@ -12,7 +12,8 @@ from typing import Any, Optional
 import typer
 from typer.core import TyperGroup
 
-from ._common import JSON_OPTION, UNITS_OPTION, emit, read_cloud_cli, table
+from ._common import CHUNK_OPTION, JSON_OPTION, MEMORY_OPTION, UNITS_OPTION, emit, open_scan_cli, table
+from .qif import INSTRUMENT_OPTION, QIF_RESULTS_OPTION, check_output, write_results
 
 
 class DefaultScanGroup(TyperGroup):
@@ -46,6 +47,10 @@ def inspect(
     units: Optional[str] = UNITS_OPTION,
     as_json: bool = JSON_OPTION,
     report: Optional[Path] = typer.Option(None, "--report", help="Write report.html (callouts, datum frame, 3-D deviation view) and result.json into DIR."),
+    memory: Optional[str] = MEMORY_OPTION,
+    chunk: Optional[int] = CHUNK_OPTION,
+    qif_results: Optional[Path] = QIF_RESULTS_OPTION,
+    instrument: str = INSTRUMENT_OPTION,
 ) -> None:
     """Evaluate every GD&T callout of PART.toml on the scan (ISO 1101 zones, ISO 5459 datums).
 
@@ -53,11 +58,20 @@ def inspect(
     """
     from ..inspect import inspect as run_inspect, load_part_spec
 
+    from ..cloud.stream import CloudStream
+    from ..inspect import inspect_stream
+
+    check_output(qif_results)
     spec = load_part_spec(part)
-    pts = read_cloud_cli(scan, units).points
-    result = run_inspect(pts, spec)
+    cloud = open_scan_cli(scan, units, memory, chunk)
+    result = inspect_stream(cloud, spec) if isinstance(cloud, CloudStream) else run_inspect(cloud.points, spec)
     if report is not None:
         from ..report.inspect import write_report
 
         write_report(result, report)
+    if qif_results is not None:
+        from .._util import check_finite_result, to_jsonable
+
+        check_finite_result(result)
+        write_results(qif_results, [{"scan": str(scan), "result": to_jsonable(result)}], spec, part, instrument)
     emit(result, as_json, human)

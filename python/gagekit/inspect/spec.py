@@ -87,10 +87,14 @@ AXIS_METHODS = ("least-squares", "median-line")
 DATUM_FITS = ("chebyshev", "least-squares")
 MIN_POINTS = {"surface": 1, "plane": 3, "line": 2, "circle": 3, "sphere": 4, "cylinder": 5, "cone": 6}
 
-_FEATURE_KEYS = {"name", "shape", "region", "outward", "kind", "direction", "axis", "sections", "datum_fit", "faces", "band"}
-_TOL_KEYS = {"feature", "characteristic", "tolerance", "datums", "nominal", "angle", "name", "sections", "offset"}
+_FEATURE_KEYS = {"name", "shape", "region", "outward", "kind", "direction", "axis", "sections", "datum_fit", "qif_id",
+                 "faces", "band"}
+_TOL_KEYS = {"feature", "characteristic", "tolerance", "datums", "nominal", "angle", "name", "sections", "qif_id", "qpid",
+             "offset"}
 _PART_KEYS = {"name", "datum_fit", "axis", "sections", "cad", "band"}
-_TOP_KEYS = {"part", "feature", "datums", "tolerance", "region"}
+_TOP_KEYS = {"part", "feature", "datums", "tolerance", "region", "qif"}
+#: the [qif] table of a drawing imported from a QIF model (``gagekit qif import``)
+_QIF_KEYS = {"model", "qpid", "units"}
 
 
 @dataclass(frozen=True)
@@ -108,6 +112,7 @@ class Feature:
     axis: str = "least-squares"
     sections: int = 10
     datum_fit: str = "chebyshev"
+    qif_id: str = ""  # the QIF feature nominal this feature came from (gagekit qif import)
     faces: tuple = ()
     band: Optional[float] = None
 
@@ -151,6 +156,8 @@ class Tolerance:
     name: str = ""
     sections: Optional[int] = None
     index: int = 0
+    qif_id: str = ""  # the QIF characteristic nominal this callout came from (gagekit qif import)
+    qpid: str = ""  # the QPId of the QIF model document
     offset: float = 0.0
 
     @property
@@ -167,6 +174,7 @@ class PartSpec:
     datums: dict[str, DatumRef]
     tolerances: tuple[Tolerance, ...]
     source: str = "part"
+    qif: Optional[dict] = None  # [qif]: model, qpid, units of an imported QIF model
     cad: Optional[str] = None
 
     def moved(self, rotation: Any, translation: Any) -> "PartSpec":
@@ -188,9 +196,9 @@ class PartSpec:
                 None if f.outward is None else tuple(R @ np.array(f.outward)),
                 f.kind,
                 None if f.direction is None else tuple(R @ np.array(f.direction)),
-                f.axis, f.sections, f.datum_fit,
+                f.axis, f.sections, f.datum_fit, f.qif_id,
             )
-        return PartSpec(self.name, feats, self.datums, self.tolerances, self.source)
+        return PartSpec(self.name, feats, self.datums, self.tolerances, self.source, self.qif, self.cad)
 
 
 # -- parsing ---------------------------------------------------------------------------
@@ -321,7 +329,8 @@ def part_spec_from_dict(doc: Mapping[str, Any], source: str = "part") -> PartSpe
         axis = _choice(t.get("axis", daxis), AXIS_METHODS, where, "axis")
         sections = _sections(t.get("sections", dsec), where)
         fit = _choice(t.get("datum_fit", dfit), DATUM_FITS, where, "datum_fit")
-        features[name] = Feature(name, shape, region, outward, kind, direction, axis, sections, fit, faces, band)
+        features[name] = Feature(name, shape, region, outward, kind, direction, axis, sections, fit,
+                                 _qif_ref(t.get("qif_id", ""), where, "qif_id"), faces=faces, band=band)
 
     raw_datums = doc.get("datums", {})
     if not isinstance(raw_datums, Mapping):
@@ -427,7 +436,9 @@ def part_spec_from_dict(doc: Mapping[str, Any], source: str = "part") -> PartSpe
         if char in ("position", "profile") and shape in ("plane", "cylinder", "cone") and ndir is None:
             raise ConfigError(f"{where}: 'nominal' needs a 'direction' (the basic {'normal' if shape == 'plane' else 'axis'} in the datum frame)")
         sections = _sections(t["sections"], where) if "sections" in t else None
-        tols.append(Tolerance(fname, char, tol, tuple(raw_d), npoint, ndir, angle, str(t.get("name", "")), sections, k, offset))
+        ids = {key: _qif_ref(t.get(key, ""), where, key) for key in ("qif_id", "qpid")}
+        tols.append(Tolerance(fname, char, tol, tuple(raw_d), npoint, ndir, angle, str(t.get("name", "")), sections, k, **ids,
+                              offset=offset))
     cad = part.get("cad")
     if cad is not None:
         if not isinstance(cad, str) or not cad:
@@ -436,7 +447,22 @@ def part_spec_from_dict(doc: Mapping[str, Any], source: str = "part") -> PartSpe
 
         base = Path(source).parent if source != "part" else Path(".")
         cad = str(base / cad)
-    return PartSpec(pname, features, datums, tuple(tols), source, cad)
+    return PartSpec(pname, features, datums, tuple(tols), source, _qif_table(doc.get("qif"), source), cad=cad)
+
+
+def _qif_ref(v: Any, where: str, key: str) -> str:
+    if isinstance(v, bool) or not isinstance(v, (str, int)):
+        raise ConfigError(f"{where}: '{key}' must be a string (a QIF id or QPId), got {v!r}")
+    return str(v)
+
+
+def _qif_table(t: Any, source: str) -> Optional[dict]:
+    if t is None:
+        return None
+    if not isinstance(t, Mapping):
+        raise ConfigError(f"{source}: [qif] must be a table {{ model, qpid, units }}")
+    _unknown(t, _QIF_KEYS, f"{source}: [qif]")
+    return {k: _qif_ref(v, f"{source}: [qif]", k) for k, v in t.items()}
 
 
 def _check_datums(char: str, letters: list, datums: Mapping[str, DatumRef], features: Mapping[str, Feature], where: str) -> None:

@@ -99,12 +99,15 @@ def simulate_sphere(
     location: dict,
     noise_um: float = 0.0,
     seed: int = 0,
+    params: Optional[np.ndarray] = None,
 ) -> np.ndarray:
     """Commands (n, J), file units, at which the probe finds the centre of a sphere fixed at
     ``sphere`` (table frame, mm) for each rotary position, the rotary axis being displaced by
     ``location`` {EXOB.., mm; EAOB.., rad} (ISO 230-7 names with O and the axis letter, e.g.
     EXOB, EZOB, EAOB, ECOB for a B axis). The other rotary joints stay at ``at``, prismatic
-    joints not needed to reach the sphere (a redundant one) too. The linear axes are ideal."""
+    joints not needed to reach the sphere (a redundant one) too. The linear axes are ideal;
+    with ``params`` the whole machine has those error parameters instead (the exact chain,
+    Eq. 3.7: the actual tool reaches the sphere) and ``location`` must be empty."""
     rj = machine.joint_names.index(rotary)
     spec = machine.joints[rj]
     if spec.kind != "rotary":
@@ -121,7 +124,23 @@ def simulate_sphere(
         raise InvalidInputError(f"give --at for all but three prismatic joints (free now: {[machine.joint_names[k] for k in free]})")
     rng = np.random.default_rng(np.random.SeedSequence([seed, 0x7370]))
     out = []
+    if params is not None and location:
+        raise InvalidInputError("give either location errors or error parameters, not both")
     for b in np.asarray(positions_deg, dtype=np.float64):
+        if params is not None:
+            c = base.copy()
+            c[rj] = b
+            for _ in range(20):  # Newton on the free prismatic joints, exact perturbed chain
+                p = machine.positions(c[None, :], params)[0]
+                jac = machine.command_jacobian(c[None, :])[:, free]
+                step = np.linalg.lstsq(jac, np.asarray(sphere) - p, rcond=None)[0]
+                c[free] += step
+                if np.abs(step).max() < 1e-13:
+                    break
+            if noise_um > 0:
+                c[free] += rng.normal(scale=1e-3 * noise_um, size=3)
+            out.append(c)
+            continue
         # a table point S lies, at rotary angle b, where the nominal kinematics at rotary 0
         # would put it: p_base = R_true(-b) (S - e) + e (rotation about the true axis line)
         rot = _axis_rotation(true_axis, -b * unit)
