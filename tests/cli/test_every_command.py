@@ -39,6 +39,7 @@ RECIPES: dict[str, list] = {
     "machine compensate-nc": [M, "T/cal.json", "T/prog.nc", "--out", "T/prog-comp.nc"],
     "machine export": [M, "T/cal.json", "--format", "grid-csv", "--out", "T/grid.csv"],
     "machine iso230-2": [ROOT / "tests" / "data" / "iso230_2" / "ecmc_axis1_runs.csv"],
+    "machine ballbar": [ROOT / "tests" / "data" / "ballbar" / "simulated_xy.csv", "--plane", "XY", "--radius", 150, "--feed", 1000],
     "machine design": [M, "--points", 60, "--candidates", 2000, "--out", "T/plan.csv"],
     "machine evaluate-plan": [M, "T/plan.csv", "--seeds", 2, "--test-points", 200],
     "machine simulate-cycles": [M, "T/plan.csv", "--cycles", 3, "--out", "T/cyc.csv"],
