@@ -15,6 +15,12 @@ scipy.optimize.minimize_scalar; run-outs and positions with NumPy. Datum D is a 
 cylinder, so its least-squares axis is its minimum circumscribed one and both programs
 must agree on every value.
 
+Second case, sizes (ISO 14405-1): the LP two-point size callouts of bracket_sizes.toml (bore,
+boss, pin: every two-point size, 10 sections x 180 directions per cylinder) on the same
+~2 M points, end to end (regions, least-squares axes, sizes). The peer: boolean masks, the
+least-squares axis by scipy.optimize.least_squares, then per section np.argsort by angle and
+np.interp (periodic) for the opposite points -- the same definition.
+
 Prints one line per case: case, gagekit time, peer time, ratio (peer / gagekit), then
 every callout's value from both and the largest difference.
 Run: python benches/bench_inspect.py [--quick]
@@ -26,6 +32,7 @@ import importlib.util
 import math
 import os
 import sys
+from dataclasses import replace
 
 import numpy as np
 from scipy.optimize import least_squares, linprog, minimize_scalar
@@ -203,6 +210,54 @@ def peer(pts, spec: PartSpec) -> list[float]:
     return out
 
 
+def lp_sizes(spec: PartSpec) -> PartSpec:
+    """The LP two-point size callouts of a drawing (no envelope: only the two-point sizes)."""
+    tols = tuple(replace(t, envelope=False) for t in spec.tolerances
+                 if t.characteristic == "size" and (t.modifier or "LP") == "LP")
+    used = {t.feature for t in tols}
+    return PartSpec(spec.name, {k: v for k, v in spec.features.items() if k in used}, spec.datums, tols, spec.source)
+
+
+def peer_two_point(pts, p, d, ref, sections, angles):
+    d = d / np.linalg.norm(d)
+    u = ref - (ref @ d) * d
+    u /= np.linalg.norm(u)
+    v = np.cross(d, u)
+    q = pts - p
+    t, x, y = q @ d, q @ u, q @ v
+    th, rho = np.arctan2(y, x), np.hypot(x, y)
+    k = np.minimum(((t - t.min()) / np.ptp(t) * sections).astype(int), sections - 1)
+    phi = -np.pi + np.pi * np.arange(angles) / angles
+    out = []
+    for i in range(sections):
+        m = k == i
+        o = np.argsort(th[m])
+        a, r = th[m][o], rho[m][o]
+        out.append(np.interp(phi, a, r, period=2 * np.pi) + np.interp(phi + np.pi, a, r, period=2 * np.pi))
+    return np.concatenate(out)
+
+
+def peer_sizes(pts, spec: PartSpec) -> list[float]:
+    out = []
+    for t in spec.tolerances:
+        f = spec.features[t.feature]
+        P = box(pts, f)
+        ref = rotvec(f.region.rotation)[:, 0]
+        if f.shape == "circle":
+            c = P.mean(0)
+            n = np.linalg.svd(P - c, full_matrices=False)[2][2]
+            x = least_squares(lambda z: np.linalg.norm(P - (c + z[0] * basis(n)[0] + z[1] * basis(n)[1]), axis=1) - z[2],
+                              [0, 0, np.linalg.norm(P - c, axis=1).mean()], method="lm").x
+            p = c + x[0] * basis(n)[0] + x[1] * basis(n)[1]
+            s = peer_two_point(P, p, n, ref, 1, 180)
+        else:
+            p, d = peer_cylinder(P, np.array(f.direction))
+            s = peer_two_point(P, p, d, ref, t.sections or f.sections, 180)
+        U, L = t.upper_limit, t.lower_limit
+        out.append(float(s.max() if U - s.max() <= s.min() - L else s.min()))
+    return out
+
+
 def main() -> None:
     quick = "--quick" in sys.argv
     density = 3.0 if quick else 70.0
@@ -220,6 +275,16 @@ def main() -> None:
     for t, a, b in zip(res.tolerances, ours, ref):
         print(f"{t.characteristic + ' of ' + t.feature + ('|' + '|'.join(t.datums) if t.datums else ''):40s} {a:16.12f} {b:16.12f} {abs(a - b):9.1e}")
     print(f"largest difference: {diff:.2e} mm")
+    # sizes: every two-point size of the LP callouts
+    sspec = lp_sizes(load_part_spec(data_path("bracket_sizes.toml")))
+    t_s, sres = timed(lambda: inspect(pts, sspec), 1 if quick else 3)
+    t_sp, sref = timed(lambda: peer_sizes(pts, sspec), 1)
+    n_sizes = sum(t.extra["local_sizes"]["n"] for t in sres.tolerances)
+    print(f"\n{'case':48s} {'gagekit s':>10s} {'peer s':>10s} {'ratio':>7s}")
+    case = f"sizes {len(pts)} points, {len(sres.tolerances)} LP callouts, {n_sizes} two-point sizes"
+    print(f"{case:48s} {t_s:10.3f} {t_sp:10.3f} {t_sp / t_s:7.1f}")
+    for t, b in zip(sres.tolerances, sref):
+        print(f"{t.label:40s} {t.measured:16.12f} {b:16.12f} {abs(t.measured - b):9.1e}")
 
 
 if __name__ == "__main__":

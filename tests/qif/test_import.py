@@ -58,8 +58,9 @@ def test_ctc01_mapping():
     assert s["units"] == {"file": "mm", "mm_per_unit": 1.0}
     assert ev["1470"]["characteristic"] == "flatness" and ev["1470"]["features"] == ["plane-2154"]
     assert ev["1467"]["characteristic"] == "perpendicularity"
-    # the seven diameters are sizes (issue 25 keys), kept as comments until gagekit evaluates them
-    sizes = [e for e in s["unsupported"] if e["type"] == "Diameter"]
+    # the seven diameters are sizes (issue 25 keys), evaluated since gagekit reads sizes
+    sizes = [e for e in s["unsupported"] + s["evaluated"] if e.get("type") == "Diameter" or
+             (e.get("characteristic") == "size" and e in s["evaluated"])]
     assert len(sizes) == 7 and all(e.get("characteristic") == "size" for e in sizes)
     # positions of the centre planes of slots: no such derived feature yet
     assert un["1443"]["toml"] == "listed" and "OppositeParallelPlanes" in un["1443"]["reason"]
