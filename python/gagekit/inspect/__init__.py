@@ -62,7 +62,12 @@ def inspect(points: Any, spec: Union[PartSpec, str, Any]) -> InspectionResult:
     if not isinstance(spec, PartSpec):
         spec = load_part_spec(spec)
     pts = as_points(points)  # the region kernel checks finiteness (naming the row)
-    feats = extract(pts, spec.features, spec.source)
+    cad = None
+    if spec.cad is not None:
+        from ..cad.features import CadContext
+
+        cad = CadContext.of_scan(spec.cad, pts)
+    feats = extract(pts, spec.features, spec.source, cad)
     return _evaluate(spec, feats, int(len(pts)), t0)
 
 

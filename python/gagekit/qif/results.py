@@ -284,20 +284,27 @@ def _from_model(root: Any, spec: Any, model: Any, ids: _Ids, device: str) -> _Pl
         citems = _new("CharacteristicItems", n=0)
         X.child(ch, "CharacteristicNominals").addnext(citems)
     existing = {X.text(el, "CharacteristicNominalId"): el.get("id") for el in citems}
+    created: dict = {}
     for t in spec.tolerances:
         nom = by_id.get(t.qif_id) if t.qif_id else None
         if nom is None or not X.local(nom).endswith("CharacteristicNominal"):
             raise ConfigError(f"{spec.source}: [[tolerance]] #{t.index + 1} ({t.label}): qif_id {t.qif_id or '(none)'} is no "
                               f"characteristic nominal of {model.path}")
         qt = X.local(nom)[: -len("CharacteristicNominal")]
+        fitem = plan.feature_items.get(t.feature)
         if t.qif_id in existing:
             plan.items.append((existing[t.qif_id], qt))
+            fl = X.child(created[t.qif_id], "FeatureItemIds") if t.qif_id in created else None
+            if fl is not None and fitem and fitem not in X.ids(fl):  # a pattern: every member's feature
+                X.sub(fl, "Id", fitem)
+                fl.set("n", str(len(fl)))
             continue
         i = ids()
         it = X.sub(citems, f"{qt}CharacteristicItem", id=i)
-        X.sub(it, "Name", t.label)
-        if spec.features[t.feature].qif_id and t.feature in plan.feature_items:
-            _id_list(it, "FeatureItemIds", [plan.feature_items[t.feature]])
+        created[t.qif_id] = it
+        X.sub(it, "Name", t.label.rsplit(" (1/", 1)[0])
+        if fitem:
+            _id_list(it, "FeatureItemIds", [fitem])
         _id_list(it, "MeasurementDeviceIds", [device])
         X.sub(it, "CharacteristicNominalId", t.qif_id)
         existing[t.qif_id] = i
@@ -307,6 +314,34 @@ def _from_model(root: Any, spec: Any, model: Any, ids: _Ids, device: str) -> _Pl
 
 
 # -- the results ------------------------------------------------------------------------
+
+
+def _scan_reference(mr: Any, scan: Any, description: str) -> None:
+    """The scan file as the results' ExternalFileReference (a file URI when it exists)."""
+    p = Path(str(scan))
+    ref = X.sub(X.sub(mr, "ExternalFileReferences", n=1), "ExternalFileReference")
+    X.sub(ref, "URI", p.resolve().as_uri() if p.exists() else str(scan))
+    X.sub(X.sub(ref, "FileSpec"), "OtherFileSpec", (p.suffix.lstrip(".") or "points").upper())
+    X.sub(ref, "Description", description)
+
+
+def _device(root: Any, device: str, instrument: str, description: str) -> None:
+    """The instrument as a MeasurementDevice of MeasurementResources (added to the model's)."""
+    mres = X.child(root, "MeasurementResources")
+    if mres is None:
+        mres = _place(root, _new("MeasurementResources"))
+    devs = X.child(mres, "MeasurementDevices")
+    if devs is None:
+        devs = _new("MeasurementDevices", n=0)
+        later = [c for c in mres if X.local(c) in ("DetachableSensors", "Tools")]  # the schema's order
+        if later:
+            later[0].addprevious(devs)
+        else:
+            mres.append(devs)
+    dev = X.sub(devs, "MeasurementDevice", id=device)
+    X.sub(dev, "Name", instrument or "point-cloud scanner")
+    X.sub(dev, "Description", description)
+    devs.set("n", str(len(devs)))
 
 
 def _measured_feature(parent: Any, name: str, fd: dict, plan: _Plan, ids: _Ids) -> Optional[str]:
@@ -391,14 +426,10 @@ def _results(results_el: Any, runs: Sequence[dict], spec: Any, plan: _Plan, ids:
         X.sub(mr, "ThisResultsInstanceQPId", str(uuid.uuid5(uuid.NAMESPACE_URL, "gagekit-results:" + key)))
         scan = run.get("scan")
         if scan:
-            refs = X.sub(mr, "ExternalFileReferences", n=1)
-            ref = X.sub(refs, "ExternalFileReference")
-            X.sub(ref, "URI", Path(str(scan)).resolve().as_uri() if Path(str(scan)).exists() else str(scan))
-            X.sub(X.sub(ref, "FileSpec"), "OtherFileSpec", (Path(str(scan)).suffix.lstrip(".") or "points").upper())
             desc = f"point cloud inspected: {res.get('n_points', 0)} points"
             if run.get("sha256"):
                 desc += f", SHA-256 {run['sha256']}"
-            X.sub(ref, "Description", desc)
+            _scan_reference(mr, scan, desc)
         feats = res.get("features", {})
         mf = X.sub(mr, "MeasuredFeatures", n=0)
         fmeas = {}
@@ -410,20 +441,26 @@ def _results(results_el: Any, runs: Sequence[dict], spec: Any, plan: _Plan, ids:
         mf.set("n", str(len(mf)))
         if len(mf) == 0:
             mr.remove(mf)
+        # one measurement per characteristic item: the callouts of a pattern (one per member,
+        # sharing a qif_id) give one actual, the largest, PASS when every member passes
+        groups: dict = {}
+        for t, r, (item, qt) in zip(spec.tolerances, tols, plan.items):
+            groups.setdefault(item, (qt, []))[1].append((t, r))
         mc = X.sub(mr, "MeasuredCharacteristics")
-        cm = X.sub(mc, "CharacteristicMeasurements", n=len(tols))
+        cm = X.sub(mc, "CharacteristicMeasurements", n=len(groups))
         at = _new("ActualTransforms", n=0)
         for fr in res.get("frames", []):
             _transform(at, fr, ids, plan)
-        for t, r, (item, qt) in zip(spec.tolerances, tols, plan.items):
+        for item, (qt, members) in groups.items():
             el = X.sub(cm, f"{qt}CharacteristicMeasurement", id=ids())
-            _status(el, bool(r["pass"]))
+            _status(el, all(bool(r["pass"]) for _, r in members))
             X.sub(el, "CharacteristicItemId", item)
-            if t.feature in fmeas:
-                _id_list(el, "FeatureMeasurementIds", [fmeas[t.feature]])
+            fm = [fmeas[t.feature] for t, _ in members if t.feature in fmeas]
+            if fm:
+                _id_list(el, "FeatureMeasurementIds", fm)
             X.sub(el, "MeasurementDeviceIds", n=1).append(_new("Id", plan.device))
-            angular = t.characteristic == "angle"
-            value = float(r["measured"]) / (plan.angle_scale if angular else plan.pmi_scale)
+            angular = members[0][0].characteristic == "angle"
+            value = max(float(r["measured"]) for _, r in members) / (plan.angle_scale if angular else plan.pmi_scale)
             X.sub(el, "Value", _num(value))
         if len(at):
             at.set("n", str(len(at)))
@@ -474,16 +511,7 @@ def inspection_results_document(runs: Sequence[dict], spec: Any, spec_path: Any 
     else:
         first = runs[0]["result"].get("tolerances", []) if runs else []
         plan = _self_contained(root, spec, ids, device, {k: t.get("zone") for k, t in enumerate(first)})
-    mres = X.child(root, "MeasurementResources")
-    if mres is None:
-        mres = _place(root, _new("MeasurementResources"))
-    devs = X.child(mres, "MeasurementDevices")
-    if devs is None:
-        devs = X.sub(mres, "MeasurementDevices", n=0)
-    dev = X.sub(devs, "MeasurementDevice", id=device)
-    X.sub(dev, "Name", instrument or "point-cloud scanner")
-    X.sub(dev, "Description", "the instrument that acquired the inspected point clouds")
-    devs.set("n", str(len(devs)))
+    _device(root, device, instrument, "the instrument that acquired the inspected point clouds")
     res_el = X.child(root, "Results")
     if res_el is None:
         res_el = _place(root, _new("Results"))
@@ -523,11 +551,7 @@ def gage_results_document(scan: Any, result: dict, instrument: str = "") -> Any:
     _header(root)
     _units_block(root)
     device = ids()
-    mres = _place(root, _new("MeasurementResources"))
-    devs = X.sub(mres, "MeasurementDevices", n=1)
-    dev = X.sub(devs, "MeasurementDevice", id=device)
-    X.sub(dev, "Name", instrument or "point-cloud scanner")
-    X.sub(dev, "Description", "the instrument that acquired the checked point cloud")
+    _device(root, device, instrument, "the instrument that acquired the checked point cloud")
     # the gages are virtual gages for machining stock (dissertation Ch. 5) against the
     # datums of ISO 5459; that is the standard named
     ch = _characteristics(root, ids, "5459", "2011", "Geometrical product specifications (GPS) -- Datums and datum systems")
@@ -556,11 +580,7 @@ def gage_results_document(scan: Any, result: dict, instrument: str = "") -> Any:
     mset = X.sub(res_el, "MeasurementResultsSet", n=1)
     mr = X.sub(mset, "MeasurementResults", id=ids())
     X.sub(mr, "ThisResultsInstanceQPId", str(uuid.uuid5(uuid.NAMESPACE_URL, "gagekit-gage-results:" + digest)))
-    refs = X.sub(mr, "ExternalFileReferences", n=1)
-    ref = X.sub(refs, "ExternalFileReference")
-    X.sub(ref, "URI", Path(str(scan)).resolve().as_uri() if Path(str(scan)).exists() else str(scan))
-    X.sub(X.sub(ref, "FileSpec"), "OtherFileSpec", (Path(str(scan)).suffix.lstrip(".") or "points").upper())
-    X.sub(ref, "Description", "point cloud checked with virtual gages")
+    _scan_reference(mr, scan, "point cloud checked with virtual gages")
     mc = X.sub(mr, "MeasuredCharacteristics")
     cm = X.sub(mc, "CharacteristicMeasurements", n=len(gages))
     for g, item in zip(gages, items):
