@@ -142,7 +142,7 @@ def _inspect(path: str, document: Mapping[str, Any], options: Mapping[str, Any])
     from ..inspect import inspect, inspect_stream, part_spec_from_dict
 
     spec = part_spec_from_dict(document["part"], options.get("source") or "part spec")
-    stream = _stream(path, options.get("units"))
+    stream = _stream(path, options.get("units")) if getattr(spec, "cad", None) is None else None
     result = inspect_stream(stream, spec) if stream is not None else inspect(_read(path, options.get("units")), spec)
     check_finite_result(result)
     return to_jsonable(result)
