@@ -11,11 +11,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from conftest import TEST_DATA
+from gagekit.samples import sample_path
 from gagekit.errors import FileFormatError, InvalidInputError
 from gagekit.machine.iso230_2 import iso230_2, read_runs
 
-ECMC = TEST_DATA / "iso230_2" / "ecmc_axis1_runs.csv"
+ECMC = sample_path("iso230-2")
 
 
 def write_runs(path: Path, rows) -> Path:

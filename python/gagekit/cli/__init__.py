@@ -16,7 +16,7 @@ import typer
 
 from .. import __version__
 from ..errors import GagekitError
-from . import batch, cloud, db, demo, form, gage, machine, machine_export, machine_observer, stats, studio
+from . import batch, cloud, data, db, demo, form, gage, machine, machine_export, machine_observer, stats, studio
 from . import inspect as inspect_cmd
 
 app = typer.Typer(
@@ -34,6 +34,7 @@ app.add_typer(form.app, name="form")
 app.add_typer(gage.app, name="gage")
 app.add_typer(machine.app, name="machine")
 app.add_typer(db.app, name="db")
+app.add_typer(data.app, name="data")
 app.command("stats")(stats.stats)
 gage.app.command("batch")(batch.gage_batch)
 form.app.command("batch")(batch.form_batch)
