@@ -63,7 +63,7 @@ from ..errors import ConfigError, FileFormatError, InvalidInputError
 from ._files import write_files_atomically
 from .errormotions import Twist, compose, element_twists, frames, transport
 from .calibration import Calibration
-from .predict import predict, predict_uncertainty
+from .predict import check_calibration, predict, predict_uncertainty
 from .model import JointSpec, Machine, ShapeSpec
 
 __all__ = [
@@ -261,22 +261,10 @@ def make_grid(
 
 
 # ----- model ---------------------------------------------------------------------------------
-def check_calibration(machine: Machine, calibration: Calibration) -> None:
-    """A calibration must come from this machine: its name, group count and groups."""
-    if calibration.machine and calibration.machine != machine.name:
-        raise ConfigError(
-            f"the calibration is of machine '{calibration.machine}', not '{machine.name}': identify again with this machine file"
-        )
-    calibration_parameters(machine, calibration)
-
-
 def calibration_parameters(machine: Machine, calibration: Calibration) -> np.ndarray:
     """The minimum-norm parameter vector (P,) with the calibration's group values (Eq. 3.14);
-    raises ConfigError when the calibration's groups are not this machine's."""
-    from .predict import _coefficients
-
-    st = machine.structure()
-    c = _coefficients(machine, calibration, st)
+    raises ConfigError when the calibration is not this machine's (:func:`check_calibration`)."""
+    c = check_calibration(machine, calibration)
     return np.linalg.pinv(c) @ np.array([g.value for g in calibration.groups])
 
 
@@ -660,7 +648,6 @@ def export(
         raise InvalidInputError(f"--increment must be a positive number of mm, got {increment}")
     from .._files import output_file
 
-    check_calibration(machine, calibration)
     params = calibration_parameters(machine, calibration)
     grid = make_grid(machine, axes if axes else default_axes(machine, fmt), step, points, at, limits)
     for p in linuxcnc_paths(out, grid.axes) if fmt == "linuxcnc" else [out]:

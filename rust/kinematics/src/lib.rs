@@ -7,9 +7,12 @@
 //!   least squares with covariance (Eq. 3.18), and the closed-form rigid fit of a tracker
 //!   frame (Step 1 of Sec. 3.1.5).
 //!
+//! - [`ballbar`]: circular tests with a ballbar (ISO 230-4:2022): G, F, H and the diagnostics.
+//!
 //! Linear algebra uses nalgebra: the matrices here are at most a few thousand rows by ~60
 //! columns, where nalgebra's SVD takes milliseconds and compiles far faster than faer.
 
+pub mod ballbar;
 pub mod chain;
 pub mod ident;
 
