@@ -82,7 +82,7 @@ PLACEHOLDERS = {
     "SPHERE.csv": "pending:a probed-sphere observation file",
     "RTEST.csv": "pending:an R-test observation file",
     "RUN.csv": "pending:a ballbar run",
-    "R": "150", "F": "1000",
+    "R": "150", "F": "1000", "XY": "XY",
 }
 PLACEHOLDER = re.compile(r"^[A-Z][A-Z0-9_]*(\.[a-z0-9]+)?$")
 
