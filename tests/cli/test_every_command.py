@@ -54,6 +54,7 @@ RECIPES: dict[str, list] = {
     "stats": ["--db", "sqlite:///T/batch.db"],
     "inspect scan": [data_path("bracket.ply"), data_path("bracket.toml")],  # `gagekit inspect SCAN PART` is the same
     "demo": ["--quick", "--out", "T/demo"],
+    "qif import": [data_path("nist_ctc_01_asme1_ap242.qif.gz"), "--out", "T/ctc01.toml"],
     "studio": None,  # a web server that runs until stopped: tests/studio runs it
 }
 

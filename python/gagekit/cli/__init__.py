@@ -16,7 +16,8 @@ import typer
 
 from .. import __version__
 from ..errors import GagekitError
-from . import batch, cloud, data, db, demo, form, gage, machine, machine_export, machine_instruments, machine_observer, stats, studio
+from . import batch, cloud, db, demo, form, gage, machine, machine_export, machine_instruments, machine_observer, qif, stats, studio
+from . import data  # gagekit data list / path
 from . import inspect as inspect_cmd
 
 app = typer.Typer(
@@ -35,6 +36,7 @@ app.add_typer(form.app, name="form")
 app.add_typer(gage.app, name="gage")
 app.add_typer(machine.app, name="machine")
 app.add_typer(db.app, name="db")
+app.add_typer(qif.app, name="qif")
 app.add_typer(data.app, name="data")
 app.command("stats")(stats.stats)
 gage.app.command("batch")(batch.gage_batch)
