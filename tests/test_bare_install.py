@@ -83,11 +83,17 @@ PLACEHOLDERS = {
     "RTEST.csv": "pending:an R-test observation file",
     "RUN.csv": "pending:a ballbar run",
     "R": "150", "F": "1000", "XY": "XY",
+    "MODEL.qif": "pkg:data/nist_ctc_01_asme1_ap242.qif.gz",
+    "OUT.qif": "out:OUT.qif",
 }
+#: the value after these options is written: always a new path in the command's folder (so that
+#: `--out PART.toml` never writes over a bundled sample)
+OUTPUT_OPTIONS = ("--out", "--out-cloud", "--report", "--qif-results")
 PLACEHOLDER = re.compile(r"^[A-Z][A-Z0-9_]*(\.[a-z0-9]+)?$")
 
 #: a documented line containing KEY needs the extra: in the bare venv it must say so in one line
-NEEDS_EXTRA = {"gagekit studio": "studio", "postgresql://": "postgresql", "--format parquet": "parquet"}
+NEEDS_EXTRA = {"gagekit studio": "studio", "postgresql://": "postgresql", "--format parquet": "parquet",
+               "gagekit qif": "qif", "--qif-results": "qif"}
 
 
 # ----- the documented lines ------------------------------------------------------------------
@@ -199,16 +205,24 @@ def _args(line: str, work: Path, made: Path, bare: bool, request) -> list[str]:
     """The documented line's arguments with every placeholder replaced; run in ``work``."""
     from gagekit.samples import sample_path
 
+    import gagekit
+
     part = "PART.toml" in line
-    out = []
+    out: list[str] = []
     for a in runnable(line):
         v = PLACEHOLDERS.get(a, a) if PLACEHOLDER.match(a) or a in PLACEHOLDERS else a
+        if out and out[-1] in OUTPUT_OPTIONS:
+            v = f"out:{Path(a).name}"
+        elif a.startswith("python/gagekit/"):  # a path of the source tree: the installed package's file
+            v = f"pkg:{a[len('python/gagekit/'):]}"
         if a in ("SCAN.ply", "SCAN") and part:
             v = "sample:bracket"
         if a == "scans/*.ply" and part:
             v = "made:part-scans/*.ply"
         if v.startswith("sample:"):
             v = str(sample_path(v[7:]))
+        elif v.startswith("pkg:"):
+            v = str(Path(gagekit.__file__).resolve().parent / v[4:])
         elif v.startswith("test:"):
             v = str(TEST_DATA / v[5:])
         elif v.startswith("made:"):
