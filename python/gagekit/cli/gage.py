@@ -8,7 +8,7 @@ from typing import Optional
 
 import typer
 
-from ._common import JSON_OPTION, UNITS_OPTION, emit, read_cloud_cli
+from ._common import JSON_OPTION, UNITS_OPTION, emit, read_cloud_cli, warn
 from .qif import INSTRUMENT_OPTION, QIF_RESULTS_OPTION, check_output
 
 app = typer.Typer(help="Virtual gages: can a scanned casting be machined to print? (Ch. 5)", no_args_is_help=True)
@@ -46,7 +46,7 @@ def check(
         warnings.simplefilter("always")
         spec = GageSpec.load(gages)
     for w in caught:
-        typer.echo(f"gagekit: warning: {w.message}", err=True)
+        warn(w.message)
     pts = read_cloud_cli(cloud, units).points
     result = check_gages(pts, spec, groups=not no_groups)
     if report is not None:
