@@ -81,7 +81,8 @@ PLACEHOLDERS = {
     "TRACKER.csv": "made:OBS.csv",  # laser-tracker observations
     "SPHERE.csv": "pending:a probed-sphere observation file",
     "RTEST.csv": "pending:an R-test observation file",
-    "RUN.csv": "pending:a ballbar run",
+    "RUN.csv": "test:ballbar/simulated_xy.csv",  # a simulated ballbar run, XY plane, R 150 mm
+    "KIN.txt": "out:KIN.txt",
     "R": "150", "F": "1000", "XY": "XY",
     "MODEL.qif": "pkg:data/nist_ctc_01_asme1_ap242.qif.gz",
     "OUT.qif": "out:OUT.qif",
@@ -89,6 +90,8 @@ PLACEHOLDERS = {
 #: the value after these options is written: always a new path in the command's folder (so that
 #: `--out PART.toml` never writes over a bundled sample)
 OUTPUT_OPTIONS = ("--out", "--out-cloud", "--report", "--qif-results")
+#: where one placeholder letter means two things: the value after these options
+OPTION_VALUES = {"--pitch": "5"}  # ballbar: lead of the screw, mm (P is the studio's --port elsewhere)
 PLACEHOLDER = re.compile(r"^[A-Z][A-Z0-9_]*(\.[a-z0-9]+)?$")
 
 #: a documented line containing KEY needs the extra: in the bare venv it must say so in one line
@@ -213,6 +216,8 @@ def _args(line: str, work: Path, made: Path, bare: bool, request) -> list[str]:
         v = PLACEHOLDERS.get(a, a) if PLACEHOLDER.match(a) or a in PLACEHOLDERS else a
         if out and out[-1] in OUTPUT_OPTIONS:
             v = f"out:{Path(a).name}"
+        elif out and out[-1] in OPTION_VALUES and PLACEHOLDER.match(a):
+            v = OPTION_VALUES[out[-1]]
         elif a.startswith("python/gagekit/"):  # a path of the source tree: the installed package's file
             v = f"pkg:{a[len('python/gagekit/'):]}"
         if a in ("SCAN.ply", "SCAN") and part:

@@ -41,6 +41,7 @@ RECIPES: dict[str, list] = {
     "machine iso230-2": [data_path("ecmc_axis1_runs.csv")],
     "data list": [],
     "data path": ["round"],
+    "machine ballbar": [ROOT / "tests" / "data" / "ballbar" / "simulated_xy.csv", "--plane", "XY", "--radius", 150, "--feed", 1000],
     "machine design": [M, "--points", 60, "--candidates", 2000, "--out", "T/plan.csv"],
     "machine evaluate-plan": [M, "T/plan.csv", "--seeds", 2, "--test-points", 200],
     "machine simulate-cycles": [M, "T/plan.csv", "--cycles", 3, "--out", "T/cyc.csv"],

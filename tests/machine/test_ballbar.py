@@ -181,3 +181,24 @@ def test_cli_json_report_and_errors(tmp_path, simulated):
     (tmp_path / "bad.csv").write_text("angle_deg,deviation_um\n0,1\n")
     r = cli("ballbar", tmp_path / "bad.csv", "--plane", "XY", "--radius", R)
     assert r.returncode == 2 and "direction" in r.stderr
+
+
+def test_groups_behind_the_diagnostics(machine, simulated):
+    """With the machine file and the centre joints, squareness and scale mismatch name their
+    groups, and the groups' true values give back what the ballbar measured."""
+    from gagekit.machine.ballbar import group_sensitivities
+
+    run, _ = simulated
+    at = dict(zip(machine.joint_names, [0.0, 0.0, 1500.0, 1400.0, -500.0]))
+    sens = group_sensitivities(machine, "XY", R, at)
+    sq = sens["squareness_um_per_m"]
+    key = next(k for k in sq if k.startswith("T2.alpha"))
+    assert sq[key] == pytest.approx(-1e6, rel=1e-6)
+    assert sens["scale_mismatch_um_per_m"]["X.delta"] == pytest.approx(1e6, rel=1e-6)
+    assert sens["scale_mismatch_um_per_m"]["Y.delta"] == pytest.approx(-1e6, rel=1e-6)
+    groups = {g.name: v for g, v in zip(machine.structure().groups, machine.structure().group_values(_params(
+        machine, {"T3.alpha": 25e-6, "X.delta": 30e-6, "Y.delta": -10e-6})))}
+    d = analyse_ballbar(run, "XY", R, feed=FEED).to_dict()
+    for label in ("squareness_um_per_m", "scale_mismatch_um_per_m"):
+        predicted = sum(v * groups[k] for k, v in sens[label].items())
+        assert predicted == pytest.approx(d[label]["value"], rel=0.02), label

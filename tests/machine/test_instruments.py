@@ -152,3 +152,113 @@ def test_files_and_cli(machine, tmp_path):
     assert "EXOB" in json.loads(r.stdout)["instruments"]["sphere"]["location_errors_seen"]
     r = cli("check", mf, "--observations", "laser")
     assert r.returncode == 2 and r.stderr.startswith("gagekit: error: ") and len(r.stderr.splitlines()) == 1
+
+
+def test_kinematics_export(machine, tmp_path):
+    from gagekit.machine.export_kinematics import export_kinematics
+
+    c = simulate_sphere(machine, "B", POSITIONS, SPHERE, {"W": -500.0}, LOCATION)
+    cal = identify_mixed(machine, [_sphere_obs(c)]).calibration
+    res = export_kinematics(machine, cal, tmp_path / "kin.txt", at={"W": -500.0}, stamp="test")
+    (b,) = res.axes
+    # the X and Z joints move the tool along +x and +z: the axis line moves by EXOB, EZOB
+    assert b.point["X"] - b.nominal_point["X"] == pytest.approx(LOCATION["EXOB"], abs=1e-8)
+    assert b.point["Z"] - b.nominal_point["Z"] == pytest.approx(LOCATION["EZOB"], abs=1e-8)
+    assert b.direction[0] == pytest.approx(-LOCATION["ECOB"], abs=1e-10) and b.direction[2] == pytest.approx(LOCATION["EAOB"], abs=1e-10)
+    hal = (tmp_path / "kin_linuxcnc.hal").read_text()
+    setp = {ln.split()[1]: float(ln.split()[2]) for ln in hal.splitlines() if ln.startswith("setp")}
+    assert setp["xyzbc-trt-kins.x-offset"] == pytest.approx(b.point["X"], abs=1e-6)
+    assert setp["xyzbc-trt-kins.z-offset"] == pytest.approx(b.point["Z"], abs=1e-6)
+    tab = (tmp_path / "kin_heidenhain.tab").read_text().splitlines()
+    trans = [ln.split() for ln in tab if ln.split()[:2] == ["0", "Trans"]][0]
+    assert float(trans[2]) == pytest.approx(b.point["X"], abs=1e-6) and float(trans[7]) == pytest.approx(np.degrees(LOCATION["ECOB"]), abs=1e-7)
+    sie = (tmp_path / "kin_siemens.txt").read_text()
+    assert "$MC_TRAFO5_PART_OFFSET_1[0]=" in sie and "$MC_TRAFO5_AXIS1_1[1]=" in sie
+    cli = lambda *a: subprocess.run([sys.executable, "-m", "gagekit", "machine", *map(str, a)], capture_output=True, text=True)  # noqa: E731
+    cal.save(tmp_path / "cal.json")
+    r = cli("export", example_machine_path(), tmp_path / "cal.json", "--format", "kinematics", "--out", tmp_path / "k.txt", "--at", "W=-500", "--json")
+    assert r.returncode == 0, r.stderr
+    assert len(json.loads(r.stdout)["files"]) == 3
+
+
+def test_ballbar_run_as_an_observation(machine, tmp_path):
+    """A ballbar file with plane, radius and centre joints joins the identification: alone it
+    sees little at one place (reported honestly), with tracker data it sharpens the XY
+    squareness and the X, Y scale groups; backlash and servo drop out (both directions averaged)."""
+    from gagekit.machine.simulate_instruments import simulate_ballbar
+
+    truth = Truth.random(machine, seed=4)
+    at = np.array([0.0, 0.0, 1500.0, 1400.0, -500.0])
+    run = simulate_ballbar(machine, truth.parameters, "XY", 150.0, at, points=360, backlash={"X": 0.004}, lag={"Y": 0.001},
+                           noise_um=0.1, seed=4)
+    lines = ["# kind = ballbar", "# plane = XY", "# radius = 150", "# at = B=0,X=0,Z=1500,Y=1400,W=-500", "# sigma_um = 0.1",
+             "angle_deg,deviation_um,direction"]
+    lines += [f"{float(a)!r},{float(d)!r},{'ccw' if s > 0 else 'cw'}" for a, d, s in zip(run.angles_deg, run.deviations_um, run.directions)]
+    f = tmp_path / "bb.csv"
+    f.write_text("\n".join(lines) + "\n")
+    bb = read_instrument(f, machine)
+    assert bb.kind == "ballbar" and len(bb) == 361  # 360 averaged angles and the centre
+    alone = identify_mixed(machine, [bb])
+    assert alone.unknowns == "groups" and alone.instruments[0]["residual_rms_um"] < 0.5  # backlash, servo gone
+    tracker = simulate(machine, truth, machine.sample_commands(120, seed=5), seed=6)
+    t_obs = InstrumentObservations("tracker", tracker.commands, tracker.measured, sigma=0.0089)
+    t_only = identify_mixed(machine, [t_obs])
+    mixed = identify_mixed(machine, [t_obs, bb])
+    sq = next(k for k in t_only.groups if k.startswith("T2.alpha"))
+    assert mixed.groups[sq]["std"] < 0.9 * t_only.groups[sq]["std"]  # 13.2 -> 11.1 urad: one circle, one place
+    true = truth.group_values(machine)[sq]
+    assert abs(mixed.groups[sq]["value"] - true) < 3 * mixed.groups[sq]["std"]
+    (tmp_path / "bad.csv").write_text("# kind = ballbar\n# plane = XY\nangle_deg,deviation_um,direction\n0,1,cw\n")
+    with pytest.raises(FileFormatError):
+        read_instrument(tmp_path / "bad.csv", machine)
+
+
+def test_design_for_instruments(machine, tmp_path):
+    from gagekit.machine.instrument_design import design_instrument
+
+    d = design_instrument(machine, "sphere", 12, at={"W": -500.0})
+    assert len(d["positions"]) == 12 and set(d["unknowns"]) == {"sphere x", "sphere y", "sphere z", "EXOB", "EZOB", "EAOB", "ECOB"}
+    # the I-optimal positions identify the location errors at least as well as 12 even ones
+    from gagekit.machine.instruments import identify_mixed as ident
+
+    def std(pos):
+        c = simulate_sphere(machine, "B", np.asarray(pos), SPHERE, {"W": -500.0}, {})
+        loc = ident(machine, [_sphere_obs(c)]).location
+        return sum(loc[k]["std"] ** 2 * (1e6 if k[1] in "XYZ" else 1e12) for k in LOCATION)
+
+    d2 = design_instrument(machine, "sphere", 12, sphere=SPHERE, at={"W": -500.0})
+    assert std(d2["positions"]) <= std(POSITIONS) * 1.05
+    cli = lambda *a: subprocess.run([sys.executable, "-m", "gagekit", "machine", *map(str, a)], capture_output=True, text=True)  # noqa: E731
+    r = cli("design", example_machine_path(), "--instrument", "sphere", "--points", 8, "--at", "W=-500", "--out", tmp_path / "p.csv", "--json")
+    assert r.returncode == 0, r.stderr
+    assert read_instrument(tmp_path / "p.csv", machine).kind == "sphere"
+    r = cli("design", example_machine_path(), "--instrument", "ballbar", "--points", 5, "--at", "W=-500", "--out", tmp_path / "b.csv")
+    assert r.returncode == 0 and "ballbar plan" in r.stdout, r.stderr
+    r = cli("design", example_machine_path(), "--instrument", "laser", "--out", tmp_path / "x.csv")
+    assert r.returncode == 2 and len(r.stderr.splitlines()) == 1
+
+
+def test_track_sphere_cycles(machine, tmp_path):
+    """Daily thermal tracking with a probing cycle: EXOB drifts 3 um per hour, EAOB 4 urad per
+    hour; four cycles of 12 probes with 0.5 um noise give the drift back."""
+    rows = []
+    for k in range(4):
+        loc = {**LOCATION, "EXOB": LOCATION["EXOB"] + 0.003 * k, "EAOB": LOCATION["EAOB"] + 4e-6 * k}
+        c = simulate_sphere(machine, "B", POSITIONS, SPHERE, {"W": -500.0}, loc, noise_um=0.5, seed=40 + k)
+        rows += [[k + 1, *r, float(k), 20.0 + k] for r in c]
+    lines = ["# kind = sphere", ",".join(["cycle", *machine.joint_names, "time", "temp_spindle"])]
+    lines += [",".join(repr(float(v)) for v in r) for r in rows]
+    f = tmp_path / "cycles.csv"
+    f.write_text("\n".join(lines) + "\n")
+    cli = lambda *a: subprocess.run([sys.executable, "-m", "gagekit", "machine", *map(str, a)], capture_output=True, text=True)  # noqa: E731
+    r = cli("track", example_machine_path(), f, "--json", "--report", tmp_path / "rep")
+    assert r.returncode == 0, r.stderr
+    d = json.loads(r.stdout)
+    assert len(d["cycles"]) == 4 and d["cycles"][3]["drift"]["EXOB"] == pytest.approx(0.009, abs=0.002)
+    assert d["trend"]["EXOB"]["slope"] == pytest.approx(0.003, abs=0.001) and d["trend"]["EXOB"]["per"] == "hour"
+    assert d["trend"]["EAOB"]["slope"] == pytest.approx(4e-6, abs=2e-6)
+    assert (tmp_path / "rep" / "track.json").is_file()
+    r = cli("track", example_machine_path(), f)
+    assert r.returncode == 0 and "trend EXOB" in r.stdout, r.stderr
+    r = cli("track", example_machine_path(), f, "--history", tmp_path / "h.sqlite")
+    assert r.returncode == 2 and len(r.stderr.splitlines()) == 1

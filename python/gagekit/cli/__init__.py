@@ -16,9 +16,14 @@ import typer
 
 from .. import __version__
 from ..errors import GagekitError
+<<<<<<< HEAD
 from . import batch, cloud, db, demo, form, gage, machine, machine_export, machine_instruments, machine_observer, qif, stats, studio
 from . import data  # gagekit data list / path
 from ._common import warn
+=======
+from . import (batch, cloud, compare, db, demo, form, gage, machine, machine_export, machine_instruments, machine_observer,
+               qif, stats, studio)
+>>>>>>> main
 from . import inspect as inspect_cmd
 
 app = typer.Typer(
@@ -47,6 +52,7 @@ inspect_cmd.app.command("scan")(inspect_cmd.inspect)
 inspect_cmd.app.command("batch")(batch.inspect_batch)
 app.add_typer(inspect_cmd.app, name="inspect")
 app.command("studio")(studio.studio)
+app.command("compare")(compare.compare)
 
 
 def _plain_help(t: typer.Typer) -> None:

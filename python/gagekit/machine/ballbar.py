@@ -48,7 +48,8 @@ import numpy as np
 from .. import _core
 from ..errors import FileFormatError, InvalidInputError
 
-__all__ = ["BallbarRun", "BallbarResult", "read_ballbar", "analyse_ballbar", "PLANES"]
+__all__ = ["BallbarRun", "BallbarResult", "read_ballbar", "analyse_ballbar", "PLANES", "group_sensitivities",
+           "circle_commands", "radial_rows"]
 
 #: The planes of ISO 230-4 and their (first, second) axes.
 PLANES = {"XY": ("X", "Y"), "YZ": ("Y", "Z"), "ZX": ("Z", "X")}
@@ -242,3 +243,60 @@ def analyse_ballbar(
     )
     counts = {"ccw": int((run.directions == 1).sum()), "cw": int((run.directions == -1).sum())}
     return BallbarResult(pl, float(radius), feed, {k: v for k, v in counts.items() if v}, raw, run, pitch is not None)
+
+
+def group_sensitivities(machine, plane: str, radius: float, at: dict, min_share: float = 0.01) -> dict:
+    """Which identifiable groups (Eq. 3.14) a ballbar circle's squareness and scale mismatch
+    stand for, at the centre commands ``at`` (every joint): for each group, the squareness
+    (um/m) and scale mismatch (um/m) a unit value of it produces on this circle (first order:
+    the radial effect u . (M_i - M_centre) g projected on sin 2theta and cos 2theta). Groups
+    whose effect at Table 3.3's typical sizes is below ``min_share`` of the largest are left out. A ballbar test updates a
+    calibration through these groups (or as an observation file of ``machine identify``)."""
+    pl = plane.upper()
+    if pl not in PLANES:
+        raise InvalidInputError(f"plane must be XY, YZ or ZX, got {plane!r}")
+    names = machine.joint_names
+    missing = [j for j in names if j not in at]
+    if missing:
+        raise InvalidInputError(f"--at must give every joint of the machine (missing {', '.join(missing)})")
+    for x in PLANES[pl]:
+        if x not in names:
+            raise InvalidInputError(f"machine '{machine.name}' has no joints {' and '.join(PLANES[pl])} for plane {pl}")
+    st = machine.structure()
+    t = np.radians(np.arange(0.0, 360.0, 5.0))
+    cmds = circle_commands(machine, pl, radius, np.array([float(at[j]) for j in names]), t)
+    rows, _ = radial_rows(machine, cmds, st.reduce(machine.design_matrix(cmds)))  # radial effect of each group
+    sq = 2.0 / len(t) * np.sin(2 * t) @ rows * 2.0 / radius * 1e6  # um/m per unit group
+    sc = 2.0 / len(t) * np.cos(2 * t) @ rows * 2.0 / radius * 1e6
+    from .simulate import typical_magnitudes
+
+    typical = typical_magnitudes(machine)[list(st.leaders)]  # Table 3.3 sizes: compare effects, not units
+    out = {}
+    for label, v in (("squareness_um_per_m", sq), ("scale_mismatch_um_per_m", sc)):
+        size = np.abs(v) * typical
+        big = size.max()
+        out[label] = {g.name: float(x) for g, x, e in zip(st.groups, v, size) if big > 0 and e >= min_share * big}
+    return out
+
+
+def circle_commands(machine, plane: str, radius: float, centre: np.ndarray, angles_rad: np.ndarray) -> np.ndarray:
+    """Commands of a ballbar circle: ``centre`` (every joint) with the plane's joints moved by
+    radius (cos, sin) at each angle, and the centre itself as the last row."""
+    names = machine.joint_names
+    a, b = (names.index(x) for x in PLANES[plane])
+    cmds = np.repeat(np.asarray(centre, dtype=np.float64)[None, :], len(angles_rad) + 1, axis=0)
+    cmds[:-1, a] += radius * np.cos(angles_rad)
+    cmds[:-1, b] += radius * np.sin(angles_rad)
+    return cmds
+
+
+def radial_rows(machine, commands: np.ndarray, design: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """First-order change of the ballbar length for the circle ``commands`` (centre last):
+    u_i . (M_i - M_centre) with u_i the nominal direction from the pivot, (n, k) for the columns
+    of ``design`` (3(n+1), k); and the nominal lengths (n,)."""
+    nom = machine.nominal(commands)
+    m3 = np.asarray(design).reshape(len(commands), 3, -1)
+    d = nom[:-1] - nom[-1]
+    length = np.linalg.norm(d, axis=1)
+    u = d / length[:, None]
+    return np.einsum("ni,nik->nk", u, m3[:-1] - m3[-1][None]), length

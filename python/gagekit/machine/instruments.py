@@ -15,6 +15,13 @@ R-test 0.5).
   the table read the ball on the spindle; ``# directions = ux uy uz; ...`` their unit
   directions in the table frame (default the table axes). d_k = n_k . (nominal(c) + M(c) p -
   S) with S (the nest's zero, unknown) estimated.
+- ``kind = ballbar``: a ballbar run in the layout of :mod:`.ballbar` (``angle_deg,
+  deviation_um, direction``) with ``# plane = XY``, ``# radius = R`` (mm) and ``# at = B=0,X=0,
+  ...`` (the joint positions of the circle's centre). The commands of reading i are ``at`` with
+  the plane's joints moved by R (cos, sin); the deviation is u_i . ((M_i - M_at) p) + l with u_i
+  the nominal direction from the pivot and l the ballbar's length error (estimated). Readings
+  of both directions at the same angle are averaged first: backlash and servo mismatch change
+  sign with the direction and drop out (they are not geometric errors of the model).
 - ``kind = tracker``: q = T0 (nominal + M p); T0 from the closed-form rigid fit (Step 1), its
   small correction estimated with the errors (the joint method of :func:`identify`).
 
@@ -58,11 +65,13 @@ __all__ = [
     "location_names",
     "location_matrix",
     "instrument_view",
+    "cycles_kind",
+    "track_sphere",
 ]
 
-KINDS = ("tracker", "sphere", "rtest")
+KINDS = ("tracker", "sphere", "rtest", "ballbar")
 #: Standard deviation of one reading by kind, mm (tracker: Sec. 3.2.1).
-DEFAULT_SIGMA = {"tracker": TRACKER_SIGMA, "sphere": 0.001, "rtest": 0.0005}
+DEFAULT_SIGMA = {"tracker": TRACKER_SIGMA, "sphere": 0.001, "rtest": 0.0005, "ballbar": 0.0005}
 _META = re.compile(r"^\s*#\s*([A-Za-z_]+)\s*=\s*(.*?)\s*$")
 _LOC = ("X", "Y", "Z", "A", "B", "C")
 
@@ -115,6 +124,8 @@ def read_instrument(path: Union[str, Path], machine: Machine) -> InstrumentObser
             raise FileFormatError(f"{p}: sigma_um must be a number, got {meta['sigma_um']!r}") from None
         if not (math.isfinite(sigma) and sigma > 0):
             raise InvalidInputError(f"{p}: sigma_um must be positive, got {meta['sigma_um']}")
+    if kind == "ballbar":
+        return _read_ballbar_kind(p, machine, meta, sigma)
     header, data = _read_table(p)
     if data.shape[0] == 0:
         raise DegenerateGeometryError(f"{p}: no observations")
@@ -139,6 +150,48 @@ def read_instrument(path: Union[str, Path], machine: Machine) -> InstrumentObser
     if kind == "rtest":
         directions = _directions(meta.get("directions"), p)
     return InstrumentObservations(kind, cmds, readings, sphere, directions, sigma, str(p))
+
+
+def _read_ballbar_kind(p: Path, machine: Machine, meta: dict, sigma: float) -> InstrumentObservations:
+    """A ballbar run as an observation: commands on the circle, mean deviation of both
+    directions per angle (mm) in ``readings`` (n, 1), the circle centre's commands last."""
+    from .ballbar import PLANES, circle_commands, read_ballbar
+
+    for key in ("plane", "radius", "at"):
+        if key not in meta:
+            raise FileFormatError(f"{p}: a ballbar observation file needs a '# {key} = ...' line (plane, radius, at)")
+    plane = meta["plane"].upper()
+    if plane not in PLANES:
+        raise FileFormatError(f"{p}: plane must be XY, YZ or ZX, got {meta['plane']!r}")
+    try:
+        radius = float(meta["radius"])
+    except ValueError:
+        raise FileFormatError(f"{p}: radius must be a number of mm, got {meta['radius']!r}") from None
+    if not (math.isfinite(radius) and radius > 0):
+        raise InvalidInputError(f"{p}: radius must be positive, got {radius}")
+    at = {}
+    for part in meta["at"].split(","):
+        if "=" not in part:
+            raise FileFormatError(f"{p}: at must be NAME=VALUE items separated by commas, got {meta['at']!r}")
+        k, v = (x.strip() for x in part.split("=", 1))
+        try:
+            at[k] = float(v)
+        except ValueError:
+            raise FileFormatError(f"{p}: at {k}: {v!r} is not a number") from None
+    missing = [j for j in machine.joint_names if j not in at]
+    if missing:
+        raise FileFormatError(f"{p}: at must give every joint of the machine (missing {', '.join(missing)})")
+    for name in PLANES[plane]:
+        if name not in machine.joint_names or machine.joints[machine.joint_names.index(name)].kind != "prismatic":
+            raise InvalidInputError(f"{p}: plane {plane} needs prismatic joints named {' and '.join(PLANES[plane])}")
+    run = read_ballbar(p)
+    ang = np.round(np.mod(run.angles_deg, 360.0), 9)
+    uniq = np.unique(ang)
+    dev = np.array([run.deviations_um[ang == a].mean() for a in uniq]) * 1e-3  # both directions averaged
+    centre = np.array([at[j] for j in machine.joint_names])
+    cmds = circle_commands(machine, plane, radius, centre, np.radians(uniq))
+    return InstrumentObservations("ballbar", machine.commands_array(cmds, str(p)), np.append(dev, 0.0)[:, None],
+                                  None, np.array([[radius]]), sigma, str(p))
 
 
 def _directions(text: Optional[str], p: Path) -> np.ndarray:
@@ -203,6 +256,7 @@ class _Block:
     sigma: float
     nuisance: list
     source: str
+    raw: Optional[np.ndarray] = None  # (3n, P) the errors at the commands, before any projection
 
 
 def _rows(machine: Machine, obs: InstrumentObservations, index: int) -> _Block:
@@ -215,6 +269,15 @@ def _rows(machine: Machine, obs: InstrumentObservations, index: int) -> _Block:
         r = frame.to_table(obs.readings) - nom
         names = [f"{src}: frame.{k}" for k in ("alpha0", "beta0", "gamma0", "x0", "y0", "z0")]
         return _Block("tracker", m, frame_columns(nom), r.reshape(-1), obs.sigma, names, src)
+    if obs.kind == "ballbar":
+        radius = float(obs.directions[0, 0])
+        from .ballbar import radial_rows
+
+        n = len(c) - 1
+        rows, length = radial_rows(machine, c, m)
+        b = obs.readings[:n, 0] - (length - radius)
+        names = [f"{src}: ballbar length"]
+        return _Block("ballbar", rows, np.ones((n, 1)), b, obs.sigma, names, src, m)
     ids = obs.sphere if obs.kind == "sphere" else np.zeros(len(c), dtype=np.int64)
     uniq = sorted(set(int(i) for i in ids))
     s0 = {i: nom[ids == i].mean(axis=0) for i in uniq}
@@ -242,7 +305,7 @@ def _rows(machine: Machine, obs: InstrumentObservations, index: int) -> _Block:
     proj = np.kron(np.eye(len(c)), d)  # (3n, 3n): rows n_k per point
     b = obs.readings.reshape(-1) + (proj @ base.reshape(-1))
     names = [f"{src}: nest.{a}" for a in "xyz"]
-    return _Block("rtest", proj @ m, proj @ nn, b, obs.sigma, names, src)
+    return _Block("rtest", proj @ m, proj @ nn, b, obs.sigma, names, src, m)
 
 
 # ----- the joint solve ---------------------------------------------------------------------------
@@ -279,11 +342,18 @@ class MixedResult:
 RANK_RTOL = 1e-6
 
 
-def _seen(vt: np.ndarray, r: int, k: int) -> np.ndarray:
+#: Largest variance inflation (equilibrated columns) of an unknown counted as seen: beyond it
+#: the estimate is more than 1000 times noisier than the unknown's own column would make it.
+MAX_INFLATION = 1e6
+
+
+def _seen(vt: np.ndarray, sv: np.ndarray, r: int, k: int) -> np.ndarray:
     """Which of the first k columns are estimable: their unit vectors lie in the row space
-    (the first r right singular vectors of the weighted, equilibrated matrix)."""
+    (the first r right singular vectors of the weighted, equilibrated matrix), and not so
+    nearly dependent on the others that the estimate is meaningless."""
     resid = 1.0 - (vt[:r, :k] ** 2).sum(axis=0)
-    return resid < 1e-6
+    inflation = ((vt[:r, :k] / sv[:r, None]) ** 2).sum(axis=0)
+    return (resid < 1e-6) & (inflation < MAX_INFLATION) & (np.abs(vt[:r, :k]).sum(axis=0) > 0)
 
 
 def identify_mixed(
@@ -298,7 +368,7 @@ def identify_mixed(
         raise InvalidInputError("no observations given")
     kinds = {o.kind for o in observations}
     if unknowns is None:
-        unknowns = "groups" if "tracker" in kinds else "location"
+        unknowns = "groups" if kinds & {"tracker", "ballbar"} else "location"
     if unknowns not in ("groups", "location"):
         raise InvalidInputError(f"unknowns must be 'groups' or 'location', got {unknowns!r}")
     st = structure if structure is not None else machine.structure()
@@ -324,7 +394,13 @@ def identify_mixed(
     full = np.hstack([a, nmat])
     rhs = np.concatenate([b.b / b.sigma for b in blocks])
     norms = np.linalg.norm(full, axis=0)
-    norms[norms == 0] = 1.0
+    # an unknown whose effect the readings cancel (a ballbar's length under a rotation of the
+    # whole table) has a column of round-off only: no effect
+    raw = np.sqrt(sum((((b.raw if b.raw is not None else b.a) @ basis / b.sigma) ** 2).sum(axis=0) for b in blocks))
+    dead = np.zeros(full.shape[1], bool)
+    dead[:k] = norms[:k] <= 1e-9 * raw
+    norms[dead | (norms == 0)] = 1.0
+    full[:, dead] = 0.0
     eq = full / norms
     # the SVD of the tall, thin, equilibrated matrix through its normal matrix (k x k): eq^T eq =
     # V S^2 V^T; with columns of unit norm the squared condition stays far inside double
@@ -338,7 +414,7 @@ def identify_mixed(
     r = int((sv > RANK_RTOL * sv[0]).sum())
     if r == 0:
         raise DegenerateGeometryError("the observations see none of the unknowns")
-    seen = _seen(vt, r, k)
+    seen = _seen(vt, sv, r, k)
     x = (vt[:r].T @ (qtb[:r] / sv[:r])) / norms
     cov = ((vt[:r].T / sv[:r] ** 2) @ vt[:r]) / np.outer(norms, norms)  # unit weight: sigmas as given
     resid = rhs - full @ x
@@ -463,3 +539,70 @@ def instrument_view(machine: Machine, kinds: Sequence[str]) -> dict:
         entry["location_errors_not_seen"] = [n for n, s in zip(res_l.names, res_l.seen) if not s]
         out[label] = entry
     return out
+
+
+# ----- daily tracking with sphere-probing cycles ---------------------------------------------
+def cycles_kind(path: Union[str, Path]) -> str:
+    """The ``# kind`` of a cycles file (tracker when none is given)."""
+    from .._files import read_text
+
+    return _metadata(read_text(Path(path), "cycles")).get("kind", "tracker").lower()
+
+
+def track_sphere(machine: Machine, path: Union[str, Path]) -> dict:
+    """Sphere-probing cycles (``# kind = sphere``; columns ``cycle``, the joints, optional
+    ``sphere``, ``time`` (h), ``temp_*``): the rotary-axis location errors of each cycle with
+    their uncertainties, their drift from the first cycle, and a straight-line trend per error
+    against time (or the cycle number)."""
+    from .._files import read_text
+    from .observations import _read_table
+
+    p = Path(path)
+    meta = _metadata(read_text(p, "cycles"))
+    sigma = 1e-3 * float(meta.get("sigma_um", 1e3 * DEFAULT_SIGMA["sphere"]))
+    if not (math.isfinite(sigma) and sigma > 0):
+        raise InvalidInputError(f"{p}: sigma_um must be positive")
+    header, data = _read_table(p)
+    joints = machine.joint_names
+    missing = [c for c in ["cycle", *joints] if c not in header]
+    if missing:
+        raise FileFormatError(f"{p}: missing column(s) {', '.join(missing)} (expected cycle, {', '.join(joints)}, optional sphere, time, temp_*)")
+    extra = [c for c in header if c not in ["cycle", "sphere", "time", *joints] and not c.startswith("temp_")]
+    if extra:
+        raise FileFormatError(f"{p}: unknown column(s) {', '.join(extra)}")
+    if len(data) == 0:
+        raise FileFormatError(f"{p}: no data rows")
+    col = {c: data[:, header.index(c)] for c in header}
+    cyc = col["cycle"]
+    if not np.allclose(cyc, np.round(cyc)):
+        raise FileFormatError(f"{p}: the cycle column must hold whole numbers")
+    ids = sorted({int(round(v)) for v in cyc})
+    cmds_all = machine.commands_array(np.column_stack([col[j] for j in joints]), str(p))
+    sph = col.get("sphere", np.zeros(len(cyc)))
+    rows = []
+    for cid in ids:
+        sel = np.round(cyc) == cid
+        obs = InstrumentObservations("sphere", cmds_all[sel], None, sph[sel].astype(np.int64), None, sigma, f"cycle {cid}")
+        res = identify_mixed(machine, [obs], unknowns="location")
+        entry = {"cycle": cid, "points": int(sel.sum()), "location_errors": res.location,
+                 "residual_rms_um": res.instruments[0]["residual_rms_um"]}
+        if "time" in col:
+            entry["time"] = float(col["time"][sel].mean())
+        temps = {c: float(col[c][sel].mean()) for c in header if c.startswith("temp_")}
+        if temps:
+            entry["temperatures"] = temps
+        rows.append(entry)
+    first = rows[0]["location_errors"]
+    names = [k for k, v in first.items() if "value" in v]
+    x = np.array([r.get("time", r["cycle"]) for r in rows], dtype=np.float64)
+    trend = {}
+    for k in names:
+        y = np.array([r["location_errors"][k].get("value", np.nan) for r in rows])
+        for r, v in zip(rows, y):
+            if math.isfinite(v):
+                r.setdefault("drift", {})[k] = float(v - first[k]["value"])
+        ok = np.isfinite(y)
+        if ok.sum() >= 2 and np.ptp(x[ok]) > 0:
+            slope, icpt = np.polyfit(x[ok], y[ok], 1)
+            trend[k] = {"per": "hour" if "time" in col else "cycle", "slope": float(slope), "intercept": float(icpt)}
+    return {"kind": "sphere", "cycles": rows, "trend": trend, "sigma_um": 1e3 * sigma}

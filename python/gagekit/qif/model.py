@@ -42,12 +42,13 @@ class Units:
     angle: float
     named_linear: dict = field(default_factory=dict)
     named_angular: dict = field(default_factory=dict)
+    pmi_linear: float = 0.0  # mm per PMI linear unit (tolerances, targets); 0: the linear unit
 
-    def length(self, el: Any, where: str) -> float:
+    def length(self, el: Any, where: str, pmi: bool = False) -> float:
         v = X.number(el, where)
         unit = el.get("linearUnit")
         if unit is None:
-            return v * self.linear
+            return v * ((self.pmi_linear or self.linear) if pmi else self.linear)
         if unit not in self.named_linear:
             raise FileFormatError(f"{where}: unknown linear unit {unit!r} (not in FileUnits)")
         return v * self.named_linear[unit]
@@ -175,6 +176,11 @@ def _units(root: Any, path: str) -> Units:
     angle = _unit_factor(ang, ANGULAR_DEG, "radian", 180.0 / math.pi, where)[1] if ang is not None else 180.0 / math.pi
     pmi_angle = _unit_factor(pmi, ANGULAR_DEG, "radian", 180.0 / math.pi, where)[1] if pmi is not None else angle
     named_l = {lname: lmm}
+    pmi_lin = X.child(prim, "PMILinearUnit")
+    pmi_mm = 0.0
+    if pmi_lin is not None:
+        pname, pmi_mm = _unit_factor(pmi_lin, LINEAR_MM, "meter", 1000.0, where)
+        named_l[pname] = pmi_mm
     named_a: dict = {}
     for u in ([ang] if ang is not None else []) + ([pmi] if pmi is not None else []):
         n, f = _unit_factor(u, ANGULAR_DEG, "radian", 180.0 / math.pi, where)
@@ -191,7 +197,7 @@ def _units(root: Any, path: str) -> Units:
                 named_a[n] = f
         except FileFormatError:
             continue  # an exotic other unit only matters if a value names it (checked there)
-    return Units(lmm, lname, pmi_angle, angle, named_l, named_a)
+    return Units(lmm, lname, pmi_angle, angle, named_l, named_a, pmi_mm)
 
 
 # -- features --------------------------------------------------------------------------
@@ -348,7 +354,7 @@ def _char(nom: Any, defs: dict, units: Units, features: dict, drfs: dict, path: 
     c.angular = angular
 
     def value(el: Any, w: str) -> float:
-        return units.pmi_angle_of(el, w) if angular else units.length(el, w)
+        return units.pmi_angle_of(el, w) if angular else units.length(el, w, pmi=True)
 
     tv = X.child(d, "ToleranceValue")
     if tv is not None:

@@ -29,7 +29,7 @@ from .model import FeatureNominal
 __all__ = ["SHAPE_OF", "Region", "feature_region", "sample_feature", "basis"]
 
 #: QIF feature type -> PART.toml shape
-SHAPE_OF = {"Plane": "plane", "Cylinder": "cylinder", "Circle": "circle", "Sphere": "sphere", "Line": "line"}
+SHAPE_OF = {"Plane": "plane", "Cylinder": "cylinder", "Circle": "circle", "Sphere": "sphere", "Line": "line", "Cone": "cone"}
 
 #: side of the square region of a plane the model gives no boundary for (mm)
 DEFAULT_PLANE_SIZE = 10.0
@@ -73,8 +73,9 @@ def _missing(f: FeatureNominal, keys: tuple) -> Optional[str]:
 def problem(f: FeatureNominal) -> Optional[str]:
     """Why this feature cannot become a PART.toml feature, or None."""
     if f.kind not in SHAPE_OF:
-        return f"a {f.kind} feature (gagekit's shapes: plane, cylinder, circle, sphere, line)"
+        return f"a {f.kind} feature (gagekit's shapes: plane, cylinder, cone, circle, sphere, line)"
     need = {"Plane": ("location", "normal"), "Cylinder": ("point", "direction", "diameter"),
+            "Cone": ("point", "direction", "diameter", "half_angle", "large_end"),
             "Circle": ("center", "normal", "diameter"), "Sphere": ("center", "diameter"), "Line": ("location", "direction")}
     return _missing(f, need[f.kind])
 
@@ -108,6 +109,14 @@ def feature_region(f: FeatureNominal, band: float, inset: float) -> Region:
         Lr = L - 2 * inset if L > 4 * inset else L / 2
         center = g["point"] + g["direction"] * L / 2
         return Region(tuple(center), (d + 2 * band, d + 2 * band, Lr), _rot(B), note)
+    if f.kind == "Cone":
+        B = basis(g["direction"])
+        t0, t1 = _cone_span(g)
+        d = _cone_diameter(g, max(abs(t0), abs(t1)))
+        L = t1 - t0
+        Lr = L - 2 * inset if L > 4 * inset else L / 2
+        center = g["point"] + g["direction"] * (t0 + t1) / 2
+        return Region(tuple(center), (d + 2 * band, d + 2 * band, Lr), _rot(B))
     if f.kind == "Circle":
         B = basis(g["normal"])
         d = g["diameter"]
@@ -128,6 +137,18 @@ def feature_region(f: FeatureNominal, band: float, inset: float) -> Region:
         L, note = 10.0, "the model gives no length: 10 mm from its Location"
     Lr = L - 2 * inset if L > 4 * inset else L / 2
     return Region(tuple(g["location"] + d * L / 2), (Lr, 2 * band, 2 * band), _rot(B), note)
+
+
+def _cone_span(g: dict) -> tuple:
+    """The cone's extent along its Direction from the AxisPoint (QIF: ``Diameter`` at the
+    AxisPoint, the cone widening along ``Direction`` from ``SmallEndDistance`` (default 0)
+    to ``LargeEndDistance``)."""
+    t0 = g.get("small_end") or 0.0
+    return float(t0), float(g["large_end"])
+
+
+def _cone_diameter(g: dict, t: Any) -> Any:
+    return g["diameter"] + 2 * np.asarray(t) * math.tan(math.radians(g["half_angle"]))
 
 
 def _inside(poly: np.ndarray, pts: np.ndarray) -> np.ndarray:
@@ -167,6 +188,14 @@ def sample_feature(f: FeatureNominal, n: int = 2000) -> np.ndarray:
         z = np.linspace(0.0, L, m)
         T, Z = np.meshgrid(t, z)
         T, Z = T.ravel(), Z.ravel()
+        return g["point"] + np.outer(r * np.cos(T), B[0]) + np.outer(r * np.sin(T), B[1]) + np.outer(Z, B[2])
+    if f.kind == "Cone":
+        B = basis(g["direction"])
+        t0, t1 = _cone_span(g)
+        m = max(int(math.sqrt(n)), 8)
+        T, Z = np.meshgrid(np.linspace(0.0, 2 * math.pi, m, endpoint=False), np.linspace(t0, t1, m))
+        T, Z = T.ravel(), Z.ravel()
+        r = _cone_diameter(g, Z) / 2
         return g["point"] + np.outer(r * np.cos(T), B[0]) + np.outer(r * np.sin(T), B[1]) + np.outer(Z, B[2])
     if f.kind == "Circle":
         B = basis(g["normal"])

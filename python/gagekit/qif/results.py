@@ -33,6 +33,7 @@ import copy
 import datetime as _dt
 import hashlib
 import json
+import math
 import uuid
 from pathlib import Path
 from typing import Any, Optional, Sequence
@@ -167,8 +168,10 @@ class _Plan:
         self.feature_items: dict = {}  # feature name -> item id
         self.drfs: dict = {}         # datums tuple -> DRF id
         self.device = ""
-        self.scale = 1.0             # mm per file unit
+        self.scale = 1.0             # mm per file unit (geometry)
+        self.pmi_scale = 1.0         # mm per file PMI linear unit (characteristic values)
         self.angle_scale = 1.0       # degrees per file PMI angle unit
+        self.geom_angle_scale = 1.0  # degrees per file geometric angle unit
 
 
 def _self_contained(root: Any, spec: Any, ids: _Ids, device: str, zones: dict) -> _Plan:
@@ -241,7 +244,9 @@ def _from_model(root: Any, spec: Any, model: Any, ids: _Ids, device: str) -> _Pl
     plan = _Plan()
     plan.device = device
     plan.scale = model.units.linear
+    plan.pmi_scale = model.units.pmi_linear or model.units.linear
     plan.angle_scale = model.units.pmi_angle
+    plan.geom_angle_scale = model.units.angle
     by_id = {el.get("id"): el for el in root.iter() if isinstance(el.tag, str) and el.get("id") is not None}
     # the model's frames: the datums tuple of each DRF
     for did, fr in model.drfs.items():
@@ -279,20 +284,27 @@ def _from_model(root: Any, spec: Any, model: Any, ids: _Ids, device: str) -> _Pl
         citems = _new("CharacteristicItems", n=0)
         X.child(ch, "CharacteristicNominals").addnext(citems)
     existing = {X.text(el, "CharacteristicNominalId"): el.get("id") for el in citems}
+    created: dict = {}
     for t in spec.tolerances:
         nom = by_id.get(t.qif_id) if t.qif_id else None
         if nom is None or not X.local(nom).endswith("CharacteristicNominal"):
             raise ConfigError(f"{spec.source}: [[tolerance]] #{t.index + 1} ({t.label}): qif_id {t.qif_id or '(none)'} is no "
                               f"characteristic nominal of {model.path}")
         qt = X.local(nom)[: -len("CharacteristicNominal")]
+        fitem = plan.feature_items.get(t.feature)
         if t.qif_id in existing:
             plan.items.append((existing[t.qif_id], qt))
+            fl = X.child(created[t.qif_id], "FeatureItemIds") if t.qif_id in created else None
+            if fl is not None and fitem and fitem not in X.ids(fl):  # a pattern: every member's feature
+                X.sub(fl, "Id", fitem)
+                fl.set("n", str(len(fl)))
             continue
         i = ids()
         it = X.sub(citems, f"{qt}CharacteristicItem", id=i)
-        X.sub(it, "Name", t.label)
-        if spec.features[t.feature].qif_id and t.feature in plan.feature_items:
-            _id_list(it, "FeatureItemIds", [plan.feature_items[t.feature]])
+        created[t.qif_id] = it
+        X.sub(it, "Name", t.label.rsplit(" (1/", 1)[0])
+        if fitem:
+            _id_list(it, "FeatureItemIds", [fitem])
         _id_list(it, "MeasurementDeviceIds", [device])
         X.sub(it, "CharacteristicNominalId", t.qif_id)
         existing[t.qif_id] = i
@@ -336,9 +348,10 @@ def _measured_feature(parent: Any, name: str, fd: dict, plan: _Plan, ids: _Ids) 
         X.sub(ax, "Direction", dr("axis_direction") or dr("direction"))
         if shape == "cylinder" and ls.get("radius") is not None:
             X.sub(el, "Diameter", _num(2 * ls["radius"] * s))
-        if shape == "cone":
-            X.sub(el, "HalfAngle", _num(ls.get("half_angle_deg", 0.0)))
-            X.sub(el, "FullAngle", _num(2 * ls.get("half_angle_deg", 0.0)))
+        if shape == "cone":  # gagekit: full apex angle in rad; QIF: the file's angular unit
+            full = math.degrees(float(ls.get("apex_angle", 0.0))) / plan.geom_angle_scale
+            X.sub(el, "HalfAngle", _num(full / 2))
+            X.sub(el, "FullAngle", _num(full))
     elif shape == "circle":
         X.sub(el, "Location", pt("center"))
         if ls.get("normal") is not None:
@@ -404,20 +417,26 @@ def _results(results_el: Any, runs: Sequence[dict], spec: Any, plan: _Plan, ids:
         mf.set("n", str(len(mf)))
         if len(mf) == 0:
             mr.remove(mf)
+        # one measurement per characteristic item: the callouts of a pattern (one per member,
+        # sharing a qif_id) give one actual, the largest, PASS when every member passes
+        groups: dict = {}
+        for t, r, (item, qt) in zip(spec.tolerances, tols, plan.items):
+            groups.setdefault(item, (qt, []))[1].append((t, r))
         mc = X.sub(mr, "MeasuredCharacteristics")
-        cm = X.sub(mc, "CharacteristicMeasurements", n=len(tols))
+        cm = X.sub(mc, "CharacteristicMeasurements", n=len(groups))
         at = _new("ActualTransforms", n=0)
         for fr in res.get("frames", []):
             _transform(at, fr, ids, plan)
-        for t, r, (item, qt) in zip(spec.tolerances, tols, plan.items):
+        for item, (qt, members) in groups.items():
             el = X.sub(cm, f"{qt}CharacteristicMeasurement", id=ids())
-            _status(el, bool(r["pass"]))
+            _status(el, all(bool(r["pass"]) for _, r in members))
             X.sub(el, "CharacteristicItemId", item)
-            if t.feature in fmeas:
-                _id_list(el, "FeatureMeasurementIds", [fmeas[t.feature]])
+            fm = [fmeas[t.feature] for t, _ in members if t.feature in fmeas]
+            if fm:
+                _id_list(el, "FeatureMeasurementIds", fm)
             X.sub(el, "MeasurementDeviceIds", n=1).append(_new("Id", plan.device))
-            angular = t.characteristic == "angle"
-            value = float(r["measured"]) / (plan.angle_scale if angular else plan.scale)
+            angular = members[0][0].characteristic == "angle"
+            value = max(float(r["measured"]) for _, r in members) / (plan.angle_scale if angular else plan.pmi_scale)
             X.sub(el, "Value", _num(value))
         if len(at):
             at.set("n", str(len(at)))
