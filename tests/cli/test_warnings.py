@@ -42,3 +42,14 @@ def test_cli_wording():
     assert cli_wording("outside max_tilt = 10 degrees; pass max_tilt=90") == "outside --max-tilt 10 degrees; pass --max-tilt 90"
     assert cli_wording("give the nominal axis (axis=...)") == "give the nominal axis (--axis X,Y,Z)"
     assert cli_wording("the x axis of the\nframe") == "the x axis of the frame"
+
+
+def test_one_place_prints_warnings():
+    """Every `gagekit: warning:` line of the command line comes from cli._common.warn."""
+    from pathlib import Path
+
+    import gagekit
+
+    cli = Path(gagekit.__file__).parent / "cli"
+    offenders = [f.name for f in cli.glob("*.py") if f.name != "_common.py" and "gagekit: warning: {" in f.read_text()]
+    assert not offenders, offenders

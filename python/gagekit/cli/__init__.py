@@ -16,14 +16,10 @@ import typer
 
 from .. import __version__
 from ..errors import GagekitError
-<<<<<<< HEAD
-from . import batch, cloud, db, demo, form, gage, machine, machine_export, machine_instruments, machine_observer, qif, stats, studio
-from . import data  # gagekit data list / path
-from ._common import warn
-=======
 from . import (batch, cloud, compare, db, demo, form, gage, machine, machine_export, machine_instruments, machine_observer,
                qif, stats, studio)
->>>>>>> main
+from . import data  # gagekit data list / path
+from ._common import warn
 from . import inspect as inspect_cmd
 
 app = typer.Typer(

@@ -8,11 +8,7 @@ from typing import Optional
 
 import typer
 
-<<<<<<< HEAD
-from ._common import JSON_OPTION, UNITS_OPTION, emit, read_cloud_cli, warn
-=======
-from ._common import CHUNK_OPTION, JSON_OPTION, MEMORY_OPTION, UNITS_OPTION, emit, open_scan_cli
->>>>>>> main
+from ._common import CHUNK_OPTION, JSON_OPTION, MEMORY_OPTION, UNITS_OPTION, emit, open_scan_cli, warn
 from .qif import INSTRUMENT_OPTION, QIF_RESULTS_OPTION, check_output
 
 app = typer.Typer(help="Virtual gages: can a scanned casting be machined to print? (Ch. 5)", no_args_is_help=True)
@@ -52,12 +48,7 @@ def check(
         warnings.simplefilter("always")
         spec = GageSpec.load(gages)
     for w in caught:
-<<<<<<< HEAD
         warn(w.message)
-    pts = read_cloud_cli(cloud, units).points
-    result = check_gages(pts, spec, groups=not no_groups)
-=======
-        typer.echo(f"gagekit: warning: {w.message}", err=True)
     from ..cloud.stream import CloudStream
     from ..gage.analysis import check_gages_stream
 
@@ -68,7 +59,6 @@ def check(
     else:
         pts = scan.points
         result = check_gages(pts, spec, groups=not no_groups)
->>>>>>> main
     if report is not None:
         write_report(result, report)
     if out_cloud is not None:
