@@ -83,6 +83,7 @@ PLACEHOLDERS = {
     "RTEST.csv": "pending:an R-test observation file",
     "RUN.csv": "test:ballbar/simulated_xy.csv",  # a simulated ballbar run, XY plane, R 150 mm
     "KIN.txt": "out:KIN.txt",
+    "PROBING.csv": "pending:probing cycles ('# kind = sphere')",
     "R": "150", "F": "1000", "XY": "XY",
     "MODEL.qif": "pkg:data/nist_ctc_01_asme1_ap242.qif.gz",
     "OUT.qif": "out:OUT.qif",
