@@ -84,6 +84,7 @@ PLACEHOLDERS = {
     "RUN.csv": "test:ballbar/simulated_xy.csv",  # a simulated ballbar run, XY plane, R 150 mm
     "KIN.txt": "out:KIN.txt",
     "PROBING.csv": "pending:probing cycles ('# kind = sphere')",
+    "BALLBAR.csv": "pending:ballbar observations ('# kind = ballbar')",
     "R": "150", "F": "1000", "XY": "XY",
     "MODEL.qif": "pkg:data/nist_ctc_01_asme1_ap242.qif.gz",
     "OUT.qif": "out:OUT.qif",
