@@ -6,6 +6,7 @@ warning below 25 values, trends from the scan's acquisition time and over a day 
 dates on chart time axes, zero margin after T* flagged, `stats --tolerance` checked."""
 
 import json
+import re
 import subprocess
 import sys
 from datetime import datetime, timedelta, timezone
@@ -15,7 +16,6 @@ import pytest
 
 from gagekit.stats import capability, imr_chart, trend_per_day
 from gagekit.stats.collect import characteristic
-from gagekit.stats.spc import MIN_CAPABILITY_VALUES, cpk_lower_bound, on_limits
 
 T0 = datetime(2026, 3, 2, 7, 0, tzinfo=timezone.utc)
 # after T* the limiting gage sits at zero stock: the LP returns +-1.4e-14 mm, not 0
@@ -36,6 +36,8 @@ def one_error_line(proc, *words):
 
 
 def test_values_within_the_resolution_are_on_the_limit():
+    from gagekit.stats.spc import on_limits
+
     c = capability(ZERO_STOCK, lower=0.0, resolution=1e-9, unit="mm")
     assert c.min_margin == 0.0 and c.minimum == 0.0 and c.maximum == 0.0 and c.on_limit == len(ZERO_STOCK)
     assert c.cpk is None and c.ppk is None and c.sd is None and c.sigma_within is None
@@ -63,6 +65,8 @@ def test_a_characteristic_on_its_limit_has_no_index_no_chart_and_a_zero_margin_f
 
 
 def test_capability_only_against_limits_and_warned_below_25_values():
+    from gagekit.stats.spc import MIN_CAPABILITY_VALUES, cpk_lower_bound
+
     rng = np.random.default_rng(1)
     x = rng.normal(1.0, 0.1, 12)
     c = capability(x, lower=0.0, upper=2.0, resolution=1e-9)
@@ -99,7 +103,14 @@ def test_chart_time_axes_show_dates_and_times():
     fig = trend_figure([c], "allowances", "mm")
     fig.canvas.draw()
     labels = [t.get_text() for t in fig.axes[0].get_xticklabels() if t.get_text()]
-    assert labels and all(lb.startswith("2026-03-02 07:00:") for lb in labels), labels
+    assert len(labels) >= 3 and len(set(labels)) == len(labels), labels
+    assert all(re.fullmatch(r"2026-03-0[12] (06:59:59|07:00:00)\.\d{6}", lb) for lb in labels), labels
+    times = [T0 + timedelta(hours=7 * k) for k in range(8)]  # two days: dates and minutes
+    c = characteristic("allowance after T*: g1", "mm", [0.1 * k for k in range(8)], times, ["s"] * 8, lower=0.0)
+    fig = trend_figure([c], "allowances", "mm")
+    fig.canvas.draw()
+    labels = [t.get_text() for t in fig.axes[0].get_xticklabels() if t.get_text()]
+    assert labels and all(re.fullmatch(r"2026-03-0\d \d\d:\d\d", lb) for lb in labels), labels
 
 
 def test_gage_check_flags_zero_margin_in_json_text_and_report(tmp_path):
@@ -182,7 +193,10 @@ def test_e57_acquisition_time_from_its_header():
     pye57 = pytest.importorskip("pye57")
     data = Path(__file__).resolve().parents[1] / "data" / "e57"
     f = data / "bunnyDouble.e57"
-    gps = pye57.E57(str(f)).root["creationDateTime"]["dateTimeValue"].value()
+    e57 = pye57.E57(str(f))
+    root = e57.root
+    node = root["creationDateTime"]
+    gps = node["dateTimeValue"].value()  # each node kept: pye57's nodes hold weak references
     assert acquisition_time(f) == gps_to_utc(gps)
     # GPS time runs 15 s ahead of UTC in 2011, 18 s since 2017
     assert gps_to_utc(0.0) == datetime(1980, 1, 6, tzinfo=timezone.utc)

@@ -23,14 +23,16 @@ def _plt():
     return plt
 
 
-def date_axis(ax) -> None:
+def date_axis(ax, times: list) -> None:
     """Dates and times on a time axis (``2026-03-02 07:00``), whatever the span: matplotlib's
-    automatic format shows ``53:23.300000`` for data within a minute."""
+    automatic format shows ``53:23.300000`` for data within a minute. Seconds appear when
+    the data span less than a day, microseconds when less than a minute."""
     import matplotlib.dates as mdates
 
-    loc = mdates.AutoDateLocator(minticks=3, maxticks=7)
-    ax.xaxis.set_major_locator(loc)
-    ax.xaxis.set_major_formatter(mdates.DateFormatter("%Y-%m-%d %H:%M:%S"))
+    span = (max(times) - min(times)).total_seconds() if times else 0.0
+    fmt = "%Y-%m-%d %H:%M" if span >= 86400 else ("%Y-%m-%d %H:%M:%S" if span >= 60 else "%Y-%m-%d %H:%M:%S.%f")
+    ax.xaxis.set_major_locator(mdates.AutoDateLocator(minticks=3, maxticks=6))
+    ax.xaxis.set_major_formatter(mdates.DateFormatter(fmt))
     ax.set_xlabel("time (UTC)")
 
 
@@ -78,14 +80,16 @@ def trend_figure(chars: list, title: str, ylabel: str):
     """Several series against the scan time."""
     plt = _plt()
     fig, ax = plt.subplots(figsize=(8, 4))
+    every = []
     for c in chars:
         t = [datetime.fromisoformat(s) for s in c["series"]["time"]]
+        every += t
         ax.plot(t, c["series"]["value"], marker="o", ms=3, lw=1, label=c["name"].split(": ")[-1])
     ax.set_title(title)
     ax.set_ylabel(ylabel)
     ax.legend(fontsize=7, ncol=2)
     ax.grid(alpha=0.3)
-    date_axis(ax)
+    date_axis(ax, every)
     fig.autofmt_xdate()
     fig.tight_layout()
     return fig
@@ -95,8 +99,10 @@ def drift_figure(machine: dict, top: int = 8):
     """Fig. 4.8 across days: each group's change since the first calibration."""
     plt = _plt()
     fig, ax = plt.subplots(figsize=(8, 4.5))
+    every = []
     for g in machine["groups"][:top]:
         t = [datetime.fromisoformat(s) for s in g["times"]]
+        every += t
         if "effect_mm_per_unit" in g:
             y = [(v - g["first"]) * g["effect_mm_per_unit"] * 1000.0 for v in g["values"]]
         else:
@@ -109,7 +115,7 @@ def drift_figure(machine: dict, top: int = 8):
     ax.set_title(f"{machine['machine']}: parameter drift across calibrations (Fig. 4.8)")
     ax.legend(fontsize=7, ncol=2)
     ax.grid(alpha=0.3)
-    date_axis(ax)
+    date_axis(ax, every)
     fig.autofmt_xdate()
     fig.tight_layout()
     return fig
