@@ -121,6 +121,7 @@ def nc_compensate(
     header: str,
     arc_tolerance: Optional[float] = None,
     iterations: int = 4,
+    ranges: Sequence[tuple[float, float]] = ...,
 ) -> tuple[bytes, dict[str, Any]]: ...
 
 class Identifiability:

@@ -34,7 +34,7 @@ import shutil
 import stat
 import tempfile
 from pathlib import Path
-from typing import IO, Iterator, Union
+from typing import IO, Iterator, Optional, Union
 
 from .errors import FileAccessError, FileFormatError, GagekitError
 
@@ -124,12 +124,21 @@ def input_file(path: PathLike, what: str = "file") -> Path:
         raise FileAccessError(f"{p}: {what} not found (no such file)") from None
     except OSError as exc:
         raise os_error(exc, p, "read") from None
+    why = not_regular(st, what)
+    if why:
+        raise FileAccessError(f"{p}: {why}")
+    return p
+
+
+def not_regular(st: os.stat_result, what: str = "file") -> Optional[str]:
+    """Why a file with status ``st`` is not read (a folder, FIFO, socket or device), or None
+    for a regular file: the one wording of every input check (single commands, batches)."""
     if stat.S_ISDIR(st.st_mode):
-        raise FileAccessError(f"{p}: is a folder; expected a {what}")
+        return f"is a folder; expected a {what}"
     if not stat.S_ISREG(st.st_mode):
         kind = "a FIFO (named pipe)" if stat.S_ISFIFO(st.st_mode) else "not a regular file (a device or socket)"
-        raise FileAccessError(f"{p}: is {kind}; gagekit reads regular files only")
-    return p
+        return f"is {kind}; gagekit reads regular files only"
+    return None
 
 
 def read_bytes(path: PathLike, what: str = "file") -> bytes:

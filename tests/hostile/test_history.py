@@ -136,3 +136,29 @@ def test_reads_after_a_killed_writer(tmp_path, cycles):
     w.wait()
     for _ in range(3):
         assert _runs(h) == 1
+
+
+def test_a_history_killed_during_its_first_track_is_rolled_back(tmp_path, cycles):
+    """A writer killed inside the first transaction of a new history leaves a file whose
+    first page was never written (zeros, no SQLite header) beside a hot journal: SQLite rolls
+    the journal back (to an empty database) before the header is read, so the next track
+    writes its run and the history reads it (issue 22 section 2)."""
+    h = tmp_path / "h.sqlite"
+    w = subprocess.Popen([sys.executable, "-c",
+                          "import sqlite3, sys, time; c = sqlite3.connect(sys.argv[1], isolation_level=None);"
+                          "c.execute('PRAGMA cache_size=2'); c.execute('BEGIN IMMEDIATE');"
+                          "c.execute('CREATE TABLE alembic_version (version_num VARCHAR(32) NOT NULL)');"
+                          "c.execute('CREATE TABLE calibrations (id INTEGER PRIMARY KEY, source TEXT)');"
+                          "[c.execute('INSERT INTO calibrations (source) VALUES (?)', ('x' * 500,)) for i in range(4000)];"
+                          "print('writing', flush=True); time.sleep(60)", str(h)], stdout=subprocess.PIPE, text=True)
+    assert w.stdout.readline().strip() == "writing"
+    w.send_signal(signal.SIGKILL)
+    w.wait()
+    journal = h.with_name(h.name + "-journal")
+    assert journal.stat().st_size > 0 and h.stat().st_size > 0
+    assert h.read_bytes()[:16] != b"SQLite format 3\x00"  # the state the header check refused
+    proc = gk("machine", "history", h)
+    assert_clean_error(proc, "an empty SQLite database")  # rolled back: nothing was ever stored
+    assert not journal.exists()
+    assert_ok(gk("machine", "track", EXAMPLE_MACHINE, cycles, "--history", h))
+    assert _runs(h) == 1

@@ -158,3 +158,25 @@ def test_a_killed_report_folder_is_old_or_absent(tmp_path):
     if rep.exists():
         assert (rep / "report.html").exists() and (rep / ".gagekit-report").exists()
     assert [x.name for x in tmp_path.iterdir() if x.name != "rep" and ".gk-tmp" not in x.name] == []
+
+
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGHUP])
+def test_sigterm_and_sighup_mid_write_leave_no_temporary_file(tmp_path, sig):
+    """SIGTERM (a timeout, systemd, docker stop) and SIGHUP are handled as Ctrl-C: sent while
+    the output's temporary file is being written, the old file stays, no ``.NAME.*.gk-tmp.*``
+    is left, one line, exit 128 + signal (issue 22 section 2)."""
+    out = tmp_path / "obs.csv"
+    out.write_text("old\n")
+    p = _start("machine", "simulate", EXAMPLE_MACHINE, "--points", 2_000_000, "--out", out)
+    deadline = time.monotonic() + 300
+    while p.poll() is None and not leftovers(tmp_path) and time.monotonic() < deadline:
+        time.sleep(0.002)
+    if p.poll() is not None:
+        pytest.skip("finished before the temporary file was seen")
+    p.send_signal(sig)
+    so, se = p.communicate(timeout=120)
+    if p.returncode == 0:
+        pytest.skip("the signal came after the rename")
+    name = signal.Signals(sig).name
+    assert p.returncode == 128 + sig and se.strip() == f"gagekit: error: interrupted ({name})", (p.returncode, se)
+    assert out.read_text() == "old\n" and leftovers(tmp_path) == []

@@ -190,3 +190,44 @@ def test_cli_export_json_and_error(machine, cal, tmp_path):
     p = run("export", EXAMPLE_MACHINE, calf, "--format", "fanuc-3d", "--axes", "X,Y,B", "--out", tmp_path / "f.tap")
     assert p.returncode == 2 and p.stderr.startswith("gagekit: error: ") and len(p.stderr.splitlines()) == 1
     assert not (tmp_path / "f.tap").exists()
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.integers(0, 2**32 - 1), st.lists(st.integers(1, 6), min_size=1, max_size=4), st.integers(1, 3))
+def test_multilinear_matches_scipy_regular_grid_interpolator(seed, shape, k):
+    """The grid read-back interpolates in numpy (a bare install has no scipy, issue 22 item 1):
+    it agrees with scipy's RegularGridInterpolator (method linear) inside any rectilinear grid."""
+    interpolate = pytest.importorskip("scipy.interpolate")
+    from gagekit.machine.export import multilinear
+
+    rng = np.random.default_rng(seed)
+    values = tuple(np.cumsum(rng.uniform(0.1, 50.0, n)) - 100.0 for n in shape)
+    table = rng.normal(size=(*shape, k))
+    pts = np.column_stack([rng.uniform(v[0], v[-1], 50) for v in values])
+    pts[0] = [v[0] for v in values]  # the corners and nodes themselves
+    pts[1] = [v[-1] for v in values]
+    got = multilinear(values, table, pts)
+    if min(shape) >= 2:  # scipy needs two nodes per axis
+        want = interpolate.RegularGridInterpolator(values, table, method="linear", bounds_error=True)(pts)
+        np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-12)
+    node = tuple(rng.integers(0, n) for n in shape)
+    np.testing.assert_allclose(multilinear(values, table, np.array([[v[i] for v, i in zip(values, node)]])),
+                               table[node][None], rtol=1e-12, atol=1e-12)
+    with pytest.raises(InvalidInputError, match="outside the grid"):
+        multilinear(values, table, np.array([[v[-1] + 1.0 for v in values]]))
+
+
+def test_grid_exports_import_no_scipy(machine, cal, tmp_path):
+    """grid-csv and fanuc-3d run where scipy cannot be imported (a bare `pip install gagekit`)."""
+    code = (
+        "import sys; sys.modules['scipy'] = None\n"
+        "import gagekit\n"
+        "from gagekit.cli import main\n"
+        f"main(['machine', 'export', {str(EXAMPLE_MACHINE)!r}, {str(tmp_path / 'cal.json')!r}, '--format', sys.argv[1],"
+        f" '--out', {str(tmp_path)!r} + '/out.' + sys.argv[1], '--step', '400'])\n"
+    )
+    cal.save(tmp_path / "cal.json")
+    for fmt in ("grid-csv", "fanuc-3d"):
+        p = subprocess.run([sys.executable, "-c", code, fmt], capture_output=True, text=True, timeout=300)
+        assert p.returncode == 0, p.stderr
+        assert "scipy" not in p.stderr and (tmp_path / f"out.{fmt}").exists()

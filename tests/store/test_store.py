@@ -234,3 +234,31 @@ def test_export_writes_every_table(db_url, tmp_path, fmt):
     assert allow.num_rows == 15 and results.num_rows == 5
     assert json.loads(results.column("result")[2].as_py()) == gage_result(2)
     assert sorted(allow.column("allowance_after").to_pylist())[-1] == pytest.approx(0.54)
+
+
+def test_csv_export_needs_no_pyarrow(tmp_path):
+    """`db export --format csv` runs on a bare install (issue 22 item 1): pyarrow cannot be
+    imported, the CSV files are written by the standard library and read back by it; only
+    Parquet asks for the extra, in one line."""
+    import csv
+    import subprocess
+    import sys
+
+    url = f"sqlite:///{tmp_path / 'r.db'}"
+    store = ResultStore(url)
+    sid = store.ensure_spec("gage", "d" * 64, {"spec": {"x": 1}}, "g.toml", "p")
+    for k in range(3):
+        store.record("gage", sid, f"{k:064d}", 5, T0, [f"s{k}.ply"], outcome(k))
+    store.close()
+    code = ("import sys; sys.modules['pyarrow'] = None\nfrom gagekit.cli import main\n"
+            "main(['db', 'export', sys.argv[1], '--format', sys.argv[2], '--out', sys.argv[3]])")
+    run = lambda fmt, out: subprocess.run([sys.executable, "-c", code, url, fmt, str(tmp_path / out)],  # noqa: E731
+                                          capture_output=True, text=True, timeout=120)
+    p = run("csv", "csv")
+    assert p.returncode == 0, p.stderr
+    with open(tmp_path / "csv" / "results.csv", newline="", encoding="utf-8") as f:
+        rows = list(csv.DictReader(f))
+    assert len(rows) == 3 and json.loads(rows[2]["result"]) == gage_result(2)
+    assert rows[0]["finished"].endswith("Z") and datetime.fromisoformat(rows[0]["finished"][:-1]) > datetime(2000, 1, 1)
+    p = run("parquet", "pq")
+    assert p.returncode == 2 and p.stderr.count("\n") == 1 and "gagekit[parquet]" in p.stderr, p.stderr

@@ -7,6 +7,7 @@ last run is not evaluated again.
 
 from __future__ import annotations
 
+import errno
 import glob
 import hashlib
 import os
@@ -85,6 +86,11 @@ def identify_file(path: str) -> FileIdentity:
     The batch's parent process hashes every scan while the workers compute, so this
     reads into one reused buffer (unbuffered ``readinto``: no new 4 MB object, and its
     page faults, per chunk) - half the CPU time of ``read()`` in chunks."""
+    from .._files import not_regular
+
+    why = not_regular(os.stat(path), "scan file")  # stat never blocks: a FIFO is refused, not opened
+    if why:
+        raise OSError(errno.EINVAL, why)
     h = hashlib.sha256()
     buf = _buffer()
     view = memoryview(buf)

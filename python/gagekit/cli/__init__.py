@@ -86,6 +86,7 @@ def main(argv: Optional[list[str]] = None) -> None:
             # it into the one line: Ctrl-C at any moment gives the same answer
             if getattr(signal.getsignal(signal.SIGINT), "__name__", "") == "_stop":  # set while gagekit imported
                 signal.signal(signal.SIGINT, signal.default_int_handler)
+            _terminate_as_interrupt(signal)
             command = typer.main.get_command(app)
             with command.make_context("gagekit", args) as ctx:
                 command.invoke(ctx)
@@ -99,6 +100,8 @@ def main(argv: Optional[list[str]] = None) -> None:
             code = _fail("interrupted", 130)
         except usage_error as exc:  # bad or missing arguments, unknown options
             code = _fail(exc.format_message())
+        except _Terminated as exc:
+            code = _fail(f"interrupted ({exc.name})", 128 + exc.signum)
         except KeyboardInterrupt:
             code = _fail("interrupted", 130)
         except RecursionError:
@@ -115,6 +118,32 @@ def main(argv: Optional[list[str]] = None) -> None:
             for line in dict.fromkeys(str(w.message) for w in caught):
                 print(f"gagekit: warning: {line}", file=sys.stderr)
     sys.exit(code)  # always, as click's standalone mode does (callers of main() expect SystemExit)
+
+
+class _Terminated(KeyboardInterrupt):
+    """SIGTERM or SIGHUP (a timeout, systemd, ``docker stop``, a closed terminal), handled
+    as Ctrl-C: every temporary file and folder is removed on the way out; exit 128 + signal."""
+
+    def __init__(self, signum: int, name: str) -> None:
+        super().__init__(name)
+        self.signum, self.name = signum, name
+
+
+def _terminate_as_interrupt(signal) -> None:
+    """Raise :class:`_Terminated` on SIGTERM and SIGHUP, as Python raises KeyboardInterrupt
+    on SIGINT (the kernels stop for them too: ``rust/py/src/sigint.rs``). A signal the
+    caller ignores (``nohup``: SIGHUP) or handles itself is left alone."""
+
+    def handler(signum, frame):
+        raise _Terminated(signum, signal.Signals(signum).name)
+
+    for name in ("SIGTERM", "SIGHUP"):
+        sig = getattr(signal, name, None)
+        if sig is not None and signal.getsignal(sig) is signal.SIG_DFL:
+            try:
+                signal.signal(sig, handler)
+            except (ValueError, OSError):  # pragma: no cover - not the main thread
+                pass
 
 
 def _click_classes() -> tuple:

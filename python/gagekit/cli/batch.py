@@ -162,9 +162,11 @@ def form_batch(
 ) -> None:
     """Form fits of many files: each result as `form fit SHAPE FILE -c C --json` prints it."""
     from ..batch import Job
+    from ..form.criteria import SHAPE_CRITERIA, criterion_name
     from ..form.files import normalize_shape
 
     name = normalize_shape(shape)
+    criterion_name(criterion, SHAPE_CRITERIA[name], name)  # a bad criterion stops the batch before it starts
     job = Job("form", {"shape": name, "criterion": criterion, "seed": seed}, _units(units), source=None, part=part)
     run(job, scans, db, report, workers, scheduler, as_json, retry_failed, f"Form batch: {name} ({criterion})")
 

@@ -88,10 +88,21 @@ def regions(
     units: Optional[str] = UNITS_OPTION,
     as_json: bool = JSON_OPTION,
 ) -> None:
-    """Cut a cloud into its regions and hull-filter each one (Sec. 5.4.1)."""
+    """Cut a cloud into its regions and hull-filter each one (Sec. 5.4.1); with an [alignment], part-frame regions after the 3-2-1 alignment, as `gage check` cuts them."""
+    from .._util import load_toml
     from ..cloud.workflow import cut_and_filter
+    from ..gage.analysis import region_boxes
+    from ..gage.spec_file import parse_region_spec
 
-    result = cut_and_filter(read_cloud_cli(file, units).points, load_regions(regions_toml))
+    doc = load_toml(regions_toml, "regions")
+    if isinstance(doc, dict) and "alignment" in doc:
+        spec = parse_region_spec(doc, str(regions_toml))
+        points = read_cloud_cli(file, units).points
+        boxes = region_boxes(points, spec)
+    else:
+        boxes = load_regions(regions_toml)
+        points = read_cloud_cli(file, units).points
+    result = cut_and_filter(points, boxes)
 
     def human(res) -> str:
         r = res.to_dict()

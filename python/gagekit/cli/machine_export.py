@@ -126,7 +126,7 @@ def compensate_nc_cmd(
     calibration: Path = CAL_ARG,
     program: Path = typer.Argument(..., help="G-code program (ISO 6983 / RS-274) with the machine's joint letters."),
     out: Path = typer.Option(..., "--out", help="Corrected program to write."),
-    axes: Optional[str] = typer.Option(None, "--axes", help="Joints that compensate (default: all prismatic)."),
+    axes: Optional[str] = typer.Option(None, "--axes", help="Joints that compensate (default: the first prismatic joint along x, y and z; a redundant axis such as W only when named)."),
     max_step: float = typer.Option(0.001, "--max-step", help="Subdivide G1 moves whose correction changes by more than this, mm."),
     linearize_arcs: Optional[float] = typer.Option(None, "--linearize-arcs", help="Turn G2/G3 into chords within TOL mm (default: arcs are errors)."),
     start: Optional[str] = typer.Option(None, "--start", help="Joint positions before the program, e.g. B=0,W=-500."),
@@ -149,8 +149,9 @@ def compensate_nc_cmd(
         res,
         as_json,
         lambda r: (
-            f"wrote {r.out}: {r.lines} lines, {r.moves} moves corrected (largest correction {r.max_correction:.4f} mm), "
-            f"{r.inserted} points inserted in {r.subdivided} moves; predicted error left <= {r.max_remaining_um:.2g} um"
+            f"wrote {r.out}: {r.lines_written} lines ({r.lines} read), axes {', '.join(r.axes)} corrected in {r.moves} moves "
+            f"(largest correction {r.max_correction:.4f} mm), {r.inserted} points inserted in {r.subdivided} moves; "
+            f"predicted error left <= {r.max_remaining_um:.2g} um"
         ),
     )
 

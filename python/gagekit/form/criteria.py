@@ -10,7 +10,7 @@ from typing import Iterable
 
 from .. import _core
 
-__all__ = ["ALIASES", "CIRCLE_CRITERIA", "CRITERIA", "criterion_name"]
+__all__ = ["ALIASES", "CIRCLE_CRITERIA", "CRITERIA", "SHAPE_CRITERIA", "criterion_name"]
 
 _TABLE = _core.form_criteria()
 
@@ -22,6 +22,17 @@ CRITERIA: tuple[str, ...] = tuple(dict.fromkeys(name for _, name, _ in _TABLE))
 
 #: The short codes of the 2-D circle fits (lsq, mc, mi, mz) and their canonical names.
 CIRCLE_CRITERIA: dict[str, str] = {code: name for _, name, code in _TABLE}
+
+#: The criteria the fit of each shape accepts (canonical names); the fits and the batches
+#: (which check the name before the first scan) read them here.
+SHAPE_CRITERIA: dict[str, tuple[str, ...]] = {
+    "circle": CRITERIA,
+    "line": ("least-squares", "minimum-zone"),
+    "plane": ("least-squares", "minimum-zone"),
+    "sphere": ("least-squares", "min-circumscribed", "max-inscribed", "minimum-zone"),
+    "cylinder": ("least-squares", "min-circumscribed", "max-inscribed", "minimum-zone"),
+    "cone": ("least-squares",),
+}
 
 
 def criterion_name(criterion: object, allowed: Iterable[str] = (), shape: str = "fit") -> str:

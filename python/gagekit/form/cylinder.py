@@ -19,13 +19,13 @@ import numpy as np
 
 from .. import _core
 from ..errors import ConfigError
-from .criteria import criterion_name
+from .criteria import SHAPE_CRITERIA, criterion_name
 from .fits import Certificate, _cert, _fit_dict, _points, _vec
 from .search import DEFAULT_MAX_TILT, outside_warning, search_settings
 
 __all__ = ["CylinderFit", "fit_cylinder", "axis_angles", "DEFAULT_MAX_TILT"]
 
-_ALLOWED = ("least-squares", "min-circumscribed", "max-inscribed", "minimum-zone")
+_ALLOWED = SHAPE_CRITERIA["cylinder"]
 
 
 def axis_angles(direction: Any) -> tuple[float, float]:

@@ -22,7 +22,7 @@ import numpy as np
 from .. import _core
 from .._util import as_points
 from ..errors import ConfigError, InvalidInputError
-from .criteria import criterion_name
+from .criteria import SHAPE_CRITERIA, criterion_name
 
 __all__ = [
     "Certificate",
@@ -214,7 +214,7 @@ def fit_line(
     """
     from .search import outside_warning, search_settings
 
-    crit = criterion_name(criterion, ("least-squares", "minimum-zone"), "line")
+    crit = criterion_name(criterion, SHAPE_CRITERIA["line"], "line")
     pts = _points(points, (2, 3), "line")
     if crit == "minimum-zone" and pts.shape[1] == 3:
         # straightness in space: the thinnest cylinder around the points (MCC, Eq. 6.13);
@@ -244,7 +244,7 @@ def fit_plane(points: Any, criterion: str = "least-squares") -> PlaneFit:
     an exact solve of the active constraints and re-linearisation until the tilt vanishes;
     the mid-plane is reported and ``form_error`` is recomputed from its normal.
     """
-    crit = criterion_name(criterion, ("least-squares", "minimum-zone"), "plane")
+    crit = criterion_name(criterion, SHAPE_CRITERIA["plane"], "plane")
     pts = _points(points, (3,), "plane")
     if crit == "minimum-zone":
         z = _core.form_min_zone_flat(pts)
@@ -270,7 +270,7 @@ def fit_sphere(points: Any, criterion: str = "least-squares") -> SphereFit:
     centre, MI the whole MC sphere. Coplanar points raise
     :class:`DegenerateGeometryError` (except for the circumscribed sphere).
     """
-    crit = criterion_name(criterion, ("least-squares", "min-circumscribed", "max-inscribed", "minimum-zone"), "sphere")
+    crit = criterion_name(criterion, SHAPE_CRITERIA["sphere"], "sphere")
     pts = _points(points, (2, 3), "sphere")
     if crit != "least-squares":
         if pts.shape[1] != 3:
@@ -331,7 +331,7 @@ def fit_cone(points: Any, criterion: str = "least-squares") -> ConeFit:
     """Least-squares cone of (n, 3) points: orthogonal distances
     d = rho cos(psi) - z sin(psi) - D (Levenberg-Marquardt from algebraic cones about the
     principal axes); as the NIST reference fits define it."""
-    crit = criterion_name(criterion, ("least-squares",), "cone")
+    crit = criterion_name(criterion, SHAPE_CRITERIA["cone"], "cone")
     pts = _points(points, (3,), "cone")
     c = _core.form_cone_lsq(pts)
     return ConeFit(

@@ -11,9 +11,13 @@ its points, re-linearised about the exact rotation:
   (Eq. 5.14);
 * tertiary (x): normal n_x = n_y x n_z, placed against its points (Eq. 5.15).
 
-Sign convention: each datum normal points from the locators towards the part
-(towards the centroid of the whole cloud), and the plane touches its locator
-points on the part side - where the part rests. The origin solves the three
+Sign convention: each datum normal points from the locators towards the part, and
+the plane touches its locator points on the part side - where the part rests. The
+part side of a datum is where the other two datums' points are (the mean of their
+centroids): the locators of a 3-2-1 fixture all touch the part, each on a face that
+stands on the material side of the other two. Only the datum regions' points decide
+it, never the whole cloud, which holds more than the part (a fixture, the machine
+table, a second part). The origin solves the three
 plane equations (Eq. 5.16); C_L^S has the normals as columns and the origin as
 translation (Eq. 5.17), and H = (C_L^S)^-1 brings the cloud into the part frame
 (Eqs. 5.18-5.19).
@@ -106,13 +110,22 @@ def _oriented(n: np.ndarray, towards: np.ndarray) -> np.ndarray:
     return n if n @ towards >= 0 else -n
 
 
-def fit_321(groups: dict, centroid: np.ndarray) -> Alignment:
+def _material_side(groups: dict, key: str) -> np.ndarray:
+    """A point on the material side of datum ``key``: the mean of the centroids of the
+    other two datums' points (see the module docstring)."""
+    return np.mean([groups[k][1].mean(axis=0) for k in ("primary", "secondary", "tertiary") if k != key], axis=0)
+
+
+def fit_321(groups: dict) -> Alignment:
     """Fit the 3-2-1 frame.
 
     ``groups`` maps ``"primary"``, ``"secondary"``, ``"tertiary"`` to
-    ``(region names, all points, hull-vertex points)`` in the scanner frame;
-    ``centroid`` is a point on the part side of every datum (the cloud centroid).
+    ``(region names, all points, hull-vertex points)`` in the scanner frame; the part
+    side of each datum comes from the other datums' points (:func:`_material_side`).
     """
+    for key in ("primary", "secondary", "tertiary"):
+        if len(groups[key][1]) == 0:
+            raise DegenerateGeometryError(f"alignment: the {key} datum ({', '.join(groups[key][0])}) has no points")
     fitted = {}
     # primary: least-squares normal as the start, then Eq. 5.13
     names, allp, pts = groups["primary"]
@@ -125,7 +138,7 @@ def fit_321(groups: dict, centroid: np.ndarray) -> Alignment:
         raise DegenerateGeometryError(f"alignment: the primary datum points ({', '.join(names)}) are collinear; "
                                       "they do not determine a plane")
     extent = float(np.ptp(np.vstack([g[2] for g in groups.values() if len(g[2])]), axis=0).max())
-    nz0 = _oriented(vt[2], centroid - c)
+    nz0 = _oriented(vt[2], _material_side(groups, "primary") - c)
     e1 = np.cross([0.0, 1.0, 0.0], nz0)
     if np.linalg.norm(e1) < 0.5:
         e1 = np.cross([1.0, 0.0, 0.0], nz0)
@@ -159,9 +172,10 @@ def fit_321(groups: dict, centroid: np.ndarray) -> Alignment:
             raise DegenerateGeometryError(f"alignment: the secondary datum points ({', '.join(names)}) lie on a line "
                                           "parallel to the primary normal; they do not determine a plane")
         ny0 = np.cross(nz, vt[0])
-    ny0 = _oriented(ny0 / np.linalg.norm(ny0), centroid - c)
-    if abs(ny0 @ (centroid - c)) < 1e-9:
-        raise DegenerateGeometryError("alignment: the secondary datum passes through the part's centroid; "
+    side = _material_side(groups, "secondary") - c
+    ny0 = _oriented(ny0 / np.linalg.norm(ny0), side)
+    if abs(ny0 @ side) < 1e-9:
+        raise DegenerateGeometryError("alignment: the primary and tertiary datums lie in the plane of the secondary; "
                                       "cannot tell which side the part is on")
     basis = np.column_stack([np.cross(ny0, nz), ny0, nz])
     ny, dy, zone = _support(pts, basis, 1, [True, False, False, False, True, False], extent)
@@ -175,7 +189,7 @@ def fit_321(groups: dict, centroid: np.ndarray) -> Alignment:
         raise DegenerateGeometryError(f"alignment: the tertiary datum ({', '.join(names)}) has no points")
     nx = np.cross(ny, nz)
     c = pts.mean(axis=0)
-    if nx @ (centroid - c) <= 0:
+    if nx @ (_material_side(groups, "tertiary") - c) <= 0:
         raise DegenerateGeometryError(
             f"alignment: the part lies on the -x side of the tertiary datum ({', '.join(names)}); with the primary "
             "(z) and secondary (y) datums given, x = y cross z must point into the part: check the datum regions")

@@ -73,6 +73,16 @@ def parse_gage_spec(doc: Mapping[str, Any], source: str) -> GageSpec:
     return GageSpec(regions, tuple(gages), motion, alignment, source)
 
 
+def parse_region_spec(doc: Mapping[str, Any], source: str) -> GageSpec:
+    """The ``[[region]]`` tables and the ``[alignment]`` of a gage or regions file, without
+    gages or motions (``cloud regions``): the regions placed as ``gage check`` places them."""
+    if not isinstance(doc, Mapping):
+        raise ConfigError(f"{source}: expected a table at the top level")
+    _unknown(doc.keys(), _TOP_KEYS, "top level", source)
+    regions = _parse_regions(doc, source, _angle_factor(doc, source))
+    return GageSpec(regions, (), alignment=_parse_alignment(doc, source, regions), source=source)
+
+
 def _angle_factor(doc: Mapping[str, Any], source: str) -> float:
     """Radians per angle unit of the file (``length_unit`` must be mm)."""
     unit = doc.get("length_unit", "mm")

@@ -201,9 +201,16 @@ def _number(v: Any, where: str, key: str, positive: bool = False) -> float:
     return float(v)
 
 
+#: The most sections a median line, run-out or banded measurement may take: each section
+#: needs points of its own, and a larger count only loops over empty slices.
+MAX_SECTIONS = 10_000
+
+
 def _sections(v: Any, where: str) -> int:
     if isinstance(v, bool) or not isinstance(v, int) or v < 1:
         raise ConfigError(f"{where}: 'sections' must be a positive integer, got {v!r}")
+    if v > MAX_SECTIONS:
+        raise ConfigError(f"{where}: 'sections' = {v} is more than {MAX_SECTIONS} (each section needs points of its own)")
     return int(v)
 
 

@@ -63,7 +63,7 @@ from ..errors import ConfigError, FileFormatError, InvalidInputError
 from ._files import write_files_atomically
 from .errormotions import Twist, compose, element_twists, frames, transport
 from .calibration import Calibration
-from .predict import predict, predict_uncertainty
+from .predict import check_calibration, predict, predict_uncertainty
 from .model import JointSpec, Machine, ShapeSpec
 
 __all__ = [
@@ -261,22 +261,10 @@ def make_grid(
 
 
 # ----- model ---------------------------------------------------------------------------------
-def check_calibration(machine: Machine, calibration: Calibration) -> None:
-    """A calibration must come from this machine: its name, group count and groups."""
-    if calibration.machine and calibration.machine != machine.name:
-        raise ConfigError(
-            f"the calibration is of machine '{calibration.machine}', not '{machine.name}': identify again with this machine file"
-        )
-    calibration_parameters(machine, calibration)
-
-
 def calibration_parameters(machine: Machine, calibration: Calibration) -> np.ndarray:
     """The minimum-norm parameter vector (P,) with the calibration's group values (Eq. 3.14);
-    raises ConfigError when the calibration's groups are not this machine's."""
-    from .predict import _coefficients
-
-    st = machine.structure()
-    c = _coefficients(machine, calibration, st)
+    raises ConfigError when the calibration is not this machine's (:func:`check_calibration`)."""
+    c = check_calibration(machine, calibration)
     return np.linalg.pinv(c) @ np.array([g.value for g in calibration.groups])
 
 
@@ -347,11 +335,41 @@ def read_grid_csv(path: Union[str, Path], machine: Machine):
 def interpolate_grid(grid: Grid, table: np.ndarray, commands: np.ndarray, machine: Machine) -> np.ndarray:
     """Multilinear interpolation of a (shape..., k) table at commands (n, J): what a grid
     compensation (FANUC 3-D, trilinear) does between the nodes."""
-    from scipy.interpolate import RegularGridInterpolator
-
     idx = [machine.joint_names.index(a) for a in grid.axes]
-    f = RegularGridInterpolator(grid.values, table, method="linear", bounds_error=True)
-    return f(commands[:, idx])
+    return multilinear(grid.values, table, commands[:, idx])
+
+
+def multilinear(values: tuple[np.ndarray, ...], table: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """Multilinear interpolation on a regular (rectilinear) grid: ``values`` the ascending
+    node coordinates per axis, ``table`` (len(values[0]), ..., len(values[-1]), k...), ``points``
+    (n, d) inside the grid. Each point blends the 2^d vertices of its cell with the interior
+    division ratios (the trilinear rule of FANUC's A-79351E for d = 3); an axis with one node
+    holds that node's value. Points outside the grid are refused."""
+    pts = np.asarray(points, dtype=float).reshape(len(points), len(values))
+    table = np.asarray(table, dtype=float)
+    lo_idx, frac = [], []
+    for d, v in enumerate(values):
+        v = np.asarray(v, dtype=float)
+        x = pts[:, d]
+        if np.any((x < v[0]) | (x > v[-1])) or not np.all(np.isfinite(x)):
+            raise InvalidInputError(f"interpolation: a point lies outside the grid on axis {d} [{v[0]:g}, {v[-1]:g}]")
+        if len(v) == 1:
+            lo_idx.append(np.zeros(len(x), dtype=np.intp))
+            frac.append(np.zeros(len(x)))
+            continue
+        i = np.clip(np.searchsorted(v, x, side="right") - 1, 0, len(v) - 2)
+        lo_idx.append(i)
+        frac.append((x - v[i]) / (v[i + 1] - v[i]))
+    out = np.zeros((len(pts),) + table.shape[len(values):])
+    for corner in range(1 << len(values)):
+        weight = np.ones(len(pts))
+        index = []
+        for d, v in enumerate(values):
+            up = (corner >> d) & 1
+            index.append(np.minimum(lo_idx[d] + up, len(v) - 1))
+            weight = weight * (frac[d] if up else 1.0 - frac[d])
+        out += weight.reshape((-1,) + (1,) * (out.ndim - 1)) * table[tuple(index)]
+    return out
 
 
 # ----- isg-csv -------------------------------------------------------------------------------
@@ -630,7 +648,6 @@ def export(
         raise InvalidInputError(f"--increment must be a positive number of mm, got {increment}")
     from .._files import output_file
 
-    check_calibration(machine, calibration)
     params = calibration_parameters(machine, calibration)
     grid = make_grid(machine, axes if axes else default_axes(machine, fmt), step, points, at, limits)
     for p in linuxcnc_paths(out, grid.axes) if fmt == "linuxcnc" else [out]:

@@ -158,6 +158,13 @@ class ModelStructure:
         }
 
 
+def warn_outside_ranges(what: str, detail: str, stacklevel: int = 2) -> None:
+    """The one warning for commands outside the joint ranges of the machine file
+    (``machine predict``, ``compensate``, ``compensate-nc``): ``detail`` says which joints,
+    how many commands and (for a program) the first line."""
+    warnings.warn(f"{what}: commands outside the machine's joint ranges ({detail})", UserWarning, stacklevel=stacklevel)
+
+
 def example_machine_path() -> Path:
     """Path of the bundled copy of the dissertation's 5-axis machine file (Eq. 3.1, Table 3.1)."""
     return Path(__file__).resolve().parent / "examples" / "dissertation-5axis.toml"
@@ -284,8 +291,7 @@ class Machine:
         """Warn (UserWarning) when commands fall outside the joint ranges of the machine file."""
         bad = self.out_of_range(commands)
         if bad:
-            detail = ", ".join(f"{k}: {v}" for k, v in bad.items())
-            warnings.warn(f"{what}: commands outside the machine's joint ranges ({detail})", UserWarning, stacklevel=3)
+            warn_outside_ranges(what, ", ".join(f"{k}: {v}" for k, v in bad.items()), stacklevel=4)
 
     def sample_commands(self, n: int, seed: Optional[int] = 0) -> np.ndarray:
         """``n`` quasi-random commands (shifted Halton) over the joint ranges, file units

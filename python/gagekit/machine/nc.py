@@ -16,12 +16,23 @@ writer are the Rust kernel ``gagekit-nc`` (throughput: ``benches/bench_nc.py``).
 - A linear (G1) move whose correction changes by more than ``max_step`` (default 0.001 mm)
   along it, or bends away from the straight line by more (moves with a rotary joint or longer
   than 100 mm are checked at the pieces' midpoints), is subdivided: the inserted points come
-  first as ``G1`` blocks without numbers (the block's feed repeated on the first), then the
-  original block, with its number and words, ending at the corrected end point. Rapid (G0)
-  moves are corrected at their end point only (a controller does not move them straight).
+  first as blocks without numbers, then the original block, with its number and words, ending
+  at the corrected end point. Modal words are not repeated: the first inserted block carries
+  ``G1`` only where the mode in force is not already linear, and the block's feed word, which
+  the original block then drops (F is modal, in force from the first inserted point). A move
+  is split into at most 100,000 points (``MAX_PIECES_PER_MOVE`` of the kernel) and a program
+  grows by at most 20 million: a smaller ``max_step`` is refused naming the line, not allocated.
+  Rapid (G0) moves are corrected at their end point only (a controller does not move them
+  straight).
 - Every other byte is copied; joint words of the corrected joints are rewritten with
-  ``decimals`` decimals and missing ones appended; a leading comment names the machine, the
-  calibration's date and what was done.
+  ``decimals`` decimals and missing ones appended, in the program's own word order (the order
+  in which it first writes each joint; inserted blocks too); a leading comment names the
+  machine, the calibration's date and which axes were corrected.
+- Corrected axes: by default the first prismatic joint along x, y and z (a redundant axis such
+  as W keeps its programmed words; name it in ``axes`` to move it too).
+- Programmed or corrected points outside the joint ranges of the machine file are corrected
+  all the same, with the warning :func:`gagekit.machine.compensate` gives, naming the first
+  line per joint.
 """
 
 from __future__ import annotations
@@ -37,9 +48,9 @@ import numpy as np
 from .. import _core
 from ..errors import ConfigError, FileFormatError, InvalidInputError
 from ._files import write_files_atomically
-from .export import calibration_parameters, check_calibration
+from .export import calibration_parameters, default_axes
 from .calibration import Calibration
-from .model import Machine
+from .model import Machine, warn_outside_ranges
 
 __all__ = ["NcResult", "compensate_nc", "compensate_nc_text"]
 
@@ -53,6 +64,7 @@ class NcResult:
     axes: tuple[str, ...]
     max_step: float
     lines: int
+    lines_written: int
     moves: int
     inserted: int
     subdivided: int
@@ -70,6 +82,7 @@ class NcResult:
             "axes": list(self.axes),
             "max_step": self.max_step,
             "lines": self.lines,
+            "lines_written": self.lines_written,
             "moves": self.moves,
             "inserted": self.inserted,
             "subdivided": self.subdivided,
@@ -100,12 +113,18 @@ def compensate_nc_text(
     start: Optional[Mapping[str, float]] = None,
     decimals: int = 4,
     stamp: str = "",
+    source: str = "NC program",
 ) -> tuple[bytes, dict]:
-    """The corrected program (bytes) and the kernel's report; see the module docstring."""
-    check_calibration(machine, calibration)
+    """The corrected program (bytes) and the kernel's report; see the module docstring.
+
+    ``axes`` default: one prismatic joint per direction x, y, z, the first of the chain
+    (a redundant axis such as W keeps its programmed words unless named). Programmed or
+    corrected points outside the joint ranges give the warning of :func:`compensate`,
+    naming the first line (``source``: the program's name in it)."""
+    params = np.ascontiguousarray(calibration_parameters(machine, calibration))  # refuses another machine's
     letters = _letters(machine)
     names = machine.joint_names
-    axes = list(axes) if axes else [j.name for j in machine.joints if j.kind == "prismatic"]
+    axes = list(axes) if axes else default_axes(machine, "grid-csv")
     unknown = [a for a in axes if a not in names]
     if unknown or not axes:
         raise InvalidInputError(f"compensation axes: unknown joint(s) {', '.join(unknown) or '(none given)'} (machine has {', '.join(names)})")
@@ -121,7 +140,6 @@ def compensate_nc_text(
             raise InvalidInputError(f"--start: '{k}' is not a joint of machine '{machine.name}' ({', '.join(names)})")
         if not math.isfinite(v):
             raise InvalidInputError(f"--start {k}: not a finite number")
-    params = np.ascontiguousarray(calibration_parameters(machine, calibration))
     unit = [float(f) for f in machine._angle_factor()]
     header = (
         f"gagekit compensate-nc: machine {machine.name}, calibration {stamp or 'undated'}; "
@@ -141,8 +159,14 @@ def compensate_nc_text(
         int(decimals),
         header,
         arc_tolerance=linearize_arcs,
+        ranges=[(float(lo), float(hi)) for lo, hi in machine.ranges],
     )
-    return bytes(out), {**report, "axes": axes}
+    order = [names[j] for j in report["order"]]
+    if report["outside"]:
+        warn_outside_ranges(source, ", ".join(
+            f"{names[j]}: {k} at line {first}" if k == 1 else f"{names[j]}: {k}, first at line {first}"
+            for j, k, first in report["outside"]), stacklevel=3)
+    return bytes(out), {**report, "axes": sorted(axes, key=order.index)}
 
 
 def compensate_nc(
@@ -160,7 +184,7 @@ def compensate_nc(
     output_file(out)
     t0 = time.perf_counter()
     try:
-        data, report = compensate_nc_text(machine, calibration, text, **kwargs)
+        data, report = compensate_nc_text(machine, calibration, text, source=str(p), **kwargs)
     except InvalidInputError as exc:
         raise InvalidInputError(f"{p}, {exc}") from None
     write_files_atomically({Path(out): data})
@@ -170,6 +194,7 @@ def compensate_nc(
         axes=tuple(report["axes"]),
         max_step=float(kwargs.get("max_step", 0.001)),
         lines=int(report["lines"]),
+        lines_written=int(report["lines_written"]),
         moves=int(report["moves"]),
         inserted=int(report["inserted"]),
         subdivided=int(report["subdivided"]),

@@ -13,7 +13,19 @@ from ..errors import ConfigError, InvalidInputError
 from .calibration import Calibration
 from .model import Machine, ModelStructure
 
-__all__ = ["predict", "predict_uncertainty", "compensate"]
+__all__ = ["predict", "predict_uncertainty", "compensate", "check_calibration"]
+
+
+def check_calibration(machine: Machine, cal: Calibration, st: Optional[ModelStructure] = None) -> np.ndarray:
+    """The one rule for using a calibration with a machine (predict, compensate, export,
+    compensate-nc, uncertainty): it must name this machine (when it names one) and its groups
+    must be this machine's (same count, leaders and coefficients, Eq. 3.14). Returns the
+    coefficient matrix (groups x parameters); raises ConfigError otherwise."""
+    if cal.machine and cal.machine != machine.name:
+        raise ConfigError(
+            f"the calibration is of machine '{cal.machine}', not '{machine.name}': identify again with this machine file"
+        )
+    return _coefficients(machine, cal, st if st is not None else machine.structure())
 
 
 def _coefficients(machine: Machine, cal: Calibration, st: ModelStructure) -> np.ndarray:
@@ -45,8 +57,8 @@ def predict(machine: Machine, calibration: Calibration, commands: Any, structure
     """Volumetric error (n, 3), mm, in the table frame at ``commands`` (file units): M p
     (Eq. 3.9, 3.13) with p any parameter vector having the identified group values."""
     st = structure if structure is not None else machine.structure()
+    c = check_calibration(machine, calibration, st)
     machine.warn_out_of_range(commands)
-    c = _coefficients(machine, calibration, st)
     values = np.array([g.value for g in calibration.groups])
     p = np.linalg.pinv(c) @ values
     return machine.volumetric_error(commands, p)
@@ -59,7 +71,7 @@ def predict_uncertainty(
     covariance: sqrt(diag(M_L Sigma M_L^T)), with M_L the reduced design matrix (Eq. 3.14).
     The uncertainty of the groups the frame takes is a rigid motion and is not included."""
     st = structure if structure is not None else machine.structure()
-    _coefficients(machine, calibration, st)
+    check_calibration(machine, calibration, st)
     if calibration.covariance is None:
         raise ConfigError("calibration has no covariance (written by an older gagekit?): identify again")
     cov = np.asarray(calibration.covariance, dtype=np.float64)
@@ -85,6 +97,7 @@ def compensate(
     Returns (corrected commands (n, J) in file units, remaining predicted error (n, 3) mm).
     """
     st = structure if structure is not None else machine.structure()
+    coef = check_calibration(machine, calibration, st)
     c0 = machine.commands_array(commands)
     machine.warn_out_of_range(c0)
     joints = machine.joints
@@ -96,7 +109,6 @@ def compensate(
     if not axes:
         raise InvalidInputError("compensation axes: none given")
     idx = [machine.joint_names.index(a) for a in axes]
-    coef = _coefficients(machine, calibration, st)
     p = np.linalg.pinv(coef) @ np.array([g.value for g in calibration.groups])
     n = c0.shape[0]
     # Gauss-Newton on the commands of ``axes`` (Rust kernel, gagekit-kinematics chain/inverse.rs):

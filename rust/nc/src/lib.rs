@@ -33,12 +33,33 @@ pub struct Settings {
     pub header: String,
     /// Gauss-Newton iterations of the inverse model.
     pub iterations: usize,
+    /// Joint ranges (file units) to check the programmed and corrected points against;
+    /// empty: not checked.
+    pub ranges: Vec<(f64, f64)>,
+}
+
+/// The most points one linear move may be split into: a smaller max step than this allows
+/// (1e-9 mm on a 1 m move: 10^12 points) is refused, not allocated.
+pub const MAX_PIECES_PER_MOVE: usize = 100_000;
+/// The most points inserted into one program.
+pub const MAX_INSERTED: usize = 20_000_000;
+
+/// Joints whose range a program leaves: how many programmed points (nominal or corrected)
+/// are outside, and the first line with one.
+#[derive(Clone, Debug, PartialEq)]
+pub struct OutOfRange {
+    pub joint: usize,
+    pub count: usize,
+    pub first_line: usize,
 }
 
 /// What was done.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Report {
+    /// Lines read.
     pub lines: usize,
+    /// Lines written (with the leading comment and the inserted blocks).
+    pub lines_written: usize,
     pub moves: usize,
     pub inserted: usize,
     pub subdivided: usize,
@@ -46,6 +67,10 @@ pub struct Report {
     pub max_correction: f64,
     /// Largest predicted error left at a written point, mm.
     pub max_remaining: f64,
+    /// Joints whose range the programmed or corrected points leave (empty when no ranges).
+    pub outside: Vec<OutOfRange>,
+    /// The joints in the program's word order (see [`Program::order`]).
+    pub order: Vec<usize>,
 }
 
 /// Corrected points: (corrected (n, J), remaining (n, 3)) in file units.
@@ -97,7 +122,11 @@ pub fn compensate_program(text: &[u8], machine: &Machine, params: &[f64], s: &Se
             }
             let length: f64 = (0..nj).filter(|&j| !rotary[j]).map(|j| (prog.points[b * nj + j] - prog.points[a * nj + j]).powi(2)).sum::<f64>().sqrt();
             let turns = (0..nj).any(|j| rotary[j] && prog.points[b * nj + j] != prog.points[a * nj + j]);
-            let pieces = ((change / s.max_step).ceil() as usize).max(1);
+            let pieces = (change / s.max_step).ceil().max(1.0);
+            if pieces > MAX_PIECES_PER_MOVE as f64 {
+                return Err(too_many(li, change, pieces, s.max_step));
+            }
+            let pieces = pieces as usize;
             legs.push((li, Leg { a, b, pieces, curved: turns || length > 100.0 }));
             a = b;
         }
@@ -130,7 +159,10 @@ pub fn compensate_program(text: &[u8], machine: &Machine, params: &[f64], s: &Se
                 }
             }
             at += 2 * l.pieces + 1;
-            if worst > s.max_step && l.pieces < 1 << 20 {
+            if worst > s.max_step {
+                if 2 * l.pieces > MAX_PIECES_PER_MOVE {
+                    return Err(too_many(legs[k].0, worst, (2 * l.pieces) as f64, s.max_step));
+                }
                 legs[k].1.pieces *= 2;
             } else {
                 legs[k].1.curved = false;
@@ -138,7 +170,14 @@ pub fn compensate_program(text: &[u8], machine: &Machine, params: &[f64], s: &Se
         }
     }
     // the inserted points
-    let mut inserted = Vec::new();
+    let total: usize = legs.iter().map(|(_, l)| l.pieces - 1).sum();
+    if total > MAX_INSERTED {
+        return Err(GkError::invalid(format!(
+            "the program would grow by {total} points (more than {MAX_INSERTED}) at a max step of {} mm: raise the max step",
+            s.max_step
+        )));
+    }
+    let mut inserted = Vec::with_capacity(total * nj);
     for (_, l) in &legs {
         for i in 1..l.pieces {
             let f = i as f64 / l.pieces as f64;
@@ -152,8 +191,45 @@ pub fn compensate_program(text: &[u8], machine: &Machine, params: &[f64], s: &Se
     report.subdivided = legs.iter().filter(|(_, l)| l.pieces > 1).count();
     report.max_correction = corr.iter().zip(&prog.points).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
     report.max_remaining = left.chunks(3).chain(ins_left.chunks(3)).map(|v| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()).fold(0.0, f64::max);
+    report.outside = outside(&prog, &corr, &s.ranges);
+    report.order = prog.order.clone();
     let out = write::program(text, &prog, &corr, &legs.iter().map(|(li, l)| (*li, l.a, l.b, l.pieces)).collect::<Vec<_>>(), &ins_corr, s);
+    report.lines_written = out.split(|&b| b == b'\n').count() - usize::from(out.ends_with(b"\n"));
     Ok((out, report))
+}
+
+/// The refusal of a move that would be split into more than [`MAX_PIECES_PER_MOVE`] points.
+fn too_many(line: usize, change: f64, pieces: f64, max_step: f64) -> GkError {
+    GkError::invalid(format!(
+        "line {}: the correction changes by {change:.3e} mm along this move; at a max step of {max_step} mm it would be \
+         split into {pieces:.3e} points, more than {MAX_PIECES_PER_MOVE}: raise the max step",
+        line + 1
+    ))
+}
+
+/// Joints whose range the programmed (nominal) or corrected points of the moves leave.
+fn outside(prog: &Program, corr: &[f64], ranges: &[(f64, f64)]) -> Vec<OutOfRange> {
+    let nj = prog.n_joints;
+    if ranges.len() != nj {
+        return Vec::new();
+    }
+    let mut out: Vec<OutOfRange> = Vec::new();
+    for (li, line) in prog.lines.iter().enumerate() {
+        let Some(mv) = line.mv else { continue };
+        for p in mv.first..mv.first + mv.count {
+            for (j, &(lo, hi)) in ranges.iter().enumerate() {
+                let (a, b) = (prog.points[p * nj + j], corr[p * nj + j]);
+                if a < lo || a > hi || b < lo || b > hi {
+                    match out.iter_mut().find(|o| o.joint == j) {
+                        Some(o) => o.count += 1,
+                        None => out.push(OutOfRange { joint: j, count: 1, first_line: li + 1 }),
+                    }
+                }
+            }
+        }
+    }
+    out.sort_by_key(|o| prog.order.iter().position(|&j| j == o.joint));
+    out
 }
 
 fn lerp(points: &[f64], a: usize, b: usize, j: usize, nj: usize, f: f64) -> f64 {

@@ -47,6 +47,8 @@ pub struct Move {
     pub feed: Option<(usize, usize)>,
     /// The block's coordinates were incremental (G91): every joint word is rewritten.
     pub incremental: bool,
+    /// The motion mode in force before the block (0, 1, 2, 3), if any.
+    pub prev_motion: Option<u8>,
 }
 
 /// One input line: byte range (without the line break) and how to rewrite it.
@@ -64,6 +66,9 @@ pub struct Program {
     pub lines: Vec<Line>,
     pub points: Vec<f64>,
     pub n_joints: usize,
+    /// The joints in the order the program first writes them (joints it never writes follow,
+    /// in machine order): the order of the words gagekit writes.
+    pub order: Vec<usize>,
 }
 
 const ALLOWED_G: [f64; 15] = [0.0, 1.0, 4.0, 17.0, 18.0, 19.0, 21.0, 40.0, 49.0, 80.0, 90.0, 91.0, 94.0, 61.0, 64.0];
@@ -109,7 +114,13 @@ pub fn interpret(text: &[u8], opts: &Options) -> Result<Program> {
         }
         it.line(raw, start, k + 1)?;
     }
-    Ok(it.prog)
+    let mut prog = it.prog;
+    for j in 0..prog.n_joints {
+        if !prog.order.contains(&j) {
+            prog.order.push(j);
+        }
+    }
+    Ok(prog)
 }
 
 /// The error for line `lineno`.
@@ -204,6 +215,7 @@ impl<'a> Interpreter<'a> {
         if b.has_p && !b.dwell {
             return Err(at(lineno, "a P word is only supported with G4 (dwell)"));
         }
+        let prev_motion = self.motion;
         if let Some(m) = b.new_motion {
             self.motion = Some(m);
         }
@@ -220,7 +232,7 @@ impl<'a> Interpreter<'a> {
         }
         let m = self.motion.ok_or_else(|| at(lineno, "axis words without a motion mode (G0, G1)"))?;
         self.end_point(lineno, &mut line)?;
-        self.push_move(m, lineno, &mut line)?;
+        self.push_move(m, prev_motion, lineno, &mut line)?;
         self.prog.lines.push(line);
         Ok(())
     }
@@ -247,6 +259,9 @@ impl<'a> Interpreter<'a> {
                     return Err(at(lineno, format!("{} appears twice", w.letter as char)));
                 }
                 b.coords[j] = Some((w.value, w.start, w.end));
+                if !self.prog.order.contains(&j) {
+                    self.prog.order.push(j);
+                }
                 continue;
             }
             match w.letter {
@@ -356,7 +371,7 @@ impl<'a> Interpreter<'a> {
     }
 
     /// Append the move's points (a linearised arc's, then the end point) and its record.
-    fn push_move(&mut self, m: u8, lineno: usize, line: &mut Line) -> Result<()> {
+    fn push_move(&mut self, m: u8, prev_motion: Option<u8>, lineno: usize, line: &mut Line) -> Result<()> {
         let nj = self.nj;
         let first = self.prog.points.len() / nj;
         let mut count = 1;
@@ -381,6 +396,7 @@ impl<'a> Interpreter<'a> {
             insert_at: self.block.last_word_end,
             feed: self.block.feed,
             incremental: self.incremental,
+            prev_motion,
         });
         self.last_point = Some(first + count - 1);
         for j in 0..nj {

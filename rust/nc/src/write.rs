@@ -24,6 +24,7 @@ pub fn program(text: &[u8], prog: &Program, corr: &[f64], legs: &[(usize, usize,
     let mut ins_at = 0usize;
     for (li, line) in prog.lines.iter().enumerate() {
         let raw = &text[line.start..line.end];
+        let mut moved_feed = None;
         let eol: &[u8] = if raw.ends_with(b"\r") { b"\r\n" } else { b"\n" };
         let has_newline = line.end < text.len();
         if !header_done && !(li == 0 && raw.iter().copied().filter(|b| !b.is_ascii_whitespace()).eq(*b"%")) {
@@ -34,6 +35,9 @@ pub fn program(text: &[u8], prog: &Program, corr: &[f64], legs: &[(usize, usize,
         if let Some(mv) = line.mv {
             // inserted points of this block's legs
             let feed = mv.feed.map(|(a, b)| &text[line.start + a..line.start + b]);
+            // the first written point carries the block's feed (then in force: the block
+            // drops it, F is modal) and G1 where the mode in force is not already linear
+            let g1 = !matches!(mv.prev_motion, Some(1..=3));
             let mut first_inserted = true;
             let start = mv.from.unwrap_or(mv.first);
             let moving: Vec<bool> = (0..nj)
@@ -42,24 +46,25 @@ pub fn program(text: &[u8], prog: &Program, corr: &[f64], legs: &[(usize, usize,
             while leg < legs.len() && legs[leg].0 == li {
                 let (_, _, b, pieces) = legs[leg];
                 for _ in 1..pieces {
-                    write_point(&mut out, &ins[ins_at * nj..(ins_at + 1) * nj], letters, &moving, s.decimals, feed.filter(|_| first_inserted));
+                    write_point(&mut out, &ins[ins_at * nj..(ins_at + 1) * nj], letters, &prog.order, &moving, s.decimals, first_inserted.then_some((g1, feed)));
                     out.extend_from_slice(eol);
                     first_inserted = false;
                     ins_at += 1;
                 }
                 if b != mv.first + mv.count - 1 {
                     // an arc vertex: written as a point of its own
-                    write_point(&mut out, &corr[b * nj..(b + 1) * nj], letters, &moving, s.decimals, feed.filter(|_| first_inserted));
+                    write_point(&mut out, &corr[b * nj..(b + 1) * nj], letters, &prog.order, &moving, s.decimals, first_inserted.then_some((g1, feed)));
                     out.extend_from_slice(eol);
                     first_inserted = false;
                 }
                 leg += 1;
             }
+            moved_feed = if first_inserted { None } else { mv.feed };
         }
         if line.edits.is_empty() && line.mv.is_none() {
             out.extend_from_slice(raw);
         } else {
-            rewrite(&mut out, raw, line, prog, corr, s);
+            rewrite(&mut out, raw, line, prog, corr, s, moved_feed);
         }
         if has_newline {
             out.push(b'\n');
@@ -72,29 +77,44 @@ pub fn program(text: &[u8], prog: &Program, corr: &[f64], legs: &[(usize, usize,
     out
 }
 
-fn write_point(out: &mut Vec<u8>, p: &[f64], letters: &[u8], moving: &[bool], decimals: usize, feed: Option<&[u8]>) {
-    out.extend_from_slice(b"G1");
-    for (j, &l) in letters.iter().enumerate() {
+/// An inserted point: the moving joints' words in the program's order; the first point of a
+/// block (`first`: whether G1 is needed, the block's feed word) carries the modal words.
+fn write_point(out: &mut Vec<u8>, p: &[f64], letters: &[u8], order: &[usize], moving: &[bool], decimals: usize, first: Option<(bool, Option<&[u8]>)>) {
+    let mut sep = false;
+    if let Some((true, _)) = first {
+        out.extend_from_slice(b"G1");
+        sep = true;
+    }
+    for &j in order {
         if moving[j] {
-            out.push(b' ');
-            out.push(l);
+            if sep {
+                out.push(b' ');
+            }
+            out.push(letters[j]);
             number(out, p[j], decimals);
+            sep = true;
         }
     }
-    if let Some(f) = feed {
+    if let Some((_, Some(f))) = first {
         out.push(b' ');
         out.extend_from_slice(f);
     }
 }
 
-fn rewrite(out: &mut Vec<u8>, raw: &[u8], line: &crate::program::Line, prog: &Program, corr: &[f64], s: &Settings) {
+fn rewrite(out: &mut Vec<u8>, raw: &[u8], line: &crate::program::Line, prog: &Program, corr: &[f64], s: &Settings, moved_feed: Option<(usize, usize)>) {
     let nj = prog.n_joints;
-    let edits = &line.edits;
+    let mut edits = line.edits.clone();
+    if let Some((a, b)) = moved_feed {
+        edits.push(Edit::Drop(a, b));
+        edits.sort_by_key(|e| match *e {
+            Edit::Coord(_, a, _) | Edit::Absolute(a, _) | Edit::Linear(a, _) | Edit::Drop(a, _) => a,
+        });
+    }
     let end = line.mv.map(|m| m.first + m.count - 1);
     let incremental = line.edits.iter().any(|e| matches!(e, Edit::Absolute(..))) || line.mv.map(|m| m.incremental).unwrap_or(false);
     let mut seen = vec![false; nj];
     let mut at = 0usize;
-    for e in edits {
+    for e in &edits {
         match *e {
             Edit::Coord(j, a, b) => {
                 out.extend_from_slice(&raw[at..a]);
@@ -129,7 +149,7 @@ fn rewrite(out: &mut Vec<u8>, raw: &[u8], line: &crate::program::Line, prog: &Pr
         }
         if let Some(mv) = line.mv {
             if at == mv.insert_at {
-                missing(out, &mut seen, corr, end.unwrap(), s, nj);
+                missing(out, &mut seen, corr, end.unwrap(), s, prog);
             }
         }
     }
@@ -137,15 +157,17 @@ fn rewrite(out: &mut Vec<u8>, raw: &[u8], line: &crate::program::Line, prog: &Pr
         if at <= mv.insert_at {
             out.extend_from_slice(&raw[at..mv.insert_at]);
             at = mv.insert_at;
-            missing(out, &mut seen, corr, end.unwrap(), s, nj);
+            missing(out, &mut seen, corr, end.unwrap(), s, prog);
         }
     }
     out.extend_from_slice(&raw[at..]);
 }
 
-fn missing(out: &mut Vec<u8>, seen: &mut [bool], corr: &[f64], p: usize, s: &Settings, nj: usize) {
-    for &j in &s.joints {
-        if !seen[j] {
+/// The corrected joints' words the block lacks, appended in the program's word order.
+fn missing(out: &mut Vec<u8>, seen: &mut [bool], corr: &[f64], p: usize, s: &Settings, prog: &Program) {
+    let nj = prog.n_joints;
+    for &j in &prog.order {
+        if s.joints.contains(&j) && !seen[j] {
             out.push(b' ');
             out.push(s.options.letters[j]);
             number(out, corr[p * nj + j], s.decimals);

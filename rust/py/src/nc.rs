@@ -29,7 +29,7 @@ fn machine_compensate<'py>(
 
 /// Correct a G-code program (bytes); returns (bytes, report dict).
 #[pyfunction]
-#[pyo3(signature = (chain, params, text, letters, unit, start, joints, max_step, decimals, header, arc_tolerance=None, iterations=4))]
+#[pyo3(signature = (chain, params, text, letters, unit, start, joints, max_step, decimals, header, arc_tolerance=None, iterations=4, ranges=Vec::new()))]
 #[allow(clippy::too_many_arguments)]
 fn nc_compensate<'py>(
     py: Python<'py>,
@@ -45,6 +45,7 @@ fn nc_compensate<'py>(
     header: String,
     arc_tolerance: Option<f64>,
     iterations: usize,
+    ranges: Vec<(f64, f64)>,
 ) -> PyResult<(Bound<'py, PyBytes>, Bound<'py, PyDict>)> {
     let m = chain.get().chain();
     let p = values(py, &params, "parameters")?;
@@ -56,10 +57,15 @@ fn nc_compensate<'py>(
         decimals,
         header,
         iterations,
+        ranges,
     };
     let (out, r) = run(py, || compensate_program(text, m, p, &settings))?;
     let d = PyDict::new(py);
     d.set_item("lines", r.lines)?;
+    d.set_item("lines_written", r.lines_written)?;
+    d.set_item("order", r.order)?;
+    let outside: Vec<(usize, usize, usize)> = r.outside.iter().map(|o| (o.joint, o.count, o.first_line)).collect();
+    d.set_item("outside", outside)?;
     d.set_item("moves", r.moves)?;
     d.set_item("inserted", r.inserted)?;
     d.set_item("subdivided", r.subdivided)?;

@@ -1,4 +1,5 @@
-//! The SIGINT action that lets Ctrl-C stop a kernel running without the GIL.
+//! The SIGINT action that lets Ctrl-C stop a kernel running without the GIL (the same
+//! action for SIGTERM and SIGHUP, which the command line treats as Ctrl-C).
 //!
 //! Python's own SIGINT handler only sets a flag that the interpreter reads between
 //! bytecodes, so a long kernel would not see it. Before every kernel call ([`ensure`]),
@@ -16,25 +17,30 @@
 mod unix {
     use std::sync::atomic::{AtomicUsize, Ordering};
 
-    /// The action replaced by [`action`]: its handler address and `sa_flags`.
-    static PREV_HANDLER: AtomicUsize = AtomicUsize::new(0);
-    static PREV_FLAGS: AtomicUsize = AtomicUsize::new(0);
+    /// The signals that stop a kernel: Ctrl-C, and SIGTERM and SIGHUP (a timeout, systemd,
+    /// `docker stop`, a closed terminal), which the command line treats as Ctrl-C.
+    const SIGNALS: [libc::c_int; 3] = [libc::SIGINT, libc::SIGTERM, libc::SIGHUP];
+
+    /// The actions replaced by [`action`], per signal of [`SIGNALS`]: handler address and `sa_flags`.
+    static PREV_HANDLER: [AtomicUsize; 3] = [AtomicUsize::new(0), AtomicUsize::new(0), AtomicUsize::new(0)];
+    static PREV_FLAGS: [AtomicUsize; 3] = [AtomicUsize::new(0), AtomicUsize::new(0), AtomicUsize::new(0)];
 
     fn action_addr() -> usize {
         action as *const () as usize
     }
 
-    /// The SIGINT action: set the cancel flag, then run the replaced action. Only
-    /// async-signal-safe operations (atomic loads and stores, a call through a pointer).
+    /// The action: set the cancel flag, then run the replaced action of the same signal.
+    /// Only async-signal-safe operations (atomic loads and stores, a call through a pointer).
     extern "C" fn action(sig: libc::c_int, info: *mut libc::siginfo_t, ctx: *mut libc::c_void) {
         gagekit_core::interrupt::request();
-        let prev = PREV_HANDLER.load(Ordering::Acquire);
+        let Some(k) = SIGNALS.iter().position(|&s| s == sig) else { return };
+        let prev = PREV_HANDLER[k].load(Ordering::Acquire);
         if prev == libc::SIG_DFL || prev == libc::SIG_IGN || prev == action_addr() {
             return; // not installed over those (see `ensure`)
         }
-        let flags = PREV_FLAGS.load(Ordering::Relaxed) as libc::c_int;
+        let flags = PREV_FLAGS[k].load(Ordering::Relaxed) as libc::c_int;
         // SAFETY: `prev` is the address of the handler the process had installed for
-        // SIGINT, with the calling convention its flags say.
+        // this signal, with the calling convention its flags say.
         unsafe {
             if flags & libc::SA_SIGINFO != 0 {
                 let f: extern "C" fn(libc::c_int, *mut libc::siginfo_t, *mut libc::c_void) = std::mem::transmute(prev);
@@ -46,26 +52,29 @@ mod unix {
         }
     }
 
-    /// Put [`action`] in front of the current SIGINT action unless it is already there or
-    /// the disposition is SIG_IGN / SIG_DFL. One `sigaction` call when nothing changed.
+    /// Put [`action`] in front of the current action of each of [`SIGNALS`] unless it is
+    /// already there or the disposition is SIG_IGN / SIG_DFL. One `sigaction` call per
+    /// signal when nothing changed.
     pub fn ensure() {
-        // SAFETY: plain sigaction calls with zeroed, then filled structures.
-        unsafe {
-            let mut cur: libc::sigaction = std::mem::zeroed();
-            if libc::sigaction(libc::SIGINT, std::ptr::null(), &mut cur) != 0 {
-                return;
+        for (k, &sig) in SIGNALS.iter().enumerate() {
+            // SAFETY: plain sigaction calls with zeroed, then filled structures.
+            unsafe {
+                let mut cur: libc::sigaction = std::mem::zeroed();
+                if libc::sigaction(sig, std::ptr::null(), &mut cur) != 0 {
+                    continue;
+                }
+                let h = cur.sa_sigaction;
+                if h == action_addr() || h == libc::SIG_DFL || h == libc::SIG_IGN {
+                    continue;
+                }
+                PREV_FLAGS[k].store(cur.sa_flags as usize, Ordering::Relaxed);
+                PREV_HANDLER[k].store(h, Ordering::Release);
+                let mut new: libc::sigaction = std::mem::zeroed();
+                new.sa_sigaction = action_addr();
+                new.sa_flags = libc::SA_SIGINFO | (cur.sa_flags & libc::SA_ONSTACK);
+                new.sa_mask = cur.sa_mask;
+                libc::sigaction(sig, &new, std::ptr::null_mut());
             }
-            let h = cur.sa_sigaction;
-            if h == action_addr() || h == libc::SIG_DFL || h == libc::SIG_IGN {
-                return;
-            }
-            PREV_FLAGS.store(cur.sa_flags as usize, Ordering::Relaxed);
-            PREV_HANDLER.store(h, Ordering::Release);
-            let mut new: libc::sigaction = std::mem::zeroed();
-            new.sa_sigaction = action_addr();
-            new.sa_flags = libc::SA_SIGINFO | (cur.sa_flags & libc::SA_ONSTACK);
-            new.sa_mask = cur.sa_mask;
-            libc::sigaction(libc::SIGINT, &new, std::ptr::null_mut());
         }
     }
 }

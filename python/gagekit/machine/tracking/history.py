@@ -150,6 +150,7 @@ def _check_history_path(p: Path, create: bool, write: bool) -> bool:
 
     if p.exists() or not create:
         input_file(p, "history file")
+        _settle_journal(p)
         with open(p, "rb") as fh:
             head = fh.read(16)
         if head and head != _SQLITE_MAGIC:
@@ -159,6 +160,28 @@ def _check_history_path(p: Path, create: bool, write: bool) -> bool:
         return bool(head)
     output_file(p)
     return False
+
+
+def _settle_journal(p: Path) -> None:
+    """Let SQLite read the file first when a rollback journal lies beside it: a writer killed
+    inside the first transaction of a new history leaves a first page never written (no
+    SQLite header) and a hot journal, which SQLite rolls back on the first read (back to an
+    empty database). Reading the header before would refuse the file as foreign. Nothing is
+    done for a file SQLite cannot open: the header check then says what it is."""
+    journal = p.with_name(p.name + "-journal")
+    try:
+        if journal.stat().st_size == 0:
+            return
+    except OSError:
+        return
+    try:
+        conn = sqlite3.connect(f"file:{p.resolve()}?mode=rw", uri=True, timeout=_timeout(None), isolation_level=None)
+        try:
+            conn.execute("SELECT count(*) FROM sqlite_master").fetchone()
+        finally:
+            conn.close()
+    except sqlite3.Error:
+        pass
 
 
 def _engine(p: Path, timeout: float, create: bool, write: bool):
