@@ -36,7 +36,7 @@ against specification limits, and from :data:`MIN_CAPABILITY_VALUES` = 25 values
 AIAG manual asks for 25 subgroups before control limits and capability are computed
 (with individuals, 25 values); below, each index comes with a warning that states n and
 the one-sided 95 % lower confidence bound of Cpk (Bissell, *Applied Statistics* 39, 1990:
-``Cpk - 1.645 sqrt(1/(9n) + Cpk^2/(2(n-1)))``): at n = 10 a Cpk of 1.33 may be 0.75.
+``Cpk - 1.645 sqrt(1/(9n) + Cpk^2/(2(n-1)))``): at n = 10 a Cpk of 1.33 may be 0.79.
 
 Trends need time: a slope over less than :data:`MIN_TREND_DAYS` (one day) of data is not
 reported (8 scans written within milliseconds are not 792 mm/day).
