@@ -39,6 +39,7 @@ RECIPES: dict[str, list] = {
     "machine compensate-nc": [M, "T/cal.json", "T/prog.nc", "--out", "T/prog-comp.nc"],
     "machine export": [M, "T/cal.json", "--format", "grid-csv", "--out", "T/grid.csv"],
     "machine iso230-2": [ROOT / "tests" / "data" / "iso230_2" / "ecmc_axis1_runs.csv"],
+    "machine ballbar": [ROOT / "tests" / "data" / "ballbar" / "simulated_xy.csv", "--plane", "XY", "--radius", 150, "--feed", 1000],
     "machine design": [M, "--points", 60, "--candidates", 2000, "--out", "T/plan.csv"],
     "machine evaluate-plan": [M, "T/plan.csv", "--seeds", 2, "--test-points", 200],
     "machine simulate-cycles": [M, "T/plan.csv", "--cycles", 3, "--out", "T/cyc.csv"],
@@ -52,6 +53,7 @@ RECIPES: dict[str, list] = {
     "stats": ["--db", "sqlite:///T/batch.db"],
     "inspect scan": [data_path("bracket.ply"), data_path("bracket.toml")],  # `gagekit inspect SCAN PART` is the same
     "demo": ["--quick", "--out", "T/demo"],
+    "qif import": [data_path("nist_ctc_01_asme1_ap242.qif.gz"), "--out", "T/ctc01.toml"],
     "studio": None,  # a web server that runs until stopped: tests/studio runs it
 }
 

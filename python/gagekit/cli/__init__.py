@@ -16,7 +16,7 @@ import typer
 
 from .. import __version__
 from ..errors import GagekitError
-from . import batch, cloud, db, demo, form, gage, machine, machine_export, machine_observer, stats, studio
+from . import batch, cloud, db, demo, form, gage, machine, machine_export, machine_instruments, machine_observer, qif, stats, studio
 from . import inspect as inspect_cmd
 
 app = typer.Typer(
@@ -29,11 +29,13 @@ app = typer.Typer(
 # Every sub-application and command is registered here, explicitly (no registration by import).
 machine_observer.register(machine.app)  # machine design, evaluate-plan, track, history, simulate-cycles
 machine_export.register(machine.app)  # machine export, compensate-nc, iso230-2
+machine_instruments.register(machine.app)  # machine ballbar
 app.add_typer(cloud.app, name="cloud")
 app.add_typer(form.app, name="form")
 app.add_typer(gage.app, name="gage")
 app.add_typer(machine.app, name="machine")
 app.add_typer(db.app, name="db")
+app.add_typer(qif.app, name="qif")
 app.command("stats")(stats.stats)
 gage.app.command("batch")(batch.gage_batch)
 form.app.command("batch")(batch.form_batch)

@@ -23,6 +23,7 @@ from typing import Callable, List, Optional
 import typer
 
 from ._common import UNITS_OPTION
+from .qif import INSTRUMENT_OPTION, QIF_RESULTS_OPTION, check_output, write_results
 
 SCANS_ARG = typer.Argument(..., help="Scan files, folders (searched for scan files) or glob patterns ('scans/*.ply').")
 WORKERS_OPTION = typer.Option(None, "--workers", "-w", help="Local worker processes (default: one per core).")
@@ -75,8 +76,10 @@ def _human_line(ev) -> str:
 
 
 def run(job, scans: List[str], db: Optional[str], report: Optional[Path], workers: Optional[int],
-        scheduler: Optional[str], as_json: bool, retry_failed: bool, title: str) -> None:
-    """Run a batch from the command line (shared by every `... batch` command)."""
+        scheduler: Optional[str], as_json: bool, retry_failed: bool, title: str,
+        on_done: Optional[Callable[[list], None]] = None) -> None:
+    """Run a batch from the command line (shared by every `... batch` command);
+    ``on_done(lines)`` gets every scan's line once the batch has run (--qif-results)."""
     from .. import _progress
     from ..batch import BatchSummary, expand_scans, run_batch
     from ..store import ResultStore
@@ -109,6 +112,8 @@ def run(job, scans: List[str], db: Optional[str], report: Optional[Path], worker
         from ..report.batch import write_batch_report
 
         write_batch_report(report, title, lines, summary)
+    if on_done is not None:
+        on_done(lines)
     if as_json:
         out(json.dumps({"summary": summary.to_dict()}))
     else:
@@ -182,13 +187,26 @@ def inspect_batch(
     as_json: bool = JSON_LINES,
     retry_failed: bool = RETRY_OPTION,
     part_name: Optional[str] = PART_OPTION,
+    qif_results: Optional[Path] = QIF_RESULTS_OPTION,
+    instrument: str = INSTRUMENT_OPTION,
 ) -> None:
     """GD&T inspection (ISO 1101 / ISO 5459) of many scans: each result as `gagekit inspect --json` prints it."""
     from .._util import load_toml
     from ..batch import Job
     from ..inspect import part_spec_from_dict
 
+    check_output(qif_results)
     doc = load_toml(part)
     spec = part_spec_from_dict(doc, str(part))  # a bad drawing stops the batch before it starts
     job = Job("inspect", {"part": doc}, _units(units), source=str(part), part=part_name or spec.name)
-    run(job, scans, db, report, workers, scheduler, as_json, retry_failed, f"Inspection batch: {part.name}")
+
+    def qif(lines: list) -> None:  # one MeasurementResults per inspected scan, in the order of the scans
+        runs = sorted(({"scan": x["scan"], "result": x["result"]} for x in lines if x.get("result") is not None),
+                      key=lambda r: r["scan"])
+        if not runs:
+            typer.echo(f"gagekit: warning: no scan was inspected; {qif_results} not written", err=True)
+            return
+        write_results(qif_results, runs, spec, part, instrument)
+
+    run(job, scans, db, report, workers, scheduler, as_json, retry_failed, f"Inspection batch: {part.name}",
+        on_done=qif if qif_results is not None else None)

@@ -9,6 +9,7 @@ from typing import Optional
 import typer
 
 from ._common import JSON_OPTION, UNITS_OPTION, emit, read_cloud_cli
+from .qif import INSTRUMENT_OPTION, QIF_RESULTS_OPTION, check_output
 
 app = typer.Typer(help="Virtual gages: can a scanned casting be machined to print? (Ch. 5)", no_args_is_help=True)
 
@@ -22,6 +23,8 @@ def check(
     out_cloud: Optional[Path] = typer.Option(None, "--out-cloud", help="Write the cloud in the part frame with T* applied."),
     no_groups: bool = typer.Option(False, "--no-groups", help="Skip the infeasible-group LPs of Eq. 5.10."),
     units: Optional[str] = UNITS_OPTION,
+    qif_results: Optional[Path] = QIF_RESULTS_OPTION,
+    instrument: str = INSTRUMENT_OPTION,
 ) -> None:
     """Find the correction T* of the machining frame (Eq. 5.11) and every gage's allowance.
 
@@ -38,6 +41,7 @@ def check(
         output_dir(report)
     if out_cloud is not None:
         output_file(out_cloud)
+    check_output(qif_results)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         spec = GageSpec.load(gages)
@@ -49,4 +53,10 @@ def check(
         write_report(result, report)
     if out_cloud is not None:
         write_points(out_cloud, corrected_cloud(pts, result))
+    if qif_results is not None:
+        from .._util import check_finite_result, to_jsonable
+        from ..qif.results import write_gage_results
+
+        check_finite_result(result)
+        write_gage_results(qif_results, cloud, to_jsonable(result), instrument)
     emit(result, as_json, human)

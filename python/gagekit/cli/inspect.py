@@ -13,6 +13,7 @@ import typer
 from typer.core import TyperGroup
 
 from ._common import JSON_OPTION, UNITS_OPTION, emit, read_cloud_cli, table
+from .qif import INSTRUMENT_OPTION, QIF_RESULTS_OPTION, check_output, write_results
 
 
 class DefaultScanGroup(TyperGroup):
@@ -46,6 +47,8 @@ def inspect(
     units: Optional[str] = UNITS_OPTION,
     as_json: bool = JSON_OPTION,
     report: Optional[Path] = typer.Option(None, "--report", help="Write report.html (callouts, datum frame, 3-D deviation view) and result.json into DIR."),
+    qif_results: Optional[Path] = QIF_RESULTS_OPTION,
+    instrument: str = INSTRUMENT_OPTION,
 ) -> None:
     """Evaluate every GD&T callout of PART.toml on the scan (ISO 1101 zones, ISO 5459 datums).
 
@@ -53,6 +56,7 @@ def inspect(
     """
     from ..inspect import inspect as run_inspect, load_part_spec
 
+    check_output(qif_results)
     spec = load_part_spec(part)
     pts = read_cloud_cli(scan, units).points
     result = run_inspect(pts, spec)
@@ -60,4 +64,9 @@ def inspect(
         from ..report.inspect import write_report
 
         write_report(result, report)
+    if qif_results is not None:
+        from .._util import check_finite_result, to_jsonable
+
+        check_finite_result(result)
+        write_results(qif_results, [{"scan": str(scan), "result": to_jsonable(result)}], spec, part, instrument)
     emit(result, as_json, human)

@@ -48,12 +48,19 @@ def _sci(v: Optional[float]) -> str:
 def check(
     machine_file: Path = MACHINE_ARG,
     commands: int = count_option(2000, "--commands", help="Quasi-random commands used for the rank analysis."),
+    observations: Optional[str] = typer.Option(
+        None, "--observations", help="tracker, sphere, rtest or a comma list: which groups and rotary-axis location errors each instrument sees, and together."
+    ),
     as_json: bool = JSON_OPTION,
 ) -> None:
     """Validate a machine file; show its chain, parameters, rank and identifiable groups (Eq. 3.14)."""
     from ..machine import load_machine
 
     m = load_machine(machine_file)
+    if observations is not None:
+        from .machine_instruments import check_observations
+
+        return check_observations(m, observations, as_json)
     s = m.structure(n=commands)
     result = {**m.to_dict(), "n_parameters": m.n_parameters, **s.to_dict()}
 
@@ -172,7 +179,10 @@ def _identify_text(cal) -> str:
 @app.command("identify")
 def identify_cmd(
     machine_file: Path = MACHINE_ARG,
-    observations: Path = typer.Argument(..., help="Observations CSV: joint columns and x, y, z (tracker frame, mm)."),
+    observations: list[Path] = typer.Argument(
+        ..., help="Observations CSV(s): tracker (joint columns and x, y, z, mm) or, with a '# kind = sphere|rtest' line, "
+        "probed-sphere or R-test readings; several files of any kinds are identified together."
+    ),
     test: Optional[Path] = typer.Option(None, "--test", help="Test observations CSV (Table 3.5)."),
     method: str = typer.Option("joint", "--method", help="joint (frame correction estimated with the groups) or two-step (dissertation)."),
     test_frame: str = typer.Option("same", "--test-frame", help="same (test set measured in the same tracker set-up) or refit."),
@@ -180,15 +190,27 @@ def identify_cmd(
     residuals: Optional[Path] = typer.Option(
         None, "--residuals", help="Write per-point residuals (CSV: set, joints, nominal and model residual vectors and lengths, mm)."
     ),
+    unknowns: Optional[str] = typer.Option(
+        None, "--unknowns", help="Mixed observations: groups (default with a tracker file) or location (rotary-axis location errors; default otherwise)."
+    ),
     as_json: bool = JSON_OPTION,
 ) -> None:
-    """Identify the error model's groups from tracker observations (Sec. 3.1.5, Tables 3.2-3.5)."""
+    """Identify the error model's groups from tracker observations (Sec. 3.1.5, Tables 3.2-3.5), or from any mix
+    of tracker, probed-sphere and R-test files."""
     from ..machine import identify, load_machine, read_observations
 
     _outputs(out, residuals)
     if method not in ("joint", "two-step"):
         raise InvalidInputError(f"--method must be joint or two-step, got {method!r}")
     m = load_machine(machine_file)
+    from ..machine.instruments import read_instrument
+
+    kinds = [read_instrument(p, m) for p in observations]
+    if len(kinds) > 1 or kinds[0].kind != "tracker" or unknowns is not None:
+        from .machine_instruments import identify_mixed_cmd
+
+        return identify_mixed_cmd(m, kinds, unknowns, out, test, residuals, as_json)
+    observations = observations[0]
     with _warnings_to_stderr():
         obs = read_observations(observations, m)
         tobs = read_observations(test, m) if test is not None else None

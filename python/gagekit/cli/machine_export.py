@@ -68,7 +68,10 @@ def _limits(text: Optional[str]) -> dict:
 def export_cmd(
     machine_file: Path = MACHINE_ARG,
     calibration: Path = CAL_ARG,
-    fmt: str = typer.Option(..., "--format", help="grid-csv, isg-csv (ISG/Beckhoff TF5280), fanuc-3d or linuxcnc."),
+    fmt: str = typer.Option(
+        ..., "--format", help="grid-csv, isg-csv (ISG/Beckhoff TF5280), fanuc-3d, linuxcnc, or kinematics (rotary-axis "
+        "location corrections: LinuxCNC trtkins, Heidenhain kinematics rows, Siemens TRAFO5; OUT_linuxcnc.hal ...)."
+    ),
     out: Path = typer.Option(..., "--out", help="File to write (linuxcnc: one file per axis, OUT_<joint>.ext)."),
     axes: Optional[str] = typer.Option(None, "--axes", help="Grid joints, e.g. X,Y,Z (default depends on the format)."),
     step: Optional[str] = typer.Option(None, "--step", help="Node spacing: one value (file units) or X=50,B=5 (default 50 mm, 5 deg)."),
@@ -87,6 +90,10 @@ def export_cmd(
     cal = load_calibration(calibration)
     ax = [a.strip() for a in axes.split(",") if a.strip()] if axes else None
     fixed = {k: _number(v, f"--at {k}") for k, v in parse_assignments(at, "--at").items()}
+    if fmt == "kinematics":
+        from .machine_instruments import export_kinematics_cmd
+
+        return export_kinematics_cmd(m, cal, out, fixed, calibration_stamp(calibration, cal), as_json)
     with _warnings_to_stderr():
         res = export(
             m, cal, fmt, out, axes=ax, step=_per_axis_option(step, "--step"), points=_per_axis_option(points, "--points"),

@@ -29,6 +29,12 @@ def design_cmd(
     seed: int = seed_option(help="Seed of candidates and search (same seed, same plan)."),
     starts: int = count_option(4, "--starts", help="Independent starts of the exchange search."),
     out: Path = typer.Option(..., "--out", help="PLAN.csv to write: one column per joint."),
+    instrument: Optional[str] = typer.Option(
+        None, "--instrument", help="sphere, rtest (rotary positions to probe) or ballbar (circles: plane and centre) instead of tracker points."
+    ),
+    sphere: Optional[str] = typer.Option(None, "--sphere", help="--instrument sphere/rtest: the sphere's place on the table, x,y,z mm (table frame)."),
+    at: Optional[str] = typer.Option(None, "--at", help="--instrument: joints held fixed, e.g. W=-500."),
+    radius: float = typer.Option(150.0, "--radius", help="--instrument ballbar: ballbar length, mm."),
     as_json: bool = JSON_OPTION,
 ) -> None:
     """Design an optimal observer plan (Eqs. 4.3-4.8) for the machine's identifiable groups."""
@@ -37,6 +43,10 @@ def design_cmd(
 
     _outputs(out)
     m = load_machine(machine_file)
+    if instrument is not None:
+        from .machine_instruments import design_instrument_cmd
+
+        return design_instrument_cmd(m, instrument, points, criterion, sphere, at, radius, seed, out, as_json)
     space = ObserverSpace.of(m)
     zone_arg = zones
     if zones not in ("none", "dissertation-8"):

@@ -87,10 +87,12 @@ AXIS_METHODS = ("least-squares", "median-line")
 DATUM_FITS = ("chebyshev", "least-squares")
 MIN_POINTS = {"plane": 3, "line": 2, "circle": 3, "sphere": 4, "cylinder": 5, "cone": 6}
 
-_FEATURE_KEYS = {"name", "shape", "region", "outward", "kind", "direction", "axis", "sections", "datum_fit"}
-_TOL_KEYS = {"feature", "characteristic", "tolerance", "datums", "nominal", "angle", "name", "sections"}
+_FEATURE_KEYS = {"name", "shape", "region", "outward", "kind", "direction", "axis", "sections", "datum_fit", "qif_id"}
+_TOL_KEYS = {"feature", "characteristic", "tolerance", "datums", "nominal", "angle", "name", "sections", "qif_id", "qpid"}
 _PART_KEYS = {"name", "datum_fit", "axis", "sections"}
-_TOP_KEYS = {"part", "feature", "datums", "tolerance", "region"}
+_TOP_KEYS = {"part", "feature", "datums", "tolerance", "region", "qif"}
+#: the [qif] table of a drawing imported from a QIF model (``gagekit qif import``)
+_QIF_KEYS = {"model", "qpid", "units"}
 
 
 @dataclass(frozen=True)
@@ -106,6 +108,7 @@ class Feature:
     axis: str = "least-squares"
     sections: int = 10
     datum_fit: str = "chebyshev"
+    qif_id: str = ""  # the QIF feature nominal this feature came from (gagekit qif import)
 
     def to_dict(self) -> dict[str, Any]:
         d: dict[str, Any] = {"name": self.name, "shape": self.shape, "region": self.region.to_dict()}
@@ -141,6 +144,8 @@ class Tolerance:
     name: str = ""
     sections: Optional[int] = None
     index: int = 0
+    qif_id: str = ""  # the QIF characteristic nominal this callout came from (gagekit qif import)
+    qpid: str = ""  # the QPId of the QIF model document
 
     @property
     def label(self) -> str:
@@ -156,6 +161,7 @@ class PartSpec:
     datums: dict[str, DatumRef]
     tolerances: tuple[Tolerance, ...]
     source: str = "part"
+    qif: Optional[dict] = None  # [qif]: model, qpid, units of an imported QIF model
 
     def moved(self, rotation: Any, translation: Any) -> "PartSpec":
         """The same drawing for the part moved by the rigid motion p -> R p + t: regions,
@@ -173,9 +179,9 @@ class PartSpec:
                 None if f.outward is None else tuple(R @ np.array(f.outward)),
                 f.kind,
                 None if f.direction is None else tuple(R @ np.array(f.direction)),
-                f.axis, f.sections, f.datum_fit,
+                f.axis, f.sections, f.datum_fit, f.qif_id,
             )
-        return PartSpec(self.name, feats, self.datums, self.tolerances, self.source)
+        return PartSpec(self.name, feats, self.datums, self.tolerances, self.source, self.qif)
 
 
 # -- parsing ---------------------------------------------------------------------------
@@ -300,7 +306,8 @@ def part_spec_from_dict(doc: Mapping[str, Any], source: str = "part") -> PartSpe
         axis = _choice(t.get("axis", daxis), AXIS_METHODS, where, "axis")
         sections = _sections(t.get("sections", dsec), where)
         fit = _choice(t.get("datum_fit", dfit), DATUM_FITS, where, "datum_fit")
-        features[name] = Feature(name, shape, region, outward, kind, direction, axis, sections, fit)
+        features[name] = Feature(name, shape, region, outward, kind, direction, axis, sections, fit,
+                                 _qif_ref(t.get("qif_id", ""), where, "qif_id"))
 
     raw_datums = doc.get("datums", {})
     if not isinstance(raw_datums, Mapping):
@@ -398,8 +405,24 @@ def part_spec_from_dict(doc: Mapping[str, Any], source: str = "part") -> PartSpe
         if char in ("position", "profile") and shape in ("plane", "cylinder", "cone") and ndir is None:
             raise ConfigError(f"{where}: 'nominal' needs a 'direction' (the basic {'normal' if shape == 'plane' else 'axis'} in the datum frame)")
         sections = _sections(t["sections"], where) if "sections" in t else None
-        tols.append(Tolerance(fname, char, tol, tuple(raw_d), npoint, ndir, angle, str(t.get("name", "")), sections, k))
-    return PartSpec(pname, features, datums, tuple(tols), source)
+        ids = {key: _qif_ref(t.get(key, ""), where, key) for key in ("qif_id", "qpid")}
+        tols.append(Tolerance(fname, char, tol, tuple(raw_d), npoint, ndir, angle, str(t.get("name", "")), sections, k, **ids))
+    return PartSpec(pname, features, datums, tuple(tols), source, _qif_table(doc.get("qif"), source))
+
+
+def _qif_ref(v: Any, where: str, key: str) -> str:
+    if isinstance(v, bool) or not isinstance(v, (str, int)):
+        raise ConfigError(f"{where}: '{key}' must be a string (a QIF id or QPId), got {v!r}")
+    return str(v)
+
+
+def _qif_table(t: Any, source: str) -> Optional[dict]:
+    if t is None:
+        return None
+    if not isinstance(t, Mapping):
+        raise ConfigError(f"{source}: [qif] must be a table {{ model, qpid, units }}")
+    _unknown(t, _QIF_KEYS, f"{source}: [qif]")
+    return {k: _qif_ref(v, f"{source}: [qif]", k) for k, v in t.items()}
 
 
 def _check_datums(char: str, letters: list, datums: Mapping[str, DatumRef], features: Mapping[str, Feature], where: str) -> None:

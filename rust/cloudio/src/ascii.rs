@@ -229,88 +229,110 @@ pub(crate) fn line_at<'a>(bytes: &'a [u8], starts: &[usize], k: usize) -> &'a [u
 /// The text of `bytes`, after the checks of [`parse_ascii`]: `dim` is 2 or 3, the text
 /// is not UTF-16 nor binary (no NUL byte); a UTF-8 byte-order mark is skipped.
 fn checked_text<'a>(bytes: &'a [u8], dim: usize, what: &str) -> Result<&'a [u8]> {
-    if !(2..=3).contains(&dim) {
-        return Err(GkError::invalid(format!("{what}: dim must be 2 or 3, got {dim}")));
-    }
+    check_dim(dim, what)?;
     if bytes.starts_with(&[0xFF, 0xFE]) || bytes.starts_with(&[0xFE, 0xFF]) {
         return Err(GkError::invalid(format!(
             "{what}: UTF-16 text (as Excel's \"Unicode Text\"); save it as CSV UTF-8 or plain ASCII"
         )));
     }
     let bytes = bytes.strip_prefix(&[0xEF, 0xBB, 0xBF]).unwrap_or(bytes);
+    check_no_nul(bytes, what)?;
+    Ok(bytes)
+}
+
+fn check_dim(dim: usize, what: &str) -> Result<()> {
+    if !(2..=3).contains(&dim) {
+        return Err(GkError::invalid(format!("{what}: dim must be 2 or 3, got {dim}")));
+    }
+    Ok(())
+}
+
+/// A NUL byte means a binary file, not a point list.
+pub(crate) fn check_no_nul(bytes: &[u8], what: &str) -> Result<()> {
     if memchr::memchr(0, bytes).is_some() {
         return Err(GkError::invalid(format!(
             "{what}: this is a binary file, not an ASCII point list (XYZ/CSV/TXT)"
         )));
     }
-    Ok(bytes)
+    Ok(())
 }
 
-/// The lines of a text with its separator style, and the file's name for error messages.
-struct Lines<'a> {
-    bytes: &'a [u8],
-    starts: Vec<usize>,
-    nlines: usize,
-    style: Style,
-    what: &'a str,
+/// The lines of `bytes` from byte `pos` (a line start) and line index `k`: (index, start
+/// offset, line with its line break), in order, without any table of line starts.
+fn lines_from(bytes: &[u8], mut pos: usize, mut k: usize) -> impl Iterator<Item = (usize, usize, &[u8])> {
+    std::iter::from_fn(move || {
+        if pos >= bytes.len() {
+            return None;
+        }
+        let end = memchr::memchr(b'\n', &bytes[pos..]).map_or(bytes.len(), |i| pos + i + 1);
+        let item = (k, pos, &bytes[pos..end]);
+        pos = end;
+        k += 1;
+        Some(item)
+    })
 }
 
-impl<'a> Lines<'a> {
-    /// Line `k` (0-based) with its line break.
-    fn at(&self, k: usize) -> &'a [u8] {
-        line_at(self.bytes, &self.starts, k)
-    }
+/// How the data lines of a file are read: separator style, the coordinate columns, the
+/// number of fields a data line needs, and the file's name for messages. Decided once
+/// from the top of the file ([`ascii_layout`]).
+#[derive(Debug, Clone)]
+pub struct Layout {
+    pub style: Style,
+    pub columns: Vec<usize>,
+    pub need: usize,
+    pub dim: usize,
+    /// For each field index below `need`, the coordinate it holds (`usize::MAX`: none).
+    slot: Vec<usize>,
+    /// Header lines recognised (after `skip_lines`), and the number of fields of the first data line.
+    pub header_lines: usize,
+    pub ncols: usize,
 }
 
-/// The lines before the first data line: the last header line, the number of header lines.
-struct Preamble<'a> {
-    header: Option<&'a [u8]>,
-    header_lines: usize,
-    /// Index of the first data line and its number of fields.
-    first: usize,
-    ncols: usize,
+/// Where the data of a text begins: its [`Layout`], the byte offset of the first data
+/// line, and that line's 0-based index (counting the skipped and header lines).
+#[derive(Debug, Clone)]
+pub struct DataStart {
+    pub layout: Layout,
+    pub offset: usize,
+    pub line: usize,
 }
 
-/// Header: leading non-skipped lines (from line `from`) whose first `dim` fields are not
-/// all numbers (at most 50), up to the first data line.
-fn preamble<'a>(lines: &Lines<'a>, from: usize, dim: usize) -> Result<Preamble<'a>> {
-    let (style, what) = (lines.style, lines.what);
-    let mut k = from;
+/// Header: leading non-skipped lines (after `skip_lines`) whose first `dim` fields are not
+/// all numbers (at most 50), up to the first data line; then the coordinate columns (a
+/// header with one name per data column may name the x, y, z columns, else the first
+/// `dim`). `bytes` is the checked text ([`checked_text`]); only its top is read.
+fn data_start(bytes: &[u8], opts: &AsciiOptions, what: &str) -> Result<DataStart> {
+    let dim = opts.dim;
+    let skipped = lines_from(bytes, 0, 0).take(opts.skip_lines).last();
+    let from = skipped.map_or(0, |(_, s, l)| s + l.len());
+    let k0 = skipped.map_or(0, |(k, _, _)| k + 1);
+    let style = style_of(lines_from(bytes, from, k0).map(|(_, _, l)| l));
     let mut header: Option<&[u8]> = None;
     let mut header_lines = 0;
     let mut first_data = None;
-    while k < lines.nlines {
-        let line = lines.at(k);
-        if !is_skipped(line) {
-            let f = fields(line, style);
-            if f.len() >= dim && f[..dim].iter().all(|x| parse_num(x, style).is_some()) {
-                first_data = Some((k, f.len()));
-                break;
-            }
-            if header_lines >= 50 {
-                return Err(GkError::invalid(format!(
-                    "{what}: line {}: expected numbers (x y z), found {:?}",
-                    k + 1,
-                    String::from_utf8_lossy(trim(line))
-                )));
-            }
-            header = Some(line);
-            header_lines += 1;
+    for (k, start, line) in lines_from(bytes, from, k0) {
+        if is_skipped(line) {
+            continue;
         }
-        k += 1;
+        let f = fields(line, style);
+        if f.len() >= dim && f[..dim].iter().all(|x| parse_num(x, style).is_some()) {
+            first_data = Some((k, start, f.len()));
+            break;
+        }
+        if header_lines >= 50 {
+            return Err(GkError::invalid(format!(
+                "{what}: line {}: expected numbers (x y z), found {:?}",
+                k + 1,
+                String::from_utf8_lossy(trim(line))
+            )));
+        }
+        header = Some(line);
+        header_lines += 1;
     }
-    let Some((first, ncols)) = first_data else {
+    let Some((first, offset, ncols)) = first_data else {
         return Err(GkError::invalid(format!("{what}: no points found (the file is empty or has only header lines)")));
     };
-    Ok(Preamble { header, header_lines, first, ncols })
-}
-
-/// The columns of the coordinates and the number of columns a data line needs: a header
-/// with one name per data column may name the x, y, z columns, else the first `dim`.
-fn coordinate_columns(lines: &Lines, pre: &Preamble, dim: usize) -> Result<(Vec<usize>, usize)> {
-    let (style, what, ncols) = (lines.style, lines.what, pre.ncols);
-    let columns = pre
-        .header
+    let columns = header
         .filter(|h| fields(h, style).len() == ncols)
         .and_then(|h| header_columns(h, dim, style))
         .unwrap_or_else(|| (0..dim).collect());
@@ -318,60 +340,250 @@ fn coordinate_columns(lines: &Lines, pre: &Preamble, dim: usize) -> Result<(Vec<
     if ncols < need {
         return Err(GkError::invalid(format!(
             "{what}: line {}: expected at least {need} columns, found {ncols}",
-            pre.first + 1
+            first + 1
         )));
     }
-    Ok((columns, need))
+    let mut slot = vec![usize::MAX; need];
+    for (a, &c) in columns.iter().enumerate() {
+        if slot[c] == usize::MAX {
+            slot[c] = a;
+        }
+    }
+    let layout = Layout { style, columns, need, dim, slot, header_lines, ncols };
+    Ok(DataStart { layout, offset, line: first })
 }
 
-/// The coordinates (`columns`, finite numbers) of the non-skipped lines `lo..hi`.
-fn parse_lines(lines: &Lines, lo: usize, hi: usize, columns: &[usize], need: usize, dim: usize) -> Result<Vec<f64>> {
-    let (style, what) = (lines.style, lines.what);
-    let mut out = Vec::with_capacity((hi - lo) * dim);
-    for k in lo..hi {
-        let line = lines.at(k);
-        if is_skipped(line) {
-            continue;
+/// [`data_start`] of the raw bytes of a file's top (the checks of [`parse_ascii`] first);
+/// the offset counts the byte-order mark, so it indexes `head` itself.
+pub fn ascii_layout(head: &[u8], opts: &AsciiOptions, what: &str) -> Result<DataStart> {
+    let text = checked_text(head, opts.dim, what)?;
+    let mut d = data_start(text, opts, what)?;
+    d.offset += head.len() - text.len();
+    Ok(d)
+}
+
+/// The coordinates of one data line by the rules of [`fields`] (the reference path:
+/// every line the fast path declines comes here, so messages and values are the
+/// reader's own). `Ok(false)`: a skipped line (blank, comment). `k` is the 0-based index.
+fn slow_line(line: &[u8], lay: &Layout, k: usize, what: &str, out: &mut [f64]) -> Result<bool> {
+    if is_skipped(line) {
+        return Ok(false);
+    }
+    let style = lay.style;
+    let f = fields(line, style);
+    for (a, &c) in lay.columns.iter().enumerate() {
+        let v = f.get(c).and_then(|x| parse_num(x, style)).ok_or_else(|| {
+            GkError::invalid(format!(
+                "{what}: line {}: expected {} numbers, found {:?}",
+                k + 1,
+                lay.need,
+                String::from_utf8_lossy(trim(line))
+            ))
+        })?;
+        if !v.is_finite() {
+            return Err(GkError::invalid(format!(
+                "{what}: line {}: non-finite coordinate ({v}); remove NaN/inf values",
+                k + 1
+            )));
         }
-        let f = fields(line, style);
-        for &c in columns {
-            let v = f.get(c).and_then(|x| parse_num(x, style)).ok_or_else(|| {
-                GkError::invalid(format!(
-                    "{what}: line {}: expected {} numbers, found {:?}",
-                    k + 1,
-                    need,
-                    String::from_utf8_lossy(trim(line))
-                ))
-            })?;
+        out[a] = v;
+    }
+    Ok(true)
+}
+
+/// The usual data line, read in one pass with no field list: fields `0..need` separated
+/// by one separator run holding at most one comma or semicolon, each wanted field a
+/// finite number (fast-float2, read in place: the token is exactly the bytes it
+/// consumes, as the next byte is a separator or the line's end). `Some(false)`: a blank
+/// or comment line; `None`: anything else (an error, a decimal comma, an empty field,
+/// unusual whitespace), which [`slow_line`] then reads.
+#[inline]
+fn fast_line(line: &[u8], lay: &Layout, out: &mut [f64]) -> Option<bool> {
+    let n = line.len();
+    let mut i = 0;
+    while i < n && line[i].is_ascii_whitespace() {
+        i += 1;
+    }
+    if i == n {
+        return Some(false);
+    }
+    if line[i] == b'#' || (line[i] == b'/' && line.get(i + 1) == Some(&b'/')) {
+        return Some(false);
+    }
+    let style = lay.style;
+    for (f, &a) in lay.slot.iter().enumerate() {
+        if a != usize::MAX {
+            let (v, len) = parse_number(&line[i..])?;
             if !v.is_finite() {
-                return Err(GkError::invalid(format!(
-                    "{what}: line {}: non-finite coordinate ({v}); remove NaN/inf values",
-                    k + 1
-                )));
+                return None;
             }
-            out.push(v);
+            out[a] = v;
+            i += len;
+        } else {
+            let start = i;
+            while i < n && !is_sep(line[i], style) {
+                i += 1;
+            }
+            if i == start {
+                return None;
+            }
+        }
+        if f + 1 == lay.need {
+            // the rest (further fields, trailing whitespace) is not read
+            return if i == n || is_sep(line[i], style) || line[i..].iter().all(u8::is_ascii_whitespace) {
+                Some(true)
+            } else {
+                None
+            };
+        }
+        let mut hard = 0;
+        let run = i;
+        while i < n && is_sep(line[i], style) {
+            hard += usize::from(is_hard(line[i], style));
+            i += 1;
+        }
+        if i == run || hard > 1 || i == n || line[i].is_ascii_whitespace() {
+            return None;
         }
     }
-    Ok(out)
+    Some(true)
 }
 
-/// Parallel parse of lines `first..` in chunks ([`parse_lines`]), concatenated in order;
-/// the error of the first failing chunk.
-fn parse_data(lines: &Lines, first: usize, columns: &[usize], need: usize, dim: usize) -> Result<Vec<f64>> {
-    let nlines = lines.nlines;
-    let data_lines = nlines - first;
-    let chunk = (data_lines / (rayon::current_num_threads() * 8)).clamp(4096, 1 << 20);
-    let parts: Vec<Result<Vec<f64>>> = (first..nlines)
-        .step_by(chunk)
-        .collect::<Vec<_>>()
-        .into_par_iter()
-        .map(|lo| parse_lines(lines, lo, (lo + chunk).min(nlines), columns, need, dim))
-        .collect();
-    let mut coords = Vec::with_capacity(data_lines * dim);
-    for p in parts {
-        coords.extend(p?);
+/// Powers of ten exactly representable as f64.
+const POW10: [f64; 23] = [
+    1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16, 1e17, 1e18, 1e19, 1e20,
+    1e21, 1e22,
+];
+
+/// The number at the start of `s` and the bytes it takes, as `fast_float2::parse_partial`
+/// reads it. Plain decimals (`-123.4567`: a sign, digits, a point and digits, no
+/// exponent, at most 15 digits) are read here: the digits are an integer m < 2^53 and the
+/// value m / 10^k with k <= 22, both exact in binary, so the one correctly rounded
+/// division is the correctly rounded value of the decimal (Clinger's fast path, which
+/// fast-float2 takes for them too): the same bits. Anything else goes to fast-float2.
+#[inline]
+fn parse_number(s: &[u8]) -> Option<(f64, usize)> {
+    let n = s.len();
+    let mut i = 0;
+    let neg = match s.first() {
+        Some(b'-') => {
+            i = 1;
+            true
+        }
+        Some(b'+') => {
+            i = 1;
+            false
+        }
+        _ => false,
+    };
+    let mut m: u64 = 0;
+    let int_start = i;
+    while i < n && s[i].is_ascii_digit() {
+        m = m.wrapping_mul(10).wrapping_add(u64::from(s[i] - b'0'));
+        i += 1;
     }
-    Ok(coords)
+    let int_digits = i - int_start;
+    let mut k = 0;
+    let mut point_ok = true;
+    if i < n && s[i] == b'.' {
+        i += 1;
+        let frac_start = i;
+        while i < n && s[i].is_ascii_digit() {
+            m = m.wrapping_mul(10).wrapping_add(u64::from(s[i] - b'0'));
+            i += 1;
+        }
+        k = i - frac_start;
+        point_ok = k > 0;
+    }
+    if int_digits > 0 && point_ok && int_digits + k <= 15 && (i == n || !matches!(s[i], b'e' | b'E' | b'.')) {
+        let v = m as f64 / POW10[k];
+        return Some((if neg { -v } else { v }, i));
+    }
+    fast_float2::parse_partial::<f64, _>(s).ok()
+}
+
+/// Parse the lines of `block` (whole lines; the first has 0-based index `line0`) into
+/// `out` (`dim` per data line, at most one slot per line); the number of points written.
+fn parse_block(block: &[u8], line0: usize, lay: &Layout, what: &str, out: &mut [f64]) -> Result<usize> {
+    let dim = lay.dim;
+    let mut w = 0;
+    let mut pos = 0;
+    let mut k = line0;
+    while pos < block.len() {
+        let end = memchr::memchr(b'\n', &block[pos..]).map_or(block.len(), |i| pos + i);
+        let line = &block[pos..end];
+        let o = &mut out[w * dim..(w + 1) * dim];
+        let data = match fast_line(line, lay, o) {
+            Some(d) => d,
+            None => slow_line(line, lay, k, what, o)?,
+        };
+        w += usize::from(data);
+        pos = end + 1;
+        k += 1;
+    }
+    Ok(w)
+}
+
+/// Number of lines of `block` (the last one may lack its line break).
+fn count_lines(block: &[u8]) -> usize {
+    memchr::memchr_iter(b'\n', block).count() + usize::from(block.last().is_some_and(|&b| b != b'\n'))
+}
+
+/// Chunks of `body` of about `target` bytes, each ending after a line break (the last at
+/// the end of `body`).
+fn line_chunks(body: &[u8], target: usize) -> Vec<std::ops::Range<usize>> {
+    let mut out = Vec::new();
+    let mut lo = 0;
+    while lo < body.len() {
+        let probe = (lo + target.max(1)).min(body.len());
+        let hi = memchr::memchr(b'\n', &body[probe..]).map_or(body.len(), |i| probe + i + 1);
+        out.push(lo..hi);
+        lo = hi;
+    }
+    out
+}
+
+/// The coordinates of the data lines of `body` (whole lines; the first has 0-based index
+/// `line0`), parsed in parallel over chunks split at line breaks. Each chunk writes
+/// straight into its place in the one output array (a slot per line, from a parallel
+/// count of line breaks); chunks after a skipped line are moved down once, in place.
+/// The error is the first failing line's.
+/// Also returns the number of lines of `body`.
+pub fn parse_body(body: &[u8], line0: usize, lay: &Layout, what: &str) -> Result<(Vec<f64>, usize)> {
+    let target = (body.len() / (rayon::current_num_threads() * 8)).clamp(1 << 20, 32 << 20);
+    parse_chunked(body, line0, lay, what, target)
+}
+
+/// [`parse_body`] over chunks of about `target` bytes.
+fn parse_chunked(body: &[u8], line0: usize, lay: &Layout, what: &str, target: usize) -> Result<(Vec<f64>, usize)> {
+    let dim = lay.dim;
+    let chunks = line_chunks(body, target);
+    let counts: Vec<usize> = chunks.par_iter().map(|r| count_lines(&body[r.clone()])).collect();
+    let total: usize = counts.iter().sum();
+    let mut out = vec![0.0; total * dim];
+    let mut parts = Vec::with_capacity(chunks.len());
+    let (mut rest, mut first_line) = (&mut out[..], line0);
+    for (r, &c) in chunks.iter().zip(&counts) {
+        let (head, tail) = rest.split_at_mut(c * dim);
+        parts.push((r.clone(), first_line, head));
+        rest = tail;
+        first_line += c;
+    }
+    let written: Vec<Result<usize>> = parts
+        .into_par_iter()
+        .map(|(r, l0, o)| parse_block(&body[r], l0, lay, what, o))
+        .collect();
+    let (mut pos, mut slot) = (0, 0);
+    for (w, &c) in written.into_iter().zip(&counts) {
+        let w = w?;
+        if pos != slot {
+            out.copy_within(slot..slot + w * dim, pos);
+        }
+        pos += w * dim;
+        slot += c * dim;
+    }
+    out.truncate(pos);
+    Ok((out, total))
 }
 
 /// Parse an ASCII point cloud. `what` names the file in error messages.
@@ -380,17 +592,29 @@ fn parse_data(lines: &Lines, first: usize, columns: &[usize], need: usize, dim: 
 /// refused with a hint. The separator style (decimal comma or not) is decided once from
 /// the first line that starts like a number ([`detect_style`]).
 pub fn parse_ascii(bytes: &[u8], opts: &AsciiOptions, what: &str) -> Result<Parsed> {
-    let dim = opts.dim;
-    let bytes = checked_text(bytes, dim, what)?;
-    let starts = line_starts(bytes);
-    let nlines = if bytes.is_empty() { 0 } else { starts.len() };
-    let style = style_of((opts.skip_lines.min(nlines)..nlines).map(|k| line_at(bytes, &starts, k)));
-    let lines = Lines { bytes, starts, nlines, style, what };
-    let pre = preamble(&lines, opts.skip_lines.min(nlines), dim)?;
-    let (columns, need) = coordinate_columns(&lines, &pre, dim)?;
-    let coords = parse_data(&lines, pre.first, &columns, need, dim)?;
-    let (header_lines, ncols) = (pre.header_lines, pre.ncols);
-    Ok(Parsed { coords, header_lines, columns, ncols, decimal_comma: style == Style::DecimalComma })
+    let bytes = checked_text(bytes, opts.dim, what)?;
+    let start = data_start(bytes, opts, what)?;
+    let lay = start.layout;
+    let (coords, _) = parse_body(&bytes[start.offset..], start.line, &lay, what)?;
+    Ok(Parsed {
+        coords,
+        header_lines: lay.header_lines,
+        columns: lay.columns,
+        ncols: lay.ncols,
+        decimal_comma: lay.style == Style::DecimalComma,
+    })
+}
+
+/// [`parse_ascii`] of the file at `path`, memory-mapped (no copy of its bytes).
+pub fn read_ascii_file(path: &std::path::Path, opts: &AsciiOptions, what: &str) -> Result<Parsed> {
+    let io = |e: std::io::Error| GkError::invalid(format!("{what}: cannot be read ({e})"));
+    let file = std::fs::File::open(path).map_err(io)?;
+    if file.metadata().map_err(io)?.len() == 0 {
+        return parse_ascii(b"", opts, what);
+    }
+    // SAFETY: read-only map alive during this call only (see PlyFile::open).
+    let map = unsafe { memmap2::MmapOptions::new().map(&file) }.map_err(io)?;
+    parse_ascii(&map, opts, what)
 }
 
 /// Write points as ASCII, one per line, values separated by `sep`, with an
@@ -424,6 +648,33 @@ pub fn write_ascii(coords: &[f64], dim: usize, sep: u8, header: Option<&str>) ->
         out.extend(r);
     }
     Ok(out)
+}
+
+/// The reader before its one-pass rewrite, line by line through [`fields`]: the oracle
+/// the fast path, the chunking and the compaction are checked against.
+#[cfg(test)]
+pub(crate) fn parse_reference(bytes: &[u8], opts: &AsciiOptions, what: &str, target: usize) -> (Result<Parsed>, Result<Parsed>) {
+    let reference = (|| {
+        let text = checked_text(bytes, opts.dim, what)?;
+        let ds = data_start(text, opts, what)?;
+        let mut coords = Vec::new();
+        for (k, _, line) in lines_from(text, ds.offset, ds.line) {
+            let mut o = [0.0; 3];
+            if slow_line(line, &ds.layout, k, what, &mut o)? {
+                coords.extend_from_slice(&o[..opts.dim]);
+            }
+        }
+        let lay = ds.layout;
+        Ok(Parsed { coords, header_lines: lay.header_lines, columns: lay.columns, ncols: lay.ncols, decimal_comma: lay.style == Style::DecimalComma })
+    })();
+    let fast = (|| {
+        let text = checked_text(bytes, opts.dim, what)?;
+        let ds = data_start(text, opts, what)?;
+        let (coords, _) = parse_chunked(&text[ds.offset..], ds.line, &ds.layout, what, target)?;
+        let lay = ds.layout;
+        Ok(Parsed { coords, header_lines: lay.header_lines, columns: lay.columns, ncols: lay.ncols, decimal_comma: lay.style == Style::DecimalComma })
+    })();
+    (reference, fast)
 }
 
 #[cfg(test)]
@@ -524,5 +775,104 @@ mod tests {
         let opts = AsciiOptions { dim: 2, skip_lines: 0 };
         let p = parse_ascii(b"1 2\n3 4\n", &opts, "c").unwrap();
         assert_eq!(p.coords, vec![1., 2., 3., 4.]);
+    }
+
+    use proptest::prelude::*;
+
+    fn token() -> impl Strategy<Value = String> {
+        prop_oneof![
+            any::<f64>().prop_map(|v| format!("{v}")),
+            any::<f64>().prop_map(|v| format!("{v:e}")),
+            (-1e6f64..1e6).prop_map(|v| format!("{v:.4}")),
+            (-1e6f64..1e6).prop_map(|v| format!("{v:.17e}")),
+            prop::sample::select(vec![
+                "0", "-0", "+0", "+.5", "5.", ".", "-", "1e", "1e+", "1E+05", "0x10", "nan", "inf", "-infinity",
+                "1,5", "-4,25", "2,5e3", "1.5x", "abc", "x", "", "1e-320", "2.2250738585072011e-308",
+                "4.9406564584124654e-324", "1.7976931348623157e308", "1e309", "9007199254740993", "-0.0", "0.30000000000000004", "999999999999999", "9999999999999999", "0.000000000000001", "123456789.012345", "1.5.2", "+-1", "1..2", "5.e3", "-.5",
+                "0.1000000000000000055511151231257827", "123456789012345678901234567890", "00012", "1_0",
+            ])
+            .prop_map(String::from),
+        ]
+    }
+
+    fn sep() -> impl Strategy<Value = String> {
+        prop::sample::select(vec![" ", "  ", ",", ", ", " ,", ";", "; ", "\t", ",,", ";;", ",;", "\r", "\x0b", "\x0c", " \t "])
+            .prop_map(String::from)
+    }
+
+    fn line() -> impl Strategy<Value = String> {
+        prop_oneof![
+            8 => (prop::collection::vec((token(), sep()), 1..6), prop::sample::select(vec!["", " ", "\r", "\x0c", ",", " # x"]))
+                .prop_map(|(f, end)| {
+                    let mut s = String::new();
+                    for (i, (t, sp)) in f.iter().enumerate() {
+                        if i > 0 {
+                            s.push_str(sp);
+                        }
+                        s.push_str(t);
+                    }
+                    s + end
+                }),
+            1 => prop::sample::select(vec!["", "   ", "# comment", "  // note", "x y z", "X;Y;Z", "id,Z,Y,X", "\r"]).prop_map(String::from),
+        ]
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 4000, .. ProptestConfig::default() })]
+
+        /// The one-pass reader (fast path, chunks split at line breaks, compaction) reads
+        /// exactly what the line-by-line reader read: the same values bit for bit, the
+        /// same error message.
+        #[test]
+        fn one_pass_equals_line_by_line(lines in prop::collection::vec(line(), 1..40), target in 1usize..64, dim in 2usize..=3, crlf in any::<bool>(), last_nl in any::<bool>()) {
+            let nl = if crlf { "\r\n" } else { "\n" };
+            let mut text = lines.join(nl);
+            if last_nl {
+                text.push_str(nl);
+            }
+            let opts = AsciiOptions { dim, skip_lines: 0 };
+            let (want, got) = parse_reference(text.as_bytes(), &opts, "p", target);
+            match (want, got) {
+                (Ok(a), Ok(b)) => {
+                    prop_assert_eq!(a.coords.iter().map(|v| v.to_bits()).collect::<Vec<_>>(), b.coords.iter().map(|v| v.to_bits()).collect::<Vec<_>>());
+                    prop_assert_eq!((a.header_lines, a.columns, a.ncols, a.decimal_comma), (b.header_lines, b.columns, b.ncols, b.decimal_comma));
+                }
+                (Err(a), Err(b)) => prop_assert_eq!(a.message, b.message),
+                (a, b) => prop_assert!(false, "{:?} vs {:?}", a, b),
+            }
+        }
+    }
+
+    #[test]
+    fn chunk_boundaries_and_skipped_lines() {
+        let text = b"x y z\n1 2 3\n\n# c\n4 5 6\n\n\n7 8 9 10\n1e3,-2.5,+3\n4 5 6";
+        for target in 1..40 {
+            let (want, got) = parse_reference(text, &AsciiOptions::default(), "c", target);
+            assert_eq!(want.unwrap().coords, got.unwrap().coords);
+        }
+        let bad = b"1 2 3\n4 5 6\n\n7 8\n";
+        for target in 1..20 {
+            let e = parse_reference(bad, &AsciiOptions::default(), "c", target).1.unwrap_err();
+            assert!(e.message.contains("line 4"), "{}", e.message);
+        }
+    }
+}
+
+#[cfg(test)]
+mod number_tests {
+    use super::parse_number;
+    use proptest::prelude::*;
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 20000, .. ProptestConfig::default() })]
+        /// The plain-decimal route reads what fast-float2 reads, bit for bit, and takes
+        /// the same bytes.
+        #[test]
+        fn plain_decimals_equal_fast_float(int in "[+-]?[0-9]{0,16}", frac in "(\\.[0-9]{0,16})?", tail in "[ ,;eE.x]?[0-9]?") {
+            let s = format!("{int}{frac}{tail}");
+            let a = parse_number(s.as_bytes()).map(|(v, n)| (v.to_bits(), n));
+            let b = fast_float2::parse_partial::<f64, _>(s.as_bytes()).ok().map(|(v, n): (f64, usize)| (v.to_bits(), n));
+            prop_assert_eq!(a, b, "{:?}", s);
+        }
     }
 }

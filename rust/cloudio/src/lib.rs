@@ -15,8 +15,10 @@ pub mod e57;
 mod e57_fast;
 pub mod ply;
 pub mod scale;
+pub mod stream;
 
-pub use ascii::{data_columns, detect_style, parse_ascii, write_ascii, AsciiOptions, Parsed, Style};
+pub use ascii::{ascii_layout, data_columns, detect_style, parse_ascii, parse_body, read_ascii_file, write_ascii, AsciiOptions, DataStart, Layout, Parsed, Style};
 pub use e57::{read_e57, E57Points};
-pub use ply::{read_ply, read_ply_file, PlyFile, PlyPoints};
+pub use ply::{read_ply, read_ply_file, PlyFile, PlyPoints, VertexRecords};
+pub use stream::{AsciiStream, PlyStream};
 pub use scale::scale_in_place;

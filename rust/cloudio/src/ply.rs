@@ -227,6 +227,17 @@ pub struct PlyFile {
 impl PlyFile {
     /// Open and check the PLY file at `path`; `what` names it in messages.
     pub fn open(path: &std::path::Path, what: &str) -> Result<PlyFile> {
+        Self::open_with(path, what, true)
+    }
+
+    /// [`PlyFile::open`] without reading the file ahead: only the pages touched (the
+    /// header, and the tail [`PlyFile::vertex_records`] checks) are read, for a reader
+    /// that then streams the vertices itself.
+    pub fn open_lazy(path: &std::path::Path, what: &str) -> Result<PlyFile> {
+        Self::open_with(path, what, false)
+    }
+
+    fn open_with(path: &std::path::Path, what: &str, populate: bool) -> Result<PlyFile> {
         let io = |e: std::io::Error| GkError::invalid(format!("{what}: cannot be read ({e})"));
         let file = std::fs::File::open(path).map_err(io)?;
         if file.metadata().map_err(io)?.len() == 0 {
@@ -234,7 +245,11 @@ impl PlyFile {
         }
         // SAFETY: the map is read-only and lives only as long as this reader; a file
         // truncated by another process meanwhile is outside what any reader can guard against.
-        let map = unsafe { memmap2::MmapOptions::new().populate().map(&file) }.map_err(io)?;
+        let mut opts = memmap2::MmapOptions::new();
+        if populate {
+            opts.populate();
+        }
+        let map = unsafe { opts.map(&file) }.map_err(io)?;
         let (format, elements, body) = header(&map, what)?;
         let (vi, idx) = xyz(&elements, what)?;
         // a count no file of this size can hold: refuse before anyone allocates for it
@@ -293,6 +308,28 @@ impl PlyFile {
         Ok(Some(self.body))
     }
 
+    /// The vertices as fixed-size records, when the file is binary and every element has
+    /// fixed-size records (no lists): the file's size is checked against the header here
+    /// (the same errors as a whole read), so the caller can read any range of vertices.
+    pub fn vertex_records(&self) -> Result<Option<VertexRecords>> {
+        if self.format == Format::Ascii || self.elements.iter().any(|e| e.fixed_size().is_none()) {
+            return Ok(None);
+        }
+        let be = self.format == Format::Be;
+        check_tail(&self.map, &self.elements, self.vi, &self.what, self.body, be)?;
+        let el = &self.elements[self.vi];
+        let offset = self.body + self.elements[..self.vi].iter().map(|e| e.count * e.fixed_size().unwrap_or(0)).sum::<usize>();
+        let field = |p: usize| el.props[..p].iter().map(|q| q.ty.size()).sum::<usize>();
+        Ok(Some(VertexRecords {
+            offset,
+            count: el.count,
+            stride: el.fixed_size().unwrap_or(0),
+            fo: self.idx.map(field),
+            ty: self.idx.map(|p| el.props[p].ty),
+            be,
+        }))
+    }
+
     /// Decode x, y, z of every vertex into `out` (length 3 x [`Self::vertex_count`]).
     pub fn read_into(&self, out: &mut [f64]) -> Result<()> {
         if out.len() != 3 * self.vertex_count() {
@@ -305,6 +342,33 @@ impl PlyFile {
                 read_binary(bytes, self.body, &self.elements, self.vi, self.idx, self.format == Format::Be, what, out)
             }
         }
+    }
+}
+
+/// Where and how the vertices of a binary PLY file are stored ([`PlyFile::vertex_records`]).
+#[derive(Debug, Clone)]
+pub struct VertexRecords {
+    /// Byte offset of the first vertex record.
+    pub offset: usize,
+    /// Number of vertices.
+    pub count: usize,
+    /// Bytes per vertex record.
+    pub stride: usize,
+    fo: [usize; 3],
+    ty: [Ty; 3],
+    be: bool,
+}
+
+impl VertexRecords {
+    /// Whether a record is exactly little-endian `double x, y, z` (its bytes are the points).
+    pub fn is_f64_xyz(&self) -> bool {
+        self.stride == 24 && self.fo == [0, 8, 16] && self.ty == [Ty::F64; 3] && !self.be
+    }
+
+    /// Decode the records `bytes` (whole records, the first being vertex `first`) into
+    /// `out` (3 per record); a non-finite coordinate is the whole read's error.
+    pub fn decode(&self, bytes: &[u8], first: usize, out: &mut [f64], what: &str) -> Result<()> {
+        decode_fixed(bytes, self.stride, self.fo, self.ty, self.be, out).map_err(|i| non_finite(what, first + i))
     }
 }
 

@@ -2,7 +2,7 @@
 
 use crate::arrays::rows;
 use crate::errors::{invalid, run};
-use gagekit_cloudio::{data_columns, parse_ascii, scale_in_place, read_e57, write_ascii, AsciiOptions, PlyFile};
+use gagekit_cloudio::{data_columns, read_ascii_file, scale_in_place, read_e57, write_ascii, AsciiOptions, PlyFile};
 use gagekit_core::GkError;
 use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray2, PyReadwriteArray2};
 use pyo3::prelude::*;
@@ -27,11 +27,7 @@ fn cloud_read_ascii<'py>(
     dim: usize,
     skip_lines: usize,
 ) -> PyResult<AsciiCloud> {
-    let parsed = run(py, || {
-        let bytes = std::fs::read(&path)
-            .map_err(|e| GkError::invalid(format!("{path}: cannot be read ({e})")))?;
-        parse_ascii(&bytes, &AsciiOptions { dim, skip_lines }, &path)
-    })?;
+    let parsed = run(py, || read_ascii_file(std::path::Path::new(&path), &AsciiOptions { dim, skip_lines }, &path))?;
     let n = parsed.coords.len() / dim;
     let arr = PyArray1::from_vec(py, parsed.coords).reshape([n, dim])?;
     Ok(AsciiCloud { points: arr.into_any().unbind(), header_lines: parsed.header_lines, columns: parsed.columns })

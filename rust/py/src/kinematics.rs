@@ -164,6 +164,27 @@ pub struct RigidTransform {
     rms: f64,
 }
 
+/// Leave-one-cycle-out error sums of the temperature ridge model, one per strength
+/// (`gagekit_kinematics::ridge::loo_errors`): temperatures (k, S), groups (k, G), residuals
+/// (k, 3n), reduced design matrix (3n, G).
+#[pyfunction]
+fn tracking_loo_errors<'py>(
+    py: Python<'py>,
+    temperatures: PyReadonlyArray2<'py, f64>,
+    groups: PyReadonlyArray2<'py, f64>,
+    residuals: PyReadonlyArray2<'py, f64>,
+    design: PyReadonlyArray2<'py, f64>,
+    lambdas: Vec<f64>,
+) -> PyResult<Vec<f64>> {
+    let (k, s) = (temperatures.shape()[0], temperatures.shape()[1]);
+    let g = groups.shape()[1];
+    let t = rows(py, &temperatures, s, "temperatures")?;
+    let p = rows(py, &groups, g, "groups")?;
+    let r = rows(py, &residuals, residuals.shape()[1], "residuals")?;
+    let m = rows(py, &design, g, "design matrix")?;
+    run(py, || gagekit_kinematics::ridge::loo_errors(t, p, r, m, k, s, g, &lambdas))
+}
+
 #[pyfunction]
 fn machine_rigid_fit<'py>(py: Python<'py>, src: PyReadonlyArray2<'py, f64>, dst: PyReadonlyArray2<'py, f64>) -> PyResult<RigidTransform> {
     let s = rows(py, &src, 3, "nominal positions")?;
@@ -184,5 +205,6 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(machine_identifiability, m)?)?;
     m.add_function(wrap_pyfunction!(machine_lstsq, m)?)?;
     m.add_function(wrap_pyfunction!(machine_rigid_fit, m)?)?;
+    m.add_function(wrap_pyfunction!(tracking_loo_errors, m)?)?;
     Ok(())
 }

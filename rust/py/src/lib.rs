@@ -5,6 +5,7 @@
 //! submodule `gagekit._core._testing`.
 
 mod arrays;
+mod ballbar;
 mod cloudio;
 mod design;
 mod errors;
@@ -42,6 +43,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     geometry::register(m)?;
     form::register(m)?;
     kinematics::register(m)?;
+    ballbar::register(m)?;
     nc::register(m)?;
     gage::register(m)?;
     gdt::register(m)?;

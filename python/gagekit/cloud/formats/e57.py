@@ -2,15 +2,29 @@
 ``e57`` crate: no C++ library, nothing printed on stderr, page checksums verified):
 every scan with its pose, Cartesian or spherical coordinates, scaled-integer or float
 fields; points whose invalid state is not 0 dropped and counted. Unit: metres, by the
-standard."""
+standard.
+
+A file whose points are all at one place (every spherical range 0, or every Cartesian
+coordinate the same: what a failed or invalid acquisition leaves) is refused, not read as a
+cloud of coincident points. The check is on the whole file: a multi-scan file with one such
+scan among good ones is read (its points then sit at that scan's origin)."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
+
 from ... import _core
 from ...errors import FileFormatError, InvalidInputError
 from . import Raw
+
+
+def _check_spread(p: Path, pts: np.ndarray) -> None:
+    if len(pts) > 1 and np.array_equal(pts.min(axis=0), pts.max(axis=0)):
+        x, y, z = (float(v) for v in pts[0])
+        raise FileFormatError(f"{p}: all {len(pts)} points are at one place ({x:g}, {y:g}, {z:g} m; every range 0?): "
+                              "an invalid acquisition, not a scan")
 
 
 def read(p: Path, dim: int) -> Raw:
@@ -21,5 +35,6 @@ def read(p: Path, dim: int) -> Raw:
     pts, scans, dropped = cloud.points, cloud.scans, cloud.invalid_dropped
     if scans == 0:
         raise FileFormatError(f"{p}: the E57 file holds no scans")
+    _check_spread(p, pts)
     return Raw(pts, "e57", unit="m", unit_basis="E57 standard (ASTM E2807): metres",
                scans=scans, invalid_dropped=dropped, finite_checked=True)

@@ -42,12 +42,22 @@ def read(p: Path, dim: int) -> Raw:
         if "LazBackend" in msg:
             msg = "no LAZ decompressor; pip install 'gagekit[las]' (laspy with lazrs)"
         raise FileFormatError(f"{p}: not a readable LAS/LAZ file ({msg})") from None
+    _check_scales(las.header, p)
     pts = np.empty((len(las.points), 3))
     pts[:, 0], pts[:, 1], pts[:, 2] = las.x, las.y, las.z
     raw = Raw(pts, "laz" if p.suffix.lower() == ".laz" else "las")
     vlrs = list(las.header.vlrs) + list(getattr(las, "evlrs", None) or [])
     _crs_unit(vlrs, raw, p)
     return raw
+
+
+def _check_scales(header, p: Path) -> None:
+    """A coordinate is offset + scale x the stored integer: a scale factor of 0 (or not a
+    finite number) would read every point at the offset, so it is refused."""
+    for axis, s in zip("xyz", np.asarray(header.scales, dtype=float)):
+        if not (np.isfinite(s) and s != 0.0):
+            raise FileFormatError(f"{p}: the LAS header's {axis} scale factor is {s:g}: every {axis} would read as "
+                                  "the offset; the file is damaged")
 
 
 def _crs_unit(vlrs: list, raw: Raw, p: Path) -> None:

@@ -12,7 +12,10 @@ with the frame correction of ERRATA item 6) and kept; then, per cycle j:
 With temperature columns, a ridge model from the cycle-mean temperatures to each group
 (Sec. 7.2, item 4), its strength chosen by leave-one-cycle-out, and its nested
 leave-one-cycle-out prediction residuals (``temperature_model.leave_one_cycle_out_mean``, mm,
-beside the full, static and drift-only residuals of each cycle).
+beside the full, static and drift-only residuals of each cycle). The nested search refits the
+ridge C^2 times per strength; each training set is decomposed once (thin SVD) and reused
+across the 25 strengths, and the residuals are linear in the groups, so a year of daily
+cycles (365 x 80 points) tracks in seconds (``benches/bench_track.py``).
 """
 
 from __future__ import annotations
@@ -22,7 +25,7 @@ from typing import Optional
 
 import numpy as np
 
-from ... import _progress
+from ... import _core, _progress
 from ...errors import DegenerateGeometryError
 from ..identify import identify
 from ..model import Machine, ModelStructure
@@ -120,17 +123,29 @@ def track(machine: Machine, cycles: Cycles, structure: Optional[ModelStructure] 
 _LAMBDAS = tuple(float(v) for v in np.logspace(-3, 3, 25))
 
 
+def _ridge_parts(T: np.ndarray, P: np.ndarray):
+    """What every ridge strength shares for training cycles T (..., k, S), P (..., k, G)
+    (leading axes: a batch of training sets): the temperature means and scales, the group
+    means, the thin SVD X = U diag(s) V^T of the standardised temperatures, U^T (P - mean)
+    and the scale of the strengths (mean squared norm of the rows of X)."""
+    tm, pm = T.mean(axis=-2), P.mean(axis=-2)
+    sd = T.std(axis=-2)
+    sd = np.where(sd > 1e-9, sd, 1.0)
+    X = (T - tm[..., None, :]) / sd[..., None, :]
+    U, sv, Vt = np.linalg.svd(X, full_matrices=False)
+    UtY = np.swapaxes(U, -1, -2) @ (P - pm[..., None, :])
+    scale = np.maximum((sv**2).sum(axis=-1) / T.shape[-2], 1e-12)
+    return tm, sd, pm, sv, Vt, UtY, scale
+
+
 def _ridge(T: np.ndarray, P: np.ndarray, lam: float):
     """Ridge regression of group values P (C, G) on temperatures T (C, S): standardised
-    temperatures, dual form (C x C) so that more sensors than cycles is fine. Returns
+    temperatures, strength lam times the mean squared norm of their rows; through the thin
+    SVD of the standardised temperatures, so more sensors than cycles is fine. Returns
     (T mean, T scale, P mean, coefficients (S, G) per standardised unit)."""
-    tm, pm = T.mean(axis=0), P.mean(axis=0)
-    sd = T.std(axis=0)
-    sd = np.where(sd > 1e-9, sd, 1.0)
-    X = (T - tm) / sd
-    k = X @ X.T
-    scale = max(float(np.trace(k)) / len(T), 1e-12)
-    B = X.T @ np.linalg.solve(k + lam * scale * np.eye(len(T)), P - pm)
+    tm, sd, pm, sv, Vt, UtY, scale = _ridge_parts(T, P)
+    # X^T (X X^T + mu I)^-1 Y = V diag(s / (s^2 + mu)) U^T Y
+    B = Vt.T @ ((sv / (sv**2 + lam * scale))[:, None] * UtY)
     return tm, sd, pm, B
 
 
@@ -139,20 +154,61 @@ def _predict_groups(fit, t: np.ndarray) -> np.ndarray:
     return pm + ((t - tm) / sd) @ B
 
 
-def _residual(m, resid_c, g) -> float:
-    return float(np.linalg.norm(resid_c - (m @ g).reshape(-1, 3), axis=1).mean())
+def _loo_errors(T, P, m, resid, idx) -> np.ndarray:
+    """Leave-one-cycle-out mean residual over the cycles ``idx`` for every strength of
+    ``_LAMBDAS`` (sum over the held-out cycles of the mean residual length, mm).
+
+    Each training set is decomposed once and every strength then costs a rescaling of the
+    spectrum; the model's residuals are linear in the predicted groups. With fewer sensors
+    than training cycles, the Rust kernel (``gagekit_kinematics::ridge``: the primal form
+    (X^T X + mu I)^-1 X^T Y from the sums over all cycles minus the held-out one, S x S per
+    set, in parallel over the held-out cycles); otherwise the thin SVD of each set's X."""
+    idx = np.asarray(idx)
+    k, S = len(idx), T.shape[1]
+    n = resid[0].shape[0]
+    R = np.ascontiguousarray(np.stack([resid[c].reshape(-1) for c in idx]))  # (k, 3n)
+    if S < k - 1:
+        return np.array(_core.tracking_loo_errors(np.ascontiguousarray(T[idx], dtype=np.float64),
+                                                  np.ascontiguousarray(P[idx], dtype=np.float64), R,
+                                                  np.ascontiguousarray(m, dtype=np.float64), list(_LAMBDAS)))
+    Ti = T[idx] - T[idx].mean(axis=0)  # the ridge is invariant to a shift of the temperatures
+    return _loo_errors_dual(Ti, P[idx], R, np.ascontiguousarray(m.T), n)
+
+
+def _loo_errors_dual(Ti, Pi, R, mt, n) -> np.ndarray:
+    """:func:`_loo_errors` with at least as many sensors as training cycles: the thin SVD
+    X = U diag(s) V^T of each training set, X^T (X X^T + mu I)^-1 Y = V diag(s/(s^2+mu)) U^T Y;
+    held-out cycles in chunks of about 4 million numbers per array."""
+    k, S = Ti.shape
+    r = min(k - 1, S)
+    chunk = max(1, 4_000_000 // max(1, (k - 1) * S + r * mt.shape[1] + len(_LAMBDAS) * mt.shape[1]))
+    others = np.arange(k - 1)
+    lam = np.asarray(_LAMBDAS)[None, :, None]
+    err = np.zeros(len(_LAMBDAS))
+    for lo in range(0, k, chunk):
+        held = np.arange(lo, min(k, lo + chunk))
+        rows = others[None, :] + (others[None, :] >= held[:, None])  # every cycle but the held-out one
+        tm, sd, pm, sv, Vt, UtY, scale = _ridge_parts(Ti[rows], Pi[rows])
+        a = (Vt @ ((Ti[held] - tm) / sd)[:, :, None])[:, :, 0]
+        w = a[:, None, :] * sv[:, None, :] / (sv[:, None, :] ** 2 + lam * scale[:, None, None])
+        err += _residual_sums(R[held] - pm @ mt, w, UtY @ mt, n)
+    return err
+
+
+def _residual_sums(base, w, mb, n) -> np.ndarray:
+    """Sum over the held-out cycles of the mean residual length, per strength: residuals
+    base - w @ mb, (h, L, 3n), of n points."""
+    res = (base[:, None, :] - w @ mb).reshape(base.shape[0], w.shape[1], n, 3)
+    return np.sqrt(np.einsum("hlpi,hlpi->hlp", res, res)).mean(axis=2).sum(axis=0)
 
 
 def _choose_lambda(T, P, m, resid, idx) -> float:
-    """Strength with the smallest leave-one-cycle-out mean residual over the cycles ``idx``."""
+    """Strength with the smallest leave-one-cycle-out mean residual over the cycles ``idx``
+    (the first of equal ones)."""
     best, best_err = _LAMBDAS[0], np.inf
-    for lam in _LAMBDAS:
-        err = 0.0
-        for c in idx:
-            keep = [i for i in idx if i != c]
-            err += _residual(m, resid[c], _predict_groups(_ridge(T[keep], P[keep], lam), T[c]))
+    for lam, err in zip(_LAMBDAS, _loo_errors(T, P, m, resid, idx)):
         if err < best_err - 1e-15:
-            best, best_err = lam, err
+            best, best_err = lam, float(err)
     return best
 
 

@@ -1,0 +1,547 @@
+"""Observers other than the laser tracker, alone or mixed: a probed reference sphere, the R-test
+(ISO 10791-6), and the tracker of Ch. 3 (Sec. 3.1.5), identified together.
+
+Observation files are the CSVs of :mod:`.observations` with ``# key = value`` lines before the
+header. ``# kind = tracker`` (the default: joint columns and x, y, z), ``sphere`` or ``rtest``;
+``# sigma_um = S`` the standard deviation of one reading (default: tracker 8.9, sphere 1,
+R-test 0.5).
+
+- ``kind = sphere``: joint columns, optionally ``sphere`` (an integer naming the sphere location
+  when several are probed). A row holds the joint positions at which the probe's touch cycle
+  found the centre of a sphere fixed on the table: there the actual tool sits at the sphere
+  centre S (table frame), nominal(c) + M(c) p = S (Eq. 3.9, 3.13). S is unknown, one per
+  location, estimated with the errors.
+- ``kind = rtest``: joint columns and ``d1, d2, d3`` (mm): three displacement sensors fixed on
+  the table read the ball on the spindle; ``# directions = ux uy uz; ...`` their unit
+  directions in the table frame (default the table axes). d_k = n_k . (nominal(c) + M(c) p -
+  S) with S (the nest's zero, unknown) estimated.
+- ``kind = ballbar``: a ballbar run in the layout of :mod:`.ballbar` (``angle_deg,
+  deviation_um, direction``) with ``# plane = XY``, ``# radius = R`` (mm) and ``# at = B=0,X=0,
+  ...`` (the joint positions of the circle's centre). The commands of reading i are ``at`` with
+  the plane's joints moved by R (cos, sin); the deviation is u_i . ((M_i - M_at) p) + l with u_i
+  the nominal direction from the pivot and l the ballbar's length error (estimated). Readings
+  of both directions at the same angle are averaged first: backlash and servo mismatch change
+  sign with the direction and drop out (they are not geometric errors of the model).
+- ``kind = tracker``: q = T0 (nominal + M p); T0 from the closed-form rigid fit (Step 1), its
+  small correction estimated with the errors (the joint method of :func:`identify`).
+
+All rows are weighted by 1/sigma and solved together (generalized least squares). The unknowns
+are the identifiable groups of Eq. 3.14 (``unknowns = "groups"``, the default when a tracker
+file is in the mix), or only the location errors of the rotary axes (``"location"``, the
+default for sphere and R-test data alone: the linear axes taken as calibrated, as the
+controllers' kinematics cycles do). Which of them the data see is decided on the weighted
+design matrix: an unknown is *seen* when its unit vector lies in the row space (its estimate is
+unique whatever the unseen ones are); unseen unknowns are reported as such and kept at zero.
+
+Location errors of a rotary axis J, ISO 230-7 / ISO 230-1 names: EXOJ, EYOJ, EZOJ (offsets of
+the axis average line, mm) and EAOJ, EBOJ, ECOJ (its tilts about x, y, z, rad), at the joint's
+frame origin. In the chain (Eq. 3.1) they are the displacement D of the joint, Phi_J' = D Phi_J
+D^-1: the shape after the joint takes D^-1 (rotation -w, translation -e - w x offset), the shape
+before it D (rotation +w, translation +e); a joint first in the chain moves the table frame
+itself, which the sphere position and the tracker frame take up.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Optional, Sequence, Union
+
+import numpy as np
+
+from ..errors import DegenerateGeometryError, FileFormatError, InvalidInputError
+from .frame import frame_columns, rigid_fit
+from .model import Machine, ModelStructure, ShapeSpec
+from .simulate import TRACKER_SIGMA
+
+__all__ = [
+    "KINDS",
+    "InstrumentObservations",
+    "MixedResult",
+    "read_instrument",
+    "identify_mixed",
+    "location_names",
+    "location_matrix",
+    "instrument_view",
+]
+
+KINDS = ("tracker", "sphere", "rtest", "ballbar")
+#: Standard deviation of one reading by kind, mm (tracker: Sec. 3.2.1).
+DEFAULT_SIGMA = {"tracker": TRACKER_SIGMA, "sphere": 0.001, "rtest": 0.0005, "ballbar": 0.0005}
+_META = re.compile(r"^\s*#\s*([A-Za-z_]+)\s*=\s*(.*?)\s*$")
+_LOC = ("X", "Y", "Z", "A", "B", "C")
+
+
+@dataclass(frozen=True)
+class InstrumentObservations:
+    """One observation file: ``kind``, commands (n, J), readings (tracker (n, 3) positions,
+    rtest (n, 3) sensor readings, sphere: none), sphere ids, sensor directions, sigma (mm)."""
+
+    kind: str
+    commands: np.ndarray
+    readings: Optional[np.ndarray] = None
+    sphere: Optional[np.ndarray] = None
+    directions: Optional[np.ndarray] = None
+    sigma: float = 0.0
+    source: Optional[str] = None
+
+    def __len__(self) -> int:
+        return int(self.commands.shape[0])
+
+
+def _metadata(text: str) -> dict:
+    out = {}
+    for line in text.splitlines():
+        if not line.strip():
+            continue
+        if not line.lstrip().startswith("#"):
+            break
+        m = _META.match(line)
+        if m:
+            out[m.group(1).lower()] = m.group(2)
+    return out
+
+
+def read_instrument(path: Union[str, Path], machine: Machine) -> InstrumentObservations:
+    """Read an observation file of any kind (see the module's doc)."""
+    from .._files import read_text
+    from .observations import _read_table
+
+    p = Path(path)
+    meta = _metadata(read_text(p, "observations"))
+    kind = meta.get("kind", "tracker").lower()
+    if kind not in KINDS:
+        raise FileFormatError(f"{p}: kind must be one of {', '.join(KINDS)}, got {kind!r}")
+    sigma = DEFAULT_SIGMA[kind]
+    if "sigma_um" in meta:
+        try:
+            sigma = 1e-3 * float(meta["sigma_um"])
+        except ValueError:
+            raise FileFormatError(f"{p}: sigma_um must be a number, got {meta['sigma_um']!r}") from None
+        if not (math.isfinite(sigma) and sigma > 0):
+            raise InvalidInputError(f"{p}: sigma_um must be positive, got {meta['sigma_um']}")
+    if kind == "ballbar":
+        return _read_ballbar_kind(p, machine, meta, sigma)
+    header, data = _read_table(p)
+    if data.shape[0] == 0:
+        raise DegenerateGeometryError(f"{p}: no observations")
+    joints = machine.joint_names
+    want = {"tracker": ["x", "y", "z"], "sphere": [], "rtest": ["d1", "d2", "d3"]}[kind]
+    optional = ["sphere"] if kind == "sphere" else []
+    missing = [c for c in joints + want if c not in header]
+    if missing:
+        raise FileFormatError(f"{p}: missing column(s) {', '.join(missing)} for kind {kind} (expected {', '.join(joints + want + optional)})")
+    extra = [c for c in header if c not in joints + want + optional]
+    if extra:
+        raise FileFormatError(f"{p}: unknown column(s) {', '.join(extra)} for kind {kind}")
+    cmds = machine.commands_array(data[:, [header.index(c) for c in joints]], str(p))
+    readings = data[:, [header.index(c) for c in want]] if want else None
+    sphere = None
+    if kind == "sphere":
+        sphere = data[:, header.index("sphere")] if "sphere" in header else np.zeros(len(cmds))
+        if np.any(sphere != np.round(sphere)):
+            raise FileFormatError(f"{p}: the sphere column must hold integers (one per sphere location)")
+        sphere = sphere.astype(np.int64)
+    directions = None
+    if kind == "rtest":
+        directions = _directions(meta.get("directions"), p)
+    return InstrumentObservations(kind, cmds, readings, sphere, directions, sigma, str(p))
+
+
+def _read_ballbar_kind(p: Path, machine: Machine, meta: dict, sigma: float) -> InstrumentObservations:
+    """A ballbar run as an observation: commands on the circle, mean deviation of both
+    directions per angle (mm) in ``readings`` (n, 1), the circle centre's commands last."""
+    from .ballbar import PLANES, read_ballbar
+
+    for key in ("plane", "radius", "at"):
+        if key not in meta:
+            raise FileFormatError(f"{p}: a ballbar observation file needs a '# {key} = ...' line (plane, radius, at)")
+    plane = meta["plane"].upper()
+    if plane not in PLANES:
+        raise FileFormatError(f"{p}: plane must be XY, YZ or ZX, got {meta['plane']!r}")
+    try:
+        radius = float(meta["radius"])
+    except ValueError:
+        raise FileFormatError(f"{p}: radius must be a number of mm, got {meta['radius']!r}") from None
+    if not (math.isfinite(radius) and radius > 0):
+        raise InvalidInputError(f"{p}: radius must be positive, got {radius}")
+    at = {}
+    for part in meta["at"].split(","):
+        if "=" not in part:
+            raise FileFormatError(f"{p}: at must be NAME=VALUE items separated by commas, got {meta['at']!r}")
+        k, v = (x.strip() for x in part.split("=", 1))
+        try:
+            at[k] = float(v)
+        except ValueError:
+            raise FileFormatError(f"{p}: at {k}: {v!r} is not a number") from None
+    missing = [j for j in machine.joint_names if j not in at]
+    if missing:
+        raise FileFormatError(f"{p}: at must give every joint of the machine (missing {', '.join(missing)})")
+    idx = []
+    for name in PLANES[plane]:
+        if name not in machine.joint_names or machine.joints[machine.joint_names.index(name)].kind != "prismatic":
+            raise InvalidInputError(f"{p}: plane {plane} needs prismatic joints named {' and '.join(PLANES[plane])}")
+        idx.append(machine.joint_names.index(name))
+    run = read_ballbar(p)
+    ang = np.round(np.mod(run.angles_deg, 360.0), 9)
+    uniq = np.unique(ang)
+    dev = np.array([run.deviations_um[ang == a].mean() for a in uniq]) * 1e-3  # both directions averaged
+    centre = np.array([at[j] for j in machine.joint_names])
+    cmds = np.repeat(centre[None, :], len(uniq), axis=0)
+    t = np.radians(uniq)
+    cmds[:, idx[0]] += radius * np.cos(t)
+    cmds[:, idx[1]] += radius * np.sin(t)
+    cmds = np.vstack([cmds, centre[None, :]])
+    return InstrumentObservations("ballbar", machine.commands_array(cmds, str(p)), np.append(dev, 0.0)[:, None],
+                                  None, np.array([[radius]]), sigma, str(p))
+
+
+def _directions(text: Optional[str], p: Path) -> np.ndarray:
+    if text is None:
+        return np.eye(3)
+    try:
+        rows = [[float(v) for v in part.replace(",", " ").split()] for part in text.split(";") if part.strip()]
+        d = np.array(rows, dtype=np.float64)
+    except ValueError:
+        raise FileFormatError(f"{p}: directions must be three vectors 'ux uy uz; ...', got {text!r}") from None
+    if d.shape != (3, 3) or not np.isfinite(d).all():
+        raise FileFormatError(f"{p}: directions must be three vectors of three numbers, got {text!r}")
+    n = np.linalg.norm(d, axis=1)
+    if np.any(n < 1e-9) or abs(np.linalg.det(d / n[:, None])) < 1e-3:
+        raise InvalidInputError(f"{p}: the three R-test sensor directions must be independent")
+    return d / n[:, None]
+
+
+# ----- location errors of the rotary axes (ISO 230-7) ------------------------------------------
+def location_names(machine: Machine) -> list[str]:
+    """EXOB, EYOB, ... for every rotary joint, in chain order."""
+    return [f"E{c}O{j.name}" for j in machine.joints if j.kind == "rotary" for c in _LOC]
+
+
+def location_matrix(machine: Machine) -> np.ndarray:
+    """(P, 6 R) map from location errors (mm, rad) to the error parameters (see the module)."""
+    names = machine.parameter_names
+    index = {n: k for k, n in enumerate(names)}
+    rotary = [k for k, e in enumerate(machine.elements) if getattr(e, "kind", "") == "rotary"]
+    out = np.zeros((len(names), 6 * len(rotary)))
+    for r, k in enumerate(rotary):
+        joint = machine.elements[k]
+        after = machine.elements[k + 1] if k + 1 < len(machine.elements) else None
+        before = machine.elements[k - 1] if k > 0 else None
+        if not isinstance(after, ShapeSpec):
+            raise InvalidInputError(f"rotary joint {joint.name}: its location errors need a shape right after it in the chain")
+        o = np.asarray(after.offset)
+        for c in range(6):
+            e = np.zeros(3)
+            w = np.zeros(3)
+            (e if c < 3 else w)[c % 3] = 1.0
+            col = 6 * r + c
+            # after the joint: D^-1 = rotation -w, translation -e - w x offset
+            t_after = -e - np.cross(w, o)
+            for sh, sign, t in ((after, -1.0, t_after), (before, 1.0, e)):
+                if not isinstance(sh, ShapeSpec):
+                    continue
+                for pname, v in (("gamma", w[0]), ("beta", w[1]), ("alpha", w[2])):
+                    out[index[f"{sh.name}.{pname}"], col] += sign * v
+                for pname, v in zip(("dx", "dy", "dz"), t):
+                    out[index[f"{sh.name}.{pname}"], col] += v
+    return out
+
+
+# ----- rows of each kind ---------------------------------------------------------------------
+@dataclass
+class _Block:
+    kind: str
+    a: np.ndarray  # (m, P) rows in the full parameters
+    n: np.ndarray  # (m, k) nuisance columns
+    b: np.ndarray  # (m,)
+    sigma: float
+    nuisance: list
+    source: str
+    raw: Optional[np.ndarray] = None  # (3n, P) the errors at the commands, before any projection
+
+
+def _rows(machine: Machine, obs: InstrumentObservations, index: int) -> _Block:
+    c = obs.commands
+    nom = machine.nominal(c)
+    m = machine.design_matrix(c)  # (3n, P)
+    src = obs.source or f"observations {index + 1}"
+    if obs.kind == "tracker":
+        frame = rigid_fit(nom, obs.readings)
+        r = frame.to_table(obs.readings) - nom
+        names = [f"{src}: frame.{k}" for k in ("alpha0", "beta0", "gamma0", "x0", "y0", "z0")]
+        return _Block("tracker", m, frame_columns(nom), r.reshape(-1), obs.sigma, names, src)
+    if obs.kind == "ballbar":
+        radius = float(obs.directions[0, 0])
+        n = len(c) - 1
+        d = nom[:n] - nom[n]
+        length = np.linalg.norm(d, axis=1)
+        u = d / length[:, None]
+        m3 = m.reshape(len(c), 3, -1)
+        rows = np.einsum("ni,nik->nk", u, m3[:n] - m3[n][None])
+        b = obs.readings[:n, 0] - (length - radius)
+        names = [f"{src}: ballbar length"]
+        return _Block("ballbar", rows, np.ones((n, 1)), b, obs.sigma, names, src, m)
+    ids = obs.sphere if obs.kind == "sphere" else np.zeros(len(c), dtype=np.int64)
+    uniq = sorted(set(int(i) for i in ids))
+    s0 = {i: nom[ids == i].mean(axis=0) for i in uniq}
+    # the errors act where the tool is, at the sphere: the rows are taken at the commands that
+    # put the nominal tool there (one Newton step on the prismatic joints; the shift is the
+    # errors' size, a second-order change of the rows). Taken at the probed commands, a rotation
+    # of the table frame would look slightly different from a move of the sphere.
+    target = np.array([s0[int(i)] for i in ids])
+    jac = machine.command_jacobian(c).reshape(len(c), 3, -1)
+    lin = [k for k, j in enumerate(machine.joints) if j.kind == "prismatic"]
+    shifted = c.copy()
+    shifted[:, lin] += np.einsum("nij,nj->ni", np.linalg.pinv(jac[:, :, lin]), target - nom)
+    m = machine.design_matrix(shifted)
+    nn = np.zeros((len(c), 3, len(uniq), 3))
+    slot = np.searchsorted(np.array(uniq), ids)
+    for a in range(3):
+        nn[np.arange(len(c)), a, slot, a] = -1.0
+    nn = nn.reshape(3 * len(c), 3 * len(uniq))
+    base = np.array([s0[int(i)] for i in ids]) - nom  # M p - dS = S0 - nominal
+    names = [f"{src}: sphere {i}.{a}" for i in uniq for a in "xyz"]
+    if obs.kind == "sphere":
+        return _Block("sphere", m, nn, base.reshape(-1), obs.sigma, names, src)
+    # rtest: d_k = n_k . (nominal + M p - S0 - dS)
+    d = obs.directions
+    proj = np.kron(np.eye(len(c)), d)  # (3n, 3n): rows n_k per point
+    b = obs.readings.reshape(-1) + (proj @ base.reshape(-1))
+    names = [f"{src}: nest.{a}" for a in "xyz"]
+    return _Block("rtest", proj @ m, proj @ nn, b, obs.sigma, names, src, m)
+
+
+# ----- the joint solve ---------------------------------------------------------------------------
+@dataclass(frozen=True)
+class MixedResult:
+    """Groups (or location errors) seen by the mix, their values and uncertainties, the
+    location errors of the rotary axes, and each instrument's residuals."""
+
+    unknowns: str
+    names: tuple
+    values: np.ndarray
+    std: np.ndarray
+    seen: np.ndarray
+    groups: dict
+    location: dict
+    instruments: list
+    condition_number: float
+    calibration: object = field(repr=False, default=None)
+
+    def to_dict(self) -> dict:
+        return {
+            "unknowns": self.unknowns,
+            "seen": [n for n, s in zip(self.names, self.seen) if s],
+            "not_seen": [n for n, s in zip(self.names, self.seen) if not s],
+            "groups": self.groups,
+            "location_errors": self.location,
+            "instruments": self.instruments,
+            "condition_number": self.condition_number,
+        }
+
+
+#: Relative singular value below which a direction counts as unseen: the readings resolve
+#: parts in 1e6 at best, and first-order effects of the errors themselves reach 1e-9.
+RANK_RTOL = 1e-6
+
+
+#: Largest variance inflation (equilibrated columns) of an unknown counted as seen: beyond it
+#: the estimate is more than 1000 times noisier than the unknown's own column would make it.
+MAX_INFLATION = 1e6
+
+
+def _seen(vt: np.ndarray, sv: np.ndarray, r: int, k: int) -> np.ndarray:
+    """Which of the first k columns are estimable: their unit vectors lie in the row space
+    (the first r right singular vectors of the weighted, equilibrated matrix), and not so
+    nearly dependent on the others that the estimate is meaningless."""
+    resid = 1.0 - (vt[:r, :k] ** 2).sum(axis=0)
+    inflation = ((vt[:r, :k] / sv[:r, None]) ** 2).sum(axis=0)
+    return (resid < 1e-6) & (inflation < MAX_INFLATION) & (np.abs(vt[:r, :k]).sum(axis=0) > 0)
+
+
+def identify_mixed(
+    machine: Machine,
+    observations: Sequence[InstrumentObservations],
+    unknowns: Optional[str] = None,
+    structure: Optional[ModelStructure] = None,
+) -> MixedResult:
+    """Identify from any mix of tracker, sphere and R-test observations (see the module's doc):
+    generalized least squares over all rows, each kind with its own sigma."""
+    if not observations:
+        raise InvalidInputError("no observations given")
+    kinds = {o.kind for o in observations}
+    if unknowns is None:
+        unknowns = "groups" if kinds & {"tracker", "ballbar"} else "location"
+    if unknowns not in ("groups", "location"):
+        raise InvalidInputError(f"unknowns must be 'groups' or 'location', got {unknowns!r}")
+    st = structure if structure is not None else machine.structure()
+    blocks = [_rows(machine, o, i) for i, o in enumerate(observations)]
+    lmat = location_matrix(machine)
+    lnames = location_names(machine)
+    if unknowns == "groups":
+        basis = np.zeros((machine.n_parameters, st.rank))
+        basis[list(st.leaders), np.arange(st.rank)] = 1.0  # M p = M[:, leaders] g
+        names = [g.name for g in st.groups]
+    else:
+        basis = lmat
+        names = lnames
+    k = basis.shape[1]
+    a = np.vstack([np.hstack([b.a @ basis / b.sigma, np.zeros((len(b.b), 0))]) for b in blocks])
+    nuis = [b.n.shape[1] for b in blocks]
+    nmat = np.zeros((a.shape[0], sum(nuis)))
+    row = col = 0
+    for b, w in zip(blocks, nuis):
+        nmat[row : row + len(b.b), col : col + w] = b.n / b.sigma
+        row += len(b.b)
+        col += w
+    full = np.hstack([a, nmat])
+    rhs = np.concatenate([b.b / b.sigma for b in blocks])
+    norms = np.linalg.norm(full, axis=0)
+    # an unknown whose effect the readings cancel (a ballbar's length under a rotation of the
+    # whole table) has a column of round-off only: no effect
+    raw = np.sqrt(sum((((b.raw if b.raw is not None else b.a) @ basis / b.sigma) ** 2).sum(axis=0) for b in blocks))
+    dead = np.zeros(full.shape[1], bool)
+    dead[:k] = norms[:k] <= 1e-9 * raw
+    norms[dead | (norms == 0)] = 1.0
+    full[:, dead] = 0.0
+    eq = full / norms
+    # the SVD of the tall, thin, equilibrated matrix through its normal matrix (k x k): eq^T eq =
+    # V S^2 V^T; with columns of unit norm the squared condition stays far inside double
+    # precision, and one matrix product is all that touches the 3n rows
+    lam, v = np.linalg.eigh(eq.T @ eq)
+    order = np.argsort(lam)[::-1]
+    lam, v = np.clip(lam[order], 0.0, None), v[:, order]
+    sv = np.sqrt(lam)
+    vt = v.T
+    qtb = (vt @ (eq.T @ rhs)) / np.where(sv > 0, sv, 1.0)  # = U^T rhs on the row space
+    r = int((sv > RANK_RTOL * sv[0]).sum())
+    if r == 0:
+        raise DegenerateGeometryError("the observations see none of the unknowns")
+    seen = _seen(vt, sv, r, k)
+    x = (vt[:r].T @ (qtb[:r] / sv[:r])) / norms
+    cov = ((vt[:r].T / sv[:r] ** 2) @ vt[:r]) / np.outer(norms, norms)  # unit weight: sigmas as given
+    resid = rhs - full @ x
+    dof = max(len(rhs) - r, 1)
+    chi2 = float(resid @ resid) / dof
+    values = np.where(seen, x[:k], 0.0)
+    std = np.where(seen, np.sqrt(np.clip(np.diag(cov)[:k], 0.0, None)), np.nan)
+    instruments = []
+    row = 0
+    for b in blocks:
+        m = len(b.b)
+        res = resid[row : row + m] * b.sigma
+        instruments.append({
+            "source": b.source, "kind": b.kind, "readings": int(m), "sigma_um": 1e3 * b.sigma,
+            "residual_rms_um": 1e3 * float(np.sqrt((res**2).mean())),
+        })
+        row += m
+    # groups and location errors from the estimate
+    if unknowns == "groups":
+        gvals, gstd, gseen = values, std, seen
+        lvals, lstd, lseen = _location_from_groups(st, lmat, values, cov[:k, :k], seen)
+    else:
+        cg = st.coefficients @ lmat  # groups of the location errors
+        gvals = cg @ values
+        gcov = cg @ (cov[:k, :k] * np.outer(seen, seen)) @ cg.T
+        gstd = np.sqrt(np.clip(np.diag(gcov), 0.0, None))
+        gseen = np.abs(cg[:, seen]).sum(axis=1) > 0 if seen.any() else np.zeros(st.rank, bool)
+        lvals, lstd, lseen = values, std, seen
+    groups = {g.name: ({"value": float(v), "std": float(s)} if ok else {"seen": False})
+              for g, v, s, ok in zip(st.groups, gvals, gstd, gseen)}
+    location = {}
+    for n, v, s, ok in zip(lnames, lvals, lstd, lseen):
+        unit = "mm" if n[1] in "XYZ" else "rad"
+        location[n] = {"value": float(v), "std": float(s), "unit": unit} if ok else {"seen": False}
+    cal = _calibration(machine, st, gvals, gstd, gseen, unknowns, chi2, dof, len(rhs))
+    return MixedResult(unknowns, tuple(names), values, std, seen, groups, location, instruments,
+                       float(sv[0] / sv[r - 1]), cal)
+
+
+def _location_from_groups(st, lmat, g, gcov, gseen):
+    """Location errors from identified groups: each location error maps onto the groups by
+    C L; those whose groups are all seen are solved from them by least squares."""
+    cg = st.coefficients @ lmat  # (rank, 6R)
+    n = cg.shape[1]
+    vals, std, seen = np.zeros(n), np.full(n, np.nan), np.zeros(n, bool)
+    for j in range(n):
+        rows = np.flatnonzero(np.abs(cg[:, j]) > 1e-12)
+        if rows.size == 0 or not gseen[rows].all():
+            continue
+        # groups touched only by this location error give it alone
+        own = [r for r in rows if np.count_nonzero(np.abs(cg[r]) > 1e-12) == 1]
+        if not own:
+            continue
+        c = cg[own, j]
+        w = c / (c @ c)
+        vals[j] = float(w @ g[own])
+        std[j] = float(np.sqrt(max(w @ gcov[np.ix_(own, own)] @ w, 0.0)))
+        seen[j] = True
+    return vals, std, seen
+
+
+def _calibration(machine, st, gvals, gstd, gseen, unknowns, chi2, dof, n_rows):
+    """A :class:`Calibration` of the groups (unseen ones at zero) for predict and export."""
+    from .calibration import Calibration, GroupEstimate, ResidualStats
+    from .frame import Frame
+
+    units = machine.parameter_units()
+    groups = tuple(
+        GroupEstimate(name=g.name, leader=g.leader, terms=dict(g.terms), value=float(v) if ok else 0.0,
+                      std=float(s) if ok else None, unit=units[st.leaders[i]])
+        for i, (g, v, s, ok) in enumerate(zip(st.groups, gvals, gstd, gseen))
+    )
+    zero = np.zeros((1, 3))
+    return Calibration(
+        machine=machine.name, method=f"mixed ({unknowns})", rank=st.rank, condition_number=1.0, groups=groups,
+        unidentifiable=tuple(st.no_effect), frame=Frame.identity(), residuals=ResidualStats.of(zero, zero),
+        sigma=math.sqrt(chi2), dof=int(dof),
+    )
+
+
+# ----- what each instrument sees -------------------------------------------------------------
+def _sample(machine: Machine, kind: str, seed: int = 0) -> list:
+    """A rich synthetic set-up of ``kind`` over the machine's ranges (for `machine check`)."""
+    from .simulate_instruments import simulate_sphere
+
+    if kind == "tracker":
+        c = machine.sample_commands(300, seed=seed + 1)
+        return [InstrumentObservations("tracker", c, machine.nominal(c), sigma=DEFAULT_SIGMA["tracker"])]
+    rot = [j for j in machine.joints if j.kind == "rotary"]
+    if not rot:
+        raise InvalidInputError(f"machine '{machine.name}' has no rotary axis: a sphere or R-test observes rotary axes")
+    lin = [j for j in machine.joints if j.kind == "prismatic"]
+    mid = {j.name: 0.5 * (j.range[0] + j.range[1]) for j in lin}
+    at = {n: v for n, v in mid.items() if n not in [x.name for x in lin[:3]]}
+    out = []
+    for j in rot:
+        pos = np.linspace(j.range[0], j.range[1], 13)[:-1] if j.range[1] - j.range[0] >= 359 else np.linspace(*j.range, 12)
+        spheres = [np.array([100.0, 50.0, 200.0]), np.array([-150.0, 120.0, -100.0])]
+        cmds = [simulate_sphere(machine, j.name, pos, s, {**at, **{r.name: 0.0 for r in rot if r is not j}}, {}) for s in spheres]
+        c = np.vstack(cmds)
+        ids = np.repeat(np.arange(len(cmds)), [len(x) for x in cmds])
+        out.append(InstrumentObservations(kind, c, np.zeros((len(c), 3)) if kind == "rtest" else None,
+                                          ids if kind == "sphere" else None, np.eye(3) if kind == "rtest" else None,
+                                          DEFAULT_SIGMA[kind]))
+    return out
+
+
+def instrument_view(machine: Machine, kinds: Sequence[str]) -> dict:
+    """Which groups and location errors each instrument of ``kinds`` sees alone, and the
+    combination (unknowns = groups; for sphere and R-test alone also the location errors)."""
+    st = machine.structure()
+    out = {}
+    sets = {k: _sample(machine, k) for k in kinds}
+    for label, obs in list(sets.items()) + ([("combined", [o for k in kinds for o in sets[k]])] if len(kinds) > 1 else []):
+        res_g = identify_mixed(machine, obs, unknowns="groups", structure=st)
+        entry = {
+            "groups_seen": [n for n, s in zip(res_g.names, res_g.seen) if s],
+            "groups_not_seen": [n for n, s in zip(res_g.names, res_g.seen) if not s],
+        }
+        res_l = identify_mixed(machine, obs, unknowns="location", structure=st)
+        entry["location_errors_seen"] = [n for n, s in zip(res_l.names, res_l.seen) if s]
+        entry["location_errors_not_seen"] = [n for n, s in zip(res_l.names, res_l.seen) if not s]
+        out[label] = entry
+    return out

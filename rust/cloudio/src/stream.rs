@@ -1,0 +1,244 @@
+//! Streaming readers: the points of a file in chunks of bounded size, in file order,
+//! each chunk exactly what the whole-file reader returns for those points (the same
+//! parser, the same values, the same error for a bad point, naming its line or vertex).
+//!
+//! - [`AsciiStream`]: XYZ / CSV / TXT, blocks of bytes cut after a line break, each
+//!   parsed in parallel by [`crate::ascii::parse_body`] with the layout (separator style,
+//!   columns) decided once from the top of the file, as the whole read decides it.
+//! - [`PlyStream`]: binary PLY whose elements all have fixed-size records: ranges of
+//!   vertex records read with positioned reads (no memory map kept: the pages read
+//!   never count towards the process's resident memory) and decoded in parallel.
+
+use crate::ascii::{ascii_layout, check_no_nul, parse_body, AsciiOptions, Layout};
+use crate::ply::{PlyFile, VertexRecords};
+use gagekit_core::{GkError, Result};
+use std::fs::File;
+use std::io::Read;
+use std::os::unix::fs::FileExt;
+use std::path::Path;
+
+fn io_error(what: &str) -> impl Fn(std::io::Error) -> GkError + '_ {
+    move |e| GkError::invalid(format!("{what}: cannot be read ({e})"))
+}
+
+/// An ASCII point file read in blocks of about `block` bytes.
+pub struct AsciiStream {
+    file: File,
+    what: String,
+    layout: Layout,
+    /// Bytes read and not yet parsed (whole lines from `line` on, then a partial line).
+    carry: Vec<u8>,
+    /// 0-based index of the first line of `carry`.
+    line: usize,
+    block: usize,
+    eof: bool,
+    /// Header lines and columns, as [`crate::ascii::Parsed`] reports them.
+    pub header_lines: usize,
+}
+
+impl AsciiStream {
+    /// Open `path` and read its top until the first data line (the file's layout).
+    pub fn open(path: &Path, opts: &AsciiOptions, what: &str, block: usize) -> Result<AsciiStream> {
+        let mut file = File::open(path).map_err(io_error(what))?;
+        let block = block.max(1 << 16);
+        let mut head = Vec::new();
+        let mut eof = false;
+        loop {
+            let want = head.len().max(block);
+            let got = (&mut file).take(want as u64).read_to_end(&mut head).map_err(io_error(what))?;
+            eof = got < want;
+            // whole lines only, unless the file ends: a cut line could pass for a header
+            let cut = if eof { head.len() } else { memchr::memrchr(b'\n', &head).map_or(0, |i| i + 1) };
+            match ascii_layout(&head[..cut], opts, what) {
+                Ok(ds) => {
+                    check_no_nul(&head, what)?;
+                    let carry = head.split_off(ds.offset);
+                    return Ok(AsciiStream {
+                        file,
+                        what: what.to_string(),
+                        header_lines: ds.layout.header_lines,
+                        layout: ds.layout,
+                        carry,
+                        line: ds.line,
+                        block,
+                        eof,
+                    });
+                }
+                Err(e) if eof || !e.message.contains("no points found") => return Err(e),
+                Err(_) => {} // comments or headers longer than a block: read on
+            }
+        }
+    }
+
+    /// The columns the coordinates are taken from.
+    pub fn columns(&self) -> &[usize] {
+        &self.layout.columns
+    }
+
+    /// The next chunk of coordinates (`dim` per point; a chunk may be empty when a block
+    /// holds only comments), or `None` at the end of the file.
+    pub fn next_chunk(&mut self) -> Result<Option<Vec<f64>>> {
+        if self.eof && self.carry.is_empty() {
+            return Ok(None);
+        }
+        let mut cut = if self.eof { self.carry.len() } else { 0 };
+        while !self.eof && cut == 0 {
+            let before = self.carry.len();
+            let want = self.block.saturating_sub(before).max(1 << 16);
+            let got = (&mut self.file).take(want as u64).read_to_end(&mut self.carry).map_err(io_error(&self.what))?;
+            check_no_nul(&self.carry[before..], &self.what)?;
+            self.eof = got < want;
+            cut = if self.eof { self.carry.len() } else { memchr::memrchr(b'\n', &self.carry).map_or(0, |i| i + 1) };
+        }
+        let (coords, lines) = parse_body(&self.carry[..cut], self.line, &self.layout, &self.what)?;
+        self.line += lines;
+        self.carry.drain(..cut);
+        Ok(Some(coords))
+    }
+}
+
+/// The vertices of a binary PLY file read in ranges of records.
+pub struct PlyStream {
+    file: File,
+    what: String,
+    rec: VertexRecords,
+    next: usize,
+    buf: Vec<u8>,
+}
+
+impl PlyStream {
+    /// Open a binary PLY file whose elements all have fixed-size records (sizes checked
+    /// against the header as a whole read checks them); `Ok(None)` for an ASCII PLY or
+    /// one with list properties (faces), which are read whole.
+    pub fn open(path: &Path, what: &str) -> Result<Option<PlyStream>> {
+        let ply = PlyFile::open_lazy(path, what)?;
+        let Some(rec) = ply.vertex_records()? else { return Ok(None) };
+        drop(ply);
+        let file = File::open(path).map_err(io_error(what))?;
+        Ok(Some(PlyStream { file, what: what.to_string(), rec, next: 0, buf: Vec::new() }))
+    }
+
+    /// Number of vertices.
+    pub fn count(&self) -> usize {
+        self.rec.count
+    }
+
+    /// The next at most `max_points` vertices (x, y, z each), or `None` at the end.
+    pub fn next_chunk(&mut self, max_points: usize) -> Result<Option<Vec<f64>>> {
+        let m = max_points.max(1).min(self.rec.count - self.next);
+        if m == 0 {
+            return Ok(None);
+        }
+        let at = (self.rec.offset + self.next * self.rec.stride) as u64;
+        let mut out = vec![0.0f64; 3 * m];
+        if self.rec.is_f64_xyz() && cfg!(target_endian = "little") {
+            // the records are the points: read them straight into the output
+            // SAFETY: any 8 bytes are a valid f64 bit pattern; the slice covers `out` exactly.
+            let bytes = unsafe { std::slice::from_raw_parts_mut(out.as_mut_ptr().cast::<u8>(), 24 * m) };
+            self.file.read_exact_at(bytes, at).map_err(io_error(&self.what))?;
+            if let Some(i) = out.iter().position(|v| !v.is_finite()) {
+                return Err(GkError::invalid(format!(
+                    "{}: vertex {} has a non-finite coordinate (NaN or inf)",
+                    self.what,
+                    self.next + i / 3
+                )));
+            }
+        } else {
+            self.buf.resize(m * self.rec.stride, 0);
+            self.file.read_exact_at(&mut self.buf, at).map_err(io_error(&self.what))?;
+            self.rec.decode(&self.buf, self.next, &mut out, &self.what)?;
+        }
+        self.next += m;
+        Ok(Some(out))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::ascii::{parse_ascii, write_ascii};
+    use crate::ply::read_ply_file;
+
+    fn tmp(name: &str, bytes: &[u8]) -> std::path::PathBuf {
+        let dir = std::env::temp_dir().join(format!("gk-stream-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let p = dir.join(name);
+        std::fs::write(&p, bytes).unwrap();
+        p
+    }
+
+    fn drain_ascii(p: &Path, block: usize) -> Result<Vec<f64>> {
+        let mut s = AsciiStream::open(p, &AsciiOptions::default(), "s", block)?;
+        s.block = block; // below the floor of `open`, to cut many blocks
+        let mut all = Vec::new();
+        while let Some(c) = s.next_chunk()? {
+            all.extend(c);
+        }
+        Ok(all)
+    }
+
+    #[test]
+    fn ascii_blocks_equal_the_whole_read() {
+        let coords: Vec<f64> = (0..3 * 5000).map(|i| (i as f64) * 0.0137 - 41.5).collect();
+        let mut text = b"# scan\nX,Y,Z,i\n".to_vec();
+        text.extend(write_ascii(&coords, 3, b',', None).unwrap());
+        text.extend_from_slice(b"\n# end\n1,2,3");
+        let p = tmp("a.csv", &text);
+        let whole = parse_ascii(&text, &AsciiOptions::default(), "s").unwrap().coords;
+        for block in [1, 7, 100, 4096, 1 << 20] {
+            assert_eq!(drain_ascii(&p, block).unwrap(), whole, "block {block}");
+        }
+        let mut bad = text.clone();
+        bad.extend_from_slice(b"\n4,x,6\n");
+        let p = tmp("b.csv", &bad);
+        let want = parse_ascii(&bad, &AsciiOptions::default(), "s").unwrap_err().message;
+        for block in [1, 100, 1 << 20] {
+            assert_eq!(drain_ascii(&p, block).unwrap_err().message, want);
+        }
+    }
+
+    #[test]
+    fn ply_ranges_equal_the_whole_read() {
+        let n = 1000usize;
+        for (ty, size, be) in [("double", 8, false), ("float", 4, false), ("float", 4, true)] {
+            let fmt = if be { "binary_big_endian" } else { "binary_little_endian" };
+            let mut b = format!("ply\nformat {fmt} 1.0\nelement vertex {n}\nproperty {ty} x\nproperty {ty} y\nproperty {ty} z\nend_header\n").into_bytes();
+            for i in 0..3 * n {
+                let v = i as f64 * 0.25 - 7.0;
+                match (size, be) {
+                    (8, _) => b.extend_from_slice(&v.to_le_bytes()),
+                    (_, false) => b.extend_from_slice(&(v as f32).to_le_bytes()),
+                    _ => b.extend_from_slice(&(v as f32).to_be_bytes()),
+                }
+            }
+            let p = tmp(&format!("p{size}{be}.ply"), &b);
+            let whole = read_ply_file(&p, "s").unwrap().coords;
+            let mut s = PlyStream::open(&p, "s").unwrap().unwrap();
+            let mut all = Vec::new();
+            while let Some(c) = s.next_chunk(77).unwrap() {
+                all.extend(c);
+            }
+            assert_eq!(all, whole);
+        }
+    }
+}
+
+#[cfg(test)]
+mod timing {
+    #[test]
+    #[ignore]
+    fn parse_speed() {
+        let p = std::path::Path::new("/tmp/scale_a.xyz");
+        let bytes = std::fs::read(p).unwrap();
+        let opts = crate::ascii::AsciiOptions::default();
+        for _ in 0..3 {
+            let t = std::time::Instant::now();
+            let r = crate::ascii::parse_ascii(&bytes, &opts, "t").unwrap();
+            let el = t.elapsed().as_secs_f64();
+            println!("parse {:.3}s {:.0} MB/s n={}", el, bytes.len() as f64 / el / 1e6, r.coords.len());
+            let t = std::time::Instant::now();
+            let n: usize = memchr::memchr_iter(b'\n', &bytes).count();
+            println!("count {:.3}s {n}", t.elapsed().as_secs_f64());
+        }
+    }
+}
