@@ -7,7 +7,7 @@ had before), with everything else of `track` identical. The peer is run where it
 in reasonable time (up to --peer-max cycles); beyond, its time is extrapolated from the
 largest measured case with its C^5 cost and marked "(extrapolated)".
 
-    python benches/bench_track.py [--cycles 50 100 150 365] [--points 80] [--peer-max 100]
+    python benches/bench_track.py [--cycles 50 100 150 365] [--points 80] [--peer-max 50]
 
 Cycles: the thermal simulation of `machine simulate --plan --cycles` (heating and cooling,
 temperature sensors) on a quasi-random 80-point plan of the example machine. Prints: case, gagekit
@@ -56,7 +56,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--cycles", type=int, nargs="+", default=[50, 100, 150, 365])
     ap.add_argument("--points", type=int, default=80)
-    ap.add_argument("--peer-max", type=int, default=100, help="largest cycle count the peer is run on")
+    ap.add_argument("--peer-max", type=int, default=50, help="largest cycle count the peer is run on")
     a = ap.parse_args()
     machine = gagekit.load_machine(gagekit.machine.example_machine_path())
     st = machine.structure()

@@ -236,3 +236,29 @@ def test_design_for_instruments(machine, tmp_path):
     assert r.returncode == 0 and "ballbar plan" in r.stdout, r.stderr
     r = cli("design", example_machine_path(), "--instrument", "laser", "--out", tmp_path / "x.csv")
     assert r.returncode == 2 and len(r.stderr.splitlines()) == 1
+
+
+def test_track_sphere_cycles(machine, tmp_path):
+    """Daily thermal tracking with a probing cycle: EXOB drifts 3 um per hour, EAOB 4 urad per
+    hour; four cycles of 12 probes with 0.5 um noise give the drift back."""
+    rows = []
+    for k in range(4):
+        loc = {**LOCATION, "EXOB": LOCATION["EXOB"] + 0.003 * k, "EAOB": LOCATION["EAOB"] + 4e-6 * k}
+        c = simulate_sphere(machine, "B", POSITIONS, SPHERE, {"W": -500.0}, loc, noise_um=0.5, seed=40 + k)
+        rows += [[k + 1, *r, float(k), 20.0 + k] for r in c]
+    lines = ["# kind = sphere", ",".join(["cycle", *machine.joint_names, "time", "temp_spindle"])]
+    lines += [",".join(repr(float(v)) for v in r) for r in rows]
+    f = tmp_path / "cycles.csv"
+    f.write_text("\n".join(lines) + "\n")
+    cli = lambda *a: subprocess.run([sys.executable, "-m", "gagekit", "machine", *map(str, a)], capture_output=True, text=True)  # noqa: E731
+    r = cli("track", example_machine_path(), f, "--json", "--report", tmp_path / "rep")
+    assert r.returncode == 0, r.stderr
+    d = json.loads(r.stdout)
+    assert len(d["cycles"]) == 4 and d["cycles"][3]["drift"]["EXOB"] == pytest.approx(0.009, abs=0.002)
+    assert d["trend"]["EXOB"]["slope"] == pytest.approx(0.003, abs=0.001) and d["trend"]["EXOB"]["per"] == "hour"
+    assert d["trend"]["EAOB"]["slope"] == pytest.approx(4e-6, abs=2e-6)
+    assert (tmp_path / "rep" / "track.json").is_file()
+    r = cli("track", example_machine_path(), f)
+    assert r.returncode == 0 and "trend EXOB" in r.stdout, r.stderr
+    r = cli("track", example_machine_path(), f, "--history", tmp_path / "h.sqlite")
+    assert r.returncode == 2 and len(r.stderr.splitlines()) == 1

@@ -13,6 +13,7 @@ QIF_DATA = Path(__file__).resolve().parents[1] / "data" / "qif"
 CTC01 = data_path("nist_ctc_01_asme1_ap242.qif.gz")
 CTC03 = QIF_DATA / "nist_ctc_03_asme1_ap242.qif.gz"
 CTC05 = QIF_DATA / "nist_ctc_05_asme1_ap242.qif.gz"
+FTC09 = QIF_DATA / "nist_ftc_09_asme1_ap242.qif.gz"
 XSD = QIF_DATA / "xsd" / "QIFApplications" / "QIFDocument.xsd"
 
 

@@ -20,7 +20,7 @@ from gagekit.inspect import part_spec_from_dict
 from gagekit.qif import part_from_model, read_model, write_inspection_results
 from gagekit.qif.nominal import sample_feature
 
-from conftest import CTC01, CTC05, assert_valid
+from conftest import CTC01, CTC05, FTC09, assert_valid
 
 try:
     import tomllib
@@ -74,7 +74,7 @@ def _synthetic_scan(model, spec, seed=0, noise=0.002):
     return pts + noise * rng.normal(size=(len(pts), 1)) * d
 
 
-@pytest.mark.parametrize("path", [CTC01, CTC05])
+@pytest.mark.parametrize("path", [CTC01, CTC05, FTC09])
 def test_round_trip_references_the_model_ids(path, tmp_path, qif_schema):
     model = read_model(path)
     draft = part_from_model(model, model_ref=str(path))
@@ -98,12 +98,19 @@ def test_round_trip_references_the_model_ids(path, tmp_path, qif_schema):
     # in the same order as the callouts
     by_id = {el.get("id"): el for el in tree.iter() if isinstance(el.tag, str) and el.get("id")}
     ms = _measurements(tree)
-    assert len(ms) == len(spec.tolerances)
-    for m, t, r in zip(ms, spec.tolerances, res["tolerances"]):
+    # one measurement per characteristic; a pattern's is its largest member's value
+    groups: dict = {}
+    for t, r in zip(spec.tolerances, res["tolerances"]):
+        groups.setdefault(t.qif_id, []).append(r)
+    assert len(ms) == len(groups) == len(draft.summary["evaluated"])
+    scale = model.units.pmi_linear or model.units.linear
+    for m, (qif_id, rs) in zip(ms, groups.items()):
         item = by_id[m.findtext("q:CharacteristicItemId", namespaces=NS)]
-        assert item.findtext("q:CharacteristicNominalId", namespaces=NS) == t.qif_id
-        assert by_id[t.qif_id].tag.endswith("CharacteristicNominal")
-        assert float(m.findtext("q:Value", namespaces=NS)) == pytest.approx(r["measured"] / model.units.linear, rel=1e-15)
+        assert item.findtext("q:CharacteristicNominalId", namespaces=NS) == qif_id
+        assert by_id[qif_id].tag.endswith("CharacteristicNominal")
+        assert float(m.findtext("q:Value", namespaces=NS)) == pytest.approx(max(r["measured"] for r in rs) / scale, rel=1e-15)
+        assert m.findtext("q:Status/q:CharacteristicStatusEnum", namespaces=NS) == ("PASS" if all(r["pass"] for r in rs) else "FAIL")
+        assert len(m.xpath("q:FeatureMeasurementIds/q:Id", namespaces=NS)) == len(rs)
     # the original model's ids are untouched; the document has its own QPId and names the model's
     orig = set(re.findall(r' id="(\d+)"', gzip.decompress(path.read_bytes()).decode()))
     assert orig <= set(by_id)

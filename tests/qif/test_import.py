@@ -13,7 +13,7 @@ import pytest
 from gagekit.inspect import part_spec_from_dict
 from gagekit.qif import part_from_model, read_model
 
-from conftest import CTC01, CTC03, CTC05
+from conftest import CTC01, CTC03, CTC05, FTC09
 
 try:
     import tomllib
@@ -30,7 +30,7 @@ def _char_ids(path) -> list[str]:
     return re.findall(r"<(\w+)CharacteristicNominal id=\"(\d+)\"", text)
 
 
-@pytest.mark.parametrize("path, n", [(CTC01, 14), (CTC03, 22), (CTC05, 16)])
+@pytest.mark.parametrize("path, n", [(CTC01, 14), (CTC03, 22), (CTC05, 16), (FTC09, 53)])
 def test_every_characteristic_accounted_for(path, n):
     expected = _char_ids(path)
     assert len(expected) == n
@@ -41,7 +41,8 @@ def test_every_characteristic_accounted_for(path, n):
     assert s["characteristics"] == n
     doc = tomllib.loads(draft.toml)
     spec = part_spec_from_dict(doc, "imported")  # the TOML reads as a drawing
-    assert [t.qif_id for t in spec.tolerances] == [e["qif_id"] for e in s["evaluated"]]
+    assert [t.qif_id for t in spec.tolerances] == [s["evaluated"][j]["qif_id"] for j, e in enumerate(s["evaluated"])
+                                                   for _ in e["callouts"]]
     assert all(t.qpid == s["qpid"] and t.qpid for t in spec.tolerances)
     for e in s["unsupported"]:  # every one is in the TOML as a comment naming its id
         assert re.search(rf"^# .*CharacteristicNominal {e['qif_id']}\b", draft.toml, re.M), e
@@ -81,13 +82,20 @@ def test_ctc05_inch_model_in_mm():
 
 
 def test_material_modifiers_written_for_issue_25(tmp_path):
-    """CTC 3's MMC positions apply to patterns (listed); the single-hole position 2055 made
-    MMC is written with issue 25's key, as a comment while this gagekit lacks it."""
+    """CTC 3's MMC pattern positions 2068, 2077 (datums B(M), C(M)) and the single-hole
+    position 2055 made MMC are written with issue 25's keys, as comments while this
+    gagekit lacks them."""
     import gzip
 
-    s = part_from_model(read_model(CTC03)).summary
-    un = {e["qif_id"]: e for e in s["unsupported"]}
-    assert "2 features" in un["2068"]["reason"] and "4 features" in un["2077"]["reason"]
+    from gagekit.inspect.spec import _TOL_KEYS
+
+    draft = part_from_model(read_model(CTC03))
+    if "material" not in _TOL_KEYS:
+        un = {e["qif_id"]: e for e in draft.summary["unsupported"]}
+        for q in ("2068", "2077"):
+            assert un[q]["toml"] == "comment" and "material condition MMC" in un[q]["reason"]
+        assert draft.toml.count('# material = "MMC"') >= 6  # 2 + 4 pattern members
+        assert '# datums = ["A", "B(M)", "C(M)"]' in draft.toml
     text = gzip.decompress(CTC03.read_bytes()).decode()
     head, tail = text.split('<PositionCharacteristicDefinition id="2054">', 1)
     tail = tail.replace("<MaterialCondition>NONE</MaterialCondition>", "<MaterialCondition>MAXIMUM</MaterialCondition>", 1)
@@ -95,8 +103,6 @@ def test_material_modifiers_written_for_issue_25(tmp_path):
     f.write_text(head + '<PositionCharacteristicDefinition id="2054">' + tail)
     draft = part_from_model(read_model(f))
     entry = next(e for e in draft.summary["evaluated"] + draft.summary["unsupported"] if e["qif_id"] == "2055")
-    from gagekit.inspect.spec import _TOL_KEYS
-
     if "material" in _TOL_KEYS:
         assert entry in draft.summary["evaluated"]
     else:
@@ -146,3 +152,15 @@ def test_pmi_linear_unit_applies_to_tolerances_not_geometry(tmp_path):
     flat = next(c for c in m.characteristics if c.id == "1470")
     assert abs(flat.tolerance - 0.2 * 25.4) < 1e-12
     assert m.features["2156"].geometry["point"].tolist() == [-325.0, -175.0, 0.0]  # mm, as the file says
+
+
+def test_pattern_gives_one_callout_per_member():
+    """FTC 9: position 2186 applies to four holes in a frame that locks every motion: four
+    callouts sharing the qif_id; patterns whose frame leaves motion free are listed."""
+    draft = part_from_model(read_model(FTC09))
+    ev = {e["qif_id"]: e for e in draft.summary["evaluated"]}
+    assert len(ev["2186"]["callouts"]) == 4 and len(ev["2186"]["features"]) == 4
+    doc = tomllib.loads(draft.toml)
+    members = [t for t in doc["tolerance"] if t["qif_id"] == "2186"]
+    assert sorted(t["feature"] for t in members) == sorted(ev["2186"]["features"])
+    assert all(t["name"].endswith(f"({k + 1}/4)") for k, t in enumerate(members))

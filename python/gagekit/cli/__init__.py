@@ -16,7 +16,8 @@ import typer
 
 from .. import __version__
 from ..errors import GagekitError
-from . import batch, cloud, db, demo, form, gage, machine, machine_export, machine_instruments, machine_observer, qif, stats, studio
+from . import (batch, cloud, compare, db, demo, form, gage, machine, machine_export, machine_instruments, machine_observer,
+               qif, stats, studio)
 from . import inspect as inspect_cmd
 
 app = typer.Typer(
@@ -44,6 +45,7 @@ inspect_cmd.app.command("scan")(inspect_cmd.inspect)
 inspect_cmd.app.command("batch")(batch.inspect_batch)
 app.add_typer(inspect_cmd.app, name="inspect")
 app.command("studio")(studio.studio)
+app.command("compare")(compare.compare)
 
 
 def _version_callback(value: bool) -> None:

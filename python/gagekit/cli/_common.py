@@ -67,6 +67,31 @@ def read_cloud_cli(path: Any, units: Any = None, dim: int = 3) -> Any:
     return cloud
 
 
+MEMORY_OPTION = typer.Option(
+    None, "--memory",
+    help="Memory for points, e.g. 4G or 512M (default: an eighth of the RAM). A scan whose whole read "
+         "needs more than half of it is streamed: read in chunks, keeping only the points inside regions.",
+)
+CHUNK_OPTION = typer.Option(None, "--chunk-points", hidden=True, min=1,
+                            help="Stream in chunks of this many points (testing).")
+
+
+def open_scan_cli(path: Any, units: Any = None, memory: Any = None, chunk: Any = None, whole: bool = False) -> Any:
+    """The scan of a command that can stream (:mod:`gagekit.cloud.stream`): a
+    :class:`~gagekit.cloud.stream.CloudStream` when ``chunk`` is given or the whole read
+    would not fit half of ``memory`` (and ``whole`` is not asked), else the
+    :class:`~gagekit.cloud.Cloud` of a whole read. Warnings as :func:`read_cloud_cli`."""
+    from ..cloud.stream import memory_budget, open_cloud, should_stream
+
+    budget = memory_budget(memory)
+    if whole or (chunk is None and not should_stream(path, budget)):
+        return read_cloud_cli(path, units)
+    stream = open_cloud(path, units, chunk=chunk, memory=budget)
+    for w in stream.warnings:
+        typer.echo(f"gagekit: warning: {w}", err=True)
+    return stream
+
+
 def emit(result: Any, as_json: bool, human: Callable[[Any], str]) -> None:
     """Print ``result`` as JSON or as the human-readable text ``human(result)``, after
     checking that every number in it is finite (:class:`NumericalError` otherwise: never a

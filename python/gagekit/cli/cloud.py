@@ -10,7 +10,7 @@ import numpy as np
 import typer
 
 from ..cloud import convex_hull_indices, load_regions, write_points
-from ._common import JSON_OPTION, UNITS_OPTION, emit, read_cloud_cli, table
+from ._common import CHUNK_OPTION, JSON_OPTION, MEMORY_OPTION, UNITS_OPTION, emit, open_scan_cli, read_cloud_cli, table
 
 app = typer.Typer(help="Point clouds: information, convex-hull filter.", no_args_is_help=True)
 
@@ -53,21 +53,33 @@ def hull(
     out: Optional[Path] = typer.Option(None, "--out", help="Write the hull vertices (mm) to this file (.ply, .csv, .xyz, .npy)."),
     units: Optional[str] = UNITS_OPTION,
     as_json: bool = JSON_OPTION,
+    memory: Optional[str] = MEMORY_OPTION,
+    chunk: Optional[int] = CHUNK_OPTION,
 ) -> None:
-    """Keep only the vertices of the convex hull (Eq. 5.21): the points an LP over the cloud needs."""
+    """Keep only the vertices of the convex hull (Eq. 5.21): the points an LP over the cloud needs.
+
+    A scan larger than --memory allows is streamed: each chunk hull-filtered, then the hull
+    of the kept vertices (the same vertices as a whole read)."""
     from .._files import output_file
+    from ..cloud.stream import CloudStream
+    from ..cloud.streamed import hull_stream
 
     if out is not None:
         output_file(out)
-    pts = read_cloud_cli(file, units).points
+    scan = open_scan_cli(file, units, memory, chunk)
     t0 = time.perf_counter()
-    idx = convex_hull_indices(pts)
+    if isinstance(scan, CloudStream):
+        count, idx, vertices = hull_stream(scan)
+    else:
+        pts = scan.points
+        idx = convex_hull_indices(pts)
+        count, vertices = len(pts), pts[idx]
     seconds = time.perf_counter() - t0
     if out is not None:
-        write_points(out, pts[idx])
+        write_points(out, vertices)
     result = {
         "file": str(file),
-        "count": int(len(pts)),
+        "count": int(count),
         "hull_vertices": int(len(idx)),
         "seconds": seconds,
         "indices": idx.tolist(),
@@ -87,22 +99,31 @@ def regions(
     regions_toml: Path = typer.Argument(..., help="TOML file with [[region]] tables (a gage file works)."),
     units: Optional[str] = UNITS_OPTION,
     as_json: bool = JSON_OPTION,
+    memory: Optional[str] = MEMORY_OPTION,
+    chunk: Optional[int] = CHUNK_OPTION,
 ) -> None:
-    """Cut a cloud into its regions and hull-filter each one (Sec. 5.4.1); with an [alignment], part-frame regions after the 3-2-1 alignment, as `gage check` cuts them."""
+    """Cut a cloud into its regions and hull-filter each one (Sec. 5.4.1); with an [alignment], part-frame regions after the 3-2-1 alignment, as `gage check` cuts them.
+
+    A scan larger than --memory allows is streamed: only the points inside the regions
+    are kept, hull-filtered chunk by chunk (the same vertices as a whole read); with an
+    [alignment], a first pass over the datum regions."""
     from .._util import load_toml
-    from ..cloud.workflow import cut_and_filter
-    from ..gage.analysis import region_boxes
+    from ..cloud.stream import CloudStream
+    from ..cloud.workflow import cut_and_filter, cut_and_filter_stream
+    from ..gage.analysis import region_boxes, region_boxes_stream
     from ..gage.spec_file import parse_region_spec
 
     doc = load_toml(regions_toml, "regions")
-    if isinstance(doc, dict) and "alignment" in doc:
-        spec = parse_region_spec(doc, str(regions_toml))
-        points = read_cloud_cli(file, units).points
-        boxes = region_boxes(points, spec)
+    aligned = isinstance(doc, dict) and "alignment" in doc
+    spec = parse_region_spec(doc, str(regions_toml)) if aligned else None
+    boxes = None if aligned else load_regions(regions_toml)
+    scan = open_scan_cli(file, units, memory, chunk)
+    if isinstance(scan, CloudStream):
+        boxes = region_boxes_stream(scan, spec) if aligned else boxes
+        result = cut_and_filter_stream(scan, boxes)
     else:
-        boxes = load_regions(regions_toml)
-        points = read_cloud_cli(file, units).points
-    result = cut_and_filter(points, boxes)
+        boxes = region_boxes(scan.points, spec) if aligned else boxes
+        result = cut_and_filter(scan.points, boxes)
 
     def human(res) -> str:
         r = res.to_dict()

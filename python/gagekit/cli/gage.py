@@ -8,7 +8,7 @@ from typing import Optional
 
 import typer
 
-from ._common import JSON_OPTION, UNITS_OPTION, emit, read_cloud_cli
+from ._common import CHUNK_OPTION, JSON_OPTION, MEMORY_OPTION, UNITS_OPTION, emit, open_scan_cli
 from .qif import INSTRUMENT_OPTION, QIF_RESULTS_OPTION, check_output
 
 app = typer.Typer(help="Virtual gages: can a scanned casting be machined to print? (Ch. 5)", no_args_is_help=True)
@@ -23,6 +23,8 @@ def check(
     out_cloud: Optional[Path] = typer.Option(None, "--out-cloud", help="Write the cloud in the part frame with T* applied."),
     no_groups: bool = typer.Option(False, "--no-groups", help="Skip the infeasible-group LPs of Eq. 5.10."),
     units: Optional[str] = UNITS_OPTION,
+    memory: Optional[str] = MEMORY_OPTION,
+    chunk: Optional[int] = CHUNK_OPTION,
     qif_results: Optional[Path] = QIF_RESULTS_OPTION,
     instrument: str = INSTRUMENT_OPTION,
 ) -> None:
@@ -47,8 +49,16 @@ def check(
         spec = GageSpec.load(gages)
     for w in caught:
         typer.echo(f"gagekit: warning: {w.message}", err=True)
-    pts = read_cloud_cli(cloud, units).points
-    result = check_gages(pts, spec, groups=not no_groups)
+    from ..cloud.stream import CloudStream
+    from ..gage.analysis import check_gages_stream
+
+    # --out-cloud writes every point: the scan is read whole for it
+    scan = open_scan_cli(cloud, units, memory, chunk, whole=out_cloud is not None)
+    if isinstance(scan, CloudStream):
+        result, pts = check_gages_stream(scan, spec, groups=not no_groups), None
+    else:
+        pts = scan.points
+        result = check_gages(pts, spec, groups=not no_groups)
     if report is not None:
         write_report(result, report)
     if out_cloud is not None:

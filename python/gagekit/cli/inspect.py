@@ -12,7 +12,7 @@ from typing import Any, Optional
 import typer
 from typer.core import TyperGroup
 
-from ._common import JSON_OPTION, UNITS_OPTION, emit, read_cloud_cli, table
+from ._common import CHUNK_OPTION, JSON_OPTION, MEMORY_OPTION, UNITS_OPTION, emit, open_scan_cli, table
 from .qif import INSTRUMENT_OPTION, QIF_RESULTS_OPTION, check_output, write_results
 
 
@@ -47,6 +47,8 @@ def inspect(
     units: Optional[str] = UNITS_OPTION,
     as_json: bool = JSON_OPTION,
     report: Optional[Path] = typer.Option(None, "--report", help="Write report.html (callouts, datum frame, 3-D deviation view) and result.json into DIR."),
+    memory: Optional[str] = MEMORY_OPTION,
+    chunk: Optional[int] = CHUNK_OPTION,
     qif_results: Optional[Path] = QIF_RESULTS_OPTION,
     instrument: str = INSTRUMENT_OPTION,
 ) -> None:
@@ -56,10 +58,13 @@ def inspect(
     """
     from ..inspect import inspect as run_inspect, load_part_spec
 
+    from ..cloud.stream import CloudStream
+    from ..inspect import inspect_stream
+
     check_output(qif_results)
     spec = load_part_spec(part)
-    pts = read_cloud_cli(scan, units).points
-    result = run_inspect(pts, spec)
+    cloud = open_scan_cli(scan, units, memory, chunk)
+    result = inspect_stream(cloud, spec) if isinstance(cloud, CloudStream) else run_inspect(cloud.points, spec)
     if report is not None:
         from ..report.inspect import write_report
 

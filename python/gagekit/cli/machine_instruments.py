@@ -221,3 +221,38 @@ def design_instrument_cmd(m, instrument, points, criterion, sphere, at, radius, 
                 f"{circles} -> {r['out']}")
 
     emit(result, as_json, human)
+
+
+def track_sphere_cmd(m, cycles_csv, history, report, as_json) -> None:
+    """`machine track` on sphere-probing cycles: location errors per cycle, drift, trend."""
+    from .._util import dumps
+    from ..errors import InvalidInputError
+    from ..machine.instruments import track_sphere
+
+    if history is not None:
+        raise InvalidInputError("--history stores tracker cycles of the full model; sphere-probing cycles are reported (--json, --report) only")
+    res = track_sphere(m, cycles_csv)
+    if report is not None:
+        from .._files import atomic_dir, write_text
+
+        with atomic_dir(report) as tmp:
+            write_text(tmp / "track.json", dumps(res))
+        res["report"] = str(report / "track.json")
+
+    def human(r) -> str:
+        names = [k for k, v in r["cycles"][0]["location_errors"].items() if "value" in v]
+        head = f"{'cycle':>6} " + " ".join(f"{k:>16}" for k in names) + "   (um / urad, +/- std)"
+        lines = [f"sphere-probing cycles: {len(r['cycles'])}, rotary-axis location errors per cycle", head]
+        for c in r["cycles"]:
+            cells = []
+            for k in names:
+                v = c["location_errors"][k]
+                s = 1e3 if k[1] in "XYZ" else 1e6
+                cells.append(f"{s * v['value']:8.2f}+/-{s * v['std']:5.2f}" if "value" in v else f"{'-':>16}")
+            lines.append(f"{c['cycle']:>6} " + " ".join(cells))
+        for k, t in r["trend"].items():
+            s, u = (1e3, "um") if k[1] in "XYZ" else (1e6, "urad")
+            lines.append(f"trend {k}: {s * t['slope']:+.3f} {u} per {t['per']}")
+        return "\n".join(lines)
+
+    emit(res, as_json, human)

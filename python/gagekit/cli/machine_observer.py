@@ -143,6 +143,12 @@ def track_cmd(
     if report is not None:
         output_dir(report)
     m = load_machine(machine_file)
+    from ..machine.instruments import cycles_kind
+
+    if cycles_kind(cycles_csv) == "sphere":  # sphere-probing cycles: rotary-axis location errors per cycle
+        from .machine_instruments import track_sphere_cmd
+
+        return track_sphere_cmd(m, cycles_csv, history, report, as_json)
     # the history is opened (and a foreign, damaged, read-only or other machine's file refused)
     # before the computation, so that no computed run is lost to a bad --history path
     h = History(history, m) if history is not None else None

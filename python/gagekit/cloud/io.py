@@ -148,8 +148,9 @@ def read_points(path: PathLike, units: Optional[str] = None, dim: int = 3) -> np
     return cloud.points
 
 
-def _to_mm(raw: Raw, p: Path, override: Optional[str]) -> Cloud:
-    pts = raw.points
+def _unit_of(raw: Raw, p: Path, override: Optional[str]) -> tuple[str, str, str, list]:
+    """(unit, z unit, why that unit, the reader's warnings that still apply) of a read,
+    shared by the whole read and the streamed one (:mod:`gagekit.cloud.stream`)."""
     warns = list(raw.warnings)
     if override is not None:
         unit, z_unit, basis = override, override, "given (units=/--units)"
@@ -158,6 +159,12 @@ def _to_mm(raw: Raw, p: Path, override: Optional[str]) -> Cloud:
         raise FileFormatError(raw.unit_basis)
     else:
         unit, z_unit, basis = raw.unit, raw.z_unit or raw.unit, raw.unit_basis
+    return unit, z_unit, basis, warns
+
+
+def _to_mm(raw: Raw, p: Path, override: Optional[str]) -> Cloud:
+    pts = raw.points
+    unit, z_unit, basis, warns = _unit_of(raw, p, override)
     s, sz = _units.scale_to_mm(unit), _units.scale_to_mm(z_unit)
     if len(pts) == 0:
         raise FileFormatError(f"{p}: the file holds no points")

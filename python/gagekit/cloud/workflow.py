@@ -53,3 +53,15 @@ def cut_and_filter(points, regions: Sequence[Box]) -> CutResult:
         hull = idx[convex_hull_indices(pts[idx])] if len(idx) else idx
         cuts.append(RegionCut(box.name, idx, hull))
     return CutResult(len(pts), tuple(cuts))
+
+
+def cut_and_filter_stream(chunks, regions: Sequence[Box]) -> CutResult:
+    """:func:`cut_and_filter` of a streamed cloud (:mod:`gagekit.cloud.streamed`): every
+    inside point's number is kept (8 bytes each), the points themselves only as the hull
+    vertices of each chunk's part of a region; the result is the whole read's."""
+    from .streamed import cut_stream
+
+    p = cut_stream(chunks, regions, ["hull"] * len(regions), all_indices=True)
+    cuts = tuple(RegionCut(r.name, np.concatenate(r.all_indices) if r.all_indices else np.zeros(0, dtype=np.int64),
+                           r.index_array()) for r in p.regions)
+    return CutResult(p.count, cuts)

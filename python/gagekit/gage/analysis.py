@@ -302,12 +302,6 @@ def build_problem(points, spec: SpecLike) -> GageProblem:
     boxes = [region_in_scanner(r, alignment) for r in regions]
     cut = _cut(pts, boxes, [r.frame for r in regions], source)
     filtered = {r.name: apply(H, pts[cut[r.name].hull]) for r in regions}
-
-    gpts, offsets, planes = [], [0], []
-    for g in spec.gages:
-        gpts.append(filtered[g.region])
-        offsets.append(offsets[-1] + len(filtered[g.region]))
-        planes.append(g.plane)
     rng = np.random.default_rng(0)
     plot = {}
     for r in regions:
@@ -315,6 +309,18 @@ def build_problem(points, spec: SpecLike) -> GageProblem:
         if len(idx) > PLOT_POINTS:
             idx = np.sort(rng.choice(idx, PLOT_POINTS, replace=False))
         plot[r.name] = apply(H, pts[idx])
+    counts = {r.name: (int(len(cut[r.name].indices)), int(len(cut[r.name].hull))) for r in regions}
+    return _assemble(spec, alignment, filtered, counts, plot)
+
+
+def _assemble(spec: GageSpec, alignment: Optional[Alignment], filtered: dict, counts: dict, plot: dict) -> GageProblem:
+    """The problem of Eq. 5.11 from each region's hull vertices in the part frame
+    (``filtered``), shared by the whole read and the streamed one."""
+    gpts, offsets, planes = [], [0], []
+    for g in spec.gages:
+        gpts.append(filtered[g.region])
+        offsets.append(offsets[-1] + len(filtered[g.region]))
+        planes.append(g.plane)
     m = spec.motion
     return GageProblem(
         spec=spec,
@@ -327,9 +333,98 @@ def build_problem(points, spec: SpecLike) -> GageProblem:
         max_angle=m.max_angle,
         max_shift=m.max_shift,
         alignment=alignment,
-        region_counts={r.name: (int(len(cut[r.name].indices)), int(len(cut[r.name].hull))) for r in regions},
+        region_counts=counts,
         plot_points=plot,
     )
+
+
+def build_problem_stream(stream, spec: SpecLike) -> GageProblem:
+    """:func:`build_problem` of a streamed cloud (:class:`~gagekit.cloud.stream.CloudStream`,
+    or any re-iterable of (m, 3) chunks in file order), keeping only region points.
+
+    With an ``[alignment]`` whose gage regions are in the part frame the file is read
+    twice: the first pass keeps every point of the datum regions (the 3-2-1 fit needs them
+    all: least-squares start, Eqs. 5.13-5.15, and the part side of each datum from the
+    other datums' points); the second cuts the
+    gage regions, carried into the scanner frame by the fitted C_L^S. Scanner-frame gage
+    regions are cut in the first pass. Gage regions keep only their hull vertices, chunk
+    by chunk (:mod:`gagekit.cloud.streamed`): the same vertices, in the same order, as a
+    whole read, hence the same LP. The region pictures use a seeded uniform sample of each
+    region instead of the whole read's draw (the numbers do not depend on it)."""
+    from ..cloud.streamed import cut_stream
+
+    spec = _as_spec(spec)
+    source = spec.source
+    region_names = list(dict.fromkeys(g.region for g in spec.gages))
+    regions = [spec.region(n) for n in region_names]
+    al = spec.alignment
+    alignment = None
+    late = list(regions)
+    got: dict = {}
+    if al is not None:
+        early = [r for r in regions if r.frame != "part"]
+        late = [r for r in regions if r.frame == "part"]
+        alignment, first = _datum_pass(stream, spec, [r.box for r in early])
+        k0 = len(first.regions) - len(early)
+        _check_caught(first, [r.name for r in early], [r.frame for r in early], source, offset=k0)
+        for i, r in enumerate(early):
+            got[r.name] = first.regions[k0 + i]
+    if late:
+        boxes = [region_in_scanner(r, alignment) for r in late]
+        second = cut_stream(stream, boxes, ["hull"] * len(late), sample=PLOT_POINTS)
+        _check_caught(second, [r.name for r in late], [r.frame for r in late], source)
+        for r, sr in zip(late, second.regions):
+            got[r.name] = sr
+    H = np.eye(4) if alignment is None else alignment.H
+    filtered = {r.name: apply(H, got[r.name].point_array()) for r in regions}
+    counts = {r.name: (int(got[r.name].count), int(len(got[r.name].index_array()))) for r in regions}
+    plot = {r.name: apply(H, got[r.name].sample_points()) for r in regions}
+    return _assemble(spec, alignment, filtered, counts, plot)
+
+
+def _datum_pass(stream, spec: GageSpec, extra: list):
+    """One pass: every point of the datum regions (scanner frame) and the hull vertices
+    of the ``extra`` boxes; the 3-2-1 frame fitted to the datums as :func:`_alignment` fits it."""
+    from ..cloud.streamed import cut_stream
+
+    al = spec.alignment
+    names = list(dict.fromkeys([*al.primary, *al.secondary, *al.tertiary]))
+    boxes = [spec.region(n).box for n in names] + list(extra)
+    first = cut_stream(stream, boxes, ["all"] * len(names) + ["hull"] * len(extra), sample=PLOT_POINTS)
+    _check_caught(first, names, ["scanner"] * len(names), spec.source)
+    groups_in = {}
+    for key, lst in (("primary", al.primary), ("secondary", al.secondary), ("tertiary", al.tertiary)):
+        parts = [first[n].point_array() for n in lst]
+        groups_in[key] = (lst, np.vstack(parts), np.vstack([q[_hull_of(q)] for q in parts]))
+    return fit_321(groups_in), first  # the datums' own points, as the whole read
+
+
+def region_boxes_stream(stream, spec: SpecLike) -> list[Box]:
+    """:func:`region_boxes` of a streamed cloud (a pass over the datum regions first when
+    the spec has an ``[alignment]``)."""
+    spec = _as_spec(spec)
+    alignment = _datum_pass(stream, spec, [])[0] if spec.alignment is not None else None
+    return [region_in_scanner(r, alignment) for r in spec.regions]
+
+
+def _hull_of(pts: np.ndarray) -> np.ndarray:
+    from ..cloud.hull import convex_hull_indices
+
+    return convex_hull_indices(pts) if len(pts) else np.zeros(0, dtype=np.int64)
+
+
+def _check_caught(p, names: list, frames: list, source: str, offset: int = 0) -> None:
+    """The whole read's error for a region that catches no points (:func:`_cut`)."""
+    for k, (name, frame) in enumerate(zip(names, frames)):
+        if p.regions[offset + k].count == 0:
+            raise ConfigError(f"{source}: region '{name}' (frame {frame}) catches no points of the cloud; "
+                              "check its center and size against the cloud"
+                              + (" after alignment" if frame == "part" else ""))
+
+
+def check_gages_stream(stream, spec: SpecLike, *, groups: bool = True) -> GageCheckResult:
+    """:func:`check_gages` of a streamed cloud (:func:`build_problem_stream`)."""
+    return solve_problem(build_problem_stream(stream, spec), groups=groups)
 
 
 def solve_problem(problem: GageProblem, *, groups: bool = True) -> GageCheckResult:
@@ -394,5 +489,6 @@ def corrected_cloud(points, result: GageCheckResult) -> np.ndarray:
 
 
 __all__ = ["GageOutcome", "Transform", "BoundLimit", "GageCheckResult", "GageProblem", "build_problem",
+           "build_problem_stream", "check_gages_stream",
            "solve_problem", "check_gages", "corrected_cloud", "box_in_scanner", "datum_alignment", "region_boxes",
            "region_in_scanner", "gage_distances"]

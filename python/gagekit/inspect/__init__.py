@@ -28,6 +28,7 @@ from .zones import evaluate
 
 __all__ = [
     "inspect",
+    "inspect_stream",
     "load_part_spec",
     "part_spec_from_dict",
     "PartSpec",
@@ -61,7 +62,29 @@ def inspect(points: Any, spec: Union[PartSpec, str, Any]) -> InspectionResult:
     if not isinstance(spec, PartSpec):
         spec = load_part_spec(spec)
     pts = as_points(points)  # the region kernel checks finiteness (naming the row)
-    feats = extract(pts, spec.features, spec.source)
+    cad = None
+    if spec.cad is not None:
+        from ..cad.features import CadContext
+
+        cad = CadContext.of_scan(spec.cad, pts)
+    feats = extract(pts, spec.features, spec.source, cad)
+    return _evaluate(spec, feats, int(len(pts)), t0)
+
+
+def inspect_stream(stream: Any, spec: Union[PartSpec, str, Any]) -> InspectionResult:
+    """:func:`inspect` of a streamed scan (:func:`gagekit.cloud.stream.open_cloud`, or any
+    re-iterable of (m, 3) chunks in file order): one pass keeps the points inside the
+    feature regions only (every one: the fits need them all), then the same evaluation."""
+    from .features import extract_stream
+
+    t0 = time.perf_counter()
+    if not isinstance(spec, PartSpec):
+        spec = load_part_spec(spec)
+    n, feats = extract_stream(stream, spec.features, spec.source)
+    return _evaluate(spec, feats, n, t0)
+
+
+def _evaluate(spec: PartSpec, feats: dict, n: int, t0: float) -> InspectionResult:
     system = DatumSystem(spec, feats)
     results = []
     for tol in spec.tolerances:
@@ -77,5 +100,5 @@ def inspect(points: Any, spec: Union[PartSpec, str, Any]) -> InspectionResult:
             frames.append(system.frame(r))
     main = frames[0] if frames else None
     used = {n: feats[n] for n in spec.features}
-    return InspectionResult(spec.name, int(len(pts)), tuple(system.simulated()), main, tuple(frames), tuple(results), used,
+    return InspectionResult(spec.name, n, tuple(system.simulated()), main, tuple(frames), tuple(results), used,
                             time.perf_counter() - t0, feats)

@@ -48,7 +48,8 @@ import numpy as np
 from .. import _core
 from ..errors import FileFormatError, InvalidInputError
 
-__all__ = ["BallbarRun", "BallbarResult", "read_ballbar", "analyse_ballbar", "PLANES", "group_sensitivities"]
+__all__ = ["BallbarRun", "BallbarResult", "read_ballbar", "analyse_ballbar", "PLANES", "group_sensitivities",
+           "circle_commands", "radial_rows"]
 
 #: The planes of ISO 230-4 and their (first, second) axes.
 PLANES = {"XY": ("X", "Y"), "YZ": ("Y", "Z"), "ZX": ("Z", "X")}
@@ -258,20 +259,13 @@ def group_sensitivities(machine, plane: str, radius: float, at: dict, min_share:
     missing = [j for j in names if j not in at]
     if missing:
         raise InvalidInputError(f"--at must give every joint of the machine (missing {', '.join(missing)})")
-    a, b = (names.index(x) if x in names else -1 for x in PLANES[pl])
-    if a < 0 or b < 0:
-        raise InvalidInputError(f"machine '{machine.name}' has no joints {' and '.join(PLANES[pl])} for plane {pl}")
+    for x in PLANES[pl]:
+        if x not in names:
+            raise InvalidInputError(f"machine '{machine.name}' has no joints {' and '.join(PLANES[pl])} for plane {pl}")
     st = machine.structure()
     t = np.radians(np.arange(0.0, 360.0, 5.0))
-    centre = np.array([float(at[j]) for j in names])
-    cmds = np.repeat(centre[None, :], len(t) + 1, axis=0)
-    cmds[:-1, a] += radius * np.cos(t)
-    cmds[:-1, b] += radius * np.sin(t)
-    nom = machine.nominal(cmds)
-    m3 = st.reduce(machine.design_matrix(cmds)).reshape(len(cmds), 3, -1)
-    d = nom[:-1] - nom[-1]
-    u = d / np.linalg.norm(d, axis=1)[:, None]
-    rows = np.einsum("ni,nik->nk", u, m3[:-1] - m3[-1][None])  # radial effect of each group
+    cmds = circle_commands(machine, pl, radius, np.array([float(at[j]) for j in names]), t)
+    rows, _ = radial_rows(machine, cmds, st.reduce(machine.design_matrix(cmds)))  # radial effect of each group
     sq = 2.0 / len(t) * np.sin(2 * t) @ rows * 2.0 / radius * 1e6  # um/m per unit group
     sc = 2.0 / len(t) * np.cos(2 * t) @ rows * 2.0 / radius * 1e6
     from .simulate import typical_magnitudes
@@ -283,3 +277,26 @@ def group_sensitivities(machine, plane: str, radius: float, at: dict, min_share:
         big = size.max()
         out[label] = {g.name: float(x) for g, x, e in zip(st.groups, v, size) if big > 0 and e >= min_share * big}
     return out
+
+
+def circle_commands(machine, plane: str, radius: float, centre: np.ndarray, angles_rad: np.ndarray) -> np.ndarray:
+    """Commands of a ballbar circle: ``centre`` (every joint) with the plane's joints moved by
+    radius (cos, sin) at each angle, and the centre itself as the last row."""
+    names = machine.joint_names
+    a, b = (names.index(x) for x in PLANES[plane])
+    cmds = np.repeat(np.asarray(centre, dtype=np.float64)[None, :], len(angles_rad) + 1, axis=0)
+    cmds[:-1, a] += radius * np.cos(angles_rad)
+    cmds[:-1, b] += radius * np.sin(angles_rad)
+    return cmds
+
+
+def radial_rows(machine, commands: np.ndarray, design: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """First-order change of the ballbar length for the circle ``commands`` (centre last):
+    u_i . (M_i - M_centre) with u_i the nominal direction from the pivot, (n, k) for the columns
+    of ``design`` (3(n+1), k); and the nominal lengths (n,)."""
+    nom = machine.nominal(commands)
+    m3 = np.asarray(design).reshape(len(commands), 3, -1)
+    d = nom[:-1] - nom[-1]
+    length = np.linalg.norm(d, axis=1)
+    u = d / length[:, None]
+    return np.einsum("ni,nik->nk", u, m3[:-1] - m3[-1][None]), length

@@ -116,7 +116,7 @@ def _design_sphere(machine, instrument, points, criterion, sphere, at, joint, st
 
 
 def _design_ballbar(machine, points, criterion, at, radius, seed, optimal_design) -> dict:
-    from .ballbar import PLANES
+    from .ballbar import PLANES, circle_commands, radial_rows
 
     if not (math.isfinite(radius) and radius > 0):
         raise InvalidInputError(f"--radius must be positive, got {radius}")
@@ -151,17 +151,8 @@ def _design_ballbar(machine, points, criterion, at, radius, seed, optimal_design
     t = np.radians(np.arange(0, 360, 10.0))
 
     def circle_rows(row: np.ndarray) -> np.ndarray:
-        p = planes[int(row[0])]
-        centre = row[1:]
-        a, b = (names.index(x) for x in PLANES[p])
-        cmds = np.repeat(centre[None, :], len(t) + 1, axis=0)
-        cmds[:-1, a] += radius * np.cos(t)
-        cmds[:-1, b] += radius * np.sin(t)
-        nom = machine.nominal(cmds)
-        m3 = st.reduce(machine.design_matrix(cmds)).reshape(len(cmds), 3, -1)
-        d = nom[:-1] - nom[-1]
-        u = d / np.linalg.norm(d, axis=1)[:, None]
-        g = np.einsum("ni,nik->nk", u, m3[:-1] - m3[-1][None])
+        cmds = circle_commands(machine, planes[int(row[0])], radius, row[1:], t)
+        g, _ = radial_rows(machine, cmds, st.reduce(machine.design_matrix(cmds)))
         g = np.hstack([g, np.ones((len(t), 1))])  # the ballbar length is unknown too
         # the design search takes at most 8 rows per point: the circle's 8 strongest
         # directions (S V^T of its SVD), which carry most of its information

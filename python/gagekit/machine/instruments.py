@@ -65,6 +65,8 @@ __all__ = [
     "location_names",
     "location_matrix",
     "instrument_view",
+    "cycles_kind",
+    "track_sphere",
 ]
 
 KINDS = ("tracker", "sphere", "rtest", "ballbar")
@@ -153,7 +155,7 @@ def read_instrument(path: Union[str, Path], machine: Machine) -> InstrumentObser
 def _read_ballbar_kind(p: Path, machine: Machine, meta: dict, sigma: float) -> InstrumentObservations:
     """A ballbar run as an observation: commands on the circle, mean deviation of both
     directions per angle (mm) in ``readings`` (n, 1), the circle centre's commands last."""
-    from .ballbar import PLANES, read_ballbar
+    from .ballbar import PLANES, circle_commands, read_ballbar
 
     for key in ("plane", "radius", "at"):
         if key not in meta:
@@ -179,21 +181,15 @@ def _read_ballbar_kind(p: Path, machine: Machine, meta: dict, sigma: float) -> I
     missing = [j for j in machine.joint_names if j not in at]
     if missing:
         raise FileFormatError(f"{p}: at must give every joint of the machine (missing {', '.join(missing)})")
-    idx = []
     for name in PLANES[plane]:
         if name not in machine.joint_names or machine.joints[machine.joint_names.index(name)].kind != "prismatic":
             raise InvalidInputError(f"{p}: plane {plane} needs prismatic joints named {' and '.join(PLANES[plane])}")
-        idx.append(machine.joint_names.index(name))
     run = read_ballbar(p)
     ang = np.round(np.mod(run.angles_deg, 360.0), 9)
     uniq = np.unique(ang)
     dev = np.array([run.deviations_um[ang == a].mean() for a in uniq]) * 1e-3  # both directions averaged
     centre = np.array([at[j] for j in machine.joint_names])
-    cmds = np.repeat(centre[None, :], len(uniq), axis=0)
-    t = np.radians(uniq)
-    cmds[:, idx[0]] += radius * np.cos(t)
-    cmds[:, idx[1]] += radius * np.sin(t)
-    cmds = np.vstack([cmds, centre[None, :]])
+    cmds = circle_commands(machine, plane, radius, centre, np.radians(uniq))
     return InstrumentObservations("ballbar", machine.commands_array(cmds, str(p)), np.append(dev, 0.0)[:, None],
                                   None, np.array([[radius]]), sigma, str(p))
 
@@ -275,12 +271,10 @@ def _rows(machine: Machine, obs: InstrumentObservations, index: int) -> _Block:
         return _Block("tracker", m, frame_columns(nom), r.reshape(-1), obs.sigma, names, src)
     if obs.kind == "ballbar":
         radius = float(obs.directions[0, 0])
+        from .ballbar import radial_rows
+
         n = len(c) - 1
-        d = nom[:n] - nom[n]
-        length = np.linalg.norm(d, axis=1)
-        u = d / length[:, None]
-        m3 = m.reshape(len(c), 3, -1)
-        rows = np.einsum("ni,nik->nk", u, m3[:n] - m3[n][None])
+        rows, length = radial_rows(machine, c, m)
         b = obs.readings[:n, 0] - (length - radius)
         names = [f"{src}: ballbar length"]
         return _Block("ballbar", rows, np.ones((n, 1)), b, obs.sigma, names, src, m)
@@ -545,3 +539,70 @@ def instrument_view(machine: Machine, kinds: Sequence[str]) -> dict:
         entry["location_errors_not_seen"] = [n for n, s in zip(res_l.names, res_l.seen) if not s]
         out[label] = entry
     return out
+
+
+# ----- daily tracking with sphere-probing cycles ---------------------------------------------
+def cycles_kind(path: Union[str, Path]) -> str:
+    """The ``# kind`` of a cycles file (tracker when none is given)."""
+    from .._files import read_text
+
+    return _metadata(read_text(Path(path), "cycles")).get("kind", "tracker").lower()
+
+
+def track_sphere(machine: Machine, path: Union[str, Path]) -> dict:
+    """Sphere-probing cycles (``# kind = sphere``; columns ``cycle``, the joints, optional
+    ``sphere``, ``time`` (h), ``temp_*``): the rotary-axis location errors of each cycle with
+    their uncertainties, their drift from the first cycle, and a straight-line trend per error
+    against time (or the cycle number)."""
+    from .._files import read_text
+    from .observations import _read_table
+
+    p = Path(path)
+    meta = _metadata(read_text(p, "cycles"))
+    sigma = 1e-3 * float(meta.get("sigma_um", 1e3 * DEFAULT_SIGMA["sphere"]))
+    if not (math.isfinite(sigma) and sigma > 0):
+        raise InvalidInputError(f"{p}: sigma_um must be positive")
+    header, data = _read_table(p)
+    joints = machine.joint_names
+    missing = [c for c in ["cycle", *joints] if c not in header]
+    if missing:
+        raise FileFormatError(f"{p}: missing column(s) {', '.join(missing)} (expected cycle, {', '.join(joints)}, optional sphere, time, temp_*)")
+    extra = [c for c in header if c not in ["cycle", "sphere", "time", *joints] and not c.startswith("temp_")]
+    if extra:
+        raise FileFormatError(f"{p}: unknown column(s) {', '.join(extra)}")
+    if len(data) == 0:
+        raise FileFormatError(f"{p}: no data rows")
+    col = {c: data[:, header.index(c)] for c in header}
+    cyc = col["cycle"]
+    if not np.allclose(cyc, np.round(cyc)):
+        raise FileFormatError(f"{p}: the cycle column must hold whole numbers")
+    ids = sorted({int(round(v)) for v in cyc})
+    cmds_all = machine.commands_array(np.column_stack([col[j] for j in joints]), str(p))
+    sph = col.get("sphere", np.zeros(len(cyc)))
+    rows = []
+    for cid in ids:
+        sel = np.round(cyc) == cid
+        obs = InstrumentObservations("sphere", cmds_all[sel], None, sph[sel].astype(np.int64), None, sigma, f"cycle {cid}")
+        res = identify_mixed(machine, [obs], unknowns="location")
+        entry = {"cycle": cid, "points": int(sel.sum()), "location_errors": res.location,
+                 "residual_rms_um": res.instruments[0]["residual_rms_um"]}
+        if "time" in col:
+            entry["time"] = float(col["time"][sel].mean())
+        temps = {c: float(col[c][sel].mean()) for c in header if c.startswith("temp_")}
+        if temps:
+            entry["temperatures"] = temps
+        rows.append(entry)
+    first = rows[0]["location_errors"]
+    names = [k for k, v in first.items() if "value" in v]
+    x = np.array([r.get("time", r["cycle"]) for r in rows], dtype=np.float64)
+    trend = {}
+    for k in names:
+        y = np.array([r["location_errors"][k].get("value", np.nan) for r in rows])
+        for r, v in zip(rows, y):
+            if math.isfinite(v):
+                r.setdefault("drift", {})[k] = float(v - first[k]["value"])
+        ok = np.isfinite(y)
+        if ok.sum() >= 2 and np.ptp(x[ok]) > 0:
+            slope, icpt = np.polyfit(x[ok], y[ok], 1)
+            trend[k] = {"per": "hour" if "time" in col else "cycle", "slope": float(slope), "intercept": float(icpt)}
+    return {"kind": "sphere", "cycles": rows, "trend": trend, "sigma_um": 1e3 * sigma}

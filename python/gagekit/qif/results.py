@@ -284,20 +284,27 @@ def _from_model(root: Any, spec: Any, model: Any, ids: _Ids, device: str) -> _Pl
         citems = _new("CharacteristicItems", n=0)
         X.child(ch, "CharacteristicNominals").addnext(citems)
     existing = {X.text(el, "CharacteristicNominalId"): el.get("id") for el in citems}
+    created: dict = {}
     for t in spec.tolerances:
         nom = by_id.get(t.qif_id) if t.qif_id else None
         if nom is None or not X.local(nom).endswith("CharacteristicNominal"):
             raise ConfigError(f"{spec.source}: [[tolerance]] #{t.index + 1} ({t.label}): qif_id {t.qif_id or '(none)'} is no "
                               f"characteristic nominal of {model.path}")
         qt = X.local(nom)[: -len("CharacteristicNominal")]
+        fitem = plan.feature_items.get(t.feature)
         if t.qif_id in existing:
             plan.items.append((existing[t.qif_id], qt))
+            fl = X.child(created[t.qif_id], "FeatureItemIds") if t.qif_id in created else None
+            if fl is not None and fitem and fitem not in X.ids(fl):  # a pattern: every member's feature
+                X.sub(fl, "Id", fitem)
+                fl.set("n", str(len(fl)))
             continue
         i = ids()
         it = X.sub(citems, f"{qt}CharacteristicItem", id=i)
-        X.sub(it, "Name", t.label)
-        if spec.features[t.feature].qif_id and t.feature in plan.feature_items:
-            _id_list(it, "FeatureItemIds", [plan.feature_items[t.feature]])
+        created[t.qif_id] = it
+        X.sub(it, "Name", t.label.rsplit(" (1/", 1)[0])
+        if fitem:
+            _id_list(it, "FeatureItemIds", [fitem])
         _id_list(it, "MeasurementDeviceIds", [device])
         X.sub(it, "CharacteristicNominalId", t.qif_id)
         existing[t.qif_id] = i
@@ -410,20 +417,26 @@ def _results(results_el: Any, runs: Sequence[dict], spec: Any, plan: _Plan, ids:
         mf.set("n", str(len(mf)))
         if len(mf) == 0:
             mr.remove(mf)
+        # one measurement per characteristic item: the callouts of a pattern (one per member,
+        # sharing a qif_id) give one actual, the largest, PASS when every member passes
+        groups: dict = {}
+        for t, r, (item, qt) in zip(spec.tolerances, tols, plan.items):
+            groups.setdefault(item, (qt, []))[1].append((t, r))
         mc = X.sub(mr, "MeasuredCharacteristics")
-        cm = X.sub(mc, "CharacteristicMeasurements", n=len(tols))
+        cm = X.sub(mc, "CharacteristicMeasurements", n=len(groups))
         at = _new("ActualTransforms", n=0)
         for fr in res.get("frames", []):
             _transform(at, fr, ids, plan)
-        for t, r, (item, qt) in zip(spec.tolerances, tols, plan.items):
+        for item, (qt, members) in groups.items():
             el = X.sub(cm, f"{qt}CharacteristicMeasurement", id=ids())
-            _status(el, bool(r["pass"]))
+            _status(el, all(bool(r["pass"]) for _, r in members))
             X.sub(el, "CharacteristicItemId", item)
-            if t.feature in fmeas:
-                _id_list(el, "FeatureMeasurementIds", [fmeas[t.feature]])
+            fm = [fmeas[t.feature] for t, _ in members if t.feature in fmeas]
+            if fm:
+                _id_list(el, "FeatureMeasurementIds", fm)
             X.sub(el, "MeasurementDeviceIds", n=1).append(_new("Id", plan.device))
-            angular = t.characteristic == "angle"
-            value = float(r["measured"]) / (plan.angle_scale if angular else plan.pmi_scale)
+            angular = members[0][0].characteristic == "angle"
+            value = max(float(r["measured"]) for _, r in members) / (plan.angle_scale if angular else plan.pmi_scale)
             X.sub(el, "Value", _num(value))
         if len(at):
             at.set("n", str(len(at)))

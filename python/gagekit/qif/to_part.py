@@ -193,32 +193,37 @@ class _Importer:
         return t
 
     def geometric(self, c: Characteristic, char: str) -> None:
+        """One callout per feature of the characteristic (a pattern ``n x`` gives n callouts
+        sharing the ``qif_id``; each member meets the tolerance on its own, ISO 1101 /
+        ASME Y14.5 without a common-zone modifier)."""
         from ..inspect.spec import APPLIES_TO
 
-        if len(c.feature_ids) != 1:
-            self.listed.append((c, f"applies to {len(c.feature_ids)} features (a pattern or composite); gagekit evaluates "
-                                   "one feature per callout"))
+        if not c.feature_ids:
+            self.listed.append((c, "it names no feature"))
             return
-        name, why = self.feature(c.feature_ids[0])
-        if why:
-            self.listed.append((c, f"its feature is {why}"))
-            return
-        shape = self.features[name]["shape"]
-        if shape not in APPLIES_TO[char]:
-            self.listed.append((c, f"{char} of a {shape} is not evaluated (it applies to: {', '.join(APPLIES_TO[char])})"))
-            return
+        names = []
+        for fid in c.feature_ids:
+            name, why = self.feature(fid)
+            if why:
+                self.listed.append((c, f"its feature is {why}"))
+                return
+            shape = self.features[name]["shape"]
+            if shape not in APPLIES_TO[char]:
+                self.listed.append((c, f"{char} of a {shape} is not evaluated (it applies to: {', '.join(APPLIES_TO[char])})"))
+                return
+            names.append(name)
         if c.extras:
             self.listed.append((c, f"modifiers gagekit does not evaluate: {', '.join(c.extras)}"))
             return
         if c.tolerance is None or not c.tolerance > 0:
             self.listed.append((c, "the definition gives no positive ToleranceValue"))
             return
-        f = self.m.features[c.feature_ids[0]]
-        axial = f.kind in ("Cylinder", "Cone", "Circle")
+        kinds = {self.m.features[fid].kind for fid in c.feature_ids}
+        axial = bool(kinds & {"Cylinder", "Cone", "Circle"})
         if c.zone in ("NonDiametricalZone", "PlanarZone") and axial and char == "position":
             self.listed.append((c, f"a {c.zone} (two parallel planes) about an axis; gagekit's position zone of an axis is a cylinder"))
             return
-        if c.zone == "DiametricalZone" and f.kind == "Plane":
+        if c.zone == "DiametricalZone" and "Plane" in kinds:
             self.listed.append((c, "a diametrical zone on a plane"))
             return
         letters, why, mods = self.drf(c)
@@ -230,29 +235,37 @@ class _Importer:
             return
         if char in ("flatness", "straightness", "roundness", "cylindricity", "sphericity"):
             letters = []
-        t = self._base(c, char, name)
-        t["tolerance"] = c.tolerance
-        if letters:
-            t["datums"] = letters
-        if char == "angularity":
-            t["angle"] = c.angle if c.angle is not None and 0.0 <= c.angle <= 90.0 else None
         notes = []
         if c.kind == "Concentricity":
             notes.append("ASME concentricity evaluated as coaxiality of the derived axis (ISO 1101 18.13)")
+        if len(names) > 1:
+            notes.append(f"a pattern of {len(names)} features: one callout each")
         pending = []
+        material = None
         if c.material in _MATERIAL:
-            t["material"] = _MATERIAL[c.material]
+            material = _MATERIAL[c.material]
             if not self.accepts["material"]:
-                pending.append(f"material condition {t['material']}")
+                pending.append(f"material condition {material}")
         elif c.material not in ("NONE", "REGARDLESS", ""):
             self.listed.append((c, f"material condition {c.material}"))
             return
         if mods and not self.accepts["datum_modifiers"]:
             pending.append("datum material boundary modifiers " + ", ".join(x for x in letters if "(" in x))
-        if pending:
-            self.pending.append((c, t, "this gagekit does not evaluate " + " and ".join(pending) + " yet (issue 25)"))
-        else:
-            self.live.append((c, t, notes))
+        for k, name in enumerate(names):
+            t = self._base(c, char, name)
+            if len(names) > 1:
+                t["name"] += f" ({k + 1}/{len(names)})"
+            t["tolerance"] = c.tolerance
+            if letters:
+                t["datums"] = letters
+            if char == "angularity":
+                t["angle"] = c.angle if c.angle is not None and 0.0 <= c.angle <= 90.0 else None
+            if material:
+                t["material"] = material
+            if pending:
+                self.pending.append((c, t, "this gagekit does not evaluate " + " and ".join(pending) + " yet (issue 25)"))
+            else:
+                self.live.append((c, t, list(notes)))
 
     def dimensional(self, c: Characteristic, char: str) -> None:
         t = self._base(c, char, "")
@@ -266,9 +279,6 @@ class _Importer:
                 self.listed.append((c, f"its feature is {why}"))
                 return
         if char == "size":
-            if len(names) != 1:
-                self.listed.append((c, f"a size of {len(names)} features"))
-                return
             t["feature"] = names[0]
         else:
             if len(names) != 2:
@@ -290,11 +300,18 @@ class _Importer:
         if c.extras:
             self.listed.append((c, f"modifiers gagekit does not evaluate: {', '.join(c.extras)}"))
             return
-        if self.accepts.get(char) and "_needs" not in t:
-            self.live.append((c, t, []))
-        else:
-            why = t.pop("_needs", None)
-            self.pending.append((c, t, f"this gagekit does not evaluate {char} callouts yet (issue 25)" + (f"; {why}" if why else "")))
+        members = [t]
+        if char == "size" and len(names) > 1:  # a pattern: the size of each member
+            members = []
+            for k, name in enumerate(names):
+                m = dict(t, feature=name, name=f"{t['name']} ({k + 1}/{len(names)})")
+                members.append(m)
+        for m in members:
+            if self.accepts.get(char) and "_needs" not in m:
+                self.live.append((c, m, [f"a pattern of {len(names)} features: one callout each"] if len(members) > 1 else []))
+            else:
+                why = m.pop("_needs", None)
+                self.pending.append((c, m, f"this gagekit does not evaluate {char} callouts yet (issue 25)" + (f"; {why}" if why else "")))
 
     # -- nominals in the datum frames --------------------------------------------------
     def nominal_frames(self) -> None:
@@ -351,6 +368,11 @@ class _Importer:
             except _GE as exc:
                 t["_drop"] = f"its datum frame cannot be built on the nominal geometry ({exc})"
                 continue
+            members = sum(1 for x in self.live if x[0].id == c.id)
+            if members > 1 and (len(frame.free_translations) or frame.free_rotation):
+                t["_drop"] = (f"a pattern of {members} features whose datum frame {'|'.join(letters)} leaves motion free: "
+                              "the members share it (a simultaneous requirement); gagekit evaluates one feature per callout")
+                continue
             if f.kind == "Plane":
                 p, d = g["location"], g["normal"]
             elif f.kind in ("Cylinder", "Cone"):
@@ -364,14 +386,13 @@ class _Importer:
                 dd = np.asarray(d, dtype=float) @ frame.axes.T
                 nom["direction"] = [round(float(x), 12) + 0.0 for x in dd]
             t["nominal"] = nom
-        keep = []
+        dropped: dict = {}
         for c, t, notes in self.live:
             why = t.pop("_drop", None)
-            if why:
+            if why and c.id not in dropped:
+                dropped[c.id] = why
                 self.listed.append((c, why))
-            else:
-                keep.append((c, t, notes))
-        self.live = keep
+        self.live = [x for x in self.live if x[0].id not in dropped]
 
     # -- output -------------------------------------------------------------------------
     def _doc(self, live: list, only: Optional[set] = None, datums_only: bool = False) -> dict:
@@ -408,7 +429,8 @@ class _Importer:
                 k = _tolerance_index(msg)
                 if k is None:
                     raise ConfigError(f"{self.m.path}: the PART.toml made from the model does not read: {msg}") from None
-                c, t, _ = self.live.pop(k)
+                c = self.live[k][0]
+                self.live = [x for x in self.live if x[0].id != c.id]  # a pattern goes whole
                 self.listed.append((c, msg.split(": ", 2)[-1]))
 
 
@@ -541,10 +563,22 @@ def part_from_model(model: QifModel, band: float = 0.5, inset: float = 1.0, mode
         return {"qif_id": c.id, "type": c.kind, "name": c.name, "designator": c.designator,
                 "features": [imp.feature_ids.get(f, _fname(m.features[f])) for f in c.feature_ids]}
 
-    evaluated = [dict(entry(c), characteristic=t["characteristic"], callout=k,
-                      notes=notes + ([f"region of {t['feature']} also holds other nominal surfaces"] if t["feature"] in crowded else []))
-                 for k, (c, t, notes) in enumerate(live)]
-    unsupported = [dict(entry(c), characteristic=t["characteristic"], reason=why, toml="comment") for c, t, why in imp.pending]
+    evaluated: list = []
+    by_id: dict = {}
+    for k, (c, t, notes) in enumerate(live):  # one entry per characteristic, its callouts listed
+        crowd = [f"region of {t['feature']} also holds other nominal surfaces"] if t["feature"] in crowded else []
+        if c.id in by_id:
+            by_id[c.id]["callouts"].append(k)
+            by_id[c.id]["notes"] += [n for n in crowd if n not in by_id[c.id]["notes"]]
+            continue
+        by_id[c.id] = dict(entry(c), characteristic=t["characteristic"], callouts=[k], notes=list(notes) + crowd)
+        evaluated.append(by_id[c.id])
+    seen: set = set()
+    unsupported = []
+    for c, t, why in imp.pending:
+        if c.id not in seen:
+            seen.add(c.id)
+            unsupported.append(dict(entry(c), characteristic=t["characteristic"], reason=why, toml="comment"))
     unsupported += [dict(entry(c), reason=why, toml="listed") for c, why in imp.listed]
     summary = {
         "model": m.path, "qpid": m.qpid, "version": m.version,

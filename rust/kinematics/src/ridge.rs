@@ -67,8 +67,7 @@ pub fn loo_errors(t: &[f64], p: &[f64], r: &[f64], m: &[f64], k: usize, s: usize
             smp[e] += mp[c * d + e];
         }
     }
-    let a0m = DMatrix::from_row_slice(s, g, &stp) * mmat.transpose();
-    let a0: Vec<f64> = (0..s * d).map(|i| a0m[(i / d, i % d)]).collect();
+    let a0t = &mmat * DMatrix::from_row_slice(s, g, &stp).transpose(); // A0^T: 3n x s
     interrupt::check()?;
     let per_fold: Vec<Vec<f64>> = (0..k)
         .into_par_iter()
@@ -94,37 +93,39 @@ pub fn loo_errors(t: &[f64], p: &[f64], r: &[f64], m: &[f64], k: usize, s: usize
             let mpm: Vec<f64> = (0..d).map(|e| (smp[e] - mp[i * d + e]) / kk).collect();
             let ri = &r[i * d..(i + 1) * d];
             let mpi = &mp[i * d..(i + 1) * d];
-            // residuals of every strength as one product: coefficients (L x (s + 3)) times the
-            // vectors (A0 rows, r_i, M p_i, M pm): r_i + alpha M p_i + ((k-1) beta - 1) M pm - A0^T z
-            let q = s + 3;
-            let basis = DMatrix::from_fn(q, d, |row, e| match row {
-                row if row < s => a0[row * d + e],
-                row if row == s => ri[e],
-                row if row == s + 1 => mpi[e],
-                _ => mpm[e],
-            });
-            let mut coef = DMatrix::<f64>::zeros(lambdas.len(), q);
+            // residuals of every strength: r_i + alpha M p_i + ((k-1) beta - 1) M pm - A0^T z,
+            // the A0 part as one product (3n x s) (s x L)
+            let nl = lambdas.len();
+            let mut zc = DMatrix::<f64>::zeros(nl, s);
+            let mut rank3 = vec![(0.0, 0.0); nl];
+            let mut w = vec![0.0; s];
             for (l, &lam) in lambdas.iter().enumerate() {
                 let mu = lam * scale;
                 // z = D^-1 V diag(1 / (e + mu)) V^T x
-                let w: Vec<f64> = (0..s).map(|j| vx[j] / (eig.eigenvalues[j].max(0.0) + mu)).collect();
-                let z: Vec<f64> = (0..s).map(|a| (0..s).map(|j| eig.eigenvectors[(a, j)] * w[j]).sum::<f64>() / sd[a]).collect();
-                let alpha: f64 = (0..s).map(|a| ti[a] * z[a]).sum();
-                let beta: f64 = (0..s).map(|a| tm[a] * z[a]).sum();
-                for (a, za) in z.iter().enumerate() {
-                    coef[(l, a)] = -za;
+                for j in 0..s {
+                    w[j] = vx[j] / (eig.eigenvalues[j].max(0.0) + mu);
                 }
-                coef[(l, s)] = 1.0;
-                coef[(l, s + 1)] = alpha;
-                coef[(l, s + 2)] = kk * beta - 1.0;
+                let (mut alpha, mut beta) = (0.0, 0.0);
+                for a in 0..s {
+                    let za = (0..s).map(|j| eig.eigenvectors[(a, j)] * w[j]).sum::<f64>() / sd[a];
+                    zc[(l, a)] = za;
+                    alpha += ti[a] * za;
+                    beta += tm[a] * za;
+                }
+                rank3[l] = (alpha, kk * beta - 1.0);
             }
-            let res = coef * basis;
-            (0..lambdas.len())
+            let shared = &a0t * zc.transpose(); // 3n x L: A0^T z per strength, contiguous
+            (0..nl)
                 .map(|l| {
+                    let (alpha, cm) = rank3[l];
                     let total: f64 = (0..d / 3)
                         .map(|pt| {
-                            let (x, y, z) = (res[(l, 3 * pt)], res[(l, 3 * pt + 1)], res[(l, 3 * pt + 2)]);
-                            (x * x + y * y + z * z).sqrt()
+                            let mut sq = 0.0;
+                            for e in 3 * pt..3 * pt + 3 {
+                                let v = ri[e] + alpha * mpi[e] + cm * mpm[e] - shared[(e, l)];
+                                sq += v * v;
+                            }
+                            sq.sqrt()
                         })
                         .sum();
                     total / (d / 3) as f64
@@ -206,3 +207,4 @@ mod tests {
         }
     }
 }
+

@@ -1,8 +1,8 @@
 //! Bindings of gagekit-cloudio: point-cloud reading (ASCII, PLY, E57) and ASCII writing.
 
-use crate::arrays::rows;
+use crate::arrays::{matrix, rows};
 use crate::errors::{invalid, run};
-use gagekit_cloudio::{data_columns, read_ascii_file, scale_in_place, read_e57, write_ascii, AsciiOptions, PlyFile};
+use gagekit_cloudio::{data_columns, read_ascii_file, scale_in_place, read_e57, write_ascii, AsciiOptions, AsciiStream, PlyFile, PlyStream};
 use gagekit_core::GkError;
 use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray2, PyReadwriteArray2};
 use pyo3::prelude::*;
@@ -137,7 +137,73 @@ fn cloud_write_ascii(
     })
 }
 
+/// An ASCII point file read in blocks (`gagekit-cloudio`'s `AsciiStream`).
+#[pyclass(module = "gagekit._core")]
+pub struct AsciiChunks {
+    inner: AsciiStream,
+    dim: usize,
+}
+
+#[pymethods]
+impl AsciiChunks {
+    /// Header lines skipped before the first point.
+    #[getter]
+    fn header_lines(&self) -> usize {
+        self.inner.header_lines
+    }
+
+    /// The next (m, dim) chunk of points (m may be 0 for a block of comments), None at the end.
+    fn next_chunk(&mut self, py: Python<'_>) -> PyResult<Option<Py<PyAny>>> {
+        let inner = &mut self.inner;
+        let chunk = run(py, || inner.next_chunk())?;
+        let dim = self.dim;
+        chunk.map(|c| Ok(matrix(py, c, dim)?.into_any().unbind())).transpose()
+    }
+}
+
+/// Open an ASCII point file for reading in blocks of about `block` bytes.
+#[pyfunction]
+#[pyo3(signature = (path, dim=3, skip_lines=0, block=1 << 26))]
+fn cloud_ascii_chunks(py: Python<'_>, path: String, dim: usize, skip_lines: usize, block: usize) -> PyResult<AsciiChunks> {
+    let inner = run(py, || AsciiStream::open(std::path::Path::new(&path), &AsciiOptions { dim, skip_lines }, &path, block))?;
+    Ok(AsciiChunks { inner, dim })
+}
+
+/// The vertices of a binary PLY file read in ranges (`gagekit-cloudio`'s `PlyStream`).
+#[pyclass(module = "gagekit._core")]
+pub struct PlyChunks {
+    inner: PlyStream,
+}
+
+#[pymethods]
+impl PlyChunks {
+    /// Number of vertices.
+    #[getter]
+    fn count(&self) -> usize {
+        self.inner.count()
+    }
+
+    /// The next at most `max_points` vertices as an (m, 3) array, None at the end.
+    fn next_chunk(&mut self, py: Python<'_>, max_points: usize) -> PyResult<Option<Py<PyAny>>> {
+        let inner = &mut self.inner;
+        let chunk = run(py, || inner.next_chunk(max_points))?;
+        chunk.map(|c| Ok(matrix(py, c, 3)?.into_any().unbind())).transpose()
+    }
+}
+
+/// Open a binary PLY file (every element of fixed-size records) for reading its vertices
+/// in ranges; None for an ASCII PLY or one with lists (faces), which is read whole.
+#[pyfunction]
+fn cloud_ply_chunks(py: Python<'_>, path: String) -> PyResult<Option<PlyChunks>> {
+    let s = run(py, || PlyStream::open(std::path::Path::new(&path), &path))?;
+    Ok(s.map(|inner| PlyChunks { inner }))
+}
+
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<AsciiChunks>()?;
+    m.add_class::<PlyChunks>()?;
+    m.add_function(wrap_pyfunction!(cloud_ascii_chunks, m)?)?;
+    m.add_function(wrap_pyfunction!(cloud_ply_chunks, m)?)?;
     m.add_class::<AsciiCloud>()?;
     m.add_function(wrap_pyfunction!(cloud_read_ascii, m)?)?;
     m.add_function(wrap_pyfunction!(cloud_ascii_columns, m)?)?;

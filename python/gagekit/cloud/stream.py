@@ -1,0 +1,356 @@
+"""Point clouds read in chunks of bounded size (issue 29): the cost of a check grows with
+the points inside its regions, not with the file.
+
+:func:`open_cloud` returns a :class:`CloudStream`: iterating it reads the file once, in
+order, as (m, 3) float64 arrays in millimetres, each exactly the rows :func:`read_cloud`
+returns for those points (the same parser, the same unit factor applied the same way, the
+same error for a bad point, naming its line, vertex or row in the whole file). Iterating
+again reads the file again (a second pass).
+
+========================  =====================================================================
+format                    how it streams
+========================  =====================================================================
+XYZ/CSV/TXT/ASC/PTS/.ds   Rust ``AsciiStream``: blocks cut after a line break, each parsed in
+                          parallel; the layout (separators, header columns) read once from the
+                          top. ``.ds``: the count line is checked at the end.
+PLY binary                Rust ``PlyStream``: ranges of vertex records by positioned reads,
+                          decoded in parallel (every element of fixed-size records: the
+                          header's sizes are checked first, as a whole read checks them).
+.npy                      ``numpy.fromfile`` of row ranges (C order); Fortran order by slices
+                          of a memory map.
+LAS/LAZ                   ``laspy``'s chunk iterator (LAZ decompressed chunk by chunk).
+E57, PLY ASCII, PLY with  read whole, then handed out in chunks: memory is that of a whole read
+faces (lists)             (E57 scans are decoded as whole byte streams; see docs).
+========================  =====================================================================
+
+Memory: :func:`memory_budget` (``--memory``; default :data:`DEFAULT_MEMORY_FRACTION` of the
+machine's RAM) and :func:`whole_read_bytes` decide whether a command reads the whole file or
+streams it (:func:`should_stream`), and how many points a chunk holds (:func:`chunk_points`).
+"""
+
+from __future__ import annotations
+
+import os
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable, Iterator, Optional, Union
+
+import numpy as np
+
+from .. import _core
+from .._util import check_finite
+from ..errors import FileFormatError, InvalidInputError
+from . import units as _units
+from .formats import Raw
+
+PathLike = Union[str, os.PathLike]
+
+DEFAULT_MEMORY_FRACTION = 0.125
+"""Share of the machine's RAM a command may use for points when ``--memory`` is not given."""
+
+BYTES_PER_POINT = 24
+"""float64 x, y, z"""
+
+__all__ = ["CloudStream", "open_cloud", "memory_budget", "whole_read_bytes", "should_stream", "chunk_points",
+           "DEFAULT_MEMORY_FRACTION"]
+
+
+def total_ram() -> int:
+    """Bytes of physical memory (8 GiB when the system does not tell)."""
+    try:
+        return int(os.sysconf("SC_PAGE_SIZE")) * int(os.sysconf("SC_PHYS_PAGES"))
+    except (ValueError, OSError, AttributeError):
+        return 8 << 30
+
+
+_SIZE = re.compile(r"^\s*([0-9]*\.?[0-9]+)\s*([kmgt]?)i?b?\s*$", re.IGNORECASE)
+
+
+def memory_budget(memory: Union[str, int, float, None] = None) -> int:
+    """Bytes a command may hold in points: ``memory`` as a number of bytes or a size such as
+    ``"4G"``, ``"512M"``, ``"1.5GB"`` (powers of 1024), or by default
+    :data:`DEFAULT_MEMORY_FRACTION` of the RAM. At least 64 MiB."""
+    if memory is None:
+        return max(64 << 20, int(total_ram() * DEFAULT_MEMORY_FRACTION))
+    if isinstance(memory, (int, float)) and not isinstance(memory, bool):
+        value = float(memory)
+    else:
+        m = _SIZE.match(str(memory))
+        if not m:
+            raise InvalidInputError(f"memory: expected a size such as 4G, 512M or 2000000000, got {memory!r}")
+        value = float(m.group(1)) * 1024 ** "kmgt".find(m.group(2).lower()) * (1024 if m.group(2) else 1) \
+            if m.group(2) else float(m.group(1))
+    if not np.isfinite(value) or value < (64 << 20):
+        raise InvalidInputError(f"memory: {memory!r} is less than 64M; give at least 64M")
+    return int(value)
+
+
+def chunk_points(memory: int) -> int:
+    """Points per chunk for a budget of ``memory`` bytes: a sixteenth of it in float64
+    points (the chunk, its unit conversion and the region copies stay well inside), between
+    2^16 and 2^23."""
+    return int(min(1 << 23, max(1 << 16, memory // (16 * BYTES_PER_POINT))))
+
+
+def whole_read_bytes(path: PathLike) -> int:
+    """What reading the whole file would hold in points (bytes), from its header where the
+    format has a count (PLY, .npy, E57 records, LAS), else its size (text: about one byte
+    of file per byte of float64)."""
+    p = Path(path)
+    try:
+        size = p.stat().st_size
+    except OSError:
+        return 0  # the reader words the error (missing, no permission...)
+    suffix = p.suffix.lower()
+    try:
+        if suffix == ".ply":
+            return _ply_head(p)[0] * BYTES_PER_POINT
+        if suffix == ".npy":
+            shape, _, _, _ = _npy_header(p)
+            return BYTES_PER_POINT * int(shape[0]) if shape else size
+    except (FileFormatError, InvalidInputError, OSError, ValueError):
+        return size
+    return size
+
+
+def should_stream(path: PathLike, memory: Optional[int]) -> bool:
+    """Whether a command should stream ``path`` rather than read it whole: when the whole
+    read would take more than half the budget (the other half is for the work on it)."""
+    budget = memory_budget(memory)
+    return whole_read_bytes(path) > budget // 2
+
+
+def _ply_head(p: Path) -> tuple[int, str]:
+    """The vertex count and the format word of a PLY header (a guess for sizing only;
+    the Rust reader checks the header)."""
+    with open(p, "rb") as fh:
+        head = fh.read(1 << 16)
+    m = re.search(rb"element\s+vertex\s+([0-9]+)", head)
+    f = re.search(rb"format\s+(\S+)", head)
+    return (int(m.group(1)) if m else p.stat().st_size // BYTES_PER_POINT,
+            f.group(1).decode("ascii", "replace") if f else "binary")
+
+
+@dataclass
+class CloudStream:
+    """A point-cloud file read chunk by chunk, in millimetres (see the module docstring).
+
+    ``count`` is the number of points when the header tells it before reading (PLY, .npy,
+    LAS), else None; :attr:`points_read` counts what the last full pass read."""
+
+    path: str
+    format: str
+    source_unit: str
+    scale_to_mm: float
+    unit_basis: str
+    z_scale_to_mm: float
+    count: Optional[int]
+    chunk_points: int
+    warnings: tuple = ()
+    _raw_chunks: Callable[[], Iterator[np.ndarray]] = field(repr=False, default=None)  # type: ignore[assignment]
+    _finite_checked: bool = field(repr=False, default=True)
+    _at_end: Optional[Callable[[int], None]] = field(repr=False, default=None)
+    points_read: Optional[int] = None
+
+    def __iter__(self) -> Iterator[np.ndarray]:
+        scale = [self.scale_to_mm, self.scale_to_mm, self.z_scale_to_mm]
+        n = 0
+        for raw in self._raw_chunks():
+            pts = np.require(raw, np.float64, ["C_CONTIGUOUS", "WRITEABLE"])
+            if not self._finite_checked:
+                _check_finite_from(pts, n, self.path)
+            if scale != [1.0, 1.0, 1.0] and len(pts):
+                _scale_from(pts, scale, n, self.path)
+            n += len(pts)
+            if len(pts):
+                yield pts
+        if n == 0:
+            raise FileFormatError(f"{self.path}: the file holds no points")
+        if self._at_end is not None:
+            self._at_end(n)
+        self.points_read = n
+
+
+def _check_finite_from(pts: np.ndarray, offset: int, what: str) -> None:
+    try:
+        check_finite(pts, what)
+    except InvalidInputError:
+        bad = ~np.isfinite(pts)
+        row = int(np.argmax(bad.any(axis=1)))
+        raise InvalidInputError(f"{what}: point {offset + row} has a non-finite coordinate {pts[row].tolist()} "
+                                "(NaN or inf)") from None
+
+
+def _scale_from(pts: np.ndarray, scale: list, offset: int, what: str) -> None:
+    try:
+        _core.cloud_scale_in_place(pts, scale, what)
+    except InvalidInputError as exc:
+        m = re.search(r"point ([0-9]+) overflows", str(exc))
+        if m is None:
+            raise
+        raise InvalidInputError(str(exc).replace(m.group(0), f"point {offset + int(m.group(1))} overflows")) from None
+
+
+def open_cloud(path: PathLike, units: Optional[str] = None, *, chunk: Optional[int] = None,
+               memory: Union[str, int, None] = None) -> CloudStream:
+    """Open a point-cloud file for reading in chunks of ``chunk`` points (default from the
+    ``memory`` budget, :func:`chunk_points`). Same formats, units and errors as
+    :func:`~gagekit.cloud.read_cloud`; 3-D points only."""
+    from .._files import input_file
+    from .io import ASCII_SUFFIXES, _BINARY, _sniff, _unit_of
+
+    override = _units.check_units(units)
+    p = input_file(path, "point cloud file")
+    suffix = p.suffix.lower()
+    if suffix not in ASCII_SUFFIXES and suffix not in _BINARY:
+        suffix = _sniff(p)
+    m = int(chunk) if chunk is not None else chunk_points(memory_budget(memory))
+    if m < 1:
+        raise InvalidInputError(f"chunk: expected a positive number of points, got {chunk}")
+    info, chunks, count, finite, at_end = _open_format(p, suffix, m)
+    unit, z_unit, basis, warns = _unit_of(info, p, override)
+    return CloudStream(str(p), info.format, unit, _units.scale_to_mm(unit), basis, _units.scale_to_mm(z_unit),
+                       count, m, tuple(warns), chunks, finite, at_end)
+
+
+def _open_format(p: Path, suffix: str, m: int):
+    """(Raw without points: format and unit; chunk generator factory; count or None;
+    finite already checked; check at the end of a pass or None)."""
+    from .io import ASCII_SUFFIXES
+    from .formats import e57, las, ply
+
+    empty = np.empty((0, 3))
+    if suffix in ASCII_SUFFIXES:
+        nist = suffix == ".ds"
+        block = max(1 << 16, m * 32)  # about one point per 32 bytes of text
+
+        def text_chunks() -> Iterator[np.ndarray]:
+            try:
+                s = _core.cloud_ascii_chunks(str(p), 3, 1 if nist else 0, block)
+                while (c := s.next_chunk()) is not None:
+                    yield c
+            except InvalidInputError as exc:
+                raise FileFormatError(str(exc)) from None
+
+        return (Raw(empty, "nist-ds" if nist else "ascii"), text_chunks, None, True,
+                (lambda n: _nist_count(p, n)) if nist else None)
+    if suffix == ".ply":
+        try:
+            s0 = _core.cloud_ply_chunks(str(p))
+        except InvalidInputError as exc:
+            raise FileFormatError(str(exc)) from None
+        if s0 is not None:
+            def ply_chunks() -> Iterator[np.ndarray]:
+                try:
+                    s = _core.cloud_ply_chunks(str(p))
+                    while s is not None and (c := s.next_chunk(m)) is not None:
+                        yield c
+                except InvalidInputError as exc:
+                    raise FileFormatError(str(exc)) from None
+
+            return Raw(empty, f"ply {_ply_head(p)[1]}"), ply_chunks, int(s0.count), True, None
+        raw = ply.read(p, 3)
+        return _whole(raw, m)
+    if suffix == ".npy":
+        return _npy(p, m)
+    if suffix in (".las", ".laz"):
+        return _las(p, m)
+    if suffix == ".e57":
+        return _whole(e57.read(p, 3), m)
+    raise FileFormatError(f"{p}: cannot stream '{suffix}' files")  # pragma: no cover - suffixes above are all
+
+
+def _whole(raw: Raw, m: int):
+    """A format read whole, handed out in chunks of ``m`` points."""
+    pts = raw.points
+    info = Raw(np.empty((0, 3)), raw.format, raw.unit, raw.unit_basis, raw.z_unit, raw.scans, raw.invalid_dropped,
+               list(raw.warnings), raw.finite_checked)
+
+    def chunks() -> Iterator[np.ndarray]:
+        for i in range(0, len(pts), m):
+            yield np.array(pts[i:i + m], dtype=np.float64)  # a copy: the unit factor is applied in place
+
+    return info, chunks, len(pts), raw.finite_checked, None
+
+
+def _nist_count(p: Path, n: int) -> None:
+    with p.open("rb") as fh:
+        first = fh.readline().split()
+    try:
+        count = int(first[0])
+    except (IndexError, ValueError):
+        raise FileFormatError(f"{p}: line 1: a NIST .ds file starts with the point count") from None
+    if count != n:
+        raise FileFormatError(f"{p}: line 1 announces {count} points but the file holds {n}")
+
+
+def _npy_header(p: Path):
+    with open(p, "rb") as fh:
+        version = np.lib.format.read_magic(fh)
+        read = np.lib.format.read_array_header_1_0 if version == (1, 0) else np.lib.format.read_array_header_2_0
+        shape, fortran, dtype = read(fh)
+        return shape, fortran, dtype, fh.tell()
+
+
+def _npy(p: Path, m: int):
+    from .formats import npy
+
+    try:
+        shape, fortran, dtype, offset = _npy_header(p)
+    except Exception:  # the whole reader words the error
+        return _whole(npy.read(p, 3), m)
+    if fortran or dtype.kind not in "fiu" or len(shape) != 2 or shape[1] < 3 or dtype.hasobject \
+            or p.stat().st_size < offset + shape[0] * shape[1] * dtype.itemsize:
+        return _whole(npy.read(p, 3), m)
+    n, ncols = int(shape[0]), int(shape[1])
+
+    def chunks() -> Iterator[np.ndarray]:
+        with open(p, "rb") as fh:
+            for i in range(0, n, m):
+                k = min(m, n - i)
+                fh.seek(offset + i * ncols * dtype.itemsize)
+                rows = np.fromfile(fh, dtype=dtype, count=k * ncols).reshape(k, ncols)
+                yield np.ascontiguousarray(rows[:, :3], dtype=np.float64)
+
+    return Raw(np.empty((0, 3)), "npy"), chunks, n, False, None
+
+
+def _las(p: Path, m: int):
+    from .formats.las import _check_scales, _crs_unit
+
+    try:
+        import laspy
+    except ImportError:
+        raise FileFormatError(f"{p}: LAS/LAZ needs the optional extra: pip install 'gagekit[las]'") from None
+
+    def bad(exc: Exception) -> FileFormatError:
+        msg = str(exc)
+        if "LazBackend" in msg:
+            msg = "no LAZ decompressor; pip install 'gagekit[las]' (laspy with lazrs)"
+        return FileFormatError(f"{p}: not a readable LAS/LAZ file ({msg})")
+
+    try:
+        with laspy.open(str(p)) as r:
+            header = r.header
+            vlrs = list(header.vlrs) + list(getattr(r, "evlrs", None) or getattr(header, "evlrs", None) or [])
+            count = int(header.point_count)
+    except Exception as exc:  # laspy raises LaspyException, ValueError, OSError... for bad files
+        raise bad(exc) from None
+    _check_scales(header, p)
+    info = Raw(np.empty((0, 3)), "laz" if p.suffix.lower() == ".laz" else "las")
+    _crs_unit(vlrs, info, p)
+
+    def chunks() -> Iterator[np.ndarray]:
+        try:
+            with laspy.open(str(p)) as r:
+                for pts in r.chunk_iterator(m):
+                    out = np.empty((len(pts), 3))
+                    out[:, 0], out[:, 1], out[:, 2] = pts.x, pts.y, pts.z
+                    yield out
+        except FileFormatError:
+            raise
+        except Exception as exc:
+            raise bad(exc) from None
+
+    return info, chunks, count, False, None

@@ -1,0 +1,150 @@
+"""Region-first evaluation of a streamed cloud (issue 29, Sec. 5.4.1): each chunk is
+classified into the regions (one Rust pass over the chunk), and only the points inside
+regions are kept; where the evaluation needs only the convex-hull vertices (the LP of
+Eq. 5.11: a linear constraint that holds at the hull vertices holds everywhere), each
+chunk's region points are hull-filtered at once and the hull of the kept vertices is taken
+at the end. The hull of the union is the hull of the union of the hulls, and the exact
+predicates keep the same extreme points (the lowest index among duplicates), so the
+vertices kept, and their order (ascending point number), are those of a whole read.
+
+Memory: a chunk, plus the kept points of each region (every point for ``keep="all"``,
+hull vertices only for ``keep="hull"``: re-hulled whenever they pile up).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Iterable, Optional, Sequence
+
+import numpy as np
+
+from .hull import convex_hull_indices
+from .regions import Box, classify
+
+REHULL = 1 << 20
+"""Kept hull vertices of a region above which they are re-hulled during the pass."""
+
+
+@dataclass
+class StreamedRegion:
+    """What a pass kept of one region: ``count`` points inside; ``indices`` (point numbers
+    in the file, ascending) and ``points`` of every point (``keep="all"``) or of the hull
+    vertices only (``keep="hull"``, after :meth:`finish`); ``sample``: up to ``sample_size``
+    points drawn uniformly (seeded bottom-k keys) for pictures."""
+
+    name: str
+    keep: str
+    count: int = 0
+    indices: list = field(default_factory=list)
+    points: list = field(default_factory=list)
+    all_indices: Optional[list] = None
+    sample_keys: Optional[np.ndarray] = None
+    sample_idx: Optional[np.ndarray] = None
+    sample_pts: Optional[np.ndarray] = None
+    _pending: int = 0
+
+    def add(self, ids: np.ndarray, pts: np.ndarray) -> None:
+        self.count += len(ids)
+        if self.all_indices is not None:
+            self.all_indices.append(ids)
+        if self.keep == "hull" and len(ids):
+            h = convex_hull_indices(pts)
+            ids, pts = ids[h], pts[h]
+        self.indices.append(ids)
+        self.points.append(pts)
+        self._pending += len(ids)
+        if self.keep == "hull" and self._pending > REHULL:
+            self._rehull()
+
+    def _rehull(self) -> None:
+        ids, pts = self.index_array(), self.point_array()
+        if len(ids):
+            h = convex_hull_indices(pts)
+            ids, pts = ids[h], pts[h]
+        self.indices, self.points, self._pending = [ids], [pts], len(ids)
+
+    def finish(self) -> "StreamedRegion":
+        if self.keep == "hull":
+            self._rehull()
+        return self
+
+    def index_array(self) -> np.ndarray:
+        return np.concatenate(self.indices) if self.indices else np.zeros(0, dtype=np.int64)
+
+    def point_array(self) -> np.ndarray:
+        return np.ascontiguousarray(np.vstack(self.points)) if self.points else np.zeros((0, 3))
+
+    def sample(self, rng: np.random.Generator, ids: np.ndarray, pts: np.ndarray, size: int) -> None:
+        """Bottom-k sampling: every point gets a seeded key, the ``size`` smallest stay."""
+        keys = rng.random(len(ids))
+        if self.sample_keys is None:
+            self.sample_keys, self.sample_idx, self.sample_pts = keys, ids, pts
+        else:
+            self.sample_keys = np.concatenate([self.sample_keys, keys])
+            self.sample_idx = np.concatenate([self.sample_idx, ids])
+            self.sample_pts = np.vstack([self.sample_pts, pts])
+        if len(self.sample_keys) > size:
+            keep = np.sort(np.argpartition(self.sample_keys, size)[:size])
+            self.sample_keys, self.sample_idx, self.sample_pts = (self.sample_keys[keep], self.sample_idx[keep],
+                                                                  self.sample_pts[keep])
+
+    def sample_points(self) -> np.ndarray:
+        """The sampled points in file order."""
+        if self.sample_idx is None:
+            return np.zeros((0, 3))
+        return self.sample_pts[np.argsort(self.sample_idx, kind="stable")]
+
+
+@dataclass
+class Pass:
+    """One pass over a stream: the number of points, the sum of their coordinates (for a
+    centroid), and what each region kept."""
+
+    count: int
+    total: np.ndarray
+    regions: list
+
+    def __getitem__(self, name: str) -> StreamedRegion:
+        for r in self.regions:
+            if r.name == name:
+                return r
+        raise KeyError(name)
+
+
+def cut_stream(chunks: Iterable[np.ndarray], boxes: Sequence[Box], keep: Sequence[str], *,
+               all_indices: bool = False, sample: int = 0, seed: int = 0) -> Pass:
+    """One pass over ``chunks`` ((m, 3) arrays in file order): every chunk classified into
+    ``boxes``; per box ``keep`` is ``"all"`` (every point inside) or ``"hull"`` (hull
+    vertices). ``all_indices`` also keeps every inside point's number (int64, 8 bytes a
+    point); ``sample`` > 0 draws that many points per box (seeded) for pictures."""
+    regions = [StreamedRegion(b.name, k, all_indices=[] if all_indices else None) for b, k in zip(boxes, keep)]
+    rng = np.random.default_rng(seed)
+    n = 0
+    total = np.zeros(3)
+    for pts in chunks:
+        m = len(pts)
+        total += np.ones(m) @ pts
+        if boxes:
+            for r, idx in zip(regions, classify(pts, boxes)):
+                ids = idx + n
+                sel = pts[idx]
+                r.add(ids, sel)
+                if sample and len(ids):
+                    r.sample(rng, ids, sel, sample)
+        n += m
+    return Pass(n, total, [r.finish() for r in regions])
+
+
+def hull_stream(chunks: Iterable[np.ndarray]) -> tuple[int, np.ndarray, np.ndarray]:
+    """(number of points, hull vertex numbers ascending, their points) of a streamed cloud:
+    each chunk hull-filtered, then the hull of the kept vertices (Eq. 5.21)."""
+    acc = StreamedRegion("cloud", "hull")
+    n = 0
+    for pts in chunks:
+        acc.add(np.arange(n, n + len(pts), dtype=np.int64), pts)
+        n += len(pts)
+    acc.finish()
+    return n, acc.index_array(), acc.point_array()
+
+
+__all__ = ["StreamedRegion", "Pass", "cut_stream", "hull_stream", "REHULL"]

@@ -1,0 +1,132 @@
+"""Streamed reads and region-first evaluation (issue 29): every format read in chunks gives
+the whole read's points bit for bit, and `gage check`, `inspect`, `cloud hull` and
+`cloud regions` give the same JSON streamed with a tiny chunk size as reading the whole
+file (CI runs these small files only; benches/bench_scale.py runs the large ones)."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import gagekit
+from gagekit.cloud import read_cloud
+from gagekit.cloud.stream import chunk_points, memory_budget, open_cloud, should_stream
+from gagekit.errors import FileFormatError, InvalidInputError
+
+DATA = Path(gagekit.__file__).parent / "data"
+TESTS = Path(__file__).resolve().parents[1] / "data"
+
+
+def streamed(path, chunk=997, units=None) -> np.ndarray:
+    s = open_cloud(path, units, chunk=chunk)
+    got = np.vstack(list(s))
+    assert s.points_read == len(got)
+    return got
+
+
+def same(a: np.ndarray, b: np.ndarray) -> bool:
+    return a.shape == b.shape and a.tobytes() == b.tobytes()
+
+
+@pytest.mark.parametrize("path", [DATA / "casting_ok.ply", DATA / "bracket.ply",
+                                  *sorted((TESTS / "e57").glob("bunny*.e57"))[:1],
+                                  *sorted((TESTS / "las").glob("*.la[sz]"))[:3]], ids=lambda p: p.name)
+def test_bundled_files_stream_as_they_read(path):
+    whole = read_cloud(path)
+    for chunk in (1, 997, 10**6):
+        if chunk == 1 and len(whole.points) > 5000:
+            continue
+        assert same(streamed(path, chunk), whole.points)
+    s = open_cloud(path, chunk=100)
+    assert (s.source_unit, s.scale_to_mm, s.format) == (whole.source_unit, whole.scale_to_mm, whole.format)
+
+
+def test_text_formats_and_units(tmp_path):
+    rng = np.random.default_rng(3)
+    pts = rng.uniform(-100, 100, (5003, 3)).round(6)
+    body = "\n".join(f"{i},{z!r},{y!r},{x!r}" + ("\n# c\n" if i % 500 == 0 else "") for i, (x, y, z) in enumerate(pts.tolist()))
+    csv = tmp_path / "a.csv"
+    csv.write_text("# scan\nid,Z,Y,X\n" + body + "\n")
+    assert same(streamed(csv, 77), read_cloud(csv).points)
+    assert same(streamed(csv, 77, units="in"), read_cloud(csv, units="in").points)
+    ds = tmp_path / "a.ds"
+    ds.write_text(f"{len(pts)}\n" + "\n".join(f"{x!r} {y!r} {z!r}" for x, y, z in pts.tolist()) + "\n")
+    assert same(streamed(ds, 100), pts)
+    ds.write_text(f"{len(pts) + 1}\n" + "\n".join(f"{x!r} {y!r} {z!r}" for x, y, z in pts.tolist()) + "\n")
+    with pytest.raises(FileFormatError, match="announces"):
+        streamed(ds, 100)
+    for order in ("C", "F"):
+        npy = tmp_path / f"a{order}.npy"
+        np.save(npy, np.asarray(np.column_stack([pts, pts[:, 0]]), order=order))
+        assert same(streamed(npy, 300), read_cloud(npy).points)
+
+
+def test_errors_name_the_point_in_the_whole_file(tmp_path):
+    lines = [f"{i} {i} {i}" for i in range(3000)]
+    lines[2500] = "1 oops 3"
+    bad = tmp_path / "bad.xyz"
+    bad.write_text("\n".join(lines) + "\n")
+    with pytest.raises(FileFormatError) as whole:
+        read_cloud(bad)
+    with pytest.raises(FileFormatError) as part:
+        streamed(bad, 10)
+    assert str(part.value) == str(whole.value) and "line 2501" in str(part.value)
+    arr = np.zeros((1000, 3))
+    arr[777, 1] = np.nan
+    npy = tmp_path / "nan.npy"
+    np.save(npy, arr)
+    with pytest.raises(InvalidInputError, match="point 777"):
+        streamed(npy, 100)
+    empty = tmp_path / "empty.xyz"
+    empty.write_text("x y z\n")
+    with pytest.raises(FileFormatError):
+        streamed(empty)
+
+
+def test_memory_budget():
+    assert memory_budget("512M") == 512 << 20 and memory_budget("2G") == 2 << 30
+    assert memory_budget(None) >= 64 << 20
+    for bad in ("1K", "lots", "-3G"):
+        with pytest.raises(InvalidInputError):
+            memory_budget(bad)
+    assert 1 << 16 <= chunk_points(memory_budget("1G")) <= 1 << 23
+    assert not should_stream(DATA / "casting_ok.ply", None)
+    assert should_stream(DATA / "casting_ok.ply", 64 << 20) is False  # 3 MB of points
+
+
+def cli(*args):
+    return subprocess.run([sys.executable, "-m", "gagekit", *map(str, args), "--json"], capture_output=True,
+                          text=True, timeout=300)
+
+
+def result(proc) -> dict:
+    assert proc.returncode == 0, proc.stderr
+    d = json.loads(proc.stdout)
+    d.pop("seconds", None)
+    return d
+
+
+@pytest.mark.parametrize("args", [
+    ("gage", "check", DATA / "casting_ok.ply", DATA / "casting_ok.toml"),
+    ("gage", "check", DATA / "casting_short.ply", DATA / "casting_short.toml"),
+    ("inspect", DATA / "bracket.ply", DATA / "bracket.toml"),
+    ("cloud", "hull", DATA / "casting_short.ply"),
+    ("cloud", "regions", DATA / "casting_ok.ply", DATA / "casting_ok.toml"),
+], ids=lambda a: " ".join(str(x) for x in a[:2]) if isinstance(a, tuple) else str(a))
+def test_streamed_equals_whole(args):
+    """Bit for bit: the JSON of a streamed evaluation (chunks of 997 points: about a
+    hundred chunks, so regions and hulls straddle chunk borders) is the whole read's."""
+    whole = result(cli(*args))
+    assert result(cli(*args, "--chunk-points", 997)) == whole
+    small = cli(*args, "--memory", "1G")
+    assert result(small) == whole
+
+
+def test_bad_memory_option_is_one_line():
+    proc = cli("cloud", "hull", DATA / "bracket.ply", "--memory", "12 apples")
+    assert proc.returncode == 2 and proc.stderr.startswith("gagekit: error: memory:") and proc.stderr.count("\n") == 1
