@@ -37,7 +37,7 @@ def _human(s: dict) -> str:
 
 def stats(
     db: str = typer.Option(..., "--db", help="Results database: sqlite:///FILE or postgresql://..."),
-    spec: Optional[Path] = typer.Option(None, "--spec", help="Only the results of this gage file (GAGES.toml)."),
+    spec: Optional[Path] = typer.Option(None, "--spec", help="Only the results of this gage file or drawing (GAGES.toml or PART.toml)."),
     tolerance: Optional[float] = typer.Option(None, "--tolerance", help="Upper limit of form errors (mm, > 0), for Cp/Cpk of form batches."),
     resolution: float = typer.Option(1e-9, "--resolution", help="Resolution of lengths (mm; angles: this / 1000 rad). "
                                                                  "Values within it of a limit are on the limit; no "
