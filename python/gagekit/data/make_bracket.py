@@ -35,6 +35,7 @@ The scanner stops 1 mm short of every edge of the block's faces.
 from __future__ import annotations
 
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -140,12 +141,84 @@ def make_bracket(density: float = 1.0) -> np.ndarray:
     return np.ascontiguousarray(np.concatenate(parts))
 
 
+#: Names of the nominal bracket's STEP faces, by a point inside each face (make_bracket_step).
+FACE_NAMES = {
+    "A": (60.0, 40.0, 0.0), "B": (60.0, 0.0, 20.0), "C": (0.0, 40.0, 20.0), "top": (50.0, 60.0, 40.0),
+    "chamfer": (110.0, 40.0, 30.0), "right": (120.0, 40.0, 10.0), "back": (60.0, 80.0, 20.0),
+    "bore": (20.0, 40.0, 20.0), "boss": (58.0, 40.0, 50.0), "boss-shoulder": (65.0, 50.0, 60.0),
+    "boss-top": (62.0, 40.0, 67.0), "ball": (70.0, 40.0, 83.0), "pin": (27.0, 15.0, 35.0), "pin-bottom": (30.0, 15.0, 30.0),
+}
+
+
+def make_bracket_step(path) -> None:  # pragma: no cover - regenerates the bundled STEP model (needs gagekit[cad])
+    """The nominal bracket as a STEP solid (OpenCASCADE): the block with its chamfer, the
+    through bore, the blind pin hole (10 deep), the stepped boss and the ball, every face
+    named (FACE_NAMES) so that a drawing can call it by name or by its STEP id."""
+    from OCP.BRepAlgoAPI import BRepAlgoAPI_Cut, BRepAlgoAPI_Fuse
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace, BRepBuilderAPI_MakePolygon
+    from OCP.BRepExtrema import BRepExtrema_DistShapeShape
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeVertex
+    from OCP.BRepPrimAPI import BRepPrimAPI_MakeCylinder, BRepPrimAPI_MakePrism, BRepPrimAPI_MakeSphere
+    from OCP.IFSelect import IFSelect_RetDone
+    from OCP.Interface import Interface_Static
+    from OCP.ShapeUpgrade import ShapeUpgrade_UnifySameDomain
+    from OCP.STEPControl import STEPControl_AsIs, STEPControl_Writer
+    from OCP.TopAbs import TopAbs_FACE
+    from OCP.TopExp import TopExp_Explorer
+    from OCP.gp import gp_Ax2, gp_Dir, gp_Pnt, gp_Vec
+
+    poly = BRepBuilderAPI_MakePolygon()
+    for x, z in ((0, 0), (120, 0), (120, 20), (100, 40), (0, 40)):
+        poly.Add(gp_Pnt(x, 0, z))
+    poly.Close()
+    block = BRepPrimAPI_MakePrism(BRepBuilderAPI_MakeFace(poly.Wire()).Face(), gp_Vec(0, 80, 0)).Shape()
+    up = gp_Dir(0, 0, 1)
+    shape = BRepAlgoAPI_Cut(block, BRepPrimAPI_MakeCylinder(gp_Ax2(gp_Pnt(30, 40, -1), up), 10.0, 42.0).Shape()).Shape()
+    shape = BRepAlgoAPI_Cut(shape, BRepPrimAPI_MakeCylinder(gp_Ax2(gp_Pnt(30, 15, 30), up), 3.0, 11.0).Shape()).Shape()
+    shape = BRepAlgoAPI_Fuse(shape, BRepPrimAPI_MakeCylinder(gp_Ax2(gp_Pnt(70, 40, 39), up), 12.0, 21.0).Shape()).Shape()
+    shape = BRepAlgoAPI_Fuse(shape, BRepPrimAPI_MakeCylinder(gp_Ax2(gp_Pnt(70, 40, 59), up), 8.0, 16.0).Shape()).Shape()
+    shape = BRepAlgoAPI_Fuse(shape, BRepPrimAPI_MakeSphere(gp_Pnt(70, 40, 75), 8.0).Shape()).Shape()
+    unify = ShapeUpgrade_UnifySameDomain(shape, True, True, True)
+    unify.Build()
+    shape = unify.Shape()
+    names = []
+    ex = TopExp_Explorer(shape, TopAbs_FACE)
+    while ex.More():
+        face = ex.Current()
+        dists = {n: BRepExtrema_DistShapeShape(face, BRepBuilderAPI_MakeVertex(gp_Pnt(*q)).Vertex()).Value()
+                 for n, q in FACE_NAMES.items()}
+        name = min(dists, key=dists.get)
+        names.append(name if dists[name] < 1e-6 else "")
+        ex.Next()
+    Interface_Static.SetCVal_s("write.step.schema", "AP214IS")
+    writer = STEPControl_Writer()
+    writer.Transfer(shape, STEPControl_AsIs)
+    tmp = Path(str(path) + ".tmp")
+    if writer.Write(str(tmp)) != IFSelect_RetDone:
+        raise RuntimeError(f"cannot write {path}")
+    # the faces' names: the shell lists the faces in the order OpenCASCADE explored them
+    text = tmp.read_text()
+    tmp.unlink()
+    shell = re.search(r"CLOSED_SHELL\s*\(\s*'[^']*'\s*,\s*\(([^)]*)\)", text)
+    ids = [int(x) for x in re.findall(r"#(\d+)", shell.group(1))]
+    assert len(ids) == len(names), (len(ids), len(names))
+    for fid, name in zip(ids, names):
+        text = re.sub(rf"(#{fid}\s*=\s*ADVANCED_FACE\s*\(\s*)''", rf"\g<1>'{name}'", text, count=1)
+    text = re.sub(r"FILE_NAME\('[^']*','[^']*'", "FILE_NAME('bracket.step','2026-01-01T00:00:00'", text, count=1)
+    Path(path).write_text(text)
+
+
 def main() -> None:  # pragma: no cover - regenerates the bundled files
     from gagekit.cloud import write_points
 
     here = Path(__file__).resolve().parent
     write_points(here / "bracket.ply", make_bracket())
     print(f"wrote {here / 'bracket.ply'}")
+    try:
+        make_bracket_step(here / "bracket.step")
+        print(f"wrote {here / 'bracket.step'}")
+    except ImportError:
+        print("bracket.step not written: install gagekit[cad] (OpenCASCADE)")
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -62,7 +62,12 @@ def inspect(points: Any, spec: Union[PartSpec, str, Any]) -> InspectionResult:
     if not isinstance(spec, PartSpec):
         spec = load_part_spec(spec)
     pts = as_points(points)  # the region kernel checks finiteness (naming the row)
-    feats = extract(pts, spec.features, spec.source)
+    cad = None
+    if spec.cad is not None:
+        from ..cad.features import CadContext
+
+        cad = CadContext.of_scan(spec.cad, pts)
+    feats = extract(pts, spec.features, spec.source, cad)
     return _evaluate(spec, feats, int(len(pts)), t0)
 
 
@@ -75,6 +80,11 @@ def inspect_stream(stream: Any, spec: Union[PartSpec, str, Any]) -> InspectionRe
     t0 = time.perf_counter()
     if not isinstance(spec, PartSpec):
         spec = load_part_spec(spec)
+    if getattr(spec, "cad", None) is not None:
+        from ..errors import InvalidInputError
+
+        raise InvalidInputError(f"{spec.source}: a drawing with a [part] cad model is matched to the whole scan: "
+                                "read it whole (inspect)")
     n, feats = extract_stream(stream, spec.features, spec.source)
     return _evaluate(spec, feats, n, t0)
 

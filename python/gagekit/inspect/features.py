@@ -54,7 +54,10 @@ class FeatureData:
         return self.spec.shape
 
     def box_axes(self) -> np.ndarray:
-        """The region box's axes as rows (they move with the part)."""
+        """The region box's axes as rows (they move with the part); a feature given by CAD
+        faces has the model's axes."""
+        if self.spec.region is None:
+            return np.eye(3)
         return rotation_from_vector(self.spec.region.rotation).T
 
     # -- least-squares fits ------------------------------------------------------------
@@ -240,13 +243,24 @@ def golden_min(f: Callable[[float], float], lo: float, hi: float, iterations: in
     return f(x), x
 
 
-def extract(points: np.ndarray, features: dict[str, Feature], source: str = "part") -> dict[str, FeatureData]:
-    """Cut every feature's points out of the scan (one parallel pass over the boxes)."""
+def extract(points: np.ndarray, features: dict[str, Feature], source: str = "part", cad: Any = None) -> dict[str, FeatureData]:
+    """Cut every feature's points out of the scan (one parallel pass over the boxes); a
+    feature given by CAD ``faces`` takes the points nearest to them (``cad``: a
+    :class:`gagekit.cad.features.CadContext` over the same points)."""
     from ..cloud.regions import classify
 
-    names = list(features)
-    idx = classify(points, [features[n].region for n in names])
-    return _feature_data(features, [(ids, points[ids]) for ids in idx], source)
+    names = [n for n in features if features[n].region is not None]
+    idx = dict(zip(names, classify(points, [features[n].region for n in names]))) if names else {}
+    cut = []
+    for name, f in features.items():
+        if name in idx:
+            ids = idx[name]
+        else:
+            if cad is None:
+                raise DegenerateGeometryError(f"{source}: [[feature]] '{name}': 'faces' needs the [part] cad model")
+            ids = cad.indices(f, f"{source}: [[feature]] '{name}'")
+        cut.append((ids, points[ids]))
+    return _feature_data(features, cut, source, cad)
 
 
 def extract_stream(chunks, features: dict[str, Feature], source: str = "part") -> tuple[int, dict[str, FeatureData]]:
@@ -254,19 +268,25 @@ def extract_stream(chunks, features: dict[str, Feature], source: str = "part") -
     (number of points, the features), the same points and point numbers as a whole read."""
     from ..cloud.streamed import cut_stream
 
+    if any(f.region is None for f in features.values()):
+        raise DegenerateGeometryError(f"{source}: features given by CAD 'faces' need the whole scan (not streamed)")
     names = list(features)
     p = cut_stream(chunks, [features[n].region for n in names], ["all"] * len(names))
     return p.count, _feature_data(features, [(r.index_array(), r.point_array()) for r in p.regions], source)
 
 
-def _feature_data(features: dict[str, Feature], cut: list, source: str) -> dict[str, FeatureData]:
+def _feature_data(features: dict[str, Feature], cut: list, source: str, cad: Any = None) -> dict[str, FeatureData]:
     out: dict[str, FeatureData] = {}
     for name, (ids, pts) in zip(list(features), cut):
         f = features[name]
+        what = "'region' holds" if f.region is not None else "its faces hold"
         need = MIN_POINTS[f.shape]
         if len(ids) < need:
             raise DegenerateGeometryError(
-                f"{source}: [[feature]] '{name}': 'region' holds {len(ids)} point(s) of the scan; a {f.shape} needs at "
+                f"{source}: [[feature]] '{name}': {what} {len(ids)} point(s) of the scan; a {f.shape} needs at "
                 f"least {need} (check the region's center, size and rotation, and the scan's units)")
-        out[name] = FeatureData(f, ids, np.ascontiguousarray(pts))
+        fd = FeatureData(f, ids, np.ascontiguousarray(pts))
+        if cad is not None:
+            fd._cache["cad"] = cad
+        out[name] = fd
     return out

@@ -56,7 +56,7 @@ __all__ = [
     "part_spec_from_dict",
 ]
 
-SHAPES = ("plane", "cylinder", "circle", "sphere", "line", "cone")
+SHAPES = ("plane", "cylinder", "circle", "sphere", "line", "cone", "surface")
 FORM = ("flatness", "straightness", "roundness", "cylindricity", "sphericity")
 ORIENTATION = ("parallelism", "perpendicularity", "angularity")
 LOCATION = ("position", "coaxiality", "profile")
@@ -75,7 +75,7 @@ APPLIES_TO: dict[str, tuple[str, ...]] = {
     "angularity": ("plane", "cylinder", "cone"),
     "position": ("plane", "cylinder", "cone", "circle", "sphere"),
     "coaxiality": ("cylinder", "cone", "circle", "sphere"),
-    "profile": ("plane",),
+    "profile": ("plane", "surface"),
     "circular-runout": ("cylinder", "cone", "circle", "plane"),
     "total-runout": ("cylinder", "cone", "plane"),
 }
@@ -85,11 +85,13 @@ DATUM_SHAPES = ("plane", "cylinder", "cone", "circle", "sphere")
 AXIAL = ("cylinder", "cone", "circle")
 AXIS_METHODS = ("least-squares", "median-line")
 DATUM_FITS = ("chebyshev", "least-squares")
-MIN_POINTS = {"plane": 3, "line": 2, "circle": 3, "sphere": 4, "cylinder": 5, "cone": 6}
+MIN_POINTS = {"surface": 1, "plane": 3, "line": 2, "circle": 3, "sphere": 4, "cylinder": 5, "cone": 6}
 
-_FEATURE_KEYS = {"name", "shape", "region", "outward", "kind", "direction", "axis", "sections", "datum_fit", "qif_id"}
-_TOL_KEYS = {"feature", "characteristic", "tolerance", "datums", "nominal", "angle", "name", "sections", "qif_id", "qpid"}
-_PART_KEYS = {"name", "datum_fit", "axis", "sections"}
+_FEATURE_KEYS = {"name", "shape", "region", "outward", "kind", "direction", "axis", "sections", "datum_fit", "qif_id",
+                 "faces", "band"}
+_TOL_KEYS = {"feature", "characteristic", "tolerance", "datums", "nominal", "angle", "name", "sections", "qif_id", "qpid",
+             "offset"}
+_PART_KEYS = {"name", "datum_fit", "axis", "sections", "cad", "band"}
 _TOP_KEYS = {"part", "feature", "datums", "tolerance", "region", "qif"}
 #: the [qif] table of a drawing imported from a QIF model (``gagekit qif import``)
 _QIF_KEYS = {"model", "qpid", "units"}
@@ -97,11 +99,13 @@ _QIF_KEYS = {"model", "qpid", "units"}
 
 @dataclass(frozen=True)
 class Feature:
-    """A toleranced or datum feature: the points of the scan inside ``region``."""
+    """A toleranced or datum feature: the points of the scan inside ``region``, or (with
+    ``[part] cad``) those nearest to the CAD ``faces`` (STEP ids or names) within ``band``
+    mm of them (None: 3 RMS of their deviations, :mod:`gagekit.cad.features`)."""
 
     name: str
     shape: str
-    region: Box
+    region: Optional[Box]
     outward: Optional[tuple[float, float, float]] = None
     kind: Optional[str] = None
     direction: Optional[tuple[float, float, float]] = None
@@ -109,9 +113,17 @@ class Feature:
     sections: int = 10
     datum_fit: str = "chebyshev"
     qif_id: str = ""  # the QIF feature nominal this feature came from (gagekit qif import)
+    faces: tuple = ()
+    band: Optional[float] = None
 
     def to_dict(self) -> dict[str, Any]:
-        d: dict[str, Any] = {"name": self.name, "shape": self.shape, "region": self.region.to_dict()}
+        d: dict[str, Any] = {"name": self.name, "shape": self.shape}
+        if self.region is not None:
+            d["region"] = self.region.to_dict()
+        if self.faces:
+            d["faces"] = list(self.faces)
+            if self.band is not None:
+                d["band"] = self.band
         for key in ("outward", "kind", "direction"):
             v = getattr(self, key)
             if v is not None:
@@ -146,6 +158,7 @@ class Tolerance:
     index: int = 0
     qif_id: str = ""  # the QIF characteristic nominal this callout came from (gagekit qif import)
     qpid: str = ""  # the QPId of the QIF model document
+    offset: float = 0.0
 
     @property
     def label(self) -> str:
@@ -162,6 +175,7 @@ class PartSpec:
     tolerances: tuple[Tolerance, ...]
     source: str = "part"
     qif: Optional[dict] = None  # [qif]: model, qpid, units of an imported QIF model
+    cad: Optional[str] = None
 
     def moved(self, rotation: Any, translation: Any) -> "PartSpec":
         """The same drawing for the part moved by the rigid motion p -> R p + t: regions,
@@ -171,6 +185,9 @@ class PartSpec:
         t = np.asarray(translation, dtype=float).reshape(3)
         feats = {}
         for name, f in self.features.items():
+            if f.region is None:  # located by CAD faces: the part and its model move together
+                feats[name] = f
+                continue
             box_R = rotation_from_vector(f.region.rotation)
             new_R = R @ box_R
             feats[name] = Feature(
@@ -181,7 +198,7 @@ class PartSpec:
                 None if f.direction is None else tuple(R @ np.array(f.direction)),
                 f.axis, f.sections, f.datum_fit, f.qif_id,
             )
-        return PartSpec(self.name, feats, self.datums, self.tolerances, self.source, self.qif)
+        return PartSpec(self.name, feats, self.datums, self.tolerances, self.source, self.qif, self.cad)
 
 
 # -- parsing ---------------------------------------------------------------------------
@@ -283,9 +300,15 @@ def part_spec_from_dict(doc: Mapping[str, Any], source: str = "part") -> PartSpe
         if "shape" not in t:
             raise ConfigError(f"{where}: 'shape' is missing; choose one of {', '.join(SHAPES)}")
         shape = _choice(t["shape"], SHAPES, where, "shape")
-        if "region" not in t:
-            raise ConfigError(f"{where}: 'region' is missing")
-        region = _region(t["region"], regions, where, name)
+        faces: tuple = ()
+        if "faces" in t:
+            faces = _faces(t["faces"], where, part.get("cad"))
+        if "region" not in t and not faces:
+            raise ConfigError(f"{where}: 'region' is missing" + (" (or 'faces' of the [part] cad model)" if "cad" in part else ""))
+        if shape == "surface" and not faces:
+            raise ConfigError(f"{where}: a surface feature needs 'faces' (STEP ids or names of the [part] cad model)")
+        region = _region(t["region"], regions, where, name) if "region" in t else None
+        band = _number(t.get("band", part.get("band")), where, "band", positive=True) if ("band" in t or "band" in part) else None
         outward = None
         if "outward" in t:
             if shape not in ("plane", "line"):
@@ -307,7 +330,7 @@ def part_spec_from_dict(doc: Mapping[str, Any], source: str = "part") -> PartSpe
         sections = _sections(t.get("sections", dsec), where)
         fit = _choice(t.get("datum_fit", dfit), DATUM_FITS, where, "datum_fit")
         features[name] = Feature(name, shape, region, outward, kind, direction, axis, sections, fit,
-                                 _qif_ref(t.get("qif_id", ""), where, "qif_id"))
+                                 _qif_ref(t.get("qif_id", ""), where, "qif_id"), faces=faces, band=band)
 
     raw_datums = doc.get("datums", {})
     if not isinstance(raw_datums, Mapping):
@@ -400,14 +423,31 @@ def part_spec_from_dict(doc: Mapping[str, Any], source: str = "part") -> PartSpe
                 npoint = _vec3(nom["point"], where, "nominal.point")
             if "direction" in nom:
                 ndir = _vec3(nom["direction"], where, "nominal.direction", nonzero=True)
-        if char in ("position", "profile") and npoint is None:
+        offset = 0.0
+        if "offset" in t:
+            if not (char == "profile" and shape == "surface"):
+                raise ConfigError(f"{where}: 'offset' (ISO 1101 UZ) applies to the profile of a surface only")
+            offset = _number(t["offset"], where, "offset")
+        if shape == "surface":
+            if npoint is not None or ndir is not None:
+                raise ConfigError(f"{where}: a surface's nominal is its CAD faces; drop 'nominal'")
+        elif char in ("position", "profile") and npoint is None:
             raise ConfigError(f"{where}: 'nominal' needs a 'point' (the basic location in the datum frame)")
         if char in ("position", "profile") and shape in ("plane", "cylinder", "cone") and ndir is None:
             raise ConfigError(f"{where}: 'nominal' needs a 'direction' (the basic {'normal' if shape == 'plane' else 'axis'} in the datum frame)")
         sections = _sections(t["sections"], where) if "sections" in t else None
         ids = {key: _qif_ref(t.get(key, ""), where, key) for key in ("qif_id", "qpid")}
-        tols.append(Tolerance(fname, char, tol, tuple(raw_d), npoint, ndir, angle, str(t.get("name", "")), sections, k, **ids))
-    return PartSpec(pname, features, datums, tuple(tols), source, _qif_table(doc.get("qif"), source))
+        tols.append(Tolerance(fname, char, tol, tuple(raw_d), npoint, ndir, angle, str(t.get("name", "")), sections, k, **ids,
+                              offset=offset))
+    cad = part.get("cad")
+    if cad is not None:
+        if not isinstance(cad, str) or not cad:
+            raise ConfigError(f"{source}: [part] 'cad' must be the path of the CAD model (relative to the drawing)")
+        from pathlib import Path
+
+        base = Path(source).parent if source != "part" else Path(".")
+        cad = str(base / cad)
+    return PartSpec(pname, features, datums, tuple(tols), source, _qif_table(doc.get("qif"), source), cad=cad)
 
 
 def _qif_ref(v: Any, where: str, key: str) -> str:
@@ -445,6 +485,17 @@ def _check_datums(char: str, letters: list, datums: Mapping[str, DatumRef], feat
                               f"datum '{letters[0]}' is a {first}")
         if n > 1:
             raise ConfigError(f"{where}: 'datums': {char} takes one datum axis, got {n} datums")
+
+
+def _faces(v: Any, where: str, cad: Any) -> tuple:
+    """The ``faces`` of a feature: STEP ids (integers or "#12") or names, at least one."""
+    if cad is None:
+        raise ConfigError(f"{where}: 'faces' needs the CAD model: [part] cad = \"MODEL.step\"")
+    if isinstance(v, (str, int)) and not isinstance(v, bool):
+        v = [v]
+    if not isinstance(v, list) or not v or not all(isinstance(x, (str, int)) and not isinstance(x, bool) for x in v):
+        raise ConfigError(f"{where}: 'faces' must be a list of STEP face ids or names, got {v!r}")
+    return tuple(v)
 
 
 def load_part_spec(path: Any) -> PartSpec:

@@ -440,6 +440,12 @@ def _plane_location(tol, fd, frame, element):
 
 
 def _profile(tol, fd, system):
+    if fd.shape == "surface":
+        from ..cad.features import surface_profile
+
+        value, details = surface_profile(tol, fd, system)
+        return Measurement(value, "width", "surface (CAD faces" + (", zone fixed by the datums)" if tol.datums else
+                                                                  ", no datums: the zone floats)"), len(fd.points), details)
     if not tol.datums:
         w, n = fd.min_zone()
         return Measurement(w, "width", "surface (no datums: the zone floats)", len(fd.points), {"zone_normal": n.tolist()})

@@ -503,6 +503,19 @@ def _sample(machine: Machine, kind: str, seed: int = 0) -> list:
     if kind == "tracker":
         c = machine.sample_commands(300, seed=seed + 1)
         return [InstrumentObservations("tracker", c, machine.nominal(c), sigma=DEFAULT_SIGMA["tracker"])]
+    if kind == "ballbar":
+        from .ballbar import PLANES, circle_commands
+
+        mid = np.array([0.0 if j.kind == "rotary" else 0.5 * (j.range[0] + j.range[1]) for j in machine.joints])
+        radius = 0.25 * min(j.range[1] - j.range[0] for j in machine.joints if j.kind == "prismatic")
+        out = []
+        for plane, axes in PLANES.items():
+            if all(a in machine.joint_names for a in axes):
+                c = circle_commands(machine, plane, radius, mid, np.radians(np.arange(0.0, 360.0, 10.0)))
+                out.append(InstrumentObservations("ballbar", c, np.zeros((len(c), 1)), None, np.array([[radius]]), DEFAULT_SIGMA["ballbar"]))
+        if not out:
+            raise InvalidInputError(f"machine '{machine.name}' has no pair of joints named X, Y, Z for a ballbar circle")
+        return out
     rot = [j for j in machine.joints if j.kind == "rotary"]
     if not rot:
         raise InvalidInputError(f"machine '{machine.name}' has no rotary axis: a sphere or R-test observes rotary axes")

@@ -14,6 +14,7 @@ mod gage;
 mod gdt;
 mod geometry;
 mod kinematics;
+mod mesh;
 mod nc;
 mod sigint;
 
@@ -48,5 +49,6 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     gage::register(m)?;
     gdt::register(m)?;
     design::register(m)?;
+    mesh::register(m)?;
     testing(m.py(), m)
 }

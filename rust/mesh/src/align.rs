@@ -1,0 +1,418 @@
+//! Best-fit alignment of a scan to a mesh: the rigid motion minimising the robust sum of
+//! squared signed distances (point-to-plane ICP, Chen and Medioni 1992, with Tukey
+//! biweights, Zhang 1994), from any initial pose.
+//!
+//! Start: the given pose and, unless degrees of freedom are locked, the 24 rotations that
+//! put the scan's principal axes on the surface's (area-weighted, exact per triangle) in
+//! every order and sign (the cube group), centroid on centroid. Each start is screened by
+//! 10 iterations on 400 points, the 3 best by their median |distance| are iterated (30) on
+//! 2000; the smallest median |distance| wins (ties: the first), then iterations run on
+//! 30 000, 300 000 and all points, each point starting its query from its previous
+//! nearest triangle.
+//!
+//! Iteration: linearise d_i(p) = d_i + J_i . delta over the free parameters (translations
+//! and Rz Ry Rx angles, [`crate::rigid`]), J_i = [g_i, g_i . (dR/da x_i)] with g_i the
+//! gradient of the distance (the face normal inside a face); weights w_i = (1 - (d_i /
+//! c)^2)^2 for |d_i| < c = 4.685 sigma, sigma = 1.4826 median |d_i| (outliers -- clutter,
+//! fixtures, the other side of a thin wall -- get no weight); solve the weighted normal
+//! equations by SVD (minimum-norm: motions the surface does not constrain, e.g. sliding
+//! along a plane, stay put). Stop when the step is below 1e-12 rad and 1e-10 mm.
+
+use crate::distance::Hit;
+use crate::mesh::TriMesh;
+use crate::rigid::{apply, rotation_and_derivatives, Pose, M3};
+use gagekit_core::{check_finite, interrupt, GkError, Result};
+use gagekit_gdt::vec3::{dot, V3};
+use nalgebra::{Matrix3, Matrix6, SymmetricEigen, Vector6};
+use rayon::prelude::*;
+
+/// Points per chunk of the parallel passes (fixed: results never depend on threads).
+const CHUNK: usize = 256;
+/// Sample sizes of the start search and of the refinement stages.
+const SCREEN_SAMPLE: usize = 400;
+const START_SAMPLE: usize = 2000;
+/// Starts iterated further after the screening.
+const KEEP_STARTS: usize = 3;
+const STAGES: [usize; 3] = [30_000, 300_000, usize::MAX];
+
+/// The points, the mesh, the initial pose and the free parameters of a fit.
+pub struct Frame<'a> {
+    pub mesh: &'a TriMesh,
+    pub points: &'a [f64],
+    pub base: Pose,
+    pub bound2: f64,
+    pub free: Vec<usize>,
+    /// subtracted from every distance: the zone's centre surface is the CAD surface
+    /// offset by this (ISO 1101 UZ); 0 for the CAD surface itself
+    pub offset: f64,
+}
+
+/// One point's distance after the motion, its gradient and the point before the step.
+#[derive(Debug, Clone, Copy)]
+pub struct Eval {
+    pub index: u32,
+    pub d: f64,
+    pub g: V3,
+    pub x: V3,
+}
+
+impl<'a> Frame<'a> {
+    pub fn new(mesh: &'a TriMesh, points: &'a [f64], base: Pose, max_distance: Option<f64>, free: [bool; 6]) -> Result<Self> {
+        check_finite(points, 3, "points")?;
+        if points.is_empty() {
+            return Err(GkError::invalid("points: no points to align"));
+        }
+        let bound2 = match max_distance {
+            Some(m) if !(m >= 0.0) => return Err(GkError::invalid(format!("max_distance must be zero or positive, got {m}"))),
+            Some(m) => m * m,
+            None => f64::INFINITY,
+        };
+        let free: Vec<usize> = (0..6).filter(|&k| free[k]).collect();
+        Ok(Self { mesh, points, base, bound2, free, offset: 0.0 })
+    }
+
+    pub fn n(&self) -> usize {
+        self.points.len() / 3
+    }
+
+    #[inline]
+    pub fn x(&self, i: usize) -> V3 {
+        self.base.apply([self.points[3 * i], self.points[3 * i + 1], self.points[3 * i + 2]])
+    }
+
+    /// Distances of the points `idx` moved by the parameters `p` (after `base`), each query
+    /// started from `hints` (updated); points beyond the bound are left out.
+    pub fn eval(&self, idx: &[u32], p: &[f64; 6], hints: &mut [u32]) -> Result<Vec<Option<Eval>>> {
+        let pose = Pose::from_params(p);
+        let signed = self.mesh.signed();
+        let mut out: Vec<Option<Eval>> = vec![None; idx.len()];
+        out.par_chunks_mut(CHUNK).zip(hints.par_chunks_mut(CHUNK)).enumerate().try_for_each(|(c, (o, h))| -> Result<()> {
+            if c % 64 == 0 {
+                interrupt::check()?;
+            }
+            let mut prev = None;
+            for k in 0..o.len() {
+                let i = idx[c * CHUNK + k];
+                let x = self.x(i as usize);
+                let q = pose.apply(x);
+                let hint = if h[k] != u32::MAX { Some(h[k]) } else { prev };
+                let hit: Option<Hit> = self.mesh.hit(q, self.bound2, hint, signed);
+                if let Some(hit) = hit {
+                    h[k] = hit.slot;
+                    prev = Some(hit.slot);
+                    o[k] = Some(Eval { index: i, d: hit.distance - self.offset, g: hit.gradient, x });
+                }
+            }
+            Ok(())
+        })?;
+        Ok(out)
+    }
+
+    /// The row of the Jacobian of a point's distance over the six parameters at `p`.
+    #[inline]
+    pub fn jacobian(e: &Eval, dr: &[M3; 3]) -> [f64; 6] {
+        [e.g[0], e.g[1], e.g[2], dot(e.g, apply(&dr[0], e.x)), dot(e.g, apply(&dr[1], e.x)), dot(e.g, apply(&dr[2], e.x))]
+    }
+
+    /// The pose of parameters `p`, after `base`.
+    pub fn pose(&self, p: &[f64; 6]) -> Pose {
+        Pose::from_params(p).after(&self.base)
+    }
+}
+
+/// The result of [`best_fit`].
+#[derive(Debug, Clone)]
+pub struct BestFit {
+    pub pose: Pose,
+    pub iterations: usize,
+    /// RMS of the distances before and after, over the points within the bound
+    pub rms_before: f64,
+    pub rms_after: f64,
+    pub n_used: usize,
+    /// which start won (0: the given pose; 1-4: principal axes and flips)
+    pub start: usize,
+}
+
+fn median_abs(v: &mut [f64]) -> f64 {
+    if v.is_empty() {
+        return 0.0;
+    }
+    let m = v.len() / 2;
+    let (_, x, _) = v.select_nth_unstable_by(m, |a, b| a.total_cmp(b));
+    *x
+}
+
+/// Evenly spaced indices: `m` of `0..n` (all when m >= n).
+pub fn sample(n: usize, m: usize) -> Vec<u32> {
+    if m >= n {
+        return (0..n as u32).collect();
+    }
+    (0..m).map(|k| ((k as u128 * n as u128) / m as u128) as u32).collect()
+}
+
+/// RMS of the distances of all points at `p` (those within the bound), and their count.
+pub fn rms(frame: &Frame, p: &[f64; 6], hints: &mut [u32]) -> Result<(f64, usize)> {
+    let idx = sample(frame.n(), usize::MAX);
+    let ev = frame.eval(&idx, p, hints)?;
+    let (mut s, mut k) = (0.0, 0usize);
+    for e in ev.iter().flatten() {
+        s += e.d * e.d;
+        k += 1;
+    }
+    Ok((if k > 0 { (s / k as f64).sqrt() } else { 0.0 }, k))
+}
+
+/// Iterate the robust Gauss-Newton steps on the points `idx` from `p`; returns the
+/// iterations done and the median |d| at the end.
+fn iterate(frame: &Frame, idx: &[u32], p: &mut [f64; 6], hints: &mut [u32], max_iter: usize) -> Result<(usize, f64)> {
+    let nf = frame.free.len();
+    let mut it = 0;
+    loop {
+        let ev = frame.eval(idx, p, hints)?;
+        let mut ad: Vec<f64> = ev.iter().flatten().map(|e| e.d.abs()).collect();
+        if ad.len() < nf.max(3) {
+            return Err(GkError::degenerate(format!(
+                "best-fit: only {} point(s) within reach of the model; check the units, --max-distance and the initial pose",
+                ad.len()
+            )));
+        }
+        let med = median_abs(&mut ad);
+        if it >= max_iter || nf == 0 {
+            return Ok((it, med));
+        }
+        let sigma = (1.4826 * med).max(1e-12);
+        let c = 4.685 * sigma;
+        let (_, dr) = rotation_and_derivatives(p);
+        // normal equations, summed per fixed chunk then in chunk order (deterministic)
+        let parts: Vec<(Matrix6<f64>, Vector6<f64>)> = ev
+            .par_chunks(CHUNK)
+            .map(|chunk| {
+                let mut a = Matrix6::<f64>::zeros();
+                let mut b = Vector6::<f64>::zeros();
+                for e in chunk.iter().flatten() {
+                    let u = e.d / c;
+                    if u.abs() >= 1.0 {
+                        continue;
+                    }
+                    let w = (1.0 - u * u) * (1.0 - u * u);
+                    let j = Frame::jacobian(e, &dr);
+                    for r in 0..6 {
+                        b[r] += w * j[r] * e.d;
+                        for s in 0..6 {
+                            a[(r, s)] += w * j[r] * j[s];
+                        }
+                    }
+                }
+                (a, b)
+            })
+            .collect();
+        let mut a = Matrix6::<f64>::zeros();
+        let mut b = Vector6::<f64>::zeros();
+        for (pa, pb) in parts {
+            a += pa;
+            b += pb;
+        }
+        let af = a.select_rows(&frame.free).select_columns(&frame.free);
+        let bf = b.select_rows(&frame.free);
+        let svd = af.clone().svd(true, true);
+        let smax = svd.singular_values.max();
+        if !(smax > 0.0) {
+            return Ok((it, med));
+        }
+        let delta = svd.solve(&(-bf), smax * 1e-12).map_err(|e| GkError::numerical(format!("best-fit: {e}")))?;
+        let mut step = [0.0; 6];
+        for (k, &m) in frame.free.iter().enumerate() {
+            step[m] = delta[k];
+        }
+        let rot = (step[3] * step[3] + step[4] * step[4] + step[5] * step[5]).sqrt();
+        let s = if rot > 0.3 { 0.3 / rot } else { 1.0 };
+        for k in 0..6 {
+            p[k] += s * step[k];
+        }
+        it += 1;
+        let tr = (step[0] * step[0] + step[1] * step[1] + step[2] * step[2]).sqrt();
+        if !p.iter().all(|v| v.is_finite()) {
+            return Err(GkError::numerical("best-fit: the iteration diverged"));
+        }
+        if rot < 1e-12 && tr < 1e-10 {
+            let ev = frame.eval(idx, p, hints)?;
+            let mut ad: Vec<f64> = ev.iter().flatten().map(|e| e.d.abs()).collect();
+            return Ok((it, median_abs(&mut ad)));
+        }
+    }
+}
+
+fn principal_axes(mean: V3, cov: [[f64; 3]; 3]) -> (V3, M3) {
+    let m = Matrix3::from_fn(|i, j| cov[i][j]);
+    let eig = SymmetricEigen::new(m);
+    let mut order = [0usize, 1, 2];
+    order.sort_by(|&a, &b| eig.eigenvalues[b].total_cmp(&eig.eigenvalues[a]).then(a.cmp(&b)));
+    let mut axes = [[0.0; 3]; 3]; // columns: the axes, largest variance first
+    for (c, &k) in order.iter().enumerate() {
+        let v = eig.eigenvectors.column(k);
+        // a deterministic sign: the largest component positive
+        let big = (0..3).max_by(|&a, &b| v[a].abs().total_cmp(&v[b].abs()).then(b.cmp(&a))).unwrap_or(0);
+        let s = if v[big] < 0.0 { -1.0 } else { 1.0 };
+        for r in 0..3 {
+            axes[r][c] = s * v[r];
+        }
+    }
+    // right-handed: third = first x second
+    let (a0, a1) = ([axes[0][0], axes[1][0], axes[2][0]], [axes[0][1], axes[1][1], axes[2][1]]);
+    let a2 = gagekit_gdt::vec3::cross(a0, a1);
+    for r in 0..3 {
+        axes[r][2] = a2[r];
+    }
+    (mean, axes)
+}
+
+fn point_moments(points: &[f64]) -> (V3, [[f64; 3]; 3]) {
+    let n = (points.len() / 3) as f64;
+    let mut mean = [0.0; 3];
+    for p in points.chunks_exact(3) {
+        for k in 0..3 {
+            mean[k] += p[k];
+        }
+    }
+    for v in mean.iter_mut() {
+        *v /= n;
+    }
+    let mut cov = [[0.0; 3]; 3];
+    for p in points.chunks_exact(3) {
+        let d = [p[0] - mean[0], p[1] - mean[1], p[2] - mean[2]];
+        for i in 0..3 {
+            for j in 0..3 {
+                cov[i][j] += d[i] * d[j];
+            }
+        }
+    }
+    for row in cov.iter_mut() {
+        for v in row.iter_mut() {
+            *v /= n;
+        }
+    }
+    (mean, cov)
+}
+
+/// The principal-axes starts: the scan's axes onto the surface's, in each of the 24
+/// rotations of the cube group (the axes' order and signs: a scan's point density can
+/// reorder its principal axes), centroid on centroid.
+pub fn principal_starts(mesh: &TriMesh, points: &[f64], initial: &Pose) -> Vec<Pose> {
+    let moved: Vec<f64> = points.chunks_exact(3).flat_map(|p| initial.apply([p[0], p[1], p[2]])).collect();
+    let (ms, cs) = point_moments(&moved);
+    let (mm, cm) = mesh.surface_moments();
+    let (_, u) = principal_axes(ms, cs);
+    let (_, v) = principal_axes(mm, cm);
+    let mut out = Vec::new();
+    for perm in [[0, 1, 2], [1, 2, 0], [2, 0, 1], [0, 2, 1], [2, 1, 0], [1, 0, 2]] {
+        for signs in [[1.0, 1.0, 1.0], [1.0, -1.0, -1.0], [-1.0, 1.0, -1.0], [-1.0, -1.0, 1.0],
+                      [-1.0, -1.0, -1.0], [-1.0, 1.0, 1.0], [1.0, -1.0, 1.0], [1.0, 1.0, -1.0]] {
+            // P e_k = signs[k] e_perm[k]; keep the proper ones (det R = det P = +1)
+            let mut pm = [[0.0; 3]; 3];
+            for k in 0..3 {
+                pm[perm[k]][k] = signs[k];
+            }
+            let det = pm[0][0] * (pm[1][1] * pm[2][2] - pm[1][2] * pm[2][1]) - pm[0][1] * (pm[1][0] * pm[2][2] - pm[1][2] * pm[2][0])
+                + pm[0][2] * (pm[1][0] * pm[2][1] - pm[1][1] * pm[2][0]);
+            if det < 0.0 {
+                continue;
+            }
+            // R = V P U^T
+            let mut vp = [[0.0; 3]; 3];
+            for i in 0..3 {
+                for j in 0..3 {
+                    vp[i][j] = (0..3).map(|k| v[i][k] * pm[k][j]).sum();
+                }
+            }
+            let mut r = [[0.0; 3]; 3];
+            for i in 0..3 {
+                for j in 0..3 {
+                    r[i][j] = (0..3).map(|k| vp[i][k] * u[j][k]).sum();
+                }
+            }
+            let rm = apply(&r, ms);
+            out.push(Pose { r, t: [mm[0] - rm[0], mm[1] - rm[1], mm[2] - rm[2]] }.after(initial));
+        }
+    }
+    out
+}
+
+/// Options of [`best_fit`].
+#[derive(Debug, Clone, Copy)]
+pub struct FitOptions {
+    pub initial: Pose,
+    /// x, y, z, rx, ry, rz: free (true) or locked
+    pub free: [bool; 6],
+    pub max_distance: Option<f64>,
+    /// also start from the principal axes and their flips (ignored when a parameter is locked)
+    pub search: bool,
+}
+
+impl Default for FitOptions {
+    fn default() -> Self {
+        Self { initial: Pose::IDENTITY, free: [true; 6], max_distance: None, search: true }
+    }
+}
+
+/// The robust best-fit alignment (module docs): the pose applied to the scan.
+pub fn best_fit(mesh: &TriMesh, points: &[f64], opt: &FitOptions) -> Result<BestFit> {
+    let n = points.len() / 3;
+    let before = Frame::new(mesh, points, opt.initial, opt.max_distance, opt.free)?;
+    let mut hints_all = vec![u32::MAX; n];
+    let (rms_before, _) = rms(&before, &[0.0; 6], &mut hints_all)?;
+    let mut starts = vec![opt.initial];
+    if opt.search && opt.free.iter().all(|&f| f) {
+        starts.extend(principal_starts(mesh, points, &opt.initial));
+    }
+    // screen every start briefly on a small sample, then iterate the best few further
+    let screen = sample(n, SCREEN_SAMPLE);
+    let mut scored: Vec<(f64, usize, [f64; 6])> = Vec::new();
+    let mut iterations = 0;
+    for (k, s) in starts.iter().enumerate() {
+        let frame = Frame::new(mesh, points, *s, opt.max_distance, opt.free)?;
+        let mut p = [0.0; 6];
+        let mut hints = vec![u32::MAX; screen.len()];
+        match iterate(&frame, &screen, &mut p, &mut hints, if starts.len() > 1 { 10 } else { 0 }) {
+            Ok((it, med)) => {
+                iterations += it;
+                scored.push((med, k, p));
+            }
+            Err(e) if e.kind == gagekit_core::ErrorKind::DegenerateGeometry && starts.len() > 1 => continue,
+            Err(e) => return Err(e),
+        }
+    }
+    scored.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    let idx0 = sample(n, START_SAMPLE);
+    let mut best: Option<(f64, usize, Pose, [f64; 6])> = None;
+    for &(_, k, p0) in scored.iter().take(KEEP_STARTS) {
+        let frame = Frame::new(mesh, points, starts[k], opt.max_distance, opt.free)?;
+        let mut p = p0;
+        let mut hints = vec![u32::MAX; idx0.len()];
+        let (it, med) = match iterate(&frame, &idx0, &mut p, &mut hints, 30) {
+            Ok(v) => v,
+            Err(e) if e.kind == gagekit_core::ErrorKind::DegenerateGeometry && starts.len() > 1 => continue,
+            Err(e) => return Err(e),
+        };
+        iterations += it;
+        if best.as_ref().map_or(true, |b| med < b.0) {
+            best = Some((med, k, starts[k], p));
+        }
+    }
+    let (_, start, base, mut p) =
+        best.ok_or_else(|| GkError::degenerate("best-fit: no start brings the points within reach of the model"))?;
+    // the parameters keep accumulating on the winning start: a locked one stays exactly 0
+    let frame = Frame::new(mesh, points, base, opt.max_distance, opt.free)?;
+    for &m in STAGES.iter() {
+        let idx = sample(n, m);
+        let mut hints = vec![u32::MAX; idx.len()];
+        let (it, _) = iterate(&frame, &idx, &mut p, &mut hints, if m >= n { 15 } else { 30 })?;
+        iterations += it;
+        if m >= n {
+            break;
+        }
+    }
+    let pose = frame.pose(&p);
+    let after = Frame::new(mesh, points, pose, opt.max_distance, opt.free)?;
+    let (rms_after, n_used) = rms(&after, &[0.0; 6], &mut hints_all)?;
+    Ok(BestFit { pose, iterations, rms_before, rms_after, n_used, start })
+}

@@ -1,0 +1,253 @@
+//! Validated triangle meshes, their topology and their angle-weighted pseudonormals.
+//!
+//! A mesh is refused (typed error naming the element) when a vertex is not finite, a
+//! triangle names a vertex that does not exist, or a triangle is degenerate (two equal
+//! corners, or a height below 1e-12 of its longest edge: no normal). Its topology decides
+//! whether distances can be signed: every edge shared by exactly two triangles that run
+//! it in opposite directions (a closed, consistently oriented 2-manifold) gives signed
+//! distances, positive outside the material; otherwise distances are unsigned and
+//! [`Topology::reason`] says why (the caller warns once). A closed mesh whose triangles
+//! face inwards (negative enclosed volume) is read turned outwards.
+//!
+//! Sign (Baerentzen and Aanaes, "Signed distance computation using the angle weighted
+//! pseudonormal", IEEE TVCG 11(3), 2005, Theorem 1): with c the closest point of the
+//! surface to p, the sign of (p - c) . n(c) is the side of p, where n(c) is the face
+//! normal inside a face, the sum of the two face normals on an edge, and the sum of the
+//! incident face normals weighted by their angles at a vertex.
+
+use crate::bvh::Bvh;
+use gagekit_core::{GkError, Result};
+use gagekit_gdt::vec3::{add, cross, dot, norm, scale, sub, V3};
+
+/// How the triangles fit together.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Topology {
+    /// closed, manifold and consistently oriented: distances are signed
+    pub closed: bool,
+    /// why distances are unsigned (None when closed)
+    pub reason: Option<String>,
+    /// edges used by one triangle only
+    pub boundary_edges: usize,
+    /// edges used by more than two triangles
+    pub nonmanifold_edges: usize,
+    /// the triangles were wound inwards and are read turned outwards
+    pub flipped: bool,
+    /// the enclosed volume (mm^3; 0 when not closed)
+    pub volume: f64,
+}
+
+/// A triangle mesh ready for distance queries.
+#[derive(Debug, Clone)]
+pub struct TriMesh {
+    pub vertices: Vec<V3>,
+    pub triangles: Vec<[u32; 3]>,
+    /// unit outward normal of each triangle
+    pub face_normals: Vec<V3>,
+    /// angle-weighted pseudonormal of each vertex (not unit)
+    pub vertex_normals: Vec<V3>,
+    /// pseudonormal of edge k (vertex k to k + 1) of each triangle (not unit)
+    pub edge_normals: Vec<[V3; 3]>,
+    /// the surface area (mm^2)
+    pub area: f64,
+    pub topology: Topology,
+    pub bvh: Bvh,
+}
+
+fn vertex(v: &[f64], i: usize) -> V3 {
+    [v[3 * i], v[3 * i + 1], v[3 * i + 2]]
+}
+
+impl TriMesh {
+    /// Build from flat vertex coordinates (3 per vertex) and flat vertex indices (3 per
+    /// triangle); see the module docs for what is refused.
+    pub fn new(vertices: &[f64], triangles: &[u32]) -> Result<Self> {
+        if vertices.len() % 3 != 0 || triangles.len() % 3 != 0 {
+            return Err(GkError::invalid("mesh: vertices and triangles must be (n, 3) arrays"));
+        }
+        let nv = vertices.len() / 3;
+        let nt = triangles.len() / 3;
+        if nt == 0 {
+            return Err(GkError::invalid("mesh: no triangles (the model has no faces)"));
+        }
+        if nv > u32::MAX as usize - 1 || nt > u32::MAX as usize - 1 {
+            return Err(GkError::invalid("mesh: more than 2^32 - 2 vertices or triangles"));
+        }
+        if let Some(pos) = vertices.iter().position(|v| !v.is_finite()) {
+            return Err(GkError::invalid(format!(
+                "mesh: vertex {} has a non-finite coordinate ({}); the model is damaged",
+                pos / 3,
+                vertices[pos]
+            )));
+        }
+        let verts: Vec<V3> = (0..nv).map(|i| vertex(vertices, i)).collect();
+        let tris: Vec<[u32; 3]> = triangles.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect();
+        let mut normals = Vec::with_capacity(nt);
+        let mut area = 0.0;
+        let mut degenerate = Vec::new();
+        for (i, t) in tris.iter().enumerate() {
+            if let Some(&bad) = t.iter().find(|&&k| k as usize >= nv) {
+                return Err(GkError::invalid(format!("mesh: triangle {i} names vertex {bad}, but there are {nv} vertices")));
+            }
+            let (a, b, c) = (verts[t[0] as usize], verts[t[1] as usize], verts[t[2] as usize]);
+            let n = cross(sub(b, a), sub(c, a));
+            let n2 = norm(n);
+            let longest = [sub(b, a), sub(c, b), sub(a, c)].iter().map(|e| dot(*e, *e)).fold(0.0, f64::max);
+            if t[0] == t[1] || t[1] == t[2] || t[0] == t[2] || !(n2 > 1e-12 * longest) {
+                degenerate.push(i);
+                normals.push([0.0; 3]);
+                continue;
+            }
+            area += 0.5 * n2;
+            normals.push(scale(n, 1.0 / n2));
+        }
+        if !degenerate.is_empty() {
+            let first: Vec<String> = degenerate.iter().take(5).map(|i| i.to_string()).collect();
+            return Err(GkError::degenerate(format!(
+                "mesh: {} degenerate triangle(s) (zero area or repeated corners), first: {}; repair the model (remove them) first",
+                degenerate.len(),
+                first.join(", ")
+            )));
+        }
+        let topology = topology(&verts, &tris);
+        if topology.flipped {
+            for n in normals.iter_mut() {
+                *n = scale(*n, -1.0);
+            }
+        }
+        let (vertex_normals, edge_normals) = pseudonormals(&verts, &tris, &normals);
+        let corners: Vec<[V3; 3]> =
+            tris.iter().map(|t| [verts[t[0] as usize], verts[t[1] as usize], verts[t[2] as usize]]).collect();
+        let bvh = Bvh::new(&corners);
+        Ok(Self { vertices: verts, triangles: tris, face_normals: normals, vertex_normals, edge_normals, area, topology, bvh })
+    }
+
+    /// Whether distances are signed.
+    pub fn signed(&self) -> bool {
+        self.topology.closed
+    }
+
+    /// The area-weighted centroid and second-moment (covariance) matrix of the surface,
+    /// exact for uniform density on each triangle: E[x x^T] = (sum v v^T + s s^T) / 12,
+    /// s = a + b + c.
+    pub fn surface_moments(&self) -> (V3, [[f64; 3]; 3]) {
+        let mut m = [0.0; 3];
+        let mut s2 = [[0.0; 3]; 3];
+        let mut total = 0.0;
+        for t in &self.triangles {
+            let (a, b, c) = (self.vertices[t[0] as usize], self.vertices[t[1] as usize], self.vertices[t[2] as usize]);
+            let w = 0.5 * norm(cross(sub(b, a), sub(c, a)));
+            let s = add(add(a, b), c);
+            total += w;
+            for i in 0..3 {
+                m[i] += w * s[i] / 3.0;
+                for j in 0..3 {
+                    s2[i][j] += w * (a[i] * a[j] + b[i] * b[j] + c[i] * c[j] + s[i] * s[j]) / 12.0;
+                }
+            }
+        }
+        let mu = scale(m, 1.0 / total);
+        let mut cov = [[0.0; 3]; 3];
+        for i in 0..3 {
+            for j in 0..3 {
+                cov[i][j] = s2[i][j] / total - mu[i] * mu[j];
+            }
+        }
+        (mu, cov)
+    }
+}
+
+fn topology(verts: &[V3], tris: &[[u32; 3]]) -> Topology {
+    // (low vertex, high vertex, forward?) per directed edge, sorted: groups of one edge
+    let mut edges: Vec<(u32, u32, bool)> = Vec::with_capacity(3 * tris.len());
+    for t in tris {
+        for k in 0..3 {
+            let (u, v) = (t[k], t[(k + 1) % 3]);
+            edges.push((u.min(v), u.max(v), u < v));
+        }
+    }
+    edges.sort_unstable();
+    let (mut boundary, mut nonmanifold, mut inconsistent) = (0usize, 0usize, 0usize);
+    let mut i = 0;
+    while i < edges.len() {
+        let mut j = i + 1;
+        while j < edges.len() && edges[j].0 == edges[i].0 && edges[j].1 == edges[i].1 {
+            j += 1;
+        }
+        match j - i {
+            1 => boundary += 1,
+            2 => {
+                if edges[i].2 == edges[i + 1].2 {
+                    inconsistent += 1;
+                }
+            }
+            _ => nonmanifold += 1,
+        }
+        i = j;
+    }
+    let mut reason = None;
+    if boundary > 0 {
+        reason = Some(format!("the mesh is open ({boundary} boundary edges): it has no inside, distances are unsigned"));
+    } else if nonmanifold > 0 {
+        reason = Some(format!("the mesh is not a manifold ({nonmanifold} edges shared by more than two triangles): distances are unsigned"));
+    } else if inconsistent > 0 {
+        reason = Some(format!("the triangles are not consistently oriented ({inconsistent} edges): distances are unsigned"));
+    }
+    let mut volume = 0.0;
+    let mut flipped = false;
+    if reason.is_none() {
+        for t in tris {
+            let (a, b, c) = (verts[t[0] as usize], verts[t[1] as usize], verts[t[2] as usize]);
+            volume += dot(a, cross(b, c)) / 6.0;
+        }
+        if volume < 0.0 {
+            flipped = true;
+            volume = -volume;
+        } else if volume == 0.0 {
+            reason = Some("the closed mesh encloses no volume: distances are unsigned".to_string());
+        }
+    }
+    Topology { closed: reason.is_none(), reason, boundary_edges: boundary, nonmanifold_edges: nonmanifold, flipped, volume }
+}
+
+fn angle(u: V3, v: V3) -> f64 {
+    // atan2 of |u x v| and u . v: accurate for small and large angles
+    norm(cross(u, v)).atan2(dot(u, v))
+}
+
+fn pseudonormals(verts: &[V3], tris: &[[u32; 3]], normals: &[V3]) -> (Vec<V3>, Vec<[V3; 3]>) {
+    let mut vn = vec![[0.0; 3]; verts.len()];
+    for (t, n) in tris.iter().zip(normals) {
+        for k in 0..3 {
+            let p = verts[t[k] as usize];
+            let a = angle(sub(verts[t[(k + 1) % 3] as usize], p), sub(verts[t[(k + 2) % 3] as usize], p));
+            let i = t[k] as usize;
+            vn[i] = add(vn[i], scale(*n, a));
+        }
+    }
+    // edge normals: the sum of the normals of the triangles sharing the edge
+    let mut edges: Vec<(u32, u32, u32, u8)> = Vec::with_capacity(3 * tris.len());
+    for (i, t) in tris.iter().enumerate() {
+        for k in 0..3u8 {
+            let (u, v) = (t[k as usize], t[(k as usize + 1) % 3]);
+            edges.push((u.min(v), u.max(v), i as u32, k));
+        }
+    }
+    edges.sort_unstable();
+    let mut en = vec![[[0.0; 3]; 3]; tris.len()];
+    let mut i = 0;
+    while i < edges.len() {
+        let mut j = i + 1;
+        while j < edges.len() && edges[j].0 == edges[i].0 && edges[j].1 == edges[i].1 {
+            j += 1;
+        }
+        let mut sum = [0.0; 3];
+        for e in &edges[i..j] {
+            sum = add(sum, normals[e.2 as usize]);
+        }
+        for e in &edges[i..j] {
+            en[e.2 as usize][e.3 as usize] = sum;
+        }
+        i = j;
+    }
+    (vn, en)
+}

@@ -1,0 +1,272 @@
+use crate::align::{best_fit, FitOptions};
+use crate::distance::Query;
+use crate::mesh::TriMesh;
+use crate::minimax::minimax;
+use crate::rigid::Pose;
+use gagekit_core::ErrorKind;
+use proptest::prelude::*;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+/// A box [-a, a] x [-b, b] x [-c, c], 12 triangles wound outwards.
+pub fn box_mesh(h: [f64; 3]) -> (Vec<f64>, Vec<u32>) {
+    let mut v = Vec::new();
+    for i in 0..8 {
+        v.extend([if i & 1 == 0 { -h[0] } else { h[0] }, if i & 2 == 0 { -h[1] } else { h[1] }, if i & 4 == 0 { -h[2] } else { h[2] }]);
+    }
+    let quads = [[0, 2, 3, 1], [4, 5, 7, 6], [0, 1, 5, 4], [2, 6, 7, 3], [0, 4, 6, 2], [1, 3, 7, 5]];
+    let mut t = Vec::new();
+    for q in quads {
+        t.extend([q[0], q[1], q[2], q[0], q[2], q[3]]);
+    }
+    (v, t)
+}
+
+/// The exact signed distance of a box of half-sizes h (positive outside).
+fn box_sdf(p: [f64; 3], h: [f64; 3]) -> f64 {
+    let q = [p[0].abs() - h[0], p[1].abs() - h[1], p[2].abs() - h[2]];
+    let out = (q[0].max(0.0).powi(2) + q[1].max(0.0).powi(2) + q[2].max(0.0).powi(2)).sqrt();
+    out + q[0].max(q[1]).max(q[2]).min(0.0)
+}
+
+fn moved(v: &[f64], pose: &Pose) -> Vec<f64> {
+    v.chunks_exact(3).flat_map(|p| pose.apply([p[0], p[1], p[2]])).collect()
+}
+
+fn random_pose(rng: &mut ChaCha8Rng, angle: f64, shift: f64) -> Pose {
+    let p = [
+        rng.random_range(-shift..shift),
+        rng.random_range(-shift..shift),
+        rng.random_range(-shift..shift),
+        rng.random_range(-angle..angle),
+        rng.random_range(-angle..angle),
+        rng.random_range(-angle..angle),
+    ];
+    Pose::from_params(&p)
+}
+
+#[test]
+fn box_distances_match_the_analytic_sdf() {
+    let h = [2.0, 1.5, 1.0];
+    let (v, t) = box_mesh(h);
+    let mesh = TriMesh::new(&v, &t).unwrap();
+    assert!(mesh.signed());
+    assert!((mesh.topology.volume - 24.0).abs() < 1e-12);
+    let mut rng = ChaCha8Rng::seed_from_u64(1);
+    let pts: Vec<f64> = (0..30000).map(|_| rng.random_range(-4.0..4.0)).collect();
+    let d = mesh.distances(&pts, &Query::default()).unwrap();
+    for (i, p) in pts.chunks_exact(3).enumerate() {
+        let e = box_sdf([p[0], p[1], p[2]], h);
+        assert!((d.distance[i] - e).abs() < 1e-12, "point {i}: {} vs {e}", d.distance[i]);
+    }
+}
+
+#[test]
+fn inward_wound_mesh_is_turned_outwards() {
+    let (v, mut t) = box_mesh([1.0, 1.0, 1.0]);
+    for tri in t.chunks_exact_mut(3) {
+        tri.swap(1, 2);
+    }
+    let mesh = TriMesh::new(&v, &t).unwrap();
+    assert!(mesh.topology.flipped && mesh.signed());
+    let d = mesh.distances(&[0.0, 0.0, 3.0, 0.0, 0.0, 0.5], &Query::default()).unwrap();
+    assert!((d.distance[0] - 2.0).abs() < 1e-15 && (d.distance[1] + 0.5).abs() < 1e-15);
+}
+
+#[test]
+fn open_mesh_gives_unsigned_distances() {
+    let (v, t) = box_mesh([1.0, 1.0, 1.0]);
+    let mesh = TriMesh::new(&v, &t[..30]).unwrap();
+    assert!(!mesh.signed());
+    assert!(mesh.topology.reason.as_deref().unwrap().contains("open"));
+    let d = mesh.distances(&[0.0, 0.0, 0.5], &Query::default()).unwrap();
+    assert!(!d.signed && d.distance[0] > 0.0);
+}
+
+#[test]
+fn bad_meshes_are_refused() {
+    let e = TriMesh::new(&[0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 2.0, 0.0, 0.0], &[0, 1, 2]).unwrap_err();
+    assert_eq!(e.kind, ErrorKind::DegenerateGeometry);
+    let e = TriMesh::new(&[0.0, 0.0, 0.0, 1.0, f64::NAN, 0.0, 2.0, 1.0, 0.0], &[0, 1, 2]).unwrap_err();
+    assert_eq!(e.kind, ErrorKind::InvalidInput);
+    assert!(e.message.contains("vertex 1"));
+    let e = TriMesh::new(&[0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 2.0, 1.0, 0.0], &[0, 1, 5]).unwrap_err();
+    assert_eq!(e.kind, ErrorKind::InvalidInput);
+    let e = TriMesh::new(&[0.0; 9], &[]).unwrap_err();
+    assert!(e.message.contains("no triangles"));
+    let (v, t) = box_mesh([1.0, 1.0, 1.0]);
+    let mesh = TriMesh::new(&v, &t).unwrap();
+    assert_eq!(mesh.distances(&[f64::NAN, 0.0, 0.0], &Query::default()).unwrap_err().kind, ErrorKind::InvalidInput);
+}
+
+#[test]
+fn max_distance_leaves_far_points_apart() {
+    let (v, t) = box_mesh([1.0, 1.0, 1.0]);
+    let mesh = TriMesh::new(&v, &t).unwrap();
+    let q = Query { max_distance: Some(0.5), ..Default::default() };
+    let d = mesh.distances(&[0.0, 0.0, 1.2, 0.0, 0.0, 3.0], &q).unwrap();
+    assert_eq!(d.beyond, 1);
+    assert_eq!(d.triangle[1], -1);
+    assert!((d.distance[0] - 0.2).abs() < 1e-15);
+}
+
+fn sphere_mesh(n: usize, r: f64) -> (Vec<f64>, Vec<u32>) {
+    // a UV sphere: n rings, 2n segments
+    let mut v = vec![0.0, 0.0, r];
+    for i in 1..n {
+        let th = std::f64::consts::PI * i as f64 / n as f64;
+        for j in 0..2 * n {
+            let ph = std::f64::consts::PI * j as f64 / n as f64;
+            v.extend([r * th.sin() * ph.cos(), r * th.sin() * ph.sin(), r * th.cos()]);
+        }
+    }
+    v.extend([0.0, 0.0, -r]);
+    let m = 2 * n as u32;
+    let last = (v.len() / 3 - 1) as u32;
+    let mut t = Vec::new();
+    for j in 0..m {
+        t.extend([0, 1 + j, 1 + (j + 1) % m]);
+    }
+    for i in 0..(n as u32 - 2) {
+        for j in 0..m {
+            let a = 1 + i * m + j;
+            let b = 1 + i * m + (j + 1) % m;
+            t.extend([a, a + m, b + m, a, b + m, b]);
+        }
+    }
+    let base = 1 + (n as u32 - 2) * m;
+    for j in 0..m {
+        t.extend([base + j, last, base + (j + 1) % m]);
+    }
+    (v, t)
+}
+
+#[test]
+fn results_do_not_depend_on_the_thread_count() {
+    let (v, t) = sphere_mesh(60, 10.0);
+    let mesh = TriMesh::new(&v, &t).unwrap();
+    assert!(mesh.signed());
+    let mut rng = ChaCha8Rng::seed_from_u64(7);
+    let pts: Vec<f64> = (0..60000).map(|_| rng.random_range(-12.0..12.0)).collect();
+    let q = Query { foot: true, ..Default::default() };
+    let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap().install(|| mesh.distances(&pts, &q).unwrap());
+    let two = rayon::ThreadPoolBuilder::new().num_threads(3).build().unwrap().install(|| mesh.distances(&pts, &q).unwrap());
+    assert_eq!(one.distance.iter().map(|d| d.to_bits()).collect::<Vec<_>>(), two.distance.iter().map(|d| d.to_bits()).collect::<Vec<_>>());
+    assert_eq!(one.triangle, two.triangle);
+    // brute force on a subset: the same distance
+    for i in (0..20000).step_by(97) {
+        let p = [pts[3 * i], pts[3 * i + 1], pts[3 * i + 2]];
+        let best = (0..mesh.bvh.corners.len() as u32).map(|s| mesh.bvh.to_slot(p, s).d2).fold(f64::INFINITY, f64::min);
+        assert!((one.distance[i].abs() - best.sqrt()).abs() < 1e-12);
+        let r = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
+        assert_eq!(one.distance[i] > 0.0, r > 10.0 || one.distance[i] > 0.0 && r > 9.9, "sign at r = {r}");
+    }
+}
+
+fn box_scan(h: [f64; 3], step: f64, bump: f64) -> Vec<f64> {
+    // points on the faces of the box, offset along the outward normal by a smooth bump
+    let mut pts = Vec::new();
+    for axis in 0..3 {
+        for side in [-1.0, 1.0] {
+            let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
+            let nu = (2.0 * h[u] / step) as i64;
+            let nv = (2.0 * h[v] / step) as i64;
+            for i in 1..nu {
+                for j in 1..nv {
+                    let mut p = [0.0; 3];
+                    p[u] = -h[u] + i as f64 * step;
+                    p[v] = -h[v] + j as f64 * step;
+                    let dev = bump * (p[u] * 1.3 + axis as f64).sin() * (p[v] * 0.7 + side).cos();
+                    p[axis] = side * (h[axis] + dev);
+                    pts.extend(p);
+                }
+            }
+        }
+    }
+    pts
+}
+
+#[test]
+fn best_fit_undoes_a_rigid_motion() {
+    let h = [20.0, 12.0, 7.0];
+    let (v, t) = box_mesh(h);
+    let mesh = TriMesh::new(&v, &t).unwrap();
+    let scan = box_scan(h, 0.8, 0.01);
+    let truth = mesh.distances(&scan, &Query::default()).unwrap().distance;
+    let mut rng = ChaCha8Rng::seed_from_u64(3);
+    for _ in 0..3 {
+        let pose = random_pose(&mut rng, 3.0, 50.0);
+        let moved_scan = moved(&scan, &pose);
+        let fit = best_fit(&mesh, &moved_scan, &FitOptions::default()).unwrap();
+        let back = moved(&moved_scan, &fit.pose);
+        let d = mesh.distances(&back, &Query::default()).unwrap().distance;
+        let worst = d.iter().zip(&truth).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+        assert!(worst < 1e-3, "largest change of a deviation {worst}");
+        assert!(fit.rms_after < fit.rms_before);
+    }
+}
+
+#[test]
+fn minimax_is_certified_and_below_the_best_fit() {
+    let h = [20.0, 12.0, 7.0];
+    let (v, t) = box_mesh(h);
+    let mesh = TriMesh::new(&v, &t).unwrap();
+    let scan = box_scan(h, 1.0, 0.02);
+    let mut rng = ChaCha8Rng::seed_from_u64(5);
+    let pose = random_pose(&mut rng, 0.01, 0.2);
+    let s = moved(&scan, &pose);
+    let fit = best_fit(&mesh, &s, &FitOptions::default()).unwrap();
+    let bf_max = mesh.distances(&moved(&s, &fit.pose), &Query::default()).unwrap().distance.iter().fold(0.0f64, |m, d| m.max(d.abs()));
+    let mm = minimax(&mesh, &s, fit.pose, [true; 6], None, 0.0).unwrap();
+    let check = mesh.distances(&moved(&s, &mm.pose), &Query::default()).unwrap().distance.iter().fold(0.0f64, |m, d| m.max(d.abs()));
+    assert!((check - mm.max_abs).abs() < 1e-12);
+    assert!(mm.max_abs <= bf_max + 1e-12, "{} > {}", mm.max_abs, bf_max);
+    assert!((mm.max_abs - mm.lp_optimum).abs() < 1e-8 * (1.0 + mm.max_abs), "{} vs {}", mm.max_abs, mm.lp_optimum);
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(64))]
+    /// A moved box: every distance equals the box's analytic SDF in its own frame (1e-9).
+    #[test]
+    fn moved_box_distances_are_exact(seed in 0u64..1_000_000, hx in 0.5f64..50.0, hy in 0.5f64..50.0, hz in 0.5f64..50.0) {
+        let h = [hx, hy, hz];
+        let (v, t) = box_mesh(h);
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let pose = random_pose(&mut rng, 3.0, 100.0);
+        let mesh = TriMesh::new(&moved(&v, &pose), &t).unwrap();
+        let local: Vec<f64> = (0..600).map(|k| rng.random_range(-2.0..2.0) * h[k % 3]).collect();
+        let d = mesh.distances(&moved(&local, &pose), &Query::default()).unwrap();
+        for (i, p) in local.chunks_exact(3).enumerate() {
+            let e = box_sdf([p[0], p[1], p[2]], h);
+            prop_assert!((d.distance[i] - e).abs() < 1e-9, "{} vs {}", d.distance[i], e);
+        }
+    }
+
+    /// Moving the points and the mesh together leaves every distance unchanged.
+    #[test]
+    fn distances_are_invariant_under_rigid_motion(seed in 0u64..1_000_000) {
+        let (v, t) = sphere_mesh(12, 5.0);
+        let mesh = TriMesh::new(&v, &t).unwrap();
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let pts: Vec<f64> = (0..300).map(|_| rng.random_range(-7.0..7.0)).collect();
+        let pose = random_pose(&mut rng, 3.0, 100.0);
+        let a = mesh.distances(&pts, &Query::default()).unwrap().distance;
+        let mesh2 = TriMesh::new(&moved(&v, &pose), &t).unwrap();
+        let b = mesh2.distances(&moved(&pts, &pose), &Query::default()).unwrap().distance;
+        for (x, y) in a.iter().zip(&b) {
+            prop_assert!((x - y).abs() < 1e-9);
+        }
+    }
+}
+
+#[test]
+fn minimax_with_an_offset_centres_the_zone_on_the_offset_surface() {
+    let h = [20.0, 12.0, 7.0];
+    let (v, t) = box_mesh(h);
+    let mesh = TriMesh::new(&v, &t).unwrap();
+    // the scan is the box grown by 0.05 everywhere (plus bumps of 0.01): offset 0.05 leaves 0.01
+    let scan = box_scan([h[0] + 0.05, h[1] + 0.05, h[2] + 0.05], 1.0, 0.01);
+    let m0 = minimax(&mesh, &scan, Pose::IDENTITY, [true; 6], None, 0.0).unwrap();
+    let m1 = minimax(&mesh, &scan, Pose::IDENTITY, [true; 6], None, 0.05).unwrap();
+    assert!(m0.max_abs > 0.05 && m1.max_abs <= 0.0100001, "{} {}", m0.max_abs, m1.max_abs);
+}
