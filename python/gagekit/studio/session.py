@@ -141,10 +141,12 @@ class Session:
     def open_spec(self, path: Optional[Path], kind: str = "gage") -> dict:
         text = ""
         if path is not None and path.exists():
-            try:
-                text = path.read_text(encoding="utf-8")
-            except (OSError, UnicodeDecodeError) as exc:
-                raise ConfigError(f"{path}: cannot read the gage file ({exc})") from None
+            from .._files import read_text
+
+            try:  # a regular file only: opening a FIFO would block until a writer comes
+                text = read_text(path, "gage file")
+            except GagekitError as exc:
+                raise ConfigError(f"cannot read the gage file: {exc}") from None
         with self.lock:
             self.spec_path = path
             self.spec_text = text
