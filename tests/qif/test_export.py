@@ -116,7 +116,9 @@ def test_round_trip_references_the_model_ids(path, tmp_path, qif_schema):
         assert by_id[qif_id].tag.endswith("CharacteristicNominal")
         assert float(m.findtext("q:Value", namespaces=NS)) == pytest.approx(max(r["measured"] for r in rs) / scale, rel=1e-15)
         assert m.findtext("q:Status/q:CharacteristicStatusEnum", namespaces=NS) == ("PASS" if all(r["pass"] for r in rs) else "FAIL")
-        assert len(m.xpath("q:FeatureMeasurementIds/q:Id", namespaces=NS)) == len(rs)
+        # a width (slot / tab, issue 25) has no feature measurement in the export yet
+        measured_features = [r for r in rs if spec.features[r["feature"]].shape not in ("slot", "tab")]
+        assert len(m.xpath("q:FeatureMeasurementIds/q:Id", namespaces=NS)) == len(measured_features)
     # the original model's ids are untouched; the document has its own QPId and names the model's
     orig = set(re.findall(r' id="(\d+)"', gzip.decompress(path.read_bytes()).decode()))
     assert orig <= set(by_id)

@@ -16,7 +16,9 @@ against its limits ``nominal + lower`` ... ``nominal + upper`` (or the ISO 286 c
   least-squares normal (interpolated on the second face's Delaunay triangulation);
   a cone's in one cross-section, the middle one of ``sections`` slices. Every local
   size must lie within the limits; ``measured`` is the local size nearest a limit (the
-  one that decides), ``local_sizes`` gives n, min, max, mean.
+  one that decides), ``local_sizes`` gives n, min, max, mean. A feature scanned over
+  less than half a turn has no two-point size: its least-squares size (GG) is reported
+  with a warning in ``details`` and ``modifier_used = "GG"``.
 - ``LS`` -- the same two-point sizes (on a sphere: through the centre).
 - ``GG`` least squares, ``GX`` maximum inscribed, ``GN`` minimum circumscribed: the
   associated cylinder / circle / sphere (exact or certified, :mod:`gagekit.form`); for
@@ -209,7 +211,15 @@ def evaluate_size(tol: Tolerance, fd: FeatureData, system: Any) -> Measurement:
         extra["fit"] = tol.fit
     sizes = None
     if mod in ("LP", "LS") + RANK_ORDER:
-        sizes = two_point_sizes(fd, sections, angles)
+        try:
+            sizes = two_point_sizes(fd, sections, angles)
+        except DegenerateGeometryError as exc:
+            # a partial feature (less than half a turn scanned) has no two-point size: the
+            # least-squares size is reported instead, as CMM software does, with a warning
+            mod = "GG"
+            details["warning"] = f"{exc}; the least-squares size (GG) is reported"
+            extra["modifier_used"] = "GG"
+    if sizes is not None:
         extra["local_sizes"] = _stats(sizes)
         if mod in RANK_ORDER:
             measured = float(_RANK[mod](sizes))
@@ -246,9 +256,12 @@ def evaluate_size(tol: Tolerance, fd: FeatureData, system: Any) -> Measurement:
         mate = mating_size(fd, "GX" if internal else "GN", sections)
         mmc = L if internal else U
         env_margin = (mate - L) if internal else (U - mate)
-        if sizes is None:
+        if sizes is None and "warning" not in details:
             sizes = two_point_sizes(fd, sections, angles)
-        lmc_margin = (U - float(sizes.max())) if internal else (float(sizes.min()) - L)
+        if sizes is None:
+            lmc_margin = env_margin  # no two-point size: the LMC side is not evaluated (see the warning)
+        else:
+            lmc_margin = (U - float(sizes.max())) if internal else (float(sizes.min()) - L)
         extra["envelope"] = {"mating_size": mate, "mmc_size": mmc, "mating": "GX" if internal else "GN",
                              "margin": min(env_margin, lmc_margin)}
         margin = min(margin, env_margin, lmc_margin)
