@@ -316,3 +316,12 @@ def test_cli_database(tmp_path):
     assert g["sd"]["EV"] == pytest.approx(anova_grr(y)["sd"]["EV"], rel=1e-12)
     bad = gk("stats", "grr", "--db", url, "--pattern", "{part}-{appraiser}")
     assert bad.returncode == 2 and "does not match --pattern" in bad.stderr and len(bad.stderr.strip().splitlines()) == 1
+
+
+def test_bundled_aiag_csv_is_the_manual_data():
+    from pathlib import Path
+
+    from gagekit.stats.grr import read_study_csv
+
+    rows = read_study_csv(Path(__file__).resolve().parents[1] / "data" / "grr" / "aiag_msa4.csv")
+    assert [(r["part"], r["appraiser"], int(r["trial"]), r["value"]) for r in rows] == aiag_rows()
