@@ -151,8 +151,9 @@ def main() -> None:
                 d_cc = np.asarray(vert[sf[-1]], dtype=np.float64)
                 d_ref = np.load(out)
                 ok = np.isfinite(d_cc)
-                print(f"#   largest |gagekit - CloudCompare| = {np.abs(d_ref[ok] - d_cc[ok]).max():.3e} mm over {ok.sum()} points "
-                      f"(scalar field '{sf[-1]}')")
+                print(f"#   largest |gagekit - CloudCompare| = {np.abs(d_ref[ok] - d_cc[ok]).max():.3e} mm, of the absolute "
+                      f"values {np.abs(np.abs(d_ref[ok]) - np.abs(d_cc[ok])).max():.3e} mm, over {ok.sum()} points "
+                      f"(scalar field '{sf[-1]}'; CloudCompare stores float32 coordinates)")
         else:
             line(f"C2M command line {len(pts) / 1e6:.1f} M pts / {len(t) / 1e6:.1f} M tri (CloudCompare not installed)", t_cli, None)
 
