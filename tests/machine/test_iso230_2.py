@@ -11,11 +11,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from conftest import TEST_DATA
+from gagekit.samples import sample_path
 from gagekit.errors import FileFormatError, InvalidInputError
 from gagekit.machine.iso230_2 import iso230_2, read_runs
 
-ECMC = TEST_DATA / "iso230_2" / "ecmc_axis1_runs.csv"
+ECMC = sample_path("iso230-2")
 
 
 def write_runs(path: Path, rows) -> Path:
@@ -106,3 +106,23 @@ def test_cli_json_and_report(tmp_path):
     bad = write_runs(tmp_path / "bad.csv", [(0, "+", 1, 0.0), (0, "+", 2, 0.0)])
     p = run("iso230-2", bad)
     assert p.returncode == 2 and p.stderr.startswith("gagekit: error: ") and len(p.stderr.splitlines()) == 1
+
+
+def test_text_table_prints_um_to_three_decimals():
+    """Every um value of the text output is the JSON value to 0.001 um, printed with three
+    decimals (issue 22 section 6: it was rounded to 0.001 um and printed with four)."""
+    import re
+    import subprocess
+    import sys
+
+    run = lambda *a: subprocess.run([sys.executable, "-m", "gagekit", "machine", "iso230-2", str(ECMC), *a],  # noqa: E731
+                                    capture_output=True, text=True, timeout=120)
+    text, d = run().stdout, json.loads(run("--json").stdout)
+    lines = text.splitlines()  # title, the summary values, blank, header, dashes, one row per target
+    fixed = lambda v: (lambda s: s[1:] if s.startswith("-") and float(s) == 0 else s)(f"{1e3 * v:.3f}")  # noqa: E731
+    for key, value in re.findall(r"(\w+) (-?\d+\.\d+)", lines[1]):
+        assert value == fixed(d[key]), key
+    rows = [ln.split() for ln in lines[5:] if ln.strip()]
+    assert len(rows) == len(d["targets"]) == 5
+    for row, t in zip(rows, d["targets"]):
+        assert row[1:] == [fixed(t[k]) for k in ("mean_up", "mean_down", "s_up", "s_down", "R", "B")], row

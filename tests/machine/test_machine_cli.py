@@ -93,3 +93,19 @@ def test_out_of_range_warns_on_stderr(files, tmp_path):
     p = gk("identify", EXAMPLE, tmp_path / "r.csv", "--json")
     assert "warning: " in p.stderr and "(X: 1)" in p.stderr
     json.loads(p.stdout)
+
+
+def test_simulate_cycles_accepts_plan_as_its_help_says(tmp_path):
+    """`simulate-cycles` is short for `simulate --plan PLAN.csv --cycles N` and takes --plan too
+    (issue 22 section 6); the plan given twice, or not at all, is one error line."""
+    plan = tmp_path / "plan.csv"
+    plan.write_text("B,X,Z,Y,W\n0,-1000,1000,400,-500\n90,0,1500,1000,-500\n180,500,2000,2000,-300\n"
+                    "270,1200,950,2400,-700\n45,-500,1200,800,-400\n")
+    a = gk("simulate-cycles", EXAMPLE, "--plan", plan, "--cycles", 2, "--out", tmp_path / "a.csv")
+    b = gk("simulate-cycles", EXAMPLE, plan, "--cycles", 2, "--out", tmp_path / "b.csv")
+    c = gk("simulate", EXAMPLE, "--plan", plan, "--cycles", 2, "--out", tmp_path / "c.csv")
+    assert a.returncode == b.returncode == c.returncode == 0, a.stderr + b.stderr + c.stderr
+    assert (tmp_path / "a.csv").read_bytes() == (tmp_path / "b.csv").read_bytes() == (tmp_path / "c.csv").read_bytes()
+    for args in ((plan, "--plan", plan), ()):
+        p = gk("simulate-cycles", EXAMPLE, *args, "--out", tmp_path / "d.csv", ok=False)
+        assert p.returncode == 2 and p.stderr.count("\n") == 1 and "give the plan once" in p.stderr, p.stderr

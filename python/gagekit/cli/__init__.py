@@ -18,6 +18,8 @@ from .. import __version__
 from ..errors import GagekitError
 from . import (batch, cloud, compare, db, demo, form, gage, machine, machine_export, machine_instruments, machine_observer,
                qif, stats, studio)
+from . import data  # gagekit data list / path
+from ._common import warn
 from . import inspect as inspect_cmd
 
 app = typer.Typer(
@@ -37,6 +39,7 @@ app.add_typer(gage.app, name="gage")
 app.add_typer(machine.app, name="machine")
 app.add_typer(db.app, name="db")
 app.add_typer(qif.app, name="qif")
+app.add_typer(data.app, name="data")
 app.command("stats")(stats.stats)
 gage.app.command("batch")(batch.gage_batch)
 form.app.command("batch")(batch.form_batch)
@@ -46,6 +49,19 @@ inspect_cmd.app.command("batch")(batch.inspect_batch)
 app.add_typer(inspect_cmd.app, name="inspect")
 app.command("studio")(studio.studio)
 app.command("compare")(compare.compare)
+
+
+def _plain_help(t: typer.Typer) -> None:
+    """Help as plain text, for every command: Rich markup would read the TOML table names of
+    the help texts (`[[region]]`, `[[feature]]`) as style tags and drop them, and Rich's
+    panels print a `<bool>` metavar after every flag."""
+    t.rich_markup_mode = None
+    for group in t.registered_groups:
+        if group.typer_instance is not None:
+            _plain_help(group.typer_instance)
+
+
+_plain_help(app)
 
 
 def _version_callback(value: bool) -> None:
@@ -120,7 +136,7 @@ def main(argv: Optional[list[str]] = None) -> None:
                 pass
         if code == 0:
             for line in dict.fromkeys(str(w.message) for w in caught):
-                print(f"gagekit: warning: {line}", file=sys.stderr)
+                warn(line)
     sys.exit(code)  # always, as click's standalone mode does (callers of main() expect SystemExit)
 
 

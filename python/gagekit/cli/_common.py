@@ -2,14 +2,15 @@
 
 from __future__ import annotations
 
-from typing import Any, Callable
+import re
+from typing import Any, Callable, Sequence
 
 import typer
 
 from .._util import check_finite_result, dumps
 from ..report.text import table
 
-__all__ = ["JSON_OPTION", "emit", "table"]
+__all__ = ["JSON_OPTION", "emit", "table", "warn"]
 
 JSON_OPTION = typer.Option(False, "--json", help="Print the result as JSON on stdout, and nothing else.")
 
@@ -17,10 +18,17 @@ JSON_OPTION = typer.Option(False, "--json", help="Print the result as JSON on st
 SEED_MAX = 2**64 - 1
 
 
+def _seed(value: Any) -> Any:
+    if value is not None and not 0 <= value <= SEED_MAX:
+        raise typer.BadParameter(f"a seed is an integer from 0 to 2**64 - 1, got {value}")
+    return value
+
+
 def seed_option(help: str, flag: str = "--seed") -> Any:
     """A ``--seed`` option: an integer in [0, 2**64 - 1]; anything else is a usage error
-    (one line, exit 2) instead of an OverflowError deep in numpy or the kernels."""
-    return typer.Option(0, flag, min=0, max=SEED_MAX, help=help)
+    (one line, exit 2) instead of an OverflowError deep in numpy or the kernels. Checked by a
+    callback, not an IntRange, so the help does not print the 20-digit bound."""
+    return typer.Option(0, flag, metavar="SEED", callback=_seed, help=help)
 
 
 def count_option(default: int, flag: str, help: str, min: int = 1, max: int = 10**9) -> Any:
@@ -63,7 +71,7 @@ def read_cloud_cli(path: Any, units: Any = None, dim: int = 3) -> Any:
 
     cloud = read_cloud(path, units=units, dim=dim)
     for w in cloud.warnings:
-        typer.echo(f"gagekit: warning: {w}", err=True)
+        warn(w)
     return cloud
 
 
@@ -88,16 +96,40 @@ def open_scan_cli(path: Any, units: Any = None, memory: Any = None, chunk: Any =
         return read_cloud_cli(path, units)
     stream = open_cloud(path, units, chunk=chunk, memory=budget)
     for w in stream.warnings:
-        typer.echo(f"gagekit: warning: {w}", err=True)
+        warn(w)
     return stream
 
 
-def emit(result: Any, as_json: bool, human: Callable[[Any], str]) -> None:
+#: Python argument names the library's warnings may mention -> the command-line option
+_OPTION_OF = {"max_tilt": "--max-tilt", "axis": "--axis"}
+_ARGUMENT = re.compile(r"\b(" + "|".join(_OPTION_OF) + r")\s*=\s*(\.\.\.|[-+\w.]+)")
+
+
+def cli_wording(message: str) -> str:
+    """A library message as the command line says it: ``max_tilt=90`` -> ``--max-tilt 90``,
+    ``axis=...`` -> ``--axis X,Y,Z``."""
+    def option(m: "re.Match[str]") -> str:
+        value = "X,Y,Z" if m.group(1) == "axis" and m.group(2) == "..." else m.group(2)
+        return f"{_OPTION_OF[m.group(1)]} {value}"
+
+    return _ARGUMENT.sub(option, " ".join(str(message).split()))
+
+
+def warn(message: Any) -> None:
+    """The one way the command line prints a warning: one line ``gagekit: warning: ...`` on
+    stderr (never in the stdout table or JSON), in the command line's words."""
+    typer.echo(f"gagekit: warning: {cli_wording(str(message))}", err=True)
+
+
+def emit(result: Any, as_json: bool, human: Callable[[Any], str], warnings: Sequence[str] = ()) -> None:
     """Print ``result`` as JSON or as the human-readable text ``human(result)``, after
     checking that every number in it is finite (:class:`NumericalError` otherwise: never a
-    NaN, an infinity or a JSON null in place of a number)."""
+    NaN, an infinity or a JSON null in place of a number); then each of ``warnings`` (the
+    result's own, e.g. a fit's) with :func:`warn`. JSON keeps them in the result too."""
     check_finite_result(result)
     if as_json:
         typer.echo(dumps(result))
     else:
         typer.echo(human(result))
+    for w in dict.fromkeys(warnings):
+        warn(w)

@@ -22,7 +22,7 @@ from typing import Callable, List, Optional
 
 import typer
 
-from ._common import UNITS_OPTION
+from ._common import UNITS_OPTION, seed_option, warn
 from .qif import INSTRUMENT_OPTION, QIF_RESULTS_OPTION, check_output, write_results
 
 SCANS_ARG = typer.Argument(..., help="Scan files, folders (searched for scan files) or glob patterns ('scans/*.ply').")
@@ -145,7 +145,7 @@ def gage_batch(
         warnings.simplefilter("always")
         GageSpec.from_dict(doc, str(gages))  # a bad gage file stops the batch before it starts
     for w in caught:
-        typer.echo(f"gagekit: warning: {w.message}", err=True)
+        warn(w.message)
     options = {"groups": not no_groups, **_units(units)}
     job = Job("gage", {"spec": doc}, options, source=str(gages), part=part or gages.stem)
     run(job, scans, db, report, workers, scheduler, as_json, retry_failed, f"Virtual-gage batch: {gages.name}")
@@ -155,7 +155,7 @@ def form_batch(
     shape: str = typer.Argument(..., help="circle, line, plane, sphere, circle3d, cylinder or cone"),
     scans: List[str] = SCANS_ARG,
     criterion: str = typer.Option("least-squares", "--criterion", "-c", help="Fit criterion, as for `form fit`."),
-    seed: int = typer.Option(0, "--seed", help="Seed of the particle swarm (cylinders)"),
+    seed: int = seed_option(help="Seed of the particle swarm (cylinders, 3-D lines)"),
     units: Optional[str] = UNITS_OPTION,
     workers: Optional[int] = WORKERS_OPTION,
     scheduler: Optional[str] = SCHEDULER_OPTION,
@@ -204,7 +204,7 @@ def inspect_batch(
         runs = sorted(({"scan": x["scan"], "result": x["result"]} for x in lines if x.get("result") is not None),
                       key=lambda r: r["scan"])
         if not runs:
-            typer.echo(f"gagekit: warning: no scan was inspected; {qif_results} not written", err=True)
+            warn(f"no scan was inspected; {qif_results} not written")
             return
         write_results(qif_results, runs, spec, part, instrument)
 

@@ -8,7 +8,7 @@ from typing import Optional
 
 import typer
 
-from ._common import JSON_OPTION, UNITS_OPTION, emit, read_cloud_cli, table
+from ._common import JSON_OPTION, UNITS_OPTION, emit, read_cloud_cli, table, warn
 
 
 def human(result) -> str:
@@ -72,7 +72,7 @@ def compare(
         spec = load_part_spec(part)
     model = read_cad(cad, cad_units)
     for w in model.warnings:
-        typer.echo(f"gagekit: warning: {w}", err=True)
+        warn(w)
     pts = read_cloud_cli(scan, units).points
     result = run_compare(pts, model, align=align, lock=lock, max_distance=max_distance, part=spec)
     if deviations is not None:

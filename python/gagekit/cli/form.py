@@ -46,10 +46,9 @@ def circle(
         rows = [[f.criterion, *f.center, f.radius, f.form_error,
                  " ".join(map(str, f.control_points))] for f in fits]
         text = table(["criterion", *xyz, "radius", "form error", "control points"], rows)
-        notes = [w for f in fits for w in f.warnings]
-        return "\n".join([f"{file}: {fits[0].n_points} points", text, *[f"warning: {w}" for w in notes]])
+        return "\n".join([f"{file}: {fits[0].n_points} points", text])
 
-    emit(result, as_json, human)
+    emit(result, as_json, human, warnings=[w for f in fits for w in f.warnings])
 
 
 # end circles --------------------------------------------------------------------------
@@ -82,8 +81,7 @@ def _human(r: Any) -> str:
     rows.append(["min_distance", f"{cert['min_distance']:.9f}"])
     rows.append(["max_distance", f"{cert['max_distance']:.9f}"])
     head = f"{d['shape']} ({d['criterion']}), {d['n_points']} points"
-    notes = [f"warning: {w}" for w in d.get("warnings", ())]
-    return "\n".join([head, table(["quantity", "value (mm, rad)"], rows), *notes])
+    return "\n".join([head, table(["quantity", "value (mm, rad)"], rows)])
 
 
 def _axis(text: Optional[str]) -> Optional[tuple[float, ...]]:
@@ -110,7 +108,10 @@ TILT_OPTION = typer.Option(10.0, "--max-tilt", help="Chebyshev fits search axes 
 def fit(
     shape: str = typer.Argument(..., help="circle (circle3d: alias), line, plane, sphere, cylinder or cone"),
     file: Path = typer.Argument(..., help="Points: any file read_points reads (XYZ/CSV/TXT, NIST .ds, PLY, .npy, ...)"),
-    criterion: str = typer.Option("least-squares", "--criterion", "-c", help="Fit criterion"),
+    criterion: str = typer.Option(
+        "least-squares", "--criterion", "-c",
+        help="least-squares (lsq), min-circumscribed (mc), max-inscribed (mi) or minimum-zone (mz); "
+             "lines and planes: least-squares or minimum-zone; cones: least-squares"),
     seed: int = seed_option(help="Seed of the particle swarm (cylinders, 3-D lines)"),
     axis: Optional[str] = AXIS_OPTION,
     max_tilt: float = TILT_OPTION,
@@ -121,7 +122,7 @@ def fit(
     from ..form.files import fit_file
 
     r = fit_file(shape, file, criterion, seed=seed, units=units, axis=_axis(axis), max_tilt=max_tilt)
-    emit(r, as_json, _human)
+    emit(r, as_json, _human, warnings=getattr(r, "warnings", ()))
 
 
 @app.command("cylinder")
@@ -140,4 +141,4 @@ def cylinder(
     from .. import form
 
     r = form.fit_cylinder(_load_points(file, units), criterion, seed=seed, axis=_axis(axis), max_tilt=max_tilt)
-    emit(r, as_json, _human)
+    emit(r, as_json, _human, warnings=r.warnings)

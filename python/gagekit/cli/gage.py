@@ -8,7 +8,7 @@ from typing import Optional
 
 import typer
 
-from ._common import CHUNK_OPTION, JSON_OPTION, MEMORY_OPTION, UNITS_OPTION, emit, open_scan_cli
+from ._common import CHUNK_OPTION, JSON_OPTION, MEMORY_OPTION, UNITS_OPTION, emit, open_scan_cli, warn
 from .qif import INSTRUMENT_OPTION, QIF_RESULTS_OPTION, check_output
 
 app = typer.Typer(help="Virtual gages: can a scanned casting be machined to print? (Ch. 5)", no_args_is_help=True)
@@ -48,7 +48,7 @@ def check(
         warnings.simplefilter("always")
         spec = GageSpec.load(gages)
     for w in caught:
-        typer.echo(f"gagekit: warning: {w.message}", err=True)
+        warn(w.message)
     from ..cloud.stream import CloudStream
     from ..gage.analysis import check_gages_stream
 

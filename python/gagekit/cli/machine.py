@@ -12,7 +12,7 @@ import typer
 
 from ..errors import InvalidInputError
 from ..machine.simulate import TRACKER_SIGMA
-from ._common import JSON_OPTION, count_option, emit, float_option, seed_option, table
+from ._common import JSON_OPTION, count_option, emit, float_option, seed_option, table, warn
 
 app = typer.Typer(help="Machine-tool volumetric error models, identification and observers (Ch. 3-4).", no_args_is_help=True)
 
@@ -27,7 +27,7 @@ def _warnings_to_stderr() -> Iterator[None]:
         warnings.simplefilter("always")
         yield
     for w in caught:
-        typer.echo(f"gagekit: warning: {w.message}", err=True)
+        warn(w.message)
 
 
 def _outputs(*paths: Optional[Path]) -> None:

@@ -12,7 +12,7 @@ from typing import Optional
 import typer
 
 from ..errors import InvalidInputError
-from ._common import JSON_OPTION, emit
+from ._common import JSON_OPTION, emit, seed_option
 from .machine import MACHINE_ARG, _warnings_to_stderr
 
 CAL_ARG = typer.Argument(..., help="Calibration JSON from identify --out.")
@@ -79,7 +79,7 @@ def export_cmd(
     at: Optional[str] = typer.Option(None, "--at", help="Fixed values of the other joints, e.g. B=0,W=-500 (default 0 or mid-range)."),
     limits: Optional[str] = typer.Option(None, "--limits", help="Grid extent inside the joint ranges, e.g. X=-1000:1000."),
     increment: float = typer.Option(0.001, "--increment", help="fanuc-3d: detection unit, mm (0.001 IS-B, 0.0001 IS-C)."),
-    seed: int = typer.Option(0, "--seed", help="Seed of the random commands of the read-back check."),
+    seed: int = seed_option(help="Seed of the random commands of the read-back check."),
     as_json: bool = JSON_OPTION,
 ) -> None:
     """Write a compensation table for a controller and read it back as the controller interpolates it."""
@@ -201,10 +201,14 @@ def iso230_2_cmd(
 
     def human(r) -> str:
         keys = ("A", "A_up", "A_down", "E", "E_up", "E_down", "M", "R", "R_up", "R_down", "B", "B_mean")
-        rows = [[t.target] + [round(1e3 * v, 3) for v in (t.mean_up, t.mean_down, t.s_up, t.s_down, t.R, t.B)] for t in r.targets]
+        from ..report.text import fixed
+
+        # every um value to 0.001 um, printed with three decimals (the targets in mm)
+        rows = [[t.target] + [fixed(1e3 * v, 3) for v in (t.mean_up, t.mean_down, t.s_up, t.s_down, t.R, t.B)]
+                for t in r.targets]
         return "\n".join([
             f"ISO 230-2:2014, {len(r.targets)} targets, {r.cycles} cycles per direction (um)",
-            "  ".join(f"{k} {1e3 * getattr(r, k):.3f}" for k in keys),
+            "  ".join(f"{k} {fixed(1e3 * getattr(r, k), 3)}" for k in keys),
             "",
             table(["target (mm)", "mean up", "mean down", "s up", "s down", "R", "B"], rows),
         ])

@@ -10,7 +10,7 @@ from typing import Optional
 
 import typer
 
-from ..errors import InvalidInputError
+from ..errors import ConfigError, InvalidInputError
 from ._common import JSON_OPTION, count_option, emit, float_option, seed_option, table
 from .machine import MACHINE_ARG, NOISE_OPTION, _outputs, _warnings_to_stderr, _write_simulation
 
@@ -201,8 +201,9 @@ def history_cmd(
 
 def simulate_cycles_cmd(
     machine_file: Path = MACHINE_ARG,
-    plan: Path = typer.Argument(..., help="PLAN.csv (joint columns) measured in every cycle."),
+    plan: Optional[Path] = typer.Argument(None, help="PLAN.csv (joint columns) measured in every cycle (or --plan)."),
     out: Path = typer.Option(..., "--out", help="Cycles CSV to write (cycle, joints, x, y, z, time, temp_*)."),
+    plan_option: Optional[Path] = typer.Option(None, "--plan", help="PLAN.csv, as `machine simulate --plan` takes it."),
     cycles: int = count_option(6, "--cycles", help="Measurement cycles (Fig. 4.4: 4 heating, 1 cooling after the first)."),
     noise: float = NOISE_OPTION,
     drift_scale: float = float_option(1.0, "--drift-scale", help="Scale of the W- and Y-axis thermal drift."),
@@ -212,6 +213,9 @@ def simulate_cycles_cmd(
     """Short for `machine simulate MACHINE.toml --plan PLAN.csv --cycles N` (thermal mode)."""
     from ..machine import Truth, load_machine, read_commands
 
+    if (plan is None) == (plan_option is None):
+        raise ConfigError("give the plan once: simulate-cycles MACHINE.toml PLAN.csv, or --plan PLAN.csv")
+    plan = plan if plan is not None else plan_option
     _outputs(out)
     if cycles < 1:
         raise InvalidInputError(f"--cycles must be at least 1, got {cycles}")

@@ -32,7 +32,7 @@ def _human(s: dict) -> str:
 
 def stats(
     db: str = typer.Option(..., "--db", help="Results database: sqlite:///FILE or postgresql://..."),
-    spec: Optional[Path] = typer.Option(None, "--spec", help="Only the results of this gage file (GAGES.toml)."),
+    spec: Optional[Path] = typer.Option(None, "--spec", help="Only the results of this gage file or drawing (GAGES.toml or PART.toml)."),
     tolerance: Optional[float] = typer.Option(None, "--tolerance", help="Upper limit of form errors (mm), for Cp/Cpk of form batches."),
     report: Optional[Path] = typer.Option(None, "--report", help="Write report.html with the charts into DIR."),
     as_json: bool = JSON_OPTION,

@@ -225,14 +225,22 @@ def _length(units: Units, el: Any, name: str, where: str) -> Optional[float]:
     return None if c is None else units.length(c, f"{where}/{name}")
 
 
-def _feature(el: Any, defs: dict, units: Units, path: str) -> FeatureNominal:
-    kind = X.local(el)[: -len("FeatureNominal")]
-    fid = el.get("id")
-    where = f"{path}: {X.local(el)} id={fid}"
-    def_id = X.text(el, "FeatureDefinitionId") or ""
+def _nominal(el: Any, what: str, defs: dict, path: str) -> tuple[str, str, str, str, Any]:
+    """(kind, id, where, definition id, definition element) of a feature or characteristic
+    nominal (``what``: "Feature" / "Characteristic"); a definition id the file does not
+    hold is a FileFormatError."""
+    kind = X.local(el)[: -len(f"{what}Nominal")]
+    i = el.get("id")
+    where = f"{path}: {X.local(el)} id={i}"
+    def_id = X.text(el, f"{what}DefinitionId") or ""
     d = defs.get(def_id)
     if d is None:
-        raise FileFormatError(f"{where}: FeatureDefinitionId {def_id!r} names no feature definition in the file")
+        raise FileFormatError(f"{where}: {what}DefinitionId {def_id!r} names no {what.lower()} definition in the file")
+    return kind, i, where, def_id, d
+
+
+def _feature(el: Any, defs: dict, units: Units, path: str) -> FeatureNominal:
+    kind, fid, where, def_id, d = _nominal(el, "Feature", defs, path)
     s = units.linear
     g: dict = {}
     internal = None
@@ -337,13 +345,7 @@ _KNOWN = {"Attributes", "StatisticalCharacteristic", "ToleranceValue", "DatumRef
 
 
 def _char(nom: Any, defs: dict, units: Units, features: dict, drfs: dict, path: str) -> Characteristic:
-    kind = X.local(nom)[: -len("CharacteristicNominal")]
-    cid = nom.get("id")
-    where = f"{path}: {X.local(nom)} id={cid}"
-    def_id = X.text(nom, "CharacteristicDefinitionId") or ""
-    d = defs.get(def_id)
-    if d is None:
-        raise FileFormatError(f"{where}: CharacteristicDefinitionId {def_id!r} names no characteristic definition in the file")
+    kind, cid, where, def_id, d = _nominal(nom, "Characteristic", defs, path)
     fids = X.ids(X.child(nom, "FeatureNominalIds"))
     for f in fids:
         if f not in features:

@@ -316,6 +316,34 @@ def _from_model(root: Any, spec: Any, model: Any, ids: _Ids, device: str) -> _Pl
 # -- the results ------------------------------------------------------------------------
 
 
+def _scan_reference(mr: Any, scan: Any, description: str) -> None:
+    """The scan file as the results' ExternalFileReference (a file URI when it exists)."""
+    p = Path(str(scan))
+    ref = X.sub(X.sub(mr, "ExternalFileReferences", n=1), "ExternalFileReference")
+    X.sub(ref, "URI", p.resolve().as_uri() if p.exists() else str(scan))
+    X.sub(X.sub(ref, "FileSpec"), "OtherFileSpec", (p.suffix.lstrip(".") or "points").upper())
+    X.sub(ref, "Description", description)
+
+
+def _device(root: Any, device: str, instrument: str, description: str) -> None:
+    """The instrument as a MeasurementDevice of MeasurementResources (added to the model's)."""
+    mres = X.child(root, "MeasurementResources")
+    if mres is None:
+        mres = _place(root, _new("MeasurementResources"))
+    devs = X.child(mres, "MeasurementDevices")
+    if devs is None:
+        devs = _new("MeasurementDevices", n=0)
+        later = [c for c in mres if X.local(c) in ("DetachableSensors", "Tools")]  # the schema's order
+        if later:
+            later[0].addprevious(devs)
+        else:
+            mres.append(devs)
+    dev = X.sub(devs, "MeasurementDevice", id=device)
+    X.sub(dev, "Name", instrument or "point-cloud scanner")
+    X.sub(dev, "Description", description)
+    devs.set("n", str(len(devs)))
+
+
 def _measured_feature(parent: Any, name: str, fd: dict, plan: _Plan, ids: _Ids) -> Optional[str]:
     shape = fd.get("shape")
     ls = fd.get("least_squares") or {}
@@ -398,14 +426,10 @@ def _results(results_el: Any, runs: Sequence[dict], spec: Any, plan: _Plan, ids:
         X.sub(mr, "ThisResultsInstanceQPId", str(uuid.uuid5(uuid.NAMESPACE_URL, "gagekit-results:" + key)))
         scan = run.get("scan")
         if scan:
-            refs = X.sub(mr, "ExternalFileReferences", n=1)
-            ref = X.sub(refs, "ExternalFileReference")
-            X.sub(ref, "URI", Path(str(scan)).resolve().as_uri() if Path(str(scan)).exists() else str(scan))
-            X.sub(X.sub(ref, "FileSpec"), "OtherFileSpec", (Path(str(scan)).suffix.lstrip(".") or "points").upper())
             desc = f"point cloud inspected: {res.get('n_points', 0)} points"
             if run.get("sha256"):
                 desc += f", SHA-256 {run['sha256']}"
-            X.sub(ref, "Description", desc)
+            _scan_reference(mr, scan, desc)
         feats = res.get("features", {})
         mf = X.sub(mr, "MeasuredFeatures", n=0)
         fmeas = {}
@@ -487,16 +511,7 @@ def inspection_results_document(runs: Sequence[dict], spec: Any, spec_path: Any 
     else:
         first = runs[0]["result"].get("tolerances", []) if runs else []
         plan = _self_contained(root, spec, ids, device, {k: t.get("zone") for k, t in enumerate(first)})
-    mres = X.child(root, "MeasurementResources")
-    if mres is None:
-        mres = _place(root, _new("MeasurementResources"))
-    devs = X.child(mres, "MeasurementDevices")
-    if devs is None:
-        devs = X.sub(mres, "MeasurementDevices", n=0)
-    dev = X.sub(devs, "MeasurementDevice", id=device)
-    X.sub(dev, "Name", instrument or "point-cloud scanner")
-    X.sub(dev, "Description", "the instrument that acquired the inspected point clouds")
-    devs.set("n", str(len(devs)))
+    _device(root, device, instrument, "the instrument that acquired the inspected point clouds")
     res_el = X.child(root, "Results")
     if res_el is None:
         res_el = _place(root, _new("Results"))
@@ -536,11 +551,7 @@ def gage_results_document(scan: Any, result: dict, instrument: str = "") -> Any:
     _header(root)
     _units_block(root)
     device = ids()
-    mres = _place(root, _new("MeasurementResources"))
-    devs = X.sub(mres, "MeasurementDevices", n=1)
-    dev = X.sub(devs, "MeasurementDevice", id=device)
-    X.sub(dev, "Name", instrument or "point-cloud scanner")
-    X.sub(dev, "Description", "the instrument that acquired the checked point cloud")
+    _device(root, device, instrument, "the instrument that acquired the checked point cloud")
     # the gages are virtual gages for machining stock (dissertation Ch. 5) against the
     # datums of ISO 5459; that is the standard named
     ch = _characteristics(root, ids, "5459", "2011", "Geometrical product specifications (GPS) -- Datums and datum systems")
@@ -569,11 +580,7 @@ def gage_results_document(scan: Any, result: dict, instrument: str = "") -> Any:
     mset = X.sub(res_el, "MeasurementResultsSet", n=1)
     mr = X.sub(mset, "MeasurementResults", id=ids())
     X.sub(mr, "ThisResultsInstanceQPId", str(uuid.uuid5(uuid.NAMESPACE_URL, "gagekit-gage-results:" + digest)))
-    refs = X.sub(mr, "ExternalFileReferences", n=1)
-    ref = X.sub(refs, "ExternalFileReference")
-    X.sub(ref, "URI", Path(str(scan)).resolve().as_uri() if Path(str(scan)).exists() else str(scan))
-    X.sub(X.sub(ref, "FileSpec"), "OtherFileSpec", (Path(str(scan)).suffix.lstrip(".") or "points").upper())
-    X.sub(ref, "Description", "point cloud checked with virtual gages")
+    _scan_reference(mr, scan, "point cloud checked with virtual gages")
     mc = X.sub(mr, "MeasuredCharacteristics")
     cm = X.sub(mc, "CharacteristicMeasurements", n=len(gages))
     for g, item in zip(gages, items):

@@ -19,10 +19,16 @@ def table(headers: list[str], rows: list[list[Any]]) -> str:
     return "\n".join(lines)
 
 
+def fixed(v: float, decimals: int = 4) -> str:
+    """``v`` with ``decimals`` decimals; a value that rounds to zero prints 0.000..., never
+    -0.000... (for a column whose unit calls for another precision than the default 4)."""
+    s = f"{v:.{decimals}f}"
+    return s[1:] if s.startswith("-") and float(s) == 0.0 else s  # -1e-13 prints 0.0000, not -0.0000
+
+
 def _fmt(v: Any) -> str:
     if isinstance(v, float):
-        s = f"{v:.4f}"
-        return s[1:] if s.startswith("-") and float(s) == 0.0 else s  # -1e-13 prints 0.0000, not -0.0000
+        return fixed(v)
     return str(v)
 
 

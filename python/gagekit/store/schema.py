@@ -22,7 +22,7 @@ from typing import Optional, Union
 import sqlalchemy as sa
 from sqlalchemy.engine import URL, Engine
 
-from ..errors import SchemaVersionError, StoreError
+from ..errors import ConfigError, SchemaVersionError, StoreError
 
 MIGRATIONS = Path(__file__).resolve().parent / "migrations"
 #: the advisory-lock key of schema changes on PostgreSQL ("gagekit" in ASCII, truncated)
@@ -106,7 +106,11 @@ def create_engine(url: Union[str, Path, URL], *, must_exist: bool = False) -> En
         engine = sa.create_engine(u, connect_args={"timeout": SQLITE_TIMEOUT})
         _sqlite_events(engine)
     else:
-        engine = sa.create_engine(u, connect_args={"connect_timeout": 10}, pool_pre_ping=True)
+        try:
+            engine = sa.create_engine(u, connect_args={"connect_timeout": 10}, pool_pre_ping=True)
+        except ImportError as exc:  # the driver (psycopg) is an extra: one line, not a traceback
+            raise ConfigError(f"{safe_url(u)}: PostgreSQL needs its driver ({exc.name or 'psycopg'} is missing): "
+                              "pip install 'gagekit[postgresql]'") from None
     try:
         with engine.connect():
             pass

@@ -155,10 +155,12 @@ pub struct BallbarInput<'a> {
     pub feed: Option<f64>,
 }
 
+/// Sign of a sine or cosine of an angle, 0 at the axis reversals themselves (|v| below 1e-12:
+/// sin(pi) is 1.2e-16 in floating point, and a reading at the reversal angle is mid-step).
 fn sgn(v: f64) -> f64 {
-    if v > 0.0 {
+    if v > 1e-12 {
         1.0
-    } else if v < 0.0 {
+    } else if v < -1e-12 {
         -1.0
     } else {
         0.0
@@ -302,7 +304,7 @@ pub fn analyse(inp: &BallbarInput) -> Result<BallbarAnalysis> {
         }
         if inp.deviations[i].abs() >= 0.5 * inp.radius {
             return Err(GkError::invalid(format!(
-                "ballbar: reading {i} deviates by {} mm, half the radius or more: check the units (deviation in um)",
+                "ballbar: reading {i} deviates by {:.4e} mm, half the radius or more: check the units (deviation in um)",
                 inp.deviations[i]
             )));
         }
