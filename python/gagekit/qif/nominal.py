@@ -70,10 +70,28 @@ def _missing(f: FeatureNominal, keys: tuple) -> Optional[str]:
     return f"the model gives no {', '.join(miss)} for {f.kind} feature nominal {f.id}" if miss else None
 
 
+def slots_supported() -> bool:
+    """Whether the installed PART.toml reader has the two-face ``slot`` / ``tab`` shapes
+    (issue 25)."""
+    from ..inspect.spec import SHAPES
+
+    return "slot" in SHAPES and "tab" in SHAPES
+
+
+def shape_of(f: FeatureNominal) -> Optional[str]:
+    """The PART.toml shape of a QIF feature nominal, or None."""
+    if f.kind == "OppositeParallelPlanes" and slots_supported():
+        return "slot" if f.internal else "tab"
+    return SHAPE_OF.get(f.kind)
+
+
 def problem(f: FeatureNominal) -> Optional[str]:
     """Why this feature cannot become a PART.toml feature, or None."""
-    if f.kind not in SHAPE_OF:
-        return f"a {f.kind} feature (gagekit's shapes: plane, cylinder, cone, circle, sphere, line)"
+    if shape_of(f) is None:
+        return f"a {f.kind} feature (gagekit's shapes: plane, cylinder, cone, circle, sphere, line" + \
+            (", slot, tab)" if slots_supported() else ")")
+    if f.kind == "OppositeParallelPlanes":
+        return _missing(f, ("point", "normal", "width", "length_vector", "length", "depth"))
     need = {"Plane": ("location", "normal"), "Cylinder": ("point", "direction", "diameter"),
             "Cone": ("point", "direction", "diameter", "half_angle", "large_end"),
             "Circle": ("center", "normal", "diameter"), "Sphere": ("center", "diameter"), "Line": ("location", "direction")}
@@ -109,6 +127,11 @@ def feature_region(f: FeatureNominal, band: float, inset: float) -> Region:
         Lr = L - 2 * inset if L > 4 * inset else L / 2
         center = g["point"] + g["direction"] * L / 2
         return Region(tuple(center), (d + 2 * band, d + 2 * band, Lr), _rot(B), note)
+    if f.kind == "OppositeParallelPlanes":
+        B = _slot_axes(g)
+        L, D = g["length"], g["depth"]
+        size = (L - 2 * inset if L > 4 * inset else L / 2, D - 2 * inset if D > 4 * inset else D / 2, g["width"] + 2 * band)
+        return Region(tuple(g["point"]), size, _rot(B))
     if f.kind == "Cone":
         B = basis(g["direction"])
         t0, t1 = _cone_span(g)
@@ -137,6 +160,17 @@ def feature_region(f: FeatureNominal, band: float, inset: float) -> Region:
         L, note = 10.0, "the model gives no length: 10 mm from its Location"
     Lr = L - 2 * inset if L > 4 * inset else L / 2
     return Region(tuple(g["location"] + d * L / 2), (Lr, 2 * band, 2 * band), _rot(B), note)
+
+
+def _slot_axes(g: dict) -> np.ndarray:
+    """Rows: along the slot's length, along its depth, across its width (the centre
+    plane's normal). QIF gives the CenterPlane (its Point at the middle of the slot), the
+    LengthVector and the Length and Depth."""
+    n = np.asarray(g["normal"], dtype=float)
+    L = np.asarray(g["length_vector"], dtype=float)
+    L = L - (L @ n) * n
+    L /= np.linalg.norm(L)
+    return np.array([L, np.cross(n, L), n])
 
 
 def _cone_span(g: dict) -> tuple:
@@ -189,6 +223,12 @@ def sample_feature(f: FeatureNominal, n: int = 2000) -> np.ndarray:
         T, Z = np.meshgrid(t, z)
         T, Z = T.ravel(), Z.ravel()
         return g["point"] + np.outer(r * np.cos(T), B[0]) + np.outer(r * np.sin(T), B[1]) + np.outer(Z, B[2])
+    if f.kind == "OppositeParallelPlanes":  # the two faces, width apart about the centre plane
+        B = _slot_axes(g)
+        m = max(int(math.sqrt(n / 2)), 4)
+        a, b = np.meshgrid(np.linspace(-g["length"] / 2, g["length"] / 2, m), np.linspace(-g["depth"] / 2, g["depth"] / 2, m))
+        face = g["point"] + np.outer(a.ravel(), B[0]) + np.outer(b.ravel(), B[1])
+        return np.vstack([face + B[2] * g["width"] / 2, face - B[2] * g["width"] / 2])
     if f.kind == "Cone":
         B = basis(g["direction"])
         t0, t1 = _cone_span(g)

@@ -174,6 +174,17 @@ class _Plan:
         self.geom_angle_scale = 1.0  # degrees per file geometric angle unit
 
 
+def _qif_type(t: Any, spec: Any) -> str:
+    """The QIF characteristic type of a callout (a size by its feature: a slot or tab's is
+    a Width, a sphere's a SphericalDiameter)."""
+    if t.characteristic == "size":
+        shape = spec.features[t.feature].shape
+        return {"slot": "Width", "tab": "Width", "sphere": "SphericalDiameter"}.get(shape, "Diameter")
+    if t.characteristic in ("distance", "angle"):  # QIF's DistanceBetween needs feature nominals: user-defined
+        return "UserDefinedLinear" if t.characteristic == "distance" else "UserDefinedAngular"
+    return QIF_TYPE[t.characteristic]
+
+
 def _self_contained(root: Any, spec: Any, ids: _Ids, device: str, zones: dict) -> _Plan:
     """Definitions, nominals and items made from PART.toml; ``zones``: callout index ->
     gagekit's zone (width, diameter, spherical diameter), for each definition's ZoneShape."""
@@ -213,16 +224,26 @@ def _self_contained(root: Any, spec: Any, ids: _Ids, device: str, zones: dict) -
     cnoms = X.sub(ch, "CharacteristicNominals", n=len(spec.tolerances))
     citems = X.sub(ch, "CharacteristicItems", n=len(spec.tolerances))
     for t in spec.tolerances:
-        qt = QIF_TYPE[t.characteristic]
+        qt = _qif_type(t, spec)
         di, ni, ii = ids(), ids(), ids()
         d = X.sub(cdefs, f"{qt}CharacteristicDefinition", id=di)
-        X.sub(d, "ToleranceValue", _num(t.tolerance))
-        if qt not in _FORM and t.datums:
+        dimensional = getattr(t, "size_nominal", None) is not None  # sizes, distances, angles (issue 25)
+        if dimensional:
+            tol = X.sub(d, "Tolerance")
+            X.sub(tol, "MaxValue", _num(t.upper))
+            X.sub(tol, "MinValue", _num(t.lower))
+            X.sub(tol, "DefinedAsLimit", "false")
+            if qt.startswith("UserDefined"):
+                X.sub(d, "WhatToMeasure", f"{t.characteristic} from {t.feature} to {getattr(t, 'to', None) or '?'} "
+                                          "(ISO 14405-2 / ASME Y14.5, as gagekit inspect evaluates it)")
+        else:
+            X.sub(d, "ToleranceValue", _num(t.tolerance))
+        if qt not in _FORM and t.datums and not dimensional:
             X.sub(d, "DatumReferenceFrameId", plan.drfs[t.datums])
         zone = zones.get(t.index, "width")
         if qt in ("Parallelism", "Perpendicularity", "Angularity", "Position", "Straightness", "Coaxiality"):
             if qt != "Coaxiality":
-                X.sub(d, "MaterialCondition", "NONE")
+                X.sub(d, "MaterialCondition", {"MMC": "MAXIMUM", "LMC": "LEAST"}.get(getattr(t, "material", None) or "", "NONE"))
             flat = "PlanarZone" if qt in ("Parallelism", "Perpendicularity", "Angularity") else "NonDiametricalZone"
             X.sub(X.sub(d, "ZoneShape"), {"diameter": "DiametricalZone", "spherical diameter": "SphericalZone"}.get(zone, flat))
         n = X.sub(cnoms, f"{qt}CharacteristicNominal", id=ni)
@@ -230,6 +251,8 @@ def _self_contained(root: Any, spec: Any, ids: _Ids, device: str, zones: dict) -
         X.sub(n, "Name", t.label)
         if qt == "Angularity" and t.angle is not None:
             X.sub(n, "Angle", _num(t.angle))
+        if dimensional:
+            X.sub(n, "TargetValue", _num(t.size_nominal))
         it = X.sub(citems, f"{qt}CharacteristicItem", id=ii)
         X.sub(it, "Name", t.label)
         _id_list(it, "MeasurementDeviceIds", [device])

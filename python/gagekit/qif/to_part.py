@@ -39,7 +39,7 @@ import numpy as np
 
 from ..errors import ConfigError, GagekitError
 from .model import Characteristic, QifModel
-from .nominal import SHAPE_OF, feature_region, problem, sample_feature
+from .nominal import feature_region, problem, sample_feature, shape_of
 
 __all__ = ["PartDraft", "part_from_model", "GAGEKIT_OF", "PENDING_OF"]
 
@@ -77,7 +77,7 @@ def _spec_accepts() -> dict:
 
 
 def _fname(f) -> str:
-    return f"{SHAPE_OF.get(f.kind, f.kind.lower())}-{f.id}"
+    return f"{shape_of(f) or f.kind.lower()}-{f.id}"
 
 
 def _angle_between(a_plane: bool, a: np.ndarray, b_plane: bool, b: np.ndarray) -> float:
@@ -116,8 +116,10 @@ class _Importer:
         name = _fname(f)
         if name not in self.features:
             reg = feature_region(f, self.band, self.inset)
-            t: dict = {"name": name, "shape": SHAPE_OF[f.kind], "region": reg.to_dict(), "qif_id": f.id}
+            t: dict = {"name": name, "shape": shape_of(f), "region": reg.to_dict(), "qif_id": f.id}
             g = f.geometry
+            if f.kind == "OppositeParallelPlanes":  # slot / tab: the direction across the width
+                t["direction"] = [float(x) for x in g["normal"]]
             if f.kind == "Plane":
                 t["outward"] = [float(x) for x in g["normal"]]
             if f.kind in ("Cylinder", "Cone", "Circle", "Sphere") and f.internal is not None:
@@ -273,7 +275,7 @@ class _Importer:
         for fid in c.feature_ids:
             name, why = self.feature(fid)
             names.append(name or _fname(self.m.features[fid]))
-            if why and char == "size" and self.m.features[fid].kind in ("OppositeParallelPlanes",):
+            if why and self.m.features[fid].kind == "OppositeParallelPlanes" and not shape_of(self.m.features[fid]):
                 t.setdefault("_needs", f"feature {names[-1]} is a {self.m.features[fid].kind} (shape \"slot\" / \"tab\")")
             elif why:
                 self.listed.append((c, f"its feature is {why}"))
@@ -284,8 +286,7 @@ class _Importer:
             if len(names) != 2:
                 self.listed.append((c, f"a {char} between {len(names)} features (gagekit: between two)"))
                 return
-            t["feature"] = names[0]
-            t["features"] = names
+            t["feature"], t["to"] = names
         if c.basic:
             self.listed.append((c, "a basic (theoretically exact) dimension: no tolerance to evaluate"))
             return
