@@ -120,20 +120,25 @@ def test_a_long_lock_is_a_clean_error(tmp_path, cycles):
     assert _runs(h) == 1
 
 
+def _killed_writer(h, statements: str) -> None:
+    """A process that runs ``statements`` on connection ``c`` to ``h`` (inside a transaction
+    it leaves open), then is killed with SIGKILL: a hot journal is left."""
+    w = subprocess.Popen([sys.executable, "-c",
+                          "import sqlite3, sys, time; c = sqlite3.connect(sys.argv[1], isolation_level=None);"
+                          + statements + "print('writing', flush=True); time.sleep(60)", str(h)], stdout=subprocess.PIPE, text=True)
+    assert w.stdout.readline().strip() == "writing"
+    w.send_signal(signal.SIGKILL)
+    w.wait()
+
+
 def test_reads_after_a_killed_writer(tmp_path, cycles):
     """A writer killed inside its transaction leaves a hot journal; reads roll it back."""
     h = tmp_path / "h.sqlite"
     assert_ok(gk("machine", "track", EXAMPLE_MACHINE, cycles, "--history", h))
-    w = subprocess.Popen([sys.executable, "-c",
-                          "import sqlite3, sys, time; c = sqlite3.connect(sys.argv[1], isolation_level=None);"
-                          "c.execute('PRAGMA journal_mode=DELETE'); c.execute('BEGIN IMMEDIATE');"
-                          "c.execute('PRAGMA cache_size=1');"
-                          "[c.execute('INSERT INTO calibrations (machine_id, kind, created, source, n_points) VALUES (1, ?, ?, ?, ?)', ('track', 'x' * 500, 'y' * 500, i))"
-                          " for i in range(20000)];"
-                          "print('writing', flush=True); time.sleep(60)", str(h)], stdout=subprocess.PIPE, text=True)
-    assert w.stdout.readline().strip() == "writing"
-    w.send_signal(signal.SIGKILL)
-    w.wait()
+    _killed_writer(h, "c.execute('PRAGMA journal_mode=DELETE'); c.execute('BEGIN IMMEDIATE');"
+                      "c.execute('PRAGMA cache_size=1');"
+                      "[c.execute('INSERT INTO calibrations (machine_id, kind, created, source, n_points) VALUES (1, ?, ?, ?, ?)', ('track', 'x' * 500, 'y' * 500, i))"
+                      " for i in range(20000)];")
     for _ in range(3):
         assert _runs(h) == 1
 
@@ -144,16 +149,10 @@ def test_a_history_killed_during_its_first_track_is_rolled_back(tmp_path, cycles
     the journal back (to an empty database) before the header is read, so the next track
     writes its run and the history reads it (issue 22 section 2)."""
     h = tmp_path / "h.sqlite"
-    w = subprocess.Popen([sys.executable, "-c",
-                          "import sqlite3, sys, time; c = sqlite3.connect(sys.argv[1], isolation_level=None);"
-                          "c.execute('PRAGMA cache_size=2'); c.execute('BEGIN IMMEDIATE');"
-                          "c.execute('CREATE TABLE alembic_version (version_num VARCHAR(32) NOT NULL)');"
-                          "c.execute('CREATE TABLE calibrations (id INTEGER PRIMARY KEY, source TEXT)');"
-                          "[c.execute('INSERT INTO calibrations (source) VALUES (?)', ('x' * 500,)) for i in range(4000)];"
-                          "print('writing', flush=True); time.sleep(60)", str(h)], stdout=subprocess.PIPE, text=True)
-    assert w.stdout.readline().strip() == "writing"
-    w.send_signal(signal.SIGKILL)
-    w.wait()
+    _killed_writer(h, "c.execute('PRAGMA cache_size=2'); c.execute('BEGIN IMMEDIATE');"
+                      "c.execute('CREATE TABLE alembic_version (version_num VARCHAR(32) NOT NULL)');"
+                      "c.execute('CREATE TABLE calibrations (id INTEGER PRIMARY KEY, source TEXT)');"
+                      "[c.execute('INSERT INTO calibrations (source) VALUES (?)', ('x' * 500,)) for i in range(4000)];")
     journal = h.with_name(h.name + "-journal")
     assert journal.stat().st_size > 0 and h.stat().st_size > 0
     assert h.read_bytes()[:16] != b"SQLite format 3\x00"  # the state the header check refused

@@ -92,8 +92,9 @@ def test_mixed_is_never_worse_than_either_alone(machine, seed):
 
 
 def test_views_per_instrument(machine):
-    v = instrument_view(machine, ["tracker", "sphere", "rtest"])
-    assert set(v) == {"tracker", "sphere", "rtest", "combined"}
+    v = instrument_view(machine, ["tracker", "sphere", "rtest", "ballbar"])
+    assert set(v) == {"tracker", "sphere", "rtest", "ballbar", "combined"}
+    assert 0 < len(v["ballbar"]["groups_seen"]) < len(v["tracker"]["groups_seen"])  # one circle per plane, one place
     for k in ("sphere", "rtest"):
         assert set(v[k]["location_errors_seen"]) == {"EXOB", "EZOB", "EAOB", "ECOB"}
         assert len(v[k]["groups_seen"]) < len(v["tracker"]["groups_seen"])

@@ -91,15 +91,39 @@ def _read(path: str, units: Optional[str]):
         return read_points(path, units=units)
 
 
+def _stream(path: str, units: Optional[str]):
+    """The scan as a :class:`~gagekit.cloud.stream.CloudStream` when its whole read would not
+    fit this worker's budget (a quarter of a Dask worker's ``memory_limit``, else the
+    default share of the RAM), else None: the same streaming path as the single-scan
+    commands, with the same results."""
+    from ..cloud.stream import memory_budget, open_cloud, should_stream
+
+    memory = None
+    try:
+        from distributed import get_worker
+
+        limit = get_worker().memory_manager.memory_limit
+        memory = max(64 << 20, int(limit) // 4) if limit else None
+    except (ImportError, ValueError, AttributeError):
+        pass
+    budget = memory_budget(memory)
+    return open_cloud(path, units, memory=budget) if should_stream(path, budget) else None
+
+
 def _gage(path: str, document: Mapping[str, Any], options: Mapping[str, Any]) -> dict:
     from .._util import to_jsonable
     from ..gage import GageSpec, check_gages
+    from ..gage.analysis import check_gages_stream
 
     with warnings.catch_warnings():  # the batch printed the spec's warnings once
         warnings.simplefilter("ignore")
         spec = GageSpec.from_dict(document["spec"], options.get("source") or "gage spec")
+    groups = options.get("groups", True)
+    stream = _stream(path, options.get("units"))
+    if stream is not None:
+        return to_jsonable(check_gages_stream(stream, spec, groups=groups))
     pts = _read(path, options.get("units"))
-    return to_jsonable(check_gages(pts, spec, groups=options.get("groups", True)))
+    return to_jsonable(check_gages(pts, spec, groups=groups))
 
 
 def _form(path: str, document: Mapping[str, Any], options: Mapping[str, Any]) -> dict:
@@ -115,10 +139,11 @@ def _form(path: str, document: Mapping[str, Any], options: Mapping[str, Any]) ->
 def _inspect(path: str, document: Mapping[str, Any], options: Mapping[str, Any]) -> dict:
     """What ``gagekit inspect SCAN PART.toml --json`` prints (the drawing is ``document["part"]``)."""
     from .._util import check_finite_result, to_jsonable
-    from ..inspect import inspect, part_spec_from_dict
+    from ..inspect import inspect, inspect_stream, part_spec_from_dict
 
     spec = part_spec_from_dict(document["part"], options.get("source") or "part spec")
-    result = inspect(_read(path, options.get("units")), spec)
+    stream = _stream(path, options.get("units")) if getattr(spec, "cad", None) is None else None
+    result = inspect_stream(stream, spec) if stream is not None else inspect(_read(path, options.get("units")), spec)
     check_finite_result(result)
     return to_jsonable(result)
 

@@ -63,7 +63,8 @@ def inspect(
 
     check_output(qif_results)
     spec = load_part_spec(part)
-    cloud = open_scan_cli(scan, units, memory, chunk)
+    # a drawing with a CAD model matches the whole scan to it: read whole
+    cloud = open_scan_cli(scan, units, memory, chunk, whole=getattr(spec, "cad", None) is not None)
     result = inspect_stream(cloud, spec) if isinstance(cloud, CloudStream) else run_inspect(cloud.points, spec)
     if report is not None:
         from ..report.inspect import write_report

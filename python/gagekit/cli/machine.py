@@ -49,7 +49,7 @@ def check(
     machine_file: Path = MACHINE_ARG,
     commands: int = count_option(2000, "--commands", help="Quasi-random commands used for the rank analysis."),
     observations: Optional[str] = typer.Option(
-        None, "--observations", help="tracker, sphere, rtest or a comma list: which groups and rotary-axis location errors each instrument sees, and together."
+        None, "--observations", help="tracker, sphere, rtest, ballbar or a comma list: which groups and rotary-axis location errors each instrument sees, and together."
     ),
     as_json: bool = JSON_OPTION,
 ) -> None:

@@ -97,11 +97,9 @@ class StreamedRegion:
 
 @dataclass
 class Pass:
-    """One pass over a stream: the number of points, the sum of their coordinates (for a
-    centroid), and what each region kept."""
+    """One pass over a stream: the number of points and what each region kept."""
 
     count: int
-    total: np.ndarray
     regions: list
 
     def __getitem__(self, name: str) -> StreamedRegion:
@@ -120,10 +118,8 @@ def cut_stream(chunks: Iterable[np.ndarray], boxes: Sequence[Box], keep: Sequenc
     regions = [StreamedRegion(b.name, k, all_indices=[] if all_indices else None) for b, k in zip(boxes, keep)]
     rng = np.random.default_rng(seed)
     n = 0
-    total = np.zeros(3)
     for pts in chunks:
         m = len(pts)
-        total += np.ones(m) @ pts
         if boxes:
             for r, idx in zip(regions, classify(pts, boxes)):
                 ids = idx + n
@@ -132,7 +128,7 @@ def cut_stream(chunks: Iterable[np.ndarray], boxes: Sequence[Box], keep: Sequenc
                 if sample and len(ids):
                     r.sample(rng, ids, sel, sample)
         n += m
-    return Pass(n, total, [r.finish() for r in regions])
+    return Pass(n, [r.finish() for r in regions])
 
 
 def hull_stream(chunks: Iterable[np.ndarray]) -> tuple[int, np.ndarray, np.ndarray]:

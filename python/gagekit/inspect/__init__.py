@@ -80,6 +80,11 @@ def inspect_stream(stream: Any, spec: Union[PartSpec, str, Any]) -> InspectionRe
     t0 = time.perf_counter()
     if not isinstance(spec, PartSpec):
         spec = load_part_spec(spec)
+    if getattr(spec, "cad", None) is not None:
+        from ..errors import InvalidInputError
+
+        raise InvalidInputError(f"{spec.source}: a drawing with a [part] cad model is matched to the whole scan: "
+                                "read it whole (inspect)")
     n, feats = extract_stream(stream, spec.features, spec.source)
     return _evaluate(spec, feats, n, t0)
 

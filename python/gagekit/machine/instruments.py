@@ -289,7 +289,8 @@ def _rows(machine: Machine, obs: InstrumentObservations, index: int) -> _Block:
     jac = machine.command_jacobian(c).reshape(len(c), 3, -1)
     lin = [k for k, j in enumerate(machine.joints) if j.kind == "prismatic"]
     shifted = c.copy()
-    shifted[:, lin] += np.einsum("nij,nj->ni", np.linalg.pinv(jac[:, :, lin]), target - nom)
+    jl = jac[:, :, lin]  # minimum-norm step J^T (J J^T)^-1 (target - nominal), batched 3 x 3 solves
+    shifted[:, lin] += np.einsum("nji,nj->ni", jl, np.linalg.solve(jl @ jl.transpose(0, 2, 1), (target - nom)[:, :, None])[:, :, 0])
     m = machine.design_matrix(shifted)
     nn = np.zeros((len(c), 3, len(uniq), 3))
     slot = np.searchsorted(np.array(uniq), ids)
@@ -383,55 +384,68 @@ def identify_mixed(
         basis = lmat
         names = lnames
     k = basis.shape[1]
-    a = np.vstack([np.hstack([b.a @ basis / b.sigma, np.zeros((len(b.b), 0))]) for b in blocks])
+    # the normal matrix of the weighted rows [A_b | N_b] / sigma_b, block by block (the nuisance
+    # columns of a block meet only its own rows): nothing of size 3n x unknowns is stacked
     nuis = [b.n.shape[1] for b in blocks]
-    nmat = np.zeros((a.shape[0], sum(nuis)))
-    row = col = 0
+    q = k + sum(nuis)
+    normal = np.zeros((q, q))
+    atb = np.zeros(q)
+    raw2 = np.zeros(k)
+    ab_all = []
+    col = k
+    select = list(st.leaders) if unknowns == "groups" else None  # the basis only picks columns
     for b, w in zip(blocks, nuis):
-        nmat[row : row + len(b.b), col : col + w] = b.n / b.sigma
-        row += len(b.b)
+        ab = (b.a[:, select] if select is not None else b.a @ basis) / b.sigma
+        nb = b.n / b.sigma
+        rb = b.b / b.sigma
+        ab_all.append((ab, nb, rb, col))
+        sl = slice(col, col + w)
+        normal[:k, :k] += ab.T @ ab
+        normal[:k, sl] += ab.T @ nb
+        normal[sl, :k] += nb.T @ ab
+        normal[sl, sl] += nb.T @ nb
+        atb[:k] += ab.T @ rb
+        atb[sl] += nb.T @ rb
+        # an unknown whose effect the readings cancel (a ballbar's length under a rotation of
+        # the whole table) has a column of round-off only: no effect
+        raw2 += ((b.raw @ basis / b.sigma) ** 2).sum(axis=0) if b.raw is not None else (ab**2).sum(axis=0)
         col += w
-    full = np.hstack([a, nmat])
-    rhs = np.concatenate([b.b / b.sigma for b in blocks])
-    norms = np.linalg.norm(full, axis=0)
-    # an unknown whose effect the readings cancel (a ballbar's length under a rotation of the
-    # whole table) has a column of round-off only: no effect
-    raw = np.sqrt(sum((((b.raw if b.raw is not None else b.a) @ basis / b.sigma) ** 2).sum(axis=0) for b in blocks))
-    dead = np.zeros(full.shape[1], bool)
-    dead[:k] = norms[:k] <= 1e-9 * raw
+    n_rows = sum(len(b.b) for b in blocks)
+    norms = np.sqrt(np.clip(np.diag(normal), 0.0, None))
+    dead = np.zeros(q, bool)
+    dead[:k] = norms[:k] <= 1e-9 * np.sqrt(raw2)
+    normal[dead, :] = 0.0
+    normal[:, dead] = 0.0
+    atb[dead] = 0.0
     norms[dead | (norms == 0)] = 1.0
-    full[:, dead] = 0.0
-    eq = full / norms
-    # the SVD of the tall, thin, equilibrated matrix through its normal matrix (k x k): eq^T eq =
-    # V S^2 V^T; with columns of unit norm the squared condition stays far inside double
-    # precision, and one matrix product is all that touches the 3n rows
-    lam, v = np.linalg.eigh(eq.T @ eq)
+    eqn = normal / np.outer(norms, norms)  # eq^T eq of the column-equilibrated rows
+    eqb = atb / norms  # eq^T rhs
+    lam, v = np.linalg.eigh(eqn)
     order = np.argsort(lam)[::-1]
     lam, v = np.clip(lam[order], 0.0, None), v[:, order]
     sv = np.sqrt(lam)
     vt = v.T
-    qtb = (vt @ (eq.T @ rhs)) / np.where(sv > 0, sv, 1.0)  # = U^T rhs on the row space
+    qtb = (vt @ eqb) / np.where(sv > 0, sv, 1.0)  # = U^T rhs on the row space
     r = int((sv > RANK_RTOL * sv[0]).sum())
     if r == 0:
         raise DegenerateGeometryError("the observations see none of the unknowns")
     seen = _seen(vt, sv, r, k)
     x = (vt[:r].T @ (qtb[:r] / sv[:r])) / norms
     cov = ((vt[:r].T / sv[:r] ** 2) @ vt[:r]) / np.outer(norms, norms)  # unit weight: sigmas as given
-    resid = rhs - full @ x
-    dof = max(len(rhs) - r, 1)
-    chi2 = float(resid @ resid) / dof
+    x[dead] = 0.0
+    dof = max(n_rows - r, 1)
+    rss = 0.0
+    instruments = []
+    for b, (ab, nb, rb, col) in zip(blocks, ab_all):
+        res = rb - ab @ x[:k] - nb @ x[col : col + nb.shape[1]]
+        rss += float(res @ res)
+        instruments.append({
+            "source": b.source, "kind": b.kind, "readings": int(len(b.b)), "sigma_um": 1e3 * b.sigma,
+            "residual_rms_um": 1e3 * b.sigma * float(np.sqrt((res**2).mean())),
+        })
+    chi2 = rss / dof
     values = np.where(seen, x[:k], 0.0)
     std = np.where(seen, np.sqrt(np.clip(np.diag(cov)[:k], 0.0, None)), np.nan)
-    instruments = []
-    row = 0
-    for b in blocks:
-        m = len(b.b)
-        res = resid[row : row + m] * b.sigma
-        instruments.append({
-            "source": b.source, "kind": b.kind, "readings": int(m), "sigma_um": 1e3 * b.sigma,
-            "residual_rms_um": 1e3 * float(np.sqrt((res**2).mean())),
-        })
-        row += m
     # groups and location errors from the estimate
     if unknowns == "groups":
         gvals, gstd, gseen = values, std, seen
@@ -449,7 +463,7 @@ def identify_mixed(
     for n, v, s, ok in zip(lnames, lvals, lstd, lseen):
         unit = "mm" if n[1] in "XYZ" else "rad"
         location[n] = {"value": float(v), "std": float(s), "unit": unit} if ok else {"seen": False}
-    cal = _calibration(machine, st, gvals, gstd, gseen, unknowns, chi2, dof, len(rhs))
+    cal = _calibration(machine, st, gvals, gstd, gseen, unknowns, chi2, dof, n_rows)
     return MixedResult(unknowns, tuple(names), values, std, seen, groups, location, instruments,
                        float(sv[0] / sv[r - 1]), cal)
 
@@ -503,6 +517,19 @@ def _sample(machine: Machine, kind: str, seed: int = 0) -> list:
     if kind == "tracker":
         c = machine.sample_commands(300, seed=seed + 1)
         return [InstrumentObservations("tracker", c, machine.nominal(c), sigma=DEFAULT_SIGMA["tracker"])]
+    if kind == "ballbar":
+        from .ballbar import PLANES, circle_commands
+
+        mid = np.array([0.0 if j.kind == "rotary" else 0.5 * (j.range[0] + j.range[1]) for j in machine.joints])
+        radius = 0.25 * min(j.range[1] - j.range[0] for j in machine.joints if j.kind == "prismatic")
+        out = []
+        for plane, axes in PLANES.items():
+            if all(a in machine.joint_names for a in axes):
+                c = circle_commands(machine, plane, radius, mid, np.radians(np.arange(0.0, 360.0, 10.0)))
+                out.append(InstrumentObservations("ballbar", c, np.zeros((len(c), 1)), None, np.array([[radius]]), DEFAULT_SIGMA["ballbar"]))
+        if not out:
+            raise InvalidInputError(f"machine '{machine.name}' has no pair of joints named X, Y, Z for a ballbar circle")
+        return out
     rot = [j for j in machine.joints if j.kind == "rotary"]
     if not rot:
         raise InvalidInputError(f"machine '{machine.name}' has no rotary axis: a sphere or R-test observes rotary axes")

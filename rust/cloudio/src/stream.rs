@@ -12,6 +12,7 @@
 use crate::ascii::{ascii_layout, check_no_nul, parse_body, AsciiOptions, Layout};
 use crate::ply::{PlyFile, VertexRecords};
 use gagekit_core::{GkError, Result};
+use rayon::prelude::*;
 use std::fs::File;
 use std::io::Read;
 use std::os::unix::fs::FileExt;
@@ -136,7 +137,9 @@ impl PlyStream {
             // SAFETY: any 8 bytes are a valid f64 bit pattern; the slice covers `out` exactly.
             let bytes = unsafe { std::slice::from_raw_parts_mut(out.as_mut_ptr().cast::<u8>(), 24 * m) };
             self.file.read_exact_at(bytes, at).map_err(io_error(&self.what))?;
-            if let Some(i) = out.iter().position(|v| !v.is_finite()) {
+            if let Some(i) = out.par_chunks(1 << 16).position_first(|c| c.iter().any(|v| !v.is_finite())).map(|c| {
+                c * (1 << 16) + out[c * (1 << 16)..].iter().position(|v| !v.is_finite()).unwrap_or(0)
+            }) {
                 return Err(GkError::invalid(format!(
                     "{}: vertex {} has a non-finite coordinate (NaN or inf)",
                     self.what,
