@@ -18,6 +18,14 @@ Spec files and point files run in this process through ``gagekit.cli.main`` (tho
 cases); paths that are not regular files, kills and interrupts run as subprocesses. The
 cases are those of ``tests/hostile`` (shared generators in ``tests/hostile/mutants.py``),
 plus the reader cases of ``tests/hostile`` written by the readers' owner when present.
+
+The surfaces of issue 22 (``tests/hostile/surfaces.py``): ``inspect`` (drawings mutated key
+by key, degenerate scans), ``machine export`` (calibrations mutated, options at their
+edges), ``machine compensate-nc`` (programs mutated word by word), batches (every kind of
+bad file, option and database), ``stats`` and ``db`` (every kind of database), and the
+studio's HTTP API (one real server: documents mutated key by key, hostile bodies and
+paths; a 4xx JSON error is clean, a 2xx finite JSON ok, a 5xx a traceback, no answer in
+the time bound a hang; after them all Ctrl-C must stop the server).
 """
 
 from __future__ import annotations
@@ -499,10 +507,104 @@ def run_point_files(c: Census, tmp: Path, quick: bool) -> None:
         c.add(g, f"gage {name}", run_inproc(["gage", "check", f, toml, "--no-groups", "--json"]))
 
 
+def _run_case(argv, mode, limit=TIME_LIMIT):
+    return run_inproc(argv, limit=limit) if mode == "inproc" else run_sub(argv, limit=limit)
+
+
+def _good_db(tmp: Path) -> str:
+    """A results database with gage, form and inspection results (a small batch of each)."""
+    from gagekit.cloud import read_points, write_points
+    from gagekit.demo import data_path
+
+    url = f"sqlite:///{tmp / 'good.db'}"
+    d = tmp / "good-scans"
+    d.mkdir()
+    pts = read_points(data_path("casting_ok.ply"))
+    for k in range(3):
+        write_points(d / f"c{k}.ply", pts[k::6])
+    write_points(d / "b.npy", read_points(data_path("bracket.ply"))[::3])
+    run_sub(["gage", "batch", data_path("casting_ok.toml"), d / "c*.ply", "--db", url, "-w", "1"])
+    run_sub(["form", "batch", "plane", d / "c*.ply", "--db", url, "-w", "1"])
+    run_sub(["inspect", "batch", data_path("bracket.toml"), d / "b.npy", "--db", url, "-w", "1"])
+    return url
+
+
+def run_surfaces(c: Census, tmp: Path, quick: bool) -> None:
+    """inspect, export, compensate-nc, batches, stats, db (issue 22)."""
+    from tests.hostile.surfaces import command_cases
+
+    machine, _, _ = _data()
+    _, cal = _obs_file(tmp)
+    for group, label, argv, mode in command_cases(tmp, machine, cal, _good_db(tmp), quick):
+        # a valid drawing inspects 20 callouts: on a loaded 2-core machine that takes over a minute
+        limit = 300 if group.startswith("inspect") else 120 if mode == "sub" else TIME_LIMIT
+        c.add(group, label, _run_case(argv, mode, limit=limit))
+
+
+def classify_http(status: int, data) -> tuple[str, str]:
+    """A studio answer: 4xx with a JSON error is clean, 2xx with finite JSON ok."""
+    if status is None:
+        return "hangs", "no answer"
+    if 400 <= status < 500:
+        if isinstance(data, dict) and isinstance(data.get("error"), str) and data["error"]:
+            return "clean", ""
+        return "tracebacks", f"{status} without a JSON error"
+    if 200 <= status < 300:
+        return ("ok", "") if data is None or is_finite_json(data) else ("wrong", "non-finite value")
+    return "tracebacks", f"HTTP {status}: {str(data)[:200]}"
+
+
+def run_studio(c: Census, tmp: Path, quick: bool) -> None:
+    """The studio's HTTP API on one real server (uvicorn on 127.0.0.1)."""
+    import shutil
+
+    from gagekit.demo import data_path
+    from tests.hostile.surfaces import studio_cases
+    from tests.servers import StudioServer
+
+    folder, outside = tmp / "studio", tmp / "outside"
+    folder.mkdir()
+    outside.mkdir()
+    shutil.copy(data_path("casting_ok.ply"), folder / "casting.ply")
+    shutil.copy(data_path("casting_ok.toml"), folder / "casting.toml")
+    (outside / "secret.toml").write_text("[motion]\n")
+    os.mkfifo(folder / "pipe.toml")
+    os.mkfifo(folder / "pipe.ply")
+    (folder / "out.ply").symlink_to(data_path("casting_ok.ply"))
+    (folder / "outdir").symlink_to(outside, target_is_directory=True)
+    server = StudioServer(str(folder / "casting.ply"), str(folder / "casting.toml"))
+    try:
+        gage_doc = server.request("GET", "/api/state")[1]["spec"]["doc"]
+        from gagekit.studio.specdoc import parse_text
+
+        part_doc = parse_text(data_path("bracket.toml").read_text(), "bracket.toml")
+        for group, label, method, path, body in studio_cases(gage_doc, part_doc, quick):
+            if server.proc.poll() is not None:
+                c.add(group, label, ("panics", f"the server exited ({server.proc.returncode})"))
+                continue
+            try:
+                status, data, _ = server.request(method, path, body, timeout=TIME_LIMIT)
+            except OSError as exc:  # a timeout, a reset connection
+                status, data = None, str(exc)
+            c.add(group, label, classify_http(status, data))
+        for label, token in (("no token", False), ("wrong token", "x")):
+            server_token = server.token
+            if token == "x":
+                server.token = "wrong"
+            status, data, _ = server.request("GET", "/api/state", token=bool(token))
+            server.token = server_token
+            c.add("studio HTTP: access", label, ("clean", "") if status == 401 else ("wrong", f"HTTP {status} without the token"))
+        code = server.interrupt(timeout=15)
+        c.add("studio HTTP: access", "Ctrl-C after it all", ("clean", "") if code is not None else ("hangs", "Ctrl-C did not stop it"))
+    finally:
+        server.stop()
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="a fifth of the generated cases")
-    ap.add_argument("--only", default="", help="comma-separated groups: specs,csv,numeric,outputs,history,interrupts,points")
+    ap.add_argument("--only", default="", help="comma-separated groups: specs,csv,numeric,outputs,history,interrupts,points,"
+                                               "surfaces,studio")
     ap.add_argument("--show", type=int, default=5, help="examples per failing category")
     ap.add_argument("--pytest", action="store_true", help="also count the pytest cases of tests/hostile (other owners' readers and fits)")
     args = ap.parse_args(argv)
@@ -513,7 +615,8 @@ def main(argv=None) -> int:
 
     _progress.set_quiet()
     runs = {"specs": run_specs, "csv": run_csv, "numeric": run_numeric, "outputs": run_outputs,
-            "history": run_history, "interrupts": run_interrupts, "points": run_point_files}
+            "history": run_history, "interrupts": run_interrupts, "points": run_point_files,
+            "surfaces": run_surfaces, "studio": run_studio}
     only = [s for s in args.only.split(",") if s] or list(runs)
     census = Census(args.show)
     t0 = time.perf_counter()

@@ -142,3 +142,67 @@ def dask_cluster():
     cluster.started_in = time.perf_counter() - t0
     yield cluster
     cluster.close()
+
+
+class StudioServer:
+    """`gagekit studio` in a child process (a real uvicorn server on 127.0.0.1, a free port):
+    :attr:`url` is the address it prints (with its access token), :meth:`request` sends one
+    HTTP request with the token and returns (status, parsed JSON or None, seconds)."""
+
+    def __init__(self, *args: str, env: Optional[dict] = None, browser: bool = False) -> None:
+        import re
+        import sys
+
+        cmd = [sys.executable, "-m", "gagekit", "studio", *args, "--port", "0"] + ([] if browser else ["--no-browser"])
+        self.proc = subprocess.Popen(cmd, stderr=subprocess.PIPE, stdout=subprocess.DEVNULL, text=True,
+                                     env=env if env is not None else dict(os.environ))
+        self.url = self.token = None
+        self.lines: list = []
+        for line in self.proc.stderr:
+            self.lines.append(line)
+            m = re.search(r"access token: (\S+)", line)
+            self.token = self.token or (m.group(1) if m else None)
+            m = re.search(r"open (http://\S+)", line)
+            if m:
+                self.url = m.group(1)
+                break
+        assert self.url, "".join(self.lines)
+        self.base = self.url.split("?")[0]
+
+    def request(self, method: str, path: str, body: Optional[bytes] = None, *, token: bool = True,
+                timeout: float = 30.0, content_type: str = "application/json"):
+        import json
+        import urllib.error
+        import urllib.request
+
+        headers = {"Content-Type": content_type} if body is not None else {}
+        if token and self.token:
+            headers["X-Studio-Token"] = self.token
+        req = urllib.request.Request(self.base + path.lstrip("/"), data=body, method=method, headers=headers)
+        t0 = time.monotonic()
+        try:
+            with urllib.request.urlopen(req, timeout=timeout) as r:
+                status, data, ctype = r.status, r.read(), r.headers.get("content-type", "")
+        except urllib.error.HTTPError as exc:
+            status, data, ctype = exc.code, exc.read(), exc.headers.get("content-type", "")
+        seconds = time.monotonic() - t0
+        return status, (json.loads(data) if ctype.startswith("application/json") else None), seconds
+
+    def interrupt(self, timeout: float = 15.0) -> Optional[int]:
+        """Ctrl-C (SIGINT); the exit status, or None if it did not stop within ``timeout``."""
+        import signal
+
+        self.proc.send_signal(signal.SIGINT)
+        try:
+            return self.proc.wait(timeout=timeout)
+        except subprocess.TimeoutExpired:
+            return None
+
+    def stop(self) -> None:
+        if self.proc.poll() is None:
+            self.proc.terminate()
+            try:
+                self.proc.wait(timeout=10)
+            except subprocess.TimeoutExpired:
+                self.proc.kill()
+                self.proc.wait()

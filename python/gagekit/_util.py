@@ -19,6 +19,12 @@ else:  # pragma: no cover
     import tomli as tomllib
 
 
+LENGTH_RESOLUTION_MM = 1e-9
+"""Resolution of computed lengths (mm): a result within it of a limit is on the limit (an LP
+that places a face on its gage returns +-1e-14 mm, not 0); 1 pm, far below any scanner's
+noise and far above the rounding of double-precision coordinates of parts up to 10 m."""
+
+
 def as_points(points: Any, dim: int = 3, what: str = "points") -> np.ndarray:
     """Return ``points`` as a C-contiguous float64 array of shape (n, dim).
 

@@ -26,10 +26,10 @@ def test_capability_by_hand():
     assert c.min_margin == pytest.approx(2.0)  # 10 - 8
     one = capability([10, 12, 11, 13, 12], lower=8)  # one-sided: Cpl only
     assert one.cp is None and one.cpk == pytest.approx(3.6 / (3 * sigma)) and "cp" not in one.to_dict()
-    assert capability([5.0]).to_dict() == {"n": 1, "mean": 5.0, "min": 5.0, "max": 5.0, "notes": [
+    assert capability([5.0]).to_dict() == {"n": 1, "mean": 5.0, "min": 5.0, "max": 5.0, "resolution": 0.0, "notes": [
         "no specification limits: no capability indices", "one value: no spread, no capability indices"]}
     flat = capability([0.0, 0.0, 0.0], lower=0.0)
-    assert flat.cpk is None and flat.min_margin == 0.0 and any("no spread" in n for n in flat.notes)
+    assert flat.cpk is None and flat.min_margin == 0.0 and any("no variation above the resolution" in n for n in flat.notes)
 
 
 def test_imr_limits():
@@ -91,17 +91,32 @@ def test_stats_of_a_batch(casting_set, tmp_path):
     chars = {c["name"]: c for c in spec["characteristics"]}
     assert len(chars) == 3 * 8 + 4  # allowance after / before, stock, per gage; T* beta, dx, dy, dz
     c = chars["allowance before T*: outer wall 1"]
-    # time order = scan time (one casting an hour), the values those of each scan's own result
-    assert c["series"]["scan"] == [str(p) for p in scans]
-    vals = [next(g["allowance_before"] for g in results[str(p)]["gages"] if g["name"] == "outer wall 1") for p in scans]
+    # time order: PLY files record no acquisition time, so the time each result was stored
+    assert c["series"]["time_source"] == ["stored"] * len(scans) and c["series"]["time"] == sorted(c["series"]["time"])
+    assert sorted(c["series"]["scan"]) == [str(p) for p in scans]
+    vals = [next(g["allowance_before"] for g in results[p]["gages"] if g["name"] == "outer wall 1")
+            for p in c["series"]["scan"]]
     assert c["series"]["value"] == vals and c["mean"] == pytest.approx(np.mean(vals)) and c["n"] == len(scans)
-    assert c["sd"] == pytest.approx(np.std(vals, ddof=1)) and c["lower"] == 0.0
+    assert c["sd"] == pytest.approx(np.std(vals, ddof=1))
+    # the casting as fixtured has no specification limit: no capability index
+    assert "lower" not in c and "cpk" not in c and "ppk" not in c and "zero_margin" not in c
+    after = [chars[n] for n in chars if n.startswith("allowance after T*")]
+    assert all(a["lower"] == 0.0 and a["resolution"] == 1e-9 for a in after)
+    # the gages that place each part sit on the limit after T*: flagged, not counted below it
+    limiting = [a for a in after if a["zero_margin"]]
+    assert limiting and all(a["min_margin"] == 0.0 and a["on_limit"] >= 1 for a in limiting)
+    assert all(a["min_margin"] >= 0.0 for a in after)
+    assert sum(a["on_limit"] for a in after) == sum(
+        1 for r in results.values() for g in r["gages"] if abs(g["allowance_after"]) <= 1e-9)
+    assert all(any("only 8 values" in w for w in a.get("warnings", [])) for a in after if "cpk" in a)
     dx = chars["T* dx"]
     assert dx["lower"] == -20.0 and dx["upper"] == 20.0 and "cpk" in dx and "chart" in dx
     assert dx["min_margin"] == pytest.approx(20.0 - max(abs(results[str(p)]["transform"]["dx"]) for p in scans))
     html = (tmp_path / "spc" / "report.html").read_text()
     assert "Western Electric" in html and "Cpk" in html
-    assert len(list((tmp_path / "spc").glob("*.png"))) >= 8 + 4 + 2
+    charts = [c for c in chars.values() if "chart" in c and not c["name"].startswith(("allowance before", "stock"))]
+    assert len(charts) >= 4 + 4  # T* and the gages that do not sit on their limit in every part
+    assert len(list((tmp_path / "spc").glob("*.png"))) == len(charts) + 1 + 2  # and the trends: allowances, T* mm, rad
 
 
 def test_machine_drift_across_calibrations(tmp_path):

@@ -262,3 +262,47 @@ def test_csv_export_needs_no_pyarrow(tmp_path):
     assert rows[0]["finished"].endswith("Z") and datetime.fromisoformat(rows[0]["finished"][:-1]) > datetime(2000, 1, 1)
     p = run("parquet", "pq")
     assert p.returncode == 2 and p.stderr.count("\n") == 1 and "gagekit[parquet]" in p.stderr, p.stderr
+
+
+def test_a_database_of_revision_0002_gains_the_acquisition_time(db_url):
+    """Revision 0003 adds scans.acquired: a database written at 0002 is refused until `db
+    upgrade`, keeps its scans (acquired NULL: their results are timed by when they were
+    stored) and then takes scans with an acquisition time; SPC orders by it."""
+    from alembic import command
+    from alembic.config import Config
+
+    from gagekit.stats import collect
+    from gagekit.store.schema import MIGRATIONS
+
+    assert known_revisions()[:3] == ["0001", "0002", "0003"]
+    engine = create_engine(db_url)
+    cfg = Config()
+    cfg.set_main_option("script_location", str(MIGRATIONS))
+    with engine.begin() as conn:
+        cfg.attributes["connection"] = conn
+        command.upgrade(cfg, "0002")
+    engine.dispose()
+    with pytest.raises(SchemaVersionError, match="older"):
+        ResultStore(db_url)
+    # a scan as 0002's gagekit stored it
+    engine = create_engine(db_url)
+    with engine.begin() as conn:
+        conn.execute(sa.text("INSERT INTO scans (content_hash, size_bytes, scanned, created) VALUES ('old', 10, :t, :t)"),
+                     {"t": T0})
+    engine.dispose()
+    assert upgrade(db_url) == ("0002", head_revision())
+    store = ResultStore(db_url)
+    with store.engine.connect() as conn:
+        assert conn.execute(sa.select(m.Scan.acquired).where(m.Scan.content_hash == "old")).scalar_one() is None
+    sid = store.ensure_spec("gage", "e" * 64, {"spec": {"x": 1}}, "g.toml", "p")
+    later = T0 + timedelta(days=3)
+    # acquired on January 3, 7 and 8, stored in another order of time (all at T0)
+    for k in range(3):
+        assert store.record("gage", sid, f"{k:064d}", 5, T0, [f"s{k}.ply"], outcome(k),
+                            acquired=later - timedelta(days=2 - k) if k else later - timedelta(days=5))
+    store.close()
+    s = collect(db_url)
+    (c,) = [c for c in s["specs"][0]["characteristics"] if c["name"] == "allowance after T*: g1"]
+    assert c["series"]["scan"] == ["s0.ply", "s1.ply", "s2.ply"]
+    assert c["series"]["time_source"] == ["acquired"] * 3
+    assert c["series"]["time"][0].startswith("2026-01-03") and c["series"]["time"][2].startswith("2026-01-08")

@@ -226,3 +226,36 @@ def test_drawing_features_tolerances_inspection_and_save(browser, tmp_path):
         assert problems == [] and page.evaluate("window.__studio.errors") == []
     finally:
         studio.stop()
+
+
+def test_part_mode_fits_the_callout_table_and_hides_apply_t(browser, tmp_path):
+    """In part mode the callout table (7 columns, feature and characteristic names) fits the
+    480-px panel without a horizontal scroll; "apply T*" belongs to gages only."""
+    scan, part = tmp_path / "bracket.ply", tmp_path / "bracket.toml"
+    shutil.copy(data_path("bracket.ply"), scan)
+    shutil.copy(data_path("bracket.toml"), part)
+    studio = Studio(str(scan), str(part))
+    try:
+        page, problems = open_page(browser, studio.url)
+        assert not page.is_visible("#apply-t") and not page.is_visible("label:has(#apply-t)")
+        page.click("#run")
+        page.wait_for_selector("#callouts tbody tr", timeout=60000)
+        fit = page.evaluate("""() => {
+            const panel = document.querySelector('#panel'), table = document.querySelector('#callouts');
+            const p = panel.getBoundingClientRect(), t = table.getBoundingClientRect();
+            const pad = parseFloat(getComputedStyle(panel).paddingRight);
+            return {panelScroll: panel.scrollWidth, panelClient: panel.clientWidth,
+                    tableRight: t.right, panelInner: p.right - pad, tableScroll: table.scrollWidth, tableClient: table.clientWidth};
+        }""")
+        assert fit["panelScroll"] <= fit["panelClient"], fit
+        assert fit["tableRight"] <= fit["panelInner"] + 0.5 and fit["tableScroll"] <= fit["tableClient"], fit
+        assert not page.is_visible("label:has(#apply-t)")
+        assert problems == [] and page.evaluate("window.__studio.errors") == []
+    finally:
+        studio.stop()
+    studio = Studio(str(data_path("casting_ok.ply")))
+    try:
+        page, problems = open_page(browser, studio.url)
+        assert page.is_visible("label:has(#apply-t)")   # a gage file: shown
+    finally:
+        studio.stop()

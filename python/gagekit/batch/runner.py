@@ -135,7 +135,8 @@ def run_batch(job: Job, paths: Sequence[str], store: ResultStore, executor: Any,
                 yield emit(ScanEvent(path, "error", error=msg))
             return
         del jobs[h]
-        store.record(job.kind, spec_id, h, p.identity.size, p.identity.modified, p.paths, out)
+        store.record(job.kind, spec_id, h, p.identity.size, p.identity.modified, p.paths, out,
+                     acquired=p.identity.acquired)
         for path in p.paths:
             yield emit(ScanEvent(path, out.status, out.result, out.error))
 
@@ -161,7 +162,7 @@ def run_batch(job: Job, paths: Sequence[str], store: ResultStore, executor: Any,
             h = ident.content_hash
             if h in stored:
                 s = stored[h]
-                store.add_paths(h, ident.size, ident.modified, [path])
+                store.add_paths(h, ident.size, ident.modified, [path], acquired=ident.acquired)
                 yield emit(ScanEvent(path, "skipped", s.result, s.error))
             elif h in jobs:
                 jobs[h].paths.append(path)

@@ -15,8 +15,9 @@ import threading
 from dataclasses import dataclass
 from datetime import datetime, timezone
 from pathlib import Path
-from typing import Iterable
+from typing import Iterable, Optional
 
+from ..cloud.acquisition import acquisition_time
 from ..cloud.io import ASCII_SUFFIXES
 from ..errors import InvalidInputError
 
@@ -70,11 +71,13 @@ def expand_scans(args: Iterable[str]) -> list[str]:
 
 @dataclass(frozen=True)
 class FileIdentity:
-    """A scan file's content hash (SHA-256, hex), size (bytes) and modification time (UTC)."""
+    """A scan file's content hash (SHA-256, hex), size (bytes), modification time (UTC)
+    and, where its header records one, acquisition time (UTC, :mod:`gagekit.cloud.acquisition`)."""
 
     content_hash: str
     size: int
     modified: datetime
+    acquired: Optional[datetime] = None
 
 
 def identify_file(path: str) -> FileIdentity:
@@ -98,7 +101,8 @@ def identify_file(path: str) -> FileIdentity:
             if not n:
                 break
             h.update(view[:n])
-    return FileIdentity(h.hexdigest(), int(st.st_size), datetime.fromtimestamp(st.st_mtime, timezone.utc))
+    return FileIdentity(h.hexdigest(), int(st.st_size), datetime.fromtimestamp(st.st_mtime, timezone.utc),
+                        acquisition_time(path))
 
 
 _local = threading.local()

@@ -11,7 +11,11 @@ from ._common import JSON_OPTION, emit, table
 
 
 def _human(s: dict) -> str:
-    out = [f"SPC of {s['database']}"]
+    from ..stats.collect import messages
+
+    res = s["resolution"]
+    out = [f"SPC of {s['database']} (resolution {res['mm']:g} mm, {res['rad']:g} rad: values within it of a limit are on "
+           f"the limit; capability from {s['min_values_for_capability']} values, trends from {s['min_trend_days']:g} day)"]
     for spec in s["specs"]:
         label = spec.get("part") or spec.get("source") or spec["spec"]
         out.append(f"\n{spec['kind']} {label} ({spec['spec']}): {spec['results']} results, {spec['failed']} failed")
@@ -22,6 +26,7 @@ def _human(s: dict) -> str:
                          len(c.get("chart", {}).get("signals", []))])
         if rows:
             out.append(table(["characteristic", "n", "mean", "sd", "min margin", "Cpk", "Ppk", "signals"], rows))
+            out += [f"  {kind}: {line}" for c in spec["characteristics"] for kind, line in messages(c)]
     for mach in s["machines"]:
         out.append(f"\nmachine {mach['machine']}: {mach['calibrations']} tracking runs, "
                    f"{mach['identifications']} identifications; largest drifts:")
@@ -33,7 +38,10 @@ def _human(s: dict) -> str:
 def stats(
     db: str = typer.Option(..., "--db", help="Results database: sqlite:///FILE or postgresql://..."),
     spec: Optional[Path] = typer.Option(None, "--spec", help="Only the results of this gage file or drawing (GAGES.toml or PART.toml)."),
-    tolerance: Optional[float] = typer.Option(None, "--tolerance", help="Upper limit of form errors (mm), for Cp/Cpk of form batches."),
+    tolerance: Optional[float] = typer.Option(None, "--tolerance", help="Upper limit of form errors (mm, > 0), for Cp/Cpk of form batches."),
+    resolution: float = typer.Option(1e-9, "--resolution", help="Resolution of lengths (mm; angles: this / 1000 rad). "
+                                                                 "Values within it of a limit are on the limit; no "
+                                                                 "capability without variation above it."),
     report: Optional[Path] = typer.Option(None, "--report", help="Write report.html with the charts into DIR."),
     as_json: bool = JSON_OPTION,
 ) -> None:
@@ -41,6 +49,8 @@ def stats(
     the Western Electric rules, trends of the allowances and T*; per machine: drift across calibrations."""
     from .._util import load_toml
     from ..stats import collect
+
+    from ..errors import ConfigError
 
     if report is not None:
         from .._files import output_dir
@@ -50,10 +60,8 @@ def stats(
     if spec is not None:
         doc = load_toml(spec)
         documents = [{"spec": doc}, {"part": doc}]
-    s = collect(db, documents=documents, tolerance=tolerance)
+    s = collect(db, documents=documents, tolerance=tolerance, resolution=resolution)
     if spec is not None and not s["specs"]:
-        from ..errors import ConfigError
-
         raise ConfigError(f"{spec}: no results of this spec in {s['database']}")
     if report is not None:
         from ..report.spc import write_spc_report

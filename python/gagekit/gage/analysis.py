@@ -29,7 +29,7 @@ import numpy as np
 
 from .. import _core
 from .._rotation import rotation_from_vector, rotation_vector
-from .._util import as_points, check_finite
+from .._util import LENGTH_RESOLUTION_MM, as_points, check_finite
 from ..cloud.regions import Box
 from ..errors import ConfigError, InvalidInputError
 from .align import Alignment, apply, fit_321
@@ -118,10 +118,21 @@ class GageCheckResult:
     lp_status: str
     motion: dict
     plot_data: Optional[dict] = field(default=None, repr=False, compare=False)
+    resolution: float = LENGTH_RESOLUTION_MM
+    """mm: an allowance within it of zero is on the limit"""
 
     @property
     def conforming(self) -> bool:
         return self.status == "conforming"
+
+    @property
+    def zero_margin_gages(self) -> tuple[str, ...]:
+        """The gages of a conforming part whose allowance after T* is zero (within the
+        resolution): the part can be machined to print, with nothing left for measurement
+        noise or fixturing - a risk, not a comfortable pass."""
+        if not self.conforming:
+            return ()
+        return tuple(g.name for g in self.gages if abs(g.allowance_after) <= self.resolution)
 
     def gage(self, name: str) -> GageOutcome:
         for g in self.gages:
@@ -139,6 +150,9 @@ class GageCheckResult:
             "gages": [g.to_dict() for g in self.gages],
             "infeasible_groups": [list(g) for g in self.infeasible_groups],
             "largest_release": self.largest_release,
+            "resolution_mm": self.resolution,
+            "zero_margin": bool(self.zero_margin_gages),
+            "zero_margin_gages": list(self.zero_margin_gages),
             "alignment": None if self.alignment is None else self.alignment.to_dict(),
             "motion": self.motion,
             "solver": {"lp_status": self.lp_status, "relinearisations": self.iterations,

@@ -10,7 +10,7 @@ from typing import Any
 from ..report.text import table
 from .analysis import GageCheckResult
 
-__all__ = ["gage_table", "summary_lines", "human"]
+__all__ = ["gage_table", "summary_lines", "human", "zero_margin_line"]
 
 
 def _f(v: float, nd: int = 4) -> float:
@@ -26,11 +26,21 @@ def gage_table(result: GageCheckResult) -> tuple[list[str], list[list]]:
     return headers, rows
 
 
+def zero_margin_line(result: GageCheckResult) -> str:
+    """The flag of a conforming part that sits on its limits after T*."""
+    names = result.zero_margin_gages
+    return (f"zero margin: {'gage' if len(names) == 1 else 'gages'} {', '.join(names)} "
+            f"{'sits' if len(names) == 1 else 'sit'} on the limit after T* (allowance 0 within {result.resolution:g} mm): "
+            "conforming, but nothing is left for measurement noise or fixturing")
+
+
 def summary_lines(result: GageCheckResult) -> list[str]:
     """Status, T*, the objective, groups and bound limits as text lines."""
     t = result.transform
-    out = [
-        f"status: {result.status}",
+    out = [f"status: {result.status}"]
+    if result.zero_margin_gages:
+        out.append(zero_margin_line(result))
+    out += [
         f"T*: alpha = {t.alpha:.6f} rad, beta = {t.beta:.6f} rad ({math.degrees(t.beta):.4f} deg), "
         f"gamma = {t.gamma:.6f} rad",
         f"    dx = {t.dx:.4f} mm, dy = {t.dy:.4f} mm, dz = {t.dz:.4f} mm",

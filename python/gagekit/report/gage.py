@@ -74,7 +74,8 @@ def add_to_report(rep, result: GageCheckResult, label: str = "") -> list[str]:
     prefix = f"{label}: " if label else ""
     rep.section(f"{prefix}virtual gage result")
     for line in summary_lines(result):
-        rep.text(line, "ok" if line == "status: conforming" else ("bad" if line.startswith("status") else None))
+        rep.text(line, "ok" if line == "status: conforming" else ("bad" if line.startswith(("status", "zero margin"))
+                                                                  else None))
     headers, rows = gage_table(result)
     rep.table(headers, rows, "Allowances (mm): smallest signed distance to each gage plane; q the largest; "
               "slack the release s_i (Tables 5.3-5.4)")

@@ -23,6 +23,19 @@ def _plt():
     return plt
 
 
+def date_axis(ax, times: list) -> None:
+    """Dates and times on a time axis (``2026-03-02 07:00``), whatever the span: matplotlib's
+    automatic format shows ``53:23.300000`` for data within a minute. Seconds appear when
+    the data span less than a day, microseconds when less than a minute."""
+    import matplotlib.dates as mdates
+
+    span = (max(times) - min(times)).total_seconds() if times else 0.0
+    fmt = "%Y-%m-%d %H:%M" if span >= 86400 else ("%Y-%m-%d %H:%M:%S" if span >= 60 else "%Y-%m-%d %H:%M:%S.%f")
+    ax.xaxis.set_major_locator(mdates.AutoDateLocator(minticks=3, maxticks=6))
+    ax.xaxis.set_major_formatter(mdates.DateFormatter(fmt))
+    ax.set_xlabel("time (UTC)")
+
+
 def _g(d: dict, k: str):
     v = d.get(k)
     return "-" if v is None else v
@@ -67,13 +80,16 @@ def trend_figure(chars: list, title: str, ylabel: str):
     """Several series against the scan time."""
     plt = _plt()
     fig, ax = plt.subplots(figsize=(8, 4))
+    every = []
     for c in chars:
         t = [datetime.fromisoformat(s) for s in c["series"]["time"]]
+        every += t
         ax.plot(t, c["series"]["value"], marker="o", ms=3, lw=1, label=c["name"].split(": ")[-1])
     ax.set_title(title)
     ax.set_ylabel(ylabel)
     ax.legend(fontsize=7, ncol=2)
     ax.grid(alpha=0.3)
+    date_axis(ax, every)
     fig.autofmt_xdate()
     fig.tight_layout()
     return fig
@@ -83,8 +99,10 @@ def drift_figure(machine: dict, top: int = 8):
     """Fig. 4.8 across days: each group's change since the first calibration."""
     plt = _plt()
     fig, ax = plt.subplots(figsize=(8, 4.5))
+    every = []
     for g in machine["groups"][:top]:
         t = [datetime.fromisoformat(s) for s in g["times"]]
+        every += t
         if "effect_mm_per_unit" in g:
             y = [(v - g["first"]) * g["effect_mm_per_unit"] * 1000.0 for v in g["values"]]
         else:
@@ -97,6 +115,7 @@ def drift_figure(machine: dict, top: int = 8):
     ax.set_title(f"{machine['machine']}: parameter drift across calibrations (Fig. 4.8)")
     ax.legend(fontsize=7, ncol=2)
     ax.grid(alpha=0.3)
+    date_axis(ax, every)
     fig.autofmt_xdate()
     fig.tight_layout()
     return fig
@@ -108,13 +127,24 @@ def write_spc_report(stats: dict, directory: Union[str, Path]) -> Path:
     for spec in stats["specs"]:
         label = spec.get("part") or spec.get("source") or spec["spec"]
         rep.section(f"{spec['kind']} {label} ({spec['spec']})")
+        res = stats["resolution"]
         rep.text(f"{spec['results']} results, {spec['failed']} failed scans. Cp/Cpk: within sigma = MRbar/1.128; "
-                 "Pp/Ppk: overall sample standard deviation (ISO 22514-2, AIAG SPC); one limit: one-sided indices.")
+                 "Pp/Ppk: overall sample standard deviation (ISO 22514-2, AIAG SPC); one limit: one-sided indices; "
+                 "indices only against specification limits. "
+                 f"Resolution {res['mm']:g} mm ({res['rad']:g} rad): values within it of a limit are on the limit, "
+                 "no index without variation above it. Capability from "
+                 f"{stats['min_values_for_capability']} values (AIAG), trends from {stats['min_trend_days']:g} day of data; "
+                 "times: the scan's acquisition time, else when its result was stored.")
         chars = spec["characteristics"]
         if not chars:
             rep.text("no successful results yet")
             continue
         rep.table(HEADERS, capability_rows(chars))
+        from ..stats.collect import messages
+
+        for c in chars:
+            for kind, line in messages(c):
+                rep.text(f"{kind}: {line}", None if kind == "note" else "bad")
         allow = [c for c in chars if c["name"].startswith("allowance after")]
         tstar = [c for c in chars if c["name"].startswith("T* ")]
         if allow:

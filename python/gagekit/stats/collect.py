@@ -11,7 +11,13 @@ Characteristics and their limits:
 * form fits (Ch. 6): the form error (mm), upper limit the ``--tolerance`` when given;
 * inspections: each tolerance's value against its lower/upper limits as stored.
 
-Values are in time order of the scans (the files' modification times). Machines: the
+Values are in time order of the scans: the acquisition time the scan file records (E57
+``acquisitionStart``, LAS creation date: ``scans.acquired``), else the time the result was
+stored (a file's modification time says when it was copied, not when it was scanned); the
+series gives each value's time and its ``time_source``. Results carry a resolution
+(:data:`gagekit.stats.spc.RESOLUTION`, ``--resolution``): values within it of a limit are on
+the limit, and a characteristic that does not vary above it has no index (see
+:mod:`gagekit.stats.spc`). Machines: the
 identified parameter groups of every calibration (each cycle of each tracking run is an
 identification, Eqs. 4.12-4.13, timed by the run's start plus the cycle's time in minutes), their change since the first one and its trend per day - Fig. 4.8
 across days instead of across the cycles of one day.
@@ -28,9 +34,9 @@ import sqlalchemy as sa
 from ..store import models as m
 from ..store.schema import _reason, create_engine, ensure_schema, safe_url
 from ..errors import StoreError
-from .spc import capability, imr_chart, trend_per_day
+from .spc import MIN_CAPABILITY_VALUES, MIN_TREND_DAYS, RESOLUTION, capability, imr_chart, on_limits, trend_per_day
 
-__all__ = ["collect", "characteristic"]
+__all__ = ["collect", "characteristic", "messages"]
 
 
 def _days(times: list) -> list[float]:
@@ -45,34 +51,79 @@ def _days(times: list) -> list[float]:
     return out
 
 
+def _utc(t: datetime) -> datetime:
+    return t.replace(tzinfo=timezone.utc) if t.tzinfo is None else t
+
+
 def characteristic(name: str, unit: str, values: list, times: list, scans: list,
-                   lower: Optional[float] = None, upper: Optional[float] = None) -> dict:
-    """Capability, I-MR chart with Western Electric signals, trend per day of one series."""
-    cap = capability(values, lower, upper)
+                   lower: Optional[float] = None, upper: Optional[float] = None, *,
+                   resolution: Optional[float] = None, time_source: Optional[list] = None) -> dict:
+    """Capability, I-MR chart with Western Electric signals, trend per day of one series
+    (``resolution``: of the unit, default :data:`RESOLUTION`)."""
+    res = RESOLUTION.get(unit, 0.0) if resolution is None else resolution
+    cap = capability(values, lower, upper, resolution=res, unit=unit)
+    x = on_limits(values, lower, upper, res)
     d: dict[str, Any] = {"name": name, "unit": unit, **cap.to_dict()}
-    trend = trend_per_day(_days(times), values)
+    notes = d.setdefault("notes", [])
+    if lower is not None or upper is not None:
+        d["zero_margin"] = bool(cap.on_limit)
+    days = _days(times)
+    trend = trend_per_day(days, x) if cap.varies else None
     if trend is not None:
         d["trend_per_day"] = trend
-    chart = imr_chart(values)
+    elif len(days) >= 2 and cap.varies:
+        span = (max(days) - min(days)) * 24.0
+        notes.append(f"{span:.3g} h of data, less than {MIN_TREND_DAYS:g} day: no trend per day")
+    if not notes:
+        del d["notes"]
+    chart = imr_chart(x, res)
     if chart is not None:
         c = chart.to_dict()
         for s in c["signals"]:
             s["scan"] = scans[s["index"]]
         d["chart"] = c
-    d["series"] = {"time": [t.isoformat() for t in times], "value": list(map(float, values)), "scan": scans}
+    d["series"] = {"time": [_utc(t).isoformat() for t in times], "value": list(map(float, x)), "scan": scans}
+    if time_source is not None:
+        d["series"]["time_source"] = time_source
     return d
 
 
+def messages(c: dict) -> list[tuple[str, str]]:
+    """(kind, line) of a characteristic's warnings and notes for people: ``zero margin``
+    (values on a limit), ``warning`` (too few values), ``note`` (why an index or a trend is
+    missing; the obvious "no specification limits" left out)."""
+    out = [("zero margin" if "nothing is left" in w else "warning", f"{c['name']}: {w}") for w in c.get("warnings", [])]
+    out += [("note", f"{c['name']}: {n}") for n in c.get("notes", []) if not n.startswith("no specification limits")]
+    return out
+
+
+def _time(acquired: Optional[datetime], stored: datetime) -> tuple[datetime, str]:
+    return (_utc(acquired), "acquired") if acquired is not None else (_utc(stored), "stored")
+
+
 def _results(conn, spec_id: int, extra_cols, join_table, *where):
-    q = (sa.select(m.Result.id, m.Result.path, m.Scan.scanned, *extra_cols)
+    """(result id, path, time, time source, *extra) of a spec's ok results, in time order:
+    the scan's acquisition time, else the time its result was stored; equal times by path."""
+    q = (sa.select(m.Result.id, m.Result.path, m.Scan.acquired, m.Result.finished, *extra_cols)
          .join(m.Scan, m.Scan.id == m.Result.scan_id)
          .join(join_table, join_table.result_id == m.Result.id)
-         .where(m.Result.spec_id == spec_id, m.Result.status == "ok", *where)
-         .order_by(m.Scan.scanned, m.Result.path))
-    return conn.execute(q).all()
+         .where(m.Result.spec_id == spec_id, m.Result.status == "ok", *where))
+    rows = [(r[0], r[1], *_time(r[2], r[3]), *r[4:]) for r in conn.execute(q).all()]
+    rows.sort(key=lambda r: (r[2], r[1]))
+    return rows
 
 
-def _gage_spec(conn, spec) -> list[dict]:
+def _series(name: str, unit: str, rows: list, col: int, res: dict, **limits) -> dict:
+    """One characteristic from ``_results`` rows (value in column ``col``)."""
+    return characteristic(name, unit, [r[col] for r in rows], [r[2] for r in rows], [r[1] for r in rows],
+                          resolution=res.get(unit, 0.0), time_source=[r[3] for r in rows], **limits)
+
+
+def _gage_spec(conn, spec, res: dict) -> list[dict]:
+    """Per gage: the allowance after T* (lower limit 0: the part can be machined to print),
+    the allowance before T* and the stock q (no specification limits: the casting as
+    fixtured and the deepest cut are not toleranced, so no capability); per free motion
+    of T*, its value against the bounds of Omega."""
     doc = (spec.document or {}).get("spec", {})
     motion = doc.get("motion", {}) if isinstance(doc, dict) else {}
     free = motion.get("free", ["alpha", "beta", "gamma", "dx", "dy", "dz"])
@@ -85,47 +136,40 @@ def _gage_spec(conn, spec) -> list[dict]:
     out = []
     rows = _results(conn, spec.id, [m.GageAllowance.gage, m.GageAllowance.allowance_after,
                                      m.GageAllowance.allowance_before, m.GageAllowance.q], m.GageAllowance)
-    by = defaultdict(list)
-    order: list[str] = []
-    for rid, path, scanned, gage, after, before, q in rows:
-        if gage not in by:
-            order.append(gage)
-        by[gage].append((scanned, path, after, before, q))
-    for col, what, lower in ((2, "allowance after T*", 0.0), (3, "allowance before T*", 0.0), (4, "stock q after T*", None)):
-        for g in order:
-            s = by[g]
-            out.append(characteristic(f"{what}: {g}", "mm", [r[col] for r in s], [r[0] for r in s], [r[1] for r in s],
-                                      lower=lower))
+    by: dict[str, list] = defaultdict(list)
+    for r in rows:
+        by[r[4]].append(r)
+    for col, what, lower in ((5, "allowance after T*", 0.0), (6, "allowance before T*", None), (7, "stock q after T*", None)):
+        for g, s in by.items():
+            out.append(_series(f"{what}: {g}", "mm", s, col, res, lower=lower))
     cols = [getattr(m.GageCheck, k) for k in ("alpha", "beta", "gamma", "dx", "dy", "dz")]
     rows = _results(conn, spec.id, cols, m.GageCheck)
     if rows:
         for k, motion_name in enumerate(("alpha", "beta", "gamma", "dx", "dy", "dz")):
             if motion_name not in free:
                 continue
-            bound = max_angle if motion_name in ("alpha", "beta", "gamma") else max_shift
-            out.append(characteristic(f"T* {motion_name}", "rad" if bound is max_angle else "mm",
-                                      [r[3 + k] for r in rows], [r[2] for r in rows], [r[1] for r in rows],
-                                      lower=-bound, upper=bound))
+            angle = motion_name in ("alpha", "beta", "gamma")
+            bound = max_angle if angle else max_shift
+            out.append(_series(f"T* {motion_name}", "rad" if angle else "mm", rows, 4 + k, res, lower=-bound, upper=bound))
     return out
 
 
-def _form_spec(conn, spec, tolerance: Optional[float]) -> list[dict]:
+def _form_spec(conn, spec, tolerance: Optional[float], res: dict) -> list[dict]:
     rows = _results(conn, spec.id, [m.FormResult.form_error], m.FormResult)
     if not rows:
         return []
     d = spec.document or {}
-    return [characteristic(f"form error: {d.get('shape', '?')} ({d.get('criterion', '?')})", "mm",
-                           [r[3] for r in rows], [r[2] for r in rows], [r[1] for r in rows], upper=tolerance)]
+    return [_series(f"form error: {d.get('shape', '?')} ({d.get('criterion', '?')})", "mm", rows, 4, res,
+                    upper=tolerance)]
 
 
-def _inspect_spec(conn, spec) -> list[dict]:
+def _inspect_spec(conn, spec, res: dict) -> list[dict]:
     rows = _results(conn, spec.id, [m.InspectionResult.tolerance, m.InspectionResult.value, m.InspectionResult.lower,
                                     m.InspectionResult.upper], m.InspectionResult)
-    by = defaultdict(list)
-    for rid, path, scanned, tol, value, lo, up in rows:
-        by[tol].append((scanned, path, value, lo, up))
-    return [characteristic(f"tolerance: {t}", "mm", [v for _, _, v, _, _ in s], [x[0] for x in s], [x[1] for x in s],
-                           lower=s[-1][3], upper=s[-1][4]) for t, s in by.items()]
+    by: dict[str, list] = defaultdict(list)
+    for r in rows:
+        by[r[4]].append(r)
+    return [_series(f"tolerance: {t}", "mm", s, 5, res, lower=s[-1][6], upper=s[-1][7]) for t, s in by.items()]
 
 
 def _machines(conn) -> list[dict]:
@@ -180,9 +224,22 @@ def _machines(conn) -> list[dict]:
     return out
 
 
-def collect(url: str, *, documents: Optional[list] = None, tolerance: Optional[float] = None) -> dict:
+def collect(url: str, *, documents: Optional[list] = None, tolerance: Optional[float] = None,
+            resolution: float = RESOLUTION["mm"]) -> dict:
     """The SPC of the database at ``url``: every spec, or those whose stored document is one
-    of ``documents`` (a gage file is stored as ``{"spec": parsed TOML}``), and the machines."""
+    of ``documents`` (a gage file is stored as ``{"spec": parsed TOML}``), and the machines.
+
+    ``tolerance`` (mm, > 0): the upper limit of form errors; ``resolution`` (mm, > 0): of
+    lengths, and of angles over a 1 m lever (``resolution / 1000`` rad)."""
+    import math
+
+    from ..errors import ConfigError
+
+    if tolerance is not None and not (math.isfinite(tolerance) and tolerance > 0):
+        raise ConfigError(f"--tolerance {tolerance:g}: a form tolerance is a positive number of mm")
+    if not (math.isfinite(resolution) and 0 < resolution < 1):
+        raise ConfigError(f"--resolution {resolution:g}: the resolution of results is a positive number of mm below 1")
+    res = {"mm": resolution, "rad": resolution * 1e-3}
     engine = create_engine(url, must_exist=True)
     try:
         ensure_schema(engine, create=False)
@@ -197,11 +254,11 @@ def collect(url: str, *, documents: Optional[list] = None, tolerance: Optional[f
                 failed = conn.execute(sa.select(sa.func.count()).select_from(m.Result)
                                       .where(m.Result.spec_id == spec.id, m.Result.status == "error")).scalar()
                 if spec.kind == "gage":
-                    chars = _gage_spec(conn, spec)
+                    chars = _gage_spec(conn, spec, res)
                 elif spec.kind == "form":
-                    chars = _form_spec(conn, spec, tolerance)
+                    chars = _form_spec(conn, spec, tolerance, res)
                 else:
-                    chars = _inspect_spec(conn, spec)
+                    chars = _inspect_spec(conn, spec, res)
                 entry = {"spec": spec.hash[:12], "kind": spec.kind, "results": n, "failed": failed,
                          "characteristics": chars}
                 if spec.source:
@@ -211,6 +268,7 @@ def collect(url: str, *, documents: Optional[list] = None, tolerance: Optional[f
                 specs.append(entry)
             machines = _machines(conn) if documents is None else []
         return {"database": safe_url(engine.url), "generated": datetime.now(timezone.utc).isoformat(),
+                "resolution": res, "min_values_for_capability": MIN_CAPABILITY_VALUES, "min_trend_days": MIN_TREND_DAYS,
                 "specs": specs, "machines": machines}
     except sa.exc.SQLAlchemyError as exc:
         raise StoreError(f"cannot read {safe_url(engine.url)}: {_reason(exc)}") from None

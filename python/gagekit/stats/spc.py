@@ -24,6 +24,22 @@ Sec. 1B), with the zones of the individuals chart's sigma:
 4. eight consecutive points on the same side of the centre line.
 
 A signal is reported at the point that completes the pattern.
+
+Resolution. Every result is a float computed from measured points; an LP that places a
+face exactly on its limit returns +-1e-14 mm, not 0. A characteristic carries a resolution
+(:data:`RESOLUTION`: 1e-9 mm for lengths, 1e-12 rad for angles, 1e-9 mm over a 1 m lever):
+a value within it of a limit is on the limit, and a characteristic whose values spread no
+more than it has no variation to speak of: no capability index, no control chart, a note.
+
+Capability rules (AIAG *SPC* manual, 2nd ed., Ch. II-IV; ISO 22514-2): indices exist only
+against specification limits, and from :data:`MIN_CAPABILITY_VALUES` = 25 values: the
+AIAG manual asks for 25 subgroups before control limits and capability are computed
+(with individuals, 25 values); below, each index comes with a warning that states n and
+the one-sided 95 % lower confidence bound of Cpk (Bissell, *Applied Statistics* 39, 1990:
+``Cpk - 1.645 sqrt(1/(9n) + Cpk^2/(2(n-1)))``): at n = 10 a Cpk of 1.33 may be 0.79.
+
+Trends need time: a slope over less than :data:`MIN_TREND_DAYS` (one day) of data is not
+reported (8 scans written within milliseconds are not 792 mm/day).
 """
 
 from __future__ import annotations
@@ -34,8 +50,13 @@ from typing import Optional, Sequence
 
 import numpy as np
 
+from .._util import LENGTH_RESOLUTION_MM
+
 D2 = 1.128  #: d2 for moving ranges of two observations
 D4 = 3.267  #: D4 for moving ranges of two observations
+RESOLUTION = {"mm": LENGTH_RESOLUTION_MM, "rad": LENGTH_RESOLUTION_MM * 1e-3}  #: default resolution of results by unit
+MIN_CAPABILITY_VALUES = 25  #: AIAG: a capability study needs at least 25 values
+MIN_TREND_DAYS = 1.0  #: no trend over less than a day of data
 
 RULES = {
     1: "one point beyond 3 sigma",
@@ -44,7 +65,7 @@ RULES = {
     4: "eight points in a row on one side of the centre line",
 }
 
-__all__ = ["D2", "D4", "RULES", "Capability", "ImrChart", "Signal", "capability", "imr_chart", "western_electric",
+__all__ = ["D2", "D4", "RULES", "RESOLUTION", "MIN_CAPABILITY_VALUES", "MIN_TREND_DAYS", "on_limits", "Capability", "ImrChart", "Signal", "capability", "imr_chart", "western_electric",
            "trend_per_day"]
 
 
@@ -80,8 +101,11 @@ class ImrChart:
 class Capability:
     """Summary statistics and capability of one characteristic against its limits.
 
-    Indices that do not exist for the data (one value, no spread, no limits) are absent
-    from :meth:`to_dict` and ``None`` here, with the reason in ``notes``."""
+    Indices that do not exist for the data (one value, no spread above the resolution,
+    no limits) are absent from :meth:`to_dict` and ``None`` here, with the reason in
+    ``notes``; ``warnings`` say when an index exists but rests on too few values.
+    ``on_limit`` counts the values within the resolution of a limit (they count as on it:
+    a margin of zero)."""
 
     n: int
     mean: float
@@ -97,15 +121,27 @@ class Capability:
     pp: Optional[float] = None
     ppk: Optional[float] = None
     notes: tuple[str, ...] = ()
+    resolution: float = 0.0
+    on_limit: int = 0
+    warnings: tuple[str, ...] = ()
+
+    @property
+    def varies(self) -> bool:
+        """Whether the values spread more than the resolution."""
+        return self.n >= 2 and self.maximum - self.minimum > self.resolution
 
     def to_dict(self) -> dict:
-        d = {"n": self.n, "mean": self.mean, "min": self.minimum, "max": self.maximum}
+        d = {"n": self.n, "mean": self.mean, "min": self.minimum, "max": self.maximum, "resolution": self.resolution}
         for k in ("lower", "upper", "sd", "sigma_within", "min_margin", "cp", "cpk", "pp", "ppk"):
             v = getattr(self, k)
             if v is not None:
                 d[k] = v
+        if self.lower is not None or self.upper is not None:
+            d["on_limit"] = self.on_limit
         if self.notes:
             d["notes"] = list(self.notes)
+        if self.warnings:
+            d["warnings"] = list(self.warnings)
         return d
 
 
@@ -120,34 +156,75 @@ def _index(spread: Optional[float], mean: float, lower: Optional[float], upper: 
     return c, ck
 
 
-def capability(values: Sequence[float], lower: Optional[float] = None, upper: Optional[float] = None) -> Capability:
-    """n, mean, sd, the smallest margin to a limit, Cp/Cpk (within) and Pp/Ppk (overall)."""
+def on_limits(values: Sequence[float], lower: Optional[float], upper: Optional[float], resolution: float) -> np.ndarray:
+    """``values`` with every value within ``resolution`` of a limit set to that limit."""
+    x = np.array(values, dtype=np.float64)
+    for limit in (lower, upper):
+        if limit is not None:
+            x[np.abs(x - limit) <= resolution] = limit
+    return x
+
+
+def _fmt(v: float) -> str:
+    return f"{v:.3g}"
+
+
+def cpk_lower_bound(cpk: float, n: int, z: float = 1.645) -> float:
+    """One-sided lower confidence bound of Cpk (Bissell 1990; z = 1.645: 95 %)."""
+    return cpk - z * math.sqrt(1.0 / (9.0 * n) + cpk * cpk / (2.0 * (n - 1)))
+
+
+def capability(values: Sequence[float], lower: Optional[float] = None, upper: Optional[float] = None, *,
+               resolution: float = 0.0, unit: str = "") -> Capability:
+    """n, mean, sd, the smallest margin to a limit, Cp/Cpk (within) and Pp/Ppk (overall).
+
+    Values within ``resolution`` of a limit are on the limit (see the module doc); with a
+    spread of at most ``resolution`` there is no capability index."""
+    if not (math.isfinite(resolution) and resolution >= 0):
+        raise ValueError(f"the resolution must be a finite number >= 0, got {resolution}")
     x = np.asarray(values, dtype=np.float64)
     if x.ndim != 1 or len(x) == 0:
         raise ValueError("capability needs at least one value")
     if lower is not None and upper is not None and not lower < upper:
         raise ValueError(f"the lower limit {lower} must be below the upper limit {upper}")
+    x = on_limits(x, lower, upper, resolution)
     n, mean = len(x), float(x.mean())
-    notes = []
+    notes: list[str] = []
+    warns: list[str] = []
     margins = [m for m in ((x - lower).min() if lower is not None else None, (upper - x).min() if upper is not None else None)
                if m is not None]
     min_margin = float(min(margins)) if margins else None
-    if lower is None and upper is None:
+    on_limit = int(sum(int(np.sum(x == lim)) for lim in (lower, upper) if lim is not None))
+    limits = lower is not None or upper is not None
+    if not limits:
         notes.append("no specification limits: no capability indices")
     sd = sigma = None
-    if n >= 2:
+    spread = float(x.max() - x.min())
+    u = f" {unit}" if unit else ""
+    if n < 2:
+        notes.append("one value: no spread, no capability indices")
+    elif spread <= resolution:
+        notes.append(f"no variation above the resolution ({resolution:g}{u}): the values spread {_fmt(spread)}{u}; "
+                     "no capability index and no control chart")
+    else:
         sd = float(x.std(ddof=1))
         sigma = float(np.abs(np.diff(x)).mean() / D2)
-        if sd == 0.0:
-            notes.append("all values equal: no spread, no capability indices")
-    else:
-        notes.append("one value: no spread, no capability indices")
-    cp, cpk = _index(sigma, mean, lower, upper)
-    pp, ppk = _index(sd, mean, lower, upper)
-    if sigma == 0.0 and sd and sd > 0:
-        notes.append("no point-to-point variation (MRbar = 0): no Cp/Cpk; see Pp/Ppk")
+    cp = cpk = pp = ppk = None
+    if limits:
+        cp, cpk = _index(sigma, mean, lower, upper)
+        pp, ppk = _index(sd, mean, lower, upper)
+        if sigma == 0.0 and sd and sd > 0:
+            notes.append("no point-to-point variation (MRbar = 0): no Cp/Cpk; see Pp/Ppk")
+        if (cpk is not None or ppk is not None) and n < MIN_CAPABILITY_VALUES:
+            k = cpk if cpk is not None else ppk
+            warns.append(f"only {n} values: a capability study needs at least {MIN_CAPABILITY_VALUES} (AIAG SPC manual); "
+                         f"with {n} the 95 % lower confidence bound of {'Cpk' if cpk is not None else 'Ppk'} "
+                         f"{k:.2f} is {cpk_lower_bound(k, n):.2f} (Bissell)")
+    if on_limit:
+        warns.append(f"{on_limit} of {n} values on a limit (within {resolution:g}{u}): conforming, but nothing is left "
+                     "for measurement noise or fixturing")
     return Capability(n, mean, float(x.min()), float(x.max()), lower, upper, sd, sigma, min_margin,
-                      cp, cpk, pp, ppk, tuple(notes))
+                      cp, cpk, pp, ppk, tuple(notes), resolution, on_limit, tuple(warns))
 
 
 def western_electric(x: Sequence[float], center: float, sigma: float) -> list[Signal]:
@@ -170,10 +247,11 @@ def western_electric(x: Sequence[float], center: float, sigma: float) -> list[Si
     return out
 
 
-def imr_chart(x: Sequence[float]) -> Optional[ImrChart]:
-    """Individuals / moving-range chart of ``x`` in time order (None below two values)."""
+def imr_chart(x: Sequence[float], resolution: float = 0.0) -> Optional[ImrChart]:
+    """Individuals / moving-range chart of ``x`` in time order (None below two values, or
+    when they spread no more than ``resolution``: a chart of rounding noise says nothing)."""
     x = np.asarray(x, dtype=np.float64)
-    if len(x) < 2:
+    if len(x) < 2 or float(x.max() - x.min()) <= resolution:
         return None
     center = float(x.mean())
     mr = float(np.abs(np.diff(x)).mean())
@@ -182,11 +260,12 @@ def imr_chart(x: Sequence[float]) -> Optional[ImrChart]:
                     tuple(western_electric(x, center, sigma)) if sigma > 0 else ())
 
 
-def trend_per_day(days: Sequence[float], values: Sequence[float]) -> Optional[float]:
-    """Least-squares slope of ``values`` against time in days (None without a time span)."""
+def trend_per_day(days: Sequence[float], values: Sequence[float], min_days: float = MIN_TREND_DAYS) -> Optional[float]:
+    """Least-squares slope of ``values`` against time in days (None over less than
+    ``min_days`` of data: minutes of data extrapolated to a day are not a trend)."""
     t = np.asarray(days, dtype=np.float64)
     y = np.asarray(values, dtype=np.float64)
-    if len(t) < 2 or np.ptp(t) == 0:
+    if len(t) < 2 or np.ptp(t) == 0 or np.ptp(t) < min_days:
         return None
     tc = t - t.mean()
     return float((tc * (y - y.mean())).sum() / (tc * tc).sum())

@@ -71,6 +71,9 @@ class Scan(Base):
     #: when the scan was taken: the modification time of the first file it was seen in
     scanned: Mapped[datetime] = _ts()
     created: Mapped[datetime] = _ts()
+    #: since revision 0003: when the scanner took it, from the file's header (E57
+    #: acquisitionStart, LAS creation date); NULL when the format does not say
+    acquired: Mapped[Optional[datetime]] = mapped_column(DateTime(timezone=True), nullable=True)
 
 
 class ScanPath(Base):

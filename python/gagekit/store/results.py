@@ -204,17 +204,20 @@ class ResultStore:
 
     # ------------------------------------------------------------------------ writes
 
-    def _scan_id(self, conn: sa.Connection, content_hash: str, size: int, scanned: datetime) -> int:
-        return _upsert_scan(conn, {"content_hash": content_hash, "size_bytes": size, "scanned": scanned, "created": now()})
+    def _scan_id(self, conn: sa.Connection, content_hash: str, size: int, scanned: datetime,
+                 acquired: Optional[datetime] = None) -> int:
+        return _upsert_scan(conn, {"content_hash": content_hash, "size_bytes": size, "scanned": scanned, "created": now(),
+                                   "acquired": acquired})
 
-    def add_paths(self, content_hash: str, size: int, scanned: datetime, paths: Iterable[str]) -> None:
+    def add_paths(self, content_hash: str, size: int, scanned: datetime, paths: Iterable[str], *,
+                  acquired: Optional[datetime] = None) -> None:
         """Record more paths of a scan's content (one transaction)."""
         import time
 
         t0 = time.perf_counter()
         try:
             with self.engine.begin() as conn:
-                sid = self._scan_id(conn, content_hash, size, scanned)
+                sid = self._scan_id(conn, content_hash, size, scanned, acquired)
                 rows = [{"scan_id": sid, "path": p, "seen": now()} for p in paths]
                 if rows:
                     _insert_ignore(conn, m.ScanPath.__table__, rows, ["scan_id", "path"])
@@ -224,9 +227,10 @@ class ResultStore:
             self.write_seconds += time.perf_counter() - t0
 
     def record(self, kind: str, spec_id: int, content_hash: str, size: int, scanned: datetime, paths: Sequence[str],
-               outcome: Any) -> bool:
+               outcome: Any, *, acquired: Optional[datetime] = None) -> bool:
         """Store one scan's outcome (a :class:`gagekit.batch.Outcome`) with its paths and
-        detail rows, in one transaction.
+        detail rows, in one transaction; ``acquired`` is the scan's acquisition time from
+        its header, where it has one.
 
         Returns False (and changes nothing but the paths) when the result was already there."""
         import time
@@ -234,7 +238,7 @@ class ResultStore:
         t0 = time.perf_counter()
         try:
             with self.engine.begin() as conn:
-                sid = self._scan_id(conn, content_hash, size, scanned)
+                sid = self._scan_id(conn, content_hash, size, scanned, acquired)
                 _insert_ignore(conn, m.ScanPath.__table__, [{"scan_id": sid, "path": p, "seen": now()} for p in paths],
                                ["scan_id", "path"])
                 row = {"scan_id": sid, "spec_id": spec_id, "path": paths[0], "status": outcome.status,

@@ -50,8 +50,11 @@ def serve(scan: Path, spec: Optional[Path] = None, *, units: Optional[str] = Non
 
     ``kind`` is what a ``spec`` that does not exist yet becomes: a gage file
     (``"gage"``) or a drawing (``"part"``). Without ``host`` the server listens on 127.0.0.1 only and accepts only loopback
-    Host headers. With ``host`` it listens there and every request must carry a
-    freshly generated access token, printed with the address.
+    Host headers (no DNS rebinding); with ``host`` it listens there. On every address each
+    request must carry a freshly generated access token, as Jupyter's server does: any
+    local user can connect to a loopback port, and any web page can make the browser
+    send requests to it. The address printed, and opened in the browser, carries it
+    (``?token=...``); the first page load turns it into a cookie of this server.
     """
     import uvicorn
 
@@ -65,12 +68,11 @@ def serve(scan: Path, spec: Optional[Path] = None, *, units: Optional[str] = Non
     if not 0 <= port <= 65535:
         raise ConfigError(f"--port {port}: must be between 0 and 65535")
     root = (root or scan.resolve().parent).resolve()
-    token = None
+    token = secrets.token_urlsafe(24)
     allowed = LOOPBACK_HOSTS
     bind = "127.0.0.1"
     if host is not None:
         bind = host
-        token = secrets.token_urlsafe(24)
         allowed = None
     echo(f"gagekit studio: reading {scan} ...")
     loaded = load_scan(scan.resolve(), units, lod_max)
@@ -89,13 +91,12 @@ def serve(scan: Path, spec: Optional[Path] = None, *, units: Optional[str] = Non
     port = sock.getsockname()[1]
     shown = "127.0.0.1" if bind in ("0.0.0.0", "::") else bind
     shown = f"[{shown}]" if ":" in shown and not shown.startswith("[") else shown
-    url = f"http://{shown}:{port}/" + (f"?token={token}" if token else "")
+    url = f"http://{shown}:{port}/?token={token}"
     config = uvicorn.Config(app, log_level="warning", lifespan="off", timeout_graceful_shutdown=2)
     server = uvicorn.Server(config)
     info = loaded.info()
     echo(f"gagekit studio: {info['count']:,} points ({info['lod_count']:,} shown) read in {info['load_seconds']:.2f} s")
-    if token:
-        echo(f"gagekit studio: listening on {bind}:{port}; access token: {token}")
+    echo(f"gagekit studio: listening on {bind}:{port}; access token: {token}")
     echo(f"gagekit studio: open {url}  (Ctrl+C to stop)")
 
     if open_browser:

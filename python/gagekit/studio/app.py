@@ -22,15 +22,22 @@ Endpoints (all JSON unless said otherwise; errors are ``{"error": message}`` wit
 ==========================  ==============================================================
 
 Requests name files relative to the studio folder; a path that leads outside it is
-refused (403). Request bodies are limited to :data:`MAX_BODY` bytes (413); a body that
-is not a JSON object is refused (400). When the server listens on another address than
-the loopback, every request must carry the access token (query ``token``, header
-``X-Studio-Token`` or the cookie set by the first page load).
+refused (403), and so is a file that is not a regular file (a FIFO would block the
+server: 400). Request bodies are limited to :data:`MAX_BODY` bytes (413); a body that is
+not a JSON object is refused (400), and so is JSON nested deeper than :data:`MAX_DEPTH`,
+a string that is not Unicode (a lone surrogate such as ``"\\ud800"``), a number that is
+not finite or an integer beyond +-2^53 (the exact range of JSON numbers, RFC 8259 Sec. 6):
+nothing a client sends reaches the library as a value it cannot hold. Every request must
+carry the access token (query ``token``, header ``X-Studio-Token`` or the cookie set by
+the first page load), on the loopback too, as Jupyter does: a local page must not be
+readable by any other local user or by a web page in the browser.
 """
 
 from __future__ import annotations
 
 import json
+import math
+import os
 import secrets
 from pathlib import Path
 from typing import Any, Optional
@@ -52,6 +59,10 @@ from .session import Session, SpecError
 STATIC = Path(__file__).with_name("static")
 MAX_BODY = 4 * 1024 * 1024
 """Largest request body accepted (bytes): a gage document is a few kB."""
+MAX_DEPTH = 32
+"""Deepest nesting of a request's JSON (a gage document or a drawing is 4 levels deep)."""
+MAX_INT = 2 ** 53
+"""Largest integer magnitude accepted in a request (JSON's exact integers, RFC 8259 Sec. 6)."""
 SCAN_SUFFIXES = {".ply", ".xyz", ".csv", ".txt", ".asc", ".pts", ".ds", ".npy", ".las", ".laz", ".e57"}
 COOKIE = "gagekit_studio"
 LOOPBACK_HOSTS = ["127.0.0.1", "localhost", "::1", "[::1]"]
@@ -66,12 +77,21 @@ class RequestError(Exception):
         self.message = message
 
 
+def cookie_name(token: str) -> str:
+    """The token cookie's name: one per server (two studios on one host, on two ports,
+    share the host's cookies; a name of their own keeps each one's token)."""
+    import hashlib
+
+    return f"{COOKIE}_{hashlib.sha256(token.encode()).hexdigest()[:10]}"
+
+
 class TokenMiddleware:
     """Every request must carry the access token (constant-time comparison)."""
 
     def __init__(self, app: ASGIApp, token: str) -> None:
         self.app = app
         self.token = token
+        self.cookie = cookie_name(token)
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
         if scope["type"] != "http":
@@ -79,7 +99,7 @@ class TokenMiddleware:
             return
         request = Request(scope)
         given = (request.query_params.get("token") or request.headers.get("x-studio-token")
-                 or request.cookies.get(COOKIE) or "")
+                 or request.cookies.get(self.cookie) or "")
         if not secrets.compare_digest(given.encode(), self.token.encode()):
             await JSONResponse({"error": "access token missing or wrong (see the terminal that started the studio)"},
                                status_code=401)(scope, receive, send)
@@ -87,7 +107,7 @@ class TokenMiddleware:
         if request.query_params.get("token") and scope["path"] == "/":
             async def send_with_cookie(message):
                 if message["type"] == "http.response.start":
-                    cookie = f"{COOKIE}={self.token}; Path=/; HttpOnly; SameSite=Strict"
+                    cookie = f"{self.cookie}={self.token}; Path=/; HttpOnly; SameSite=Strict"
                     message.setdefault("headers", []).append((b"set-cookie", cookie.encode()))
                 await send(message)
 
@@ -96,18 +116,32 @@ class TokenMiddleware:
         await self.app(scope, receive, send)
 
 
-def confined(root: Path, rel: Any, suffixes: Optional[set] = None, what: str = "path") -> Path:
-    """``root / rel`` if it stays inside ``root`` (after resolving links), else 403."""
+def _inside(root: Path, full: Path) -> bool:
+    return full == root or root in full.parents
+
+
+def confined(root: Path, rel: Any, suffixes: Optional[set] = None, what: str = "path", *,
+             regular: bool = False) -> Path:
+    """``root / rel`` if it stays inside ``root`` (after resolving links), else 403; with
+    ``regular``, an existing path must be a regular file (a FIFO is refused before anything
+    opens it: opening one blocks until a writer comes)."""
     if not isinstance(rel, str) or not rel or len(rel) > 1024 or "\x00" in rel:
         raise RequestError(400, f"{what}: expected a file name inside the studio folder")
     p = Path(rel)
     if p.is_absolute() or p.drive:
         raise RequestError(403, f"{what}: '{rel}' is outside the studio folder (give a relative name)")
     full = (root / p).resolve()
-    if full != root and root not in full.parents:
+    if not _inside(root, full):
         raise RequestError(403, f"{what}: '{rel}' is outside the studio folder")
     if suffixes is not None and full.suffix.lower() not in suffixes:
         raise RequestError(400, f"{what}: '{rel}' must end in one of {', '.join(sorted(suffixes))}")
+    if regular and full.exists():
+        from .._files import input_file
+
+        try:
+            input_file(full, what)
+        except GagekitError as exc:
+            raise RequestError(400, f"{what}: '{rel}' {str(exc).split(': ', 1)[-1]}") from None
     return full
 
 
@@ -132,9 +166,46 @@ async def read_json(request: Request) -> dict:
         data = json.loads(body.decode("utf-8"), parse_constant=_reject_constant)
     except (UnicodeDecodeError, ValueError) as exc:
         raise RequestError(400, f"malformed JSON: {exc}") from None
+    except RecursionError:
+        raise RequestError(400, f"JSON nested too deep (more than {MAX_DEPTH} levels)") from None
     if not isinstance(data, dict):
         raise RequestError(400, "expected a JSON object")
+    check_values(data)
     return data
+
+
+def check_values(data: Any) -> None:
+    """Refuse (400, naming where) JSON nested deeper than :data:`MAX_DEPTH`, strings that
+    are not Unicode (lone surrogates: nothing can encode them, not a file name, not a
+    saved file), numbers that are not finite, integers beyond +-:data:`MAX_INT`."""
+    stack = [(data, "request", 0)]
+    while stack:
+        v, where, depth = stack.pop()
+        if depth > MAX_DEPTH:
+            raise RequestError(400, f"JSON nested too deep (more than {MAX_DEPTH} levels) at {where}")
+        if isinstance(v, dict):
+            for k, x in v.items():
+                _unicode(k, f"{where} key")
+                stack.append((x, f"{where}.{k}", depth + 1))
+        elif isinstance(v, list):
+            stack.extend((x, f"{where}[{i}]", depth + 1) for i, x in enumerate(v))
+        elif isinstance(v, str):
+            _unicode(v, where)
+        elif isinstance(v, bool) or v is None:
+            pass
+        elif isinstance(v, int):
+            if abs(v) > MAX_INT:
+                raise RequestError(400, f"{where}: the integer {v} is beyond +-2^53 (the exact range of JSON numbers)")
+        elif isinstance(v, float) and not math.isfinite(v):
+            raise RequestError(400, f"{where}: {v} is not a finite number")
+
+
+def _unicode(s: str, where: str) -> None:
+    try:
+        s.encode("utf-8")
+    except UnicodeEncodeError as exc:
+        bad = s[exc.start]
+        raise RequestError(400, f"{where}: {ascii(bad)} is a lone surrogate, not valid Unicode") from None
 
 
 def _reject_constant(name: str):
@@ -171,7 +242,7 @@ def create_app(session: Session, root: Path, *, token: Optional[str] = None,
 
     async def open_scan(request: Request) -> Response:
         data = await read_json(request)
-        path = confined(root, data.get("path"), SCAN_SUFFIXES, "scan")
+        path = confined(root, data.get("path"), SCAN_SUFFIXES, "scan", regular=True)
         units = data.get("units")
         if units is not None and not isinstance(units, str):
             raise RequestError(400, "units: expected a unit name such as \"mm\"")
@@ -179,22 +250,29 @@ def create_app(session: Session, root: Path, *, token: Optional[str] = None,
 
     async def files(request: Request) -> Response:
         def listing() -> dict:
+            """Regular files under ``root`` (symbolic links to folders not followed, links
+            to files listed only when they resolve inside ``root``; hidden names skipped)."""
+            found: list[Path] = []
+            for top, dirs, names in os.walk(root, followlinks=False):
+                dirs[:] = sorted(d for d in dirs if not d.startswith("."))
+                found += [Path(top) / n for n in names if not n.startswith(".")]
+                if len(found) > 5000:
+                    break
             scans, specs = [], []
-            for p in sorted(root.rglob("*"))[:5000]:
-                if not p.is_file() or any(part.startswith(".") for part in p.relative_to(root).parts):
+            for p in sorted(found)[:5000]:
+                suffix = p.suffix.lower()
+                if suffix not in SCAN_SUFFIXES and suffix != ".toml":
                     continue
-                rel = p.relative_to(root).as_posix()
-                if p.suffix.lower() in SCAN_SUFFIXES:
-                    scans.append(rel)
-                elif p.suffix.lower() == ".toml":
-                    specs.append(rel)
+                if not p.is_file() or (p.is_symlink() and not _inside(root, p.resolve())):
+                    continue
+                (scans if suffix in SCAN_SUFFIXES else specs).append(p.relative_to(root).as_posix())
             return {"scans": scans, "specs": specs}
 
         return JSONResponse(await run_in_threadpool(listing))
 
     async def open_spec(request: Request) -> Response:
         data = await read_json(request)
-        path = confined(root, data.get("path"), {".toml"}, "gage file")
+        path = confined(root, data.get("path"), {".toml"}, "gage file", regular=True)
         kind = data.get("kind", "gage")
         if kind not in ("gage", "part"):
             raise RequestError(400, "kind: expected \"gage\" (a gage file) or \"part\" (a drawing, PART.toml)")
@@ -218,7 +296,8 @@ def create_app(session: Session, root: Path, *, token: Optional[str] = None,
     async def save(request: Request) -> Response:
         data = await read_json(request)
         doc = _doc(data)
-        path = None if data.get("path") in (None, "") else confined(root, data.get("path"), {".toml"}, "gage file")
+        path = None if data.get("path") in (None, "") else confined(root, data.get("path"), {".toml"}, "gage file",
+                                                                   regular=True)
         if path is not None and not path.parent.is_dir():
             raise RequestError(400, f"gage file: folder '{path.parent.name}' does not exist")
         return JSONResponse(await run_in_threadpool(session.save, doc, path))
@@ -268,4 +347,4 @@ def create_app(session: Session, root: Path, *, token: Optional[str] = None,
         HTTPException: http_error, Exception: server_error})
 
 
-__all__ = ["create_app", "confined", "read_json", "RequestError", "MAX_BODY"]
+__all__ = ["create_app", "confined", "read_json", "check_values", "cookie_name", "RequestError", "MAX_BODY", "MAX_DEPTH"]

@@ -141,10 +141,12 @@ class Session:
     def open_spec(self, path: Optional[Path], kind: str = "gage") -> dict:
         text = ""
         if path is not None and path.exists():
-            try:
-                text = path.read_text(encoding="utf-8")
-            except (OSError, UnicodeDecodeError) as exc:
-                raise ConfigError(f"{path}: cannot read the gage file ({exc})") from None
+            from .._files import read_text
+
+            try:  # a regular file only: opening a FIFO would block until a writer comes
+                text = read_text(path, "gage file")
+            except GagekitError as exc:
+                raise ConfigError(f"cannot read the gage file: {exc}") from None
         with self.lock:
             self.spec_path = path
             self.spec_text = text
@@ -200,8 +202,10 @@ class Session:
         names = set()
         if isinstance(al, dict):
             for v in al.values():
-                names.update(v if isinstance(v, list) else [v])
-        datums = [r for r in doc.get("region", []) if isinstance(r, dict) and r.get("name") in names]
+                names.update(x for x in (v if isinstance(v, list) else [v]) if isinstance(x, str))
+        regions = doc.get("region", [])
+        datums = [r for r in (regions if isinstance(regions, list) else [])
+                  if isinstance(r, dict) and isinstance(r.get("name"), str) and r["name"] in names]
         key = repr((al, datums, doc.get("angle_unit"), str(self.scan.path)))
         with self.lock:
             if key == self.alignment_key:
