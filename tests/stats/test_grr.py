@@ -151,7 +151,7 @@ def test_known_variance_components_within_their_intervals():
     cover = {k: h / n for k, h in hits.items()}
     assert 0.91 <= cover["repeatability"] <= 0.99, cover  # exact chi-square interval
     assert 0.88 <= cover["part"] <= 0.995, cover  # Satterthwaite
-    assert cover["appraiser"] >= 0.75 and cover["part x appraiser"] >= 0.80, cover
+    assert cover["appraiser"] >= 0.85 and cover["part x appraiser"] >= 0.88, cover  # measured 0.93, 0.945
 
 
 def test_pooling_follows_the_interaction_p_value():
