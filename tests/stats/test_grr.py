@@ -278,6 +278,9 @@ def test_cli_bad_input_one_line_exit_2(tmp_path, case):
     if case == "bad header":
         csv.write_text("a,b\n1,2\n")
     args = ("stats", "grr") if case == "no source" else ("stats", "grr", "--csv", csv)
+    if case == "no source":  # and `gagekit stats` (now a group) without --db
+        r = gk("stats")
+        assert r.returncode == 2 and r.stderr.startswith("gagekit: error:") and len(r.stderr.splitlines()) == 1
     r = gk(*args)
     assert r.returncode == 2 and r.stdout == ""
     lines = r.stderr.strip().splitlines()

@@ -52,9 +52,9 @@ def stats(
     if ctx.invoked_subcommand is not None:  # `gagekit stats grr ...`
         return
     if db is None:
-        import click
+        from ..errors import ConfigError
 
-        raise click.UsageError("Missing option '--db'.")
+        raise ConfigError("stats: missing option --db URL (the results database); `gagekit stats grr` for gage R&R")
     from .._util import load_toml
     from ..stats import collect
 
