@@ -107,54 +107,62 @@ def main() -> None:
             m = _core.Mesh(v, t)
             return m.distances(pts)[0]
 
-        t_ours, d_ours = timed(ours)
-        try:
-            import open3d as o3d
+        only = next((a.split("=", 1)[1].split(",") for a in sys.argv if a.startswith("--cases=")), ["distances", "c2m", "best-fit"])
+        if "distances" in only:
+            t_ours, d_ours = timed(ours)
+            try:
+                import open3d as o3d
 
-            def peer():
-                scene = o3d.t.geometry.RaycastingScene()
-                scene.add_triangles(o3d.core.Tensor(v.astype(np.float32)), o3d.core.Tensor(t.astype(np.uint32)))
-                return scene.compute_signed_distance(o3d.core.Tensor(pts.astype(np.float32))).numpy()
+                def peer():
+                    scene = o3d.t.geometry.RaycastingScene()
+                    scene.add_triangles(o3d.core.Tensor(v.astype(np.float32)), o3d.core.Tensor(t.astype(np.uint32)))
+                    return scene.compute_signed_distance(o3d.core.Tensor(pts.astype(np.float32))).numpy()
 
-            t_o3d, d_o3d = timed(peer)
-            # Open3D's sign: negative inside, as gagekit; it computes in float32
-            line(f"signed distances {len(pts) / 1e6:.1f} M pts / {len(t) / 1e6:.1f} M tri (Open3D)", t_ours, t_o3d)
-            diff = np.abs(d_ours - d_o3d.astype(np.float64))
-            print(f"#   largest |gagekit - Open3D| = {diff.max():.3e} mm (Open3D is float32: ~{np.spacing(np.float32(130.0)):.1e} mm at 130 mm)")
-        except ImportError:
-            line(f"signed distances {len(pts) / 1e6:.1f} M pts / {len(t) / 1e6:.1f} M tri (Open3D not installed)", t_ours, None)
+                t_o3d, d_o3d = timed(peer)
+                # Open3D's sign: negative inside, as gagekit; it computes in float32
+                line(f"signed distances {len(pts) / 1e6:.1f} M pts / {len(t) / 1e6:.1f} M tri (Open3D)", t_ours, t_o3d)
+                diff = np.abs(d_ours - d_o3d.astype(np.float64))
+                dabs = np.abs(np.abs(d_ours) - np.abs(d_o3d.astype(np.float64)))
+                print(f"#   largest |gagekit - Open3D| = {diff.max():.3e} mm, of the absolute values {dabs.max():.3e} mm, "
+                      f"sign differs at {(np.sign(d_ours) != np.sign(d_o3d)).sum()} points (Open3D: float32, sign by ray parity)")
+            except ImportError:
+                line(f"signed distances {len(pts) / 1e6:.1f} M pts / {len(t) / 1e6:.1f} M tri (Open3D not installed)", t_ours, None)
 
-        ply = work / "scan.ply"
-        from gagekit.cloud import write_points
+        if "c2m" in only:
+            ply = work / "scan.ply"
+            from gagekit.cloud import write_points
 
-        write_points(ply, pts)
-        out = work / "dev.npy"
-        gk = [sys.executable, "-m", "gagekit", "compare", str(ply), str(stl), "--deviations", str(out), "--quiet"]
-        t0 = time.perf_counter()
-        subprocess.run(gk, check=True, stdout=subprocess.DEVNULL)
-        t_cli = time.perf_counter() - t0
-        cc = shutil.which("CloudCompare") or shutil.which("cloudcompare")
-        if cc:
-            env = dict(os.environ, QT_QPA_PLATFORM="offscreen")
-            cmd = [cc, "-SILENT", "-AUTO_SAVE", "ON", "-C_EXPORT_FMT", "PLY", "-PLY_EXPORT_FMT", "BINARY_LE",
-                   "-O", str(ply), "-O", str(stl), "-C2M_DIST"]
+            write_points(ply, pts)
+            out = work / "dev.npy"
+            gk = [sys.executable, "-m", "gagekit", "--quiet", "compare", str(ply), str(stl), "--deviations", str(out)]
             t0 = time.perf_counter()
-            subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env, cwd=work)
-            t_cc = time.perf_counter() - t0
-            line(f"C2M command line {len(pts) / 1e6:.1f} M pts / {len(t) / 1e6:.1f} M tri (CloudCompare)", t_cli, t_cc)
-            outs = sorted(work.glob("scan_C2M_DIST*.ply"))
-            if outs:
-                from plyfile import PlyData
+            subprocess.run(gk, check=True, stdout=subprocess.DEVNULL)
+            t_cli = time.perf_counter() - t0
+            cc = shutil.which("CloudCompare") or shutil.which("cloudcompare")
+            if cc:
+                env = dict(os.environ, QT_QPA_PLATFORM="offscreen")
+                cmd = [cc, "-SILENT", "-AUTO_SAVE", "ON", "-C_EXPORT_FMT", "PLY", "-PLY_EXPORT_FMT", "BINARY_LE",
+                       "-O", str(ply), "-O", str(stl), "-C2M_DIST"]
+                t0 = time.perf_counter()
+                subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env, cwd=work)
+                t_cc = time.perf_counter() - t0
+                line(f"C2M command line {len(pts) / 1e6:.1f} M pts / {len(t) / 1e6:.1f} M tri (CloudCompare)", t_cli, t_cc)
+                outs = sorted(work.glob("scan_C2M_DIST*.ply"))
+                if outs:
+                    from plyfile import PlyData
 
-                vert = PlyData.read(str(outs[-1]))["vertex"]
-                sf = [p.name for p in vert.properties if p.name not in ("x", "y", "z")]
-                d_cc = np.asarray(vert[sf[-1]], dtype=np.float64)
-                d_ref = np.load(out)
-                ok = np.isfinite(d_cc)
-                print(f"#   largest |gagekit - CloudCompare| = {np.abs(d_ref[ok] - d_cc[ok]).max():.3e} mm over {ok.sum()} points "
-                      f"(scalar field '{sf[-1]}')")
-        else:
-            line(f"C2M command line {len(pts) / 1e6:.1f} M pts / {len(t) / 1e6:.1f} M tri (CloudCompare not installed)", t_cli, None)
+                    vert = PlyData.read(str(outs[-1]))["vertex"]
+                    sf = [p.name for p in vert.properties if p.name not in ("x", "y", "z")]
+                    d_cc = np.asarray(vert[sf[-1]], dtype=np.float64)
+                    d_ref = np.load(out)
+                    ok = np.isfinite(d_cc)
+                    print(f"#   largest |gagekit - CloudCompare| = {np.abs(d_ref[ok] - d_cc[ok]).max():.3e} mm, of the absolute "
+                          f"values {np.abs(np.abs(d_ref[ok]) - np.abs(d_cc[ok])).max():.3e} mm, over {ok.sum()} points "
+                          f"(scalar field '{sf[-1]}'; CloudCompare stores float32 coordinates)")
+            else:
+                line(f"C2M command line {len(pts) / 1e6:.1f} M pts / {len(t) / 1e6:.1f} M tri (CloudCompare not installed)", t_cli, None)
+        if "best-fit" not in only:
+            return
 
         # best fit: 1 M points of a 100 k-triangle torus, from a random pose
         from scipy.spatial.transform import Rotation

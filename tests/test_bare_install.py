@@ -88,6 +88,7 @@ PLACEHOLDERS = {
     "R": "150", "F": "1000", "XY": "XY",
     "MODEL.qif": "pkg:data/nist_ctc_01_asme1_ap242.qif.gz",
     "OUT.qif": "out:OUT.qif",
+    "CAD.step": "sample:bracket-step", "CADPART.toml": "sample:bracket-cad-part", "OUT.npy": "out:OUT.npy", "D": "5",
 }
 #: the value after these options is written: always a new path in the command's folder (so that
 #: `--out PART.toml` never writes over a bundled sample)
@@ -98,7 +99,7 @@ PLACEHOLDER = re.compile(r"^[A-Z][A-Z0-9_]*(\.[a-z0-9]+)?$")
 
 #: a documented line containing KEY needs the extra: in the bare venv it must say so in one line
 NEEDS_EXTRA = {"gagekit studio": "studio", "postgresql://": "postgresql", "--format parquet": "parquet",
-               "gagekit qif": "qif", "--qif-results": "qif"}
+               "gagekit qif": "qif", "--qif-results": "qif", "CAD.step": "cad", "CADPART.toml": "cad"}
 
 
 # ----- the documented lines ------------------------------------------------------------------

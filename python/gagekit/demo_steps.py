@@ -209,6 +209,30 @@ def inspection_step(ctx) -> tuple[dict, str]:
     return to_jsonable(data), text + f"\n{res.status}; largest |measured - expected| = {worst:.1e} mm"
 
 
+def cad_step(ctx) -> tuple[dict, str]:
+    """The bracket's scan against its STEP model (ISO 1101 profile of a surface): signed
+    deviations, per-face statistics and the deviation map (needs gagekit[cad]; without it
+    the step says so and is skipped)."""
+    from .cad.step import MISSING, ocp_available
+
+    if not ocp_available():
+        ctx.report.section("Scan against CAD").text(f"Skipped: {MISSING}.")
+        return {"skipped": MISSING}, f"skipped: {MISSING}"
+    from .cad import compare, read_cad
+    from .cloud import read_points
+    from .demo import data_path
+    from .report.compare import add_compare
+
+    res = compare(read_points(data_path("bracket.ply")), read_cad(data_path("bracket.step")))
+    add_compare(ctx.report, res)
+    d = res.to_dict()
+    rows = [[f["id"], f["name"], f["kind"], f["n"]] + ([f"{f['min']:+.4f}", f"{f['max']:+.4f}", f"{f['rms']:.4f}"] if f["n"] else ["-"] * 3)
+            for f in d["faces"]]
+    s = d["deviations"]
+    text = table(["face", "name", "surface", "n", "min", "max", "rms"], rows)
+    return to_jsonable(d), text + f"\nprofile (2 max |d|) {s['profile']:.4f} mm over {d['n_used']} points"
+
+
 STEPS = [
     ("cloud", "Point cloud: regions and convex-hull filter (Sec. 5.4.1)", cloud_step),
     ("machine", "Machine calibration (Ch. 3)", machine_step),
@@ -217,4 +241,5 @@ STEPS = [
     ("castings", "Virtual gages on two castings (Ch. 5)", castings_step),
     ("cylinders", "Form of cylinders (Ch. 6)", cylinders_step),
     ("inspection", "GD&T inspection of a bracket (ISO 1101, ISO 5459)", inspection_step),
+    ("cad", "The bracket's scan against its STEP model (deviation map)", cad_step),
 ]

@@ -47,6 +47,8 @@ SAMPLES: dict[str, tuple[str, str]] = {
     "casting-short-gages": ("data/casting_short.toml", "virtual gages of the short casting"),
     "bracket": ("data/bracket.ply", "scanned bracket (inspect)"),
     "bracket-part": ("data/bracket.toml", "drawing of the bracket, GD&T callouts (inspect)"),
+    "bracket-step": ("data/bracket.step", "the bracket's nominal STEP model, named faces (compare) [cad]"),
+    "bracket-cad-part": ("data/bracket_cad.toml", "drawing of the bracket on its STEP model: profile of surfaces [cad]"),
     "cylinder-set1": ("data/cylinders/set1.csv", "the dissertation's cylinder data set 1 (Table 6.2)"),
     "cylinder-set3": ("data/cylinders/set3.csv", "the dissertation's cylinder data set 3 (Table 6.4)"),
     "iso230-2": ("data/ecmc_axis1_runs.csv", "ISO 230-2 runs of a real axis (machine iso230-2)"),

@@ -82,3 +82,13 @@ def test_unknown_face_is_a_config_error(tmp_path):
     (tmp_path / "p.toml").write_text(text)
     with pytest.raises(ConfigError, match="roof"):
         inspect(read_points(data_path("bracket.ply")), load_part_spec(tmp_path / "p.toml"))
+
+
+def test_result_json_of_surface_features(result):
+    from gagekit._util import check_finite_result, dumps
+
+    check_finite_result(result)
+    d = result.to_dict()
+    assert d["features"]["ball"] == {"shape": "surface", "n_points": d["features"]["ball"]["n_points"], "faces": ["ball"]}
+    assert "profile" in dumps(result)
+    assert len(result.deviations["top"][1]) == d["features"]["top"]["n_points"]

@@ -53,6 +53,7 @@ RECIPES: dict[str, list] = {
     "db upgrade": ["sqlite:///T/batch.db"],
     "db export": ["sqlite:///T/batch.db", "--format", "csv", "--out", "T/export"],
     "stats": ["--db", "sqlite:///T/batch.db"],
+    "stats grr": ["--csv", ROOT / "tests" / "data" / "grr" / "aiag_msa4.csv", "--tolerance", 6],
     "inspect scan": [data_path("bracket.ply"), data_path("bracket.toml")],  # `gagekit inspect SCAN PART` is the same
     "demo": ["--quick", "--out", "T/demo"],
     "qif import": [data_path("nist_ctc_01_asme1_ap242.qif.gz"), "--out", "T/ctc01.toml"],

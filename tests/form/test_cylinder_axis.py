@@ -160,7 +160,8 @@ def test_cli_axis_and_max_tilt(tmp_path):
     assert out.returncode == 0, out.stderr
     assert json.loads(out.stdout)["tilt_deg"] < 1e-12
     human = _cli("form", "cylinder", str(f), "-c", "mcc")
-    assert human.returncode == 0 and "tilt_deg" in human.stdout and "warning:" in human.stdout
+    assert human.returncode == 0 and "tilt_deg" in human.stdout and "warning" not in human.stdout
+    assert human.stderr.startswith("gagekit: warning: ")  # warnings on stderr (issue 22 section 6)
     for bad in (["--max-tilt", "95"], ["--axis", "0,0,0"], ["--axis", "1,2"], ["--max-tilt", "-1"]):
         out = _cli("form", "cylinder", str(f), "-c", "mcc", *bad)
         assert out.returncode == 2, (bad, out.stderr)

@@ -48,7 +48,7 @@ def test_new_surfaces_sample(tmp_path, sim):
         if code == 0 and "\n{" in out.strip():  # batches: one JSON line per scan
             assert all(json.loads(ln) for ln in out.splitlines() if ln.strip()), what
             continue
-        check_outcome(code, out if out.strip() else "{}", err, what)
+        check_outcome(code, out if out.strip() or code != 0 else "{}", err, what)
 
 
 def test_studio_http_sample(tmp_path):
@@ -81,3 +81,19 @@ def test_studio_http_sample(tmp_path):
         assert server.interrupt(timeout=15) is not None, "Ctrl-C did not stop the studio"
     finally:
         server.stop()
+
+
+def test_census_findings_are_clean_errors(tmp_path, sim):
+    """What the census found: a URL with a bad port or host and one with a NUL (ValueError),
+    a calibration whose group leader is not a name (TypeError)."""
+    for url in ("postgresql://[::1", "postgresql://u@h:abc/db", "sqlite:///x\x00y.db"):
+        for argv in (["stats", "--db", url], ["db", "upgrade", url], ["db", "export", url, "--format", "csv"]):
+            code, out, err = gk_inproc(*argv)
+            check_outcome(code, out, err, " ".join(argv))
+    cal = json.loads((sim / "cal.json").read_text())
+    cal["groups"][0]["leader"] = []
+    (tmp_path / "cal.json").write_text(json.dumps(cal))
+    code, out, err = gk_inproc("machine", "export", EXAMPLE_MACHINE, tmp_path / "cal.json", "--format", "grid-csv",
+                               "--out", tmp_path / "t.csv", "--step", "200")
+    assert "leader" not in err or "parameter name" in err
+    check_outcome(code, out, err, "export with a list as group leader")

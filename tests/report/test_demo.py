@@ -10,7 +10,8 @@ import browser
 
 SECTIONS = ["Point cloud", "Machine calibration", "Optimal error observer", "Thermal error tracking",
             "Virtual gages on two castings", "casting_ok: virtual gage result", "casting_short: virtual gage result",
-            "Form of cylinders", "inspection of a bracket (ISO 1101, ISO 5459)", "Inspection of the bracket"]
+            "Form of cylinders", "inspection of a bracket (ISO 1101, ISO 5459)", "Inspection of the bracket",
+            "Deviation from the CAD model"]
 
 
 @pytest.fixture(scope="module")
@@ -20,7 +21,7 @@ def demo_dir(tmp_path_factory):
                           capture_output=True, text=True, timeout=900)
     assert proc.returncode == 0, proc.stderr[-3000:]
     summary = json.loads(proc.stdout)  # --json: nothing else on stdout
-    assert [s["name"] for s in summary["steps"]] == ["cloud", "machine", "observer", "tracking", "castings", "cylinders", "inspection"]
+    assert [s["name"] for s in summary["steps"]] == ["cloud", "machine", "observer", "tracking", "castings", "cylinders", "inspection", "cad"]
     return out
 
 
@@ -35,6 +36,8 @@ def test_report_has_every_section_and_step_json(demo_dir):
     assert {f["criterion"] for f in cyl["set3"]} == {"least-squares", "min-circumscribed", "max-inscribed", "minimum-zone"}
     insp = json.loads((demo_dir / "inspection.json").read_text())
     assert insp["status"] == "nonconforming" and insp["max_abs_difference_from_expected"] < 1e-9
+    cad = json.loads((demo_dir / "cad.json").read_text())
+    assert cad["n_beyond"] == 0 and {f["name"] for f in cad["faces"] if f["n"]} >= {"A", "top", "bore", "ball"}
     machine = json.loads((demo_dir / "machine.json").read_text())
     assert set(machine["calibrations"]) == {"joint", "two-step"}
 

@@ -117,6 +117,12 @@ def test_a_gage_document_with_a_bad_rotation_is_a_4xx(casting):
         assert status == 200 and "rotation" in res["regions"][0]["error"]
         doc["motion"]["max_shift"] = 2 ** 70
         assert_4xx(studio.request("POST", "/api/run", body({"doc": doc})))
+        # found by the census: datum names and region names that are not names (were HTTP 500)
+        doc = studio.request("GET", "/api/state")[1]["spec"]["doc"]
+        for change in ({"alignment": dict(doc["alignment"], secondary=["x", None, {}])},
+                       {"region": [dict(doc["region"][0], name=[0, 0])] + doc["region"][1:]}):
+            status, res, _ = studio.request("POST", "/api/regions", body({"doc": dict(doc, **change)}))
+            assert status < 500, (change, status, res)
     finally:
         studio.stop()
 

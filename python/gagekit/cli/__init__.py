@@ -21,6 +21,7 @@ from . import (batch, cloud, compare, db, demo, form, gage, machine, machine_exp
 from . import data  # gagekit data list / path
 from ._common import warn
 from . import inspect as inspect_cmd
+from . import grr as grr_cmd  # gagekit stats grr
 
 app = typer.Typer(
     name="gagekit",
@@ -40,7 +41,10 @@ app.add_typer(machine.app, name="machine")
 app.add_typer(db.app, name="db")
 app.add_typer(qif.app, name="qif")
 app.add_typer(data.app, name="data")
-app.command("stats")(stats.stats)
+stats_app = typer.Typer(add_completion=False)  # `gagekit stats --db URL` (SPC), `gagekit stats grr` (gage R&R)
+stats_app.callback(invoke_without_command=True)(stats.stats)
+stats_app.command("grr")(grr_cmd.grr)
+app.add_typer(stats_app, name="stats")
 gage.app.command("batch")(batch.gage_batch)
 form.app.command("batch")(batch.form_batch)
 app.command("demo")(demo.demo)

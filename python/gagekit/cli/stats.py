@@ -36,7 +36,8 @@ def _human(s: dict) -> str:
 
 
 def stats(
-    db: str = typer.Option(..., "--db", help="Results database: sqlite:///FILE or postgresql://..."),
+    ctx: typer.Context,
+    db: Optional[str] = typer.Option(None, "--db", help="Results database: sqlite:///FILE or postgresql://..."),
     spec: Optional[Path] = typer.Option(None, "--spec", help="Only the results of this gage file or drawing (GAGES.toml or PART.toml)."),
     tolerance: Optional[float] = typer.Option(None, "--tolerance", help="Upper limit of form errors (mm, > 0), for Cp/Cpk of form batches."),
     resolution: float = typer.Option(1e-9, "--resolution", help="Resolution of lengths (mm; angles: this / 1000 rad). "
@@ -46,7 +47,14 @@ def stats(
     as_json: bool = JSON_OPTION,
 ) -> None:
     """Per gage or tolerance: n, mean, sd, minimum margin, Cp/Cpk and Pp/Ppk, I-MR charts with
-    the Western Electric rules, trends of the allowances and T*; per machine: drift across calibrations."""
+    the Western Electric rules, trends of the allowances and T*; per machine: drift across calibrations.
+    `gagekit stats grr`: gage R&R and Type-1 studies."""
+    if ctx.invoked_subcommand is not None:  # `gagekit stats grr ...`
+        return
+    if db is None:
+        from ..errors import ConfigError
+
+        raise ConfigError("stats: missing option --db URL (the results database); `gagekit stats grr` for gage R&R")
     from .._util import load_toml
     from ..stats import collect
 

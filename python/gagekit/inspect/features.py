@@ -208,6 +208,9 @@ class FeatureData:
         outside the material for planes, away from the axis/centre otherwise)."""
         if "dev" in self._cache:
             return self._cache["dev"]
+        if self.shape == "surface":  # from the CAD faces
+            self._cache["dev"] = np.asarray(self._cache["cad"].distance)[self.indices]
+            return self._cache["dev"]
         fit, p = self.lsq(), self.points
         if self.shape in ("slot", "tab"):
             # from each face's plane, positive into the air (out of the slot's walls, off the tab)
@@ -240,6 +243,8 @@ class FeatureData:
         return dev
 
     def to_dict(self) -> dict[str, Any]:
+        if self.shape == "surface":  # its nominal is the CAD faces: no associated feature
+            return {"shape": self.shape, "n_points": int(len(self.points)), "faces": list(self.spec.faces)}
         d = self.lsq().to_dict()
         d = {"shape": self.shape, "n_points": int(len(self.points)), "least_squares": d}
         if self.shape in ("cylinder", "cone"):

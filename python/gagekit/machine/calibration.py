@@ -7,7 +7,7 @@ import json
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Optional, Union
+from typing import Any, Optional, Union
 
 import numpy as np
 
@@ -171,7 +171,7 @@ class Calibration:
             groups = tuple(
                 GroupEstimate(
                     name=g["name"],
-                    leader=g.get("leader", next(iter(g["terms"]))),
+                    leader=_name(g.get("leader", next(iter(g["terms"])))),
                     terms={k: float(v) for k, v in g["terms"].items()},
                     value=float(g["value"]) if g["value"] is not None else 0.0,
                     std=g.get("std"),
@@ -218,3 +218,10 @@ def load_calibration(path: Union[str, Path]) -> Calibration:
     except FileFormatError as exc:
         raise FileFormatError(f"{p}: {exc}") from None
 
+
+def _name(v: Any) -> str:
+    """A parameter name read from a calibration file (anything else: TypeError, reported
+    by :meth:`Calibration.from_dict` as a damaged file)."""
+    if not isinstance(v, str):
+        raise TypeError(f"expected a parameter name, got {v!r}")
+    return v

@@ -4,10 +4,10 @@ external entities, and the few typed value readers the model needs.
 
 Why lxml (etree + XPath) and not classes generated from the XSDs (xsdata): the QIF 3.0
 schema set is 3.6 MB of XSD defining some 1 700 types; generated bindings are tens of
-thousands of lines for the few dozen elements gagekit reads and writes, and loading them
-costs more than parsing a NIST model (lxml parses the 1.1 MB CTC 5 model in ~30 ms).
-lxml also validates against the official XSDs (``XMLSchema``) in the tests, and its
-parser reports the line of a malformed file.
+thousands of lines for the few dozen elements gagekit reads and writes. lxml parses the
+1.1 MB CTC 5 model in 0.10 s (the standard library's ElementTree: 0.37 s, best of five on
+the shared 2-core machine), reaches any element with XPath, reports the line of a malformed
+file, and validates against the official XSDs (``XMLSchema``) in the tests.
 """
 
 from __future__ import annotations

@@ -439,7 +439,8 @@ def read_model(path: Any) -> QifModel:
     chars: list = []
     ch = X.child(root, "Characteristics")
     if ch is not None:
-        cdefs = {el.get("id"): el for el in (list(X.child(ch, "CharacteristicDefinitions")) if X.child(ch, "CharacteristicDefinitions") is not None else [])}
+        defs_el = X.child(ch, "CharacteristicDefinitions")
+        cdefs = {el.get("id"): el for el in (list(defs_el) if defs_el is not None else [])}
         noms = X.child(ch, "CharacteristicNominals")
         for el in (list(noms) if noms is not None else []):
             chars.append(_char(el, cdefs, units, features, drfs, str(path)))

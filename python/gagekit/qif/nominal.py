@@ -88,7 +88,7 @@ def shape_of(f: FeatureNominal) -> Optional[str]:
 def problem(f: FeatureNominal) -> Optional[str]:
     """Why this feature cannot become a PART.toml feature, or None."""
     if shape_of(f) is None:
-        return f"a {f.kind} feature (gagekit's shapes: plane, cylinder, cone, circle, sphere, line" + \
+        return f"{'an' if f.kind[0] in 'AEIOU' else 'a'} {f.kind} feature (gagekit's shapes: plane, cylinder, cone, circle, sphere, line" + \
             (", slot, tab)" if slots_supported() else ")")
     if f.kind == "OppositeParallelPlanes":
         return _missing(f, ("point", "normal", "width", "length_vector", "length", "depth"))

@@ -147,7 +147,8 @@ class _Importer:
                 continue
             f = self.m.features[d.feature_ids[0]]
             if f.kind not in ("Plane", "Cylinder", "Cone", "Circle", "Sphere"):
-                self.datum_problem[d.label] = f"datum {d.label} is a {f.kind} feature, which gagekit cannot simulate as a datum"
+                art = "an" if f.kind[0] in "AEIOU" else "a"
+                self.datum_problem[d.label] = f"datum {d.label} is {art} {f.kind} feature, which gagekit cannot simulate as a datum"
                 continue
             if f.kind != "Plane" and f.internal is None:
                 self.datum_problem[d.label] = f"datum {d.label}: the model does not say whether feature {f.id} is internal or external"
@@ -276,7 +277,7 @@ class _Importer:
             name, why = self.feature(fid)
             names.append(name or _fname(self.m.features[fid]))
             if why and self.m.features[fid].kind == "OppositeParallelPlanes" and not shape_of(self.m.features[fid]):
-                t.setdefault("_needs", f"feature {names[-1]} is a {self.m.features[fid].kind} (shape \"slot\" / \"tab\")")
+                t.setdefault("_needs", f"feature {names[-1]} is an {self.m.features[fid].kind} (shape \"slot\" / \"tab\")")
             elif why:
                 self.listed.append((c, f"its feature is {why}"))
                 return

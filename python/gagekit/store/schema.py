@@ -45,11 +45,13 @@ def parse_url(url: Union[str, Path, URL]) -> URL:
         text = str(url).strip()
         if not text:
             raise StoreError("empty database URL")
+        if "\x00" in text:
+            raise StoreError("a database URL cannot hold a NUL character")
         if "://" not in text:
             return URL.create("sqlite", database=str(Path(text)))
         try:
             u = sa.make_url(text)
-        except sa.exc.ArgumentError as exc:
+        except (sa.exc.ArgumentError, ValueError) as exc:  # ValueError: a bad port or IPv6 host
             raise StoreError(f"{text}: not a database URL ({exc})") from None
     backend = u.get_backend_name()
     if backend == "postgresql" and u.drivername == "postgresql":

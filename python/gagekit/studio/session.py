@@ -202,8 +202,10 @@ class Session:
         names = set()
         if isinstance(al, dict):
             for v in al.values():
-                names.update(v if isinstance(v, list) else [v])
-        datums = [r for r in doc.get("region", []) if isinstance(r, dict) and r.get("name") in names]
+                names.update(x for x in (v if isinstance(v, list) else [v]) if isinstance(x, str))
+        regions = doc.get("region", [])
+        datums = [r for r in (regions if isinstance(regions, list) else [])
+                  if isinstance(r, dict) and isinstance(r.get("name"), str) and r["name"] in names]
         key = repr((al, datums, doc.get("angle_unit"), str(self.scan.path)))
         with self.lock:
             if key == self.alignment_key:

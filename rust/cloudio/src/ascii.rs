@@ -613,7 +613,7 @@ pub fn read_ascii_file(path: &std::path::Path, opts: &AsciiOptions, what: &str) 
         return parse_ascii(b"", opts, what);
     }
     // SAFETY: read-only map alive during this call only (see PlyFile::open).
-    let map = unsafe { memmap2::MmapOptions::new().map(&file) }.map_err(io)?;
+    let map = unsafe { memmap2::MmapOptions::new().populate().map(&file) }.map_err(io)?;
     parse_ascii(&map, opts, what)
 }
 
