@@ -79,12 +79,12 @@ PLACEHOLDERS = {
     "U": "mm", "H": "127.0.0.1", "P": "port", "TOL": "0.001", "N": "1",
     "I": "I",  # --criterion I: a value, not a placeholder
     "TRACKER.csv": "made:OBS.csv",  # laser-tracker observations
-    "SPHERE.csv": "pending:a probed-sphere observation file",
-    "RTEST.csv": "pending:an R-test observation file",
-    "RUN.csv": "test:ballbar/simulated_xy.csv",  # a simulated ballbar run, XY plane, R 150 mm
+    "SPHERE.csv": "sample:sphere",  # a probed sphere, '# kind = sphere'
+    "RTEST.csv": "sample:rtest",  # an R-test, '# kind = rtest'
+    "RUN.csv": "sample:ballbar",  # a simulated ballbar run, XY plane, R 150 mm
     "KIN.txt": "out:KIN.txt",
-    "PROBING.csv": "pending:probing cycles ('# kind = sphere')",
-    "BALLBAR.csv": "pending:ballbar observations ('# kind = ballbar')",
+    "PROBING.csv": "sample:sphere-cycles",  # sphere probing cycles ('# kind = sphere')
+    "BALLBAR.csv": "sample:ballbar",  # the same run: its '# kind = ballbar' lines make it an observation file
     "R": "150", "F": "1000", "XY": "XY",
     "MODEL.qif": "pkg:data/nist_ctc_01_asme1_ap242.qif.gz",
     "OUT.qif": "out:OUT.qif",

@@ -21,6 +21,14 @@ cylinder-set1/3    ``data/cylinders/set1.csv``, ``set3.csv``: the dissertation's
                    data sets (Tables 6.2, 6.4)
 iso230-2           ``data/ecmc_axis1_runs.csv``: readings of an ISO 230-2 test of a real axis
                    (the ecmc motion system test report, anderssandstrom/ecmccomgui)
+ballbar            ``data/ballbar_xy.csv``: a simulated ballbar run of the example machine,
+                   XY, R 150 mm, with ``# kind = ballbar`` lines
+                   (``data/make_instrument_samples.py``)
+sphere             ``data/sphere_b.csv``: a probed sphere at 12 B positions (``# kind =
+                   sphere``)
+rtest              ``data/rtest_b.csv``: an R-test of the B axis (``# kind = rtest``)
+sphere-cycles      ``data/sphere_cycles.csv``: four sphere probing cycles an hour apart
+                   (``machine track``)
 =================  =====================================================================
 """
 
@@ -52,6 +60,10 @@ SAMPLES: dict[str, tuple[str, str]] = {
     "cylinder-set1": ("data/cylinders/set1.csv", "the dissertation's cylinder data set 1 (Table 6.2)"),
     "cylinder-set3": ("data/cylinders/set3.csv", "the dissertation's cylinder data set 3 (Table 6.4)"),
     "iso230-2": ("data/ecmc_axis1_runs.csv", "ISO 230-2 runs of a real axis (machine iso230-2)"),
+    "ballbar": ("data/ballbar_xy.csv", "simulated ballbar run, XY, R 150 mm (machine ballbar, machine identify)"),
+    "sphere": ("data/sphere_b.csv", "probed sphere at 12 B positions, '# kind = sphere' (machine identify)"),
+    "rtest": ("data/rtest_b.csv", "R-test of the B axis, '# kind = rtest' (machine identify)"),
+    "sphere-cycles": ("data/sphere_cycles.csv", "four sphere probing cycles, B axis drifting (machine track)"),
 }
 
 

@@ -19,7 +19,7 @@ def _run(*args: str) -> subprocess.CompletedProcess:
 
 
 def test_every_sample_is_a_file_inside_the_package():
-    for name in ("round", "bore", "ball", "cone", "program", "machine", "iso230-2"):
+    for name in ("round", "bore", "ball", "cone", "program", "machine", "iso230-2", "ballbar", "sphere", "rtest", "sphere-cycles"):
         assert name in SAMPLES
     for name in SAMPLES:
         p = sample_path(name).resolve()
@@ -52,3 +52,15 @@ def test_samples_match_their_generator(tmp_path, monkeypatch):
     gen.main()
     for f in ("round.csv", "bore.csv", "ball.csv", "cone.csv", "program.nc"):
         assert (tmp_path / f).read_bytes() == (PACKAGE / "data" / f).read_bytes(), f
+
+
+def test_instrument_samples_match_their_generator(tmp_path, monkeypatch):
+    """The bundled ballbar, sphere, R-test and probing-cycle samples are what
+    make_instrument_samples.py writes (deterministic)."""
+    from gagekit.data import make_instrument_samples as gen
+
+    monkeypatch.setattr(gen, "HERE", tmp_path)
+    gen.main()
+    for name in ("ballbar", "sphere", "rtest", "sphere-cycles"):
+        f = sample_path(name).name
+        assert (tmp_path / f).read_bytes() == sample_path(name).read_bytes(), f
