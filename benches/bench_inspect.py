@@ -226,7 +226,8 @@ def peer_two_point(pts, p, d, ref, sections, angles):
     q = pts - p
     t, x, y = q @ d, q @ u, q @ v
     th, rho = np.arctan2(y, x), np.hypot(x, y)
-    k = np.minimum(((t - t.min()) / np.ptp(t) * sections).astype(int), sections - 1)
+    span = np.ptp(t)
+    k = np.minimum(((t - t.min()) / span * sections).astype(int), sections - 1) if span > 0 else np.zeros(len(t), int)
     phi = -np.pi + np.pi * np.arange(angles) / angles
     out = []
     for i in range(sections):
@@ -284,7 +285,7 @@ def main() -> None:
     case = f"sizes {len(pts)} points, {len(sres.tolerances)} LP callouts, {n_sizes} two-point sizes"
     print(f"{case:48s} {t_s:10.3f} {t_sp:10.3f} {t_sp / t_s:7.1f}")
     for t, b in zip(sres.tolerances, sref):
-        print(f"{t.label:40s} {t.measured:16.12f} {b:16.12f} {abs(t.measured - b):9.1e}")
+        print(f"{t.name or t.feature:40s} {t.measured:16.12f} {b:16.12f} {abs(t.measured - b):9.1e}")
 
 
 if __name__ == "__main__":

@@ -56,6 +56,7 @@ RECIPES: dict[str, list] = {
     "stats grr": ["--csv", ROOT / "tests" / "data" / "grr" / "aiag_msa4.csv", "--tolerance", 6],
     "inspect scan": [data_path("bracket.ply"), data_path("bracket.toml")],  # `gagekit inspect SCAN PART` is the same
     "demo": ["--quick", "--out", "T/demo"],
+    "compare": [data_path("bracket.ply"), data_path("bracket.step"), "--align", "none", "--deviations", "T/dev.npy"],
     "qif import": [data_path("nist_ctc_01_asme1_ap242.qif.gz"), "--out", "T/ctc01.toml"],
     "studio": None,  # a web server that runs until stopped: tests/studio runs it
 }
