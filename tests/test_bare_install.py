@@ -84,6 +84,7 @@ PLACEHOLDERS = {
     "RUN.csv": "sample:ballbar",  # a simulated ballbar run, XY plane, R 150 mm
     "KIN.txt": "out:KIN.txt",
     "PROBING.csv": "sample:sphere-cycles",  # sphere probing cycles ('# kind = sphere')
+    "STUDY.csv": "sample:grr-study",  # a gage R&R study (columns part,appraiser,trial,value)
     "BALLBAR.csv": "sample:ballbar",  # the same run: its '# kind = ballbar' lines make it an observation file
     "R": "150", "F": "1000", "XY": "XY",
     "MODEL.qif": "pkg:data/nist_ctc_01_asme1_ap242.qif.gz",

@@ -17,6 +17,7 @@ casting-short      ``data/casting_short.ply``, ``casting-short-gages``: a castin
                    material
 bracket            ``data/bracket.ply``: a scanned bracket (``make_bracket.py``)
 bracket-part       ``data/bracket.toml``: its drawing (GD&T callouts)
+grr-study          ``data/grr_study.csv``: a gage R&R study (``make_grr_sample.py``)
 cylinder-set1/3    ``data/cylinders/set1.csv``, ``set3.csv``: the dissertation's cylinder
                    data sets (Tables 6.2, 6.4)
 iso230-2           ``data/ecmc_axis1_runs.csv``: readings of an ISO 230-2 test of a real axis
@@ -64,6 +65,7 @@ SAMPLES: dict[str, tuple[str, str]] = {
     "sphere": ("data/sphere_b.csv", "probed sphere at 12 B positions, '# kind = sphere' (machine identify)"),
     "rtest": ("data/rtest_b.csv", "R-test of the B axis, '# kind = rtest' (machine identify)"),
     "sphere-cycles": ("data/sphere_cycles.csv", "four sphere probing cycles, B axis drifting (machine track)"),
+    "grr-study": ("data/grr_study.csv", "gage R&R study, 10 parts x 3 appraisers x 3 trials (stats grr)"),
 }
 
 

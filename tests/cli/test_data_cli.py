@@ -64,3 +64,11 @@ def test_instrument_samples_match_their_generator(tmp_path, monkeypatch):
     for name in ("ballbar", "sphere", "rtest", "sphere-cycles"):
         f = sample_path(name).name
         assert (tmp_path / f).read_bytes() == sample_path(name).read_bytes(), f
+
+
+def test_grr_sample_matches_its_generator(tmp_path):
+    """The bundled gage R&R study is what make_grr_sample.py writes (deterministic)."""
+    from gagekit.data import make_grr_sample as gen
+
+    gen.main(tmp_path)
+    assert (tmp_path / "grr_study.csv").read_bytes() == sample_path("grr-study").read_bytes()
