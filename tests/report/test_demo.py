@@ -58,7 +58,7 @@ def test_readme_first_command_in_a_fresh_venv(tmp_path):
     import venv
     from pathlib import Path
 
-    from conftest import ROOT
+    ROOT = Path(__file__).resolve().parents[2]  # the checkout (not `from conftest`: tests/qif has a conftest too)
 
     env_dir = tmp_path / "venv"
     venv.EnvBuilder(with_pip=True).create(env_dir)
