@@ -37,7 +37,7 @@ def cloud_step(ctx) -> tuple[dict, str]:
 
     from .cloud import cut_and_filter, read_points, regions_from_tables
     from ._util import load_toml
-    from .demo import data_path
+    from .samples import data_path
 
     t0 = time.perf_counter()
     pts = read_points(data_path("casting_ok.ply"))
@@ -133,7 +133,7 @@ def castings_step(ctx) -> tuple[dict, str]:
     """Virtual gages (Ch. 5) on the two bundled castings: 3-2-1 alignment, regions, hull
     filter, the LP of Eq. 5.11 with slacks; pictures of each region before and after T*."""
     from .cloud import read_points
-    from .demo import data_path
+    from .samples import data_path
     from .gage import check_gages
     from .report.gage import add_to_report
 
@@ -154,7 +154,7 @@ def cylinders_step(ctx) -> tuple[dict, str]:
     compared with the values it reports (Tables 6.2-6.4)."""
     from ._util import load_toml
     from .cloud import read_points
-    from .demo import data_path
+    from .samples import data_path
     from .form import fit_cylinder
     from .report.form import add_cylinder_fits
 
@@ -188,7 +188,7 @@ def inspection_step(ctx) -> tuple[dict, str]:
     import importlib.util
 
     from .cloud import read_points
-    from .demo import data_path
+    from .samples import data_path
     from .inspect import inspect, load_part_spec
     from .report.inspect import add_inspection, callout_rows
 
@@ -218,7 +218,7 @@ def cad_step(ctx) -> tuple[dict, str]:
     from .cad import compare, read_cad
     from .cad.step import MISSING, ocp_available
     from .cloud import read_points
-    from .demo import data_path
+    from .samples import data_path
     from .report.compare import add_compare
 
     exact = ocp_available()

@@ -41,7 +41,7 @@ from pathlib import Path
 
 from .errors import ConfigError
 
-__all__ = ["SAMPLES", "sample_path"]
+__all__ = ["SAMPLES", "data_path", "sample_path"]
 
 #: name -> (path inside the package, one-line description)
 SAMPLES: dict[str, tuple[str, str]] = {
@@ -69,6 +69,11 @@ SAMPLES: dict[str, tuple[str, str]] = {
     "sphere-cycles": ("data/sphere_cycles.csv", "four sphere probing cycles, B axis drifting (machine track)"),
     "grr-study": ("data/grr_study.csv", "gage R&R study, 10 parts x 3 appraisers x 3 trials (stats grr)"),
 }
+
+
+def data_path(name: str) -> Path:
+    """Path of a bundled file in ``gagekit/data`` by its file name (the demo's inputs)."""
+    return Path(str(resources.files("gagekit") / "data" / name))
 
 
 def sample_path(name: str) -> Path:
