@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from gagekit import inspect, load_part_spec, read_points
-from gagekit.demo import data_path
+from gagekit.samples import data_path
 from gagekit.errors import ConfigError
 
 pytest.importorskip("OCP")

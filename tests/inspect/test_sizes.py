@@ -220,7 +220,7 @@ def test_bracket_with_sizes_and_material_conditions():
     bracket.toml, and sizes, distances, angles, MMC bonuses and a datum shift at their analytic values."""
     from bracket_fixture import key, load_generator
     from gagekit import load_part_spec, read_points
-    from gagekit.demo import data_path
+    from gagekit.samples import data_path
 
     gen = load_generator()
     pts = read_points(data_path("bracket.ply"))
