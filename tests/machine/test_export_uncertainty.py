@@ -204,3 +204,24 @@ def test_cli_uncertainty_and_predict_json(machine, cal, tmp_path):
     assert "covariance" in p.stderr and not (tmp_path / "o.csv").exists() and not (tmp_path / "o_u.csv").exists()
     with pytest.raises(ConfigError, match="covariance"):
         isg_uncertainty(machine, dataclasses.replace(cal, covariance=None), make_grid(machine, AXES, points=2))
+
+
+def test_kinematics_companion_lists_each_location_error_with_its_std(machine, tmp_path):
+    from gagekit.machine.export_kinematics import export_kinematics
+    from gagekit.machine.instruments import InstrumentObservations, identify_mixed
+    from gagekit.machine.simulate_instruments import simulate_sphere
+
+    c = simulate_sphere(machine, "B", np.arange(12) * 30.0, np.array([150.0, 400.0, 250.0]), {"W": -500.0},
+                        {"EXOB": 0.015, "EZOB": -0.010}, noise_um=1.0, seed=2)
+    cal = identify_mixed(machine, [InstrumentObservations("sphere", c, None, np.zeros(len(c), int), None, 0.001)]).calibration
+    res = export_kinematics(machine, cal, tmp_path / "kin.txt", at={"W": -500.0}, stamp="t", uncertainty=True)
+    assert str(tmp_path / "kin_u.csv") in res.files
+    rows = np.genfromtxt(tmp_path / "kin_u.csv", delimiter=",", names=True, dtype=None, encoding="utf-8")
+    (b,) = res.axes
+    seen = {k: v for k, v in b.location.items() if v is not None}
+    assert sorted(rows["name"]) == sorted(seen) and set(rows["joint"]) == {"B"}
+    for r in rows:
+        assert r["value"] == seen[r["name"]][0] and r["std"] == seen[r["name"]][1] and r["std"] > 0
+        assert r["unit"] == ("mm" if r["name"][1] in "XYZ" else "rad")
+    plain = export_kinematics(machine, cal, tmp_path / "k2.txt", at={"W": -500.0}, stamp="t")
+    assert len(plain.files) == 3 and not (tmp_path / "k2_u.csv").exists()
