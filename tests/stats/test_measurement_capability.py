@@ -106,6 +106,10 @@ def test_cli_stats_measurement_uncertainty(database):
     text = gk("stats", "--db", url, "--spec", part_toml, "--measurement-uncertainty", "0.002")
     assert text.returncode == 0 and "measurement: tolerance: flatness of top: u = 0.002" in text.stdout
     assert "process" in text.stdout
+    rep = gk("stats", "--db", url, "--measurement-uncertainty", "0.002", "--report", part_toml.parent / "spc")
+    assert rep.returncode == 0, rep.stderr
+    html = (part_toml.parent / "spc" / "report.html").read_text()
+    assert "with the measurement variance removed" in html and "Q_MP" in html
     plain = json.loads(gk("stats", "--db", url, "--json").stdout)
     assert "measurement" not in plain and "measurement" not in plain["specs"][0]["characteristics"][0]
     for bad in ("-0.001", "nan", "inf"):

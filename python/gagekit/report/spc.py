@@ -140,6 +140,14 @@ def write_spc_report(stats: dict, directory: Union[str, Path]) -> Path:
             rep.text("no successful results yet")
             continue
         rep.table(HEADERS, capability_rows(chars))
+        meas = [c for c in chars if "measurement" in c]
+        if meas:
+            rep.text(f"Measurement standard uncertainty u = {meas[0]['measurement']['u']:g} (k = 1): "
+                     f"{meas[0]['measurement']['model']}. The table above is observed; with the measurement "
+                     "variance removed (sigma_process = sqrt(sigma_observed^2 - u^2)):")
+            rep.table(["characteristic", "u", "Cp", "Cpk", "Pp", "Ppk", "Q_MP (%)"],
+                      [[c["name"], c["measurement"]["u"]] + [_g(c["measurement"]["process"], k) for k in ("cp", "cpk", "pp", "ppk")]
+                       + [_g(c["measurement"], "q_mp_pct")] for c in meas])
         from ..stats.collect import messages
 
         for c in chars:
