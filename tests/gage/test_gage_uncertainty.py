@@ -100,3 +100,12 @@ def test_seeded_and_thread_count_independent():
     a["monte_carlo"].pop("threads", None)
     b["monte_carlo"].pop("threads", None)
     assert a == b
+
+
+def test_noise_auto_is_the_plane_residual_of_the_gage_regions():
+    rng = np.random.default_rng(5)
+    pts = np.c_[rng.uniform(-20, 20, (2000, 2)), rng.normal(0.0, 0.003, 2000)]
+    _, doc = _face(0.5)
+    res = check_gages_uncertainty(pts, doc, measurement_model(sigma="auto"), 20, seed=1, threads=1)
+    model = res.monte_carlo["model"]
+    assert model["sigma"] == pytest.approx(0.003, rel=0.1) and "plane residuals" in str(model)
