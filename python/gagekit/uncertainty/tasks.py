@@ -110,6 +110,11 @@ def inspect_uncertainty(points: Any, spec: Any, model: MeasurementModel, trials:
     if model.sigma_auto:
         model = model.with_sigma(*_auto_sigma_features(feats))
     active, rows = _active_set(feats)
+    # the measured minimum zones start each trial's active set (gagekit.form.active: exact by verification)
+    near: dict[str, dict] = {}
+    for tol, row in zip(spec.tolerances, result.tolerances):
+        if tol.characteristic == "sphericity" and "center" in row.details:
+            near[tol.feature] = row.details
 
     def values(res: Any) -> dict[str, float]:
         out = {}
@@ -124,6 +129,8 @@ def inspect_uncertainty(points: Any, spec: Any, model: MeasurementModel, trials:
             f = FeatureData(fd.spec, fd.indices, np.ascontiguousarray(p[rows[name]]))
             if "cad" in fd._cache:
                 f._cache["cad"] = fd._cache["cad"]
+            if name in near:
+                f._cache["near_zone"] = near[name]
             fs[name] = f
         return values(_evaluate(spec, fs, n, 0.0))
 
