@@ -16,6 +16,11 @@ _I64 = npt.NDArray[np.int64]
 _Arr = npt.ArrayLike
 
 __version__: str
+#: the kernels' constants (gagekit-form): the least arc of a maximum inscribed circle /
+#: cylinder (degrees) and the default bound of a cylinder axis's tilt search (degrees)
+CIRCLE_MIN_ARC_DEG: float
+CYLINDER_MIN_ARC_DEG: float
+DEFAULT_MAX_TILT_DEG: float
 #: Test-only bindings (panic_in_kernel, gage_lp, gage_lp_solve); not part of the API.
 _testing: types.ModuleType
 
