@@ -9,6 +9,10 @@ from .cylinder import __all__ as _cylinder_all
 from .fits import *  # noqa: F401,F403
 from .fits import __all__ as _fits_all
 
+# filtered form parameters (ISO 16610-21, ISO 12181, ISO 12780, ISO 12781)
+from .parameters import *  # noqa: F401,F403
+from .parameters import __all__ as _parameters_all
+
 __all__: list[str] = [
     # circles
     "CircleFit",
@@ -17,4 +21,5 @@ __all__: list[str] = [
     # 3-D fits
     *_fits_all,
     *_cylinder_all,
+    *_parameters_all,
 ]
