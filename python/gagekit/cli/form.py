@@ -69,10 +69,11 @@ def _fmt_vec(v: Any) -> str:
 def _human(r: Any) -> str:
     d = r.to_dict()
     rows = []
-    for key in ("radius", "inner_radius", "outer_radius", "form_error", "theta", "phi", "tilt_deg", "distance", "apex_angle"):
+    for key in ("radius", "inner_radius", "outer_radius", "form_error", "theta", "phi", "tilt_deg", "distance", "apex_angle",
+                "half_angle_deg", "gap"):
         if d.get(key) is not None:
             rows.append([key, f"{d[key]:.9f}"])
-    for key in ("center", "normal", "point", "direction", "axis_point", "axis_direction"):
+    for key in ("center", "normal", "point", "direction", "axis_point", "axis_direction", "apex"):
         if key in d:
             rows.append([key, _fmt_vec(d[key])])
     if d.get("control_points"):
@@ -111,17 +112,18 @@ def fit(
     criterion: str = typer.Option(
         "least-squares", "--criterion", "-c",
         help="least-squares (lsq), min-circumscribed (mc), max-inscribed (mi) or minimum-zone (mz); "
-             "lines and planes: least-squares or minimum-zone; cones: least-squares"),
+             "lines and planes: least-squares or minimum-zone"),
     seed: int = seed_option(help="Seed of the particle swarm (cylinders, 3-D lines)"),
     axis: Optional[str] = AXIS_OPTION,
     max_tilt: float = TILT_OPTION,
+    angle: Optional[float] = typer.Option(None, "--angle", help="Cones: fix the half apex angle to DEG, in (0, 90) (default: free)"),
     units: Optional[str] = UNITS_OPTION,
     as_json: bool = JSON_OPTION,
 ) -> None:
     """Fit a feature to the points of FILE and report its form error and certificate."""
     from ..form.files import fit_file
 
-    r = fit_file(shape, file, criterion, seed=seed, units=units, axis=_axis(axis), max_tilt=max_tilt)
+    r = fit_file(shape, file, criterion, seed=seed, units=units, axis=_axis(axis), max_tilt=max_tilt, angle=angle)
     emit(r, as_json, _human, warnings=getattr(r, "warnings", ()))
 
 

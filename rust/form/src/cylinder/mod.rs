@@ -53,7 +53,7 @@ mod least_squares;
 mod mic_search;
 mod projection;
 mod search;
-mod slp;
+pub(crate) mod slp;
 mod subset;
 #[cfg(test)]
 mod tests;
