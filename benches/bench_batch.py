@@ -44,7 +44,7 @@ import numpy as np
 
 from gagekit.batch import BatchSummary, DaskCluster, Job, LocalPool, run_batch
 from gagekit.data.make_castings import make_casting, write_ply
-from gagekit.demo import data_path
+from gagekit.samples import data_path
 from gagekit.store import ResultStore
 from gagekit._util import load_toml
 

@@ -22,7 +22,7 @@ import numpy as np
 from scipy.optimize import least_squares, linprog, minimize
 
 import gagekit
-from gagekit.demo import data_path
+from gagekit.samples import data_path
 from _timing import timed
 
 REF = data_path("cylinders")

@@ -37,7 +37,7 @@ from dataclasses import replace
 import numpy as np
 from scipy.optimize import least_squares, linprog, minimize_scalar
 
-from gagekit.demo import data_path
+from gagekit.samples import data_path
 from gagekit.inspect import inspect, load_part_spec
 from gagekit.inspect.spec import PartSpec
 from _timing import timed

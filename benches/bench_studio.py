@@ -37,7 +37,7 @@ from pathlib import Path
 import numpy as np
 
 import gagekit
-from gagekit.demo import data_path
+from gagekit.samples import data_path
 from gagekit.studio.session import load_scan
 
 ARGS = ["--no-sandbox", "--use-angle=swiftshader", "--enable-unsafe-swiftshader", "--ignore-gpu-blocklist"]

@@ -124,7 +124,7 @@ def run_sub(argv, expect=None, limit=TIME_LIMIT, **kw) -> tuple[str, str]:
 
 def _data():
     import gagekit
-    from gagekit.demo import data_path
+    from gagekit.samples import data_path
 
     return gagekit.machine.example_machine_path(), data_path("casting_ok.ply"), data_path("casting_ok.toml")
 
@@ -514,7 +514,7 @@ def _run_case(argv, mode, limit=TIME_LIMIT):
 def _good_db(tmp: Path) -> str:
     """A results database with gage, form and inspection results (a small batch of each)."""
     from gagekit.cloud import read_points, write_points
-    from gagekit.demo import data_path
+    from gagekit.samples import data_path
 
     url = f"sqlite:///{tmp / 'good.db'}"
     d = tmp / "good-scans"
@@ -558,7 +558,7 @@ def run_studio(c: Census, tmp: Path, quick: bool) -> None:
     """The studio's HTTP API on one real server (uvicorn on 127.0.0.1)."""
     import shutil
 
-    from gagekit.demo import data_path
+    from gagekit.samples import data_path
     from tests.hostile.surfaces import studio_cases
     from tests.servers import StudioServer
 

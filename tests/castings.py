@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from gagekit.data.make_castings import make_casting, write_ply
-from gagekit.demo import data_path
+from gagekit.samples import data_path
 
 N_SCANS = 8
 DENSITY = 0.25  # points per mm^2: about 20 000 points a scan, quick to check

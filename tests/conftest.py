@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 import gagekit
-from gagekit.demo import data_path
+from gagekit.samples import data_path
 
 ROOT = Path(__file__).resolve().parents[1]
 TEST_DATA = ROOT / "tests" / "data"

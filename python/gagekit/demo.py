@@ -11,7 +11,6 @@ import json
 import tempfile
 import time
 from dataclasses import dataclass, field
-from importlib import resources
 from pathlib import Path
 from typing import Callable, Optional
 
@@ -48,11 +47,6 @@ class DemoResult:
 
     def to_dict(self) -> dict:
         return {"out": str(self.out), "report": str(self.report), "steps": [s.to_dict() for s in self.steps]}
-
-
-def data_path(name: str) -> Path:
-    """Path of a bundled sample file in ``gagekit/data``."""
-    return Path(str(resources.files("gagekit") / "data" / name))
 
 
 # A step: (name, title, function(ctx) -> (json-ready dict, summary text)).

@@ -17,6 +17,7 @@ casting-short      ``data/casting_short.ply``, ``casting-short-gages``: a castin
                    material
 bracket            ``data/bracket.ply``: a scanned bracket (``make_bracket.py``)
 bracket-part       ``data/bracket.toml``: its drawing (GD&T callouts)
+bracket-mesh       ``data/bracket.obj``: its STEP model tessellated, one group per face
 grr-study          ``data/grr_study.csv``: a gage R&R study (``make_grr_sample.py``)
 cylinder-set1/3    ``data/cylinders/set1.csv``, ``set3.csv``: the dissertation's cylinder
                    data sets (Tables 6.2, 6.4)
@@ -40,7 +41,7 @@ from pathlib import Path
 
 from .errors import ConfigError
 
-__all__ = ["SAMPLES", "sample_path"]
+__all__ = ["SAMPLES", "data_path", "sample_path"]
 
 #: name -> (path inside the package, one-line description)
 SAMPLES: dict[str, tuple[str, str]] = {
@@ -57,6 +58,7 @@ SAMPLES: dict[str, tuple[str, str]] = {
     "bracket": ("data/bracket.ply", "scanned bracket (inspect)"),
     "bracket-part": ("data/bracket.toml", "drawing of the bracket, GD&T callouts (inspect)"),
     "bracket-step": ("data/bracket.step", "the bracket's nominal STEP model, named faces (compare) [cad]"),
+    "bracket-mesh": ("data/bracket.obj", "the bracket's STEP model tessellated (0.5 um), one OBJ group per face (compare)"),
     "bracket-cad-part": ("data/bracket_cad.toml", "drawing of the bracket on its STEP model: profile of surfaces [cad]"),
     "cylinder-set1": ("data/cylinders/set1.csv", "the dissertation's cylinder data set 1 (Table 6.2)"),
     "cylinder-set3": ("data/cylinders/set3.csv", "the dissertation's cylinder data set 3 (Table 6.4)"),
@@ -67,6 +69,11 @@ SAMPLES: dict[str, tuple[str, str]] = {
     "sphere-cycles": ("data/sphere_cycles.csv", "four sphere probing cycles, B axis drifting (machine track)"),
     "grr-study": ("data/grr_study.csv", "gage R&R study, 10 parts x 3 appraisers x 3 trials (stats grr)"),
 }
+
+
+def data_path(name: str) -> Path:
+    """Path of a bundled file in ``gagekit/data`` by its file name (the demo's inputs)."""
+    return Path(str(resources.files("gagekit") / "data" / name))
 
 
 def sample_path(name: str) -> Path:

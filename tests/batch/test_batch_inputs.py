@@ -11,7 +11,7 @@ import sys
 import numpy as np
 import pytest
 
-from gagekit.demo import data_path
+from gagekit.samples import data_path
 
 
 def gk(*args, timeout=300):

@@ -11,7 +11,7 @@ import pytest
 import sqlalchemy as sa
 
 import gagekit
-from gagekit.demo import data_path
+from gagekit.samples import data_path
 from gagekit.store import models as m
 from gagekit.store.schema import create_engine
 

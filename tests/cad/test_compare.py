@@ -10,7 +10,7 @@ import pytest
 
 from gagekit.cad import compare, read_cad
 from gagekit.cad.compare import parse_lock, transform, write_deviations
-from gagekit.demo import data_path
+from gagekit.samples import data_path
 from gagekit.errors import ConfigError
 
 from cad_models import box, write_stl

@@ -8,8 +8,8 @@ import math
 import numpy as np
 import pytest
 
-from gagekit import inspect, load_part_spec, read_points
-from gagekit.demo import data_path
+from gagekit import inspect_scan, load_part_spec, read_points
+from gagekit.samples import data_path
 from gagekit.errors import ConfigError
 
 pytest.importorskip("OCP")
@@ -20,7 +20,7 @@ L_CHAMFER = 20.0 * math.sqrt(2.0)
 
 @pytest.fixture(scope="module")
 def result():
-    return inspect(read_points(data_path("bracket.ply")), load_part_spec(data_path("bracket_cad.toml")))
+    return inspect_scan(read_points(data_path("bracket.ply")), load_part_spec(data_path("bracket_cad.toml")))
 
 
 def _value(result, feature, datums):
@@ -81,7 +81,7 @@ def test_unknown_face_is_a_config_error(tmp_path):
     text = data_path("bracket_cad.toml").read_text().replace('faces = ["top"]', 'faces = ["roof"]')
     (tmp_path / "p.toml").write_text(text)
     with pytest.raises(ConfigError, match="roof"):
-        inspect(read_points(data_path("bracket.ply")), load_part_spec(tmp_path / "p.toml"))
+        inspect_scan(read_points(data_path("bracket.ply")), load_part_spec(tmp_path / "p.toml"))
 
 
 def test_result_json_of_surface_features(result):

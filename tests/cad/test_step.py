@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from gagekit.cad import read_cad
-from gagekit.demo import data_path
+from gagekit.samples import data_path
 
 from cad_models import step_solid
 

@@ -13,7 +13,7 @@ import typer
 
 import gagekit
 from gagekit.cli import app
-from gagekit.demo import data_path
+from gagekit.samples import data_path
 
 ROOT = Path(__file__).resolve().parents[2]
 M = gagekit.machine.example_machine_path()

@@ -9,7 +9,7 @@ import pytest
 
 import browser
 import gagekit
-from gagekit.demo import data_path
+from gagekit.samples import data_path
 
 PLY, TOML = str(data_path("bracket.ply")), str(data_path("bracket.toml"))
 
@@ -97,7 +97,7 @@ def test_inspect_scan_is_the_default_subcommand_with_options_anywhere(tmp_path):
     import subprocess
     import sys
 
-    from gagekit.demo import data_path
+    from gagekit.samples import data_path
 
     scan, part = str(data_path("bracket.ply")), str(data_path("bracket.toml"))
     outs = []

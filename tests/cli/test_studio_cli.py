@@ -8,7 +8,7 @@ import sys
 import urllib.error
 import urllib.request
 
-from gagekit.demo import data_path
+from gagekit.samples import data_path
 
 
 def run(*args):

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 import gagekit
-from gagekit.demo import data_path
+from gagekit.samples import data_path
 
 
 def gk(*args):

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 import gagekit
-from gagekit.demo import data_path
+from gagekit.samples import data_path
 from gagekit.gage import check_gages, gage_distances, region_in_scanner, datum_alignment
 
 

@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 
 import gagekit
-from gagekit.demo import data_path
+from gagekit.samples import data_path
 
 EXAMPLE_MACHINE = gagekit.machine.example_machine_path()
 CASTING_PLY = data_path("casting_ok.ply")

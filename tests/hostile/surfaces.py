@@ -123,7 +123,7 @@ def command_cases(tmp: Path, machine: Path, cal: Path, good_db: str, quick: bool
     import numpy as np
 
     from gagekit.cloud import read_points, write_points
-    from gagekit.demo import data_path
+    from gagekit.samples import data_path
 
     step = 5 if quick else 1
     bracket_toml = data_path("bracket.toml")

@@ -11,7 +11,7 @@ import shutil
 
 import pytest
 
-from gagekit.demo import data_path
+from gagekit.samples import data_path
 
 from .conftest import EXAMPLE_MACHINE, check_outcome, gk, gk_inproc
 from .surfaces import command_cases, json_mutants, nc_mutants, studio_cases

@@ -4,7 +4,7 @@ import importlib.util
 
 import pytest
 
-from gagekit.demo import data_path
+from gagekit.samples import data_path
 
 
 def load_generator():

@@ -5,12 +5,12 @@ import numpy as np
 import pytest
 
 from bracket_fixture import bracket, key  # noqa: F401  (the fixture)
-from gagekit import inspect
+from gagekit import inspect_scan
 
 
 def test_every_callout_matches_its_construction(bracket):
     pts, spec, gen = bracket
-    res = inspect(pts, spec)
+    res = inspect_scan(pts, spec)
     assert len(res.tolerances) == len(gen.EXPECTED) == 20
     for t in res.tolerances:
         want = gen.EXPECTED[key(t)]
@@ -46,8 +46,8 @@ def test_rigid_motion_invariance(bracket, seed):
     pts, spec, _ = bracket
     rng = np.random.default_rng(seed)
     R, t = _rotation(rng), rng.uniform(-500, 500, 3)
-    base = inspect(pts, spec)
-    moved = inspect(pts @ R.T + t, spec.moved(R, t))
+    base = inspect_scan(pts, spec)
+    moved = inspect_scan(pts @ R.T + t, spec.moved(R, t))
     for a, b in zip(base.tolerances, moved.tolerances):
         assert b.measured == pytest.approx(a.measured, abs=1e-9), key(a)
     # the frame moves with the part
@@ -57,7 +57,7 @@ def test_rigid_motion_invariance(bracket, seed):
 
 def test_json_keys(bracket):
     pts, spec, _ = bracket
-    d = inspect(pts, spec).to_dict()
+    d = inspect_scan(pts, spec).to_dict()
     assert {"datums", "frame", "tolerances", "features", "status"} <= set(d)
     for t in d["tolerances"]:
         assert {"feature", "characteristic", "tolerance", "measured", "pass", "margin", "datums", "n_points"} <= set(t)

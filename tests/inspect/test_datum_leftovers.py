@@ -6,7 +6,7 @@ import math
 import numpy as np
 import pytest
 
-from gagekit import inspect
+from gagekit import inspect_scan
 from gagekit.errors import ConfigError
 from gagekit.inspect import part_spec_from_dict
 from gagekit.inspect.datums import DatumSystem
@@ -87,7 +87,7 @@ def test_a_datum_axis_far_from_its_basic_angle_is_a_config_error():
     spec = _spec(20.0, [{"feature": "ball", "characteristic": "position", "tolerance": 0.1, "datums": ["A", "D"],
                          "nominal": {"point": [0, 0, 0], "direction": [0, 0, 1]}}])
     with pytest.raises(ConfigError, match="at its basic angle of 20 degrees to it; this axis is 60 degrees from the plane"):
-        inspect(_points(), spec)
+        inspect_scan(_points(), spec)
 
 
 def test_sphere_datum_is_the_centre_of_the_ball():
@@ -97,7 +97,7 @@ def test_sphere_datum_is_the_centre_of_the_ball():
         {"feature": "ball2", "characteristic": "position", "tolerance": 0.1, "datums": ["S", "A"],
          "nominal": {"point": [0, 30.0, 4.0], "direction": [0, 0, 1]}},
     ])
-    res = inspect(_points(), spec)
+    res = inspect_scan(_points(), spec)
     s = [d for d in res.datums if d.letter == "S"][0]
     assert s.type == "point" and "minimum circumscribed sphere" in s.method
     assert np.allclose(s.point, [-60, 0, 20], atol=1e-9) and s.radius == pytest.approx(5.0, abs=1e-9)
@@ -128,7 +128,7 @@ def test_flatness_is_the_exact_minimum_width():
         "feature": [{"name": "F", "shape": "plane", "region": {"center": [0, 0, 0], "size": [50, 30, 10]}, "outward": [0, 0, 1]}],
         "tolerance": [{"feature": "F", "characteristic": "flatness", "tolerance": 1.0}],
     }, "flat.toml")
-    w = inspect(p, spec).tolerances[0].measured
+    w = inspect_scan(p, spec).tolerances[0].measured
     th, ph = np.meshgrid(np.linspace(0, 0.4, 200), np.linspace(0, 2 * math.pi, 360), indexing="ij")
     n = np.column_stack([np.sin(th.ravel()) * np.cos(ph.ravel()), np.sin(th.ravel()) * np.sin(ph.ravel()), np.cos(th.ravel())])
     h = p @ n.T

@@ -6,7 +6,7 @@ import math
 import numpy as np
 from hypothesis import given, settings, strategies as st
 
-from gagekit import inspect
+from gagekit import inspect_scan
 from gagekit.inspect import part_spec_from_dict
 
 PLANE_CHARS = [
@@ -64,7 +64,7 @@ SPEC = _spec()
 
 
 def test_a_perfect_part_measures_zero():
-    res = inspect(_part(0.0, 0), SPEC)
+    res = inspect_scan(_part(0.0, 0), SPEC)
     for t in res.tolerances:
         want = 0.0
         if t.characteristic in ("profile", "position"):
@@ -79,11 +79,11 @@ def test_a_perfect_part_measures_zero():
 @given(amp=st.floats(1e-4, 0.05), seed=st.integers(0, 10_000))
 def test_never_negative_and_outside_points_never_lower_it(amp, seed):
     pts = _part(amp, seed)
-    base = inspect(pts, SPEC)
+    base = inspect_scan(pts, SPEC)
     for t in base.tolerances:
         assert t.measured >= 0.0 and math.isfinite(t.measured)
     # one more point, clearly outside every zone of F, the ball and the ring
     extra = np.array([[20.0, 15.0, 10 + 1.5], [70.0, 20.0, 10 + 5.0 + 0.9], [100.0 + 4.0 + 0.4, 20.0, 5.0]])
-    more = inspect(np.concatenate([pts, extra]), SPEC)
+    more = inspect_scan(np.concatenate([pts, extra]), SPEC)
     for a, b in zip(base.tolerances, more.tolerances):
         assert b.measured >= a.measured - 1e-12, (a.characteristic, a.feature, a.measured, b.measured)

@@ -6,7 +6,7 @@ import sys
 
 import pytest
 
-from gagekit.demo import data_path
+from gagekit.samples import data_path
 from gagekit.inspect.spec import MAX_SECTIONS
 
 

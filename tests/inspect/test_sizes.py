@@ -7,7 +7,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from gagekit import inspect
+from gagekit import inspect_scan
 from gagekit.errors import ConfigError
 from gagekit.inspect import part_spec_from_dict
 from gagekit.inspect.iso286 import RANGES, _IT_UM, fit_deviations, it_formula
@@ -39,7 +39,7 @@ MODS = ["LP", "GG", "GX", "GN", "SX", "SN", "SA", "SM", "SD", "SR", "CC", "CA", 
 def test_three_lobed_shaft():
     pts = lobed(3)
     s = spec([{"upper": 0.01, "lower": -0.1, "modifier": m} for m in MODS])
-    res = {t.extra["modifier"]: t for t in inspect(pts, s).tolerances}
+    res = {t.extra["modifier"]: t for t in inspect_scan(pts, s).tolerances}
     lp = res["LP"]
     assert lp.extra["local_sizes"]["n"] == 10 * 180
     assert lp.extra["local_sizes"]["min"] == pytest.approx(2 * R, abs=1e-12)
@@ -65,10 +65,10 @@ def test_three_lobed_shaft():
 
 def test_envelope_catches_the_lobed_shaft():
     pts = lobed(3)
-    ok = inspect(pts, spec([{"upper": 0.01, "lower": -0.1}])).tolerances[0]
-    env = inspect(pts, spec([{"upper": 0.01, "lower": -0.1, "envelope": True}])).tolerances[0]
-    asme = inspect(pts, spec([{"upper": 0.01, "lower": -0.1}], part={"standard": "asme"})).tolerances[0]
-    indep = inspect(pts, spec([{"upper": 0.01, "lower": -0.1, "envelope": False}], part={"standard": "asme"})).tolerances[0]
+    ok = inspect_scan(pts, spec([{"upper": 0.01, "lower": -0.1}])).tolerances[0]
+    env = inspect_scan(pts, spec([{"upper": 0.01, "lower": -0.1, "envelope": True}])).tolerances[0]
+    asme = inspect_scan(pts, spec([{"upper": 0.01, "lower": -0.1}], part={"standard": "asme"})).tolerances[0]
+    indep = inspect_scan(pts, spec([{"upper": 0.01, "lower": -0.1, "envelope": False}], part={"standard": "asme"})).tolerances[0]
     assert ok.passed and indep.passed and "envelope" not in ok.to_dict()
     for t in (env, asme):
         assert not t.passed
@@ -79,19 +79,19 @@ def test_envelope_catches_the_lobed_shaft():
 
 def test_oval_two_point_range():
     pts = lobed(2, n_theta=720)
-    t = inspect(pts, spec([{"upper": 0.2, "lower": -0.2}])).tolerances[0]
+    t = inspect_scan(pts, spec([{"upper": 0.2, "lower": -0.2}])).tolerances[0]
     ls = t.extra["local_sizes"]
     assert ls["min"] == pytest.approx(2 * R - 2 * A, abs=1e-12)
     assert ls["max"] == pytest.approx(2 * R + 2 * A, abs=1e-12)
     assert t.passed and t.margin == pytest.approx(0.2 - 2 * A, abs=1e-12)
-    tight = inspect(pts, spec([{"upper": 0.05, "lower": -0.2}])).tolerances[0]
+    tight = inspect_scan(pts, spec([{"upper": 0.05, "lower": -0.2}])).tolerances[0]
     assert tight.measured == pytest.approx(2 * R + 2 * A) and not tight.passed
 
 
 def test_hole_fit_and_json():
     pts = lobed(3, r=10.01, a=0.002)
     s = spec([{"fit": "H7"}], kind="hole")
-    t = inspect(pts, s).tolerances[0]
+    t = inspect_scan(pts, s).tolerances[0]
     d = t.to_dict()
     assert d["upper_limit"] == pytest.approx(20.021) and d["lower_limit"] == pytest.approx(20.0)
     assert d["fit"] == "H7" and d["tolerance"] == pytest.approx(0.021)
@@ -102,7 +102,7 @@ def test_hole_fit_and_json():
 
 def test_circle_sphere_cone_widths():
     circle = lobed(3, heights=np.array([0.0]))
-    t = inspect(circle, spec([{"upper": 0.1, "lower": -0.1}, {"upper": 0.2, "lower": 0, "modifier": "GN"}], shape="circle",
+    t = inspect_scan(circle, spec([{"upper": 0.1, "lower": -0.1}, {"upper": 0.2, "lower": 0, "modifier": "GN"}], shape="circle",
                              size=(30, 30, 1))).tolerances
     assert t[0].measured == pytest.approx(2 * R, abs=1e-12) and t[1].measured == pytest.approx(2 * (R + A), abs=1e-9)
     # a sphere of radius 10: every two-point size 20
@@ -110,7 +110,7 @@ def test_circle_sphere_cone_widths():
     lon = np.linspace(0, 2 * math.pi, 120, endpoint=False)
     LA, LO = np.meshgrid(lat, lon, indexing="ij")
     ball = R * np.column_stack([(np.cos(LA) * np.cos(LO)).ravel(), (np.cos(LA) * np.sin(LO)).ravel(), np.sin(LA).ravel()])
-    t = inspect(ball, spec([{"upper": 0.1, "lower": -0.1, "modifier": m} for m in ("LS", "GN", "GG")], shape="sphere",
+    t = inspect_scan(ball, spec([{"upper": 0.1, "lower": -0.1, "modifier": m} for m in ("LS", "GN", "GG")], shape="sphere",
                            size=(30, 30, 30))).tolerances
     assert t[0].extra["local_sizes"]["min"] == pytest.approx(2 * R, abs=1e-9)
     assert t[0].extra["local_sizes"]["max"] == pytest.approx(2 * R, abs=1e-9)
@@ -132,7 +132,7 @@ def test_width(shape):
     doc = {"feature": [{"name": "w", "shape": shape, "direction": [0, 0, 1], "region": {"center": [0, 0, 5], "size": [40, 20, 14]}}],
            "tolerance": [{"feature": "w", "characteristic": "size", "nominal": 10.0, "upper": 0.1, "lower": -0.1, "modifier": m}
                          for m in ("LP", "GX", "GN", "GG")]}
-    t = inspect(pts, part_spec_from_dict(doc, "t")).tolerances
+    t = inspect_scan(pts, part_spec_from_dict(doc, "t")).tolerances
     # a flat face z = 0 and a bowed one z = 10 + bow (1 - (x / 15)^2), symmetric: the common normal is z
     ls = t[0].extra["local_sizes"]
     assert ls["n"] == len(x)
@@ -184,8 +184,8 @@ def test_sizes_invariant_under_rigid_motion(angle, ax, ay, az, tx, ty, tz):
     # 7 sections: no ring of the scan lies on a section boundary (a ring split between two
     # sections by rounding would change CA, honestly: its profile has half the points)
     s = spec([{"upper": 0.25, "lower": -0.2, "modifier": m, "sections": 7} for m in ("LP", "GX", "GN", "CA")])
-    base = inspect(pts, s).tolerances
-    moved = inspect(pts @ Rm.T + t, s.moved(Rm, t)).tolerances
+    base = inspect_scan(pts, s).tolerances
+    moved = inspect_scan(pts @ Rm.T + t, s.moved(Rm, t)).tolerances
     for a, b in zip(base, moved):
         # LP, CA: 1e-9; GX / GN of the oval come from the free-direction cylinder search of
         # gagekit.form (its inscribed cylinder touches two lines only: a flat optimum), 1e-5
@@ -220,11 +220,11 @@ def test_bracket_with_sizes_and_material_conditions():
     bracket.toml, and sizes, distances, angles, MMC bonuses and a datum shift at their analytic values."""
     from bracket_fixture import key, load_generator
     from gagekit import load_part_spec, read_points
-    from gagekit.demo import data_path
+    from gagekit.samples import data_path
 
     gen = load_generator()
     pts = read_points(data_path("bracket.ply"))
-    res = inspect(pts, load_part_spec(data_path("bracket_sizes.toml")))
+    res = inspect_scan(pts, load_part_spec(data_path("bracket_sizes.toml")))
     assert len(res.tolerances) == len(gen.EXPECTED) + len(gen.EXPECTED_SIZES)
     for t in res.tolerances:
         want = gen.EXPECTED[key(t)] if key(t) in gen.EXPECTED else gen.EXPECTED_SIZES[key(t)]
@@ -261,9 +261,9 @@ def test_material_needs_a_size_callout():
            "tolerance": [{"feature": "f", "characteristic": "perpendicularity", "tolerance": 0.0, "material": "MMC", "datums": ["A"]}]}
     plane = np.column_stack([np.random.default_rng(0).uniform(-15, 15, (400, 2)), np.full(400, -10.0)])
     with pytest.raises(ConfigError, match="size limits"):
-        inspect(np.vstack([pts, plane]), part_spec_from_dict(doc, "t"))
+        inspect_scan(np.vstack([pts, plane]), part_spec_from_dict(doc, "t"))
     doc["tolerance"].append({"feature": "f", "characteristic": "size", "nominal": 20.0, "upper": 0.1, "lower": -0.1})
-    t = inspect(np.vstack([pts, plane]), part_spec_from_dict(doc, "t")).tolerances[0]
+    t = inspect_scan(np.vstack([pts, plane]), part_spec_from_dict(doc, "t")).tolerances[0]
     # a shaft: bonus = MMC size 20.1 - GN 2 (R + a) = 0.1 - 2 a
     assert t.extra["bonus"] == pytest.approx(0.1 - 2 * A, abs=1e-9)
     doc["tolerance"][0]["tolerance"] = -0.1

@@ -5,7 +5,7 @@ import copy
 import numpy as np
 import pytest
 
-from gagekit import inspect
+from gagekit import inspect_scan
 from gagekit.errors import ConfigError, DegenerateGeometryError, GagekitError
 from gagekit.inspect import part_spec_from_dict
 
@@ -67,7 +67,7 @@ def test_a_region_with_too_few_points():
     doc = copy.deepcopy(BASE)
     doc["feature"][2]["region"] = {"center": [50, 50, 50], "size": [1, 1, 1]}
     with pytest.raises(DegenerateGeometryError, match=r"\[\[feature\]\] 'top': 'region' holds 0 point"):
-        inspect(_plate_points(), part_spec_from_dict(doc, "PART.toml"))
+        inspect_scan(_plate_points(), part_spec_from_dict(doc, "PART.toml"))
 
 
 def test_a_secondary_datum_parallel_to_the_primary():
@@ -76,7 +76,7 @@ def test_a_secondary_datum_parallel_to_the_primary():
     doc["tolerance"][0] = {"feature": "B", "characteristic": "perpendicularity", "tolerance": 0.1, "datums": ["A", "B"]}
     doc["feature"][2]["outward"] = [0, 0, 1]
     with pytest.raises(ConfigError, match=r"datum B \(feature 'top'\).*parallel to the primary datum A"):
-        inspect(_plate_points(), part_spec_from_dict(doc, "PART.toml"))
+        inspect_scan(_plate_points(), part_spec_from_dict(doc, "PART.toml"))
 
 
 def test_bad_points_are_typed_errors():
@@ -84,6 +84,6 @@ def test_bad_points_are_typed_errors():
     pts = _plate_points()
     pts[3, 1] = np.nan
     with pytest.raises(GagekitError, match="point 3"):
-        inspect(pts, spec)
+        inspect_scan(pts, spec)
     with pytest.raises(GagekitError):
-        inspect(np.zeros((5, 2)), spec)
+        inspect_scan(np.zeros((5, 2)), spec)

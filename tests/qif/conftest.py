@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from gagekit.demo import data_path
+from gagekit.samples import data_path
 
 QIF_DATA = Path(__file__).resolve().parents[1] / "data" / "qif"
 CTC01 = data_path("nist_ctc_01_asme1_ap242.qif.gz")

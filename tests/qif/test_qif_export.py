@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 import gagekit
-from gagekit.demo import data_path
+from gagekit.samples import data_path
 from gagekit.inspect import part_spec_from_dict
 from gagekit.qif import part_from_model, read_model, write_inspection_results
 from gagekit.qif.nominal import sample_feature

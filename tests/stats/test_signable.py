@@ -114,7 +114,7 @@ def test_chart_time_axes_show_dates_and_times():
 
 
 def test_gage_check_flags_zero_margin_in_json_text_and_report(tmp_path):
-    from gagekit.demo import data_path
+    from gagekit.samples import data_path
 
     ply, toml = data_path("casting_ok.ply"), data_path("casting_ok.toml")
     proc = gk("gage", "check", ply, toml, "--no-groups", "--json")

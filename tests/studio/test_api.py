@@ -14,7 +14,7 @@ from gagekit.studio import app as studio_app
 from gagekit.studio.app import create_app
 from gagekit.studio.session import Session, load_scan
 
-from gagekit.demo import data_path
+from gagekit.samples import data_path
 
 CASTING = data_path("casting_ok.ply")
 CASTING_SPEC = data_path("casting_ok.toml")

@@ -12,7 +12,7 @@ from starlette.testclient import TestClient
 
 import gagekit
 from gagekit.cloud.regions import select
-from gagekit.demo import data_path
+from gagekit.samples import data_path
 from gagekit.inspect import inspect, load_part_spec
 from gagekit.studio import app as studio_app
 from gagekit.studio.app import create_app

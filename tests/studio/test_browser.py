@@ -12,7 +12,7 @@ import pytest
 
 import gagekit
 from gagekit.cloud.regions import Box
-from gagekit.demo import data_path
+from gagekit.samples import data_path
 
 CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
 playwright = pytest.importorskip("playwright.sync_api", reason="playwright (pip) is needed for the browser tests")

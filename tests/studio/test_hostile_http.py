@@ -14,7 +14,7 @@ from pathlib import Path
 
 import pytest
 
-from gagekit.demo import data_path
+from gagekit.samples import data_path
 from servers import StudioServer
 
 pytest.importorskip("uvicorn", reason="the studio extra (uvicorn, starlette) is needed")

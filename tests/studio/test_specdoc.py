@@ -7,7 +7,7 @@ import pytest
 from gagekit.errors import ConfigError
 from gagekit.gage import GageSpec
 from gagekit.studio import specdoc
-from gagekit.demo import data_path
+from gagekit.samples import data_path
 
 COMMENTED = '''# a hand-written gage file: comments and layout must survive edits
 length_unit = "mm"   # always mm

@@ -8,7 +8,8 @@ from typing import Optional
 
 import typer
 
-from ._common import JSON_OPTION, UNITS_OPTION, emit, read_cloud_cli, table, warn
+from ._common import JSON_OPTION, UNITS_OPTION, emit, read_cloud_cli, seed_option, table, warn
+from ._uncertainty import MEASUREMENT_OPTION, NOISE_OPTION, THREADS_OPTION, UNCERTAINTY_OPTION, uncertainty_settings
 
 
 def human(result) -> str:
@@ -43,9 +44,15 @@ def compare(
     deviations: Optional[Path] = typer.Option(None, "--deviations", help="Write one deviation per input point: OUT.npy, OUT.csv or OUT.ply (a scalar field)."),
     report: Optional[Path] = typer.Option(None, "--report", help="Write report.html (the CAD coloured by deviation, histogram, per-face table, callouts) and result.json into DIR."),
     as_json: bool = JSON_OPTION,
+    uncertainty: Optional[str] = UNCERTAINTY_OPTION,
+    noise: Optional[str] = NOISE_OPTION,
+    measurement: Optional[Path] = MEASUREMENT_OPTION,
+    seed: int = seed_option(help="Seed of the Monte Carlo trials (--uncertainty)"),
+    threads: Optional[int] = THREADS_OPTION,
 ) -> None:
     """Signed deviation of every scan point from the CAD surface (positive outside the
-    material), after the chosen alignment; per-face statistics.
+    material), after the chosen alignment; per-face statistics. With --uncertainty, the
+    JCGM 101 uncertainty of every statistic (alignment re-run on each simulated scan).
 
     Exit status 0 when the comparison ran; 2 on errors.
     """
@@ -61,6 +68,7 @@ def compare(
         raise ConfigError("--align datums needs --part PART.toml (the drawing's datums)")
     if max_distance is not None and not (max_distance > 0 and max_distance < float("inf")):
         raise ConfigError(f"--max-distance must be a positive number, got {max_distance}")
+    mc = uncertainty_settings(uncertainty, noise, measurement)
     if deviations is not None:
         output_file(deviations)
     if report is not None:
@@ -74,11 +82,31 @@ def compare(
     for w in model.warnings:
         warn(w)
     pts = read_cloud_cli(scan, units).points
-    result = run_compare(pts, model, align=align, lock=lock, max_distance=max_distance, part=spec)
+    options = dict(align=align, lock=lock, max_distance=max_distance, part=spec)
+    res = None
+    if mc is not None:
+        from ..uncertainty import compare_uncertainty
+
+        result, res = compare_uncertainty(pts, model, mc[1], mc[0], seed=seed, threads=threads, **options)
+    else:
+        result = run_compare(pts, model, **options)
     if deviations is not None:
         write_deviations(deviations, result)
     if report is not None:
         from ..report.compare import write_report
 
         write_report(result, report)
-    emit(result, as_json, human)
+    if res is None:
+        emit(result, as_json, human)
+        return
+    out = {**result.to_dict(), "uncertainty": res.to_dict(), "monte_carlo": res.settings()}
+
+    def human_mc(_: object) -> str:
+        rows = [[k, f"{u.value:+.6f}", f"{u.U:.6f}", f"[{u.interval[0]:+.6f}, {u.interval[1]:+.6f}]", f"{u.bias:+.6f}"]
+                for k, u in res.uncertainties.items() if k.startswith("deviations.")]
+        s = res.settings()
+        return "\n".join([human(result), "", table(["statistic", "value", "U (95 %)", "95 % interval", "MC bias"], rows),
+                          f"uncertainty: {s['method']}, {s['trials']} trials, seed {s['seed']}, {s['stopping']}; noise "
+                          f"sigma {s['model']['sigma']:.6g} mm (per-face figures in --json)"])
+
+    emit(out, as_json, human_mc)

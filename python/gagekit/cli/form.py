@@ -9,6 +9,7 @@ import numpy as np
 import typer
 
 from ._common import JSON_OPTION, UNITS_OPTION, emit, seed_option, table
+from ._uncertainty import MEASUREMENT_OPTION, NOISE_OPTION, THREADS_OPTION, UNCERTAINTY_OPTION, uncertainty_settings
 
 app = typer.Typer(help="Form of lines, planes, circles, spheres and cylinders (Ch. 6).", no_args_is_help=True)
 
@@ -119,12 +120,38 @@ def fit(
     angle: Optional[float] = typer.Option(None, "--angle", help="Cones: fix the half apex angle to DEG, in (0, 90) (default: free)"),
     units: Optional[str] = UNITS_OPTION,
     as_json: bool = JSON_OPTION,
+    uncertainty: Optional[str] = UNCERTAINTY_OPTION,
+    noise: Optional[str] = NOISE_OPTION,
+    measurement: Optional[Path] = MEASUREMENT_OPTION,
+    threads: Optional[int] = THREADS_OPTION,
 ) -> None:
-    """Fit a feature to the points of FILE and report its form error and certificate."""
-    from ..form.files import fit_file
+    """Fit a feature to the points of FILE and report its form error and certificate; with
+    --uncertainty, the JCGM 101 uncertainty of each result (the swarm's --seed seeds the trials too)."""
+    from ..form.files import fit_file, load_points, normalize_shape
 
-    r = fit_file(shape, file, criterion, seed=seed, units=units, axis=_axis(axis), max_tilt=max_tilt, angle=angle)
-    emit(r, as_json, _human, warnings=getattr(r, "warnings", ()))
+    mc = uncertainty_settings(uncertainty, noise, measurement)
+    ax = _axis(axis)
+    if mc is None:
+        r = fit_file(shape, file, criterion, seed=seed, units=units, axis=ax, max_tilt=max_tilt, angle=angle)
+        emit(r, as_json, _human, warnings=getattr(r, "warnings", ()))
+        return
+    from ..uncertainty import fit_uncertainty
+
+    pts = _read_xy(file, units) if normalize_shape(shape) == "circle" else load_points(file, units)
+    r, res = fit_uncertainty(lambda p: fit_file(shape, file, criterion, seed=seed, points=p, axis=ax, max_tilt=max_tilt,
+                                                       angle=angle),
+                             pts, mc[1], mc[0], seed=seed, threads=threads)
+    out = {**r.to_dict(), "uncertainty": res.to_dict(), "monte_carlo": res.settings()}
+
+    def human(_: object) -> str:
+        rows = [[k, f"{u.value:.9f}", f"{u.u:.9f}", f"{u.U:.9f}", f"[{u.interval[0]:.9f}, {u.interval[1]:.9f}]", f"{u.bias:+.9f}"]
+                for k, u in res.uncertainties.items()]
+        s = res.settings()
+        return "\n".join([_human(r), "", table(["quantity", "value", "u", "U (95 %)", "95 % interval", "MC bias"], rows),
+                          f"uncertainty: {s['method']}, {s['trials']} trials, seed {s['seed']}, {s['stopping']}; noise "
+                          f"sigma {s['model']['sigma']:.6g} mm" + (f" ({s['model']['sigma_source']})" if "sigma_source" in s["model"] else "")])
+
+    emit(out, as_json, human, warnings=getattr(r, "warnings", ()))
 
 
 @app.command("cylinder")

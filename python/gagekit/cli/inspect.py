@@ -12,7 +12,9 @@ from typing import Any, Optional
 import typer
 from typer.core import TyperGroup
 
-from ._common import CHUNK_OPTION, JSON_OPTION, MEMORY_OPTION, UNITS_OPTION, emit, open_scan_cli, table
+from ._common import CHUNK_OPTION, JSON_OPTION, MEMORY_OPTION, UNITS_OPTION, emit, open_scan_cli, seed_option, table
+from ._uncertainty import (MEASUREMENT_OPTION, NOISE_OPTION, RULE_OPTION, THREADS_OPTION, UNCERTAINTY_OPTION, rule_of,
+                           uncertainty_settings)
 from .qif import INSTRUMENT_OPTION, QIF_RESULTS_OPTION, check_output, write_results
 
 
@@ -36,9 +38,27 @@ app = typer.Typer(cls=DefaultScanGroup, no_args_is_help=True,
 def human(result) -> str:
     from ..report.inspect import callout_rows
 
-    rows = [[r[0], r[1], r[2], r[3], r[4], f"{r[5]:.4f}", f"{r[6]:.6f}", f"{r[7]:+.6f}", r[8]] for r in callout_rows(result)]
-    text = table(["#", "feature", "characteristic", "datums", "zone", "tolerance", "measured", "margin", "result"], rows)
-    return f"{text}\n\n{result.part}: {result.status} ({sum(t.passed for t in result.tolerances)}/{len(result.tolerances)} callouts pass)"
+    mc = result.monte_carlo is not None
+    rows = []
+    for r, t in zip(callout_rows(result), result.tolerances):
+        d = t.to_dict()
+        row = [r[0], r[1], r[2], r[3], r[4], f"{r[5]:.4f}", f"{r[6]:.6f}", f"{r[7]:+.6f}", r[8]]
+        if mc:
+            u = d["uncertainty"]
+            row += [f"{u['U']:.6f}", f"{u['bias']:+.6f}"]
+        rows.append(row + [d["decision"]])
+    head = ["#", "feature", "characteristic", "datums", "zone", "tolerance", "measured", "margin", "result"]
+    head += ["U (95 %)", "MC bias"] if mc else []
+    text = table(head + ["decision"], rows)
+    lines = [text, "", f"{result.part}: {result.status} ({sum(t.passed for t in result.tolerances)}/{len(result.tolerances)} "
+             f"callouts pass); decision {result.decision}",
+             f"decision rule: {result.rule.label} -- {result.rule.describe()}"]
+    if mc:
+        s = result.monte_carlo
+        lines.append(f"uncertainty: {s['method']}, {s['trials']} trials, seed {s['seed']}, {s['stopping']}"
+                     f"{'' if s['stabilized'] else ' (not stabilized to one significant digit of u)'}; "
+                     f"noise sigma {s['model']['sigma']:.6g} mm" + (f" ({s['model']['sigma_source']})" if 'sigma_source' in s['model'] else ""))
+    return "\n".join(lines)
 
 
 def inspect(
@@ -51,10 +71,17 @@ def inspect(
     chunk: Optional[int] = CHUNK_OPTION,
     qif_results: Optional[Path] = QIF_RESULTS_OPTION,
     instrument: str = INSTRUMENT_OPTION,
+    uncertainty: Optional[str] = UNCERTAINTY_OPTION,
+    noise: Optional[str] = NOISE_OPTION,
+    measurement: Optional[Path] = MEASUREMENT_OPTION,
+    decision_rule: Optional[str] = RULE_OPTION,
+    seed: int = seed_option(help="Seed of the Monte Carlo trials (--uncertainty)"),
+    threads: Optional[int] = THREADS_OPTION,
 ) -> None:
-    """Evaluate every GD&T callout of PART.toml on the scan (ISO 1101 zones, ISO 5459 datums).
+    """Evaluate every GD&T callout of PART.toml on the scan (ISO 1101 zones, ISO 5459 datums);
+    with --uncertainty, each callout's JCGM 101 uncertainty and ISO 14253-1 decision.
 
-    Exit status 0 whether or not the part conforms (read `status`); 2 on errors.
+    Exit status 0 whether or not the part conforms (read `status` and `decision`); 2 on errors.
     """
     from ..inspect import inspect as run_inspect, load_part_spec
 
@@ -62,10 +89,21 @@ def inspect(
     from ..inspect import inspect_stream
 
     check_output(qif_results)
+    mc = uncertainty_settings(uncertainty, noise, measurement)
+    rule = rule_of(decision_rule, mc is not None)
     spec = load_part_spec(part)
     # a drawing with a CAD model matches the whole scan to it: read whole
     cloud = open_scan_cli(scan, units, memory, chunk, whole=getattr(spec, "cad", None) is not None)
-    result = inspect_stream(cloud, spec) if isinstance(cloud, CloudStream) else run_inspect(cloud.points, spec)
+    streamed = isinstance(cloud, CloudStream)
+    if mc is not None:
+        from ..uncertainty import inspect_uncertainty
+
+        result = inspect_uncertainty(cloud if streamed else cloud.points, spec, mc[1], mc[0], seed=seed, threads=threads,
+                                     rule=rule, stream=streamed)
+    else:
+        from ..uncertainty import decide_inspection
+
+        result = decide_inspection(inspect_stream(cloud, spec) if streamed else run_inspect(cloud.points, spec), rule)
     if report is not None:
         from ..report.inspect import write_report
 

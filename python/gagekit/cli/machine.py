@@ -272,6 +272,10 @@ def predict_cmd(
         write_csv(out, m.joint_names + ["ex", "ey", "ez", "ux", "uy", "uz"], np.hstack([cmds, err, u]))
     length = np.linalg.norm(err, axis=1) if len(err) else np.zeros(1)
     result = {"points": int(len(err)), "out": str(out), "mean": float(length.mean()), "max": float(length.max())}
+    if temperatures is None and len(err):
+        # standard uncertainty (k = 1) of each component, GUM 5.1.2 through Eq. 3.14: the CSV's ux, uy, uz
+        result["u"] = {"k": 1, "max": dict(zip("xyz", map(float, u.max(axis=0)))),
+                       "rms": dict(zip("xyz", map(float, np.sqrt((u**2).mean(axis=0)))))}
     if temperatures is not None:
         result["temperatures"] = dict(zip(model.sensors, map(float, temps)))
     emit(result, as_json, lambda r: f"wrote {r['points']} predicted errors to {r['out']} (mean {r['mean']:.4f} mm, max {r['max']:.4f} mm)")

@@ -80,6 +80,10 @@ def export_cmd(
     limits: Optional[str] = typer.Option(None, "--limits", help="Grid extent inside the joint ranges, e.g. X=-1000:1000."),
     increment: float = typer.Option(0.001, "--increment", help="fanuc-3d: detection unit, mm (0.001 IS-B, 0.0001 IS-C)."),
     seed: int = seed_option(help="Seed of the random commands of the read-back check."),
+    uncertainty: bool = typer.Option(
+        False, "--uncertainty", help="Also write each entry's standard uncertainty from the calibration's covariance "
+        "(GUM 5.1.2): grid-csv columns uc<joint>; the other formats a companion CSV OUT_u.csv beside the table."
+    ),
     as_json: bool = JSON_OPTION,
 ) -> None:
     """Write a compensation table for a controller and read it back as the controller interpolates it."""
@@ -93,21 +97,27 @@ def export_cmd(
     if fmt == "kinematics":
         from .machine_instruments import export_kinematics_cmd
 
-        return export_kinematics_cmd(m, cal, out, fixed, calibration_stamp(calibration, cal), as_json)
+        return export_kinematics_cmd(m, cal, out, fixed, calibration_stamp(calibration, cal), as_json, uncertainty)
     with _warnings_to_stderr():
         res = export(
             m, cal, fmt, out, axes=ax, step=_per_axis_option(step, "--step"), points=_per_axis_option(points, "--points"),
             at=fixed, limits=_limits(limits), increment=increment, stamp=calibration_stamp(calibration, cal), seed=seed,
+            uncertainty=uncertainty,
         )
 
     def human(r) -> str:
         rb = r.readback
         g = r.grid
-        return (
+        text = (
             f"wrote {r.format} ({' x '.join(str(n) for n in g.shape)} nodes over {', '.join(g.axes)}) to "
             f"{', '.join(r.files)}\nread back at {rb['n']} random commands: {rb['quantity']} within "
             f"{rb['max_um']:.3g} um (RMS {rb['rms_um']:.3g} um)"
         )
+        if r.uncertainty is not None:
+            u = r.uncertainty
+            text += (f"\nstandard uncertainty (k = 1) of the {u['quantity']} in {u['file']} ({u['columns']}): "
+                     f"up to {1e3 * u['max_mm']:.3g} um" + (f", {u['max_rad']:.3g} rad" if "max_rad" in u else ""))
+        return text
 
     emit(res, as_json, human)
 

@@ -167,11 +167,11 @@ def identify_mixed_cmd(m, observations, unknowns, out, test, residuals, as_json)
     emit(res, as_json, human)
 
 
-def export_kinematics_cmd(m, cal, out, at, stamp, as_json) -> None:
-    """`machine export --format kinematics`: three controller files, all or nothing."""
+def export_kinematics_cmd(m, cal, out, at, stamp, as_json, uncertainty: bool = False) -> None:
+    """`machine export --format kinematics`: three controller files (four with --uncertainty), all or nothing."""
     from ..machine.export_kinematics import export_kinematics
 
-    res = export_kinematics(m, cal, out, at=at, stamp=stamp)
+    res = export_kinematics(m, cal, out, at=at, stamp=stamp, uncertainty=uncertainty)
 
     def human(r) -> str:
         lines = [f"wrote {', '.join(r.files)}"]

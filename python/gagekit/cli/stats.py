@@ -16,6 +16,10 @@ def _human(s: dict) -> str:
     res = s["resolution"]
     out = [f"SPC of {s['database']} (resolution {res['mm']:g} mm, {res['rad']:g} rad: values within it of a limit are on "
            f"the limit; capability from {s['min_values_for_capability']} values, trends from {s['min_trend_days']:g} day)"]
+    if "measurement" in s:
+        m = s["measurement"]
+        out.append(f"measurement standard uncertainty u = {m['u']:g} mm (k = 1) on {m['applies_to']}: {m['model']}; "
+                   "Cpk/Ppk in the table are observed, the process indices follow each table")
     for spec in s["specs"]:
         label = spec.get("part") or spec.get("source") or spec["spec"]
         out.append(f"\n{spec['kind']} {label} ({spec['spec']}): {spec['results']} results, {spec['failed']} failed")
@@ -43,6 +47,10 @@ def stats(
     resolution: float = typer.Option(1e-9, "--resolution", help="Resolution of lengths (mm; angles: this / 1000 rad). "
                                                                  "Values within it of a limit are on the limit; no "
                                                                  "capability without variation above it."),
+    measurement_u: Optional[float] = typer.Option(
+        None, "--measurement-uncertainty", metavar="U",
+        help="Standard uncertainty (k = 1, mm) of a measured length: capability also with the measurement variance "
+             "removed (ISO 22514-7: observed = process + measurement), beside the observed indices."),
     report: Optional[Path] = typer.Option(None, "--report", help="Write report.html with the charts into DIR."),
     as_json: bool = JSON_OPTION,
 ) -> None:
@@ -68,7 +76,7 @@ def stats(
     if spec is not None:
         doc = load_toml(spec)
         documents = [{"spec": doc}, {"part": doc}]
-    s = collect(db, documents=documents, tolerance=tolerance, resolution=resolution)
+    s = collect(db, documents=documents, tolerance=tolerance, resolution=resolution, measurement_u=measurement_u)
     if spec is not None and not s["specs"]:
         raise ConfigError(f"{spec}: no results of this spec in {s['database']}")
     if report is not None:

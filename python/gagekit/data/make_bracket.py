@@ -9,7 +9,8 @@ scanned line on the back face. Every surface is sampled exactly (no noise) on a 
 that includes its edges, with deviations whose inspection values follow analytically
 from the construction (``EXPECTED``):
 
-The scanner stops 1 mm short of every edge of the block's faces.
+The scanner stops 1 mm short of every edge of the block's faces (the bottom face A around
+the bore's opening, the front and back faces below the chamfer), so no point lies in the air.
 
 - A (bottom, z = 0): perfect -> flatness 0.
 - B (front, z in [1, 39]): leans by S_B (y = S_B (z - 1)) -> perpendicularity to A =
@@ -110,11 +111,19 @@ def make_bracket(density: float = 1.0) -> np.ndarray:
     h = 2.0 / math.sqrt(density)  # grid step on the faces (mm)
     nt = max(24, int(round(180 * math.sqrt(density))) // 12 * 12)  # points per turn (a multiple of 12)
     parts = []
-    # A: bottom, perfect
+    a = math.pi / 4 + DELTA
+
+    def below_chamfer(x, z):  # the front and back faces end at the chamfer (1 mm short of it)
+        return z <= 40 - np.maximum(x - 100, 0) * math.tan(a) - 1
+
+    # A: bottom, perfect, without the through bore's opening
     x, y = _grid(1, 119, 1, 79, h)
-    parts.append(np.column_stack([x, y, 0 * x]))
+    keep = np.hypot(x - 30, y - 40) > 10.5
+    parts.append(np.column_stack([x[keep], y[keep], 0 * x[keep]]))
     # B: front, leaning y = S_B (z - 1)
     x, z = _grid(1, 119, 1, 39, h)
+    keep = below_chamfer(x, z)
+    x, z = x[keep], z[keep]
     parts.append(np.column_stack([x, S_B * (z - 1), z]))
     # C: left end, twisted x = S_C (y - 1)
     y, z = _grid(1, 79, 1, 39, h)
@@ -126,13 +135,12 @@ def make_bracket(density: float = 1.0) -> np.ndarray:
     parts.append(np.column_stack([x, y, 40 + OFF + T * (x - 50)]))
     # chamfer from (100, y, 40) down at 45 deg + DELTA, slant length L
     s, y = _grid(1, L_CHAMFER - 1, 1, 79, h)
-    a = math.pi / 4 + DELTA
     parts.append(np.column_stack([100 + s * math.cos(a), y, 40 - s * math.sin(a)]))
     # right face below the chamfer, back face (without the rib line's band)
     y, z = _grid(1, 79, 1, 40 - L_CHAMFER * math.sin(a) - 1, h)
     parts.append(np.column_stack([0 * y + 120, y, z]))
     x, z = _grid(1, 119, 1, 39, h)
-    band = np.abs(z - 20) > 1.0
+    band = (np.abs(z - 20) > 1.0) & below_chamfer(x, z)
     parts.append(np.column_stack([x[band], 0 * x[band] + 80, z[band]]))
     # rib: a bowed line on the back face at z = 20
     x = np.linspace(10, 110, 2 * int(round(50 / h * 2)) + 1)  # odd: the crest x = 60 is sampled
@@ -233,6 +241,21 @@ def make_bracket_step(path) -> None:  # pragma: no cover - regenerates the bundl
     Path(path).write_text(text)
 
 
+def make_bracket_obj(step_path, path) -> None:  # pragma: no cover - regenerates the bundled mesh (needs gagekit[cad])
+    """The nominal bracket's tessellation (read_cad's chord tolerance, 0.5 um) as an OBJ
+    mesh, one ``g`` group per STEP face named as in the STEP file, so that a bare install
+    (no OpenCASCADE) can still compare the scan with the model face by face."""
+    from gagekit.cad import read_cad
+
+    m = read_cad(step_path)
+    lines = [f"# bracket.obj: tessellation of bracket.step (make_bracket.py), mm, {len(m.faces)} named faces"]
+    lines += [f"v {x:.7f} {y:.7f} {z:.7f}" for x, y, z in m.vertices]
+    for f in m.faces:
+        lines.append(f"g {f.label}")
+        lines += [f"f {a + 1} {b + 1} {c + 1}" for a, b, c in m.triangles[m.triangle_face == f.index]]
+    Path(path).write_text("\n".join(lines) + "\n")
+
+
 def main() -> None:  # pragma: no cover - regenerates the bundled files
     from gagekit.cloud import write_points
 
@@ -242,6 +265,8 @@ def main() -> None:  # pragma: no cover - regenerates the bundled files
     try:
         make_bracket_step(here / "bracket.step")
         print(f"wrote {here / 'bracket.step'}")
+        make_bracket_obj(here / "bracket.step", here / "bracket.obj")
+        print(f"wrote {here / 'bracket.obj'}")
     except ImportError:
         print("bracket.step not written: install gagekit[cad] (OpenCASCADE)")
 

@@ -16,6 +16,7 @@ from .analysis import (
     region_in_scanner,
     solve_problem,
 )
+from .uncertainty import check_gages_uncertainty
 from .spec import AlignmentSpec, Gage, GageFileWarning, GageSpec, MotionSet, Region, load_gage_spec
 
 __all__ = [
@@ -34,6 +35,7 @@ __all__ = [
     "Transform",
     "build_problem",
     "check_gages",
+    "check_gages_uncertainty",
     "corrected_cloud",
     "datum_alignment",
     "gage_distances",

@@ -56,10 +56,20 @@ class GageOutcome:
     allowance_after: float
     q: float
     slack: float
+    #: with an uncertainty (:mod:`gagekit.gage.uncertainty`): the allowance after T*'s
+    #: JCGM 101 uncertainty {u, U, k, coverage, interval, bias, method, trials}
+    uncertainty: Optional[dict] = None
+    #: with an uncertainty or a decision rule: conforming / not-proven / nonconforming (ISO 14253-1)
+    decision: Optional[str] = None
 
     def to_dict(self) -> dict:
-        return {k: getattr(self, k) for k in ("name", "region", "points", "filtered_points", "allowance_before",
-                                              "allowance_after", "q", "slack")}
+        d = {k: getattr(self, k) for k in ("name", "region", "points", "filtered_points", "allowance_before",
+                                           "allowance_after", "q", "slack")}
+        if self.uncertainty is not None:
+            d["uncertainty"] = self.uncertainty
+        if self.decision is not None:
+            d["decision"] = self.decision
+        return d
 
 
 @dataclass(frozen=True)
@@ -120,6 +130,15 @@ class GageCheckResult:
     plot_data: Optional[dict] = field(default=None, repr=False, compare=False)
     resolution: float = LENGTH_RESOLUTION_MM
     """mm: an allowance within it of zero is on the limit"""
+    decision: Optional[str] = None
+    """with an uncertainty or a decision rule: the part's decision (its worst gage's)"""
+    decision_rule: Optional[dict] = None
+    monte_carlo: Optional[dict] = None
+    """how the Monte Carlo ran (JCGM 101), with an uncertainty"""
+    transform_uncertainty: Optional[dict] = None
+    """each free motion of T*: its uncertainty when T* is found again on every simulated measurement"""
+    guard_band: Optional[dict] = None
+    """the guard-banded problem that proves the decision (:mod:`gagekit.gage.uncertainty`)"""
 
     @property
     def conforming(self) -> bool:
@@ -157,6 +176,8 @@ class GageCheckResult:
             "motion": self.motion,
             "solver": {"lp_status": self.lp_status, "relinearisations": self.iterations,
                        "last_step_mm": self.last_step},
+            **{k: getattr(self, k) for k in ("decision", "decision_rule", "monte_carlo", "transform_uncertainty",
+                                             "guard_band") if getattr(self, k) is not None},
         }
 
 

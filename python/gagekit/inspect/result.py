@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Optional
 
 import numpy as np
 
@@ -31,6 +31,12 @@ class CalloutResult:
     margin_value: float | None = None
     #: further top-level JSON keys: ``upper_limit``, ``lower_limit``, ``local_sizes``, ``bonus``, ...
     extra: dict = field(default_factory=dict)
+    #: the Monte Carlo uncertainty of ``measured`` (:mod:`gagekit.uncertainty`), when computed
+    uncertainty: Optional[dict] = None
+    #: the uncertainty of ``margin`` (two limits or a material bonus), when computed
+    margin_uncertainty: Optional[dict] = None
+    #: ISO 14253-1 decision (conforming, not-proven, nonconforming) under the result's rule
+    decision: Optional[str] = None
 
     @property
     def passed(self) -> bool:
@@ -62,6 +68,11 @@ class CalloutResult:
         if self.angle is not None:
             d["angle"] = self.angle
         d.update(self.extra)
+        if self.uncertainty is not None:
+            d["uncertainty"] = self.uncertainty
+        if self.margin_uncertainty is not None:
+            d["margin_uncertainty"] = self.margin_uncertainty
+        d["decision"] = self.decision if self.decision is not None else ("conforming" if self.passed else "nonconforming")
         if self.details:
             d["details"] = self.details
         return d
@@ -80,6 +91,23 @@ class InspectionResult:
     features: dict[str, Any]
     seconds: float = 0.0
     feature_data: dict[str, Any] = field(default_factory=dict, repr=False)
+    #: the decision rule (:class:`gagekit.uncertainty.DecisionRule`); None: simple
+    decision_rule: Any = None
+    #: how the Monte Carlo uncertainty was computed (settings, model), when it was
+    monte_carlo: Optional[dict] = None
+
+    @property
+    def rule(self) -> Any:
+        from ..uncertainty.decision import parse_decision_rule
+
+        return self.decision_rule if self.decision_rule is not None else parse_decision_rule(None, False)
+
+    @property
+    def decision(self) -> str:
+        """The part's decision: its worst callout's under :attr:`rule` (ISO 14253-1)."""
+        from ..uncertainty.decision import worst_decision
+
+        return worst_decision(t.to_dict()["decision"] for t in self.tolerances)
 
     @property
     def deviations(self) -> dict[str, tuple[np.ndarray, np.ndarray]]:
@@ -99,7 +127,10 @@ class InspectionResult:
             "datums": [d.to_dict() for d in self.datums],
             "frame": None if self.frame is None else self.frame.to_dict(),
             "frames": [f.to_dict() for f in self.frames],
+            "decision_rule": self.rule.to_dict(),
+            "decision": self.decision,
             "tolerances": [t.to_dict() for t in self.tolerances],
             "features": {k: v.to_dict() for k, v in self.features.items()},
             "seconds": self.seconds,
+            **({} if self.monte_carlo is None else {"monte_carlo": self.monte_carlo}),
         }

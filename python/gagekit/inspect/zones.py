@@ -275,7 +275,13 @@ def _cylindricity(tol, fd, system):
 
 
 def _sphericity(tol, fd, system):
-    fit = fit_sphere(fd.points, "minimum-zone")
+    near = fd._cache.get("near_zone")  # a Monte Carlo trial: the measured zone (gagekit.form.active)
+    if near is not None:
+        from ..form.active import minimum_zone_sphere_near
+
+        fit = minimum_zone_sphere_near(fd.points, near["center"])
+    else:
+        fit = fit_sphere(fd.points, "minimum-zone")
     return Measurement(float(fit.outer_radius - fit.inner_radius), "width", "surface", len(fd.points), {"center": list(fit.center)})
 
 

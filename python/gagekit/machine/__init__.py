@@ -19,6 +19,7 @@ from .identify import (
     predict,
     predict_uncertainty,
 )
+from .predict import predict_covariance
 from .model import (
     Group,
     JointSpec,
@@ -55,6 +56,7 @@ __all__: list[str] = [
     "identify",
     "predict",
     "predict_uncertainty",
+    "predict_covariance",
     "compensate",
     "load_calibration",
     "Truth",

@@ -47,6 +47,22 @@ Formats (units and sources in ``docs/controller-tables.md``):
     ``usrmotLoadComp``); between lines the motion controller interpolates linearly. The trim
     is the joint's own correction along a line through the ``at`` point (other joints fixed):
     a per-axis table cannot carry the cross-axis terms, which the readback shows.
+
+Uncertainty (``uncertainty=True``, ``--uncertainty``): every table entry is linear in the
+identified group values g (e = M_L g, Eq. 3.14; a correction c = -pinv(J) e; the ISO 230-1
+error motions of the minimum-norm parameters pinv(C) g), so its standard uncertainty is the
+exact law of propagation of the identification's group covariance Sigma (GUM, JCGM 100:2008,
+5.1.2; the covariance terms of 5.2.2 Eq. 13): u^2 = a^T Sigma a with a = d entry / d g. Groups
+the tracker frame takes (a rigid motion) and groups no instrument saw carry no uncertainty.
+Where it goes:
+
+* ``grid-csv``: extra columns ``uc<joint>`` (u of each correction; ``ux, uy, uz`` are always
+  written);
+* ``isg-csv``, ``fanuc-3d``, ``linuxcnc`` (controller formats with no room for it): a companion
+  CSV ``<OUT stem>_u.csv`` beside the table, written in the same all-or-nothing step:
+  ``isg-csv``: ``block,axis,argument,name,value,u`` (one row per entry of the file, values as
+  written, u in the entry's unit); ``fanuc-3d``: ``node,<axes>,c<axis>...,uc<axis>...`` (mm,
+  nodes numbered as on the tape); ``linuxcnc``: ``joint,nominal,trim,u_trim`` (mm).
 """
 
 from __future__ import annotations
@@ -63,7 +79,7 @@ from ..errors import ConfigError, FileFormatError, InvalidInputError
 from ._files import write_files_atomically
 from .errormotions import Twist, compose, element_twists, frames, transport
 from .calibration import Calibration
-from .predict import check_calibration, predict, predict_uncertainty
+from .predict import check_calibration, predict, predict_covariance, predict_uncertainty
 from .model import JointSpec, Machine, ShapeSpec
 
 __all__ = [
@@ -78,6 +94,9 @@ __all__ = [
     "read_isg_csv",
     "read_fanuc_3d",
     "read_linuxcnc",
+    "correction_uncertainty",
+    "isg_uncertainty",
+    "companion_path",
 ]
 
 FORMATS = ("grid-csv", "isg-csv", "fanuc-3d", "linuxcnc")
@@ -146,9 +165,11 @@ class ExportResult:
     readback: dict
     parameters: str = "minimum-norm parameter vector of the identified groups (Eq. 3.14)"
     notes: tuple[str, ...] = ()
+    #: with ``uncertainty=True``: where it was written and its summary (see the module doc)
+    uncertainty: Optional[dict] = None
 
     def to_dict(self) -> dict:
-        return {
+        d = {
             "format": self.format,
             "files": list(self.files),
             "grid": self.grid.to_dict(),
@@ -156,6 +177,9 @@ class ExportResult:
             "parameters": self.parameters,
             "notes": list(self.notes),
         }
+        if self.uncertainty is not None:
+            d["uncertainty"] = dict(self.uncertainty)
+        return d
 
 
 # ----- grid ----------------------------------------------------------------------------------
@@ -279,6 +303,24 @@ def corrections(machine: Machine, commands: np.ndarray, errors: np.ndarray, join
     return out
 
 
+def correction_uncertainty(machine: Machine, calibration: Calibration, commands: np.ndarray, joints: Sequence[str]) -> np.ndarray:
+    """(n, k) standard uncertainty (mm) of the corrections c = -pinv(J[:, joints]) e: with
+    P = -pinv(J) and the prediction covariance C_e (:func:`predict_covariance`),
+    u(c)^2 = diag(P C_e P^T) (GUM 5.1.2, exact: c is linear in the group values)."""
+    st = machine.structure()
+    idx = [machine.joint_names.index(j) for j in joints]
+    n = commands.shape[0]
+    out = np.empty((n, len(idx)))
+    for s in range(0, n, 20_000):
+        c = commands[s : s + 20_000]
+        ce = predict_covariance(machine, calibration, c, structure=st)
+        jac = machine.command_jacobian(c).reshape(-1, 3, len(machine.joint_names))[:, :, idx]
+        pm = np.linalg.pinv(jac)
+        var = np.einsum("nki,nij,nkj->nk", pm, ce, pm)
+        out[s : s + 20_000] = np.sqrt(np.clip(var, 0.0, None))
+    return out
+
+
 def grid_predictions(machine: Machine, calibration: Calibration, commands: np.ndarray, with_uncertainty: bool = True):
     """Predicted error (n, 3) and its standard uncertainty (n, 3) (or None), mm, in chunks."""
     st = machine.structure()
@@ -302,15 +344,26 @@ def _comp_joints(machine: Machine, grid: Grid) -> list[str]:
     return [a for a in grid.axes if spec[a].kind == "prismatic"]
 
 
-def _grid_csv(machine: Machine, calibration: Calibration, grid: Grid) -> str:
+def _grid_csv(machine: Machine, calibration: Calibration, grid: Grid, uncertainty: bool = False) -> tuple[str, Optional[np.ndarray]]:
+    """The grid-csv text, and with ``uncertainty`` the (n, k) u of the corrections (columns ``uc<joint>``)."""
     cmds = grid.commands(machine)
     e, u = grid_predictions(machine, calibration, cmds)
     comp = _comp_joints(machine, grid)
     cj = corrections(machine, cmds, e, comp) if comp else np.zeros((len(cmds), 0))
     header = machine.joint_names + ["ex", "ey", "ez"] + [f"c{j}" for j in comp] + ["ux", "uy", "uz"]
-    data = np.hstack([cmds, e, cj, u])
+    blocks = [cmds, e, cj, u]
+    uc = None
+    if uncertainty and comp:
+        uc = correction_uncertainty(machine, calibration, cmds, comp)
+        header += [f"uc{j}" for j in comp]
+        blocks.append(uc)
+    data = np.hstack(blocks)
     if not np.isfinite(data).all():
         raise InvalidInputError("grid-csv: non-finite prediction (calibration values out of range?)")
+    return _csv_text(header, data), (uc if uc is not None else u)
+
+
+def _csv_text(header: Sequence[str], data: np.ndarray) -> str:
     lines = [",".join(header)]
     lines += [",".join(_fmt(v) for v in row) for row in data]
     return "\n".join(lines) + "\n"
@@ -469,6 +522,54 @@ def _isg_text(machine: Machine, calibration: Calibration, grid: Grid, params: np
     return "\n".join(out) + "\n"
 
 
+def isg_entries(machine: Machine, params: np.ndarray, grid: Grid) -> tuple[list, np.ndarray]:
+    """Every number of the ISG_CSV file for ``params``, in the file's order: keys
+    (block, axis, argument as written or None, name) and values (mm or rad)."""
+    location, components = isg_tables(machine, params, grid)
+    spec = {j.name: j for j in machine.joints}
+    keys: list = []
+    vals: list = []
+    for a, v in location.items():
+        for name, x in zip(("X", "Y", "Z", "A", "B", "C"), np.concatenate([v[3:], v[:3]])):
+            keys.append(("location", a, None, f"{name}0{a}"))
+            vals.append(x)
+    for a, (qs, tab) in components.items():
+        deg = spec[a].kind == "rotary"
+        factor = (180.0 / math.pi if machine.angle_unit == "rad" else 1.0) if deg else 1.0
+        for q, row in zip(qs, tab):
+            for n, x in zip(("X", "Y", "Z", "A", "B", "C"), np.concatenate([row[3:], row[:3]])):
+                keys.append(("component", a, float(f"{q * factor:.10g}"), f"E{n}{a}"))
+                vals.append(x)
+    return keys, np.array(vals, dtype=np.float64)
+
+
+def isg_uncertainty(machine: Machine, calibration: Calibration, grid: Grid) -> tuple[list, np.ndarray, np.ndarray]:
+    """(keys, values, u) of every ISG_CSV entry (:func:`isg_entries`). The entries are linear
+    in the group values g through the minimum-norm parameters p = pinv(C) g, so column k of
+    their Jacobian is the entries of pinv(C) e_k, and u^2 = diag(A Sigma A^T) (GUM 5.1.2)."""
+    from .predict import _group_covariance
+
+    st = machine.structure()
+    coef = check_calibration(machine, calibration, st)
+    cov = _group_covariance(calibration, st)
+    basis = np.linalg.pinv(coef)
+    keys, vals = isg_entries(machine, basis @ np.array([g.value for g in calibration.groups]), grid)
+    live = [k for k in range(cov.shape[0]) if cov[k, k] > 0.0]
+    jac = np.zeros((len(vals), len(live)))
+    for col, k in enumerate(live):
+        jac[:, col] = isg_entries(machine, basis[:, k], grid)[1]
+    sub = cov[np.ix_(live, live)]
+    var = np.einsum("ik,kl,il->i", jac, sub, jac) if live else np.zeros(len(vals))
+    return keys, vals, np.sqrt(np.clip(var, 0.0, None))
+
+
+def _isg_companion(keys: list, vals: np.ndarray, u: np.ndarray) -> str:
+    lines = ["block,axis,argument,name,value,u"]
+    for (block, axis, arg, name), v, uu in zip(keys, vals, u):
+        lines.append(f"{block},{axis},{'' if arg is None else repr(arg)},{name},{_fmt(v)},{_fmt(uu)}")
+    return "\n".join(lines) + "\n"
+
+
 def read_isg_csv(path: Union[str, Path]) -> list[tuple[list[str], np.ndarray]]:
     """Blocks of an ISG_CSV file: (header names, (rows, columns) values); ``//`` comments and
     blank lines skipped, ``#`` starts a new block."""
@@ -526,7 +627,9 @@ def isg_twists(machine: Machine, blocks, commands: np.ndarray) -> list[Twist]:
 
 
 # ----- fanuc-3d ------------------------------------------------------------------------------
-def _fanuc_text(machine: Machine, calibration: Calibration, grid: Grid, stamp: str, increment: float) -> str:
+def _fanuc_text(machine: Machine, calibration: Calibration, grid: Grid, stamp: str, increment: float,
+                uncertainty: bool = False) -> tuple[str, Optional[str], Optional[np.ndarray]]:
+    """The tape, and with ``uncertainty`` the companion CSV and the (n, 3) u of the amounts."""
     spec = {j.name: j for j in machine.joints}
     if len(grid.axes) != 3 or any(spec[a].kind != "prismatic" for a in grid.axes):
         raise InvalidInputError(f"fanuc-3d: needs three linear axes, got {', '.join(grid.axes)} (use --axes X,Y,Z)")
@@ -549,7 +652,15 @@ def _fanuc_text(machine: Machine, calibration: Calibration, grid: Grid, stamp: s
     for k, row in enumerate(counts.astype(np.int64)):
         lines.append(f"N{k + 1}" + "".join(f"{a}{int(x)}" for a, x in zip(grid.axes, row)))
     lines.append("%")
-    return "\n".join(lines) + "\n"
+    tape = "\n".join(lines) + "\n"
+    if not uncertainty:
+        return tape, None, None
+    u = correction_uncertainty(machine, calibration, cmds, list(grid.axes))
+    idx = [machine.joint_names.index(a) for a in grid.axes]
+    header = ["node"] + [f"{a}" for a in grid.axes] + [f"c{a}" for a in grid.axes] + [f"uc{a}" for a in grid.axes]
+    data = np.hstack([cmds[:, idx], np.round(counts * increment, 12), u])
+    rows = [",".join(header)] + [f"{k + 1}," + ",".join(_fmt(v) for v in row) for k, row in enumerate(data)]
+    return tape, "\n".join(rows) + "\n", u
 
 
 def read_fanuc_3d(path: Union[str, Path]):
@@ -584,13 +695,17 @@ def linuxcnc_paths(out: Union[str, Path], axes: Sequence[str]) -> list[Path]:
     return [p.with_name(f"{p.stem}_{a}{p.suffix}") for a in axes]
 
 
-def _linuxcnc_texts(machine: Machine, calibration: Calibration, grid: Grid) -> list[str]:
+def _linuxcnc_texts(machine: Machine, calibration: Calibration, grid: Grid,
+                    uncertainty: bool = False) -> tuple[list[str], Optional[str], Optional[np.ndarray]]:
+    """One text per axis, and with ``uncertainty`` the companion CSV and every line's u(trim)."""
     spec = {j.name: j for j in machine.joints}
     bad = [a for a in grid.axes if spec[a].kind != "prismatic"]
     if bad:
         raise InvalidInputError(f"linuxcnc: joint '{bad[0]}' is not prismatic (COMP_FILE tables are for linear axes)")
     centre = {a: float(np.median(v)) for a, v in zip(grid.axes, grid.values)}
     texts = []
+    rows = ["joint,nominal,trim,u_trim"]
+    us = []
     for a, qs in zip(grid.axes, grid.values):
         if len(qs) > LINUXCNC_MAX_LINES:
             raise InvalidInputError(f"linuxcnc: {len(qs)} lines for {a}, LinuxCNC reads at most {LINUXCNC_MAX_LINES} (raise --step)")
@@ -598,7 +713,13 @@ def _linuxcnc_texts(machine: Machine, calibration: Calibration, grid: Grid) -> l
         e, _ = grid_predictions(machine, calibration, cmds, with_uncertainty=False)
         trim = corrections(machine, cmds, e, [a])[:, 0]
         texts.append("".join(f"{q:.6f} {t:.9f} {t:.9f}\n" for q, t in zip(qs, trim)))
-    return texts
+        if uncertainty:
+            u = correction_uncertainty(machine, calibration, cmds, [a])[:, 0]
+            us.append(u)
+            rows += [f"{a},{q:.6f},{t:.9f},{_fmt(uu)}" for q, t, uu in zip(qs, trim, u)]
+    if not uncertainty:
+        return texts, None, None
+    return texts, "\n".join(rows) + "\n", np.concatenate(us)
 
 
 def _line_commands(machine: Machine, grid: Grid, axis: str, qs: np.ndarray, centre: dict) -> np.ndarray:
@@ -639,9 +760,11 @@ def export(
     stamp: str = "",
     check_points: int = 2000,
     seed: int = 0,
+    uncertainty: bool = False,
 ) -> ExportResult:
     """Write a compensation table (see the module docstring) and read it back at
-    ``check_points`` random commands inside the grid (seeded)."""
+    ``check_points`` random commands inside the grid (seeded); with ``uncertainty`` also
+    each entry's standard uncertainty (columns or a companion CSV, see the module doc)."""
     if fmt not in FORMATS:
         raise InvalidInputError(f"unknown format {fmt!r} (choose {', '.join(FORMATS)})")
     if not (math.isfinite(increment) and increment > 0):
@@ -650,24 +773,79 @@ def export(
 
     params = calibration_parameters(machine, calibration)
     grid = make_grid(machine, axes if axes else default_axes(machine, fmt), step, points, at, limits)
-    for p in linuxcnc_paths(out, grid.axes) if fmt == "linuxcnc" else [out]:
+    companion = companion_path(out) if uncertainty and fmt != "grid-csv" else None
+    targets = linuxcnc_paths(out, grid.axes) if fmt == "linuxcnc" else [Path(out)]
+    for p in targets + ([companion] if companion is not None else []):
         output_file(p)  # a bad output path fails before any work
+    if companion is not None and companion in targets:
+        raise InvalidInputError(f"--out {out}: the uncertainty file {companion} would overwrite the table")
     stamp = stamp or "undated"
     notes: list[str] = []
+    extra = None
     if fmt == "grid-csv":
-        files = {Path(out): _grid_csv(machine, calibration, grid)}
+        text, u = _grid_csv(machine, calibration, grid, uncertainty)
+        files = {Path(out): text}
+        if uncertainty:
+            comp = _comp_joints(machine, grid)
+            cols = [f"uc{j}" for j in comp] if comp else ["ux", "uy", "uz"]
+            extra = _u_summary(grid, machine, u, str(out), "columns " + ", ".join(cols),
+                               "corrections c" if comp else "predicted error e")
     elif fmt == "isg-csv":
         files = {Path(out): _isg_text(machine, calibration, grid, params, stamp)}
         notes.append("ISO 230-1 error motions are one decomposition of the identified groups (minimum-norm parameters)")
+        if uncertainty:
+            keys, vals, u = isg_uncertainty(machine, calibration, grid)
+            files[companion] = _isg_companion(keys, vals, u)
+            lin = np.array([(k[3][1] if k[0] == "component" else k[3][0]) in "XYZ" for k in keys], dtype=bool)
+            extra = {"file": str(companion), "quantity": "ISO 230-1 error motions of the file",
+                     "columns": "block,axis,argument,name,value,u",
+                     "max_mm": float(u[lin].max(initial=0.0)), "max_rad": float(u[~lin].max(initial=0.0))}
+            notes.append("the uncertainty of each ISO 230-1 error motion is that of the minimum-norm decomposition")
     elif fmt == "fanuc-3d":
-        files = {Path(out): _fanuc_text(machine, calibration, grid, stamp, increment)}
+        tape, comp_text, u = _fanuc_text(machine, calibration, grid, stamp, increment, uncertainty)
+        files = {Path(out): tape}
+        if uncertainty:
+            files[companion] = comp_text
+            extra = _u_summary(grid, machine, u, str(companion), "node,<axes>,c<axis>,uc<axis>", "compensation amounts c")
     else:
-        paths = linuxcnc_paths(out, grid.axes)
-        files = dict(zip(paths, _linuxcnc_texts(machine, calibration, grid)))
+        texts, comp_text, u = _linuxcnc_texts(machine, calibration, grid, uncertainty)
+        files = dict(zip(targets, texts))
         notes.append("per-axis tables hold each joint's own correction along a line through the fixed point")
+        if uncertainty:
+            files[companion] = comp_text
+            extra = {"file": str(companion), "quantity": "own-axis trims", "columns": "joint,nominal,trim,u_trim",
+                     "max_mm": float(u.max(initial=0.0)), "rms_mm": float(np.sqrt((u**2).mean())) if len(u) else 0.0}
+    if extra is not None:
+        extra.update(_U_COMMON)
+        left_out = [g.name for g in calibration.groups if g.std is None]
+        if left_out:
+            extra["not_included"] = left_out
     write_files_atomically(files)
     readback = _readback(machine, calibration, grid, fmt, list(files), check_points, seed)
-    return ExportResult(fmt, tuple(str(p) for p in files), grid, readback, notes=tuple(notes))
+    return ExportResult(fmt, tuple(str(p) for p in files), grid, readback, notes=tuple(notes), uncertainty=extra)
+
+
+_U_COMMON = {
+    "k": 1,
+    "method": "exact linear propagation of the identification's group covariance (GUM 5.1.2, 5.2.2 Eq. 13)",
+    "excludes": "groups the tracker frame takes (a rigid motion) and groups no instrument saw (not_included)",
+}
+
+
+def companion_path(out: Union[str, Path]) -> Path:
+    """The uncertainty CSV beside a controller table: ``COMP.tap`` -> ``COMP_u.csv``."""
+    p = Path(out)
+    return p.with_name(f"{p.stem}_u.csv")
+
+
+def _u_summary(grid: Grid, machine: Machine, u: np.ndarray, file: str, columns: str, quantity: str) -> dict:
+    """Largest and RMS u over the nodes, and the node where it is largest (mm)."""
+    worst = np.linalg.norm(u, axis=1)
+    i = int(np.argmax(worst)) if len(worst) else 0
+    node = grid.commands(machine)[i]
+    return {"file": file, "quantity": quantity, "columns": columns, "max_mm": float(u.max(initial=0.0)),
+            "rms_mm": float(np.sqrt((u**2).mean())) if u.size else 0.0,
+            "largest_at": {a: float(node[machine.joint_names.index(a)]) for a in grid.axes}}
 
 
 def _stats(diff: np.ndarray) -> dict:

@@ -202,8 +202,10 @@ def _siemens(lines: list[AxisLine], stamp: str, machine: Machine) -> str:
 
 
 def export_kinematics(machine: Machine, cal: Calibration, out: Union[str, Path], at: Optional[Mapping[str, float]] = None,
-                      stamp: str = "") -> KinematicsExport:
-    """Write the three controller files (see the module's doc), all or nothing."""
+                      stamp: str = "", uncertainty: bool = False) -> KinematicsExport:
+    """Write the three controller files (see the module's doc), all or nothing; with
+    ``uncertainty`` a fourth, ``OUT`` stem + ``_u.csv``: ``joint,name,value,std,unit`` of every
+    location error applied (std propagated from the group covariance, GUM 5.1.2)."""
     from ._files import write_files_atomically
 
     lines = rotary_axis_lines(machine, cal, at)
@@ -213,5 +215,12 @@ def export_kinematics(machine: Machine, cal: Calibration, out: Union[str, Path],
         p.with_name(f"{p.stem}_heidenhain.tab"): _heidenhain(lines, stamp or "undated", machine),
         p.with_name(f"{p.stem}_siemens.txt"): _siemens(lines, stamp or "undated", machine),
     }
+    if uncertainty:
+        rows = ["joint,name,value,std,unit"]
+        for a in lines:
+            for name, v in a.location.items():
+                if v is not None:
+                    rows.append(f"{a.joint},{name},{v[0]!r},{v[1]!r},{'mm' if name[1] in 'XYZ' else 'rad'}")
+        files[p.with_name(f"{p.stem}_u.csv")] = "\n".join(rows) + "\n"
     write_files_atomically(files)
     return KinematicsExport(tuple(str(f) for f in files), tuple(lines))

@@ -449,6 +449,7 @@ def identify_mixed(
     # groups and location errors from the estimate
     if unknowns == "groups":
         gvals, gstd, gseen = values, std, seen
+        gcov = cov[:k, :k] * np.outer(seen, seen)
         lvals, lstd, lseen = _location_from_groups(st, lmat, values, cov[:k, :k], seen)
     else:
         cg = st.coefficients @ lmat  # groups of the location errors
@@ -463,7 +464,7 @@ def identify_mixed(
     for n, v, s, ok in zip(lnames, lvals, lstd, lseen):
         unit = "mm" if n[1] in "XYZ" else "rad"
         location[n] = {"value": float(v), "std": float(s), "unit": unit} if ok else {"seen": False}
-    cal = _calibration(machine, st, gvals, gstd, gseen, unknowns, chi2, dof, n_rows)
+    cal = _calibration(machine, st, gvals, gstd, gseen, unknowns, chi2, dof, n_rows, gcov * np.outer(gseen, gseen))
     return MixedResult(unknowns, tuple(names), values, std, seen, groups, location, instruments,
                        float(sv[0] / sv[r - 1]), cal)
 
@@ -490,8 +491,9 @@ def _location_from_groups(st, lmat, g, gcov, gseen):
     return vals, std, seen
 
 
-def _calibration(machine, st, gvals, gstd, gseen, unknowns, chi2, dof, n_rows):
-    """A :class:`Calibration` of the groups (unseen ones at zero) for predict and export."""
+def _calibration(machine, st, gvals, gstd, gseen, unknowns, chi2, dof, n_rows, gcov=None):
+    """A :class:`Calibration` of the groups (unseen ones at zero, with zero rows and columns in
+    the covariance ``gcov``: the predictions' uncertainty does not count them) for predict and export."""
     from .calibration import Calibration, GroupEstimate, ResidualStats
     from .frame import Frame
 
@@ -505,7 +507,7 @@ def _calibration(machine, st, gvals, gstd, gseen, unknowns, chi2, dof, n_rows):
     return Calibration(
         machine=machine.name, method=f"mixed ({unknowns})", rank=st.rank, condition_number=1.0, groups=groups,
         unidentifiable=tuple(st.no_effect), frame=Frame.identity(), residuals=ResidualStats.of(zero, zero),
-        sigma=math.sqrt(chi2), dof=int(dof),
+        sigma=math.sqrt(chi2), dof=int(dof), covariance=gcov,
     )
 
 

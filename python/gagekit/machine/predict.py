@@ -13,7 +13,7 @@ from ..errors import ConfigError, InvalidInputError
 from .calibration import Calibration
 from .model import Machine, ModelStructure
 
-__all__ = ["predict", "predict_uncertainty", "compensate", "check_calibration"]
+__all__ = ["predict", "predict_uncertainty", "predict_covariance", "compensate", "check_calibration"]
 
 
 def check_calibration(machine: Machine, cal: Calibration, st: Optional[ModelStructure] = None) -> np.ndarray:
@@ -64,19 +64,41 @@ def predict(machine: Machine, calibration: Calibration, commands: Any, structure
     return machine.volumetric_error(commands, p)
 
 
-def predict_uncertainty(
-    machine: Machine, calibration: Calibration, commands: Any, structure: Optional[ModelStructure] = None
-) -> np.ndarray:
-    """Standard uncertainty (n, 3), mm, of each predicted error component from the group
-    covariance: sqrt(diag(M_L Sigma M_L^T)), with M_L the reduced design matrix (Eq. 3.14).
-    The uncertainty of the groups the frame takes is a rigid motion and is not included."""
-    st = structure if structure is not None else machine.structure()
-    check_calibration(machine, calibration, st)
+def _group_covariance(calibration: Calibration, st: ModelStructure) -> np.ndarray:
     if calibration.covariance is None:
         raise ConfigError("calibration has no covariance (written by an older gagekit?): identify again")
     cov = np.asarray(calibration.covariance, dtype=np.float64)
     if cov.shape != (st.rank, st.rank):
         raise ConfigError(f"calibration covariance is {cov.shape}, expected ({st.rank}, {st.rank})")
+    return cov
+
+
+def predict_covariance(
+    machine: Machine, calibration: Calibration, commands: Any, structure: Optional[ModelStructure] = None
+) -> np.ndarray:
+    """Covariance (n, 3, 3), mm^2, of each predicted error vector from the group covariance
+    Sigma of the identification: M_L,i Sigma M_L,i^T, with M_L,i the three rows of the reduced
+    design matrix (Eq. 3.14) at command i. The prediction is linear in the group values, so
+    this is the law of propagation of uncertainty exactly (GUM, JCGM 100:2008, 5.1.2, with
+    the covariance terms of 5.2.2 Eq. 13); no linearisation error. The groups the frame takes
+    (a rigid motion) have zero rows in Sigma and are not included."""
+    st = structure if structure is not None else machine.structure()
+    check_calibration(machine, calibration, st)
+    cov = _group_covariance(calibration, st)
+    ml = machine.reduced_design_matrix(commands, st).reshape(-1, 3, st.rank)
+    return np.einsum("nik,kl,njl->nij", ml, cov, ml)
+
+
+def predict_uncertainty(
+    machine: Machine, calibration: Calibration, commands: Any, structure: Optional[ModelStructure] = None
+) -> np.ndarray:
+    """Standard uncertainty (n, 3), mm, of each predicted error component from the group
+    covariance: sqrt(diag(M_L Sigma M_L^T)), with M_L the reduced design matrix (Eq. 3.14);
+    see :func:`predict_covariance` (GUM 5.1.2).
+    The uncertainty of the groups the frame takes is a rigid motion and is not included."""
+    st = structure if structure is not None else machine.structure()
+    check_calibration(machine, calibration, st)
+    cov = _group_covariance(calibration, st)
     ml = machine.reduced_design_matrix(commands, st)
     var = np.einsum("ij,jk,ik->i", ml, cov, ml)
     return np.sqrt(np.clip(var, 0.0, None)).reshape(-1, 3)

@@ -11,6 +11,12 @@ Characteristics and their limits:
 * form fits (Ch. 6): the form error (mm), upper limit the ``--tolerance`` when given;
 * inspections: each tolerance's value against its lower/upper limits as stored.
 
+With a measurement standard uncertainty (``measurement_u``, ``--measurement-uncertainty``)
+every measured length characteristic (allowances, stock, form errors, inspection values; not
+the motions of T*, which are computed from many points) also gets the ISO 22514-7 split of its
+observed variance into process and measurement (:func:`gagekit.stats.spc.measurement_split`):
+``measurement`` {u, observed {cp, cpk, ...}, process {cp, cpk, ...}, q_mp_pct, ...}.
+
 Values are in time order of the scans: the acquisition time the scan file records (E57
 ``acquisitionStart``, LAS creation date: ``scans.acquired``), else the time the result was
 stored (a file's modification time says when it was copied, not when it was scanned); the
@@ -57,11 +63,13 @@ def _utc(t: datetime) -> datetime:
 
 def characteristic(name: str, unit: str, values: list, times: list, scans: list,
                    lower: Optional[float] = None, upper: Optional[float] = None, *,
-                   resolution: Optional[float] = None, time_source: Optional[list] = None) -> dict:
+                   resolution: Optional[float] = None, time_source: Optional[list] = None,
+                   measurement_u: Optional[float] = None) -> dict:
     """Capability, I-MR chart with Western Electric signals, trend per day of one series
-    (``resolution``: of the unit, default :data:`RESOLUTION`)."""
+    (``resolution``: of the unit, default :data:`RESOLUTION`; ``measurement_u``: the
+    measurement's standard uncertainty, ISO 22514-7)."""
     res = RESOLUTION.get(unit, 0.0) if resolution is None else resolution
-    cap = capability(values, lower, upper, resolution=res, unit=unit)
+    cap = capability(values, lower, upper, resolution=res, unit=unit, measurement_u=measurement_u)
     x = on_limits(values, lower, upper, res)
     d: dict[str, Any] = {"name": name, "unit": unit, **cap.to_dict()}
     notes = d.setdefault("notes", [])
@@ -94,6 +102,15 @@ def messages(c: dict) -> list[tuple[str, str]]:
     missing; the obvious "no specification limits" left out)."""
     out = [("zero margin" if "nothing is left" in w else "warning", f"{c['name']}: {w}") for w in c.get("warnings", [])]
     out += [("note", f"{c['name']}: {n}") for n in c.get("notes", []) if not n.startswith("no specification limits")]
+    m = c.get("measurement")
+    if m is not None:
+        ob, pr = m["observed"], m["process"]
+        parts = [f"{k} observed {ob[k]:.3g}" + (f", process {pr[k]:.3g}" if k in pr else "") for k in ("cpk", "ppk") if k in ob]
+        if parts:
+            q = f"; Q_MP {m['q_mp_pct']:.0f} %" if "q_mp_pct" in m else ""
+            out.append(("measurement", f"{c['name']}: u = {m['u']:.3g} (ISO 22514-7, observed = process + measurement): "
+                        + "; ".join(parts) + q))
+        out += [("note", f"{c['name']}: {n}") for n in m.get("notes", [])]
     return out
 
 
@@ -114,9 +131,11 @@ def _results(conn, spec_id: int, extra_cols, join_table, *where):
 
 
 def _series(name: str, unit: str, rows: list, col: int, res: dict, **limits) -> dict:
-    """One characteristic from ``_results`` rows (value in column ``col``)."""
+    """One characteristic from ``_results`` rows (value in column ``col``); ``res`` may carry
+    the measurement's standard uncertainty under ``"u"`` (lengths only)."""
+    u = res.get("u") if unit == "mm" and not name.startswith("T* ") else None
     return characteristic(name, unit, [r[col] for r in rows], [r[2] for r in rows], [r[1] for r in rows],
-                          resolution=res.get(unit, 0.0), time_source=[r[3] for r in rows], **limits)
+                          resolution=res.get(unit, 0.0), time_source=[r[3] for r in rows], measurement_u=u, **limits)
 
 
 def _gage_spec(conn, spec, res: dict) -> list[dict]:
@@ -225,12 +244,13 @@ def _machines(conn) -> list[dict]:
 
 
 def collect(url: str, *, documents: Optional[list] = None, tolerance: Optional[float] = None,
-            resolution: float = RESOLUTION["mm"]) -> dict:
+            resolution: float = RESOLUTION["mm"], measurement_u: Optional[float] = None) -> dict:
     """The SPC of the database at ``url``: every spec, or those whose stored document is one
     of ``documents`` (a gage file is stored as ``{"spec": parsed TOML}``), and the machines.
 
     ``tolerance`` (mm, > 0): the upper limit of form errors; ``resolution`` (mm, > 0): of
-    lengths, and of angles over a 1 m lever (``resolution / 1000`` rad)."""
+    lengths, and of angles over a 1 m lever (``resolution / 1000`` rad); ``measurement_u``
+    (mm, >= 0): the standard uncertainty (k = 1) of a measured length (ISO 22514-7 split)."""
     import math
 
     from ..errors import ConfigError
@@ -239,7 +259,10 @@ def collect(url: str, *, documents: Optional[list] = None, tolerance: Optional[f
         raise ConfigError(f"--tolerance {tolerance:g}: a form tolerance is a positive number of mm")
     if not (math.isfinite(resolution) and 0 < resolution < 1):
         raise ConfigError(f"--resolution {resolution:g}: the resolution of results is a positive number of mm below 1")
+    if measurement_u is not None and not (math.isfinite(measurement_u) and measurement_u >= 0):
+        raise ConfigError(f"--measurement-uncertainty {measurement_u:g}: a standard uncertainty is a number of mm >= 0")
     res = {"mm": resolution, "rad": resolution * 1e-3}
+    keyed = dict(res, u=measurement_u) if measurement_u is not None else res
     engine = create_engine(url, must_exist=True)
     try:
         ensure_schema(engine, create=False)
@@ -254,11 +277,11 @@ def collect(url: str, *, documents: Optional[list] = None, tolerance: Optional[f
                 failed = conn.execute(sa.select(sa.func.count()).select_from(m.Result)
                                       .where(m.Result.spec_id == spec.id, m.Result.status == "error")).scalar()
                 if spec.kind == "gage":
-                    chars = _gage_spec(conn, spec, res)
+                    chars = _gage_spec(conn, spec, keyed)
                 elif spec.kind == "form":
-                    chars = _form_spec(conn, spec, tolerance, res)
+                    chars = _form_spec(conn, spec, tolerance, keyed)
                 else:
-                    chars = _inspect_spec(conn, spec, res)
+                    chars = _inspect_spec(conn, spec, keyed)
                 entry = {"spec": spec.hash[:12], "kind": spec.kind, "results": n, "failed": failed,
                          "characteristics": chars}
                 if spec.source:
@@ -267,9 +290,13 @@ def collect(url: str, *, documents: Optional[list] = None, tolerance: Optional[f
                     entry["part"] = spec.name
                 specs.append(entry)
             machines = _machines(conn) if documents is None else []
-        return {"database": safe_url(engine.url), "generated": datetime.now(timezone.utc).isoformat(),
-                "resolution": res, "min_values_for_capability": MIN_CAPABILITY_VALUES, "min_trend_days": MIN_TREND_DAYS,
-                "specs": specs, "machines": machines}
+        out = {"database": safe_url(engine.url), "generated": datetime.now(timezone.utc).isoformat(),
+               "resolution": res, "min_values_for_capability": MIN_CAPABILITY_VALUES, "min_trend_days": MIN_TREND_DAYS,
+               "specs": specs, "machines": machines}
+        if measurement_u is not None:
+            out["measurement"] = {"u": measurement_u, "k": 1, "unit": "mm", "applies_to": "measured lengths (not T*)",
+                                  "model": "observed variance = process variance + measurement variance (ISO 22514-7)"}
+        return out
     except sa.exc.SQLAlchemyError as exc:
         raise StoreError(f"cannot read {safe_url(engine.url)}: {_reason(exc)}") from None
     finally:

@@ -38,6 +38,19 @@ AIAG manual asks for 25 subgroups before control limits and capability are compu
 the one-sided 95 % lower confidence bound of Cpk (Bissell, *Applied Statistics* 39, 1990:
 ``Cpk - 1.645 sqrt(1/(9n) + Cpk^2/(2(n-1)))``): at n = 10 a Cpk of 1.33 may be 0.79.
 
+Measurement variance (ISO 22514-7:2021; ISO 22514-2 Annex on measurement; AIAG MSA 4th ed.
+Ch. I-B): every observed value is the process's value plus the measurement's error, and the two
+are independent, so ``sigma_obs^2 = sigma_process^2 + u^2`` with ``u`` the standard uncertainty
+of the measurement (k = 1). Given ``u`` (``--measurement-uncertainty``, or the uncertainties
+stored with the results), :func:`capability` reports the indices of the observed spread (the
+``cp``/``cpk``/``pp``/``ppk`` keys, unchanged) and those of the process with the measurement
+variance removed, ``sigma_process = sqrt(sigma_obs^2 - u^2)`` for the within and the overall
+spread (``measurement.process``); where ``u^2 >= sigma_obs^2`` the measuring system does not
+resolve the process spread and no process index is given (a note says so). Removing the
+measurement variance can only raise an index: observed indices are the conservative ones.
+With two limits the capability ratio of the measurement process ``Q_MP = 2 U / T`` (U = 2 u,
+k = 2; ISO 22514-7 and VDA 5 accept at most 30 %) is given too.
+
 Trends need time: a slope over less than :data:`MIN_TREND_DAYS` (one day) of data is not
 reported (8 scans written within milliseconds are not 792 mm/day).
 """
@@ -51,6 +64,7 @@ from typing import Optional, Sequence
 import numpy as np
 
 from .._util import LENGTH_RESOLUTION_MM
+from ..errors import InvalidInputError
 
 D2 = 1.128  #: d2 for moving ranges of two observations
 D4 = 3.267  #: D4 for moving ranges of two observations
@@ -65,7 +79,7 @@ RULES = {
     4: "eight points in a row on one side of the centre line",
 }
 
-__all__ = ["D2", "D4", "RULES", "RESOLUTION", "MIN_CAPABILITY_VALUES", "MIN_TREND_DAYS", "on_limits", "Capability", "ImrChart", "Signal", "capability", "imr_chart", "western_electric",
+__all__ = ["D2", "D4", "RULES", "RESOLUTION", "MIN_CAPABILITY_VALUES", "MIN_TREND_DAYS", "on_limits", "Capability", "measurement_split", "ImrChart", "Signal", "capability", "imr_chart", "western_electric",
            "trend_per_day"]
 
 
@@ -124,6 +138,8 @@ class Capability:
     resolution: float = 0.0
     on_limit: int = 0
     warnings: tuple[str, ...] = ()
+    #: with a measurement uncertainty: ISO 22514-7 split of the observed variance (see the module doc)
+    measurement: Optional[dict] = None
 
     @property
     def varies(self) -> bool:
@@ -138,6 +154,8 @@ class Capability:
                 d[k] = v
         if self.lower is not None or self.upper is not None:
             d["on_limit"] = self.on_limit
+        if self.measurement is not None:
+            d["measurement"] = self.measurement
         if self.notes:
             d["notes"] = list(self.notes)
         if self.warnings:
@@ -175,13 +193,19 @@ def cpk_lower_bound(cpk: float, n: int, z: float = 1.645) -> float:
 
 
 def capability(values: Sequence[float], lower: Optional[float] = None, upper: Optional[float] = None, *,
-               resolution: float = 0.0, unit: str = "") -> Capability:
+               resolution: float = 0.0, unit: str = "", measurement_u: Optional[float] = None,
+               measurement_source: str = "given") -> Capability:
     """n, mean, sd, the smallest margin to a limit, Cp/Cpk (within) and Pp/Ppk (overall).
 
     Values within ``resolution`` of a limit are on the limit (see the module doc); with a
-    spread of at most ``resolution`` there is no capability index."""
+    spread of at most ``resolution`` there is no capability index. ``measurement_u``: the
+    standard uncertainty of a measured value (k = 1, the values' unit): the indices with the
+    measurement variance removed as well (ISO 22514-7, see the module doc)."""
     if not (math.isfinite(resolution) and resolution >= 0):
         raise ValueError(f"the resolution must be a finite number >= 0, got {resolution}")
+    if measurement_u is not None and not (isinstance(measurement_u, (int, float)) and math.isfinite(measurement_u)
+                                          and measurement_u >= 0):
+        raise InvalidInputError(f"the measurement uncertainty must be a finite number >= 0, got {measurement_u}")
     x = np.asarray(values, dtype=np.float64)
     if x.ndim != 1 or len(x) == 0:
         raise ValueError("capability needs at least one value")
@@ -223,8 +247,53 @@ def capability(values: Sequence[float], lower: Optional[float] = None, upper: Op
     if on_limit:
         warns.append(f"{on_limit} of {n} values on a limit (within {resolution:g}{u}): conforming, but nothing is left "
                      "for measurement noise or fixturing")
+    meas = None
+    if measurement_u is not None:
+        meas = measurement_split(float(measurement_u), mean, lower, upper, sigma, sd, cp, cpk, pp, ppk, unit,
+                                 measurement_source)
     return Capability(n, mean, float(x.min()), float(x.max()), lower, upper, sd, sigma, min_margin,
-                      cp, cpk, pp, ppk, tuple(notes), resolution, on_limit, tuple(warns))
+                      cp, cpk, pp, ppk, tuple(notes), resolution, on_limit, tuple(warns), meas)
+
+
+def _removed(spread: Optional[float], u: float) -> Optional[float]:
+    """sqrt(spread^2 - u^2), or None when the measurement variance is at least the observed one."""
+    if spread is None or spread <= u:
+        return None
+    return math.sqrt(spread * spread - u * u)
+
+
+def measurement_split(u: float, mean: float, lower: Optional[float], upper: Optional[float],
+                      sigma: Optional[float], sd: Optional[float], cp, cpk, pp, ppk, unit: str = "",
+                      source: str = "given") -> dict:
+    """The ISO 22514-7 account of a characteristic's spread for a measurement standard
+    uncertainty ``u``: observed = process + measurement variance; the indices of both."""
+    sig_p, sd_p = _removed(sigma, u), _removed(sd, u)
+    cp_p, cpk_p = _index(sig_p, mean, lower, upper)
+    pp_p, ppk_p = _index(sd_p, mean, lower, upper)
+    obs = {k: v for k, v in (("sigma_within", sigma), ("sd", sd), ("cp", cp), ("cpk", cpk), ("pp", pp), ("ppk", ppk))
+           if v is not None}
+    proc = {k: v for k, v in (("sigma_within", sig_p), ("sd", sd_p), ("cp", cp_p), ("cpk", cpk_p), ("pp", pp_p),
+                              ("ppk", ppk_p)) if v is not None}
+    d: dict = {
+        "u": u, "k": 1, "source": source,
+        "model": "observed variance = process variance + measurement variance u^2 (ISO 22514-7)",
+        "observed": obs, "process": proc,
+    }
+    if sd:
+        d["share_of_observed_variance"] = min(u * u / (sd * sd), 1.0) if sd > 0 else 1.0
+    if lower is not None and upper is not None:
+        d["q_mp_pct"] = 100.0 * 2.0 * (2.0 * u) / (upper - lower)
+    notes = []
+    un = f" {unit}" if unit else ""
+    if (sigma is not None and sig_p is None) or (sd is not None and sd_p is None):
+        notes.append(f"the measurement uncertainty u = {u:.3g}{un} is at least the observed spread "
+                     f"(sd {sd:.3g}{un}): this measuring system does not resolve the process; no process index")
+    if "q_mp_pct" in d and d["q_mp_pct"] > 30.0:
+        notes.append(f"Q_MP = 2U/T = {d['q_mp_pct']:.0f} % > 30 %: the measurement process is not capable for "
+                     "this tolerance (ISO 22514-7, VDA 5)")
+    if notes:
+        d["notes"] = notes
+    return d
 
 
 def western_electric(x: Sequence[float], center: float, sigma: float) -> list[Signal]:

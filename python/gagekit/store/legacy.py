@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import json
 from datetime import datetime, timezone
-from typing import Optional
+from typing import Callable, Optional
 
 import sqlalchemy as sa
 
@@ -30,15 +30,14 @@ def _time(text: Optional[str]) -> datetime:
     return t if t.tzinfo else t.replace(tzinfo=timezone.utc)
 
 
-def migrate_history(conn: sa.Connection) -> int:
-    """Convert the legacy history tables on ``conn`` (in its transaction); returns the
-    number of runs copied."""
-    from .schema import _alembic_upgrade
-
+def migrate_history(conn: sa.Connection, create_schema: Callable[[sa.Connection], None]) -> int:
+    """Convert the legacy history tables on ``conn`` (in its transaction): read them, create
+    the current schema with ``create_schema(conn)`` (the caller's migration, so this module
+    does not import the schema module back), copy the runs; returns the number copied."""
     q = conn.exec_driver_sql
     meta = dict(q("SELECT key, value FROM meta").fetchall())
     runs = q("SELECT id, created, source, n_points FROM runs ORDER BY id").fetchall()
-    _alembic_upgrade(conn)
+    create_schema(conn)
     machine = meta.get("machine") or "unknown machine"
     sig = meta.get("groups") or ""
     mid = conn.execute(sa.insert(m.MachineRow).values(name=machine, signature=sig, created=_time(meta.get("created")))

@@ -258,7 +258,7 @@ def upgrade(url: Union[str, Path, URL]) -> tuple[Optional[str], str]:
             if state == "legacy":
                 from .legacy import migrate_history
 
-                migrate_history(conn)
+                migrate_history(conn, _alembic_upgrade)
                 rev = "legacy-history"
             elif state != "current":
                 _alembic_upgrade(conn)

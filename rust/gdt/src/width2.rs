@@ -5,16 +5,10 @@
 //! The width of a set is the width of its convex hull, and the minimum over all
 //! directions is attained with one line flush with a hull edge (Houle and Toussaint,
 //! "Computing the width of a set", IEEE PAMI 10 (1988) 761-765). The hull is built by
-//! Andrew's monotone chain with Shewchuk's exact orientation predicate, after an
-//! Akl-Toussaint prefilter for large inputs; rotating calipers then visit every edge
+//! `gagekit_geometry::hull_2d` (Andrew's monotone chain, exact predicate); rotating calipers then visit every edge
 //! with its farthest vertex in O(h).
 
 use gagekit_core::{check_finite, GkError, Result};
-use rayon::prelude::*;
-use robust::{orient2d, Coord};
-
-/// Inputs larger than this are prefiltered (points inside the octagon of extremes dropped).
-const PREFILTER_ABOVE: usize = 4096;
 
 /// A width of a 2-D set along a unit `normal`: `lo` and `hi` are the smallest and
 /// largest of `normal . p` over the points; `width = hi - lo`.
@@ -26,70 +20,10 @@ pub struct Width2 {
     pub width: f64,
 }
 
-fn orient(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> f64 {
-    orient2d(Coord { x: a[0], y: a[1] }, Coord { x: b[0], y: b[1] }, Coord { x: c[0], y: c[1] })
-}
 
 /// Indices of the convex hull vertices of `p`, counter-clockwise, no collinear
 /// vertices. Fewer than 3 when the set is collinear (the two extremes) or a point.
-pub fn hull(p: &[[f64; 2]]) -> Vec<usize> {
-    let mut ids: Vec<usize> = if p.len() > PREFILTER_ABOVE { survivors(p) } else { (0..p.len()).collect() };
-    ids.sort_by(|&i, &j| p[i][0].total_cmp(&p[j][0]).then(p[i][1].total_cmp(&p[j][1])).then(i.cmp(&j)));
-    ids.dedup_by(|a, b| p[*a] == p[*b]);
-    if ids.len() < 3 {
-        return ids;
-    }
-    let mut lower: Vec<usize> = Vec::new();
-    for &i in &ids {
-        while lower.len() >= 2 && orient(p[lower[lower.len() - 2]], p[lower[lower.len() - 1]], p[i]) <= 0.0 {
-            lower.pop();
-        }
-        lower.push(i);
-    }
-    let mut upper: Vec<usize> = Vec::new();
-    for &i in ids.iter().rev() {
-        while upper.len() >= 2 && orient(p[upper[upper.len() - 2]], p[upper[upper.len() - 1]], p[i]) <= 0.0 {
-            upper.pop();
-        }
-        upper.push(i);
-    }
-    lower.pop();
-    upper.pop();
-    lower.extend(upper);
-    lower
-}
-
-/// Akl-Toussaint: drop the points strictly inside the polygon of the extremes in 8
-/// directions (they cannot be hull vertices). Exact predicate, parallel.
-fn survivors(p: &[[f64; 2]]) -> Vec<usize> {
-    let dirs: [[f64; 2]; 8] = [[1.0, 0.0], [1.0, 1.0], [0.0, 1.0], [-1.0, 1.0], [-1.0, 0.0], [-1.0, -1.0], [0.0, -1.0], [1.0, -1.0]];
-    let ext: Vec<usize> = dirs
-        .iter()
-        .map(|d| {
-            (0..p.len())
-                .into_par_iter()
-                .map(|i| (d[0] * p[i][0] + d[1] * p[i][1], i))
-                .reduce(|| (f64::NEG_INFINITY, usize::MAX), |a, b| if b.0 > a.0 || (b.0 == a.0 && b.1 < a.1) { b } else { a })
-                .1
-        })
-        .collect();
-    let mut poly: Vec<usize> = Vec::new();
-    for &i in &ext {
-        if poly.last() != Some(&i) && poly.first() != Some(&i) {
-            poly.push(i);
-        }
-    }
-    if poly.len() < 3 {
-        return (0..p.len()).collect();
-    }
-    (0..p.len())
-        .into_par_iter()
-        .filter(|&i| {
-            // keep unless strictly inside every (counter-clockwise) edge
-            !(0..poly.len()).all(|k| orient(p[poly[k]], p[poly[(k + 1) % poly.len()]], p[i]) > 0.0)
-        })
-        .collect()
-}
+pub use gagekit_geometry::hull_2d as hull;
 
 /// Minimum width of (n, 2) points (flat `[x0, y0, x1, y1, ...]`), n >= 2.
 ///

@@ -6,5 +6,5 @@ pub mod hull;
 pub mod region;
 
 pub use grid::CellGrid;
-pub use hull::{convex_hull_indices, convex_hull_mesh, HullMesh};
+pub use hull::{convex_hull_indices, convex_hull_mesh, hull_2d, HullMesh};
 pub use region::{classify, rotation_matrix, select, OrientedBox};

@@ -1,36 +1,68 @@
 //! A bounding-volume hierarchy over a mesh's triangles and the nearest-triangle query.
 //!
-//! Build: axis-aligned boxes, split at the median centroid along the box's longest axis
-//! (`select_nth_unstable`, deterministic), leaves of at most [`LEAF`] triangles, the two
-//! halves built in parallel above 8192 triangles; nodes in depth-first order (the left
-//! child follows its parent) and the triangles' corners copied into leaf order, so a
-//! query reads memory front to back. The tree depends on the triangles only, never on
-//! the thread count.
+//! Build: binned surface-area heuristic (Wald, "On fast construction of SAH-based bounding
+//! volume hierarchies", IEEE RT 2007): at each node the triangles' centroids are binned
+//! into [`BINS`] slabs along the centroids' longest axis and the split with the least
+//! `area(left) n(left) + area(right) n(right)` is taken; leaves hold at most [`LEAF`]
+//! triangles. Nodes of at most [`SAH_MIN`] triangles, and levels below [`MAX_SAH_DEPTH`],
+//! split at the object median, so
+//! the depth stays below [`MAX_DEPTH`] whatever the triangles. Large subtrees (and the
+//! binning of large nodes) run in parallel (rayon); bin counts and bounds are integers
+//! and minima/maxima, so the tree depends on the triangles only, never on the thread
+//! count. Each node stores the boxes of both its children (structure of arrays, one
+//! cache-line pair per node), so a visit tests both children at once; nodes are in
+//! depth-first order and the triangles' corners are copied into leaf order, so a query
+//! reads memory front to back.
 //!
-//! Query: depth first, the nearer child first, every subtree whose box is not nearer
-//! than the best triangle so far skipped. A starting bound (the distance to a hinted
-//! triangle, e.g. the previous point's) prunes most of the tree for coherent points.
+//! Query: depth first, the nearer child first, the farther one pushed with its box's
+//! squared distance (a lower bound of every triangle inside) and skipped when popped if
+//! the best triangle so far is not farther than that bound. A starting bound (the
+//! distance to a hinted triangle, e.g. the previous point's) prunes most of the tree for
+//! coherent points. The pruning only ever skips boxes whose lower bound exceeds the best
+//! squared distance found, so the result is the exact minimum over all triangles (tested
+//! against a brute-force scan).
 
 use crate::closest::{box_distance2, closest_point, Feature};
-use gagekit_gdt::vec3::{sub, dot, V3};
+use gagekit_gdt::vec3::{dot, sub, V3};
 
 /// Most triangles per leaf.
 pub const LEAF: usize = 4;
+/// Bins per axis of the SAH split.
+pub const BINS: usize = 16;
+/// Levels built by SAH; deeper subtrees split at the object median (depth <= MAX_DEPTH).
+pub const MAX_SAH_DEPTH: usize = 40;
+/// The deepest a leaf can be (MAX_SAH_DEPTH + log2 of 2^32 triangles), the stack's size.
+pub const MAX_DEPTH: usize = MAX_SAH_DEPTH + 34;
+/// Nodes of at most this many triangles split at the object median (cheaper than binning).
+const SAH_MIN: usize = 32;
+/// Triangles above which a subtree's halves (and a node's binning) run in parallel.
+const PAR: usize = 4096;
 
-#[derive(Debug, Clone, Copy)]
-pub struct Node {
-    pub lo: V3,
-    pub hi: V3,
-    /// leaf: first triangle slot; inner node: index of the right child
-    pub start: u32,
-    /// leaf: number of triangles (> 0); inner node: 0
+/// A reference to a child: an inner node (`count == 0`, `index` = node) or a leaf
+/// (`count` triangles from slot `index`; an empty slot has `count == 0` and an empty box).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Child {
+    pub index: u32,
     pub count: u32,
 }
 
-/// The hierarchy: nodes, and per slot (leaf order) the triangle's corners and its index.
+/// An inner node: the boxes of its two children (per axis: child 0, child 1) and the children.
+#[derive(Debug, Clone, Copy)]
+#[repr(C, align(32))]
+pub struct Node {
+    pub lo: [[f64; 2]; 3],
+    pub hi: [[f64; 2]; 3],
+    pub child: [Child; 2],
+}
+
+/// The hierarchy: nodes, the root's box and reference, and per slot (leaf order) the
+/// triangle's corners and its index.
 #[derive(Debug, Clone)]
 pub struct Bvh {
     pub nodes: Vec<Node>,
+    pub root: Child,
+    pub root_lo: V3,
+    pub root_hi: V3,
     pub corners: Vec<[V3; 3]>,
     pub order: Vec<u32>,
 }
@@ -44,6 +76,7 @@ pub struct Nearest {
     pub feature: Feature,
 }
 
+#[derive(Clone, Copy)]
 struct Item {
     tri: u32,
     centroid: V3,
@@ -51,68 +84,245 @@ struct Item {
     hi: V3,
 }
 
-fn bounds(items: &[Item]) -> (V3, V3) {
-    let mut lo = [f64::INFINITY; 3];
-    let mut hi = [f64::NEG_INFINITY; 3];
-    for it in items {
-        for k in 0..3 {
-            lo[k] = lo[k].min(it.lo[k]);
-            hi[k] = hi[k].max(it.hi[k]);
-        }
-    }
-    (lo, hi)
+#[derive(Clone, Copy)]
+struct Aabb {
+    lo: V3,
+    hi: V3,
 }
 
-/// Build the subtree of `items` (slots from `first`): its nodes in depth-first order,
-/// right-child indices relative to the subtree's first node.
-fn build(items: &mut [Item], first: u32) -> Vec<Node> {
-    let (lo, hi) = bounds(items);
-    if items.len() <= LEAF {
-        return vec![Node { lo, hi, start: first, count: items.len() as u32 }];
-    }
-    let mut clo = [f64::INFINITY; 3];
-    let mut chi = [f64::NEG_INFINITY; 3];
-    for it in items.iter() {
+impl Aabb {
+    const EMPTY: Aabb = Aabb { lo: [f64::INFINITY; 3], hi: [f64::NEG_INFINITY; 3] };
+    #[inline]
+    fn grow(&mut self, lo: &V3, hi: &V3) {
         for k in 0..3 {
-            clo[k] = clo[k].min(it.centroid[k]);
-            chi[k] = chi[k].max(it.centroid[k]);
+            self.lo[k] = self.lo[k].min(lo[k]);
+            self.hi[k] = self.hi[k].max(hi[k]);
         }
     }
-    let ext = [chi[0] - clo[0], chi[1] - clo[1], chi[2] - clo[2]];
-    let axis = if ext[0] >= ext[1] && ext[0] >= ext[2] { 0 } else if ext[1] >= ext[2] { 1 } else { 2 };
-    let mid = items.len() / 2;
-    items.select_nth_unstable_by(mid, |a, b| a.centroid[axis].total_cmp(&b.centroid[axis]).then(a.tri.cmp(&b.tri)));
-    let (left, right) = items.split_at_mut(mid);
-    let (ln, rn) = if left.len() + right.len() > 8192 {
-        rayon::join(|| build(left, first), || build(right, first + mid as u32))
+    #[inline]
+    fn join(mut self, o: &Aabb) -> Aabb {
+        self.grow(&o.lo, &o.hi);
+        self
+    }
+    /// Half the surface area (0 for an empty box).
+    #[inline]
+    fn half_area(&self) -> f64 {
+        let e = [self.hi[0] - self.lo[0], self.hi[1] - self.lo[1], self.hi[2] - self.lo[2]];
+        if e[0] < 0.0 {
+            return 0.0;
+        }
+        e[0] * e[1] + e[1] * e[2] + e[2] * e[0]
+    }
+}
+
+/// Per bin along the split axis: the count and the triangles' box.
+#[derive(Clone)]
+struct Binned {
+    count: [u32; BINS],
+    bound: [Aabb; BINS],
+}
+
+impl Binned {
+    fn new() -> Self {
+        Self { count: [0; BINS], bound: [Aabb::EMPTY; BINS] }
+    }
+    fn merge(mut self, o: &Binned) -> Self {
+        for b in 0..BINS {
+            self.count[b] += o.count[b];
+            self.bound[b] = self.bound[b].join(&o.bound[b]);
+        }
+        self
+    }
+}
+
+#[inline]
+fn bin_of(c: f64, lo: f64, scale: f64) -> usize {
+    (((c - lo) * scale) as usize).min(BINS - 1)
+}
+
+fn bin_items(items: &[Item], k: usize, lo: f64, scale: f64) -> Binned {
+    let mut b = Binned::new();
+    for it in items {
+        let i = bin_of(it.centroid[k], lo, scale);
+        b.count[i] += 1;
+        b.bound[i].grow(&it.lo, &it.hi);
+    }
+    b
+}
+
+fn centroid_bounds(items: &[Item]) -> Aabb {
+    let mut c = Aabb::EMPTY;
+    for it in items {
+        c.grow(&it.centroid, &it.centroid);
+    }
+    c
+}
+
+/// Split `items` into two non-empty parts: (the number on the left); SAH by bins, or the
+/// object median along the centroids' longest axis (deep subtrees, coincident centroids).
+fn split(items: &mut [Item], depth: usize) -> usize {
+    let n = items.len();
+    let cb = if n > PAR {
+        let parts: Vec<Aabb> = {
+            use rayon::prelude::*;
+            items.par_chunks(PAR).map(centroid_bounds).collect()
+        };
+        parts.iter().fold(Aabb::EMPTY, |a, b| a.join(b))
     } else {
-        (build(left, first), build(right, first + mid as u32))
+        centroid_bounds(items)
     };
-    let mut nodes = Vec::with_capacity(1 + ln.len() + rn.len());
-    let right_at = 1 + ln.len() as u32;
-    nodes.push(Node { lo, hi, start: right_at, count: 0 });
-    for n in &ln {
-        let mut n = *n;
-        if n.count == 0 {
-            n.start += 1;
+    let ext = [cb.hi[0] - cb.lo[0], cb.hi[1] - cb.lo[1], cb.hi[2] - cb.lo[2]];
+    let axis = if ext[0] >= ext[1] && ext[0] >= ext[2] { 0 } else if ext[1] >= ext[2] { 1 } else { 2 };
+    if depth < MAX_SAH_DEPTH && n > SAH_MIN && ext[axis] > 0.0 {
+        // bins along the centroids' longest axis
+        let (k, lo, scale) = (axis, cb.lo[axis], BINS as f64 / ext[axis]);
+        let binned = if n > PAR {
+            use rayon::prelude::*;
+            let parts: Vec<Binned> = items.par_chunks(PAR).map(|c| bin_items(c, k, lo, scale)).collect();
+            parts.iter().fold(Binned::new(), |a, b| a.merge(b))
+        } else {
+            bin_items(items, k, lo, scale)
+        };
+        // the cheapest split plane (ties: the lowest plane)
+        let mut best: Option<(f64, usize)> = None;
+        let mut right_area = [0.0; BINS];
+        let mut acc = Aabb::EMPTY;
+        for b in (1..BINS).rev() {
+            acc = acc.join(&binned.bound[b]);
+            right_area[b] = acc.half_area();
         }
-        nodes.push(n);
-    }
-    for n in &rn {
-        let mut n = *n;
-        if n.count == 0 {
-            n.start += right_at;
+        let mut left = Aabb::EMPTY;
+        let mut nl = 0u64;
+        for b in 1..BINS {
+            left = left.join(&binned.bound[b - 1]);
+            nl += binned.count[b - 1] as u64;
+            let nr = n as u64 - nl;
+            if nl == 0 || nr == 0 {
+                continue;
+            }
+            let cost = left.half_area() * nl as f64 + right_area[b] * nr as f64;
+            if best.map_or(true, |(c, _)| cost < c) {
+                best = Some((cost, b));
+            }
         }
-        nodes.push(n);
+        if let Some((_, b)) = best {
+            // in-place two-pointer partition (deterministic)
+            let (mut i, mut j) = (0usize, n);
+            while i < j {
+                if bin_of(items[i].centroid[k], lo, scale) < b {
+                    i += 1;
+                } else {
+                    j -= 1;
+                    items.swap(i, j);
+                }
+            }
+            if i > 0 && i < n {
+                return i;
+            }
+        }
     }
-    nodes
+    let mid = n / 2;
+    items.select_nth_unstable_by(mid, |a, b| a.centroid[axis].total_cmp(&b.centroid[axis]).then(a.tri.cmp(&b.tri)));
+    mid
+}
+
+fn node_of(lb: &Aabb, rb: &Aabb, lc: Child, rc: Child) -> Node {
+    Node {
+        lo: [[lb.lo[0], rb.lo[0]], [lb.lo[1], rb.lo[1]], [lb.lo[2], rb.lo[2]]],
+        hi: [[lb.hi[0], rb.hi[0]], [lb.hi[1], rb.hi[1]], [lb.hi[2], rb.hi[2]]],
+        child: [lc, rc],
+    }
+}
+
+fn leaf(items: &[Item], first: u32) -> (Aabb, Child) {
+    let mut b = Aabb::EMPTY;
+    for it in items {
+        b.grow(&it.lo, &it.hi);
+    }
+    (b, Child { index: first, count: items.len() as u32 })
+}
+
+/// Build the subtree of `items` (slots from `first`) into `out`, depth first: its box and reference.
+fn build_seq(items: &mut [Item], first: u32, depth: usize, out: &mut Vec<Node>) -> (Aabb, Child) {
+    if items.len() <= LEAF {
+        return leaf(items, first);
+    }
+    let mid = split(items, depth);
+    let (left, right) = items.split_at_mut(mid);
+    let at = out.len();
+    out.push(Node { lo: [[0.0; 2]; 3], hi: [[0.0; 2]; 3], child: [Child { index: 0, count: 0 }; 2] });
+    let (lb, lc) = build_seq(left, first, depth + 1, out);
+    let (rb, rc) = build_seq(right, first + mid as u32, depth + 1, out);
+    out[at] = node_of(&lb, &rb, lc, rc);
+    (lb.join(&rb), Child { index: at as u32, count: 0 })
+}
+
+/// A subtree built in parallel: built sequentially (nodes indexed from 0), or split in two.
+enum Part {
+    Seq(Aabb, Child, Vec<Node>),
+    Split(Aabb, Box<Part>, Box<Part>),
+}
+
+fn build_par(items: &mut [Item], first: u32, depth: usize) -> Part {
+    if items.len() <= PAR {
+        let mut out = Vec::new();
+        let (b, c) = build_seq(items, first, depth, &mut out);
+        return Part::Seq(b, c, out);
+    }
+    let mid = split(items, depth);
+    let (left, right) = items.split_at_mut(mid);
+    let (l, r) = rayon::join(|| build_par(left, first, depth + 1), || build_par(right, first + mid as u32, depth + 1));
+    let b = l.bounds().join(&r.bounds());
+    Part::Split(b, Box::new(l), Box::new(r))
+}
+
+impl Part {
+    fn bounds(&self) -> Aabb {
+        match self {
+            Part::Seq(b, _, _) | Part::Split(b, _, _) => *b,
+        }
+    }
+    /// Append the subtree's nodes to `out` (depth first); its reference.
+    fn flatten(self, out: &mut Vec<Node>) -> Child {
+        match self {
+            Part::Seq(_, c, nodes) => {
+                let by = out.len() as u32;
+                let shift = |c: Child| if c.count == 0 { Child { index: c.index + by, count: 0 } } else { c };
+                out.extend(nodes.iter().map(|n| Node { child: [shift(n.child[0]), shift(n.child[1])], ..*n }));
+                shift(c)
+            }
+            Part::Split(_, l, r) => {
+                let (lb, rb) = (l.bounds(), r.bounds());
+                let at = out.len();
+                out.push(Node { lo: [[0.0; 2]; 3], hi: [[0.0; 2]; 3], child: [Child { index: 0, count: 0 }; 2] });
+                let lc = l.flatten(out);
+                let rc = r.flatten(out);
+                out[at] = node_of(&lb, &rb, lc, rc);
+                Child { index: at as u32, count: 0 }
+            }
+        }
+    }
+}
+
+/// Squared distances from `p` to both child boxes of a node.
+#[inline(always)]
+fn child_distances2(p: &V3, n: &Node) -> [f64; 2] {
+    let mut d = [0.0; 2];
+    for k in 0..3 {
+        for c in 0..2 {
+            let v = (n.lo[k][c] - p[k]).max(p[k] - n.hi[k][c]).max(0.0);
+            d[c] += v * v;
+        }
+    }
+    d
 }
 
 impl Bvh {
     /// The hierarchy of the triangles `corners` (at least one).
     pub fn new(corners: &[[V3; 3]]) -> Self {
+        use rayon::prelude::*;
         let mut items: Vec<Item> = corners
-            .iter()
+            .par_iter()
             .enumerate()
             .map(|(i, c)| {
                 let mut lo = c[0];
@@ -127,10 +337,26 @@ impl Bvh {
                 Item { tri: i as u32, centroid, lo, hi }
             })
             .collect();
-        let nodes = build(&mut items, 0);
+        let part = build_par(&mut items, 0, 0);
+        let b = part.bounds();
+        let mut nodes = Vec::with_capacity(corners.len() / 2);
+        let root = part.flatten(&mut nodes);
+        nodes.shrink_to_fit();
         let order: Vec<u32> = items.iter().map(|it| it.tri).collect();
-        let corners = order.iter().map(|&t| corners[t as usize]).collect();
-        Self { nodes, corners, order }
+        let corners = order.par_iter().map(|&t| corners[t as usize]).collect();
+        Self { nodes, root, root_lo: b.lo, root_hi: b.hi, corners, order }
+    }
+
+    /// The depth of the deepest leaf (the root is at depth 0).
+    pub fn depth(&self) -> usize {
+        fn walk(b: &Bvh, c: Child) -> usize {
+            if c.count > 0 {
+                return 0;
+            }
+            let n = &b.nodes[c.index as usize];
+            1 + walk(b, n.child[0]).max(walk(b, n.child[1]))
+        }
+        walk(self, self.root)
     }
 
     /// Squared distance from `p` to the triangle in `slot`, with the closest point and feature.
@@ -142,72 +368,76 @@ impl Bvh {
         Nearest { slot, d2: dot(v, v), foot, feature }
     }
 
-    /// The nearest triangle to `p` closer than `sqrt(bound2)` (None if there is none).
-    /// `hint`: a slot to try first (its distance starts the bound).
+    /// The nearest triangle to `p` not farther than `sqrt(bound2)` (None if there is
+    /// none); ties go to the hint, then to the first found. `hint`: a slot to try first
+    /// (its distance starts the bound).
+    #[inline]
     pub fn nearest(&self, p: V3, bound2: f64, hint: Option<u32>) -> Option<Nearest> {
         let mut best: Option<Nearest> = None;
         let mut best_d2 = bound2;
+        let mut skip = u32::MAX;
         if let Some(h) = hint {
             if (h as usize) < self.corners.len() {
                 let n = self.to_slot(p, h);
-                if n.d2 < best_d2 || (n.d2 == best_d2 && bound2.is_infinite()) {
+                if n.d2 <= best_d2 {
                     best_d2 = n.d2;
                     best = Some(n);
+                    skip = h;
                 }
             }
         }
-        let mut stack: [(u32, f64); 96] = [(0, 0.0); 96];
-        let mut sp = 0usize;
-        let root = &self.nodes[0];
-        let d_root = box_distance2(&p, &root.lo, &root.hi);
-        if d_root > best_d2 || (d_root == best_d2 && best.is_some()) {
+        // open: a box (or triangle) at squared distance d may hold something better
+        macro_rules! open {
+            ($d:expr) => {
+                $d < best_d2 || (best.is_none() && $d <= best_d2)
+            };
+        }
+        let d_root = box_distance2(&p, &self.root_lo, &self.root_hi);
+        if !open!(d_root) {
             return best;
         }
-        let mut node = 0usize;
+        let mut stack = [(Child { index: 0, count: 0 }, 0.0f64); MAX_DEPTH + 2];
+        let mut sp = 0usize;
+        let mut cur = self.root;
         loop {
-            let n = &self.nodes[node];
-            if n.count > 0 {
-                for slot in n.start..n.start + n.count {
-                    if Some(slot) == best.map(|b| b.slot) {
+            if cur.count > 0 {
+                for slot in cur.index..cur.index + cur.count {
+                    if slot == skip {
                         continue;
                     }
                     let c = &self.corners[slot as usize];
                     let (foot, feature) = closest_point(p, c[0], c[1], c[2]);
                     let v = sub(p, foot);
                     let d2 = dot(v, v);
-                    if d2 < best_d2 || (best.is_none() && d2 <= best_d2) {
+                    if open!(d2) {
                         best_d2 = d2;
                         best = Some(Nearest { slot, d2, foot, feature });
                     }
                 }
             } else {
-                let (l, r) = (node + 1, n.start as usize);
-                let dl = box_distance2(&p, &self.nodes[l].lo, &self.nodes[l].hi);
-                let dr = box_distance2(&p, &self.nodes[r].lo, &self.nodes[r].hi);
-                let (near, dn, far, df) = if dl <= dr { (l, dl, r, dr) } else { (r, dr, l, dl) };
-                let open = |d: f64, best_d2: f64, found: bool| d < best_d2 || (!found && d <= best_d2);
-                if open(dn, best_d2, best.is_some()) {
-                    if open(df, best_d2, best.is_some()) && sp < stack.len() {
-                        stack[sp] = (far as u32, df);
+                let n = &self.nodes[cur.index as usize];
+                let d = child_distances2(&p, n);
+                let (near, dn, far, df) = if d[0] <= d[1] { (n.child[0], d[0], n.child[1], d[1]) } else { (n.child[1], d[1], n.child[0], d[0]) };
+                if open!(dn) {
+                    if open!(df) {
+                        stack[sp] = (far, df);
                         sp += 1;
                     }
-                    node = near;
+                    cur = near;
                     continue;
                 }
             }
             // pop the next subtree still worth visiting
-            let mut next = None;
-            while sp > 0 {
+            loop {
+                if sp == 0 {
+                    return best;
+                }
                 sp -= 1;
-                let (k, d) = stack[sp];
-                if d < best_d2 || (best.is_none() && d <= best_d2) {
-                    next = Some(k as usize);
+                let (c, d) = stack[sp];
+                if open!(d) {
+                    cur = c;
                     break;
                 }
-            }
-            match next {
-                Some(k) => node = k,
-                None => return best,
             }
         }
     }

@@ -108,13 +108,14 @@ impl TriMesh {
                 first.join(", ")
             )));
         }
-        let topology = topology(&verts, &tris);
+        let edges = sorted_edges(&tris);
+        let topology = topology(&verts, &tris, &edges);
         if topology.flipped {
             for n in normals.iter_mut() {
                 *n = scale(*n, -1.0);
             }
         }
-        let (vertex_normals, edge_normals) = pseudonormals(&verts, &tris, &normals);
+        let (vertex_normals, edge_normals) = pseudonormals(&verts, &tris, &normals, &edges);
         let corners: Vec<[V3; 3]> =
             tris.iter().map(|t| [verts[t[0] as usize], verts[t[1] as usize], verts[t[2] as usize]]).collect();
         let bvh = Bvh::new(&corners);
@@ -156,33 +157,46 @@ impl TriMesh {
     }
 }
 
-fn topology(verts: &[V3], tris: &[[u32; 3]]) -> Topology {
-    // (low vertex, high vertex, forward?) per directed edge, sorted: groups of one edge
-    let mut edges: Vec<(u32, u32, bool)> = Vec::with_capacity(3 * tris.len());
-    for t in tris {
-        for k in 0..3 {
-            let (u, v) = (t[k], t[(k + 1) % 3]);
-            edges.push((u.min(v), u.max(v), u < v));
-        }
-    }
-    edges.sort_unstable();
+/// Every triangle's edges as (low vertex, high vertex, triangle, k), sorted (in parallel;
+/// the entries are distinct, so the order is unique): the groups of one undirected edge.
+fn sorted_edges(tris: &[[u32; 3]]) -> Vec<(u64, u32, u8)> {
+    use rayon::prelude::*;
+    let mut edges: Vec<(u64, u32, u8)> = tris
+        .par_iter()
+        .enumerate()
+        .flat_map_iter(|(i, t)| {
+            (0..3u8).map(move |k| {
+                let (u, v) = (t[k as usize], t[(k as usize + 1) % 3]);
+                (((u.min(v) as u64) << 32) | u.max(v) as u64, i as u32, k)
+            })
+        })
+        .collect();
+    edges.par_sort_unstable();
+    edges
+}
+
+/// The runs of `edges` that share one undirected edge.
+fn edge_groups(edges: &[(u64, u32, u8)]) -> impl Iterator<Item = &[(u64, u32, u8)]> {
+    edges.chunk_by(|a, b| a.0 == b.0)
+}
+
+fn topology(verts: &[V3], tris: &[[u32; 3]], edges: &[(u64, u32, u8)]) -> Topology {
     let (mut boundary, mut nonmanifold, mut inconsistent) = (0usize, 0usize, 0usize);
-    let mut i = 0;
-    while i < edges.len() {
-        let mut j = i + 1;
-        while j < edges.len() && edges[j].0 == edges[i].0 && edges[j].1 == edges[i].1 {
-            j += 1;
-        }
-        match j - i {
+    // an edge's direction in a triangle: forward when it runs from its low to its high vertex
+    let forward = |e: &(u64, u32, u8)| {
+        let t = &tris[e.1 as usize];
+        t[e.2 as usize] < t[(e.2 as usize + 1) % 3]
+    };
+    for g in edge_groups(edges) {
+        match g.len() {
             1 => boundary += 1,
             2 => {
-                if edges[i].2 == edges[i + 1].2 {
+                if forward(&g[0]) == forward(&g[1]) {
                     inconsistent += 1;
                 }
             }
             _ => nonmanifold += 1,
         }
-        i = j;
     }
     let mut reason = None;
     if boundary > 0 {
@@ -214,7 +228,7 @@ fn angle(u: V3, v: V3) -> f64 {
     norm(cross(u, v)).atan2(dot(u, v))
 }
 
-fn pseudonormals(verts: &[V3], tris: &[[u32; 3]], normals: &[V3]) -> (Vec<V3>, Vec<[V3; 3]>) {
+fn pseudonormals(verts: &[V3], tris: &[[u32; 3]], normals: &[V3], edges: &[(u64, u32, u8)]) -> (Vec<V3>, Vec<[V3; 3]>) {
     let mut vn = vec![[0.0; 3]; verts.len()];
     for (t, n) in tris.iter().zip(normals) {
         for k in 0..3 {
@@ -225,29 +239,15 @@ fn pseudonormals(verts: &[V3], tris: &[[u32; 3]], normals: &[V3]) -> (Vec<V3>, V
         }
     }
     // edge normals: the sum of the normals of the triangles sharing the edge
-    let mut edges: Vec<(u32, u32, u32, u8)> = Vec::with_capacity(3 * tris.len());
-    for (i, t) in tris.iter().enumerate() {
-        for k in 0..3u8 {
-            let (u, v) = (t[k as usize], t[(k as usize + 1) % 3]);
-            edges.push((u.min(v), u.max(v), i as u32, k));
-        }
-    }
-    edges.sort_unstable();
     let mut en = vec![[[0.0; 3]; 3]; tris.len()];
-    let mut i = 0;
-    while i < edges.len() {
-        let mut j = i + 1;
-        while j < edges.len() && edges[j].0 == edges[i].0 && edges[j].1 == edges[i].1 {
-            j += 1;
-        }
+    for g in edge_groups(edges) {
         let mut sum = [0.0; 3];
-        for e in &edges[i..j] {
-            sum = add(sum, normals[e.2 as usize]);
+        for e in g {
+            sum = add(sum, normals[e.1 as usize]);
         }
-        for e in &edges[i..j] {
-            en[e.2 as usize][e.3 as usize] = sum;
+        for e in g {
+            en[e.1 as usize][e.2 as usize] = sum;
         }
-        i = j;
     }
     (vn, en)
 }

@@ -1,4 +1,4 @@
-use crate::align::{best_fit, FitOptions};
+use crate::align::{best_fit, refine, FitOptions, Frame};
 use crate::distance::Query;
 use crate::mesh::TriMesh;
 use crate::minimax::minimax;
@@ -149,6 +149,12 @@ fn results_do_not_depend_on_the_thread_count() {
     let mut rng = ChaCha8Rng::seed_from_u64(7);
     let pts: Vec<f64> = (0..60000).map(|_| rng.random_range(-12.0..12.0)).collect();
     let q = Query { foot: true, ..Default::default() };
+    // the tree itself does not depend on the thread count (its build is parallel above 4096 triangles)
+    let (v2, t2) = sphere_mesh(120, 10.0);
+    let b1 = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap().install(|| TriMesh::new(&v2, &t2).unwrap());
+    let b3 = rayon::ThreadPoolBuilder::new().num_threads(3).build().unwrap().install(|| TriMesh::new(&v2, &t2).unwrap());
+    assert_eq!(b1.bvh.order, b3.bvh.order);
+    assert_eq!(b1.bvh.nodes.iter().map(|n| n.child).collect::<Vec<_>>(), b3.bvh.nodes.iter().map(|n| n.child).collect::<Vec<_>>());
     let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap().install(|| mesh.distances(&pts, &q).unwrap());
     let two = rayon::ThreadPoolBuilder::new().num_threads(3).build().unwrap().install(|| mesh.distances(&pts, &q).unwrap());
     assert_eq!(one.distance.iter().map(|d| d.to_bits()).collect::<Vec<_>>(), two.distance.iter().map(|d| d.to_bits()).collect::<Vec<_>>());
@@ -269,4 +275,145 @@ fn minimax_with_an_offset_centres_the_zone_on_the_offset_surface() {
     let m0 = minimax(&mesh, &scan, Pose::IDENTITY, [true; 6], None, 0.0).unwrap();
     let m1 = minimax(&mesh, &scan, Pose::IDENTITY, [true; 6], None, 0.05).unwrap();
     assert!(m0.max_abs > 0.05 && m1.max_abs <= 0.0100001, "{} {}", m0.max_abs, m1.max_abs);
+}
+
+/// A triangle soup: `n` random triangles in [-10, 10]^3, a share of them slivers (a
+/// corner within 1e-7 of the opposite edge's line) and needles (two corners 1e-7 apart),
+/// plus a heightfield patch whose triangles share edges and vertices (ties).
+fn soup(rng: &mut ChaCha8Rng, n: usize) -> Vec<[[f64; 3]; 3]> {
+    let mut out = Vec::new();
+    let r = |rng: &mut ChaCha8Rng, s: f64| -> [f64; 3] { [rng.random_range(-s..s), rng.random_range(-s..s), rng.random_range(-s..s)] };
+    for _ in 0..n {
+        let c = r(rng, 10.0);
+        let size = [0.01, 0.3, 3.0][rng.random_range(0..3)];
+        let a = gagekit_gdt::vec3::add(c, r(rng, size));
+        let b = gagekit_gdt::vec3::add(c, r(rng, size));
+        let kind = rng.random_range(0..4);
+        let third = match kind {
+            // sliver: near the line through a and b
+            0 => {
+                let t: f64 = rng.random_range(-0.5..1.5);
+                gagekit_gdt::vec3::add([a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]), a[2] + t * (b[2] - a[2])], r(rng, 1e-7))
+            }
+            // needle: next to a
+            1 => gagekit_gdt::vec3::add(a, r(rng, 1e-7)),
+            _ => gagekit_gdt::vec3::add(c, r(rng, size)),
+        };
+        out.push([a, b, third]);
+    }
+    // a heightfield patch: shared edges and vertices
+    let z = |i: usize, j: usize| ((i * 7 + j * 3) % 5) as f64 * 0.1;
+    for i in 0..6 {
+        for j in 0..6 {
+            let p = |a: usize, b: usize| [a as f64, b as f64, z(a, b)];
+            out.push([p(i, j), p(i + 1, j), p(i + 1, j + 1)]);
+            out.push([p(i, j), p(i + 1, j + 1), p(i, j + 1)]);
+        }
+    }
+    out
+}
+
+fn brute_force(corners: &[[[f64; 3]; 3]], p: [f64; 3]) -> f64 {
+    corners
+        .iter()
+        .map(|c| {
+            let (f, _) = crate::closest::closest_point(p, c[0], c[1], c[2]);
+            let v = [p[0] - f[0], p[1] - f[1], p[2] - f[2]];
+            v[0] * v[0] + v[1] * v[1] + v[2] * v[2]
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(96))]
+    /// The BVH's nearest triangle has exactly the squared distance of a brute-force scan
+    /// over every triangle (random soups with slivers, needles and shared edges; points
+    /// near, inside and far away; with and without a hint and a bound).
+    #[test]
+    fn bvh_nearest_equals_brute_force(seed in 0u64..1_000_000, n in 1usize..400) {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let corners = soup(&mut rng, n);
+        let bvh = crate::bvh::Bvh::new(&corners);
+        prop_assert!(bvh.depth() <= crate::bvh::MAX_DEPTH);
+        let mut hint = None;
+        for k in 0..300 {
+            let s = [0.5, 12.0, 1e3, 1e6][k % 4];
+            let p = [rng.random_range(-s..s), rng.random_range(-s..s), rng.random_range(-s..s)];
+            let exact = brute_force(&corners, p);
+            let got = bvh.nearest(p, f64::INFINITY, hint).unwrap();
+            prop_assert_eq!(got.d2.to_bits(), exact.to_bits(), "point {:?}: {} vs {}", p, got.d2, exact);
+            let t = bvh.order[got.slot as usize] as usize;
+            prop_assert_eq!(brute_force(&corners[t..t + 1], p).to_bits(), exact.to_bits());
+            // a bound: found exactly when the nearest is within it
+            let bound2 = exact * [0.5, 1.0, 2.0][k % 3];
+            match bvh.nearest(p, bound2, hint) {
+                Some(b) => prop_assert!(b.d2.to_bits() == exact.to_bits() && exact <= bound2),
+                None => prop_assert!(exact > bound2),
+            }
+            hint = if k % 5 == 0 { None } else { Some(got.slot) };
+        }
+    }
+}
+
+/// The same through the mesh's distance query: a closed mesh of slivers (a fine fan on a
+/// sphere's pole cap) against brute force, points near and far, any thread count.
+#[test]
+fn mesh_distances_equal_brute_force_with_slivers() {
+    let (mut v, t) = sphere_mesh(40, 10.0);
+    // squash the rings next to the poles: the triangles there become slivers
+    for p in v.chunks_exact_mut(3) {
+        let r = (p[0] * p[0] + p[1] * p[1]).sqrt();
+        if r < 1.0 {
+            p[0] *= 1e-5;
+            p[1] *= 1e-5;
+        }
+    }
+    let mesh = TriMesh::new(&v, &t).unwrap();
+    let mut rng = ChaCha8Rng::seed_from_u64(11);
+    let mut pts = Vec::new();
+    for k in 0..20000 {
+        let s = [11.0, 1e4][k % 2];
+        pts.extend([rng.random_range(-s..s), rng.random_range(-s..s), rng.random_range(-s..s)]);
+    }
+    let d = mesh.distances(&pts, &Query::default()).unwrap();
+    for (i, p) in pts.chunks_exact(3).enumerate() {
+        let exact = brute_force(&mesh.bvh.corners, [p[0], p[1], p[2]]).sqrt();
+        assert!((d.distance[i].abs() - exact).abs() <= 1e-12 * (1.0 + exact), "point {i}: {} vs {exact}", d.distance[i]);
+    }
+}
+
+/// Coarse to fine (subsamples first, then every point) ends where iterating on every
+/// point from the start ends: the whole cloud's robust fit, to 1e-6 mm on every point.
+#[test]
+fn coarse_to_fine_equals_the_full_robust_fit() {
+    let h = [20.0, 12.0, 7.0];
+    let (v, t) = box_mesh(h);
+    let mesh = TriMesh::new(&v, &t).unwrap();
+    let mut scan = box_scan(h, 0.25, 0.01);
+    // clutter: every 50th point 2 mm off the surface
+    for (i, p) in scan.chunks_exact_mut(3).enumerate() {
+        if i % 50 == 0 {
+            p[2] += 2.0;
+        }
+    }
+    let mut rng = ChaCha8Rng::seed_from_u64(9);
+    let pose = random_pose(&mut rng, 0.02, 0.5);
+    let s = moved(&scan, &pose);
+    let n = s.len() / 3;
+    assert!(n > 40_000);
+    let frame = Frame::new(&mesh, &s, Pose::IDENTITY, None, [true; 6]).unwrap();
+    let mut p_full = [0.0; 6];
+    let (full, _) = refine(&frame, &mut p_full, &[usize::MAX]).unwrap();
+    let mut p_ladder = [0.0; 6];
+    let (ladder, it) = refine(&frame, &mut p_ladder, &[3000, 10_000, 30_000, usize::MAX]).unwrap();
+    let (a, b) = (moved(&s, &frame.pose(&p_full)), moved(&s, &frame.pose(&p_ladder)));
+    let worst = a.iter().zip(&b).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max);
+    assert!(worst < 1e-6, "largest displacement between the two fits {worst} mm");
+    assert!((full.rms - ladder.rms).abs() < 1e-9 && full.used == ladder.used);
+    assert!(ladder.iterations < full.iterations, "{} full-cloud steps after the ladder ({it} in all) vs {}", ladder.iterations, full.iterations);
+    // and best_fit (which runs the ladder on its winning start) lands there too
+    let fit = best_fit(&mesh, &s, &FitOptions::default()).unwrap();
+    let c = moved(&s, &fit.pose);
+    let worst = a.iter().zip(&c).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max);
+    assert!(worst < 1e-6, "best_fit vs the full fit: {worst} mm");
 }

@@ -97,7 +97,7 @@ class History:
             if state == "legacy":
                 from ...store.legacy import migrate_history
 
-                migrate_history(conn)
+                migrate_history(conn, _alembic_upgrade)
             elif state == "empty":
                 _alembic_upgrade(conn)
             return append_tracking(

@@ -347,40 +347,10 @@ impl Nearest {
     }
 }
 
-/// Strictly convex vertices of the convex hull, counter-clockwise (Andrew's monotone
-/// chain with the exact orientation predicate).
+/// Strictly convex vertices of the convex hull, counter-clockwise
+/// (`gagekit_geometry::hull_2d`: Andrew's monotone chain with the exact predicate).
 pub(crate) fn convex_hull(p: &[[f64; 2]]) -> Vec<usize> {
-    let mut idx: Vec<usize> = (0..p.len()).collect();
-    idx.sort_unstable_by(|&a, &b| {
-        p[a][0]
-            .total_cmp(&p[b][0])
-            .then(p[a][1].total_cmp(&p[b][1]))
-    });
-    idx.dedup_by(|a, b| p[*a] == p[*b]);
-    if idx.len() < 3 {
-        return idx;
-    }
-    let turn =
-        |a: usize, b: usize, c: usize| robust::orient2d(coord(p[a]), coord(p[b]), coord(p[c]));
-    let mut hull: Vec<usize> = Vec::with_capacity(2 * idx.len());
-    for pass in 0..2 {
-        let start = hull.len();
-        let it: Box<dyn Iterator<Item = &usize>> = if pass == 0 {
-            Box::new(idx.iter())
-        } else {
-            Box::new(idx.iter().rev())
-        };
-        for &i in it {
-            while hull.len() >= start + 2
-                && turn(hull[hull.len() - 2], hull[hull.len() - 1], i) <= 0.0
-            {
-                hull.pop();
-            }
-            hull.push(i);
-        }
-        hull.pop();
-    }
-    hull
+    gagekit_geometry::hull_2d(p)
 }
 
 /// Farthest-point Voronoi diagram.

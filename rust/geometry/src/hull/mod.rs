@@ -11,12 +11,14 @@
 //! points; the survivors are de-duplicated and hulled by an exact quickhull
 //! ([`quickhull`]). Collinear and coplanar sets fall back to 1-D and 2-D hulls.
 
+mod chain;
 mod exact;
 mod inner;
 mod planar;
 mod prefilter;
 mod quickhull;
 
+pub use chain::hull_2d;
 use exact::{collinear, cross, dot, orient2d, orient3d, project, pt, sub, P3};
 use gagekit_core::{check_finite, GkError, Result};
 use rayon::prelude::*;

@@ -1,0 +1,85 @@
+//! Timing harness (not a test): `cargo run --release -p gagekit-mesh --example profile -- [points] [nu nv] [fit]`.
+//! The torus and scan-line scan of benches/bench_compare.py, built in Rust.
+use gagekit_mesh::align::{best_fit, FitOptions};
+use gagekit_mesh::distance::Query;
+use gagekit_mesh::rigid::Pose;
+use gagekit_mesh::TriMesh;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use std::f64::consts::PI;
+use std::time::Instant;
+
+fn tube(u: f64, v: f64, bumpy: bool) -> f64 {
+    30.0 + if bumpy { 5.0 * u.cos() + 3.0 * (v + 2.0 * u).sin() } else { 0.0 }
+}
+
+fn torus(nu: usize, nv: usize, bumpy: bool) -> (Vec<f64>, Vec<u32>) {
+    let mut v = Vec::new();
+    for i in 0..nu {
+        for j in 0..nv {
+            let (u, w) = (2.0 * PI * i as f64 / nu as f64, 2.0 * PI * j as f64 / nv as f64);
+            let r = tube(u, w, bumpy);
+            v.extend([((100.0 + r * w.cos()) * u.cos()) as f32 as f64, ((100.0 + r * w.cos()) * u.sin()) as f32 as f64, (r * w.sin()) as f32 as f64]);
+        }
+    }
+    let mut t = Vec::new();
+    for i in 0..nu {
+        for j in 0..nv {
+            let a = (i * nv + j) as u32;
+            let b = (((i + 1) % nu) * nv + j) as u32;
+            let c = (((i + 1) % nu) * nv + (j + 1) % nv) as u32;
+            let d = (i * nv + (j + 1) % nv) as u32;
+            t.extend([a, b, c, a, c, d]);
+        }
+    }
+    (v, t)
+}
+
+fn scan(n: usize, seed: u64, bumpy: bool) -> Vec<f64> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let rows = ((n / 3) as f64).sqrt() as usize;
+    let per = n / rows + 1;
+    let mut p = Vec::with_capacity(3 * n);
+    for k in 0..n {
+        let (i, j) = (k / per, k % per);
+        let u = 2.0 * PI * i as f64 / rows as f64;
+        let v = 2.0 * PI * j as f64 / per as f64;
+        let mut h: f64 = rng.random_range(-0.35..0.35);
+        if rng.random_range(0.0..1.0) < 0.02 {
+            h = rng.random_range(-5.0..5.0);
+        }
+        let r = tube(u, v, bumpy) + h;
+        p.extend([(100.0 + r * v.cos()) * u.cos(), (100.0 + r * v.cos()) * u.sin(), r * v.sin()]);
+    }
+    p
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    let n: usize = args.get(1).and_then(|s| s.parse().ok()).unwrap_or(1_400_000);
+    let nu: usize = args.get(2).and_then(|s| s.parse().ok()).unwrap_or(1000);
+    let nv: usize = args.get(3).and_then(|s| s.parse().ok()).unwrap_or(500);
+    let fit = args.get(4).map(|s| s == "fit").unwrap_or(false);
+    let (v, t) = torus(nu, nv, fit);
+    let pts = scan(n, 0, fit);
+    let t0 = Instant::now();
+    let mesh = TriMesh::new(&v, &t).unwrap();
+    let t_mesh = t0.elapsed().as_secs_f64();
+    let t1 = Instant::now();
+    let _ = gagekit_mesh::bvh::Bvh::new(&mesh.bvh.corners);
+    let t_bvh = t1.elapsed().as_secs_f64();
+    println!("{} tri, {} pts: TriMesh::new {:.3} s (BVH alone {:.3} s, {} nodes)", t.len() / 3, n, t_mesh, t_bvh, mesh.bvh.nodes.len());
+    if fit {
+        let pose = Pose::from_params(&[300.0, -200.0, 150.0, 2.0, -1.0, 0.7]);
+        let moved: Vec<f64> = pts.chunks_exact(3).flat_map(|p| pose.apply([p[0], p[1], p[2]])).collect();
+        let t2 = Instant::now();
+        let f = best_fit(&mesh, &moved, &FitOptions::default()).unwrap();
+        println!("best_fit {:.3} s, {} iterations, rms {:.3} -> {:.5}, start {}", t2.elapsed().as_secs_f64(), f.iterations, f.rms_before, f.rms_after, f.start);
+        return;
+    }
+    let t2 = Instant::now();
+    let d = mesh.distances(&pts, &Query::default()).unwrap();
+    let el = t2.elapsed().as_secs_f64();
+    let s: f64 = d.distance.iter().map(|x| x.abs()).sum();
+    println!("distances {:.3} s ({:.1} ns/pt wall), sum|d| {:.6}", el, el * 1e9 / n as f64, s);
+}
