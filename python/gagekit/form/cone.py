@@ -106,7 +106,11 @@ def fit_cone(points: Any, criterion: str = "least-squares", *, angle: Optional[f
         separation. ``min-circumscribed`` (``mc``) / ``max-inscribed`` (``mi``): the cone
         containing every point of least radius at the reference section / containing no
         point of greatest radius there (with a fixed angle every section gives the same
-        cone). The Chebyshev cones are found as the cylinders are (Sec. 6.3): sequential
+        cone). With a free angle the MC / MI cone need not be unique: when fewer than six
+        points touch it, optima form a ridge along which the radius changes by ~1e-9 of the
+        part's size while the angle moves by ~1e-4 degrees; the radius is then determined,
+        the angle (and the form about it) only to that level -- fix the angle (``angle``)
+        for a unique cone. The Chebyshev cones are found as the cylinders are (Sec. 6.3): sequential
         linear programming on the minimax problem in axis offset, tilt, half angle and
         radii from the least-squares cone, with basin hopping; deterministic.
     angle

@@ -36,10 +36,14 @@
 //! parameters: the min / max normal deviation of the input points; `gap` is the
 //! first-order optimality gap -- the decrease the LP predicts within a box of 1e-7 of
 //! the part's size about the result (0 at a vertex optimum: no feasible first-order
-//! descent), in mm.
+//! descent), in mm. Above 2000 points the search runs on an active subset, as the
+//! cylinders' does (`cylinder::subset`): the extreme residuals of the least-squares cone,
+//! grown by every point outside the fitted zone until none is -- then the subset's optimum
+//! is the optimum of all points (the reference section stays that of all points).
 
 use crate::criterion::FitCriterion;
 use crate::cylinder::slp::{self, Axis, Taper};
+use crate::cylinder::subset::{settle, SUBSET_ABOVE, SUBSET_EXTREMES};
 use crate::cylinder::Criterion;
 use crate::lsq::{self, orthonormal_basis, Extent};
 use gagekit_core::{check_finite, GkError, Result};
@@ -193,14 +197,54 @@ pub fn fit(pts: &[f64], crit: FitCriterion, opts: &Options) -> Result<ConeFit> {
     let q: Vec<f64> = pts.chunks_exact(3).flat_map(|x| [x[0] - c[0], x[1] - c[1], x[2] - c[2]]).collect();
     let size = q.chunks_exact(3).map(|x| Vector3::new(x[0], x[1], x[2]).norm()).fold(0.0, f64::max);
     let len = q.chunks_exact(3).map(|x| Vector3::new(x[0], x[1], x[2]).dot(&a).abs()).fold(1e-3 * size, f64::max);
-    let pb = Problem { q, crit: cc, size, len, free: fixed.is_none() };
-    let start = (Axis::new(a, p - c), ls.half_angle);
-    let mut best = pb.local(start, 1e-3 * len);
-    let mut evaluations = best.3;
-    for radius in HOP_RADII {
-        evaluations += pb.hop(&mut best, radius);
-    }
-    let (ax, psi) = (best.1, best.2);
+    let free = fixed.is_none();
+    let pb = Problem { q, crit: cc, size, len, free };
+    // the search on (a subset of) the centred points, warm-started from the last one
+    let first = (Axis::new(a, p - c), ls.half_angle);
+    let mut start = first;
+    let mut evaluations = 0;
+    let solve = |sub: &[f64]| -> Result<(Found, f64, f64)> {
+        let sp = Problem { q: sub.to_vec(), crit: cc, size, len, free };
+        let mut best = sp.local(start, 1e-3 * len);
+        evaluations += best.3;
+        for radius in HOP_RADII {
+            evaluations += sp.hop(&mut best, radius);
+        }
+        start = (best.1, best.2);
+        let (lo, hi, _, _) = sp.contacts(&best.1, best.2);
+        Ok((best, lo, hi))
+    };
+    let n = pts.len() / 3;
+    let (ax, psi) = if n > SUBSET_ABOVE {
+        // large inputs: an active subset (as the cylinders'), from the extreme residuals
+        // of the least-squares cone, grown by the points outside the zone until none is
+        let e = pb.residuals(&first.0, first.1);
+        let mut order: Vec<usize> = (0..n).collect();
+        order.sort_by(|&i, &j| e[i].total_cmp(&e[j]).then(i.cmp(&j)));
+        let k = SUBSET_EXTREMES;
+        let subset: Vec<usize> = match cc {
+            Criterion::MinCircumscribed => order[n - 2 * k..].to_vec(),
+            Criterion::MaxInscribed => order[..2 * k].to_vec(),
+            Criterion::MinZone => order[..k].iter().chain(&order[n - k..]).copied().collect(),
+        };
+        let violations = |(b, lo, hi): &(Found, f64, f64)| -> Vec<f64> {
+            let tol = 1e-12 * size;
+            pb.residuals(&b.1, b.2)
+                .into_iter()
+                .map(|e| {
+                    let over = if cc == Criterion::MaxInscribed { f64::NEG_INFINITY } else { e - hi };
+                    let under = if cc == Criterion::MinCircumscribed { f64::NEG_INFINITY } else { lo - e };
+                    over.max(under) - tol
+                })
+                .collect()
+        };
+        let ((b, _, _), _) = settle(&pb.q, subset, "cone", solve, violations)?;
+        (b.1, b.2)
+    } else {
+        let mut solve = solve;
+        let (b, _, _) = solve(&pb.q)?;
+        (b.1, b.2)
+    };
     let (lo, hi, ctl_in, ctl_out) = pb.contacts(&ax, psi);
     let gap = pb.gap(&ax, psi);
     // the zone's radii at the reference section (residuals are radial for MC / MI, normal for MZ)
@@ -326,23 +370,24 @@ impl Problem {
         evaluations
     }
 
-    /// Smallest and largest residual and the points within 1e-9 of the size of each.
-    fn contacts(&self, ax: &Axis, psi: f64) -> (f64, f64, Vec<usize>, Vec<usize>) {
+    /// The residual of every point about the cone (`ax`, `psi`): normal (MZ) or radial.
+    fn residuals(&self, ax: &Axis, psi: f64) -> Vec<f64> {
         let t = self.taper(psi);
-        let e: Vec<f64> = self
+        self
             .q
             .chunks_exact(3)
             .map(|x| {
                 let w = Vector3::new(x[0], x[1], x[2]) - ax.point;
                 let z = w.dot(&ax.dir);
                 let rho = (w - ax.dir * z).norm();
-                if t.normal {
-                    rho * psi.cos() - z * psi.sin()
-                } else {
-                    rho - z * psi.tan()
-                }
+                t.residual(rho, z)
             })
-            .collect();
+            .collect()
+    }
+
+    /// Smallest and largest residual and the points within 1e-9 of the size of each.
+    fn contacts(&self, ax: &Axis, psi: f64) -> (f64, f64, Vec<usize>, Vec<usize>) {
+        let e = self.residuals(ax, psi);
         let lo = e.iter().copied().fold(f64::INFINITY, f64::min);
         let hi = e.iter().copied().fold(f64::NEG_INFINITY, f64::max);
         let tol = 1e-9 * self.size;

@@ -54,7 +54,7 @@ mod mic_search;
 mod projection;
 mod search;
 pub(crate) mod slp;
-mod subset;
+pub(crate) mod subset;
 #[cfg(test)]
 mod tests;
 

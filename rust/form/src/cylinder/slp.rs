@@ -64,7 +64,7 @@ pub(crate) struct Taper {
 
 impl Taper {
     /// Residual of a point at axis distance `rho`, axial coordinate `z`.
-    fn residual(&self, rho: f64, z: f64) -> f64 {
+    pub(crate) fn residual(&self, rho: f64, z: f64) -> f64 {
         if self.normal {
             rho * self.psi.cos() - z * self.psi.sin()
         } else {
