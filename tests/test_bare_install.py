@@ -89,6 +89,8 @@ PLACEHOLDERS = {
     "R": "150", "F": "1000", "XY": "XY",
     "MODEL.qif": "pkg:data/nist_ctc_01_asme1_ap242.qif.gz",
     "OUT.qif": "out:OUT.qif",
+    "PROFILE.csv": "sample:roundness", "TRACE.csv": "sample:straightness",  # form roundness / straightness
+    "LSCI": "LSCI", "MZCI": "MZCI", "MZPL": "MZPL",  # reference features: values, not placeholders
     "CAD.step": "sample:bracket-step", "CADPART.toml": "sample:bracket-cad-part", "OUT.npy": "out:OUT.npy", "D": "5",
 }
 #: the value after these options is written: always a new path in the command's folder (so that

@@ -31,6 +31,9 @@ sphere             ``data/sphere_b.csv``: a probed sphere at 12 B positions (``#
 rtest              ``data/rtest_b.csv``: an R-test of the B axis (``# kind = rtest``)
 sphere-cycles      ``data/sphere_cycles.csv``: four sphere probing cycles an hour apart
                    (``machine track``)
+roundness          ``data/roundness_profile.csv``: a roundness trace of a shaft, 3600
+                   points (``data/make_roundness_samples.py``)
+straightness       ``data/straightness_profile.csv``: a 40 mm straightness trace
 =================  =====================================================================
 """
 
@@ -68,6 +71,8 @@ SAMPLES: dict[str, tuple[str, str]] = {
     "rtest": ("data/rtest_b.csv", "R-test of the B axis, '# kind = rtest' (machine identify)"),
     "sphere-cycles": ("data/sphere_cycles.csv", "four sphere probing cycles, B axis drifting (machine track)"),
     "grr-study": ("data/grr_study.csv", "gage R&R study, 10 parts x 3 appraisers x 3 trials (stats grr)"),
+    "roundness": ("data/roundness_profile.csv", "roundness trace of a shaft, 3600 points, 12 um eccentric (form roundness)"),
+    "straightness": ("data/straightness_profile.csv", "straightness trace, 40 mm, 4001 points (form straightness)"),
 }
 
 

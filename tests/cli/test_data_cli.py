@@ -72,3 +72,12 @@ def test_grr_sample_matches_its_generator(tmp_path):
 
     gen.main(tmp_path)
     assert (tmp_path / "grr_study.csv").read_bytes() == sample_path("grr-study").read_bytes()
+
+
+def test_roundness_samples_match_their_generator(tmp_path):
+    """The bundled roundness and straightness traces are what make_roundness_samples.py writes."""
+    from gagekit.data import make_roundness_samples as gen
+
+    gen.main(tmp_path)
+    assert (tmp_path / "roundness_profile.csv").read_bytes() == sample_path("roundness").read_bytes()
+    assert (tmp_path / "straightness_profile.csv").read_bytes() == sample_path("straightness").read_bytes()

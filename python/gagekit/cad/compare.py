@@ -29,7 +29,7 @@ import numpy as np
 
 from .._util import as_points
 from ..errors import ConfigError, DegenerateGeometryError
-from .model import CadModel
+from .model import CadModel, transform  # noqa: F401  (transform is also reached from here)
 
 __all__ = ["compare", "CompareResult", "ALIGN_METHODS", "DOF_NAMES", "parse_lock", "transform"]
 
@@ -47,12 +47,6 @@ def parse_lock(lock: Any) -> tuple[bool, ...]:
     if bad:
         raise ConfigError(f"--lock: unknown degree(s) of freedom {', '.join(map(repr, bad))}; choose from {','.join(DOF_NAMES)}")
     return tuple(n not in names for n in DOF_NAMES)
-
-
-def transform(points: np.ndarray, matrix: np.ndarray) -> np.ndarray:
-    """Apply a 4x4 rigid motion to (n, 3) points."""
-    m = np.asarray(matrix, dtype=float)
-    return np.ascontiguousarray(points @ m[:3, :3].T + m[:3, 3])
 
 
 @dataclass(frozen=True)

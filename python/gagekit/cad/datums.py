@@ -60,7 +60,7 @@ def _frame(points: np.ndarray, spec, letters: tuple[str, ...], cad=None):
 
 def cad_frame(model, spec, letters: tuple[str, ...]):
     """The datum frame ``letters`` simulated on the CAD surface: the nominal frame."""
-    from .features import CadContext
+    from .context import CadContext
 
     pts, face = surface_sample(model)
     return _frame(pts, spec, letters, CadContext(model, np.zeros(len(pts)), face))
@@ -70,7 +70,7 @@ def datum_alignment(points: np.ndarray, model, spec, max_distance: Optional[floa
     """(4x4 matrix applied to the scan, details) of the datum alignment (module docstring)."""
     if spec is None:
         raise ConfigError("--align datums needs --part PART.toml")
-    from .compare import transform
+    from .model import transform
 
     letters = main_datums(spec)
     fit = model.mesh.best_fit(points, None, [True] * 6, max_distance, True)
@@ -78,7 +78,7 @@ def datum_alignment(points: np.ndarray, model, spec, max_distance: Optional[floa
     moved = transform(points, m0)
     cad = None
     if any(spec.features[spec.datums[k].feature].faces for k in letters):
-        from .features import CadContext
+        from .context import CadContext
 
         d = model.distances(moved, max_distance)
         cad = CadContext(model, d.distance, d.face)

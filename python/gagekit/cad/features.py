@@ -24,50 +24,13 @@ holds every point:
 
 from __future__ import annotations
 
-from functools import lru_cache
 from typing import Any, Optional
 
 import numpy as np
 
+from .context import BAND_REACH, CadContext  # noqa: F401  (CadContext is also reached from here)
+
 __all__ = ["CadContext", "surface_profile"]
-
-#: Points farther than this from the faces never count for the default band.
-BAND_REACH = 1.0
-
-
-@lru_cache(maxsize=4)
-def _model(path: str):
-    from . import read_cad
-
-    return read_cad(path)
-
-
-class CadContext:
-    """The CAD model and every scan point's signed distance and nearest face."""
-
-    def __init__(self, model, distance: np.ndarray, face: np.ndarray) -> None:
-        self.model = model
-        self.distance = distance
-        self.face = face
-
-    @classmethod
-    def of_scan(cls, path: str, points: np.ndarray) -> "CadContext":
-        model = _model(str(path))
-        d = model.distances(points)
-        return cls(model, d.distance, d.face)
-
-    def face_set(self, feature, where: str) -> list[int]:
-        return sorted({self.model.face_index(k, f"{where}: 'faces'") for k in feature.faces})
-
-    def indices(self, feature, where: str) -> np.ndarray:
-        on = np.isin(self.face, self.face_set(feature, where))
-        d = self.distance
-        band = feature.band
-        if band is None:
-            near = d[on & (np.abs(d) <= BAND_REACH)]
-            band = max(3.0 * float(np.sqrt(np.mean(near * near))) if len(near) else 0.0, 1e-9)
-        return np.flatnonzero(on & (np.abs(d) <= band))
-
 
 def _free_in_cad_axes(frame) -> list[bool]:
     """The datum frame's free motions as free CAD-axis degrees of freedom (x, y, z, rx,
@@ -89,8 +52,8 @@ def _free_in_cad_axes(frame) -> list[bool]:
 
 def surface_profile(tol, fd, system) -> tuple[float, dict[str, Any]]:
     """(measured width, details) of the profile of a surface (module docstring)."""
-    from .compare import transform
     from .datums import cad_frame
+    from .model import transform
 
     ctx: CadContext = fd._cache["cad"]
     model = ctx.model

@@ -15,7 +15,7 @@ from typing import Any, Callable, Optional
 
 import numpy as np
 
-__all__ = ["CadFace", "CadModel", "Distances"]
+__all__ = ["CadFace", "CadModel", "Distances", "transform"]
 
 
 @dataclass(frozen=True)
@@ -119,3 +119,9 @@ class CadModel:
 
     def to_dict(self) -> dict[str, Any]:
         return {"file": self.path, "unit": self.unit, "faces": len(self.faces), "triangles": int(len(self.triangles))}
+
+
+def transform(points: np.ndarray, matrix: np.ndarray) -> np.ndarray:
+    """Apply a 4x4 rigid motion to (n, 3) points."""
+    m = np.asarray(matrix, dtype=float)
+    return np.ascontiguousarray(points @ m[:3, :3].T + m[:3, 3])

@@ -19,6 +19,7 @@ from ..errors import GagekitError
 from . import (batch, cloud, compare, db, demo, form, gage, machine, machine_export, machine_instruments, machine_observer,
                qif, stats, studio)
 from . import data  # gagekit data list / path
+from . import form_params  # gagekit form roundness / straightness / flatness
 from ._common import warn
 from . import inspect as inspect_cmd
 from . import grr as grr_cmd  # gagekit stats grr
@@ -34,6 +35,7 @@ app = typer.Typer(
 machine_observer.register(machine.app)  # machine design, evaluate-plan, track, history, simulate-cycles
 machine_export.register(machine.app)  # machine export, compensate-nc, iso230-2
 machine_instruments.register(machine.app)  # machine ballbar
+form_params.register(form.app)  # form roundness, straightness, flatness
 app.add_typer(cloud.app, name="cloud")
 app.add_typer(form.app, name="form")
 app.add_typer(gage.app, name="gage")

@@ -11,6 +11,10 @@ from .cone import __all__ as _cone_all
 from .fits import *  # noqa: F401,F403
 from .fits import __all__ as _fits_all
 
+# filtered form parameters (ISO 16610-21, ISO 12181, ISO 12780, ISO 12781)
+from .parameters import *  # noqa: F401,F403
+from .parameters import __all__ as _parameters_all
+
 __all__: list[str] = [
     # circles
     "CircleFit",
@@ -20,4 +24,5 @@ __all__: list[str] = [
     *_fits_all,
     *_cylinder_all,
     *_cone_all,
+    *_parameters_all,
 ]

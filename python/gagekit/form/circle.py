@@ -20,8 +20,9 @@ from .criteria import CIRCLE_CRITERIA, criterion_name
 
 __all__ = ["CircleFit", "fit_circle", "CIRCLE_CRITERIA"]
 
-#: Below this arc (degrees) the maximum inscribed circle is ill-posed.
-MIN_ARC_DEG = 90.0
+#: Below this arc (degrees) the maximum inscribed circle is ill-posed (the kernel's
+#: constant, gagekit-form ``circle::MIN_ARC_DEG``).
+MIN_ARC_DEG = _core.CIRCLE_MIN_ARC_DEG
 
 
 @dataclass(frozen=True)

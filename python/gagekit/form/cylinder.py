@@ -231,8 +231,9 @@ def fit_cylinder(
     )
 
 
-#: Below this arc (degrees) around the axis a maximum inscribed cylinder is ill-posed.
-MIN_ARC_DEG = 90.0
+#: Below this arc (degrees) around the axis a maximum inscribed cylinder is ill-posed
+#: (the kernel's constant, gagekit-form ``cylinder::MIN_ARC``).
+MIN_ARC_DEG = _core.CYLINDER_MIN_ARC_DEG
 
 
 def _arc_warnings(crit: str, arc: float) -> list[str]:

@@ -23,6 +23,14 @@ def gage_table(result: GageCheckResult) -> tuple[list[str], list[list]]:
     headers = ["gage", "region", "points", "filtered", "allowance before", "allowance after", "q", "slack"]
     rows = [[g.name, g.region, g.points, g.filtered_points, _f(g.allowance_before), _f(g.allowance_after),
              _f(g.q), _f(g.slack)] for g in result.gages]
+    if any(g.uncertainty is not None for g in result.gages):
+        headers += ["U (95 %)", "MC bias"]
+        for r, g in zip(rows, result.gages):
+            r += [_f(g.uncertainty["U"], 6), _f(g.uncertainty["bias"], 6)]
+    if result.decision is not None:
+        headers.append("decision")
+        for r, g in zip(rows, result.gages):
+            r.append(g.decision)
     return headers, rows
 
 
@@ -38,6 +46,19 @@ def summary_lines(result: GageCheckResult) -> list[str]:
     """Status, T*, the objective, groups and bound limits as text lines."""
     t = result.transform
     out = [f"status: {result.status}"]
+    if result.decision is not None:
+        rule = result.decision_rule or {}
+        out.append(f"decision: {result.decision} (rule {rule.get('name')}: {rule.get('description')})")
+        band = result.guard_band
+        if band is not None and band["guarded"]["status"] == "conforming":
+            g = band["guarded"]["transform"]
+            out.append("  proven at the guard-banded transform (every face keeps its guard band): "
+                       f"alpha {g['alpha']:.6f}, beta {g['beta']:.6f}, gamma {g['gamma']:.6f} rad, "
+                       f"dx {g['dx']:.4f}, dy {g['dy']:.4f}, dz {g['dz']:.4f} mm")
+    if result.monte_carlo is not None:
+        s = result.monte_carlo
+        out.append(f"uncertainty: {s['method']}, {s['trials']} trials, seed {s['seed']}, {s['stopping']}, "
+                   f"{s['active_points']} active points; noise sigma {s['model']['sigma']:.6g} mm")
     if result.zero_margin_gages:
         out.append(zero_margin_line(result))
     out += [

@@ -83,7 +83,7 @@ def active_set(points: Any, spec, alignment, stream: bool = False) -> np.ndarray
         ids = np.concatenate([r.index_array() for r in p.regions])
         pts = np.concatenate([r.point_array() for r in p.regions])
         _, first = np.unique(ids, return_index=True)
-        return np.ascontiguousarray(pts[np.sort(first)])
+        return np.ascontiguousarray(pts[first])  # in file order, as the whole read
     pts = np.asarray(points, dtype=np.float64)
     idx = np.unique(np.concatenate(classify(pts, boxes)))
     return np.ascontiguousarray(pts[idx])

@@ -64,7 +64,7 @@ def inspect(points: Any, spec: Union[PartSpec, str, Any]) -> InspectionResult:
     pts = as_points(points)  # the region kernel checks finiteness (naming the row)
     cad = None
     if spec.cad is not None:
-        from ..cad.features import CadContext
+        from ..cad.context import CadContext
 
         cad = CadContext.of_scan(spec.cad, pts)
     feats = extract(pts, spec.features, spec.source, cad)

@@ -124,7 +124,8 @@ MIN_POINTS = {"surface": 1, "plane": 3, "line": 2, "circle": 3, "sphere": 4, "cy
 _FEATURE_KEYS = {"name", "shape", "region", "outward", "kind", "direction", "axis", "sections", "datum_fit", "qif_id",
                  "faces", "band"}
 _TOL_KEYS = {"feature", "characteristic", "tolerance", "datums", "nominal", "angle", "name", "sections", "qif_id", "qpid",
-             "offset", "upper", "lower", "fit", "modifier", "angles", "envelope", "to", "material", "half_angle"}
+             "offset", "upper", "lower", "fit", "modifier", "angles", "envelope", "to", "material", "filter", "reference",
+             "half_angle"}
 _PART_KEYS = {"name", "datum_fit", "axis", "sections", "cad", "band", "standard"}
 _TOP_KEYS = {"part", "feature", "datums", "tolerance", "region", "qif"}
 #: the [qif] table of a drawing imported from a QIF model (``gagekit qif import``)
@@ -205,6 +206,10 @@ class Tolerance:
     # material conditions (ISO 2692): "MMC" / "LMC" of the toleranced feature; per datum "" / "M" / "L"
     material: Optional[str] = None
     datum_material: tuple[str, ...] = ()
+    # filtered roundness (ISO 12181, ISO 16610-21): "gaussian" / "none" when asked, its UPR, the reference circle
+    form_filter: Optional[str] = None
+    filter_upr: Optional[float] = None
+    reference: Optional[str] = None
 
     @property
     def upper_limit(self) -> Optional[float]:
@@ -523,7 +528,7 @@ def part_spec_from_dict(doc: Mapping[str, Any], source: str = "part") -> PartSpe
         sections = _sections(t["sections"], where) if "sections" in t else None
         ids = {key: _qif_ref(t.get(key, ""), where, key) for key in ("qif_id", "qpid")}
         tols.append(Tolerance(fname, char, tol, tuple(raw_d), npoint, ndir, angle, str(t.get("name", "")), sections, k, **ids,
-                              offset=offset, material=material, datum_material=dmat))
+                              offset=offset, material=material, datum_material=dmat, **_form_filter(t, char, where)))
     cad = part.get("cad")
     if cad is not None:
         if not isinstance(cad, str) or not cad:
@@ -534,6 +539,36 @@ def part_spec_from_dict(doc: Mapping[str, Any], source: str = "part") -> PartSpe
         cad = str(base / cad)
     return PartSpec(pname, features, datums, tuple(tols), source, _qif_table(doc.get("qif"), source), cad=cad,
                     standard=standard)
+
+
+#: ISO 12181-1 reference circles of a filtered roundness callout
+ROUNDNESS_REFERENCES = ("MZCI", "LSCI", "MCCI", "MICI")
+
+
+def _form_filter(t: Mapping, char: str, where: str) -> dict:
+    """``filter = { upr = 50 }`` (``type = "gaussian"`` implied; ``{ type = "none" }``
+    unfiltered) and ``reference = "MZCI"`` of a roundness callout (ISO 12181-2 / ISO 16610-21)."""
+    if "filter" not in t and "reference" not in t:
+        return {}
+    if char != "roundness":
+        raise ConfigError(f"{where}: 'filter' and 'reference' apply to roundness callouts (ISO 12181), not to {char}")
+    out: dict = {"form_filter": "none", "filter_upr": None, "reference": None}
+    if "filter" in t:
+        f = t["filter"]
+        if not isinstance(f, Mapping):
+            raise ConfigError(f"{where}: 'filter' must be a table {{ upr = 50 }} or {{ type = \"none\" }}")
+        _unknown(f, {"type", "upr"}, f"{where}, filter")
+        kind = _choice(f.get("type", "gaussian"), ("gaussian", "none"), where, "filter.type")
+        if kind == "gaussian":
+            if "upr" not in f:
+                raise ConfigError(f"{where}: 'filter' needs 'upr', the cut-off in undulations per revolution (15, 50, 150, 500, 1500)")
+            out["filter_upr"] = _number(f["upr"], where, "filter.upr", positive=True)
+        elif "upr" in f:
+            raise ConfigError(f"{where}: 'filter.upr' with type = \"none\"")
+        out["form_filter"] = kind
+    if "reference" in t:
+        out["reference"] = _choice(str(t["reference"]).upper(), ROUNDNESS_REFERENCES, where, "reference")
+    return out
 
 
 def _datum_modifiers(raw: list, datums: Mapping[str, DatumRef], features: Mapping[str, Feature],

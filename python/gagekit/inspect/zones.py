@@ -254,6 +254,8 @@ def _straightness(tol, fd, system):
 
 
 def _roundness(tol, fd, system):
+    if tol.form_filter is not None:
+        return _filtered_roundness(tol, fd)
     if fd.shape == "circle":
         d = _unit(fd.lsq().normal)
         xy = _plane_2d(fd.points - np.array(fd.lsq().center), d)
@@ -265,6 +267,29 @@ def _roundness(tol, fd, system):
     for _, xy in secs:
         worst = max(worst, float(fit_circle(xy, "mz").form_error))
     return Measurement(worst, "width", f"{len(secs)} sections", len(fd.points))
+
+
+def _filtered_roundness(tol, fd):
+    """Roundness with ``filter`` / ``reference`` (ISO 12181-1/-2): RONt of the profile filtered
+    by the ISO 16610-21 Gaussian filter of ``filter.upr`` (:func:`gagekit.roundness_parameters`)
+    against ``reference`` (default MZCI, the ISO 1101 zone); of a cylinder or cone, the
+    section of largest RONt. The row carries ``parameters``, ``filter`` and ``reference``."""
+    from ..form.parameters import roundness_parameters
+
+    reference = tol.reference or "MZCI"
+    if fd.shape == "circle":
+        d = _unit(fd.lsq().normal)
+        profiles = [_plane_2d(fd.points - np.array(fd.lsq().center), d)]
+    else:
+        profiles = [xy for _, xy in fd.section_circles(tol.sections or fd.spec.sections)]
+    results = [roundness_parameters(xy, tol.form_filter, tol.filter_upr, reference) for xy in profiles]
+    worst = max(results, key=lambda r: r.parameters["RONt"])
+    d = worst.to_dict()
+    element = "circle" if fd.shape == "circle" else f"{len(results)} sections"
+    extra = {"parameters": d["parameters"], "filter": {k: v for k, v in d["filter"].items() if k in ("type", "upr")},
+             "reference": d["reference"]}
+    return Measurement(worst.parameters["RONt"], "width", element, len(fd.points),
+                       {"eccentricity": d["eccentricity"], "samples": d["resampling"]["samples"]}, extra=extra)
 
 
 def _cylindricity(tol, fd, system):

@@ -49,6 +49,29 @@ def _table(result) -> str:
             f'(margin = tolerance - measured)</caption><thead><tr>{ths}</tr></thead><tbody>{"".join(body)}</tbody></table>')
 
 
+def _uncertainty_table(result) -> str:
+    """Each callout's Monte Carlo uncertainty and decision (issue 26), when computed."""
+    if result.monte_carlo is None:
+        return ""
+    s = result.monte_carlo
+    head = ["#", "feature", "characteristic", "measured (mm)", "u (mm)", "U 95 % (mm)", "95 % interval (mm)",
+            "MC bias (mm)", "decision"]
+    body = []
+    for k, t in enumerate(result.tolerances, 1):
+        u, dec = t.uncertainty, t.to_dict()["decision"]
+        cls = {"conforming": "ok", "nonconforming": "bad"}.get(dec, "")
+        cells = [str(k), html.escape(t.feature), html.escape(t.characteristic), _num(t.measured), _num(u["u"]), _num(u["U"]),
+                 f"[{_num(u['interval'][0])}, {_num(u['interval'][1])}]", f"{u['bias']:+.6f}"]
+        body.append("<tr>" + "".join(f'<td class="num">{c}</td>' if i in (0, 3, 4, 5, 7) else f"<td>{c}</td>"
+                                     for i, c in enumerate(cells)) + f'<td class="{cls}">{dec}</td></tr>')
+    ths = "".join(f"<th>{html.escape(h)}</th>" for h in head)
+    cap = (f"Uncertainty: {s['method']}, {s['trials']} simulated scans (seed {s['seed']}, {s['stopping']}), noise sigma "
+           f"{s['model']['sigma']:.6g} mm; interval: probabilistically symmetric 95 %; bias: mean of the trials minus "
+           "the measured value (a minimum-zone form error of noisy points is biased upward)")
+    return (f'<table class="callouts"><caption>{html.escape(cap)}</caption><thead><tr>{ths}</tr></thead>'
+            f'<tbody>{"".join(body)}</tbody></table>')
+
+
 def _frame_table(result) -> str:
     if result.frame is None:
         return ""
@@ -148,7 +171,11 @@ def add_inspection(report, result, title: str | None = None) -> None:
     report.text(f"{result.part}: {len(result.tolerances)} callouts, {n_fail} failing; status {result.status}. "
                 f"{result.n_points} scan points, inspected in {result.seconds:.2f} s.",
                 "ok" if result.status == "conforming" else "bad")
+    rule = result.rule
+    report.text(f"Decision rule: {rule.label} -- {rule.describe()}. Part decision: {result.decision}.",
+                "ok" if result.decision == "conforming" else "bad")
     report.raw(_table(result))
+    report.raw(_uncertainty_table(result))
     report.raw(_datum_table(result))
     report.raw(_frame_table(result))
     report.script("plotly", get_plotlyjs())

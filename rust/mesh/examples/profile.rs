@@ -54,6 +54,14 @@ fn scan(n: usize, seed: u64, bumpy: bool) -> Vec<f64> {
     p
 }
 
+/// CPU seconds used by the process so far (user + system, from /proc/self/stat).
+fn cpu() -> f64 {
+    let s = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
+    let f: Vec<&str> = s.rsplit(')').next().unwrap_or("").split_whitespace().collect();
+    let t = |i: usize| f.get(i).and_then(|v| v.parse::<f64>().ok()).unwrap_or(0.0);
+    (t(11) + t(12)) / 100.0
+}
+
 fn main() {
     let args: Vec<String> = std::env::args().collect();
     let n: usize = args.get(1).and_then(|s| s.parse().ok()).unwrap_or(1_400_000);
@@ -61,10 +69,22 @@ fn main() {
     let nv: usize = args.get(3).and_then(|s| s.parse().ok()).unwrap_or(500);
     let fit = args.get(4).map(|s| s == "fit").unwrap_or(false);
     let (v, t) = torus(nu, nv, fit);
-    let pts = scan(n, 0, fit);
+    let mut pts = scan(n, 0, fit);
+    if args.get(4).map(|s| s == "shuffle").unwrap_or(false) {
+        // a deterministic shuffle (Fisher-Yates, seeded)
+        let mut rng = ChaCha8Rng::seed_from_u64(5);
+        for i in (1..n).rev() {
+            let j = rng.random_range(0..=i);
+            for k in 0..3 {
+                pts.swap(3 * i + k, 3 * j + k);
+            }
+        }
+    }
+    let c0 = cpu();
     let t0 = Instant::now();
     let mesh = TriMesh::new(&v, &t).unwrap();
     let t_mesh = t0.elapsed().as_secs_f64();
+    println!("TriMesh::new cpu {:.2} s", cpu() - c0);
     let t1 = Instant::now();
     let _ = gagekit_mesh::bvh::Bvh::new(&mesh.bvh.corners);
     let t_bvh = t1.elapsed().as_secs_f64();
@@ -72,14 +92,18 @@ fn main() {
     if fit {
         let pose = Pose::from_params(&[300.0, -200.0, 150.0, 2.0, -1.0, 0.7]);
         let moved: Vec<f64> = pts.chunks_exact(3).flat_map(|p| pose.apply([p[0], p[1], p[2]])).collect();
+        let c2 = cpu();
         let t2 = Instant::now();
         let f = best_fit(&mesh, &moved, &FitOptions::default()).unwrap();
         println!("best_fit {:.3} s, {} iterations, rms {:.3} -> {:.5}, start {}", t2.elapsed().as_secs_f64(), f.iterations, f.rms_before, f.rms_after, f.start);
+        println!("best_fit cpu {:.2} s", cpu() - c2);
         return;
     }
+    let c2 = cpu();
     let t2 = Instant::now();
     let d = mesh.distances(&pts, &Query::default()).unwrap();
     let el = t2.elapsed().as_secs_f64();
+    println!("distances cpu {:.2} s ({:.0} ns/pt)", cpu() - c2, (cpu() - c2) * 1e9 / n as f64);
     let s: f64 = d.distance.iter().map(|x| x.abs()).sum();
     println!("distances {:.3} s ({:.1} ns/pt wall), sum|d| {:.6}", el, el * 1e9 / n as f64, s);
 }

@@ -417,3 +417,36 @@ fn coarse_to_fine_equals_the_full_robust_fit() {
     let worst = a.iter().zip(&c).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max);
     assert!(worst < 1e-6, "best_fit vs the full fit: {worst} mm");
 }
+
+/// The query order (input order for scan lines, a Morton sort otherwise) changes no
+/// distance: a scan-line cloud and the same points shuffled give the same values per point.
+#[test]
+fn shuffled_points_give_the_same_distances() {
+    let (v, t) = sphere_mesh(50, 10.0);
+    let mesh = TriMesh::new(&v, &t).unwrap();
+    let mut pts = Vec::new();
+    for i in 0..300 {
+        for j in 0..600 {
+            let (th, ph) = (std::f64::consts::PI * (i as f64 + 0.5) / 300.0, std::f64::consts::PI * j as f64 / 300.0);
+            let r = 10.0 + 0.05 * ((i * 7 + j * 13) % 11) as f64 - 0.25;
+            pts.extend([r * th.sin() * ph.cos(), r * th.sin() * ph.sin(), r * th.cos()]);
+        }
+    }
+    let n = pts.len() / 3;
+    assert!(crate::distance::query_order(&pts) == (0..n as u32).collect::<Vec<_>>(), "scan lines keep their order");
+    let mut rng = ChaCha8Rng::seed_from_u64(4);
+    let mut perm: Vec<usize> = (0..n).collect();
+    for i in (1..n).rev() {
+        perm.swap(i, rng.random_range(0..=i));
+    }
+    let shuffled: Vec<f64> = perm.iter().flat_map(|&i| [pts[3 * i], pts[3 * i + 1], pts[3 * i + 2]]).collect();
+    let mut order = crate::distance::query_order(&shuffled);
+    assert!(order != (0..n as u32).collect::<Vec<_>>(), "a shuffled cloud is sorted");
+    order.sort_unstable();
+    assert!(order == (0..n as u32).collect::<Vec<_>>(), "a permutation");
+    let a = mesh.distances(&pts, &Query::default()).unwrap();
+    let b = mesh.distances(&shuffled, &Query::default()).unwrap();
+    for (k, &i) in perm.iter().enumerate() {
+        assert!((a.distance[i] - b.distance[k]).abs() <= 1e-12, "point {i}: {} vs {}", a.distance[i], b.distance[k]);
+    }
+}

@@ -108,6 +108,10 @@ fn register_circles(m: &Bound<'_, PyModule>) -> PyResult<()> {
 // end circles --------------------------------------------------------------------------
 
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    // the kernels' constants, defined once in Rust (the Python facades read them here)
+    m.add("CIRCLE_MIN_ARC_DEG", gagekit_form::circle::MIN_ARC_DEG)?;
+    m.add("CYLINDER_MIN_ARC_DEG", gagekit_form::cylinder::MIN_ARC.to_degrees())?;
+    m.add("DEFAULT_MAX_TILT_DEG", gagekit_form::cylinder::DEFAULT_MAX_TILT.to_degrees())?;
     register_circles(m)?;
     register_3d(m)?;
     Ok(())

@@ -16,6 +16,7 @@ mod geometry;
 mod kinematics;
 mod mesh;
 mod nc;
+mod profile;
 mod sigint;
 
 use pyo3::prelude::*;
@@ -50,5 +51,6 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     gdt::register(m)?;
     design::register(m)?;
     mesh::register(m)?;
+    profile::register(m)?;
     testing(m.py(), m)
 }
