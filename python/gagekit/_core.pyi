@@ -492,16 +492,26 @@ class SphereResult:
 
 def form_sphere_fit(points: _F64, criterion: str) -> SphereResult: ...
 class ConeResult:
-    """A least-squares cone (half angle rad) with its certificate."""
-    point: list[float]
-    direction: list[float]
-    distance: float
+    """A cone (issue 25 §3): reference-section axis point, direction, apex, half angle rad."""
+    criterion: str
+    point: tuple[float, float, float]
+    direction: tuple[float, float, float]
+    apex: tuple[float, float, float]
     half_angle: float
+    fixed_angle: bool
+    radius: float
+    distance: float
+    r_in: float
+    r_out: float
+    control_in: list[int]
+    control_out: list[int]
+    gap: float
+    evaluations: int
     min_distance: float
     max_distance: float
     form_error: float
 
-def form_cone_lsq(points: _F64) -> ConeResult: ...
+def form_cone_fit(points: _F64, criterion: str, half_angle: Optional[float] = None) -> ConeResult: ...
 
 # -------------------------------------------------------------------------------- gdt
 _V3 = tuple[float, float, float]
