@@ -18,6 +18,9 @@ Form (no datums)
     across the least-squares axis, the largest -- width.
   cylindricity (ISO 12180): two coaxial cylinders of least radial separation -- width.
   sphericity: two concentric spheres of least radial separation -- width.
+  conicity (the dissertation's Sec. 7.2 item 6; ISO 1101 profile of a conical surface
+    without datums): two coaxial cones of the same half angle -- free, or the basic
+    ``half_angle`` -- of least separation measured normal to the cone surface -- width.
 
 Orientation (ISO 1101 Sec. 18.9-18.11), the zone's orientation fixed by the datums as
 far as they fix it and free otherwise; the toleranced element is the surface of a plane
@@ -70,7 +73,7 @@ import numpy as np
 
 from .. import _core
 from ..errors import ConfigError, DegenerateGeometryError
-from ..form import fit_circle, fit_cylinder, fit_line, fit_sphere
+from ..form import fit_circle, fit_cone, fit_cylinder, fit_line, fit_sphere
 from .datums import DatumSystem, SimulatedDatum
 from .features import FeatureData, _basis, _unit, cone_dir, golden_min
 from .spec import Tolerance
@@ -305,6 +308,13 @@ def _sphericity(tol, fd, system):
     else:
         fit = fit_sphere(fd.points, "minimum-zone")
     return Measurement(float(fit.outer_radius - fit.inner_radius), "width", "surface", len(fd.points), {"center": list(fit.center)})
+
+
+def _conicity(tol, fd, system):
+    fit = fit_cone(fd.points, "minimum-zone", angle=tol.angle)
+    return Measurement(float(fit.form_error), "width", "surface (normal to the cone)", len(fd.points),
+                       {"axis_point": list(fit.point), "axis_direction": list(fit.direction), "apex": list(fit.apex),
+                        "half_angle_deg": math.degrees(fit.half_angle), "fixed_angle": fit.fixed_angle})
 
 
 def _element(fd: FeatureData) -> tuple[np.ndarray, str]:
@@ -553,6 +563,7 @@ _DISPATCH = {
     "roundness": _roundness,
     "cylindricity": _cylindricity,
     "sphericity": _sphericity,
+    "conicity": _conicity,
     "parallelism": _orientation,
     "perpendicularity": _orientation,
     "angularity": _orientation,
