@@ -17,6 +17,7 @@ from hypothesis import strategies as st
 import gagekit
 from gagekit.errors import ConfigError, DegenerateGeometryError, InvalidInputError
 from gagekit.samples import sample_path
+from test_form3d_cylinder import rotation
 
 CRITERIA = ("least-squares", "minimum-zone", "min-circumscribed", "max-inscribed")
 P0 = np.array([12.0, -7.0, 30.0])
@@ -104,13 +105,6 @@ def test_fixed_angle_equals_the_free_fit_at_the_true_angle():
         assert np.allclose(fixed.apex, free.apex, atol=1e-8), crit
 
 
-def _rotation(a, b, g):
-    rz = np.array([[np.cos(a), -np.sin(a), 0], [np.sin(a), np.cos(a), 0], [0, 0, 1]])
-    ry = np.array([[np.cos(b), 0, np.sin(b)], [0, 1, 0], [-np.sin(b), 0, np.cos(b)]])
-    rx = np.array([[1, 0, 0], [0, np.cos(g), -np.sin(g)], [0, np.sin(g), np.cos(g)]])
-    return rz @ ry @ rx
-
-
 @settings(max_examples=10, deadline=None)
 @given(st.tuples(*[st.floats(-3.0, 3.0)] * 3), st.tuples(*[st.floats(-1000.0, 1000.0)] * 3), st.integers(0, 10_000))
 def test_invariant_under_a_rigid_motion(angles, shift, seed):
@@ -118,7 +112,7 @@ def test_invariant_under_a_rigid_motion(angles, shift, seed):
     c, ph = rng.uniform(0.001, 0.004, 3), rng.uniform(0, 2 * np.pi, 3)
     p = cone_points(math.radians(rng.uniform(8, 50)), rng.uniform(5, 30),
                     lambda t, z: c[0] * np.cos(3 * t + ph[0]) + c[1] * np.cos(2 * t + ph[1]) + c[2] * np.sin(0.2 * z + ph[2]))
-    rot = _rotation(*angles)
+    rot = rotation(*angles)
     moved = p @ rot.T + np.array(shift)
     for crit in ("least-squares", "minimum-zone"):
         f0, f1 = gagekit.fit_cone(p, crit), gagekit.fit_cone(moved, crit)

@@ -19,7 +19,7 @@ from typing import Any, Optional
 from .. import _core
 from ..errors import ConfigError
 from .criteria import SHAPE_CRITERIA, criterion_name
-from .fits import Certificate, _cert, _fit_dict, _points, _vec
+from .fits import Certificate, _cert, _fit_dict, _points, _radii, _vec
 
 __all__ = ["ConeFit", "fit_cone"]
 
@@ -71,12 +71,9 @@ class ConeFit:
         return self.radius + z * math.tan(self.half_angle)
 
     def to_dict(self) -> dict[str, Any]:
-        radii: dict[str, Any] = {"radius": self.radius}
-        if self.criterion == "minimum-zone":
-            radii.update(inner_radius=self.inner_radius, outer_radius=self.outer_radius)
         d = _fit_dict(
             self,
-            **radii,
+            **_radii(self),
             axis_point=list(self.point),
             axis_direction=list(self.direction),
             apex=list(self.apex),

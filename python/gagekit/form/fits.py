@@ -76,6 +76,15 @@ def _fit_dict(fit: Any, **fields: Any) -> dict[str, Any]:
     }
 
 
+def _radii(fit: Any) -> dict[str, Any]:
+    """The radius keys of an axis fit's JSON (cylinders, cones): ``radius``, and for the
+    minimum zone the zone's ``inner_radius`` / ``outer_radius``."""
+    radii: dict[str, Any] = {"radius": fit.radius}
+    if fit.criterion == "minimum-zone":
+        radii.update(inner_radius=fit.inner_radius, outer_radius=fit.outer_radius)
+    return radii
+
+
 @dataclass(frozen=True)
 class LineFit:
     """A fitted line. ``certificate``: signed distances (2-D) or distances (3-D) to the line;
