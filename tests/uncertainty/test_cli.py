@@ -62,3 +62,33 @@ def test_form_fit_uncertainty_json(tmp_path):
     again = json.loads(_run("form", "fit", "circle", data_path("round.csv"), "-c", "lsq", "--uncertainty", "50",
                             "--measurement", m, "--seed", "4", "--threads", "1", "--json").output)
     assert again["uncertainty"] == d["uncertainty"]
+
+
+def test_compare_uncertainty_json():
+    r = _run("compare", BRACKET, data_path("bracket.obj"), "--align", "none", "--uncertainty", "10", "--noise", "0.002",
+             "--json")
+    assert r.exit_code == 0, r.stderr
+    d = json.loads(r.output)
+    u = d["uncertainty"]["deviations.max"]
+    assert u["trials"] == 10 and u["U"] > 0 and d["monte_carlo"]["model"]["sigma"] == 0.002
+    assert any(k.startswith("faces.") for k in d["uncertainty"])
+
+
+def test_a_streamed_scan_gets_the_same_uncertainties_as_a_whole_read(tmp_path):
+    import sys as _sys
+    from pathlib import Path
+
+    import numpy as np
+
+    _sys.path.insert(0, str(Path(__file__).parent))
+    from coverage_part import part_toml, scan
+
+    np.save(tmp_path / "scan.npy", scan(np.random.default_rng(2)))
+    (tmp_path / "part.toml").write_text(part_toml())
+    args = ["inspect", tmp_path / "scan.npy", tmp_path / "part.toml", "--uncertainty", "12", "--noise", "0.005", "--json"]
+    whole = json.loads(_run(*args).output)
+    streamed = _run(*args, "--chunk-points", "97")
+    assert streamed.exit_code == 0, streamed.stderr
+    s = json.loads(streamed.output)
+    assert [t["uncertainty"] for t in s["tolerances"]] == [t["uncertainty"] for t in whole["tolerances"]]
+    assert [t["decision"] for t in s["tolerances"]] == [t["decision"] for t in whole["tolerances"]]
