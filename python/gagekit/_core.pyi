@@ -492,16 +492,26 @@ class SphereResult:
 
 def form_sphere_fit(points: _F64, criterion: str) -> SphereResult: ...
 class ConeResult:
-    """A least-squares cone (half angle rad) with its certificate."""
-    point: list[float]
-    direction: list[float]
-    distance: float
+    """A cone (issue 25 §3): reference-section axis point, direction, apex, half angle rad."""
+    criterion: str
+    point: tuple[float, float, float]
+    direction: tuple[float, float, float]
+    apex: tuple[float, float, float]
     half_angle: float
+    fixed_angle: bool
+    radius: float
+    distance: float
+    r_in: float
+    r_out: float
+    control_in: list[int]
+    control_out: list[int]
+    gap: float
+    evaluations: int
     min_distance: float
     max_distance: float
     form_error: float
 
-def form_cone_lsq(points: _F64) -> ConeResult: ...
+def form_cone_fit(points: _F64, criterion: str, half_angle: Optional[float] = None) -> ConeResult: ...
 
 # -------------------------------------------------------------------------------- gdt
 _V3 = tuple[float, float, float]
@@ -644,8 +654,9 @@ def form_roundness(
 ) -> RoundnessResult: ...
 def form_straightness(
     points: _F64, cutoff: Optional[float] = None, reference: str = "LSLI", step: Optional[float] = None,
-    max_gap: Optional[float] = None,
+    max_gap: Optional[float] = None, spline: bool = False,
 ) -> StraightnessResult: ...
 def form_flatness(points: _F64, reference: str = "LSPL", up: Optional[tuple[float, float, float]] = None) -> FlatnessResult: ...
 def profile_gaussian_closed(radii: _F64, upr: float) -> _F64: ...
 def profile_gaussian_open(values_: _F64, step: float, cutoff: float) -> tuple[int, _F64]: ...
+def profile_spline_open(values_: _F64, step: float, cutoff: float) -> _F64: ...

@@ -29,7 +29,7 @@ def _rounds(tmp_path, n=2):
     return files
 
 
-@pytest.mark.parametrize("shape, criterion", [("circle", "bogus"), ("plane", "max-inscribed"), ("cone", "minimum-zone")])
+@pytest.mark.parametrize("shape, criterion", [("circle", "bogus"), ("plane", "max-inscribed"), ("line", "min-circumscribed")])
 def test_form_batch_refuses_an_unknown_criterion_up_front(tmp_path, shape, criterion):
     db = tmp_path / "r.db"
     p = gk("form", "batch", shape, *_rounds(tmp_path), "-c", criterion, "--db", f"sqlite:///{db}", "--json")

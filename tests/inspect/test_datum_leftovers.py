@@ -139,7 +139,7 @@ def test_flatness_is_the_exact_minimum_width():
 def test_the_free_turn_is_solved_exactly(seed):
     """Position with a free rotation about z: the exact envelope minimum is never above a
     dense sampling of the turn, and within its resolution below it."""
-    from gagekit.inspect.zones import _min_max_sinusoids
+    from gagekit.inspect.zone_tools import _min_max_sinusoids
 
     rng = np.random.default_rng(seed)
     m = int(rng.integers(1, 12))

@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+import math
 import re
-from typing import Any, Callable, Sequence
+from typing import Any, Callable, Optional, Sequence
 
 import typer
 
 from .._util import check_finite_result, dumps
+from ..errors import InvalidInputError
 from ..report.text import table
 
 __all__ = ["JSON_OPTION", "emit", "table", "warn"]
@@ -133,3 +135,32 @@ def emit(result: Any, as_json: bool, human: Callable[[Any], str], warnings: Sequ
         typer.echo(human(result))
     for w in dict.fromkeys(warnings):
         warn(w)
+
+
+def number_option(text: str, what: str) -> float:
+    """A finite number given on the command line (``what`` names the option)."""
+    try:
+        v = float(text)
+    except ValueError:
+        raise InvalidInputError(f"{what}: '{text}' is not a number") from None
+    if not math.isfinite(v):
+        raise InvalidInputError(f"{what}: '{text}' is not a finite number")
+    return v
+
+
+def parse_assignments(text: Optional[str], what: str) -> dict:
+    """'B=0,W=-500' -> {'B': 0.0, 'W': -500.0}."""
+    out: dict = {}
+    if not text:
+        return out
+    for part in text.split(","):
+        part = part.strip()
+        if not part:
+            continue
+        if "=" not in part:
+            raise InvalidInputError(f"{what}: expected NAME=VALUE items separated by commas, got '{part}'")
+        k, v = (s.strip() for s in part.split("=", 1))
+        if k in out:
+            raise InvalidInputError(f"{what}: '{k}' is given twice")
+        out[k] = v
+    return out

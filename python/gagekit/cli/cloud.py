@@ -111,7 +111,7 @@ def regions(
     from ..cloud.stream import CloudStream
     from ..cloud.workflow import cut_and_filter, cut_and_filter_stream
     from ..gage.analysis import region_boxes, region_boxes_stream
-    from ..gage.spec_file import parse_region_spec
+    from ..gage.spec import parse_region_spec
 
     doc = load_toml(regions_toml, "regions")
     aligned = isinstance(doc, dict) and "alignment" in doc

@@ -70,10 +70,11 @@ def _fmt_vec(v: Any) -> str:
 def _human(r: Any) -> str:
     d = r.to_dict()
     rows = []
-    for key in ("radius", "inner_radius", "outer_radius", "form_error", "theta", "phi", "tilt_deg", "distance", "apex_angle"):
+    for key in ("radius", "inner_radius", "outer_radius", "form_error", "theta", "phi", "tilt_deg", "distance", "apex_angle",
+                "half_angle_deg", "gap"):
         if d.get(key) is not None:
             rows.append([key, f"{d[key]:.9f}"])
-    for key in ("center", "normal", "point", "direction", "axis_point", "axis_direction"):
+    for key in ("center", "normal", "point", "direction", "axis_point", "axis_direction", "apex"):
         if key in d:
             rows.append([key, _fmt_vec(d[key])])
     if d.get("control_points"):
@@ -112,10 +113,11 @@ def fit(
     criterion: str = typer.Option(
         "least-squares", "--criterion", "-c",
         help="least-squares (lsq), min-circumscribed (mc), max-inscribed (mi) or minimum-zone (mz); "
-             "lines and planes: least-squares or minimum-zone; cones: least-squares"),
+             "lines and planes: least-squares or minimum-zone"),
     seed: int = seed_option(help="Seed of the particle swarm (cylinders, 3-D lines)"),
     axis: Optional[str] = AXIS_OPTION,
     max_tilt: float = TILT_OPTION,
+    angle: Optional[float] = typer.Option(None, "--angle", help="Cones: fix the half apex angle to DEG, in (0, 90) (default: free)"),
     units: Optional[str] = UNITS_OPTION,
     as_json: bool = JSON_OPTION,
     uncertainty: Optional[str] = UNCERTAINTY_OPTION,
@@ -130,13 +132,14 @@ def fit(
     mc = uncertainty_settings(uncertainty, noise, measurement)
     ax = _axis(axis)
     if mc is None:
-        r = fit_file(shape, file, criterion, seed=seed, units=units, axis=ax, max_tilt=max_tilt)
+        r = fit_file(shape, file, criterion, seed=seed, units=units, axis=ax, max_tilt=max_tilt, angle=angle)
         emit(r, as_json, _human, warnings=getattr(r, "warnings", ()))
         return
     from ..uncertainty import fit_uncertainty
 
     pts = _read_xy(file, units) if normalize_shape(shape) == "circle" else load_points(file, units)
-    r, res = fit_uncertainty(lambda p: fit_file(shape, file, criterion, seed=seed, points=p, axis=ax, max_tilt=max_tilt),
+    r, res = fit_uncertainty(lambda p: fit_file(shape, file, criterion, seed=seed, points=p, axis=ax, max_tilt=max_tilt,
+                                                       angle=angle),
                              pts, mc[1], mc[0], seed=seed, threads=threads)
     out = {**r.to_dict(), "uncertainty": res.to_dict(), "monte_carlo": res.settings()}
 

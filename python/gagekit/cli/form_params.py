@@ -86,15 +86,15 @@ def roundness_cmd(
 
 def straightness_cmd(
     file: Path = typer.Argument(..., help="Profile points x,y (mm), in scan order along the line."),
-    filter: str = typer.Option("none", "--filter", help="gaussian (ISO 16610-21, with --cutoff) or none."),
+    filter: str = typer.Option("none", "--filter", help="gaussian (ISO 16610-21), spline (ISO 16610-22), with --cutoff; or none."),
     cutoff: Optional[float] = typer.Option(None, "--cutoff", callback=_positive, help="Cut-off length, mm (e.g. 0.8, 2.5, 8)."),
     reference: str = typer.Option("LSLI", "--reference", help="Reference line: LSLI (least squares) or MZLI (minimum zone)."),
     step: Optional[float] = typer.Option(None, "--step", callback=_positive, help="Resampling step, mm (default: the mean spacing)."),
     units: Optional[str] = UNITS_OPTION,
     as_json: bool = JSON_OPTION,
 ) -> None:
-    """Straightness parameters STRt, STRp, STRv, STRq (ISO 12780-1) of a 2-D profile; filtered:
-    one cut-off dropped at each end."""
+    """Straightness parameters STRt, STRp, STRv, STRq (ISO 12780-1) of a 2-D profile; Gaussian
+    filter: one cut-off dropped at each end; spline filter: nothing dropped."""
     from ..form.files import read_xy
     from ..form.parameters import straightness_parameters
 
@@ -102,7 +102,9 @@ def straightness_cmd(
 
     def human(r) -> str:
         f = r.filter
-        filt = "unfiltered" if f["type"] == "none" else f"Gaussian filter, cut-off {f['cutoff_mm']:g} mm (ends dropped)"
+        filt = "unfiltered" if f["type"] == "none" else (
+            f"Gaussian filter, cut-off {f['cutoff_mm']:g} mm (ends dropped)" if f["type"] == "gaussian"
+            else f"cubic spline filter (ISO 16610-22), cut-off {f['cutoff_mm']:g} mm")
         return "\n".join([f"{file}: {r.n_points} points, {filt}, reference {r.reference}, {r.length:.4f} mm evaluated",
                           _params_table(r.parameters)])
 

@@ -46,7 +46,7 @@ def check(
     """
     from ..cloud import write_points
     from ..gage import GageSpec, check_gages, corrected_cloud
-    from ..gage.report import human
+    from ..gage.summary import human
     from ..report.gage import write_report
     from .._files import output_dir, output_file
 

@@ -5,45 +5,16 @@ Registered on the ``machine`` sub-application by :func:`register`, called in ``c
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 from typing import Optional
 
 import typer
 
 from ..errors import InvalidInputError
-from ._common import JSON_OPTION, emit, seed_option
+from ._common import JSON_OPTION, emit, number_option as _number, parse_assignments, seed_option
 from .machine import MACHINE_ARG, _warnings_to_stderr
 
 CAL_ARG = typer.Argument(..., help="Calibration JSON from identify --out.")
-
-
-def _number(text: str, what: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise InvalidInputError(f"{what}: '{text}' is not a number") from None
-    if not math.isfinite(v):
-        raise InvalidInputError(f"{what}: '{text}' is not a finite number")
-    return v
-
-
-def parse_assignments(text: Optional[str], what: str) -> dict:
-    """'B=0,W=-500' -> {'B': 0.0, 'W': -500.0}."""
-    out: dict = {}
-    if not text:
-        return out
-    for part in text.split(","):
-        part = part.strip()
-        if not part:
-            continue
-        if "=" not in part:
-            raise InvalidInputError(f"{what}: expected NAME=VALUE items separated by commas, got '{part}'")
-        k, v = (s.strip() for s in part.split("=", 1))
-        if k in out:
-            raise InvalidInputError(f"{what}: '{k}' is given twice")
-        out[k] = v
-    return out
 
 
 def _per_axis_option(text: Optional[str], what: str):

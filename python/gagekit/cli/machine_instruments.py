@@ -46,7 +46,7 @@ def ballbar_cmd(
         from ..errors import InvalidInputError
         from ..machine import load_machine
         from ..machine.ballbar import group_sensitivities
-        from .machine_export import _number, parse_assignments
+        from ._common import number_option as _number, parse_assignments
 
         if machine_file is None or at is None:
             raise InvalidInputError("--machine and --at go together (the circle centre's joint positions)")
@@ -190,7 +190,7 @@ def design_instrument_cmd(m, instrument, points, criterion, sphere, at, radius, 
     from .._files import write_text
     from ..errors import InvalidInputError
     from ..machine.instrument_design import design_instrument
-    from .machine_export import _number, parse_assignments
+    from ._common import number_option as _number, parse_assignments
 
     fixed = {k: _number(v, f"--at {k}") for k, v in parse_assignments(at, "--at").items()}
     s = None

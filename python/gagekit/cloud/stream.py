@@ -226,28 +226,19 @@ def _open_format(p: Path, suffix: str, m: int):
         block = max(1 << 16, m * 32)  # about one point per 32 bytes of text
 
         def text_chunks() -> Iterator[np.ndarray]:
-            try:
-                s = _core.cloud_ascii_chunks(str(p), 3, 1 if nist else 0, block)
-                while (c := s.next_chunk()) is not None:
-                    yield c
-            except InvalidInputError as exc:
-                raise FileFormatError(str(exc)) from None
+            s = _core.cloud_ascii_chunks(str(p), 3, 1 if nist else 0, block)
+            while (c := s.next_chunk()) is not None:
+                yield c
 
         return (Raw(empty, "nist-ds" if nist else "ascii"), text_chunks, None, True,
                 (lambda n: _nist_count(p, n)) if nist else None)
     if suffix == ".ply":
-        try:
-            s0 = _core.cloud_ply_chunks(str(p))
-        except InvalidInputError as exc:
-            raise FileFormatError(str(exc)) from None
+        s0 = _core.cloud_ply_chunks(str(p))
         if s0 is not None:
             def ply_chunks() -> Iterator[np.ndarray]:
-                try:
-                    s = _core.cloud_ply_chunks(str(p))
-                    while s is not None and (c := s.next_chunk(m)) is not None:
-                        yield c
-                except InvalidInputError as exc:
-                    raise FileFormatError(str(exc)) from None
+                s = _core.cloud_ply_chunks(str(p))
+                while s is not None and (c := s.next_chunk(m)) is not None:
+                    yield c
 
             return Raw(empty, f"ply {_ply_head(p)[1]}"), ply_chunks, int(s0.count), True, None
         raw = ply.read(p, 3)

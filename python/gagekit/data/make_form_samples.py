@@ -12,7 +12,8 @@ degrees from z towards x, 8 sections z = 5..40 of 36 points; 3 lobes of 5 um, a 
 ``ball.csv``: a 25.4 mm reference ball about (100, 50, 20), 200 points on its upper
 hemisphere (a probe cannot reach the stem side), 2 lobes of 0.3 um, noise 0.2 um.
 ``cone.csv``: a shaft cone with a full apex angle of 60 degrees, axis z through the origin,
-apex at z = 40, 6 sections z = 5..30 of 30 points; noise 1 um.
+apex at z = 40, 6 sections z = 5..30 of 30 points; noise 1 um normal to the surface (the
+README's ``gagekit form fit cone`` lines: half angle 30 degrees to 1e-3, conicity about 5 um).
 ``program.nc``: a short 3-axis program for the example machine (``gagekit data path
 machine``): a rapid to the start, then feed moves around a pocket, with the rotary table B
 and the ram W fixed.

@@ -1,4 +1,4 @@
-"""Form of lines, planes, circles, spheres and cylinders (Ch. 6)."""
+"""Form of lines, planes, circles, spheres, cylinders (Ch. 6) and cones (Sec. 7.2 item 6)."""
 
 # circles
 from .circle import CIRCLE_CRITERIA, CircleFit, fit_circle
@@ -6,6 +6,8 @@ from .circle import CIRCLE_CRITERIA, CircleFit, fit_circle
 # 3-D fits
 from .cylinder import *  # noqa: F401,F403
 from .cylinder import __all__ as _cylinder_all
+from .cone import *  # noqa: F401,F403
+from .cone import __all__ as _cone_all
 from .fits import *  # noqa: F401,F403
 from .fits import __all__ as _fits_all
 
@@ -21,5 +23,6 @@ __all__: list[str] = [
     # 3-D fits
     *_fits_all,
     *_cylinder_all,
+    *_cone_all,
     *_parameters_all,
 ]

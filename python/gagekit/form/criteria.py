@@ -31,7 +31,7 @@ SHAPE_CRITERIA: dict[str, tuple[str, ...]] = {
     "plane": ("least-squares", "minimum-zone"),
     "sphere": ("least-squares", "min-circumscribed", "max-inscribed", "minimum-zone"),
     "cylinder": ("least-squares", "min-circumscribed", "max-inscribed", "minimum-zone"),
-    "cone": ("least-squares",),
+    "cone": ("least-squares", "min-circumscribed", "max-inscribed", "minimum-zone"),
 }
 
 

@@ -20,7 +20,7 @@ import numpy as np
 from .. import _core
 from ..errors import ConfigError
 from .criteria import SHAPE_CRITERIA, criterion_name
-from .fits import Certificate, _cert, _fit_dict, _points, _vec
+from .fits import Certificate, _cert, _fit_dict, _points, _radii, _vec
 from .search import DEFAULT_MAX_TILT, outside_warning, search_settings
 
 __all__ = ["CylinderFit", "fit_cylinder", "axis_angles", "DEFAULT_MAX_TILT"]
@@ -86,12 +86,9 @@ class CylinderFit:
         return self.direction
 
     def to_dict(self) -> dict[str, Any]:
-        radii: dict[str, Any] = {"radius": self.radius}
-        if self.criterion == "minimum-zone":
-            radii.update(inner_radius=self.inner_radius, outer_radius=self.outer_radius)
         d = _fit_dict(
             self,
-            **radii,
+            **_radii(self),
             axis_point=list(self.point),
             axis_direction=list(self.direction),
             theta=self.theta,

@@ -75,16 +75,19 @@ def normalize_shape(shape: str) -> str:
 
 def fit_file(shape: str, path: Union[str, Path], criterion: str = "least-squares", seed: int = 0,
              points: Optional[np.ndarray] = None, units: Optional[str] = None,
-             axis: Optional[Any] = None, max_tilt: float = 10.0) -> Any:
+             axis: Optional[Any] = None, max_tilt: float = 10.0, angle: Optional[float] = None) -> Any:
     """Fit ``shape`` to the points of ``path`` with ``criterion`` (seeded swarm for cylinders
     and 3-D lines, searched within ``max_tilt`` degrees of ``axis`` or the least-squares axis).
 
     ``points`` skips the reading (already read the way :func:`read_xy` / :func:`load_points` do);
-    ``units`` overrides the unit of the file (see :func:`gagekit.read_points`).
+    ``units`` overrides the unit of the file (see :func:`gagekit.read_points`); ``angle``
+    fixes a cone's half angle (degrees).
     """
     from .. import form
 
     name = normalize_shape(shape)
+    if angle is not None and name != "cone":
+        raise ConfigError(f"--angle (a fixed half angle) applies to cones only, not to a {name}")
     if name == "circle":  # the circle reader drops a constant coordinate; else any pose
         return form.fit_circle(read_xy(path, units) if points is None else points, criterion)
     pts = load_points(path, units) if points is None else points
@@ -96,4 +99,4 @@ def fit_file(shape: str, path: Union[str, Path], criterion: str = "least-squares
         return form.fit_sphere(pts, criterion)
     if name == "cylinder":
         return form.fit_cylinder(pts, criterion, seed=seed, axis=axis, max_tilt=max_tilt)
-    return form.fit_cone(pts, criterion)
+    return form.fit_cone(pts, criterion, angle=angle)

@@ -30,8 +30,6 @@ __all__ = [
     "PlaneFit",
     "SphereFit",
     "Circle3DFit",
-    "ConeFit",
-    "fit_cone",
     "fit_line",
     "fit_plane",
     "fit_sphere",
@@ -76,6 +74,15 @@ def _fit_dict(fit: Any, **fields: Any) -> dict[str, Any]:
         **fields,
         "certificate": fit.certificate.to_dict(),
     }
+
+
+def _radii(fit: Any) -> dict[str, Any]:
+    """The radius keys of an axis fit's JSON (cylinders, cones): ``radius``, and for the
+    minimum zone the zone's ``inner_radius`` / ``outer_radius``."""
+    radii: dict[str, Any] = {"radius": fit.radius}
+    if fit.criterion == "minimum-zone":
+        radii.update(inner_radius=fit.inner_radius, outer_radius=fit.outer_radius)
+    return radii
 
 
 @dataclass(frozen=True)
@@ -298,43 +305,3 @@ def fit_circle_3d(points: Any, criterion: str = "least-squares") -> Circle3DFit:
     pts = _points(points, (3,), "3-D circle")
     ls = _core.form_circle3d_lsq(pts)
     return Circle3DFit(crit, len(pts), _vec(ls.center), _vec(ls.normal), float(ls.radius), float(ls.form_error), _cert(ls))
-
-
-@dataclass(frozen=True)
-class ConeFit:
-    """A least-squares cone: ``point`` on the axis (nearest the centroid), ``direction``
-    (the radius grows along it), ``distance`` from ``point`` to the surface, ``apex_angle``
-    (full, rad). ``certificate``: signed orthogonal distances to the surface (positive
-    outside); ``form_error`` = max - min."""
-
-    criterion: str
-    n_points: int
-    point: tuple[float, float, float]
-    direction: tuple[float, float, float]
-    distance: float
-    apex_angle: float
-    form_error: float
-    certificate: Certificate
-    shape: str = field(default="cone", init=False)
-
-    def to_dict(self) -> dict[str, Any]:
-        return _fit_dict(
-            self,
-            axis_point=list(self.point),
-            axis_direction=list(self.direction),
-            distance=self.distance,
-            apex_angle=self.apex_angle,
-        )
-
-
-def fit_cone(points: Any, criterion: str = "least-squares") -> ConeFit:
-    """Least-squares cone of (n, 3) points: orthogonal distances
-    d = rho cos(psi) - z sin(psi) - D (Levenberg-Marquardt from algebraic cones about the
-    principal axes); as the NIST reference fits define it."""
-    crit = criterion_name(criterion, SHAPE_CRITERIA["cone"], "cone")
-    pts = _points(points, (3,), "cone")
-    c = _core.form_cone_lsq(pts)
-    return ConeFit(
-        crit, len(pts), _vec(c.point), _vec(c.direction), float(c.distance), 2.0 * float(c.half_angle),
-        float(c.form_error), _cert(c),
-    )

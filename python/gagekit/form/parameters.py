@@ -5,10 +5,12 @@
   undulations per revolution (ISO 12181-2: 15, 50, 150, 500, 1500 UPR), against the LSCI
   (default), MZCI, MCCI or MICI; eccentricity and the harmonic spectrum.
 - :func:`straightness_parameters`: STRt, STRp, STRv, STRq (ISO 12780-1) of a 2-D profile,
-  unfiltered or through the open-profile Gaussian filter (cut-off length, ends dropped).
+  unfiltered or through the open-profile Gaussian filter (cut-off length, ends dropped) or
+  the ISO 16610-22 cubic spline filter (nothing dropped).
 - :func:`flatness_parameters`: FLTt, FLTp, FLTv, FLTq (ISO 12781-1), unfiltered.
 - :func:`cylindricity_parameters`: CYLt, CYLp, CYLv (ISO 12180-1), unfiltered.
-- :func:`gaussian_filter_closed`, :func:`gaussian_filter_open`: the filters themselves.
+- :func:`gaussian_filter_closed`, :func:`gaussian_filter_open`, :func:`spline_filter_open`
+  (ISO 16610-22 cubic spline, open profiles): the filters themselves.
 
 How a scanned section is made evenly spaced (the filters need it): its least-squares
 centre is found (the exact geometric fit), each point's angle and radius about it are
@@ -45,6 +47,7 @@ __all__ = [
     "cylindricity_parameters",
     "gaussian_filter_closed",
     "gaussian_filter_open",
+    "spline_filter_open",
     "gaussian_transmission",
     "STANDARD_UPR",
     "ROUNDNESS_REFERENCES",
@@ -225,20 +228,27 @@ def straightness_parameters(points: Any, filter: str = "none", cutoff: Optional[
                             step: Optional[float] = None, max_gap: Optional[float] = None) -> StraightnessParameters:
     """STRt, STRp, STRv, STRq (ISO 12780-1) of (n, 2) points. ``filter="gaussian"`` with
     ``cutoff`` (mm): resampled at ``step`` (default the mean spacing, at most cutoff/7) and
-    filtered (ISO 16610-21), one cut-off dropped at each end (ISO 16610-28)."""
+    filtered (ISO 16610-21), one cut-off dropped at each end (ISO 16610-28);
+    ``filter="spline"``: the ISO 16610-22 cubic spline filter, nothing dropped."""
     kind = str(filter).strip().lower()
     if kind in ("none", "off", "unfiltered"):
         lc = None
-    elif kind in ("gaussian", "gauss"):
+    elif kind in ("gaussian", "gauss", "spline"):
         if cutoff is None:
-            raise ConfigError("a Gaussian filter of an open profile needs its cut-off length (mm), e.g. 2.5")
+            raise ConfigError(f"a {kind} filter of an open profile needs its cut-off length (mm), e.g. 2.5")
         lc = float(cutoff)
     else:
-        raise ConfigError(f"unknown filter {filter!r}; choose gaussian or none")
+        raise ConfigError(f"unknown filter {filter!r}; choose gaussian, spline or none")
     pts = _points(points, (2,), "straightness")
-    r = _core.form_straightness(pts, lc, str(reference), step, max_gap)
-    filt: dict[str, Any] = {"type": "none"} if lc is None else {"type": "gaussian", "cutoff_mm": lc, "standard": "ISO 16610-21",
-                                                                  "ends": "one cut-off dropped at each end"}
+    spline = kind == "spline"
+    r = _core.form_straightness(pts, lc, str(reference), step, max_gap, spline)
+    filt: dict[str, Any]
+    if lc is None:
+        filt = {"type": "none"}
+    elif spline:
+        filt = {"type": "spline", "cutoff_mm": lc, "standard": "ISO 16610-22", "ends": "none dropped"}
+    else:
+        filt = {"type": "gaussian", "cutoff_mm": lc, "standard": "ISO 16610-21", "ends": "one cut-off dropped at each end"}
     return StraightnessParameters(
         parameters=_params("STR", r.params), reference=r.reference, filter=filt,
         point=(float(r.point[0]), float(r.point[1])), direction=(float(r.direction[0]), float(r.direction[1])),
@@ -308,6 +318,13 @@ def gaussian_filter_closed(radii: Any, upr: float) -> np.ndarray:
     (exact: harmonic ``k`` times :func:`gaussian_transmission`)."""
     r = np.ascontiguousarray(np.asarray(radii, dtype=np.float64).ravel())
     return np.asarray(_core.profile_gaussian_closed(r, float(upr)))
+
+
+def spline_filter_open(values: Any, step: float, cutoff: float) -> np.ndarray:
+    """The ISO 16610-22 cubic spline mean line of an open profile sampled at ``step``
+    (every sample: a straight profile is its own mean line, no end effects to drop)."""
+    z = np.ascontiguousarray(np.asarray(values, dtype=np.float64).ravel())
+    return np.asarray(_core.profile_spline_open(z, float(step), float(cutoff)))
 
 
 def gaussian_filter_open(values: Any, step: float, cutoff: float) -> tuple[int, np.ndarray]:

@@ -41,7 +41,7 @@ from ..errors import ConfigError
 from .features import FeatureData, _unit
 from .sizes import mating_size
 from .spec import Tolerance
-from .zones import Measurement, _mec_radius, _min_max_sinusoids, _min_over_turn, _rot_z
+from .zone_tools import Measurement, _element, _mec_radius, _min_max_sinusoids, _min_over_turn, _rot_z
 
 __all__ = ["apply_material", "shift_radius", "min_in_disk"]
 
@@ -103,7 +103,6 @@ def min_in_disk(w: np.ndarray, rho: float) -> tuple[float, np.ndarray]:
 
 def _position_with_shift(tol: Tolerance, fd: FeatureData, system: Any, letter: str, rho: float, where: str) -> tuple[float, float]:
     """(measured diameter, shift used) of a position callout whose datum ``letter`` may shift by ``rho``."""
-    from .zones import _element
 
     datum = system.datum(tol.datums[: tol.datums.index(letter) + 1])
     if datum.type != "axis":

@@ -66,7 +66,7 @@ from ..errors import ConfigError, DegenerateGeometryError
 from ..form import fit_circle, fit_cylinder, fit_sphere
 from .features import FeatureData, _unit
 from .spec import RANK_ORDER, Tolerance
-from .zones import Measurement, _plane_2d
+from .zone_tools import Measurement, _plane_2d
 
 __all__ = ["evaluate_size", "evaluate_distance", "evaluate_angle", "two_point_sizes", "mating_size", "DEFAULT_ANGLES"]
 

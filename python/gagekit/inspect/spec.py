@@ -27,6 +27,7 @@ All lengths are millimetres in the scan's frame, angles degrees. Layout::
     datums = ["A", "B", "C"]
     nominal = { point = [50, 30, 0], direction = [0, 0, 1] }   # in the datum frame
     angle = 45.0                 # angularity: basic angle between feature and datum
+    half_angle = 30.0            # conicity: basic half apex angle of the cone (default: free)
 
     [[tolerance]]                # a size (ISO 14405-1), :mod:`.sizes`
     feature = "bore"
@@ -78,7 +79,7 @@ __all__ = [
 ]
 
 SHAPES = ("plane", "cylinder", "circle", "sphere", "line", "cone", "surface", "slot", "tab")
-FORM = ("flatness", "straightness", "roundness", "cylindricity", "sphericity")
+FORM = ("flatness", "straightness", "roundness", "cylindricity", "sphericity", "conicity")
 ORIENTATION = ("parallelism", "perpendicularity", "angularity")
 LOCATION = ("position", "coaxiality", "profile")
 RUNOUT = ("circular-runout", "total-runout")
@@ -99,6 +100,7 @@ APPLIES_TO: dict[str, tuple[str, ...]] = {
     "roundness": ("circle", "cylinder", "cone"),
     "cylindricity": ("cylinder",),
     "sphericity": ("sphere",),
+    "conicity": ("cone",),
     "parallelism": ("plane", "cylinder", "cone"),
     "perpendicularity": ("plane", "cylinder", "cone"),
     "angularity": ("plane", "cylinder", "cone"),
@@ -122,7 +124,8 @@ MIN_POINTS = {"surface": 1, "plane": 3, "line": 2, "circle": 3, "sphere": 4, "cy
 _FEATURE_KEYS = {"name", "shape", "region", "outward", "kind", "direction", "axis", "sections", "datum_fit", "qif_id",
                  "faces", "band"}
 _TOL_KEYS = {"feature", "characteristic", "tolerance", "datums", "nominal", "angle", "name", "sections", "qif_id", "qpid",
-             "offset", "upper", "lower", "fit", "modifier", "angles", "envelope", "to", "material", "filter", "reference"}
+             "offset", "upper", "lower", "fit", "modifier", "angles", "envelope", "to", "material", "filter", "reference",
+             "half_angle"}
 _PART_KEYS = {"name", "datum_fit", "axis", "sections", "cad", "band", "standard"}
 _TOP_KEYS = {"part", "feature", "datums", "tolerance", "region", "qif"}
 #: the [qif] table of a drawing imported from a QIF model (``gagekit qif import``)
@@ -492,7 +495,14 @@ def part_spec_from_dict(doc: Mapping[str, Any], source: str = "part") -> PartSpe
             if not 0.0 <= angle <= 90.0:
                 raise ConfigError(f"{where}: 'angle' must be in [0, 90] degrees, got {angle}")
         elif "angle" in t:
-            raise ConfigError(f"{where}: 'angle' applies to angularity only")
+            raise ConfigError(f"{where}: 'angle' applies to angularity only" +
+                              ("; a cone's basic half angle is 'half_angle'" if char == "conicity" else ""))
+        if "half_angle" in t:  # conicity: the zone's cones at the basic half angle (degrees)
+            if char != "conicity":
+                raise ConfigError(f"{where}: 'half_angle' applies to conicity only")
+            angle = _number(t["half_angle"], where, "half_angle")
+            if not 0.0 < angle < 90.0:
+                raise ConfigError(f"{where}: 'half_angle' must lie strictly between 0 and 90 degrees, got {angle}")
         npoint = ndir = None
         if "nominal" in t:
             nom = t["nominal"]

@@ -18,6 +18,9 @@ Form (no datums)
     across the least-squares axis, the largest -- width.
   cylindricity (ISO 12180): two coaxial cylinders of least radial separation -- width.
   sphericity: two concentric spheres of least radial separation -- width.
+  conicity (the dissertation's Sec. 7.2 item 6; ISO 1101 profile of a conical surface
+    without datums): two coaxial cones of the same half angle -- free, or the basic
+    ``half_angle`` -- of least separation measured normal to the cone surface -- width.
 
 Orientation (ISO 1101 Sec. 18.9-18.11), the zone's orientation fixed by the datums as
 far as they fix it and free otherwise; the toleranced element is the surface of a plane
@@ -63,17 +66,17 @@ Run-out (ISO 1101 Sec. 18.15-18.16), relative to the datum axis:
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
-from typing import Any, Callable, Optional
+from typing import Any, Optional
 
 import numpy as np
 
 from .. import _core
 from ..errors import ConfigError, DegenerateGeometryError
-from ..form import fit_circle, fit_cylinder, fit_line, fit_sphere
+from ..form import fit_circle, fit_cone, fit_cylinder, fit_line, fit_sphere
 from .datums import DatumSystem, SimulatedDatum
-from .features import FeatureData, _basis, _unit, cone_dir, golden_min
+from .features import FeatureData, _unit, cone_dir
 from .spec import Tolerance
+from .zone_tools import Measurement, _element, _mec_radius, _min_max_sinusoids, _min_over_turn, _plane_2d, _rot_z
 
 __all__ = ["Measurement", "evaluate", "ZONE_KINDS"]
 
@@ -83,63 +86,12 @@ ZONE_KINDS = {"width": "distance between the two bounding surfaces",
               "spherical diameter": "diameter of a spherical zone"}
 
 
-@dataclass(frozen=True)
-class Measurement:
-    value: float
-    zone: str
-    element: str
-    n_points: int
-    details: dict = field(default_factory=dict)
-    #: two-sided callouts (sizes, distances, angles) and material conditions: the margin
-    #: to the nearer limit / to the zone with its bonus; ``None``: ``tolerance - value``
-    margin: Optional[float] = None
-    #: top-level JSON keys of the callout (limits, local sizes, bonus, ...)
-    extra: dict = field(default_factory=dict)
-
-
 # -- small exact helpers ---------------------------------------------------------------
 
 
 def _slab(points: np.ndarray, mode: str, axis: Any = (0.0, 0.0, 1.0), angle: float = 0.0) -> tuple[float, np.ndarray]:
     normal, _, _, width = _core.gdt_slab(np.ascontiguousarray(points), mode, tuple(float(a) for a in axis), float(angle))
     return float(width), np.array(normal)
-
-
-def _plane_2d(points: np.ndarray, d: np.ndarray) -> np.ndarray:
-    u, v = _basis(d)
-    return np.ascontiguousarray(np.column_stack([points @ u, points @ v]))
-
-
-def _mec_radius(xy: np.ndarray) -> tuple[float, np.ndarray]:
-    """Minimum circumscribed circle of 2-D points (Welzl, exact): (radius, centre)."""
-    if len(xy) == 1:
-        return 0.0, xy[0]
-    if len(xy) == 2:
-        return 0.5 * float(np.linalg.norm(xy[1] - xy[0])), 0.5 * (xy[0] + xy[1])
-    if np.ptp(xy, axis=0).max() == 0.0:
-        return 0.0, xy[0]
-    c = _core.form_circle_fit(np.ascontiguousarray(xy), "min-circumscribed").center
-    r = float(np.linalg.norm(xy - np.array(c), axis=1).max())
-    return r, np.array(c)
-
-
-def _min_max_sinusoids(a: np.ndarray, b: np.ndarray, phi: np.ndarray) -> tuple[float, float]:
-    """Exact (value, psi) of min over psi of max_i f_i(psi), f_i = a_i - b_i cos(psi - phi_i):
-    the minimum of the upper envelope lies at the minimum of one sinusoid or where two
-    cross, (a_i - a_j) = r cos(psi - d); every candidate is scored on every f_i."""
-    cand = [phi]
-    i, j = np.triu_indices(len(a), 1)
-    if len(i):
-        c1 = b[i] * np.cos(phi[i]) - b[j] * np.cos(phi[j])
-        s1 = b[i] * np.sin(phi[i]) - b[j] * np.sin(phi[j])
-        r, d, rhs = np.hypot(c1, s1), np.arctan2(s1, c1), a[i] - a[j]
-        ok = (r > 0) & (np.abs(rhs) <= r)
-        t = np.arccos(np.clip(rhs[ok] / r[ok], -1.0, 1.0))
-        cand += [d[ok] + t, d[ok] - t]
-    psi = np.concatenate(cand)
-    env = (a[None, :] - b[None, :] * np.cos(psi[:, None] - phi[None, :])).max(axis=1)
-    k = int(np.argmin(env))
-    return float(env[k]), float(psi[k])
 
 
 def _exact_turn(pts: np.ndarray, frame, P0: np.ndarray, D0: Optional[np.ndarray]) -> Optional[tuple[float, float]]:
@@ -177,29 +129,6 @@ def _exact_turn(pts: np.ndarray, frame, P0: np.ndarray, D0: Optional[np.ndarray]
 def _cylinder_zone(points: np.ndarray, d: np.ndarray) -> float:
     """Diameter of the smallest cylinder of direction d containing the points."""
     return 2.0 * _mec_radius(_plane_2d(points, _unit(d)))[0]
-
-
-def _min_over_turn(f: Callable[[float], float], grid: int = 720) -> tuple[float, float]:
-    """Minimum of a continuous function of a turn angle: grid, then golden-section search
-    in the best three cells (deterministic)."""
-    step = 2 * math.pi / grid
-    vals = [f(k * step) for k in range(grid)]
-    cells = sorted(range(grid), key=lambda k: (vals[k], k))[:3]
-    best = (vals[cells[0]], cells[0] * step)
-    for k in cells:
-        fx, x = golden_min(f, (k - 1) * step, (k + 1) * step)
-        if fx < best[0]:
-            best = (fx, x)
-    return best
-
-
-def _rot_z(frame, psi: float) -> tuple[Callable, Callable]:
-    """Maps rotating nominal points / directions by psi about the frame's z axis."""
-    z = frame.axes[2]
-    c, s = math.cos(psi), math.sin(psi)
-    K = np.array([[0, -z[2], z[1]], [z[2], 0, -z[0]], [-z[1], z[0], 0]])
-    R = np.eye(3) + s * K + (1 - c) * (K @ K)
-    return (lambda p: frame.origin + R @ (p - frame.origin)), (lambda d: R @ d)
 
 
 # -- the evaluation ----------------------------------------------------------------------
@@ -307,11 +236,11 @@ def _sphericity(tol, fd, system):
     return Measurement(float(fit.outer_radius - fit.inner_radius), "width", "surface", len(fd.points), {"center": list(fit.center)})
 
 
-def _element(fd: FeatureData) -> tuple[np.ndarray, str]:
-    if fd.shape == "plane":
-        return fd.points, "surface"
-    pts = fd.axis_points()
-    return pts, ("derived axis" if fd.spec.axis == "least-squares" else f"median line ({len(pts)} section centres)")
+def _conicity(tol, fd, system):
+    fit = fit_cone(fd.points, "minimum-zone", angle=tol.angle)
+    return Measurement(float(fit.form_error), "width", "surface (normal to the cone)", len(fd.points),
+                       {"axis_point": list(fit.point), "axis_direction": list(fit.direction), "apex": list(fit.apex),
+                        "half_angle_deg": math.degrees(fit.half_angle), "fixed_angle": fit.fixed_angle})
 
 
 def _direction(sim: SimulatedDatum) -> np.ndarray:
@@ -553,6 +482,7 @@ _DISPATCH = {
     "roundness": _roundness,
     "cylindricity": _cylindricity,
     "sphericity": _sphericity,
+    "conicity": _conicity,
     "parallelism": _orientation,
     "perpendicularity": _orientation,
     "angularity": _orientation,

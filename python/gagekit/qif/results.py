@@ -53,9 +53,9 @@ QIF_TYPE = {
     "sphericity": "Sphericity", "parallelism": "Parallelism", "perpendicularity": "Perpendicularity",
     "angularity": "Angularity", "position": "Position", "coaxiality": "Coaxiality", "profile": "SurfaceProfile",
     "circular-runout": "CircularRunout", "total-runout": "TotalRunout", "size": "Diameter", "distance": "DistanceBetween",
-    "angle": "AngleBetween",
+    "angle": "AngleBetween", "conicity": "Conicity",
 }
-_FORM = ("Flatness", "Straightness", "Circularity", "Cylindricity", "Sphericity")
+_FORM = ("Flatness", "Straightness", "Circularity", "Cylindricity", "Sphericity", "Conicity")
 _SHAPE_TYPE = {"plane": "Plane", "cylinder": "Cylinder", "circle": "Circle", "sphere": "Sphere", "line": "Line", "cone": "Cone"}
 #: the children of QIFDocument, in the schema's order
 _DOC_ORDER = ["QPId", "Attributes", "VersionHistory", "Version", "Header", "ValidationCounts", "ProductDataQuality",
@@ -399,10 +399,10 @@ def _measured_feature(parent: Any, name: str, fd: dict, plan: _Plan, ids: _Ids) 
         X.sub(ax, "Direction", dr("axis_direction") or dr("direction"))
         if shape == "cylinder" and ls.get("radius") is not None:
             X.sub(el, "Diameter", _num(2 * ls["radius"] * s))
-        if shape == "cone":  # gagekit: full apex angle in rad; QIF: the file's angular unit
+        if shape == "cone":  # gagekit: full apex angle in rad; QIF: the file's angular unit,
+            # HalfAngle or FullAngle (an xs:choice: one of them)
             full = math.degrees(float(ls.get("apex_angle", 0.0))) / plan.geom_angle_scale
             X.sub(el, "HalfAngle", _num(full / 2))
-            X.sub(el, "FullAngle", _num(full))
     elif shape == "circle":
         X.sub(el, "Location", pt("center"))
         if ls.get("normal") is not None:

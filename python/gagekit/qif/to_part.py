@@ -49,6 +49,7 @@ GAGEKIT_OF = {
     "Sphericity": "sphericity", "Parallelism": "parallelism", "Perpendicularity": "perpendicularity",
     "Angularity": "angularity", "Position": "position", "Coaxiality": "coaxiality", "Concentricity": "coaxiality",
     "SurfaceProfile": "profile", "CircularRunout": "circular-runout", "TotalRunout": "total-runout",
+    "Conicity": "conicity",
 }
 #: QIF characteristic type -> issue 25's characteristic (sizes, distances, angles)
 PENDING_OF = {"Diameter": "size", "SphericalDiameter": "size", "Width": "size", "DistanceBetween": "distance",
@@ -236,7 +237,7 @@ class _Importer:
         if char in _NEEDS_DRF and not letters:
             self.listed.append((c, f"{char} without a datum reference frame"))
             return
-        if char in ("flatness", "straightness", "roundness", "cylindricity", "sphericity"):
+        if char in ("flatness", "straightness", "roundness", "cylindricity", "sphericity", "conicity"):
             letters = []
         notes = []
         if c.kind == "Concentricity":

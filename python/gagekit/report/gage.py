@@ -11,7 +11,7 @@ import numpy as np
 
 from .._util import dumps
 from ..gage.analysis import GageCheckResult
-from ..gage.report import gage_table, human, summary_lines
+from ..gage.summary import gage_table, human, summary_lines
 
 __all__ = ["region_figure", "add_to_report", "write_report"]
 

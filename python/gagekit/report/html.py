@@ -2,16 +2,20 @@
 
 The page needs no network access: figures are embedded as base64 PNG, the
 style sheet is inline. Every figure is also written as a PNG file beside the
-page, so that shop-floor documents can reuse it.
+page, so that shop-floor documents can reuse it. The markup comes from the Jinja2
+templates in ``report/templates/`` (``page.html.j2``: the page; ``parts.html.j2``: a
+paragraph, a table, a figure), rendered with autoescaping: text, titles and table cells
+are escaped; only :meth:`Report.raw` markup made by the report modules and the embedded
+script libraries pass as they are.
 """
 
 from __future__ import annotations
 
 import base64
-import html
 import io
 import re
 from dataclasses import dataclass, field
+from functools import lru_cache
 from pathlib import Path
 from typing import Any, Sequence
 
@@ -25,6 +29,25 @@ figure{margin:1em 0}figure img{max-width:100%;border:1px solid #ddd}figcaption{f
 """
 
 
+@lru_cache(maxsize=1)
+def _templates():
+    """The report templates (one Jinja2 environment per process, autoescaping on)."""
+    import jinja2
+
+    env = jinja2.Environment(loader=jinja2.PackageLoader("gagekit.report", "templates"),
+                             autoescape=True, undefined=jinja2.StrictUndefined, keep_trailing_newline=False)
+    env.filters["num"] = _num
+    return env
+
+
+def _parts():
+    return _templates().get_template("parts.html.j2").module
+
+
+def _num(v: Any) -> str:
+    return f"{v:.6g}" if isinstance(v, float) else str(v)
+
+
 @dataclass
 class _Section:
     title: str
@@ -34,14 +57,6 @@ class _Section:
 
 def _slug(text: str) -> str:
     return re.sub(r"[^a-z0-9]+", "-", text.lower()).strip("-") or "section"
-
-
-def _cell(v: Any) -> str:
-    if isinstance(v, float):
-        return f'<td class="num">{v:.6g}</td>'
-    if isinstance(v, int) and not isinstance(v, bool):
-        return f'<td class="num">{v}</td>'
-    return f"<td>{html.escape(str(v))}</td>"
 
 
 class Report:
@@ -70,15 +85,11 @@ class Report:
         return self.sections[-1]
 
     def text(self, text: str, css_class: str | None = None) -> "Report":
-        cls = f' class="{css_class}"' if css_class else ""
-        self._current().parts.append(f"<p{cls}>{html.escape(text)}</p>")
+        self._current().parts.append(str(_parts().text(text, css_class)))
         return self
 
     def table(self, headers: Sequence[str], rows: Sequence[Sequence[Any]], caption: str = "") -> "Report":
-        head = "".join(f"<th>{html.escape(str(h))}</th>" for h in headers)
-        body = "".join("<tr>" + "".join(_cell(c) for c in r) + "</tr>" for r in rows)
-        cap = f"<caption>{html.escape(caption)}</caption>" if caption else ""
-        self._current().parts.append(f"<table>{cap}<thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>")
+        self._current().parts.append(str(_parts().table([str(h) for h in headers], [list(r) for r in rows], caption)))
         return self
 
     def figure(self, fig: Any, name: str, caption: str = "") -> "Report":
@@ -92,10 +103,7 @@ class Report:
         fname = f"{_slug(name)}.png"
         self._figures.append((fname, png))
         b64 = base64.b64encode(png).decode("ascii")
-        cap = f"<figcaption>{html.escape(caption)}</figcaption>" if caption else ""
-        self._current().parts.append(
-            f'<figure><img alt="{html.escape(caption or name)}" src="data:image/png;base64,{b64}">{cap}</figure>'
-        )
+        self._current().parts.append(str(_parts().figure(caption or name, b64, caption)))
         return self
 
     def raw(self, markup: str) -> "Report":
@@ -110,17 +118,8 @@ class Report:
         return self
 
     def html(self) -> str:
-        nav = "".join(f'<li><a href="#{s.anchor}">{html.escape(s.title)}</a></li>' for s in self.sections)
-        body = "".join(
-            f'<section id="{s.anchor}"><h2>{html.escape(s.title)}</h2>{"".join(s.parts)}</section>' for s in self.sections
-        )
-        sub = f"<p>{html.escape(self.subtitle)}</p>" if self.subtitle else ""
-        scripts = "".join(f'<script data-library="{html.escape(k)}">{v}</script>' for k, v in self._scripts.items())
-        return (
-            "<!DOCTYPE html><html lang=\"en\"><head><meta charset=\"utf-8\">"
-            f"<title>{html.escape(self.title)}</title><style>{_CSS}</style>{scripts}</head><body>"
-            f"<h1>{html.escape(self.title)}</h1>{sub}<nav><ol>{nav}</ol></nav>{body}</body></html>"
-        )
+        return _templates().get_template("page.html.j2").render(
+            title=self.title, subtitle=self.subtitle, css=_CSS, scripts=self._scripts, sections=self.sections)
 
     def write(self, directory: str | Path, name: str = "report.html") -> Path:
         """Write the page and its figures into ``directory``; return the page's path."""

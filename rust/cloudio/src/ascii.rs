@@ -231,7 +231,7 @@ pub(crate) fn line_at<'a>(bytes: &'a [u8], starts: &[usize], k: usize) -> &'a [u
 fn checked_text<'a>(bytes: &'a [u8], dim: usize, what: &str) -> Result<&'a [u8]> {
     check_dim(dim, what)?;
     if bytes.starts_with(&[0xFF, 0xFE]) || bytes.starts_with(&[0xFE, 0xFF]) {
-        return Err(GkError::invalid(format!(
+        return Err(GkError::file_format(format!(
             "{what}: UTF-16 text (as Excel's \"Unicode Text\"); save it as CSV UTF-8 or plain ASCII"
         )));
     }
@@ -250,7 +250,7 @@ fn check_dim(dim: usize, what: &str) -> Result<()> {
 /// A NUL byte means a binary file, not a point list.
 pub(crate) fn check_no_nul(bytes: &[u8], what: &str) -> Result<()> {
     if memchr::memchr(0, bytes).is_some() {
-        return Err(GkError::invalid(format!(
+        return Err(GkError::file_format(format!(
             "{what}: this is a binary file, not an ASCII point list (XYZ/CSV/TXT)"
         )));
     }
@@ -320,7 +320,7 @@ fn data_start(bytes: &[u8], opts: &AsciiOptions, what: &str) -> Result<DataStart
             break;
         }
         if header_lines >= 50 {
-            return Err(GkError::invalid(format!(
+            return Err(GkError::file_format(format!(
                 "{what}: line {}: expected numbers (x y z), found {:?}",
                 k + 1,
                 String::from_utf8_lossy(trim(line))
@@ -330,7 +330,7 @@ fn data_start(bytes: &[u8], opts: &AsciiOptions, what: &str) -> Result<DataStart
         header_lines += 1;
     }
     let Some((first, offset, ncols)) = first_data else {
-        return Err(GkError::invalid(format!("{what}: no points found (the file is empty or has only header lines)")));
+        return Err(GkError::file_format(format!("{what}: no points found (the file is empty or has only header lines)")));
     };
     let columns = header
         .filter(|h| fields(h, style).len() == ncols)
@@ -338,7 +338,7 @@ fn data_start(bytes: &[u8], opts: &AsciiOptions, what: &str) -> Result<DataStart
         .unwrap_or_else(|| (0..dim).collect());
     let need = columns.iter().max().copied().unwrap_or(0) + 1;
     if ncols < need {
-        return Err(GkError::invalid(format!(
+        return Err(GkError::file_format(format!(
             "{what}: line {}: expected at least {need} columns, found {ncols}",
             first + 1
         )));
@@ -373,7 +373,7 @@ fn slow_line(line: &[u8], lay: &Layout, k: usize, what: &str, out: &mut [f64]) -
     let f = fields(line, style);
     for (a, &c) in lay.columns.iter().enumerate() {
         let v = f.get(c).and_then(|x| parse_num(x, style)).ok_or_else(|| {
-            GkError::invalid(format!(
+            GkError::file_format(format!(
                 "{what}: line {}: expected {} numbers, found {:?}",
                 k + 1,
                 lay.need,
@@ -381,7 +381,7 @@ fn slow_line(line: &[u8], lay: &Layout, k: usize, what: &str, out: &mut [f64]) -
             ))
         })?;
         if !v.is_finite() {
-            return Err(GkError::invalid(format!(
+            return Err(GkError::file_format(format!(
                 "{what}: line {}: non-finite coordinate ({v}); remove NaN/inf values",
                 k + 1
             )));
@@ -607,7 +607,7 @@ pub fn parse_ascii(bytes: &[u8], opts: &AsciiOptions, what: &str) -> Result<Pars
 
 /// [`parse_ascii`] of the file at `path`, memory-mapped (no copy of its bytes).
 pub fn read_ascii_file(path: &std::path::Path, opts: &AsciiOptions, what: &str) -> Result<Parsed> {
-    let io = |e: std::io::Error| GkError::invalid(format!("{what}: cannot be read ({e})"));
+    let io = |e: std::io::Error| crate::read_error(what, e);
     let file = std::fs::File::open(path).map_err(io)?;
     if file.metadata().map_err(io)?.len() == 0 {
         return parse_ascii(b"", opts, what);

@@ -32,18 +32,18 @@ fn unreadable(what: &str, e: impl std::fmt::Display) -> GkError {
         (true, Some((_, page))) => format!("checksum mismatch on page {}", page.trim()),
         _ => msg,
     };
-    GkError::invalid(format!("{what}: not a readable E57 file ({msg})"))
+    GkError::file_format(format!("{what}: not a readable E57 file ({msg})"))
 }
 
 /// Read every scan of the E57 file at `path`; `what` names it in messages.
 pub fn read_e57(path: &Path, what: &str) -> Result<E57Points> {
     use e57::{CartesianCoordinate, E57Reader, RecordName};
 
-    let file = std::fs::File::open(path).map_err(|e| GkError::invalid(format!("{what}: cannot be read ({e})")))?;
+    let file = std::fs::File::open(path).map_err(|e| crate::read_error(what, e))?;
     // SAFETY: read-only map, alive only during this call. Reading pages from memory
     // instead of a BufReader avoids two system calls per 1 KiB page (seek + read).
     let map = unsafe { memmap2::MmapOptions::new().populate().map(&file) }
-        .map_err(|e| GkError::invalid(format!("{what}: cannot be read ({e})")))?;
+        .map_err(|e| crate::read_error(what, e))?;
     let mut reader = E57Reader::new(std::io::Cursor::new(&map[..])).map_err(|e| unreadable(what, e))?;
     let clouds = reader.pointclouds();
     let page = reader.header().page_size as usize;
@@ -54,17 +54,17 @@ pub fn read_e57(path: &Path, what: &str) -> Result<E57Points> {
         let cart = has(RecordName::CartesianX) && has(RecordName::CartesianY) && has(RecordName::CartesianZ);
         let sph_dir = has(RecordName::SphericalAzimuth) && has(RecordName::SphericalElevation);
         if !cart && sph_dir && !has(RecordName::SphericalRange) {
-            return Err(GkError::invalid(format!(
+            return Err(GkError::file_format(format!(
                 "{what}: scan {k} has spherical coordinates without sphericalRange: directions only, no points"
             )));
         }
         if !cart && !sph_dir {
-            return Err(GkError::invalid(format!("{what}: scan {k} has neither Cartesian nor spherical coordinates")));
+            return Err(GkError::file_format(format!("{what}: scan {k} has neither Cartesian nor spherical coordinates")));
         }
         // fast path: whole byte streams decoded at once (e57_fast), else the crate's reader
         if let Some((c, bad)) = crate::e57_fast::decode(&map, page, pc, what)? {
             if let Some(i) = c.par_iter().with_min_len(1 << 16).position_first(|v| !v.is_finite()) {
-                return Err(GkError::invalid(format!(
+                return Err(GkError::file_format(format!(
                     "{what}: scan {k}: point {} has a non-finite coordinate (NaN or inf)",
                     coords.len() / 3 + i / 3
                 )));
@@ -87,7 +87,7 @@ pub fn read_e57(path: &Path, what: &str) -> Result<E57Points> {
             match p.cartesian {
                 CartesianCoordinate::Valid { x, y, z } => {
                     if !(x.is_finite() && y.is_finite() && z.is_finite()) {
-                        return Err(GkError::invalid(format!(
+                        return Err(GkError::file_format(format!(
                             "{what}: scan {k}: point {} has a non-finite coordinate (NaN or inf)",
                             coords.len() / 3 + invalid
                         )));

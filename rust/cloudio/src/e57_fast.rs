@@ -40,11 +40,11 @@ impl<'a> Logical<'a> {
         }
         let start = p * self.page;
         let Some(bytes) = self.map.get(start..start + self.page) else {
-            return Err(GkError::invalid(format!("{}: not a readable E57 file (truncated: page {p} is missing)", self.what)));
+            return Err(GkError::file_format(format!("{}: not a readable E57 file (truncated: page {p} is missing)", self.what)));
         };
         let want = &bytes[self.page - CRC..];
         if crc32c::crc32c(&bytes[..self.page - CRC]).to_be_bytes() != want {
-            return Err(GkError::invalid(format!("{}: not a readable E57 file (checksum mismatch on page {p})", self.what)));
+            return Err(GkError::file_format(format!("{}: not a readable E57 file (checksum mismatch on page {p})", self.what)));
         }
         self.checked = p;
         Ok(())
@@ -239,7 +239,7 @@ fn pose(pc: &PointCloud, what: &str) -> Result<([[f64; 3]; 3], [f64; 3])> {
     let q = &tr.rotation;
     let norm = (q.w * q.w + q.x * q.x + q.y * q.y + q.z * q.z).sqrt();
     if !(norm > 0.0) {
-        return Err(GkError::invalid(format!("{what}: a scan pose has a zero rotation quaternion")));
+        return Err(GkError::file_format(format!("{what}: a scan pose has a zero rotation quaternion")));
     }
     let (w, x, y, z) = (q.w / norm, q.x / norm, q.y / norm, q.z / norm);
     Ok((

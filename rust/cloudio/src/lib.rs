@@ -17,8 +17,34 @@ pub mod ply;
 pub mod scale;
 pub mod stream;
 
+/// The error of a failed read of file `what`: a file that ends too early is a format
+/// error (truncated), any other I/O failure an access error.
+pub(crate) fn read_error(what: &str, e: std::io::Error) -> gagekit_core::GkError {
+    let m = format!("{what}: cannot be read ({e})");
+    if e.kind() == std::io::ErrorKind::UnexpectedEof {
+        gagekit_core::GkError::file_format(m)
+    } else {
+        gagekit_core::GkError::file_access(m)
+    }
+}
+
 pub use ascii::{ascii_layout, data_columns, detect_style, parse_ascii, parse_body, read_ascii_file, write_ascii, AsciiOptions, DataStart, Layout, Parsed, Style};
 pub use e57::{read_e57, E57Points};
 pub use ply::{read_ply, read_ply_file, PlyFile, PlyPoints, VertexRecords};
 pub use stream::{AsciiStream, PlyStream};
 pub use scale::scale_in_place;
+
+#[cfg(test)]
+mod error_kind_tests {
+    use gagekit_core::ErrorKind;
+
+    #[test]
+    fn a_short_file_is_a_format_error_and_a_failed_open_an_access_error() {
+        let eof = super::read_error("f", std::io::Error::from(std::io::ErrorKind::UnexpectedEof));
+        assert_eq!(eof.kind, ErrorKind::FileFormat);
+        let denied = super::read_error("f", std::io::Error::from(std::io::ErrorKind::PermissionDenied));
+        assert_eq!(denied.kind, ErrorKind::FileAccess);
+        let missing = crate::ascii::read_ascii_file(std::path::Path::new("/nonexistent/gagekit/none.xyz"), &Default::default(), "none.xyz");
+        assert_eq!(missing.map(|_| ()).unwrap_err().kind, ErrorKind::FileAccess);
+    }
+}

@@ -110,7 +110,7 @@ pub struct PlyPoints {
 const MAX_HEADER: usize = 1 << 20;
 
 fn bad(what: &str, msg: impl std::fmt::Display) -> GkError {
-    GkError::invalid(format!("{what}: not a readable PLY file ({msg})"))
+    GkError::file_format(format!("{what}: not a readable PLY file ({msg})"))
 }
 
 /// Parse the header: (format, elements, byte offset of the body).
@@ -201,13 +201,13 @@ fn xyz(elements: &[Element], what: &str) -> Result<(usize, [usize; 3])> {
             .props
             .iter()
             .position(|p| p.name == *name && p.list.is_none())
-            .ok_or_else(|| GkError::invalid(format!("{what}: PLY file without vertex x, y, z properties (no '{name}')")))?;
+            .ok_or_else(|| GkError::file_format(format!("{what}: PLY file without vertex x, y, z properties (no '{name}')")))?;
     }
     Ok((vi, idx))
 }
 
 fn non_finite(what: &str, i: usize) -> GkError {
-    GkError::invalid(format!("{what}: vertex {i} has a non-finite coordinate (NaN or inf)"))
+    GkError::file_format(format!("{what}: vertex {i} has a non-finite coordinate (NaN or inf)"))
 }
 
 /// A PLY file opened for reading: memory-mapped, header parsed, its size checked against
@@ -238,7 +238,7 @@ impl PlyFile {
     }
 
     fn open_with(path: &std::path::Path, what: &str, populate: bool) -> Result<PlyFile> {
-        let io = |e: std::io::Error| GkError::invalid(format!("{what}: cannot be read ({e})"));
+        let io = |e: std::io::Error| crate::read_error(what, e);
         let file = std::fs::File::open(path).map_err(io)?;
         if file.metadata().map_err(io)?.len() == 0 {
             return Err(bad(what, "the file is empty"));
@@ -259,7 +259,7 @@ impl PlyFile {
             _ => el.props.iter().map(|p| p.list.unwrap_or(p.ty).size()).sum(),
         };
         if el.count > (map.len() - body) / least.max(1) {
-            return Err(GkError::invalid(format!(
+            return Err(GkError::file_format(format!(
                 "{what}: the PLY header declares {} vertices, more than the file's {} bytes can hold: truncated or a wrong count",
                 el.count,
                 map.len()
@@ -386,7 +386,7 @@ pub fn read_ply(bytes: &[u8], what: &str) -> Result<PlyPoints> {
     let (vi, idx) = xyz(&elements, what)?;
     let mut coords = vec![0.0; 3 * elements[vi].count.min(bytes.len())];
     if coords.len() != 3 * elements[vi].count {
-        return Err(GkError::invalid(format!("{what}: the PLY header declares more vertices than the file has bytes: truncated or a wrong count")));
+        return Err(GkError::file_format(format!("{what}: the PLY header declares more vertices than the file has bytes: truncated or a wrong count")));
     }
     match format {
         Format::Ascii => read_ascii(bytes, body, &elements, vi, idx, what, &mut coords)?,
@@ -479,7 +479,7 @@ fn walk_binary(
     coords: &mut [f64],
 ) -> Result<()> {
     let truncated = || {
-        GkError::invalid(format!(
+        GkError::file_format(format!(
             "{what}: the PLY file is shorter than its header declares ({}): truncated or a wrong count",
             count_desc(elements)
         ))
@@ -537,7 +537,7 @@ fn walk_binary(
             (Some(s), true) if extra % s == 0 => format!(" (the file holds {} vertices)", el.count + extra / s),
             _ => String::new(),
         };
-        return Err(GkError::invalid(format!(
+        return Err(GkError::file_format(format!(
             "{what}: {extra} bytes follow the data the PLY header declares ({}){more}: the header's counts are wrong",
             count_desc(elements)
         )));
@@ -566,7 +566,7 @@ fn read_ascii(
     let data: Vec<usize> = (0..nlines).filter(|&k| !trim(line_at(text, &starts, k)).is_empty()).collect();
     let declared: usize = elements.iter().map(|e| e.count).sum();
     if data.len() < declared {
-        return Err(GkError::invalid(format!(
+        return Err(GkError::file_format(format!(
             "{what}: the PLY header declares {} ({declared} lines) but the file has {} data lines: truncated or a wrong count",
             count_desc(elements),
             data.len()
@@ -579,7 +579,7 @@ fn read_ascii(
         } else {
             String::new()
         };
-        return Err(GkError::invalid(format!(
+        return Err(GkError::file_format(format!(
             "{what}: {extra} lines follow the data the PLY header declares ({}){more}: the header's counts are wrong",
             count_desc(elements)
         )));
@@ -592,7 +592,7 @@ fn read_ascii(
             let k = lines[c * 4096 + j];
             let line = trim(line_at(text, &starts, k));
             let lno = line0 + k + 1;
-            let err = |m: &str| GkError::invalid(format!("{what}: line {lno}: {m}"));
+            let err = |m: &str| GkError::file_format(format!("{what}: line {lno}: {m}"));
             let mut tok = line.split(|b| b.is_ascii_whitespace()).filter(|t| !t.is_empty());
             for (pi, p) in el.props.iter().enumerate() {
                 let n = match p.list {

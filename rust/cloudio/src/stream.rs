@@ -19,7 +19,7 @@ use std::os::unix::fs::FileExt;
 use std::path::Path;
 
 fn io_error(what: &str) -> impl Fn(std::io::Error) -> GkError + '_ {
-    move |e| GkError::invalid(format!("{what}: cannot be read ({e})"))
+    move |e| crate::read_error(what, e)
 }
 
 /// An ASCII point file read in blocks of about `block` bytes.
@@ -140,7 +140,7 @@ impl PlyStream {
             if let Some(i) = out.par_chunks(1 << 16).position_first(|c| c.iter().any(|v| !v.is_finite())).map(|c| {
                 c * (1 << 16) + out[c * (1 << 16)..].iter().position(|v| !v.is_finite()).unwrap_or(0)
             }) {
-                return Err(GkError::invalid(format!(
+                return Err(GkError::file_format(format!(
                     "{}: vertex {} has a non-finite coordinate (NaN or inf)",
                     self.what,
                     self.next + i / 3

@@ -20,6 +20,10 @@ pub enum ErrorKind {
     Numerical,
     /// The caller asked the kernel to stop (Ctrl-C): see [`interrupt`].
     Interrupted,
+    /// A file's content is not what its format says (truncated, malformed, wrong kind).
+    FileFormat,
+    /// A file cannot be opened or read (missing, permissions, an I/O error).
+    FileAccess,
 }
 
 /// The error every gagekit kernel returns.
@@ -47,6 +51,12 @@ impl GkError {
     }
     pub fn numerical(message: impl Into<String>) -> Self {
         Self::new(ErrorKind::Numerical, message)
+    }
+    pub fn file_format(message: impl Into<String>) -> Self {
+        Self::new(ErrorKind::FileFormat, message)
+    }
+    pub fn file_access(message: impl Into<String>) -> Self {
+        Self::new(ErrorKind::FileAccess, message)
     }
     pub fn interrupted() -> Self {
         Self::new(ErrorKind::Interrupted, "interrupted")

@@ -4,6 +4,7 @@
 //! - [`circle_pso`]: 2-D circles by the particle swarm (cross-check of [`circle`]).
 //! - [`lsq`]: least-squares lines, planes, spheres, 3-D circles and cylinders.
 //! - [`cylinder`]: cylinders by the projection model and the parallel PSO.
+//! - [`cone`]: least-squares, minimum-zone, circumscribed and inscribed cones (conicity).
 //! - [`minzone`]: minimum-zone planes (flatness) and 2-D lines (straightness) by LP.
 //! - [`sphere`]: minimum circumscribed (Welzl), maximum inscribed and minimum-zone spheres.
 //! - [`straightness`]: minimum-zone lines in space (the thinnest enclosing cylinder).
@@ -11,6 +12,7 @@
 
 pub mod circle;
 pub mod circle_pso;
+pub mod cone;
 pub mod cylinder;
 mod lp;
 pub mod lsq;

@@ -123,35 +123,57 @@ impl TriMesh {
             return Err(GkError::invalid(format!("points: {n} points, more than 2^32 - 1 in one call; split the cloud")));
         }
         let order = query_order(points);
-        // per point in Morton order: (distance, triangle, foot)
-        let mut sorted: Vec<(f64, i64, V3)> = vec![(0.0, -1, [0.0; 3]); n];
-        sorted.par_chunks_mut(CHUNK).enumerate().try_for_each(|(c, out)| -> Result<()> {
+        let identity = order.iter().enumerate().all(|(k, &i)| k == i as usize);
+        // per point in query order: the distance, the triangle and (if asked) the foot
+        let mut distance = vec![0.0; n];
+        let mut triangle = vec![-1i64; n];
+        let mut foot = if q.foot { vec![0.0; 3 * n] } else { Vec::new() };
+        let work = |c: usize, d: &mut [f64], t: &mut [i64], mut f: Option<&mut [f64]>| -> Result<()> {
             if c % 64 == 0 {
                 interrupt::check()?;
             }
             let mut hint = None;
-            for (k, o) in out.iter_mut().enumerate() {
+            for k in 0..d.len() {
                 let i = order[c * CHUNK + k] as usize;
                 let p = [points[3 * i], points[3 * i + 1], points[3 * i + 2]];
-                *o = match self.hit(p, bound2, hint, signed) {
+                let (dk, tk, fk) = match self.hit(p, bound2, hint, signed) {
                     Some(h) => {
                         hint = Some(h.slot);
                         (h.distance, h.triangle as i64, h.foot)
                     }
                     None => (f64::NAN, -1, [f64::NAN; 3]),
                 };
+                d[k] = dk;
+                t[k] = tk;
+                if let Some(f) = f.as_deref_mut() {
+                    f[3 * k..3 * k + 3].copy_from_slice(&fk);
+                }
             }
             Ok(())
-        })?;
-        // back to input order
-        let mut rank = vec![0u32; n];
-        for (k, &i) in order.iter().enumerate() {
-            rank[i as usize] = k as u32;
+        };
+        if q.foot {
+            distance
+                .par_chunks_mut(CHUNK)
+                .zip(triangle.par_chunks_mut(CHUNK))
+                .zip(foot.par_chunks_mut(3 * CHUNK))
+                .enumerate()
+                .try_for_each(|(c, ((d, t), f))| work(c, d, t, Some(f)))?;
+        } else {
+            distance.par_chunks_mut(CHUNK).zip(triangle.par_chunks_mut(CHUNK)).enumerate().try_for_each(|(c, (d, t))| work(c, d, t, None))?;
         }
-        drop(order);
-        let distance: Vec<f64> = rank.par_iter().map(|&k| sorted[k as usize].0).collect();
-        let triangle: Vec<i64> = rank.par_iter().map(|&k| sorted[k as usize].1).collect();
-        let foot: Vec<f64> = if q.foot { rank.par_iter().flat_map_iter(|&k| sorted[k as usize].2).collect() } else { Vec::new() };
+        if !identity {
+            // back to input order
+            let mut rank = vec![0u32; n];
+            for (k, &i) in order.iter().enumerate() {
+                rank[i as usize] = k as u32;
+            }
+            drop(order);
+            distance = rank.par_iter().map(|&k| distance[k as usize]).collect();
+            triangle = rank.par_iter().map(|&k| triangle[k as usize]).collect();
+            if q.foot {
+                foot = rank.par_iter().flat_map_iter(|&k| [foot[3 * k as usize], foot[3 * k as usize + 1], foot[3 * k as usize + 2]]).collect();
+            }
+        }
         let beyond = triangle.iter().filter(|&&t| t < 0).count();
         Ok(Distances { distance, triangle, foot, beyond, signed })
     }

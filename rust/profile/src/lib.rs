@@ -17,6 +17,7 @@ pub mod gaussian;
 pub mod params;
 pub mod resample;
 pub mod roundness;
+pub mod spline;
 pub mod straightness;
 
 pub use params::Params;

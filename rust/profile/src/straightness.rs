@@ -7,12 +7,14 @@
 //! [`crate::resample::open`]; the default step is the mean spacing of the points, which
 //! must be at most `cutoff / 7`) and filtered with the ISO 16610-21 Gaussian filter of
 //! cut-off length `cutoff` ([`crate::gaussian::filter_open`], one cut-off dropped at each
-//! end). The reference line is fitted to the evaluated profile: LSLI (least squares) or
+//! end), or with the ISO 16610-22 cubic spline filter (`spline`: nothing dropped, a line is
+//! its own mean line). The reference line is fitted to the evaluated profile: LSLI (least squares) or
 //! MZLI (minimum zone, its mid-line); STRt, STRp, STRv, STRq are [`Params`] of the signed
 //! deviations from it.
 
 use crate::gaussian::filter_open;
 use crate::resample::open;
+use crate::spline;
 use crate::Params;
 use gagekit_core::{check_finite, GkError, Result};
 use gagekit_form::criterion::FitCriterion;
@@ -21,8 +23,10 @@ use gagekit_form::{lsq, minzone};
 /// Options of [`straightness`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct Options {
-    /// Gaussian cut-off length (mm); `None`: unfiltered.
+    /// Filter cut-off length (mm); `None`: unfiltered.
     pub cutoff: Option<f64>,
+    /// The ISO 16610-22 cubic spline filter instead of the Gaussian (nothing dropped).
+    pub spline: bool,
     /// Least squares (LSLI) or minimum zone (MZLI).
     pub reference: FitCriterion,
     /// Resampling step (mm); default: the mean spacing of the points.
@@ -87,7 +91,7 @@ pub fn straightness(pts: &[f64], opt: &Options) -> Result<Straightness> {
                 )));
             }
             let (t0, zs, _) = open(&t, &z, step, opt.max_gap.unwrap_or(2.0 * lc / 7.0))?;
-            let (skip, zf) = filter_open(&zs, step, lc)?;
+            let (skip, zf) = if opt.spline { (0, spline::filter_open(&zs, step, lc)?) } else { filter_open(&zs, step, lc)? };
             let xy = zf
                 .iter()
                 .enumerate()
@@ -146,7 +150,7 @@ mod tests {
     fn unfiltered_sine_has_strt_2a() {
         let pts = wavy(4001, 40.0, &[(4.0, 0.003)]);
         for c in [FitCriterion::LeastSquares, FitCriterion::MinZone] {
-            let s = straightness(&pts, &Options { cutoff: None, reference: c, step: None, max_gap: None }).unwrap();
+            let s = straightness(&pts, &Options { cutoff: None, spline: false, reference: c, step: None, max_gap: None }).unwrap();
             assert!((s.params.t - 0.006).abs() < 1e-9, "{c:?} {}", s.params.t);
         }
     }
@@ -156,14 +160,14 @@ mod tests {
         // whole periods in the 35 mm kept (one cut-off dropped at each end): the LS line is the axis
         for (lam, a) in [(5.0, 0.003), (2.5, 0.003), (0.25, 0.002)] {
             let pts = wavy(40001, 40.0, &[(lam, a)]);
-            let s = straightness(&pts, &Options { cutoff: Some(2.5), reference: FitCriterion::LeastSquares, step: None, max_gap: None })
+            let s = straightness(&pts, &Options { cutoff: Some(2.5), spline: false, reference: FitCriterion::LeastSquares, step: None, max_gap: None })
                 .unwrap();
             let want = 2.0 * a * open_transmission(lam, 2.5);
             assert!((s.params.t - want).abs() < 1e-9 + 1e-6 * want, "lambda {lam}: {} vs {want}", s.params.t);
             assert!((s.length - 35.0).abs() < 1e-6);
         }
         let pts = wavy(401, 40.0, &[(5.0, 0.003)]);
-        let o = Options { cutoff: Some(0.5), reference: FitCriterion::LeastSquares, step: None, max_gap: None };
+        let o = Options { cutoff: Some(0.5), spline: false, reference: FitCriterion::LeastSquares, step: None, max_gap: None };
         assert!(straightness(&pts, &o).unwrap_err().message.contains("7 points per cut-off"));
     }
 }

@@ -14,6 +14,8 @@ pyo3::import_exception!(gagekit.errors, InfeasibleError);
 pyo3::import_exception!(gagekit.errors, ConfigError);
 pyo3::import_exception!(gagekit.errors, NumericalError);
 pyo3::import_exception!(gagekit.errors, InternalError);
+pyo3::import_exception!(gagekit.errors, FileFormatError);
+pyo3::import_exception!(gagekit.errors, FileAccessError);
 
 /// The gagekit exception of a kernel error.
 pub fn to_pyerr(e: GkError) -> PyErr {
@@ -24,6 +26,8 @@ pub fn to_pyerr(e: GkError) -> PyErr {
         ErrorKind::Infeasible => InfeasibleError::new_err(m),
         ErrorKind::Config => ConfigError::new_err(m),
         ErrorKind::Numerical => NumericalError::new_err(m),
+        ErrorKind::FileFormat => FileFormatError::new_err(m),
+        ErrorKind::FileAccess => FileAccessError::new_err(m),
         // `run` turns an interrupted kernel into KeyboardInterrupt before it gets here
         ErrorKind::Interrupted => pyo3::exceptions::PyKeyboardInterrupt::new_err(m),
     }
@@ -32,19 +36,6 @@ pub fn to_pyerr(e: GkError) -> PyErr {
 /// An `InvalidInputError` raised by the conversion layer (shapes, contiguity).
 pub fn invalid(message: impl Into<String>) -> PyErr {
     to_pyerr(GkError::invalid(message))
-}
-
-/// Build a `gagekit.errors.<name>` exception carrying `message` (by class name; kept for the
-/// form bindings: the other bindings use [`to_pyerr`] / [`invalid`]).
-pub fn gagekit_err(_py: Python<'_>, name: &str, message: String) -> PyErr {
-    match name {
-        "InvalidInputError" => InvalidInputError::new_err(message),
-        "DegenerateGeometryError" => DegenerateGeometryError::new_err(message),
-        "InfeasibleError" => InfeasibleError::new_err(message),
-        "ConfigError" => ConfigError::new_err(message),
-        "NumericalError" => NumericalError::new_err(message),
-        _ => InternalError::new_err(message),
-    }
 }
 
 /// Run a kernel with the GIL released, turning its errors and any panic into

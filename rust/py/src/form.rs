@@ -551,42 +551,53 @@ fn form_sphere_fit(py: Python<'_>, points: PyReadonlyArray2<'_, f64>, criterion:
     })
 }
 
-/// A least-squares cone: axis point (nearest the centroid), direction (the radius grows
-/// along it), distance from the point to the surface, half apex angle (rad), certificate
-/// (signed orthogonal distances, positive outside) and form error.
-#[pyclass(frozen, get_all, module = "gagekit._core")]
+/// A cone (issue 25 §3): the fields of the kernel's [`gagekit_form::cone::ConeFit`] (axis
+/// point of the reference section, direction along which the radius grows, apex, half
+/// angle rad, radii at the reference section, zone radii, control points, optimality gap),
+/// read through [`mirror!`], plus the criterion's canonical name, the certificate (signed
+/// normal deviations, positive away from the axis) and `form_error`.
+#[pyclass(frozen, module = "gagekit._core")]
 pub struct ConeResult {
-    pub point: [f64; 3],
-    pub direction: [f64; 3],
-    pub distance: f64,
-    pub half_angle: f64,
-    pub min_distance: f64,
-    pub max_distance: f64,
-    pub form_error: f64,
+    fit: gagekit_form::cone::ConeFit,
 }
 
-/// Least-squares cone of (n, 3) points (Forbes' parametrisation).
+mirror!(ConeResult {
+    point, direction, apex, half_angle, fixed_angle, radius, distance, r_in, r_out, control_in, control_out, gap,
+    evaluations
+} extra {
+    #[getter]
+    fn criterion(&self) -> &'static str {
+        self.fit.criterion.name()
+    }
+    #[getter]
+    fn min_distance(&self) -> f64 {
+        self.fit.extent.min
+    }
+    #[getter]
+    fn max_distance(&self) -> f64 {
+        self.fit.extent.max
+    }
+    #[getter]
+    fn form_error(&self) -> f64 {
+        self.fit.form_error()
+    }
+});
+
+/// Cone of (n, 3) points: `criterion` any name of the criterion table; `half_angle` (rad)
+/// fixes the half angle.
 #[pyfunction]
-fn form_cone_lsq(py: Python<'_>, points: PyReadonlyArray2<'_, f64>) -> PyResult<ConeResult> {
+#[pyo3(signature = (points, criterion, half_angle=None))]
+fn form_cone_fit(py: Python<'_>, points: PyReadonlyArray2<'_, f64>, criterion: &str, half_angle: Option<f64>) -> PyResult<ConeResult> {
     let pts = rows(py, &points, 3, "points")?;
-    let (c, e) = run(py, || {
-        let c = lsq::cone(pts)?;
-        let e = lsq::cone_extent(pts, &c);
-        Ok((c, e))
+    let fit = run(py, || {
+        let crit = FitCriterion::parse_for(criterion, &FitCriterion::ALL, "cone")?;
+        gagekit_form::cone::fit(pts, crit, &gagekit_form::cone::Options { half_angle })
     })?;
-    Ok(ConeResult {
-        point: c.point,
-        direction: c.direction,
-        distance: c.distance,
-        half_angle: c.half_angle,
-        min_distance: e.min,
-        max_distance: e.max,
-        form_error: e.spread(),
-    })
+    Ok(ConeResult { fit })
 }
 
 fn register_3d(m: &Bound<'_, PyModule>) -> PyResult<()> {
-    m.add_function(wrap_pyfunction!(form_cone_lsq, m)?)?;
+    m.add_function(wrap_pyfunction!(form_cone_fit, m)?)?;
     m.add_function(wrap_pyfunction!(form_cylinder_fit, m)?)?;
     m.add_function(wrap_pyfunction!(form_line3_min_zone, m)?)?;
     m.add_function(wrap_pyfunction!(form_criterion, m)?)?;

@@ -60,11 +60,10 @@ pub struct PointGrid {
 fn one_box(py: Python<'_>, row: &PyReadonlyArray1<'_, f64>) -> PyResult<OrientedBox> {
     let b = values(py, row, "region")?;
     if b.len() != 9 {
-        return Err(crate::errors::gagekit_err(
-            py,
-            "InvalidInputError",
-            format!("region: expected 9 numbers (centre, size, rotation), got {}", b.len()),
-        ));
+        return Err(crate::errors::invalid(format!(
+            "region: expected 9 numbers (centre, size, rotation), got {}",
+            b.len()
+        )));
     }
     Ok(OrientedBox { center: [b[0], b[1], b[2]], size: [b[3], b[4], b[5]], rotation: [b[6], b[7], b[8]] })
 }

@@ -96,10 +96,10 @@ pub struct StraightnessResult {
     length: f64,
 }
 
-/// STRt, STRp, STRv, STRq of (n, 2) points: Gaussian filter of cut-off `cutoff` mm (None:
-/// unfiltered), reference LSLI or MZLI.
+/// STRt, STRp, STRv, STRq of (n, 2) points: Gaussian (or, `spline`, ISO 16610-22 cubic
+/// spline) filter of cut-off `cutoff` mm (None: unfiltered), reference LSLI or MZLI.
 #[pyfunction]
-#[pyo3(signature = (points, cutoff=None, reference="LSLI", step=None, max_gap=None))]
+#[pyo3(signature = (points, cutoff=None, reference="LSLI", step=None, max_gap=None, spline=false))]
 fn form_straightness(
     py: Python<'_>,
     points: PyReadonlyArray2<'_, f64>,
@@ -107,11 +107,12 @@ fn form_straightness(
     reference: &str,
     step: Option<f64>,
     max_gap: Option<f64>,
+    spline: bool,
 ) -> PyResult<StraightnessResult> {
     let pts = rows(py, &points, 2, "points")?;
     let s = run(py, || {
         let crit = reference_of(reference)?;
-        straightness::straightness(pts, &straightness::Options { cutoff, reference: crit, step, max_gap })
+        straightness::straightness(pts, &straightness::Options { cutoff, spline, reference: crit, step, max_gap })
     })?;
     let name = if s.reference == gagekit_form::criterion::FitCriterion::MinZone { "MZLI" } else { "LSLI" };
     Ok(StraightnessResult {
@@ -186,6 +187,22 @@ fn profile_gaussian_open<'py>(
     Ok((first, PyArray1::from_vec(py, out)))
 }
 
+/// ISO 16610-22 cubic spline filter (mean line) of an open profile at spacing `step`.
+#[pyfunction]
+fn profile_spline_open<'py>(
+    py: Python<'py>,
+    values_: PyReadonlyArray1<'py, f64>,
+    step: f64,
+    cutoff: f64,
+) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    let z = values(py, &values_, "values")?;
+    let out = run(py, || {
+        gagekit_core::check_finite(z, 1, "values")?;
+        gagekit_profile::spline::filter_open(z, step, cutoff)
+    })?;
+    Ok(PyArray1::from_vec(py, out))
+}
+
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<FormParams>()?;
     m.add_class::<RoundnessResult>()?;
@@ -196,5 +213,6 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(form_flatness, m)?)?;
     m.add_function(wrap_pyfunction!(profile_gaussian_closed, m)?)?;
     m.add_function(wrap_pyfunction!(profile_gaussian_open, m)?)?;
+    m.add_function(wrap_pyfunction!(profile_spline_open, m)?)?;
     Ok(())
 }

@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from ... import _core
-from ...errors import FileFormatError, InvalidInputError
+from ...errors import FileFormatError
 from . import Raw
 
 
@@ -29,10 +29,7 @@ def _check_spread(p: Path, pts: np.ndarray) -> None:
 
 
 def read(p: Path, dim: int) -> Raw:
-    try:
-        cloud = _core.cloud_read_e57(str(p))
-    except InvalidInputError as exc:
-        raise FileFormatError(str(exc)) from None
+    cloud = _core.cloud_read_e57(str(p))  # FileFormatError / FileAccessError from the kernel
     pts, scans, dropped = cloud.points, cloud.scans, cloud.invalid_dropped
     if scans == 0:
         raise FileFormatError(f"{p}: the E57 file holds no scans")

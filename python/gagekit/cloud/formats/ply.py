@@ -13,18 +13,14 @@ from pathlib import Path
 import numpy as np
 
 from ... import _core
-from ...errors import FileFormatError, InvalidInputError
 from . import Raw
 
 
 def read(p: Path, dim: int) -> Raw:
-    try:
-        layout = _core.cloud_ply_layout(str(p))
-        n, offset = layout.vertices, layout.direct_offset
-        if offset is not None and offset % 8 == 0:  # numpy and the kernels need aligned float64
-            pts = np.asarray(np.memmap(p, dtype="<f8", mode="c", offset=offset, shape=(n, 3))) if n else np.empty((0, 3))
-            return Raw(pts, "ply binary_little_endian", finite_checked=True)
-        cloud = _core.cloud_read_ply(str(p))
-    except InvalidInputError as exc:
-        raise FileFormatError(str(exc)) from None
+    layout = _core.cloud_ply_layout(str(p))  # FileFormatError / FileAccessError from the kernel
+    n, offset = layout.vertices, layout.direct_offset
+    if offset is not None and offset % 8 == 0:  # numpy and the kernels need aligned float64
+        pts = np.asarray(np.memmap(p, dtype="<f8", mode="c", offset=offset, shape=(n, 3))) if n else np.empty((0, 3))
+        return Raw(pts, "ply binary_little_endian", finite_checked=True)
+    cloud = _core.cloud_read_ply(str(p))
     return Raw(cloud.points, f"ply {cloud.format}", finite_checked=True)

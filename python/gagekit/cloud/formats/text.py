@@ -7,15 +7,12 @@ from __future__ import annotations
 from pathlib import Path
 
 from ... import _core
-from ...errors import FileFormatError, InvalidInputError
+from ...errors import FileFormatError
 from . import Raw
 
 
 def read(p: Path, dim: int, nist: bool = False) -> Raw:
-    try:
-        pts = _core.cloud_read_ascii(str(p), dim, 1 if nist else 0).points
-    except InvalidInputError as exc:
-        raise FileFormatError(str(exc)) from None
+    pts = _core.cloud_read_ascii(str(p), dim, 1 if nist else 0).points  # FileFormatError from the kernel
     if nist:
         with p.open("rb") as fh:
             first = fh.readline().split()

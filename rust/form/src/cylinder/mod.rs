@@ -53,8 +53,8 @@ mod least_squares;
 mod mic_search;
 mod projection;
 mod search;
-mod slp;
-mod subset;
+pub(crate) mod slp;
+pub(crate) mod subset;
 #[cfg(test)]
 mod tests;
 

@@ -11,9 +11,9 @@ use gagekit_core::{GkError, Result};
 use nalgebra::Vector3;
 
 /// Above this many points the fit runs on an active subset.
-const SUBSET_ABOVE: usize = 2000;
+pub(crate) const SUBSET_ABOVE: usize = 2000;
 /// Points of largest / smallest least-squares residual in the first subset.
-const SUBSET_EXTREMES: usize = 128;
+pub(crate) const SUBSET_EXTREMES: usize = 128;
 /// Violating points added to the subset per round.
 const SUBSET_ADD: usize = 64;
 
@@ -37,38 +37,61 @@ pub(super) fn fit_in(
     let mut order: Vec<usize> = (0..n).collect();
     order.sort_by(|&i, &j| dist[i].total_cmp(&dist[j]).then(i.cmp(&j)));
     let k = SUBSET_EXTREMES;
-    let mut subset: Vec<usize> = match crit {
+    let subset: Vec<usize> = match crit {
         Criterion::MinCircumscribed => order[n - 2 * k..].to_vec(),
         Criterion::MaxInscribed => order[..2 * k].iter().chain(&order[n - k..]).copied().collect(),
         Criterion::MinZone => order[..k].iter().chain(&order[n - k..]).copied().collect(),
     };
     let (mut iterations, mut evaluations) = (0, 0);
+    let fit_sub = |sub: &[f64]| -> Result<CylinderFit> {
+        let r = fit_direct(sub, crit, opts, lsq_axis, region)?;
+        iterations += r.iterations;
+        evaluations += r.evaluations;
+        Ok(r)
+    };
+    let violations = |r: &CylinderFit| -> Vec<f64> {
+        let tol = 1e-12 * spread.max(r.r_out);
+        let d: Vec<f64> = lsq::axis_distances(pts, &r.point, &r.direction).collect();
+        d.iter()
+            .map(|&d| {
+                let hi = if crit == Criterion::MaxInscribed { 0.0 } else { d - r.r_out };
+                let lo = if crit == Criterion::MinCircumscribed { 0.0 } else { r.r_in - d };
+                hi.max(lo) - tol
+            })
+            .collect()
+    };
+    let (mut r, subset) = settle(pts, subset, "cylinder", fit_sub, violations)?;
+    r.control_in = r.control_in.iter().map(|&j| subset[j]).collect();
+    r.control_out = r.control_out.iter().map(|&j| subset[j]).collect();
+    r.extent = lsq::axis_extent(pts, &r.point, &r.direction);
+    r.iterations = iterations;
+    r.evaluations = evaluations;
+    Ok(r)
+}
+
+/// The active-subset iteration: fit the points `subset` of `pts` (flat, row-major), add
+/// the (at most [`SUBSET_ADD`]) points of largest positive `violations` of that fit, until
+/// no point violates it. Returns the last fit and its subset (sorted: the fit's point `j`
+/// is `subset[j]`).
+pub(crate) fn settle<R>(
+    pts: &[f64],
+    mut subset: Vec<usize>,
+    what: &str,
+    mut fit: impl FnMut(&[f64]) -> Result<R>,
+    violations: impl Fn(&R) -> Vec<f64>,
+) -> Result<(R, Vec<usize>)> {
     for _round in 0..30 {
         subset.sort_unstable();
         subset.dedup();
         let sub: Vec<f64> = subset.iter().flat_map(|&i| [pts[3 * i], pts[3 * i + 1], pts[3 * i + 2]]).collect();
-        let mut r = fit_direct(&sub, crit, opts, lsq_axis, region)?;
-        iterations += r.iterations;
-        evaluations += r.evaluations;
-        let tol = 1e-12 * spread.max(r.r_out);
-        let d: Vec<f64> = lsq::axis_distances(pts, &r.point, &r.direction).collect();
-        let violation = |i: usize| -> f64 {
-            let hi = if crit == Criterion::MaxInscribed { 0.0 } else { d[i] - r.r_out };
-            let lo = if crit == Criterion::MinCircumscribed { 0.0 } else { r.r_in - d[i] };
-            hi.max(lo)
-        };
-        let mut bad: Vec<usize> = (0..n).filter(|&i| violation(i) > tol).collect();
+        let r = fit(&sub)?;
+        let v = violations(&r);
+        let mut bad: Vec<usize> = (0..v.len()).filter(|&i| v[i] > 0.0).collect();
         if bad.is_empty() {
-            r.control_in = r.control_in.iter().map(|&j| subset[j]).collect();
-            r.control_out = r.control_out.iter().map(|&j| subset[j]).collect();
-            r.extent = lsq::axis_extent(pts, &r.point, &r.direction);
-            r.iterations = iterations;
-            r.evaluations = evaluations;
-            return Ok(r);
+            return Ok((r, subset));
         }
-        bad.sort_by(|&i, &j| violation(j).total_cmp(&violation(i)).then(i.cmp(&j)));
+        bad.sort_by(|&i, &j| v[j].total_cmp(&v[i]).then(i.cmp(&j)));
         subset.extend(bad.into_iter().take(SUBSET_ADD));
     }
-    Err(GkError::numerical("cylinder: the active-subset iteration did not settle; please report this data set"))
+    Err(GkError::numerical(format!("{what}: the active-subset iteration did not settle; please report this data set")))
 }
-

@@ -52,6 +52,12 @@ fn algebraic_cone(q: &[[f64; 3]], a: &Vector3<f64>) -> Option<(Vector3<f64>, f64
 /// d = rho cos(psi) - z sin(psi) - D (Forbes' parametrisation), from
 /// algebraic starts about each principal axis.
 pub fn cone(pts: &[f64]) -> Result<Cone> {
+    cone_with(pts, None)
+}
+
+/// [`cone`] with the half angle free (`None`) or fixed to `half_angle` (rad, in
+/// (0, pi/2); the caller checks it): the fixed angle's step is held at 0.
+pub fn cone_with(pts: &[f64], half_angle: Option<f64>) -> Result<Cone> {
     check_points(pts, 3, 6, "cone")?;
     let c = centroid(pts, 3);
     let q = centred3(pts, 3, &c);
@@ -71,15 +77,22 @@ pub fn cone(pts: &[f64]) -> Result<Cone> {
     let eval = |s: &S| {
         let (u, v) = orthonormal_basis(&s.1);
         let (cp, sp) = (s.3.cos(), s.3.sin());
-        normal_equations::<6>(&q, |x| {
+        let fixed = half_angle.is_some() as u8 as f64;
+        let (f, mut jtj, jtr) = normal_equations::<6>(&q, |x| {
             let d = vec3(x) - s.0;
             let (xu, yv, z) = (d.dot(&u), d.dot(&v), d.dot(&s.1));
             let rho = xu.hypot(yv);
             let (cx, cy) = if rho > 0.0 { (xu / rho, yv / rho) } else { (0.0, 0.0) };
             let r = rho * cp - z * sp - s.2;
             // step (x0, y0, alpha, beta, dD, dpsi); a' = a + alpha u + beta v
-            (r, [-cp * cx, -cp * cy, -cp * cx * z - sp * xu, -cp * cy * z - sp * yv, -1.0, -rho * sp - z * cp])
-        })
+            let dpsi = (1.0 - fixed) * (-rho * sp - z * cp);
+            (r, [-cp * cx, -cp * cy, -cp * cx * z - sp * xu, -cp * cy * z - sp * yv, -1.0, dpsi])
+        });
+        if half_angle.is_some() {
+            // a fixed angle: zero gradient and a unit curvature keep its step at 0
+            jtj[(5, 5)] = 1.0;
+        }
+        (f, jtj, jtr)
     };
     let apply = |s: &S, st: &DVector<f64>| {
         let (u, v) = orthonormal_basis(&s.1);
@@ -92,7 +105,7 @@ pub fn cone(pts: &[f64]) -> Result<Cone> {
         let Some((l0, s0, t0)) = algebraic_cone(&q, &a) else { continue };
         // the algebraic fit gives rho = s0 + t0 z (up to the sign of t0)
         for sign in [1.0, -1.0] {
-            let psi = (sign * t0).atan();
+            let psi = half_angle.map_or((sign * t0).atan(), |h| sign * h);
             let start: S = (l0, a, s0 * psi.cos(), psi);
             if let Ok((sol, _)) = levenberg_marquardt(start, 6, sv[0] / (q.len() as f64).sqrt(), 500, eval, cost, apply, "cone") {
                 let f = cost(&sol);

@@ -5,7 +5,6 @@ The figures, the HTML section and ``write_report`` live in :mod:`gagekit.report.
 from __future__ import annotations
 
 import math
-from typing import Any
 
 from ..report.text import table
 from .analysis import GageCheckResult
@@ -90,12 +89,3 @@ def human(result: GageCheckResult) -> str:
     headers, rows = gage_table(result)
     return "\n".join(summary_lines(result)) + "\n\n" + table(headers, rows) + \
         "\n\nallowances in mm: smallest signed distance to the gage plane (negative: short of material)"
-
-
-def __getattr__(name: str) -> Any:
-    # The figures and the HTML/file report moved to report/ (plotting only there).
-    if name in ("region_figure", "add_to_report", "write_report"):
-        from ..report import gage as _report
-
-        return getattr(_report, name)
-    raise AttributeError(name)
