@@ -5,12 +5,21 @@ Everything the tests read is inside the repository: the NIST least-squares pairs
 sets and the example machine inside the package (runtime data the demo uses too).
 """
 
+import os
 from pathlib import Path
 
 import pytest
+from hypothesis import settings
 
 import gagekit
 from gagekit.samples import data_path
+
+# Property tests: random examples on a developer's machine (they explore), the same derived
+# examples on every CI run (CI=true: a run's verdict does not depend on the draw; a failure
+# seen once is seen again). Each test's own max_examples and deadline still apply.
+settings.register_profile("ci", derandomize=True, print_blob=True)
+settings.register_profile("dev", print_blob=True)
+settings.load_profile("ci" if os.environ.get("CI", "").lower() in ("1", "true", "yes") else "dev")
 
 ROOT = Path(__file__).resolve().parents[1]
 TEST_DATA = ROOT / "tests" / "data"
