@@ -80,10 +80,10 @@ from .calibration import Calibration
 from .controllers import fanuc, grid_csv, isg, linuxcnc
 from .controllers.fanuc import read_fanuc_3d
 from .controllers.grid_csv import read_grid_csv
-from .controllers.isg import ISO_LETTERS, isg_entries, isg_twists, isg_uncertainty, read_isg_csv
-from .controllers.linuxcnc import LINUXCNC_MAX_LINES, linuxcnc_paths, read_linuxcnc
+from .controllers.isg import ISO_LETTERS, isg_entries, isg_twists, isg_uncertainty, read_isg_csv  # noqa: F401  (re-exported)
+from .controllers.linuxcnc import LINUXCNC_MAX_LINES, linuxcnc_paths, read_linuxcnc  # noqa: F401  (re-exported)
 from .errormotions import compose
-from .grid import (
+from .grid import (  # noqa: F401  (DEFAULT_STEP, multilinear: re-exported for callers)
     DEFAULT_STEP,
     Grid,
     calibration_parameters,
@@ -112,10 +112,6 @@ __all__ = [
     "isg_uncertainty",
     "companion_path",
 ]
-
-#: re-exported from the modules that define them (callers and tests import them from here)
-_REEXPORTED = (DEFAULT_STEP, LINUXCNC_MAX_LINES, corrections, interpolate_grid, multilinear, isg_entries, isg_twists,
-               linuxcnc_paths)
 
 FORMATS = ("grid-csv", "isg-csv", "fanuc-3d", "linuxcnc")
 

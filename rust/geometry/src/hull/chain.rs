@@ -35,6 +35,11 @@ pub fn hull_2d(p: &[[f64; 2]]) -> Vec<usize> {
     if ids.len() < 3 {
         return ids;
     }
+    chain(p, &ids)
+}
+
+/// Andrew's two monotone chains over `ids`, lexicographically sorted and distinct (>= 3).
+fn chain(p: &[[f64; 2]], ids: &[usize]) -> Vec<usize> {
     let mut hull: Vec<usize> = Vec::with_capacity(64);
     for pass in 0..2 {
         let start = hull.len();
@@ -153,19 +158,8 @@ mod tests {
         let mut small: Vec<usize> = (0..p.len()).collect();
         small.sort_unstable_by(|&i, &j| lex(&p, i, j));
         let fast = hull_2d(&p);
-        // the same hull without the prefilter: run the chain on the survivors-free path
-        let mut slow = Vec::new();
-        for pass in 0..2 {
-            let start = slow.len();
-            let seq: Box<dyn Iterator<Item = &usize>> = if pass == 0 { Box::new(small.iter()) } else { Box::new(small.iter().rev()) };
-            for &i in seq {
-                while slow.len() >= start + 2 && orient2d(p[slow[slow.len() - 2]], p[slow[slow.len() - 1]], p[i]) <= 0.0 {
-                    slow.pop();
-                }
-                slow.push(i);
-            }
-            slow.pop();
-        }
+        // the same chain on every point, without the prefilter
+        let slow = chain(&p, &small);
         assert_eq!(fast, slow);
     }
 }
