@@ -5,7 +5,7 @@ Scan: 14 M points near its surface in scan-line order (u, v), normal offsets N(0
 plus 2 % far points (up to 5 mm), written as a binary PLY (float64). Cases:
 
 - ``signed distances``: in memory, mesh arrays and points in, one signed distance per point
-  out, acceleration structure built inside the timing: gagekit (``gagekit._core.Mesh``,
+  out, acceleration structure built inside the timing: gagekit (``gagekit._core.mesh.Mesh``,
   BVH + exact point-triangle distance + pseudonormal sign) vs Open3D
   ``RaycastingScene.add_triangles`` + ``compute_signed_distance`` (float32 inside);
 - ``C2M command line``: files in, distances out: ``gagekit compare SCAN MESH --deviations
@@ -104,7 +104,7 @@ def main() -> None:
         print(f"# {len(t)} triangles, {len(pts)} points, {os.cpu_count()} cores")
 
         def ours():
-            m = _core.Mesh(v, t)
+            m = _core.mesh.Mesh(v, t)
             return m.distances(pts)[0]
 
         only = next((a.split("=", 1)[1].split(",") for a in sys.argv if a.startswith("--cases=")), ["distances", "c2m", "best-fit"])
@@ -168,7 +168,7 @@ def main() -> None:
         from scipy.spatial.transform import Rotation
 
         v2, t2 = torus(500, 100, bumpy=True)
-        m2 = _core.Mesh(v2, t2)
+        m2 = _core.mesh.Mesh(v2, t2)
         p2 = scan(1_000_000, 1, bumpy=True)  # the tube radius varies with u and v: one pose fits
         rot = Rotation.random(random_state=7).as_matrix()
         moved = np.ascontiguousarray(p2 @ rot.T + [300.0, -200.0, 150.0])

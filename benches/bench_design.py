@@ -111,7 +111,7 @@ def machine_case(n_cand: int, n: int, starts: int, budget: float, crits: str) ->
     for crit in crits:
         w = W if crit == "I" else None
         t, c = time.perf_counter(), time.process_time()
-        out = _core.design_search(flat, 3, [np.arange(n_cand)], [0] * n, crit, weights=w, starts=starts, seed=0)
+        out = _core.design.search(flat, 3, [np.arange(n_cand)], [0] * n, crit, weights=w, starts=starts, seed=0)
         tg, cg = time.perf_counter() - t, time.process_time() - c
         tp, peer = peer_exchange(B, n, crit, 0, budget, w)
         print(f"machine {n}-point {crit} from {n_cand} candidates ({starts} starts): gagekit {tg:.2f} s "

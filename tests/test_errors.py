@@ -35,4 +35,4 @@ def test_kernel_errors_map_to_their_classes():
     with pytest.raises(InvalidInputError, match="non-finite"):
         gagekit.convex_hull_indices([[0, 0, 0], [1, np.nan, 0]])
     with pytest.raises(InvalidInputError, match="shape"):
-        _core.hull_indices(np.zeros((5, 2)))
+        _core.geometry.hull_indices(np.zeros((5, 2)))

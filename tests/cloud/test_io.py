@@ -147,7 +147,7 @@ def test_written_binary_ply_is_aligned_and_read_without_a_copy(tmp_path):
         f = tmp_path / f"c{n}.ply"
         pts = np.arange(3.0 * n).reshape(n, 3) + 0.25
         gagekit.write_points(f, pts)
-        layout = _core.cloud_ply_layout(str(f))
+        layout = _core.cloud.ply_layout(str(f))
         assert layout.vertices == n and layout.direct_offset is not None and layout.direct_offset % 8 == 0
         got = gagekit.read_points(f)
         assert np.array_equal(got, pts)

@@ -240,7 +240,7 @@ def test_step1_recovers_any_tracker_placement(rotvec, shift):
     m = gagekit.load_machine(EXAMPLE)
     frame = gagekit.Frame(rotation_from_vector(rotvec), shift)
     p = m.nominal(m.sample_commands(30, seed=1))
-    fit = gagekit._core.machine_rigid_fit(p, frame.to_tracker(p))
+    fit = gagekit._core.kinematics.rigid_fit(p, frame.to_tracker(p))
     r, t, rms = fit.rotation, fit.translation, fit.rms
     assert rms < 1e-8
     assert np.allclose(r, frame.rotation, atol=1e-10) and np.allclose(t, frame.translation, atol=1e-7)

@@ -1,7 +1,7 @@
 """The CAD model as gagekit uses it: a triangle mesh in millimetres whose triangles know
 their CAD face, the faces (STEP ids and names), and the distance kernel built once.
 
-Distances come from the Rust kernel ``gagekit-mesh`` (:class:`gagekit._core.Mesh`): a BVH
+Distances come from the Rust kernel ``gagekit-mesh`` (:class:`gagekit._core.mesh.Mesh`): a BVH
 over the triangles, the exact closest point of the nearest triangle, the sign from the
 angle-weighted pseudonormal (Baerentzen and Aanaes 2005), positive outside the material.
 A STEP model adds a refinement on its exact faces (:mod:`.step`), so its distances are
@@ -75,7 +75,7 @@ class CadModel:
         if self._mesh is None:
             from .. import _core
 
-            self._mesh = _core.Mesh(np.ascontiguousarray(self.vertices, dtype=np.float64),
+            self._mesh = _core.mesh.Mesh(np.ascontiguousarray(self.vertices, dtype=np.float64),
                                     np.ascontiguousarray(self.triangles, dtype=np.int64))
         return self._mesh
 

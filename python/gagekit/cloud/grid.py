@@ -37,7 +37,7 @@ class IndexedCloud:
         if pts is points and pts.flags.writeable:
             pts = pts.view()
         pts.flags.writeable = False
-        self._grid = _core.grid_build(pts, int(max(1, per_cell)))
+        self._grid = _core.geometry.grid_build(pts, int(max(1, per_cell)))
         self.points: np.ndarray = pts
 
     def __len__(self) -> int:

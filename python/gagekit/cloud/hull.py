@@ -40,4 +40,4 @@ def convex_hull_indices(points) -> np.ndarray:
     Dissertation Sec. 5.4.1, Eqs. 5.20-5.21.
     """
     pts = as_points(points)
-    return _core.hull_indices(pts)
+    return _core.geometry.hull_indices(pts)

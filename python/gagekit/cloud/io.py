@@ -174,7 +174,7 @@ def _to_mm(raw: Raw, p: Path, override: Optional[str]) -> Cloud:
         # in place (the reader's own fresh array): one parallel pass, no second array;
         # an overflow to infinity is an error naming the point
         pts = np.require(pts, np.float64, ["C_CONTIGUOUS", "WRITEABLE"])
-        _core.cloud_scale_in_place(pts, [s, s, sz][: pts.shape[1]], str(p))
+        _core.cloud.scale_in_place(pts, [s, s, sz][: pts.shape[1]], str(p))
     return Cloud(np.ascontiguousarray(pts), str(p), raw.format, unit, s, basis, sz,
                  raw.scans, raw.invalid_dropped, tuple(warns))
 
@@ -198,7 +198,7 @@ def write_points(path: PathLike, points, *, binary: bool = True) -> None:
             np.save(tmp, pts)
         else:
             header = ",".join("xyz"[: pts.shape[1]]) if suffix == ".csv" else None
-            _core.cloud_write_ascii(str(tmp), pts, "," if suffix == ".csv" else " ", header)
+            _core.cloud.write_ascii(str(tmp), pts, "," if suffix == ".csv" else " ", header)
 
 
 def _sniff(p: Path) -> str:

@@ -36,7 +36,7 @@ class Box:
             if len(vals) != 3:
                 raise ConfigError(f"region '{self.name}': {attr} must be three numbers, got {len(vals)}")
             object.__setattr__(self, attr, vals)
-        _core.validate_box(self.name, self.center, self.size, self.rotation)  # finite, positive size (Rust)
+        _core.geometry.validate_box(self.name, self.center, self.size, self.rotation)  # finite, positive size (Rust)
 
     def row(self) -> list[float]:
         return [*self.center, *self.size, *self.rotation]
@@ -59,7 +59,7 @@ def classify(points, regions: Sequence[Box]) -> list[np.ndarray]:
     """
     pts = as_points(points)
     boxes = np.array([r.row() for r in regions], dtype=np.float64).reshape(-1, 9)
-    return list(_core.classify_boxes(pts, boxes))
+    return list(_core.geometry.classify_boxes(pts, boxes))
 
 
 def select(points, region: Box) -> np.ndarray:

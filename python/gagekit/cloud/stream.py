@@ -184,7 +184,7 @@ def _check_finite_from(pts: np.ndarray, offset: int, what: str) -> None:
 
 def _scale_from(pts: np.ndarray, scale: list, offset: int, what: str) -> None:
     try:
-        _core.cloud_scale_in_place(pts, scale, what)
+        _core.cloud.scale_in_place(pts, scale, what)
     except InvalidInputError as exc:
         m = re.search(r"point ([0-9]+) overflows", str(exc))
         if m is None:
@@ -226,17 +226,17 @@ def _open_format(p: Path, suffix: str, m: int):
         block = max(1 << 16, m * 32)  # about one point per 32 bytes of text
 
         def text_chunks() -> Iterator[np.ndarray]:
-            s = _core.cloud_ascii_chunks(str(p), 3, 1 if nist else 0, block)
+            s = _core.cloud.ascii_chunks(str(p), 3, 1 if nist else 0, block)
             while (c := s.next_chunk()) is not None:
                 yield c
 
         return (Raw(empty, "nist-ds" if nist else "ascii"), text_chunks, None, True,
                 (lambda n: _nist_count(p, n)) if nist else None)
     if suffix == ".ply":
-        s0 = _core.cloud_ply_chunks(str(p))
+        s0 = _core.cloud.ply_chunks(str(p))
         if s0 is not None:
             def ply_chunks() -> Iterator[np.ndarray]:
-                s = _core.cloud_ply_chunks(str(p))
+                s = _core.cloud.ply_chunks(str(p))
                 while s is not None and (c := s.next_chunk(m)) is not None:
                     yield c
 

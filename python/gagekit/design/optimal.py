@@ -190,7 +190,7 @@ def search_design(
         weights = np.ascontiguousarray(np.einsum("mrk,mrl->kl", g, g) / len(g))
 
     groups, point_group, zone_of_point = _groups(cand, zone_boxes, n)
-    out = _core.design_search(
+    out = _core.design.search(
         np.ascontiguousarray(blocks.reshape(m * r, k)), r, groups, point_group, crit,
         weights=weights, starts=max(1, int(starts)), max_sweeps=50, seed=seed,
     )
@@ -200,7 +200,7 @@ def search_design(
     if do_refine:
         points, point_blocks = _refine(rows, points, point_blocks, zone_of_point, zone_boxes, lo, hi,
                                        crit, weights, feasible, len(cand) ** (1.0 / d))
-    met = _core.design_metrics(np.ascontiguousarray(point_blocks.reshape(n * r, k)), weights=weights)
+    met = _core.design.metrics(np.ascontiguousarray(point_blocks.reshape(n * r, k)), weights=weights)
     return _result(points, crit, met, zone_of_point, len(cand), out.start_objectives)
 
 
@@ -311,7 +311,7 @@ def _corners(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
 
 
 def _scaled(n: int, lo: np.ndarray, hi: np.ndarray, seed: int) -> np.ndarray:
-    u = np.asarray(_core.design_halton(n, len(lo), seed))
+    u = np.asarray(_core.design.halton(n, len(lo), seed))
     return lo + u * (hi - lo)
 
 
@@ -460,7 +460,7 @@ def _refine(rows, points, blocks, zone_of_point, zone_boxes, lo, hi, crit, weigh
             starts_at = np.searchsorted(owner[order], np.arange(n + 1))
             groups = [np.concatenate([[i], n + order[starts_at[i]:starts_at[i + 1]]]).astype(np.int64)
                       for i in range(n)]
-            out = _core.design_search(
+            out = _core.design.search(
                 np.ascontiguousarray(all_blocks.reshape(-1, k)), r, groups, list(range(n)), crit,
                 weights=weights, starts=1, max_sweeps=_refine_sweeps(crit), seed=0, initial=list(range(n)),
             )

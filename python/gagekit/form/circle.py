@@ -22,7 +22,7 @@ __all__ = ["CircleFit", "fit_circle", "CIRCLE_CRITERIA"]
 
 #: Below this arc (degrees) the maximum inscribed circle is ill-posed (the kernel's
 #: constant, gagekit-form ``circle::MIN_ARC_DEG``).
-MIN_ARC_DEG = _core.CIRCLE_MIN_ARC_DEG
+MIN_ARC_DEG = _core.form.CIRCLE_MIN_ARC_DEG
 
 
 @dataclass(frozen=True)
@@ -150,12 +150,12 @@ def fit_circle(points: Any, criterion: str = "lsq", method: str = "exact", seed:
                 "method 'pso' fits mc, mi and mz and takes the options seed, particles, "
                 "iterations, stall_iterations"
             )
-        r = _core.form_circle_pso(
+        r = _core.form.circle_pso(
             pts, crit, int(options.get("seed", 0)), int(options.get("particles", 20)),
             int(options.get("iterations", 2000)), int(options.get("stall_iterations", 100)),
         )
     else:
-        r = _core.form_circle_fit(pts, crit)
+        r = _core.form.circle_fit(pts, crit)
     return _result(r, method, int(pts.shape[0]))
 
 
@@ -176,7 +176,7 @@ def _circle_points(points: Any) -> np.ndarray:
 
 def _fit_in_plane(pts: np.ndarray, crit: str) -> CircleFit:
     """A circle in space: the 2-D fit in the least-squares plane, in Rust."""
-    r = _core.form_circle_in_plane(pts, crit)
+    r = _core.form.circle_in_plane(pts, crit)
     arc = math.degrees(r.arc)
     mz = crit == "minimum-zone"
     return CircleFit(
@@ -211,7 +211,7 @@ def _arc_warnings(crit: str, arc: float) -> list[str]:
 
 
 def _result(r: Any, method: str, n_points: int) -> CircleFit:
-    """The Python view of a complete 2-D fit from Rust (``_core.CircleResult``)."""
+    """The Python view of a complete 2-D fit from Rust (``_core.form.CircleResult``)."""
     arc = math.degrees(r.arc)
     return CircleFit(
         criterion=str(r.criterion),

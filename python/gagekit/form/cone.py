@@ -135,7 +135,7 @@ def fit_cone(points: Any, criterion: str = "least-squares", *, angle: Optional[f
         if not (0.0 < deg < 90.0):
             raise ConfigError(f"cone: the half angle must lie strictly between 0 and 90 degrees, got {angle!r}")
         half = math.radians(deg)
-    c = _core.form_cone_fit(pts, crit, half)
+    c = _core.form.cone_fit(pts, crit, half)
     zone = crit == "minimum-zone"
     control = list(c.control_in) + [i for i in c.control_out if i not in c.control_in]
     return ConeFit(

@@ -1,5 +1,5 @@
 """Fit criterion names: the package's one table of names and aliases is Rust's
-(``gagekit_form::criterion``, read through ``_core.form_criteria``); every part of the
+(``gagekit_form::criterion``, read through ``_core.form.criteria``); every part of the
 package (form, gage, inspect, the CLI) parses names here, and stores the canonical name
 (``least-squares``, ``min-circumscribed``, ``max-inscribed``, ``minimum-zone``).
 """
@@ -12,7 +12,7 @@ from .. import _core
 
 __all__ = ["ALIASES", "CIRCLE_CRITERIA", "CRITERIA", "SHAPE_CRITERIA", "criterion_name"]
 
-_TABLE = _core.form_criteria()
+_TABLE = _core.form.criteria()
 
 #: Every accepted spelling (lower case, '-' for '_') and the canonical name it stands for.
 ALIASES: dict[str, str] = {alias: name for alias, name, _ in _TABLE}
@@ -39,4 +39,4 @@ def criterion_name(criterion: object, allowed: Iterable[str] = (), shape: str = 
     """The canonical name of ``criterion`` (any alias of the table), or a
     :class:`~gagekit.errors.ConfigError` listing the names ``allowed`` (all when empty)
     for ``shape``."""
-    return _core.form_criterion(str(criterion), list(allowed), shape)
+    return _core.form.criterion(str(criterion), list(allowed), shape)

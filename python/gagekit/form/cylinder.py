@@ -172,7 +172,7 @@ def fit_cylinder(
     pts = _points(points, (3,), "cylinder")
     nominal, tilt_rad = search_settings(axis, max_tilt, "cylinder")
     if crit == "least-squares":
-        ls = _core.form_cylinder_lsq(pts)
+        ls = _core.form.cylinder_lsq(pts)
         arc = math.degrees(ls.arc)
         # the angles of the least-squares axis as numpy computed them before the kernel
         # returned complete fits (its BLAS norm can differ from nalgebra's by an ulp, and
@@ -188,7 +188,7 @@ def fit_cylinder(
             raise ConfigError(f"cylinder: {name} must be a positive integer, got {v}")
     if seed < 0:
         raise ConfigError(f"cylinder: seed must be a non-negative integer, got {seed}")
-    r = _core.form_cylinder_fit(
+    r = _core.form.cylinder_fit(
         pts, crit, int(seed), int(particles), int(iterations), int(stall_iterations),
         nominal, tilt_rad, int(refine_starts), int(hop_rounds),
     )
@@ -230,7 +230,7 @@ def fit_cylinder(
 
 #: Below this arc (degrees) around the axis a maximum inscribed cylinder is ill-posed
 #: (the kernel's constant, gagekit-form ``cylinder::MIN_ARC``).
-MIN_ARC_DEG = _core.CYLINDER_MIN_ARC_DEG
+MIN_ARC_DEG = _core.form.CYLINDER_MIN_ARC_DEG
 
 
 def _arc_warnings(crit: str, arc: float) -> list[str]:

@@ -29,7 +29,7 @@ def text_columns(path: Union[str, Path]) -> int:
             head = fh.read(1 << 20)
     except OSError:
         return 0
-    return int(_core.cloud_ascii_columns(head))
+    return int(_core.cloud.ascii_columns(head))
 
 
 def read_xy(path: Union[str, Path], units: Optional[str] = None) -> np.ndarray:

@@ -227,7 +227,7 @@ def fit_line(
         # straightness in space: the thinnest cylinder around the points (MCC, Eq. 6.13);
         # the zone is its diameter
         nominal, tilt_rad = search_settings(axis, max_tilt, "line")
-        z = _core.form_line3_min_zone(pts, int(seed), nominal, tilt_rad)
+        z = _core.form.line3_min_zone(pts, int(seed), nominal, tilt_rad)
         cert = _cert(z)
         warnings = () if z.outside is None else (outside_warning("minimum-zone", _Diameter(z.outside), max_tilt),)
         return LineFit(
@@ -235,10 +235,10 @@ def fit_line(
             tuple(int(i) for i in z.control), tilt_deg=math.degrees(z.tilt), warnings=warnings,
         )
     if crit == "minimum-zone":
-        z = _core.form_min_zone_flat(pts)
+        z = _core.form.min_zone_flat(pts)
         cert = _cert(z)
         return LineFit(crit, len(pts), _vec(z.point), _vec(z.direction), float(z.form_error), cert, tuple(z.control))
-    ls = _core.form_line_lsq(pts)
+    ls = _core.form.line_lsq(pts)
     return LineFit(crit, len(pts), _vec(ls.point), _vec(ls.direction), float(ls.form_error), _cert(ls))
 
 
@@ -254,10 +254,10 @@ def fit_plane(points: Any, criterion: str = "least-squares") -> PlaneFit:
     crit = criterion_name(criterion, SHAPE_CRITERIA["plane"], "plane")
     pts = _points(points, (3,), "plane")
     if crit == "minimum-zone":
-        z = _core.form_min_zone_flat(pts)
+        z = _core.form.min_zone_flat(pts)
         cert = _cert(z)
         return PlaneFit(crit, len(pts), _vec(z.point), _vec(z.normal), float(z.form_error), cert, tuple(z.control))
-    ls = _core.form_plane_lsq(pts)
+    ls = _core.form.plane_lsq(pts)
     return PlaneFit(crit, len(pts), _vec(ls.point), _vec(ls.normal), float(ls.form_error), _cert(ls))
 
 
@@ -282,7 +282,7 @@ def fit_sphere(points: Any, criterion: str = "least-squares") -> SphereFit:
     if crit != "least-squares":
         if pts.shape[1] != 3:
             raise ConfigError(f"sphere: {crit} needs (n, 3) points; for 2-D points use fit_circle")
-        z = _core.form_sphere_fit(pts, crit)
+        z = _core.form.sphere_fit(pts, crit)
         radius = {"min-circumscribed": z.r_out, "max-inscribed": z.r_in}.get(crit, 0.5 * (z.r_in + z.r_out))
         cert = _cert(z)
         control = z.control_out if crit != "minimum-zone" else list(z.control_in) + [i for i in z.control_out if i not in z.control_in]
@@ -293,7 +293,7 @@ def fit_sphere(points: Any, criterion: str = "least-squares") -> SphereFit:
             control_points=tuple(int(i) for i in control),
             global_bound=float(z.bound) if crit != "min-circumscribed" else None,
         )
-    ls = _core.form_sphere_lsq(pts)
+    ls = _core.form.sphere_lsq(pts)
     shape = "sphere" if pts.shape[1] == 3 else "circle"
     return SphereFit(crit, len(pts), _vec(ls.center), float(ls.radius), float(ls.form_error), _cert(ls), shape)
 
@@ -303,5 +303,5 @@ def fit_circle_3d(points: Any, criterion: str = "least-squares") -> Circle3DFit:
     plane, projection of the points onto it, least-squares circle in that plane."""
     crit = criterion_name(criterion, ("least-squares",), "3-D circle")
     pts = _points(points, (3,), "3-D circle")
-    ls = _core.form_circle3d_lsq(pts)
+    ls = _core.form.circle3d_lsq(pts)
     return Circle3DFit(crit, len(pts), _vec(ls.center), _vec(ls.normal), float(ls.radius), float(ls.form_error), _cert(ls))

@@ -170,7 +170,7 @@ def roundness_parameters(points: Any, filter: str = "gaussian", upr: Optional[fl
     for name, value in (("samples", samples), ("harmonics", harmonics)):
         if value is not None and (not isinstance(value, (int, np.integer)) or value < 1):
             raise InvalidInputError(f"{name} must be a positive integer, got {value!r}")
-    r = _core.form_roundness(pts, u, str(reference), samples, max_gap_deg, harmonics)
+    r = _core.form.roundness(pts, u, str(reference), samples, max_gap_deg, harmonics)
     filt: dict[str, Any] = {"type": "none"} if u is None else {"type": "gaussian", "upr": u, "standard": "ISO 16610-21"}
     return RoundnessParameters(
         parameters=_params("RON", r.params),
@@ -241,7 +241,7 @@ def straightness_parameters(points: Any, filter: str = "none", cutoff: Optional[
         raise ConfigError(f"unknown filter {filter!r}; choose gaussian, spline or none")
     pts = _points(points, (2,), "straightness")
     spline = kind == "spline"
-    r = _core.form_straightness(pts, lc, str(reference), step, max_gap, spline)
+    r = _core.form.straightness(pts, lc, str(reference), step, max_gap, spline)
     filt: dict[str, Any]
     if lc is None:
         filt = {"type": "none"}
@@ -284,7 +284,7 @@ def flatness_parameters(points: Any, reference: str = "LSPL", up: Optional[Any] 
     """FLTt, FLTp, FLTv, FLTq (ISO 12781-1) of (n, 3) points, unfiltered."""
     pts = _points(points, (3,), "flatness")
     u = None if up is None else tuple(float(v) for v in up)
-    r = _core.form_flatness(pts, str(reference), u)
+    r = _core.form.flatness(pts, str(reference), u)
     return FlatnessParameters(
         parameters=_params("FLT", r.params), reference=r.reference,
         point=tuple(float(v) for v in r.point), normal=tuple(float(v) for v in r.normal),  # type: ignore[arg-type]
@@ -317,14 +317,14 @@ def gaussian_filter_closed(radii: Any, upr: float) -> np.ndarray:
     """The ISO 16610-21 Gaussian mean line of a closed profile sampled at equal angles
     (exact: harmonic ``k`` times :func:`gaussian_transmission`)."""
     r = np.ascontiguousarray(np.asarray(radii, dtype=np.float64).ravel())
-    return np.asarray(_core.profile_gaussian_closed(r, float(upr)))
+    return np.asarray(_core.form.profile_gaussian_closed(r, float(upr)))
 
 
 def spline_filter_open(values: Any, step: float, cutoff: float) -> np.ndarray:
     """The ISO 16610-22 cubic spline mean line of an open profile sampled at ``step``
     (every sample: a straight profile is its own mean line, no end effects to drop)."""
     z = np.ascontiguousarray(np.asarray(values, dtype=np.float64).ravel())
-    return np.asarray(_core.profile_spline_open(z, float(step), float(cutoff)))
+    return np.asarray(_core.form.profile_spline_open(z, float(step), float(cutoff)))
 
 
 def gaussian_filter_open(values: Any, step: float, cutoff: float) -> tuple[int, np.ndarray]:
@@ -332,5 +332,5 @@ def gaussian_filter_open(values: Any, step: float, cutoff: float) -> tuple[int, 
     ``(first, filtered)``, the filtered values of samples ``first .. n - first`` (one
     cut-off dropped at each end)."""
     z = np.ascontiguousarray(np.asarray(values, dtype=np.float64).ravel())
-    first, out = _core.profile_gaussian_open(z, float(step), float(cutoff))
+    first, out = _core.form.profile_gaussian_open(z, float(step), float(cutoff))
     return int(first), np.asarray(out)

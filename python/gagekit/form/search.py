@@ -15,7 +15,7 @@ __all__ = ["DEFAULT_MAX_TILT", "search_settings", "outside_warning"]
 
 #: Default largest tilt (degrees) of a Chebyshev fit's axis from its reference axis (the
 #: kernel's constant, gagekit-form ``cylinder::DEFAULT_MAX_TILT``, in degrees).
-DEFAULT_MAX_TILT = _core.DEFAULT_MAX_TILT_DEG
+DEFAULT_MAX_TILT = _core.form.DEFAULT_MAX_TILT_DEG
 
 
 def search_settings(axis: Any, max_tilt: Any, shape: str) -> tuple[Optional[tuple[float, float, float]], float]:

@@ -92,7 +92,7 @@ def _support(points: np.ndarray, basis: np.ndarray, axis: int, free: list[bool],
     local = (points - c) @ basis
     plane = np.zeros((1, 4))
     plane[0, axis] = -1.0
-    sol = _core.gage_solve(np.ascontiguousarray(local), [0, len(local)], plane, np.ones(1), np.full(1, 10.0),
+    sol = _core.gage.solve(np.ascontiguousarray(local), [0, len(local)], plane, np.ones(1), np.full(1, 10.0),
                            free, 0.3, 2.0 * extent + 1.0, groups=False)
     if sol.s[0] > 0 or sol.active_bounds:
         raise NumericalError("alignment: the support-plane fit of a datum did not settle within its search range")

@@ -240,7 +240,7 @@ class GageProblem:
     plot_points: dict = field(repr=False, compare=False)
 
     def args(self) -> tuple:
-        """Positional arguments of the ``_core.gage_*`` kernels."""
+        """Positional arguments of the ``_core.gage`` kernels."""
         return (self.points, self.offsets, self.planes, self.f, self.g, self.free, self.max_angle, self.max_shift)
 
 
@@ -451,7 +451,7 @@ def check_gages_stream(stream, spec: SpecLike, *, groups: bool = True) -> GageCh
 def solve_problem(problem: GageProblem, *, groups: bool = True) -> GageCheckResult:
     """Solve Eq. 5.11 for a prepared problem (Rust, clarabel, exact re-linearisation)."""
     spec = problem.spec
-    sol = _core.gage_solve(*problem.args(), groups=groups)
+    sol = _core.gage.solve(*problem.args(), groups=groups)
     p = sol.params
     transform = Transform(*[float(v) for v in p], tuple(tuple(float(v) for v in r) for r in sol.matrix))
     outcomes = tuple(

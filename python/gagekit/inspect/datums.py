@@ -138,12 +138,12 @@ def _axis_on_cone(points: np.ndarray, a: np.ndarray, tilt: float, d_ls: np.ndarr
     phi0 = math.atan2(float(d_ls @ v), float(d_ls @ u))
     if fit == "least-squares":
         d = cone_dir(a, tilt, phi0)
-        point, direction, radius, _, _ = _core.gdt_axis_along(points, tuple(d), fit)
+        point, direction, radius, _, _ = _core.gdt.axis_along(points, tuple(d), fit)
         return point, direction, radius
     sign = -1.0 if fit == "inscribed" else 1.0  # maximise the inscribed radius
 
     def value(phi: float) -> float:
-        return sign * float(_core.gdt_axis_along(points, tuple(cone_dir(a, tilt, phi)), fit)[2])
+        return sign * float(_core.gdt.axis_along(points, tuple(cone_dir(a, tilt, phi)), fit)[2])
 
     grid = 40
     step = 2 * CONE_TURN / grid
@@ -153,7 +153,7 @@ def _axis_on_cone(points: np.ndarray, a: np.ndarray, tilt: float, d_ls: np.ndarr
     fx, x = golden_min(value, phis[max(k - 1, 0)], phis[min(k + 1, grid)])
     if vals[k] < fx:
         x = phis[k]
-    point, direction, radius, _, _ = _core.gdt_axis_along(points, tuple(cone_dir(a, tilt, x)), fit)
+    point, direction, radius, _, _ = _core.gdt.axis_along(points, tuple(cone_dir(a, tilt, x)), fit)
     return point, direction, radius
 
 
@@ -256,7 +256,7 @@ class DatumSystem:
         if mode == "free" and fit == "chebyshev":
             # the free Chebyshev tangent plane has the minimum-zone normal (shared with flatness)
             mode, axis = "fixed", tuple(fd.min_zone()[1])
-        point, normal, _, dev = _core.gdt_datum_plane(pts, tuple(out), mode, axis, angle, fit)
+        point, normal, _, dev = _core.gdt.datum_plane(pts, tuple(out), mode, axis, angle, fit)
         mode = label
         method = ("chebyshev tangent plane" if fit == "chebyshev" else "least-squares plane") + ("" if mode == "free" else f", {mode}")
         return SimulatedDatum(ref.letter, fd.name, "plane", method, np.array(point), np.array(normal), before, deviation=float(dev))
@@ -282,7 +282,7 @@ class DatumSystem:
             kind_name = {"inscribed": "maximum inscribed", "circumscribed": "minimum circumscribed"}.get(fit, "least-squares")
             kind_name += f" {'cylinder' if fd.shape != 'circle' else 'circle'}"
             if ref.angle == 90.0:
-                point, direction, radius, _, _ = _core.gdt_axis_along(fd.points, tuple(d0), fit)
+                point, direction, radius, _, _ = _core.gdt.axis_along(fd.points, tuple(d0), fit)
                 method = f"{kind_name}, perpendicular to {planes[0].letter}"
             else:
                 point, direction, radius = _axis_on_cone(fd.points, d0, math.radians(tilt), d_ls, fit)
@@ -294,7 +294,7 @@ class DatumSystem:
             return SimulatedDatum(ref.letter, fd.name, "axis", f"least-squares {fd.shape} axis", p_ls, d_ls, before,
                                   radius=None if radius is None else float(radius))
         if fd.shape == "circle":
-            point, direction, radius, _, _ = _core.gdt_axis_along(fd.points, tuple(d_ls), fit)
+            point, direction, radius, _, _ = _core.gdt.axis_along(fd.points, tuple(d_ls), fit)
             method = {"inscribed": "maximum inscribed", "circumscribed": "minimum circumscribed"}.get(fit, "least-squares")
             return SimulatedDatum(ref.letter, fd.name, "axis", f"{method} circle", np.array(point), np.array(direction), before,
                                   radius=float(radius))

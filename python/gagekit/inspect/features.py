@@ -138,7 +138,7 @@ class FeatureData:
         flatness callout and the free datum plane share it. The normal points into the
         material (against ``outward``) when the feature has one."""
         if "mz" not in self._cache:
-            normal, _, _, width = _core.gdt_slab(self.points, "free", (0.0, 0.0, 1.0), 0.0)
+            normal, _, _, width = _core.gdt.slab(self.points, "free", (0.0, 0.0, 1.0), 0.0)
             n = np.array(normal)
             if self.spec.outward is not None and float(n @ np.asarray(self.spec.outward)) > 0:
                 n = -n  # the zone's normal reported into the material, as a datum frame's axis
@@ -194,7 +194,7 @@ class FeatureData:
                 continue
             q = self.points[idx] - p0
             xy = np.ascontiguousarray(np.column_stack([q @ u, q @ v]))
-            c = _core.form_circle_fit(xy, "least-squares").center
+            c = _core.form.circle_fit(xy, "least-squares").center
             h = float((q @ d).mean())
             out.append((p0 + c[0] * u + c[1] * v + h * d, xy))
         if len(out) < 2:

@@ -109,20 +109,20 @@ def two_point_sizes(fd: FeatureData, sections: int, angles: int = DEFAULT_ANGLES
     ref = lambda d: tuple(box[0] if abs(float(box[0] @ d)) < 0.9 else box[1])  # noqa: E731
     if shape in ("slot", "tab"):
         a, b = fd.faces()
-        sizes = _core.gdt_width_sizes(a, b, tuple(fd.width_fit().normal))
+        sizes = _core.gdt.width_sizes(a, b, tuple(fd.width_fit().normal))
     elif shape == "sphere":
         c = tuple(fd.lsq().center)
-        sizes = _core.gdt_two_point_sizes(fd.points, c, tuple(box[2]), tuple(box[0]), "great-circles", sections, angles)[0]
+        sizes = _core.gdt.two_point_sizes(fd.points, c, tuple(box[2]), tuple(box[0]), "great-circles", sections, angles)[0]
     elif shape == "circle":
         fit = fd.lsq()
         n = _unit(fit.normal)
-        sizes = _core.gdt_two_point_sizes(fd.points, tuple(fit.center), tuple(n), ref(n), "axial", 1, angles)[0]
+        sizes = _core.gdt.two_point_sizes(fd.points, tuple(fit.center), tuple(n), ref(n), "axial", 1, angles)[0]
     elif shape == "cone":
         p0, d = fd.axis_line()
-        sizes = _core.gdt_two_point_sizes(_cone_section(fd, sections), tuple(p0), tuple(d), ref(d), "axial", 1, angles)[0]
+        sizes = _core.gdt.two_point_sizes(_cone_section(fd, sections), tuple(p0), tuple(d), ref(d), "axial", 1, angles)[0]
     else:
         p0, d = fd.axis_line()
-        sizes = _core.gdt_two_point_sizes(fd.points, tuple(p0), tuple(d), ref(d), "axial", sections, angles)[0]
+        sizes = _core.gdt.two_point_sizes(fd.points, tuple(p0), tuple(d), ref(d), "axial", sections, angles)[0]
     if len(sizes) == 0:
         raise DegenerateGeometryError(f"feature '{fd.name}': no two opposite points found for a two-point size "
                                       "(the scan covers less than half a turn, or the faces do not face each other)")
@@ -171,9 +171,9 @@ def mating_size(fd: FeatureData, which: str, sections: Optional[int] = None) -> 
             v = fd.width_fit().size
         elif which == "GX":
             a, b = fd.faces()
-            v = float(_core.gdt_hull_distance(a, b)[0])
+            v = float(_core.gdt.hull_distance(a, b)[0])
         else:
-            v = float(_core.gdt_slab(fd.points, "free", (0.0, 0.0, 1.0), 0.0)[3])
+            v = float(_core.gdt.slab(fd.points, "free", (0.0, 0.0, 1.0), 0.0)[3])
     elif shape == "sphere":
         v = 2.0 * float(fd.lsq().radius if which == "GG" else fit_sphere(fd.points, crit).radius)
     elif shape in ("circle", "cone"):

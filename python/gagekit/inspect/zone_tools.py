@@ -45,7 +45,7 @@ def _mec_radius(xy: np.ndarray) -> tuple[float, np.ndarray]:
         return 0.5 * float(np.linalg.norm(xy[1] - xy[0])), 0.5 * (xy[0] + xy[1])
     if np.ptp(xy, axis=0).max() == 0.0:
         return 0.0, xy[0]
-    c = _core.form_circle_fit(np.ascontiguousarray(xy), "min-circumscribed").center
+    c = _core.form.circle_fit(np.ascontiguousarray(xy), "min-circumscribed").center
     r = float(np.linalg.norm(xy - np.array(c), axis=1).max())
     return r, np.array(c)
 

@@ -90,7 +90,7 @@ ZONE_KINDS = {"width": "distance between the two bounding surfaces",
 
 
 def _slab(points: np.ndarray, mode: str, axis: Any = (0.0, 0.0, 1.0), angle: float = 0.0) -> tuple[float, np.ndarray]:
-    normal, _, _, width = _core.gdt_slab(np.ascontiguousarray(points), mode, tuple(float(a) for a in axis), float(angle))
+    normal, _, _, width = _core.gdt.slab(np.ascontiguousarray(points), mode, tuple(float(a) for a in axis), float(angle))
     return float(width), np.array(normal)
 
 
@@ -166,7 +166,7 @@ def _straightness(tol, fd, system):
             w = _unit(w)
             q = fd.points - p0
             xy = np.ascontiguousarray(np.column_stack([q @ d, q @ w]))
-            width, _, _, _ = _core.gdt_min_width_2d(xy)
+            width, _, _, _ = _core.gdt.min_width_2d(xy)
             return Measurement(float(width), "width", "line in the plane of its outward normal", len(fd.points))
         fit = fit_line(fd.points, "min-circumscribed")
         return Measurement(float(fit.form_error), "diameter", "line", len(fd.points))

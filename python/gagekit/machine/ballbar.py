@@ -126,7 +126,7 @@ class BallbarResult:
     radius_mm: float
     feed_mm_per_min: Optional[float]
     n_readings: dict
-    raw: object  # gagekit._core.BallbarAnalysis
+    raw: object  # gagekit._core.kinematics.BallbarAnalysis
     run: BallbarRun
     pitch_given: bool = False
 
@@ -233,7 +233,7 @@ def analyse_ballbar(
     for name, v in (("radius", radius), ("feed", feed), ("pitch", pitch)):
         if v is not None and not (math.isfinite(v) and v > 0):
             raise InvalidInputError(f"{name} must be a positive number, got {v}")
-    raw = _core.machine_ballbar(
+    raw = _core.kinematics.ballbar(
         float(radius),
         np.ascontiguousarray(np.radians(run.angles_deg)),
         np.ascontiguousarray(1e-3 * run.deviations_um),

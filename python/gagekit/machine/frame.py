@@ -78,5 +78,5 @@ def frame_columns(p: np.ndarray) -> np.ndarray:
 def rigid_fit(src: np.ndarray, dst: np.ndarray) -> Frame:
     """The proper rigid motion taking ``src`` (n, 3) to ``dst`` best in least squares
     (Kabsch/Horn, closed form; the Rust kernel)."""
-    fit = _core.machine_rigid_fit(np.ascontiguousarray(src), np.ascontiguousarray(dst))
+    fit = _core.kinematics.rigid_fit(np.ascontiguousarray(src), np.ascontiguousarray(dst))
     return Frame(fit.rotation, fit.translation)

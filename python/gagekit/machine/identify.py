@@ -69,9 +69,9 @@ def _as_obs(machine: Machine, obs: Any, what: str) -> Observations:
 
 
 
-def _solve(a: np.ndarray, b: np.ndarray, names: list[str]) -> _core.LeastSquares:
+def _solve(a: np.ndarray, b: np.ndarray, names: list[str]) -> _core.kinematics.LeastSquares:
     try:
-        return _core.machine_lstsq(np.ascontiguousarray(a), np.ascontiguousarray(b))
+        return _core.kinematics.lstsq(np.ascontiguousarray(a), np.ascontiguousarray(b))
     except DegenerateGeometryError:
         norms = np.linalg.norm(a, axis=0)
         norms[norms == 0] = 1.0
@@ -92,7 +92,7 @@ def _confounded(machine: Machine, structure: ModelStructure) -> list[int]:
     p = machine.nominal(cmds)
     a = np.hstack([frame_columns(p), structure.reduce(machine.design_matrix(cmds))])
     powers = [1, 1, 1, 0, 0, 0] + [machine.parameter_length_powers[j] for j in structure.leaders]
-    res = _core.machine_identifiability(a, machine.length_scale(cmds), powers)
+    res = _core.kinematics.identifiability(a, machine.length_scale(cmds), powers)
     lead = set(res.leaders)
     return [k for k in range(len(structure.groups)) if 6 + k not in lead]
 

@@ -178,7 +178,7 @@ def halton(n: int, dim: int, seed: Optional[int] = 0) -> np.ndarray:
 
     if n < 0 or dim < 1 or (seed is not None and seed < 0):
         raise InvalidInputError(f"halton: need n >= 0, dim >= 1 and seed >= 0, got n={n}, dim={dim}, seed={seed}")
-    return np.asarray(_core.design_halton(n, dim, seed or 0))
+    return np.asarray(_core.design.halton(n, dim, seed or 0))
 
 
 @dataclass(frozen=True)
@@ -212,7 +212,7 @@ class Machine:
         # The Rust chain is built and validated once, here; every kinematic call reuses it.
         spec = [("shape", list(e.offset), 0) if isinstance(e, ShapeSpec) else (e.kind, list(e.axis), e.terms)
                 for e in self.elements]
-        chain = _core.KinematicChain(spec, list(self.tool))
+        chain = _core.kinematics.KinematicChain(spec, list(self.tool))
         object.__setattr__(self, "_chain", chain)
         object.__setattr__(self, "_labels", tuple(chain.parameter_labels))  # crosses the boundary once
 
@@ -353,7 +353,7 @@ class Machine:
             return _STRUCTURES[key]
         cmds = self.commands_array(commands)
         m = self.design_matrix(cmds)
-        res = _core.machine_identifiability(m, self.length_scale(cmds), self.parameter_length_powers, rtol)
+        res = _core.kinematics.identifiability(m, self.length_scale(cmds), self.parameter_length_powers, rtol)
         names = self.parameter_names
         coef = np.asarray(res.coefficients)
         groups = []

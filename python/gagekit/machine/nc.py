@@ -147,7 +147,7 @@ def compensate_nc_text(
         f"where the correction changes by more than {max_step:g} mm"
         + (f"; arcs linearised within {linearize_arcs:g} mm" if linearize_arcs else "")
     )
-    out, report = _core.nc_compensate(
+    out, report = _core.nc.compensate_program(
         machine._chain,
         params,
         bytes(text),

@@ -136,7 +136,7 @@ def compensate(
     # Gauss-Newton on the commands of ``axes`` (Rust kernel, gagekit-kinematics chain/inverse.rs):
     # c <- c - pinv(J_axes) (P(c) + M(c) p - P(c0)), minimum-norm steps for redundant axes
     unit = machine._angle_factor()
-    c, remaining = _core.machine_compensate(
+    c, remaining = _core.nc.compensate_commands(
         machine._chain, np.ascontiguousarray(c0 * unit), np.ascontiguousarray(p), idx, int(iterations)
     )
     c = c0 + (np.asarray(c) - c0 * unit) / unit  # joints not in ``axes`` stay bit-identical

@@ -21,7 +21,8 @@ fn criterion(name: &str) -> PyResult<Criterion> {
 }
 
 /// Exact figures of a design's information matrix F = M^T M (Eqs. 4.3-4.5).
-#[pyclass(frozen, get_all, module = "gagekit._core")]
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyclass)]
+#[pyclass(frozen, get_all, module = "gagekit._core.design")]
 pub struct DesignMetrics {
     /// tr(F^-1) (inf when F is singular).
     trace: f64,
@@ -50,6 +51,7 @@ impl From<Metrics> for DesignMetrics {
     }
 }
 
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pymethods)]
 #[pymethods]
 impl DesignMetrics {
     /// The value a search minimises for criterion A, D, K, E or I (inf where undefined).
@@ -68,7 +70,8 @@ impl DesignMetrics {
 }
 
 /// The outcome of a multistart exchange search.
-#[pyclass(frozen, get_all, module = "gagekit._core")]
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyclass)]
+#[pyclass(frozen, get_all, module = "gagekit._core.design")]
 pub struct DesignSearch {
     /// Candidate index of each design point.
     design: Py<PyArray1<i64>>,
@@ -84,7 +87,9 @@ pub struct DesignSearch {
 ///
 /// `blocks` is (N * r, k): candidate j owns rows j*r .. j*r + r. `groups[g]` lists the
 /// candidates of zone g; design point i must stay in zone `point_group[i]`.
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyfunction(module = "gagekit._core.design"))]
 #[pyfunction]
+#[pyo3(name = "search")]
 #[pyo3(signature = (blocks, r, groups, point_group, criterion_name, weights=None, starts=8, max_sweeps=50, seed=0, initial=None))]
 #[allow(clippy::too_many_arguments)]
 fn design_search<'py>(
@@ -127,7 +132,9 @@ fn design_search<'py>(
 }
 
 /// Exact figures of the design whose stacked rows are `blocks` ((n * r, k), any r).
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyfunction(module = "gagekit._core.design"))]
 #[pyfunction]
+#[pyo3(name = "metrics")]
 #[pyo3(signature = (blocks, weights=None))]
 fn design_metrics<'py>(
     py: Python<'py>,
@@ -144,7 +151,9 @@ fn design_metrics<'py>(
 }
 
 /// `n` shifted-Halton points in [0, 1)^d as an (n, d) array.
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyfunction(module = "gagekit._core.design"))]
 #[pyfunction]
+#[pyo3(name = "halton")]
 #[pyo3(signature = (n, d, seed=0))]
 fn design_halton<'py>(py: Python<'py>, n: usize, d: usize, seed: u64) -> PyResult<Bound<'py, PyAny>> {
     let v = run(py, || gagekit_design::halton(n, d, seed))?;

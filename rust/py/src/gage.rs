@@ -47,7 +47,8 @@ impl Args<'_> {
 }
 
 /// The solution of Eq. 5.11 (Sec. 5.2): T*, allowances, slacks, limiting bounds, groups.
-#[pyclass(frozen, get_all, module = "gagekit._core")]
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyclass)]
+#[pyclass(frozen, get_all, module = "gagekit._core.gage")]
 pub struct GageSolution {
     /// (alpha, beta, gamma, dx, dy, dz) of T*, rad and mm.
     params: Vec<f64>,
@@ -73,7 +74,9 @@ pub struct GageSolution {
 }
 
 /// Solve Eq. 5.11 with exact re-linearisation; optionally the infeasible groups (Eq. 5.10).
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyfunction(module = "gagekit._core.gage"))]
 #[pyfunction]
+#[pyo3(name = "solve")]
 #[pyo3(signature = (points, offsets, planes, f, g, free, max_angle, max_shift, tol=1e-10, slack_tol=1e-7, groups=true))]
 #[allow(clippy::too_many_arguments)]
 fn gage_solve<'py>(
@@ -122,6 +125,7 @@ fn gage_solve<'py>(
 
 /// The LP of Eq. 5.11 linearised about given motions: minimise c.x subject to A x <= b,
 /// x free, A in compressed-column form (colptr, rowval, nzval) with `nrows` rows.
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyclass)]
 #[pyclass(frozen, get_all, module = "gagekit._core._testing")]
 pub struct LinearProgram {
     c: Py<PyArray1<f64>>,
@@ -133,6 +137,7 @@ pub struct LinearProgram {
 }
 
 /// The solution of one LP of Eq. 5.11 (clarabel).
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyclass)]
 #[pyclass(frozen, get_all, module = "gagekit._core._testing")]
 pub struct LpResult {
     x: Py<PyArray1<f64>>,
@@ -144,6 +149,7 @@ pub struct LpResult {
 
 /// Test and benchmark binding: the LP of Eq. 5.11 linearised about `params`
 /// (alpha, beta, gamma, dx, dy, dz), for comparisons with other LP solvers.
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyfunction(module = "gagekit._core._testing"))]
 #[pyfunction]
 #[allow(clippy::too_many_arguments)]
 fn gage_lp<'py>(
@@ -173,6 +179,7 @@ fn gage_lp<'py>(
 /// Test and benchmark binding: solve the single LP of `gage_lp` with clarabel (no
 /// re-linearisation, no polish), by constraint generation above 4000 points unless
 /// `generate` is false.
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyfunction(module = "gagekit._core._testing"))]
 #[pyfunction]
 #[pyo3(signature = (points, offsets, planes, f, g, free, max_angle, max_shift, params, generate=true))]
 #[allow(clippy::too_many_arguments)]

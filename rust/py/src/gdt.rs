@@ -30,7 +30,9 @@ fn orientation(mode: &str, axis: V3, angle: f64) -> gagekit_core::Result<Orienta
 }
 
 /// Minimum width of (n, 2) points: (width, normal, lo, hi).
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyfunction(module = "gagekit._core.gdt"))]
 #[pyfunction]
+#[pyo3(name = "min_width_2d")]
 fn gdt_min_width_2d<'py>(py: Python<'py>, points: PyReadonlyArray2<'py, f64>) -> PyResult<(f64, (f64, f64), f64, f64)> {
     let pts = rows(py, &points, 2, "points")?;
     let w = run(py, || width2::min_width(pts))?;
@@ -40,7 +42,9 @@ fn gdt_min_width_2d<'py>(py: Python<'py>, points: PyReadonlyArray2<'py, f64>) ->
 /// Thinnest slab of (n, 3) points with its normal constrained by `mode` ("free",
 /// "perpendicular" to `axis`, at `angle` rad to `axis`, "fixed" along `axis`):
 /// (normal, lo, hi, width).
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyfunction(module = "gagekit._core.gdt"))]
 #[pyfunction]
+#[pyo3(name = "slab")]
 fn gdt_slab<'py>(py: Python<'py>, points: PyReadonlyArray2<'py, f64>, mode: &str, axis: V3, angle: f64) -> PyResult<(V3, f64, f64, f64)> {
     let pts = rows(py, &points, 3, "points")?;
     let mode = mode.to_string();
@@ -49,7 +53,9 @@ fn gdt_slab<'py>(py: Python<'py>, points: PyReadonlyArray2<'py, f64>, mode: &str
 }
 
 /// Simulated datum plane (ISO 5459): (point, normal out of the material, offset, deviation).
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyfunction(module = "gagekit._core.gdt"))]
 #[pyfunction]
+#[pyo3(name = "datum_plane")]
 #[allow(clippy::too_many_arguments)]
 fn gdt_datum_plane<'py>(
     py: Python<'py>,
@@ -74,7 +80,9 @@ fn gdt_datum_plane<'py>(
 }
 
 /// Cylinder of a fixed axis direction: (point, direction, radius, r_min, r_max).
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyfunction(module = "gagekit._core.gdt"))]
 #[pyfunction]
+#[pyo3(name = "axis_along")]
 fn gdt_axis_along<'py>(py: Python<'py>, points: PyReadonlyArray2<'py, f64>, direction: V3, fit: &str) -> PyResult<(V3, V3, f64, f64, f64)> {
     let pts = rows(py, &points, 3, "points")?;
     let fit = fit.to_string();
@@ -92,7 +100,9 @@ fn gdt_axis_along<'py>(py: Python<'py>, points: PyReadonlyArray2<'py, f64>, dire
 
 /// Two-point sizes (ISO 14405-1) about an axis: (sizes, section index, direction angle,
 /// sections used); directions from `reference` projected normal to the axis; `kind` "axial" (cylinder, circle, cone) or "great-circles" (sphere).
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyfunction(module = "gagekit._core.gdt"))]
 #[pyfunction]
+#[pyo3(name = "two_point_sizes")]
 #[allow(clippy::type_complexity)]
 fn gdt_two_point_sizes<'py>(
     py: Python<'py>,
@@ -120,7 +130,9 @@ fn gdt_two_point_sizes<'py>(
 
 /// Two-point sizes of a width: each point of `face_a` to the opposite point of `face_b`
 /// along `normal`, interpolated on `face_b`'s triangulation.
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyfunction(module = "gagekit._core.gdt"))]
 #[pyfunction]
+#[pyo3(name = "width_sizes")]
 fn gdt_width_sizes<'py>(
     py: Python<'py>,
     face_a: PyReadonlyArray2<'py, f64>,
@@ -135,7 +147,9 @@ fn gdt_width_sizes<'py>(
 
 /// Distance between the convex hulls of two point sets and the unit direction from the
 /// first to the second (GJK).
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyfunction(module = "gagekit._core.gdt"))]
 #[pyfunction]
+#[pyo3(name = "hull_distance")]
 fn gdt_hull_distance<'py>(py: Python<'py>, a: PyReadonlyArray2<'py, f64>, b: PyReadonlyArray2<'py, f64>) -> PyResult<(f64, V3)> {
     let a = rows(py, &a, 3, "a")?;
     let b = rows(py, &b, 3, "b")?;

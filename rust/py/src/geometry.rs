@@ -20,6 +20,7 @@ fn boxes_from(py: Python<'_>, boxes: &PyReadonlyArray2<'_, f64>) -> PyResult<Vec
 }
 
 /// Indices of the points inside each box; `boxes` is (k, 9): centre, size, rotation vector.
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyfunction(module = "gagekit._core.geometry"))]
 #[pyfunction]
 fn classify_boxes<'py>(
     py: Python<'py>,
@@ -34,12 +35,14 @@ fn classify_boxes<'py>(
 
 /// Check an oriented box (Sec. 5.4.1): finite centre, size and rotation, a positive size on
 /// every axis; ConfigError naming the region otherwise.
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyfunction(module = "gagekit._core.geometry"))]
 #[pyfunction]
 fn validate_box(py: Python<'_>, name: &str, center: [f64; 3], size: [f64; 3], rotation: [f64; 3]) -> PyResult<()> {
     run(py, || OrientedBox { center, size, rotation }.validate(name))
 }
 
 /// Ascending indices of the convex-hull vertices of an (n, 3) point array (Eq. 5.21).
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyfunction(module = "gagekit._core.geometry"))]
 #[pyfunction]
 fn hull_indices<'py>(py: Python<'py>, points: PyReadonlyArray2<'py, f64>) -> PyResult<Bound<'py, PyArray1<i64>>> {
     let pts = rows(py, &points, 3, "points")?;
@@ -51,7 +54,8 @@ fn hull_indices<'py>(py: Python<'py>, points: PyReadonlyArray2<'py, f64>) -> PyR
 /// cloud's array: `select` and `count` take a box row (centre, size, rotation
 /// vector) and return what `classify_boxes` finds for it. The array must not be
 /// changed in place afterwards.
-#[pyclass(frozen, module = "gagekit._core")]
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyclass)]
+#[pyclass(frozen, module = "gagekit._core.geometry")]
 pub struct PointGrid {
     grid: CellGrid,
     points: Py<PyArray2<f64>>,
@@ -68,6 +72,7 @@ fn one_box(py: Python<'_>, row: &PyReadonlyArray1<'_, f64>) -> PyResult<Oriented
     Ok(OrientedBox { center: [b[0], b[1], b[2]], size: [b[3], b[4], b[5]], rotation: [b[6], b[7], b[8]] })
 }
 
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pymethods)]
 #[pymethods]
 impl PointGrid {
     /// Ascending indices of the points inside the box.
@@ -113,6 +118,7 @@ impl PointGrid {
 }
 
 /// Index an (n, 3) C-contiguous float64 cloud by grid cells of about `per_cell` points.
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyfunction(module = "gagekit._core.geometry"))]
 #[pyfunction]
 fn grid_build(py: Python<'_>, points: Bound<'_, PyArray2<f64>>, per_cell: usize) -> PyResult<PointGrid> {
     let grid = {

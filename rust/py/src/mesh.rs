@@ -13,13 +13,15 @@ use pyo3::prelude::*;
 use std::sync::Arc;
 
 /// A validated triangle mesh ready for distance queries (built once; immutable).
-#[pyclass(frozen, module = "gagekit._core")]
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyclass)]
+#[pyclass(frozen, module = "gagekit._core.mesh")]
 pub struct Mesh {
     mesh: Arc<TriMesh>,
 }
 
 /// The result of `Mesh.best_fit`: `matrix` (4x4, row-major rows) applied to the points.
-#[pyclass(frozen, get_all, module = "gagekit._core")]
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyclass)]
+#[pyclass(frozen, get_all, module = "gagekit._core.mesh")]
 pub struct MeshBestFit {
     pub matrix: Vec<Vec<f64>>,
     pub iterations: usize,
@@ -31,7 +33,8 @@ pub struct MeshBestFit {
 
 /// The result of `Mesh.minimax`: `matrix`, the exact largest |distance| `max_abs` and the
 /// certificate LP's optimum `lp_optimum` (equal at a Chebyshev optimum).
-#[pyclass(frozen, get_all, module = "gagekit._core")]
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyclass)]
+#[pyclass(frozen, get_all, module = "gagekit._core.mesh")]
 pub struct MeshMinimax {
     pub matrix: Vec<Vec<f64>>,
     pub max_abs: f64,
@@ -59,6 +62,7 @@ fn pose_of(initial: Option<PyReadonlyArray2<'_, f64>>) -> PyResult<Pose> {
     }
 }
 
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pymethods)]
 #[pymethods]
 impl Mesh {
     /// Build from (n, 3) float64 vertices and (m, 3) int64 vertex indices.

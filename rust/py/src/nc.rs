@@ -10,7 +10,9 @@ use pyo3::types::{PyBytes, PyDict};
 
 /// Corrected commands (n, J) and predicted error left (n, 3) of the inverse first-order model:
 /// only `joints` move; rotary commands in rad.
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyfunction(module = "gagekit._core.nc"))]
 #[pyfunction]
+#[pyo3(name = "compensate_commands")]
 fn machine_compensate<'py>(
     py: Python<'py>,
     chain: &Bound<'py, KinematicChain>,
@@ -28,14 +30,16 @@ fn machine_compensate<'py>(
 }
 
 /// Correct a G-code program (bytes); returns (bytes, report dict).
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyfunction(module = "gagekit._core.nc"))]
 #[pyfunction]
+#[pyo3(name = "compensate_program")]
 #[pyo3(signature = (chain, params, text, letters, unit, start, joints, max_step, decimals, header, arc_tolerance=None, iterations=4, ranges=Vec::new()))]
 #[allow(clippy::too_many_arguments)]
 fn nc_compensate<'py>(
     py: Python<'py>,
     chain: &Bound<'py, KinematicChain>,
     params: PyReadonlyArray1<'py, f64>,
-    text: &[u8],
+    text: &Bound<'py, PyBytes>,
     letters: String,
     unit: Vec<f64>,
     start: Vec<Option<f64>>,
@@ -59,6 +63,7 @@ fn nc_compensate<'py>(
         iterations,
         ranges,
     };
+    let text = text.as_bytes();
     let (out, r) = run(py, || compensate_program(text, m, p, &settings))?;
     let d = PyDict::new(py);
     d.set_item("lines", r.lines)?;

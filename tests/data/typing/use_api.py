@@ -27,17 +27,17 @@ def machine_rank(path: str) -> int:
 
 
 def hull_size(points: npt.NDArray[np.float64]) -> int:
-    idx: npt.NDArray[np.int64] = _core.hull_indices(points)
+    idx: npt.NDArray[np.int64] = _core.geometry.hull_indices(points)
     return int(idx.shape[0])
 
 
 def design_trace(rows: npt.NDArray[np.float64]) -> float:
-    met: _core.DesignMetrics = _core.design_metrics(rows)
+    met: _core.design.DesignMetrics = _core.design.metrics(rows)
     return met.trace + met.objective("A")
 
 
 def rigid_rms(src: npt.NDArray[np.float64], dst: npt.NDArray[np.float64]) -> float:
-    fit: _core.RigidTransform = _core.machine_rigid_fit(src, dst)
+    fit: _core.kinematics.RigidTransform = _core.kinematics.rigid_fit(src, dst)
     return fit.rms
 
 

@@ -29,7 +29,7 @@ def _check_spread(p: Path, pts: np.ndarray) -> None:
 
 
 def read(p: Path, dim: int) -> Raw:
-    cloud = _core.cloud_read_e57(str(p))  # FileFormatError / FileAccessError from the kernel
+    cloud = _core.cloud.read_e57(str(p))  # FileFormatError / FileAccessError from the kernel
     pts, scans, dropped = cloud.points, cloud.scans, cloud.invalid_dropped
     if scans == 0:
         raise FileFormatError(f"{p}: the E57 file holds no scans")

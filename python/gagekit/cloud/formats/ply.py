@@ -17,10 +17,10 @@ from . import Raw
 
 
 def read(p: Path, dim: int) -> Raw:
-    layout = _core.cloud_ply_layout(str(p))  # FileFormatError / FileAccessError from the kernel
+    layout = _core.cloud.ply_layout(str(p))  # FileFormatError / FileAccessError from the kernel
     n, offset = layout.vertices, layout.direct_offset
     if offset is not None and offset % 8 == 0:  # numpy and the kernels need aligned float64
         pts = np.asarray(np.memmap(p, dtype="<f8", mode="c", offset=offset, shape=(n, 3))) if n else np.empty((0, 3))
         return Raw(pts, "ply binary_little_endian", finite_checked=True)
-    cloud = _core.cloud_read_ply(str(p))
+    cloud = _core.cloud.read_ply(str(p))
     return Raw(cloud.points, f"ply {cloud.format}", finite_checked=True)

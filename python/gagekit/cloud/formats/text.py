@@ -12,7 +12,7 @@ from . import Raw
 
 
 def read(p: Path, dim: int, nist: bool = False) -> Raw:
-    pts = _core.cloud_read_ascii(str(p), dim, 1 if nist else 0).points  # FileFormatError from the kernel
+    pts = _core.cloud.read_ascii(str(p), dim, 1 if nist else 0).points  # FileFormatError from the kernel
     if nist:
         with p.open("rb") as fh:
             first = fh.readline().split()

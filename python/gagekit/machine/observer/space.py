@@ -106,7 +106,7 @@ class ObserverSpace:
     def figures(self, commands: Any) -> dict:
         """tr, log det, det of (M^T M)^-1 and kappa(M) of a plan (scaled columns)."""
         b = self.rows(self.to_u(commands))
-        met = _core.design_metrics(np.ascontiguousarray(b.reshape(-1, b.shape[2])))
+        met = _core.design.metrics(np.ascontiguousarray(b.reshape(-1, b.shape[2])))
         ld = float(met.log_det)
         return {
             "points": int(len(b)),

@@ -168,7 +168,7 @@ def _loo_errors(T, P, m, resid, idx) -> np.ndarray:
     n = resid[0].shape[0]
     R = np.ascontiguousarray(np.stack([resid[c].reshape(-1) for c in idx]))  # (k, 3n)
     if S < k - 1:
-        return np.array(_core.tracking_loo_errors(np.ascontiguousarray(T[idx], dtype=np.float64),
+        return np.array(_core.kinematics.tracking_loo_errors(np.ascontiguousarray(T[idx], dtype=np.float64),
                                                   np.ascontiguousarray(P[idx], dtype=np.float64), R,
                                                   np.ascontiguousarray(m, dtype=np.float64), list(_LAMBDAS)))
     Ti = T[idx] - T[idx].mean(axis=0)  # the ridge is invariant to a shift of the temperatures

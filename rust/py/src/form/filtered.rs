@@ -8,7 +8,8 @@ use numpy::{PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 
 /// Peak-to-valley `t`, peak `p`, valley `v`, RMS `q` of the local deviations (mm).
-#[pyclass(frozen, get_all, module = "gagekit._core")]
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyclass)]
+#[pyclass(frozen, get_all, module = "gagekit._core.form")]
 pub struct FormParams {
     t: f64,
     p: f64,
@@ -21,7 +22,8 @@ fn params(p: gagekit_profile::Params) -> FormParams {
 }
 
 /// Roundness of a closed profile; see `gagekit_profile::roundness`.
-#[pyclass(frozen, get_all, module = "gagekit._core")]
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyclass)]
+#[pyclass(frozen, get_all, module = "gagekit._core.form")]
 pub struct RoundnessResult {
     params: Py<FormParams>,
     reference: String,
@@ -43,7 +45,9 @@ pub struct RoundnessResult {
 
 /// RONt, RONp, RONv, RONq of (n, 2) points: Gaussian filter of `upr` undulations per
 /// revolution (None: unfiltered), reference LSCI / MZCI / MCCI / MICI.
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyfunction(module = "gagekit._core.form"))]
 #[pyfunction]
+#[pyo3(name = "roundness")]
 #[pyo3(signature = (points, upr=None, reference="LSCI", samples=None, max_gap_deg=None, harmonics=None))]
 fn form_roundness(
     py: Python<'_>,
@@ -84,7 +88,8 @@ fn reference_of(name: &str) -> gagekit_core::Result<gagekit_form::criterion::Fit
 }
 
 /// Straightness of a 2-D profile; see `gagekit_profile::straightness`.
-#[pyclass(frozen, get_all, module = "gagekit._core")]
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyclass)]
+#[pyclass(frozen, get_all, module = "gagekit._core.form")]
 pub struct StraightnessResult {
     params: Py<FormParams>,
     reference: String,
@@ -98,7 +103,9 @@ pub struct StraightnessResult {
 
 /// STRt, STRp, STRv, STRq of (n, 2) points: Gaussian (or, `spline`, ISO 16610-22 cubic
 /// spline) filter of cut-off `cutoff` mm (None: unfiltered), reference LSLI or MZLI.
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyfunction(module = "gagekit._core.form"))]
 #[pyfunction]
+#[pyo3(name = "straightness")]
 #[pyo3(signature = (points, cutoff=None, reference="LSLI", step=None, max_gap=None, spline=false))]
 fn form_straightness(
     py: Python<'_>,
@@ -128,7 +135,8 @@ fn form_straightness(
 }
 
 /// Flatness of a surface; see `gagekit_profile::flatness`.
-#[pyclass(frozen, get_all, module = "gagekit._core")]
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyclass)]
+#[pyclass(frozen, get_all, module = "gagekit._core.form")]
 pub struct FlatnessResult {
     params: Py<FormParams>,
     reference: String,
@@ -139,7 +147,9 @@ pub struct FlatnessResult {
 
 /// FLTt, FLTp, FLTv, FLTq of (n, 3) points against LSPL or MZPL (deviations positive
 /// along the normal oriented towards `up`, default +z).
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyfunction(module = "gagekit._core.form"))]
 #[pyfunction]
+#[pyo3(name = "flatness")]
 #[pyo3(signature = (points, reference="LSPL", up=None))]
 fn form_flatness(
     py: Python<'_>,
@@ -160,6 +170,7 @@ fn form_flatness(
 }
 
 /// ISO 16610-21 Gaussian filter (mean line) of a closed profile sampled at equal angles.
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyfunction(module = "gagekit._core.form"))]
 #[pyfunction]
 fn profile_gaussian_closed<'py>(py: Python<'py>, radii: PyReadonlyArray1<'py, f64>, upr: f64) -> PyResult<Bound<'py, PyArray1<f64>>> {
     let r = values(py, &radii, "radii")?;
@@ -172,6 +183,7 @@ fn profile_gaussian_closed<'py>(py: Python<'py>, radii: PyReadonlyArray1<'py, f6
 
 /// ISO 16610-21 Gaussian filter (mean line) of an open profile at spacing `step`:
 /// (index of the first filtered sample, filtered values); one cut-off dropped at each end.
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyfunction(module = "gagekit._core.form"))]
 #[pyfunction]
 fn profile_gaussian_open<'py>(
     py: Python<'py>,
@@ -188,6 +200,7 @@ fn profile_gaussian_open<'py>(
 }
 
 /// ISO 16610-22 cubic spline filter (mean line) of an open profile at spacing `step`.
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyfunction(module = "gagekit._core.form"))]
 #[pyfunction]
 fn profile_spline_open<'py>(
     py: Python<'py>,
@@ -203,7 +216,7 @@ fn profile_spline_open<'py>(
     Ok(PyArray1::from_vec(py, out))
 }
 
-pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+pub(super) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<FormParams>()?;
     m.add_class::<RoundnessResult>()?;
     m.add_class::<StraightnessResult>()?;

@@ -1,125 +1,9 @@
-//! Bindings of gagekit-form.
+//! 3-D fits: lines, planes, spheres, 3-D circles, cylinders, cones (Sec. 6.3-6.5).
 
-use crate::arrays::rows;
-use crate::errors::run;
-use numpy::PyReadonlyArray2;
-use pyo3::prelude::*;
-
-/// Read-only attributes that mirror the fields of the kernel result a pyclass holds in
-/// `self.fit`: one getter per named field (converted on access), so the binding never
-/// restates the kernel's list of fields and types; `extra` holds the class's other getters.
-macro_rules! mirror {
-    ($class:ident { $($field:ident),* $(,)? } extra { $($extra:tt)* }) => {
-        #[pymethods]
-        impl $class {
-            $(
-                #[getter]
-                fn $field(&self, py: Python<'_>) -> PyResult<Py<PyAny>> {
-                    use pyo3::IntoPyObjectExt;
-                    self.fit.$field.clone().into_py_any(py)
-                }
-            )*
-            $($extra)*
-        }
-    };
-}
-
-// circles ------------------------------------------------------------------------------
-
-use gagekit_form::circle;
-use gagekit_form::criterion::FitCriterion;
-
-/// A 2-D circle fit, complete (Sec. 6.2): the fields of the kernel's
-/// [`circle::CircleFit`] (centre, radius, `r_in` / `r_out`: the zone for the minimum zone,
-/// else the certificate; control points; arc in rad, its centre, the ill-posed flag), read
-/// through [`mirror!`], plus the criterion's canonical name and `form_error`.
-#[pyclass(frozen, module = "gagekit._core")]
-pub struct CircleResult {
-    fit: circle::CircleFit,
-}
-
-mirror!(CircleResult {
-    center, radius, r_in, r_out, control, control_in, control_out, arc, arc_center, ill_posed
-} extra {
-    #[getter]
-    fn criterion(&self) -> &'static str {
-        self.fit.criterion.name()
-    }
-    #[getter]
-    fn form_error(&self) -> f64 {
-        self.fit.form_error()
-    }
-});
-
-impl From<circle::CircleFit> for CircleResult {
-    fn from(fit: circle::CircleFit) -> Self {
-        Self { fit }
-    }
-}
-
-/// Circle of (n, 2) points by the exact kernels: `criterion` is any name of the
-/// criterion table (least squares, MC Eq. 6.1, MI Eq. 6.2, MZ Eqs. 6.5-6.8).
-#[pyfunction]
-fn form_circle_fit(py: Python<'_>, points: PyReadonlyArray2<'_, f64>, criterion: &str) -> PyResult<CircleResult> {
-    let pts = rows(py, &points, 2, "points")?;
-    run(py, || {
-        let crit = FitCriterion::parse_for(criterion, &FitCriterion::ALL, "circle")?;
-        circle::fit(pts, crit)
-    })
-    .map(CircleResult::from)
-}
-
-/// 2-D circle by the PSO over the centre (Eqs. 6.1, 6.4, 6.5; a cross-check of the
-/// exact kernels) for MC, MI or MZ.
-#[pyfunction]
-#[pyo3(signature = (points, criterion, seed=0, particles=20, max_iterations=2000, stall_iterations=100))]
-fn form_circle_pso(
-    py: Python<'_>,
-    points: PyReadonlyArray2<'_, f64>,
-    criterion: &str,
-    seed: u64,
-    particles: usize,
-    max_iterations: usize,
-    stall_iterations: usize,
-) -> PyResult<CircleResult> {
-    use gagekit_form::circle_pso::{fit, Kind};
-    let pts = rows(py, &points, 2, "points")?;
-    let settings = gagekit_pso::Settings { seed, particles, max_iterations, stall_iterations, ..Default::default() };
-    run(py, || {
-        let allowed = [FitCriterion::MinCircumscribed, FitCriterion::MaxInscribed, FitCriterion::MinZone];
-        let crit = FitCriterion::parse_for(criterion, &allowed, "circle (PSO)")?;
-        let kind = match crit {
-            FitCriterion::MinCircumscribed => Kind::MinCircumscribed,
-            FitCriterion::MaxInscribed => Kind::MaxInscribed,
-            _ => Kind::MinZone,
-        };
-        circle::from_zone(pts, crit, fit(pts, kind, &settings)?.zone)
-    })
-    .map(CircleResult::from)
-}
-
-fn register_circles(m: &Bound<'_, PyModule>) -> PyResult<()> {
-    m.add_class::<CircleResult>()?;
-    m.add_function(wrap_pyfunction!(form_circle_fit, m)?)?;
-    m.add_function(wrap_pyfunction!(form_circle_pso, m)?)?;
-    Ok(())
-}
-
-// end circles --------------------------------------------------------------------------
-
-pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
-    // the kernels' constants, defined once in Rust (the Python facades read them here)
-    m.add("CIRCLE_MIN_ARC_DEG", gagekit_form::circle::MIN_ARC_DEG)?;
-    m.add("CYLINDER_MIN_ARC_DEG", gagekit_form::cylinder::MIN_ARC.to_degrees())?;
-    m.add("DEFAULT_MAX_TILT_DEG", gagekit_form::cylinder::DEFAULT_MAX_TILT.to_degrees())?;
-    register_circles(m)?;
-    register_3d(m)?;
-    Ok(())
-}
-
-// 3-D fits (lines, planes, spheres, 3-D circles, cylinders) ------------------
+use super::*;
 
 use crate::errors::invalid;
+use gagekit_form::criterion::FitCriterion;
 use gagekit_form::lsq;
 use numpy::PyUntypedArrayMethods;
 
@@ -134,7 +18,8 @@ fn rows23<'a>(py: Python<'_>, points: &'a PyReadonlyArray2<'_, f64>) -> PyResult
 
 /// A least-squares line (2-D or 3-D) with its certificate: signed distances (2-D) or
 /// distances (3-D) to the line; `form_error` the spread (2-D) or twice the largest (3-D).
-#[pyclass(frozen, get_all, module = "gagekit._core")]
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyclass)]
+#[pyclass(frozen, get_all, module = "gagekit._core.form")]
 pub struct LineResult {
     pub point: Vec<f64>,
     pub direction: Vec<f64>,
@@ -144,7 +29,9 @@ pub struct LineResult {
 }
 
 /// Least-squares line of (n, 2) or (n, 3) points (the principal axis through the centroid).
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyfunction(module = "gagekit._core.form"))]
 #[pyfunction]
+#[pyo3(name = "line_lsq")]
 fn form_line_lsq(py: Python<'_>, points: PyReadonlyArray2<'_, f64>) -> PyResult<LineResult> {
     let (pts, dim) = rows23(py, &points)?;
     let (l, e) = run(py, || {
@@ -156,7 +43,8 @@ fn form_line_lsq(py: Python<'_>, points: PyReadonlyArray2<'_, f64>) -> PyResult<
 }
 
 /// A least-squares plane with its certificate (signed distances) and flatness about it.
-#[pyclass(frozen, get_all, module = "gagekit._core")]
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyclass)]
+#[pyclass(frozen, get_all, module = "gagekit._core.form")]
 pub struct PlaneResult {
     pub point: [f64; 3],
     pub normal: [f64; 3],
@@ -166,7 +54,9 @@ pub struct PlaneResult {
 }
 
 /// Least-squares plane of (n, 3) points: the centroid and the direction of least spread.
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyfunction(module = "gagekit._core.form"))]
 #[pyfunction]
+#[pyo3(name = "plane_lsq")]
 fn form_plane_lsq(py: Python<'_>, points: PyReadonlyArray2<'_, f64>) -> PyResult<PlaneResult> {
     let pts = rows(py, &points, 3, "points")?;
     let (p, e) = run(py, || {
@@ -179,7 +69,8 @@ fn form_plane_lsq(py: Python<'_>, points: PyReadonlyArray2<'_, f64>) -> PyResult
 
 /// A least-squares circle (2-D) or sphere (3-D) with its certificate (distances to the
 /// centre) and form error about it.
-#[pyclass(frozen, get_all, module = "gagekit._core")]
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyclass)]
+#[pyclass(frozen, get_all, module = "gagekit._core.form")]
 pub struct LeastSquaresSphereResult {
     pub center: Vec<f64>,
     pub radius: f64,
@@ -189,7 +80,9 @@ pub struct LeastSquaresSphereResult {
 }
 
 /// Least-squares circle of (n, 2) points or sphere of (n, 3) points.
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyfunction(module = "gagekit._core.form"))]
 #[pyfunction]
+#[pyo3(name = "sphere_lsq")]
 fn form_sphere_lsq(py: Python<'_>, points: PyReadonlyArray2<'_, f64>) -> PyResult<LeastSquaresSphereResult> {
     let (pts, dim) = rows23(py, &points)?;
     let (s, e) = run(py, || {
@@ -201,7 +94,8 @@ fn form_sphere_lsq(py: Python<'_>, points: PyReadonlyArray2<'_, f64>) -> PyResul
 }
 
 /// A least-squares circle in space with its certificate (in-plane radial distances).
-#[pyclass(frozen, get_all, module = "gagekit._core")]
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyclass)]
+#[pyclass(frozen, get_all, module = "gagekit._core.form")]
 pub struct LeastSquaresCircle3Result {
     pub center: [f64; 3],
     pub normal: [f64; 3],
@@ -212,7 +106,9 @@ pub struct LeastSquaresCircle3Result {
 }
 
 /// Least-squares circle of (n, 3) points (NIST: plane, projection, circle in the plane).
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyfunction(module = "gagekit._core.form"))]
 #[pyfunction]
+#[pyo3(name = "circle3d_lsq")]
 fn form_circle3d_lsq(py: Python<'_>, points: PyReadonlyArray2<'_, f64>) -> PyResult<LeastSquaresCircle3Result> {
     let pts = rows(py, &points, 3, "points")?;
     let (c, e) = run(py, || {
@@ -231,7 +127,8 @@ fn form_circle3d_lsq(py: Python<'_>, points: PyReadonlyArray2<'_, f64>) -> PyRes
 }
 
 /// A least-squares cylinder, complete: axis, angles, radius, certificate, arc covered.
-#[pyclass(frozen, get_all, module = "gagekit._core")]
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyclass)]
+#[pyclass(frozen, get_all, module = "gagekit._core.form")]
 pub struct LeastSquaresCylinderResult {
     pub point: [f64; 3],
     pub direction: [f64; 3],
@@ -245,7 +142,9 @@ pub struct LeastSquaresCylinderResult {
 }
 
 /// Least-squares cylinder of (n, 3) points (from the principal axes and `start_axis`).
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyfunction(module = "gagekit._core.form"))]
 #[pyfunction]
+#[pyo3(name = "cylinder_lsq")]
 #[pyo3(signature = (points, start_axis=None))]
 fn form_cylinder_lsq(
     py: Python<'_>,
@@ -266,7 +165,8 @@ fn form_cylinder_lsq(
 }
 
 /// A minimum-zone plane (flatness) or 2-D line (straightness), with its certificate.
-#[pyclass(frozen, get_all, module = "gagekit._core")]
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyclass)]
+#[pyclass(frozen, get_all, module = "gagekit._core.form")]
 pub struct MinZoneFlatResult {
     /// A point on the mid-plane (mid-line), its unit normal, and a 2-D line's direction
     /// (empty for planes).
@@ -286,7 +186,9 @@ pub struct MinZoneFlatResult {
 
 /// Minimum-zone plane of (n, 3) points or line of (n, 2) points (LP, then the exact
 /// solve of the active constraints).
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyfunction(module = "gagekit._core.form"))]
 #[pyfunction]
+#[pyo3(name = "min_zone_flat")]
 fn form_min_zone_flat(py: Python<'_>, points: PyReadonlyArray2<'_, f64>) -> PyResult<MinZoneFlatResult> {
     let (pts, dim) = rows23(py, &points)?;
     let z = run(py, || if dim == 3 { gagekit_form::minzone::plane(pts) } else { gagekit_form::minzone::line2(pts) })?;
@@ -306,7 +208,8 @@ fn form_min_zone_flat(py: Python<'_>, points: PyReadonlyArray2<'_, f64>) -> PyRe
 }
 
 /// A better optimum of the free search outside the search cone.
-#[pyclass(frozen, get_all, module = "gagekit._core")]
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyclass)]
+#[pyclass(frozen, get_all, module = "gagekit._core.form")]
 pub struct OutsideResult {
     /// Its radius (MCC, MIC) or zone width (MZC), mm.
     pub value: f64,
@@ -327,7 +230,8 @@ impl OutsideResult {
 /// [`gagekit_form::cylinder::CylinderFit`] fields, read through [`mirror!`], plus the
 /// criterion's canonical name, the certificate (`min_distance`, `max_distance`) and the
 /// optimum outside the cone as an [`OutsideResult`].
-#[pyclass(frozen, module = "gagekit._core")]
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyclass)]
+#[pyclass(frozen, module = "gagekit._core.form")]
 pub struct CylinderResult {
     fit: gagekit_form::cylinder::CylinderFit,
 }
@@ -361,7 +265,9 @@ fn search_of(axis: Option<[f64; 3]>, max_tilt: f64) -> gagekit_form::cylinder::S
 /// Minimax cylinder by the projection model + PSO (Sec. 6.3). `criterion`: any name of
 /// the criterion table but least squares; the axis is searched within `max_tilt` (rad,
 /// [0, pi/2]) of `axis` (default: the least-squares axis).
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyfunction(module = "gagekit._core.form"))]
 #[pyfunction]
+#[pyo3(name = "cylinder_fit")]
 #[pyo3(signature = (points, criterion, seed=0, particles=20, max_iterations=300, stall_iterations=6, axis=None, max_tilt=gagekit_form::cylinder::DEFAULT_MAX_TILT, refine_starts=8, hop_rounds=3))]
 #[allow(clippy::too_many_arguments)]
 fn form_cylinder_fit(
@@ -389,7 +295,8 @@ fn form_cylinder_fit(
 }
 
 /// A minimum-zone line in space (straightness): the thinnest enclosing cylinder.
-#[pyclass(frozen, get_all, module = "gagekit._core")]
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyclass)]
+#[pyclass(frozen, get_all, module = "gagekit._core.form")]
 pub struct Line3Result {
     pub point: [f64; 3],
     pub direction: [f64; 3],
@@ -405,7 +312,9 @@ pub struct Line3Result {
 
 /// Minimum-zone 3-D line, searched within `max_tilt` (rad) of `axis` (default: the
 /// least-squares direction).
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyfunction(module = "gagekit._core.form"))]
 #[pyfunction]
+#[pyo3(name = "line3_min_zone")]
 #[pyo3(signature = (points, seed=0, axis=None, max_tilt=gagekit_form::cylinder::DEFAULT_MAX_TILT))]
 fn form_line3_min_zone(
     py: Python<'_>,
@@ -434,7 +343,9 @@ fn form_line3_min_zone(
 
 /// The canonical name of a fit criterion (any alias of the package's one table), or a
 /// ConfigError listing the names `allowed` (all when empty) for `shape`.
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyfunction(module = "gagekit._core.form"))]
 #[pyfunction]
+#[pyo3(name = "criterion")]
 #[pyo3(signature = (name, allowed=Vec::new(), shape="fit"))]
 fn form_criterion(py: Python<'_>, name: &str, allowed: Vec<String>, shape: &str) -> PyResult<String> {
     run(py, || {
@@ -448,13 +359,16 @@ fn form_criterion(py: Python<'_>, name: &str, allowed: Vec<String>, shape: &str)
 }
 
 /// The criterion table: (alias, canonical name, circle code) for every accepted spelling.
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyfunction(module = "gagekit._core.form"))]
 #[pyfunction]
+#[pyo3(name = "criteria")]
 fn form_criteria() -> Vec<(&'static str, &'static str, &'static str)> {
     gagekit_form::criterion::ALIASES.iter().map(|(k, c)| (*k, c.name(), c.code())).collect()
 }
 
 /// A circle in space (any pose): the 2-D fit of a criterion in the least-squares plane.
-#[pyclass(frozen, get_all, module = "gagekit._core")]
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyclass)]
+#[pyclass(frozen, get_all, module = "gagekit._core.form")]
 pub struct Circle3Result {
     pub center: [f64; 3],
     pub normal: [f64; 3],
@@ -478,7 +392,9 @@ pub struct Circle3Result {
 
 /// Circle of (n, 3) points in any pose: least-squares plane, projection, 2-D fit of
 /// `criterion` (any name of the criterion table).
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyfunction(module = "gagekit._core.form"))]
 #[pyfunction]
+#[pyo3(name = "circle_in_plane")]
 fn form_circle_in_plane(py: Python<'_>, points: PyReadonlyArray2<'_, f64>, criterion: &str) -> PyResult<Circle3Result> {
     let pts = rows(py, &points, 3, "points")?;
     let c = run(py, || {
@@ -503,7 +419,8 @@ fn form_circle_in_plane(py: Python<'_>, points: PyReadonlyArray2<'_, f64>, crite
 }
 
 /// A Chebyshev sphere: centre, radii, control points and certificate.
-#[pyclass(frozen, get_all, module = "gagekit._core")]
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyclass)]
+#[pyclass(frozen, get_all, module = "gagekit._core.form")]
 pub struct SphereResult {
     pub criterion: String,
     pub center: [f64; 3],
@@ -522,7 +439,9 @@ pub struct SphereResult {
 }
 
 /// Minimum circumscribed, maximum inscribed or minimum-zone sphere of (n, 3) points.
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyfunction(module = "gagekit._core.form"))]
 #[pyfunction]
+#[pyo3(name = "sphere_fit")]
 fn form_sphere_fit(py: Python<'_>, points: PyReadonlyArray2<'_, f64>, criterion: &str) -> PyResult<SphereResult> {
     use gagekit_form::sphere;
     use FitCriterion as F;
@@ -556,7 +475,8 @@ fn form_sphere_fit(py: Python<'_>, points: PyReadonlyArray2<'_, f64>, criterion:
 /// angle rad, radii at the reference section, zone radii, control points, optimality gap),
 /// read through [`mirror!`], plus the criterion's canonical name, the certificate (signed
 /// normal deviations, positive away from the axis) and `form_error`.
-#[pyclass(frozen, module = "gagekit._core")]
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyclass)]
+#[pyclass(frozen, module = "gagekit._core.form")]
 pub struct ConeResult {
     fit: gagekit_form::cone::ConeFit,
 }
@@ -585,7 +505,9 @@ mirror!(ConeResult {
 
 /// Cone of (n, 3) points: `criterion` any name of the criterion table; `half_angle` (rad)
 /// fixes the half angle.
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyfunction(module = "gagekit._core.form"))]
 #[pyfunction]
+#[pyo3(name = "cone_fit")]
 #[pyo3(signature = (points, criterion, half_angle=None))]
 fn form_cone_fit(py: Python<'_>, points: PyReadonlyArray2<'_, f64>, criterion: &str, half_angle: Option<f64>) -> PyResult<ConeResult> {
     let pts = rows(py, &points, 3, "points")?;
@@ -596,7 +518,7 @@ fn form_cone_fit(py: Python<'_>, points: PyReadonlyArray2<'_, f64>, criterion: &
     Ok(ConeResult { fit })
 }
 
-fn register_3d(m: &Bound<'_, PyModule>) -> PyResult<()> {
+pub(super) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(form_cone_fit, m)?)?;
     m.add_function(wrap_pyfunction!(form_cylinder_fit, m)?)?;
     m.add_function(wrap_pyfunction!(form_line3_min_zone, m)?)?;

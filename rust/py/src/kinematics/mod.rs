@@ -26,7 +26,8 @@ fn elements(spec: Spec) -> gagekit_core::Result<Vec<Element>> {
 }
 
 /// A validated kinematic chain (Eq. 3.1), built once per machine file.
-#[pyclass(frozen, module = "gagekit._core")]
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyclass)]
+#[pyclass(frozen, module = "gagekit._core.kinematics")]
 pub struct KinematicChain {
     machine: Machine,
     /// (element index, parameter name, length power) in design-matrix column order.
@@ -45,6 +46,7 @@ impl KinematicChain {
     }
 }
 
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pymethods)]
 #[pymethods]
 impl KinematicChain {
     #[new]
@@ -87,7 +89,8 @@ impl KinematicChain {
 }
 
 /// Identifiability of a design matrix (Eq. 3.14).
-#[pyclass(frozen, get_all, module = "gagekit._core")]
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyclass)]
+#[pyclass(frozen, get_all, module = "gagekit._core.kinematics")]
 pub struct Identifiability {
     /// Numerical rank of the column-equilibrated matrix.
     rank: usize,
@@ -101,7 +104,9 @@ pub struct Identifiability {
     reconstruction_error: f64,
 }
 
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyfunction(module = "gagekit._core.kinematics"))]
 #[pyfunction]
+#[pyo3(name = "identifiability")]
 #[pyo3(signature = (design, length_scale, length_power, rtol=1e-9, no_effect_tol=1e-12))]
 fn machine_identifiability<'py>(
     py: Python<'py>,
@@ -126,7 +131,8 @@ fn machine_identifiability<'py>(
 }
 
 /// Least squares by SVD of the column-equilibrated matrix.
-#[pyclass(frozen, get_all, module = "gagekit._core")]
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyclass)]
+#[pyclass(frozen, get_all, module = "gagekit._core.kinematics")]
 pub struct LeastSquares {
     x: Py<PyArray1<f64>>,
     /// (A^T A)^-1, to be scaled by sigma^2.
@@ -139,7 +145,9 @@ pub struct LeastSquares {
     weakest: Py<PyArray1<f64>>,
 }
 
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyfunction(module = "gagekit._core.kinematics"))]
 #[pyfunction]
+#[pyo3(name = "lstsq")]
 fn machine_lstsq<'py>(py: Python<'py>, a: PyReadonlyArray2<'py, f64>, b: PyReadonlyArray1<'py, f64>) -> PyResult<LeastSquares> {
     let shape = a.shape();
     let (n, k) = (shape[0], shape[1]);
@@ -157,7 +165,8 @@ fn machine_lstsq<'py>(py: Python<'py>, a: PyReadonlyArray2<'py, f64>, b: PyReado
 }
 
 /// Closed-form rigid fit dst ~ rotation @ src + translation (Kabsch/Horn).
-#[pyclass(frozen, get_all, module = "gagekit._core")]
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyclass)]
+#[pyclass(frozen, get_all, module = "gagekit._core.kinematics")]
 pub struct RigidTransform {
     rotation: Py<PyArray2<f64>>,
     translation: Py<PyArray1<f64>>,
@@ -167,6 +176,7 @@ pub struct RigidTransform {
 /// Leave-one-cycle-out error sums of the temperature ridge model, one per strength
 /// (`gagekit_kinematics::ridge::loo_errors`): temperatures (k, S), groups (k, G), residuals
 /// (k, 3n), reduced design matrix (3n, G).
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyfunction(module = "gagekit._core.kinematics"))]
 #[pyfunction]
 fn tracking_loo_errors<'py>(
     py: Python<'py>,
@@ -185,7 +195,9 @@ fn tracking_loo_errors<'py>(
     run(py, || gagekit_kinematics::ridge::loo_errors(t, p, r, m, k, s, g, &lambdas))
 }
 
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyfunction(module = "gagekit._core.kinematics"))]
 #[pyfunction]
+#[pyo3(name = "rigid_fit")]
 fn machine_rigid_fit<'py>(py: Python<'py>, src: PyReadonlyArray2<'py, f64>, dst: PyReadonlyArray2<'py, f64>) -> PyResult<RigidTransform> {
     let s = rows(py, &src, 3, "nominal positions")?;
     let d = rows(py, &dst, 3, "measured positions")?;
@@ -197,7 +209,10 @@ fn machine_rigid_fit<'py>(py: Python<'py>, src: PyReadonlyArray2<'py, f64>, dst:
     })
 }
 
+mod ballbar;
+
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    ballbar::register(m)?;
     m.add_class::<KinematicChain>()?;
     m.add_class::<Identifiability>()?;
     m.add_class::<LeastSquares>()?;

@@ -8,7 +8,8 @@ use pyo3::prelude::*;
 
 /// A least-squares circle of ballbar readings: centre (mm, about the pivot), radius
 /// deviation (mm), circular deviation G (mm), number of readings.
-#[pyclass(frozen, get_all, module = "gagekit._core")]
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyclass)]
+#[pyclass(frozen, get_all, module = "gagekit._core.kinematics")]
 pub struct BallbarCircle {
     centre: (f64, f64),
     radius_deviation: f64,
@@ -21,7 +22,8 @@ fn circle(c: CircleFit) -> BallbarCircle {
 }
 
 /// Everything a ballbar test gives (mm, rad, s); see `gagekit_kinematics::ballbar`.
-#[pyclass(frozen, get_all, module = "gagekit._core")]
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyclass)]
+#[pyclass(frozen, get_all, module = "gagekit._core.kinematics")]
 pub struct BallbarAnalysis {
     both: Py<BallbarCircle>,
     ccw: Option<Py<BallbarCircle>>,
@@ -49,7 +51,9 @@ pub struct BallbarAnalysis {
     residual_rms: f64,
 }
 
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyfunction(module = "gagekit._core.kinematics"))]
 #[pyfunction]
+#[pyo3(name = "ballbar")]
 #[pyo3(signature = (radius, angles, deviations, directions, pitch=None, feed=None))]
 fn machine_ballbar<'py>(
     py: Python<'py>,
@@ -91,7 +95,7 @@ fn machine_ballbar<'py>(
     })
 }
 
-pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+pub(super) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<BallbarCircle>()?;
     m.add_class::<BallbarAnalysis>()?;
     m.add_function(wrap_pyfunction!(machine_ballbar, m)?)?;

@@ -8,7 +8,8 @@ use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray2, PyReadwriteArr
 use pyo3::prelude::*;
 
 /// A parsed ASCII point file.
-#[pyclass(frozen, get_all, module = "gagekit._core")]
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyclass)]
+#[pyclass(frozen, get_all, module = "gagekit._core.cloud")]
 pub struct AsciiCloud {
     /// (n, dim) coordinates.
     points: Py<PyAny>,
@@ -19,7 +20,9 @@ pub struct AsciiCloud {
 }
 
 /// Read an ASCII point file.
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyfunction(module = "gagekit._core.cloud"))]
 #[pyfunction]
+#[pyo3(name = "read_ascii")]
 #[pyo3(signature = (path, dim=3, skip_lines=0))]
 fn cloud_read_ascii<'py>(
     py: Python<'py>,
@@ -35,13 +38,16 @@ fn cloud_read_ascii<'py>(
 
 /// Number of values on the first data line of a text file's beginning `head` (its first
 /// 1000 lines), read as `cloud_read_ascii` reads it (decimal commas included); 0 if none.
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyfunction(module = "gagekit._core.cloud"))]
 #[pyfunction]
-fn cloud_ascii_columns(head: &[u8]) -> usize {
-    data_columns(head, 1000)
+#[pyo3(name = "ascii_columns")]
+fn cloud_ascii_columns(head: &Bound<'_, pyo3::types::PyBytes>) -> usize {
+    data_columns(head.as_bytes(), 1000)
 }
 
 /// The vertices of a PLY file.
-#[pyclass(frozen, get_all, module = "gagekit._core")]
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyclass)]
+#[pyclass(frozen, get_all, module = "gagekit._core.cloud")]
 pub struct PlyCloud {
     /// (n, 3) coordinates.
     points: Py<PyAny>,
@@ -51,7 +57,9 @@ pub struct PlyCloud {
 
 /// Read the vertices of a PLY file (memory-mapped), decoded straight into numpy's
 /// allocation (one pass, no copy).
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyfunction(module = "gagekit._core.cloud"))]
 #[pyfunction]
+#[pyo3(name = "read_ply")]
 fn cloud_read_ply(py: Python<'_>, path: String) -> PyResult<PlyCloud> {
     let file = run(py, || PlyFile::open(std::path::Path::new(&path), &path))?;
     let n = file.vertex_count();
@@ -67,7 +75,8 @@ fn cloud_read_ply(py: Python<'_>, path: String) -> PyResult<PlyCloud> {
 }
 
 /// Where the vertices of a PLY file are, when they can be used without decoding.
-#[pyclass(frozen, get_all, module = "gagekit._core")]
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyclass)]
+#[pyclass(frozen, get_all, module = "gagekit._core.cloud")]
 pub struct PlyLayout {
     /// Number of vertices the header declares.
     vertices: usize,
@@ -78,7 +87,9 @@ pub struct PlyLayout {
 
 /// Open and check a PLY file; see [`PlyLayout`]. Python then maps the file
 /// (copy-on-write) as the array: no copy at all.
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyfunction(module = "gagekit._core.cloud"))]
 #[pyfunction]
+#[pyo3(name = "ply_layout")]
 fn cloud_ply_layout(py: Python<'_>, path: String) -> PyResult<PlyLayout> {
     run(py, || {
         let f = PlyFile::open(std::path::Path::new(&path), &path)?;
@@ -87,7 +98,8 @@ fn cloud_ply_layout(py: Python<'_>, path: String) -> PyResult<PlyLayout> {
 }
 
 /// The points of every scan of an E57 file.
-#[pyclass(frozen, get_all, module = "gagekit._core")]
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyclass)]
+#[pyclass(frozen, get_all, module = "gagekit._core.cloud")]
 pub struct E57Cloud {
     /// (n, 3) coordinates in metres, poses applied, invalid points dropped.
     points: Py<PyAny>,
@@ -98,7 +110,9 @@ pub struct E57Cloud {
 }
 
 /// Read every scan of an E57 file.
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyfunction(module = "gagekit._core.cloud"))]
 #[pyfunction]
+#[pyo3(name = "read_e57")]
 fn cloud_read_e57(py: Python<'_>, path: String) -> PyResult<E57Cloud> {
     let p = run(py, || read_e57(std::path::Path::new(&path), &path))?;
     let n = p.coords.len() / 3;
@@ -108,7 +122,9 @@ fn cloud_read_e57(py: Python<'_>, path: String) -> PyResult<E57Cloud> {
 
 /// Multiply the columns of a C-contiguous (n, d) float64 array by `scale` (d factors) in
 /// place: the unit conversion of a read cloud without a second array.
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyfunction(module = "gagekit._core.cloud"))]
 #[pyfunction]
+#[pyo3(name = "scale_in_place")]
 fn cloud_scale_in_place(py: Python<'_>, mut points: PyReadwriteArray2<'_, f64>, scale: Vec<f64>, what: String) -> PyResult<()> {
     let coords = points.as_slice_mut().map_err(|_| invalid("points: expected a C-contiguous float64 array"))?;
     // not interruptible (a rerun would scale twice): one pass at memory speed
@@ -116,7 +132,9 @@ fn cloud_scale_in_place(py: Python<'_>, mut points: PyReadwriteArray2<'_, f64>, 
 }
 
 /// Write points (n, d) as ASCII with separator `sep` and an optional header line.
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyfunction(module = "gagekit._core.cloud"))]
 #[pyfunction]
+#[pyo3(name = "write_ascii")]
 #[pyo3(signature = (path, points, sep=",", header=None))]
 fn cloud_write_ascii(
     py: Python<'_>,
@@ -138,12 +156,14 @@ fn cloud_write_ascii(
 }
 
 /// An ASCII point file read in blocks (`gagekit-cloudio`'s `AsciiStream`).
-#[pyclass(module = "gagekit._core")]
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyclass)]
+#[pyclass(module = "gagekit._core.cloud")]
 pub struct AsciiChunks {
     inner: AsciiStream,
     dim: usize,
 }
 
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pymethods)]
 #[pymethods]
 impl AsciiChunks {
     /// Header lines skipped before the first point.
@@ -162,7 +182,9 @@ impl AsciiChunks {
 }
 
 /// Open an ASCII point file for reading in blocks of about `block` bytes.
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyfunction(module = "gagekit._core.cloud"))]
 #[pyfunction]
+#[pyo3(name = "ascii_chunks")]
 #[pyo3(signature = (path, dim=3, skip_lines=0, block=1 << 26))]
 fn cloud_ascii_chunks(py: Python<'_>, path: String, dim: usize, skip_lines: usize, block: usize) -> PyResult<AsciiChunks> {
     let inner = run(py, || AsciiStream::open(std::path::Path::new(&path), &AsciiOptions { dim, skip_lines }, &path, block))?;
@@ -170,11 +192,13 @@ fn cloud_ascii_chunks(py: Python<'_>, path: String, dim: usize, skip_lines: usiz
 }
 
 /// The vertices of a binary PLY file read in ranges (`gagekit-cloudio`'s `PlyStream`).
-#[pyclass(module = "gagekit._core")]
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyclass)]
+#[pyclass(module = "gagekit._core.cloud")]
 pub struct PlyChunks {
     inner: PlyStream,
 }
 
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pymethods)]
 #[pymethods]
 impl PlyChunks {
     /// Number of vertices.
@@ -193,7 +217,9 @@ impl PlyChunks {
 
 /// Open a binary PLY file (every element of fixed-size records) for reading its vertices
 /// in ranges; None for an ASCII PLY or one with lists (faces), which is read whole.
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyfunction(module = "gagekit._core.cloud"))]
 #[pyfunction]
+#[pyo3(name = "ply_chunks")]
 fn cloud_ply_chunks(py: Python<'_>, path: String) -> PyResult<Option<PlyChunks>> {
     let s = run(py, || PlyStream::open(std::path::Path::new(&path), &path))?;
     Ok(s.map(|inner| PlyChunks { inner }))
