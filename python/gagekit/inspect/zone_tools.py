@@ -1,6 +1,6 @@
 """The small exact tools the callouts share (zones, sizes, material conditions): the
-measured value of a callout (:class:`Measurement`), the minimum enclosing circle of 2-D
-points (Welzl, exact) and the element (surface, derived axis or median line) a callout
+measured value of a callout (:class:`Measurement`), the projection of points normal to a
+direction and the element (surface, derived axis or median line) a callout
 measures (ISO 1101, ISO 5459 as in :mod:`.zones`). The searches over a turn angle live in
 the kernel (``gagekit_gdt::turn``)."""
 
@@ -11,7 +11,6 @@ from typing import Optional
 
 import numpy as np
 
-from .. import _core
 from .features import FeatureData, _basis
 
 __all__ = ["Measurement"]
@@ -34,19 +33,6 @@ class Measurement:
 def _plane_2d(points: np.ndarray, d: np.ndarray) -> np.ndarray:
     u, v = _basis(d)
     return np.ascontiguousarray(np.column_stack([points @ u, points @ v]))
-
-
-def _mec_radius(xy: np.ndarray) -> tuple[float, np.ndarray]:
-    """Minimum circumscribed circle of 2-D points (Welzl, exact): (radius, centre)."""
-    if len(xy) == 1:
-        return 0.0, xy[0]
-    if len(xy) == 2:
-        return 0.5 * float(np.linalg.norm(xy[1] - xy[0])), 0.5 * (xy[0] + xy[1])
-    if np.ptp(xy, axis=0).max() == 0.0:
-        return 0.0, xy[0]
-    c = _core.form_circle_fit(np.ascontiguousarray(xy), "min-circumscribed").center
-    r = float(np.linalg.norm(xy - np.array(c), axis=1).max())
-    return r, np.array(c)
 
 
 def _element(fd: FeatureData) -> tuple[np.ndarray, str]:

@@ -77,7 +77,7 @@ from ..form import fit_circle, fit_cone, fit_cylinder, fit_line, fit_sphere
 from .datums import DatumSystem, SimulatedDatum
 from .features import FeatureData, _unit
 from .spec import Tolerance
-from .zone_tools import Measurement, _element, _mec_radius, _plane_2d
+from .zone_tools import Measurement, _element, _plane_2d
 
 __all__ = ["Measurement", "evaluate", "ZONE_KINDS"]
 
@@ -96,8 +96,9 @@ def _slab(points: np.ndarray, mode: str, axis: Any = (0.0, 0.0, 1.0), angle: flo
 
 
 def _cylinder_zone(points: np.ndarray, d: np.ndarray) -> float:
-    """Diameter of the smallest cylinder of direction d containing the points."""
-    return 2.0 * _mec_radius(_plane_2d(points, _unit(d)))[0]
+    """Diameter of the smallest cylinder of direction d containing the points (the minimum
+    circumscribed circle of their projection, Welzl, exact)."""
+    return 2.0 * float(_core.gdt_axis_along(np.ascontiguousarray(points), tuple(float(x) for x in d), "circumscribed")[2])
 
 
 # -- the evaluation ----------------------------------------------------------------------

@@ -95,10 +95,16 @@ pub fn min_on_grid<F: Fn(f64) -> f64 + Sync>(f: &F, lo: f64, hi: f64, n: usize, 
     cells.truncate(CELLS);
     let k0 = cells[0];
     let mut best = (vals[k0], lo + k0 as f64 * step);
-    for &k in &cells {
-        let a = if cyclic || k > 0 { lo + (k as f64 - 1.0) * step } else { lo };
-        let b = if cyclic || k + 1 < m { lo + (k as f64 + 1.0) * step } else { hi };
-        let (fx, x) = golden(f, a, b);
+    // the cells refined in parallel, compared in their fixed order (deterministic)
+    let refined: Vec<(f64, f64)> = cells
+        .par_iter()
+        .map(|&k| {
+            let a = if cyclic || k > 0 { lo + (k as f64 - 1.0) * step } else { lo };
+            let b = if cyclic || k + 1 < m { lo + (k as f64 + 1.0) * step } else { hi };
+            golden(f, a, b)
+        })
+        .collect();
+    for (fx, x) in refined {
         if fx < best.0 {
             best = (fx, x);
         }
