@@ -43,7 +43,7 @@ impl AsciiStream {
         let mut file = File::open(path).map_err(io_error(what))?;
         let block = block.max(1 << 16);
         let mut head = Vec::new();
-        let mut eof = false;
+        let mut eof;
         loop {
             let want = head.len().max(block);
             let got = (&mut file).take(want as u64).read_to_end(&mut head).map_err(io_error(what))?;
@@ -234,11 +234,19 @@ mod timing {
         let p = std::path::Path::new("/tmp/scale_a.xyz");
         let bytes = std::fs::read(p).unwrap();
         let opts = crate::ascii::AsciiOptions::default();
+        // user and system CPU seconds of this process (the machine may be shared)
+        let cpu = || {
+            let s = std::fs::read_to_string("/proc/self/stat").unwrap();
+            let f: Vec<f64> = s.rsplit(')').next().unwrap().split_whitespace().skip(11).take(2).map(|x| x.parse().unwrap()).collect();
+            (f[0] / 100.0, f[1] / 100.0)
+        };
         for _ in 0..3 {
             let t = std::time::Instant::now();
+            let c0 = cpu();
             let r = crate::ascii::parse_ascii(&bytes, &opts, "t").unwrap();
             let el = t.elapsed().as_secs_f64();
-            println!("parse {:.3}s {:.0} MB/s n={}", el, bytes.len() as f64 / el / 1e6, r.coords.len());
+            let c1 = cpu();
+            println!("parse {:.3}s {:.0} MB/s n={} cpu user {:.2}s sys {:.2}s", el, bytes.len() as f64 / el / 1e6, r.coords.len(), c1.0 - c0.0, c1.1 - c0.1);
             let t = std::time::Instant::now();
             let n: usize = memchr::memchr_iter(b'\n', &bytes).count();
             println!("count {:.3}s {n}", t.elapsed().as_secs_f64());
