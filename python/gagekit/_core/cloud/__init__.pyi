@@ -9,11 +9,14 @@ __all__ = [
     "AsciiChunks",
     "AsciiCloud",
     "E57Cloud",
+    "PlyAsciiChunks",
     "PlyChunks",
     "PlyCloud",
     "PlyLayout",
     "ascii_chunks",
     "ascii_columns",
+    "cut_chunk",
+    "ply_ascii_chunks",
     "ply_chunks",
     "ply_layout",
     "read_ascii",
@@ -81,6 +84,21 @@ class E57Cloud:
         """
 
 @typing.final
+class PlyAsciiChunks:
+    r"""
+    The vertices of an ASCII PLY file read in blocks of lines (`gagekit-cloudio`'s `PlyAsciiStream`).
+    """
+    @property
+    def count(self) -> builtins.int:
+        r"""
+        Number of vertices.
+        """
+    def next_chunk(self, max_points: builtins.int) -> typing.Optional[typing.Any]:
+        r"""
+        The next at most `max_points` vertices as an (m, 3) array, None at the end.
+        """
+
+@typing.final
 class PlyChunks:
     r"""
     The vertices of a binary PLY file read in ranges (`gagekit-cloudio`'s `PlyStream`).
@@ -93,6 +111,11 @@ class PlyChunks:
     def next_chunk(self, max_points: builtins.int) -> typing.Optional[typing.Any]:
         r"""
         The next at most `max_points` vertices as an (m, 3) array, None at the end.
+        """
+    def next_into(self, out: numpy.typing.NDArray[numpy.float64]) -> builtins.int:
+        r"""
+        The next vertices into the C-contiguous (m, 3) float64 array `out` (a buffer
+        reused from chunk to chunk); the number read, 0 at the end.
         """
 
 @typing.final
@@ -139,6 +162,20 @@ def ascii_columns(head: bytes) -> builtins.int:
     1000 lines), read as `cloud_read_ascii` reads it (decimal commas included); 0 if none.
     """
 
+def cut_chunk(points: numpy.typing.NDArray[numpy.float64], boxes: numpy.typing.NDArray[numpy.float64], hull: typing.Sequence[builtins.bool], inside: builtins.bool = ...) -> builtins.list[tuple[builtins.int, typing.Optional[numpy.typing.NDArray[numpy.int64]], numpy.typing.NDArray[numpy.int64], numpy.typing.NDArray[numpy.float64]]]:
+    r"""
+    Classify a chunk of points into region boxes ((k, 9): centre, size, rotation vector)
+    and keep, per box, every inside point or (`hull[i]`) the hull vertices of them;
+    `inside` also returns every inside index of the hull boxes (`gagekit-cloudio`'s
+    `cut_chunk`: one call a chunk, parallel inside).
+    """
+
+def ply_ascii_chunks(path: builtins.str) -> typing.Optional[PlyAsciiChunks]:
+    r"""
+    Open an ASCII PLY file for reading its vertices in blocks of lines (its body's lines
+    counted against the header first, as a whole read checks them); None for a binary one.
+    """
+
 def ply_chunks(path: builtins.str) -> typing.Optional[PlyChunks]:
     r"""
     Open a binary PLY file (every element of fixed-size records) for reading its vertices
@@ -153,7 +190,8 @@ def ply_layout(path: builtins.str) -> PlyLayout:
 
 def read_ascii(path: builtins.str, dim: builtins.int = ..., skip_lines: builtins.int = ...) -> AsciiCloud:
     r"""
-    Read an ASCII point file.
+    Read an ASCII point file: mapped, lines counted, then parsed in parallel straight
+    into numpy's allocation (no copy of the file's bytes nor of the result).
     """
 
 def read_e57(path: builtins.str) -> E57Cloud:

@@ -4,11 +4,18 @@
 import builtins
 import numpy
 import numpy.typing
+import typing
 __all__ = [
     "axis_along",
+    "axis_on_cone",
+    "cylinder_on_cone",
     "datum_plane",
     "hull_distance",
+    "min_in_disk",
     "min_width_2d",
+    "plane_location",
+    "position_with_shift",
+    "position_zone",
     "slab",
     "two_point_sizes",
     "width_sizes",
@@ -17,6 +24,18 @@ __all__ = [
 def axis_along(points: numpy.typing.NDArray[numpy.float64], direction: tuple[builtins.float, builtins.float, builtins.float], fit: builtins.str) -> tuple[tuple[builtins.float, builtins.float, builtins.float], tuple[builtins.float, builtins.float, builtins.float], builtins.float, builtins.float, builtins.float]:
     r"""
     Cylinder of a fixed axis direction: (point, direction, radius, r_min, r_max).
+    """
+
+def axis_on_cone(points: numpy.typing.NDArray[numpy.float64], normal: tuple[builtins.float, builtins.float, builtins.float], tilt: builtins.float, ls_direction: tuple[builtins.float, builtins.float, builtins.float], fit: builtins.str) -> tuple[tuple[builtins.float, builtins.float, builtins.float], tuple[builtins.float, builtins.float, builtins.float], builtins.float, builtins.float, builtins.float]:
+    r"""
+    Datum axis at `tilt` rad from the plane normal `normal`, free to turn about it
+    (ISO 5459; `gagekit_gdt::turn::axis_on_cone`): (point, direction, radius, r_min, r_max).
+    """
+
+def cylinder_on_cone(points: numpy.typing.NDArray[numpy.float64], axis: tuple[builtins.float, builtins.float, builtins.float], angle: builtins.float) -> tuple[builtins.float, tuple[builtins.float, builtins.float, builtins.float]]:
+    r"""
+    Smallest cylinder whose axis is at `angle` rad from `axis`, free to turn about it
+    (angularity of a derived axis): (diameter, axis direction).
     """
 
 def datum_plane(points: numpy.typing.NDArray[numpy.float64], outward: tuple[builtins.float, builtins.float, builtins.float], mode: builtins.str, axis: tuple[builtins.float, builtins.float, builtins.float], angle: builtins.float, fit: builtins.str) -> tuple[tuple[builtins.float, builtins.float, builtins.float], tuple[builtins.float, builtins.float, builtins.float], builtins.float, builtins.float]:
@@ -30,9 +49,33 @@ def hull_distance(a: numpy.typing.NDArray[numpy.float64], b: numpy.typing.NDArra
     first to the second (GJK).
     """
 
+def min_in_disk(points: numpy.typing.NDArray[numpy.float64], rho: builtins.float) -> tuple[builtins.float, tuple[builtins.float, builtins.float]]:
+    r"""
+    Exact min over |s| <= rho of max_i |w_i - s| for (n, 2) points: (value, s).
+    """
+
 def min_width_2d(points: numpy.typing.NDArray[numpy.float64]) -> tuple[builtins.float, tuple[builtins.float, builtins.float], builtins.float, builtins.float]:
     r"""
     Minimum width of (n, 2) points: (width, normal, lo, hi).
+    """
+
+def plane_location(points: numpy.typing.NDArray[numpy.float64], frame_: tuple[tuple[builtins.float, builtins.float, builtins.float], tuple[tuple[builtins.float, builtins.float, builtins.float], tuple[builtins.float, builtins.float, builtins.float], tuple[builtins.float, builtins.float, builtins.float]], typing.Sequence[tuple[builtins.float, builtins.float, builtins.float]], builtins.bool], point: tuple[builtins.float, builtins.float, builtins.float], normal: tuple[builtins.float, builtins.float, builtins.float]) -> tuple[builtins.float, builtins.float]:
+    r"""
+    Width of the location zone of a plane about the nominal plane (`point`, `normal`),
+    optimised over the frame's free turn: (width, turn).
+    """
+
+def position_with_shift(points: numpy.typing.NDArray[numpy.float64], frame_: tuple[tuple[builtins.float, builtins.float, builtins.float], tuple[tuple[builtins.float, builtins.float, builtins.float], tuple[builtins.float, builtins.float, builtins.float], tuple[builtins.float, builtins.float, builtins.float]], typing.Sequence[tuple[builtins.float, builtins.float, builtins.float]], builtins.bool], point: tuple[builtins.float, builtins.float, builtins.float], u: tuple[builtins.float, builtins.float, builtins.float], v: tuple[builtins.float, builtins.float, builtins.float], rho: builtins.float) -> tuple[builtins.float, builtins.float, builtins.float]:
+    r"""
+    Position with a datum shift of radius `rho` in the plane (`u`, `v`) normal to the
+    shifted datum axis: (radius, shift used, turn).
+    """
+
+def position_zone(points: numpy.typing.NDArray[numpy.float64], frame_: tuple[tuple[builtins.float, builtins.float, builtins.float], tuple[tuple[builtins.float, builtins.float, builtins.float], tuple[builtins.float, builtins.float, builtins.float], tuple[builtins.float, builtins.float, builtins.float]], typing.Sequence[tuple[builtins.float, builtins.float, builtins.float]], builtins.bool], point: tuple[builtins.float, builtins.float, builtins.float], direction: typing.Optional[tuple[builtins.float, builtins.float, builtins.float]] = None) -> tuple[builtins.float, builtins.float]:
+    r"""
+    Position zone radius of (n, 3) points about a nominal point (`direction` None) or
+    line, optimised over what the datum frame `(origin, (x, y, z), free translations,
+    free rotation)` leaves free: (radius, turn).
     """
 
 def slab(points: numpy.typing.NDArray[numpy.float64], mode: builtins.str, axis: tuple[builtins.float, builtins.float, builtins.float], angle: builtins.float) -> tuple[tuple[builtins.float, builtins.float, builtins.float], builtins.float, builtins.float, builtins.float]:
