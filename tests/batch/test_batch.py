@@ -234,8 +234,13 @@ def test_units_are_passed_to_every_scan(tmp_path):
 def test_dask_workers_sharing_a_host_cap_their_kernel_threads(dask_cluster):
     """2 workers of 1 thread on this host: each runs its kernels (Rayon, BLAS) on
     cores // 2 threads, as 2 local workers do."""
+    from distributed import Client
+
     from gagekit.batch import DaskCluster
 
+    # a worker an earlier test stopped may still be restarting on a loaded machine
+    with Client(dask_cluster.scheduler_address) as client:
+        client.wait_for_workers(2, timeout=300)
     cluster = DaskCluster(dask_cluster.scheduler_address)
     try:
         cores = len(os.sched_getaffinity(0))
