@@ -16,10 +16,13 @@ XYZ/CSV/TXT/ASC/PTS/.ds   Rust ``AsciiStream``: blocks cut after a line break, e
 PLY binary                Rust ``PlyStream``: ranges of vertex records by positioned reads,
                           decoded in parallel (every element of fixed-size records: the
                           header's sizes are checked first, as a whole read checks them).
+PLY ASCII                 Rust ``PlyAsciiStream``: a first pass counts the body's lines against
+                          the header (the whole read's check), then blocks of vertex lines,
+                          each parsed in parallel (faces after the vertices are not read).
 .npy                      ``numpy.fromfile`` of row ranges (C order); Fortran order by slices
                           of a memory map.
 LAS/LAZ                   ``laspy``'s chunk iterator (LAZ decompressed chunk by chunk).
-E57, PLY ASCII, PLY with  read whole, then handed out in chunks: memory is that of a whole read
+E57, binary PLY with      read whole, then handed out in chunks: memory is that of a whole read
 faces (lists)             (E57 scans are decoded as whole byte streams; see docs).
 ========================  =====================================================================
 
@@ -32,7 +35,7 @@ from __future__ import annotations
 
 import os
 import re
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Callable, Iterator, Optional, Union
 
@@ -151,12 +154,22 @@ class CloudStream:
     _raw_chunks: Callable[[], Iterator[np.ndarray]] = field(repr=False, default=None)  # type: ignore[assignment]
     _finite_checked: bool = field(repr=False, default=True)
     _at_end: Optional[Callable[[int], None]] = field(repr=False, default=None)
+    _reuse: bool = field(repr=False, default=False)
     points_read: Optional[int] = None
+
+    def reusing(self) -> "CloudStream":
+        """The same stream, whose chunks may share one buffer: each chunk is valid until
+        the next is read (no fresh memory a chunk; for consumers that copy what they keep,
+        as :func:`~gagekit.cloud.streamed.cut_stream` does)."""
+        return replace(self, _reuse=True)
 
     def __iter__(self) -> Iterator[np.ndarray]:
         scale = [self.scale_to_mm, self.scale_to_mm, self.z_scale_to_mm]
         n = 0
-        for raw in self._raw_chunks():
+        source = self._raw_chunks
+        if self._reuse:
+            source = getattr(source, "reusing", source)
+        for raw in source():
             pts = np.require(raw, np.float64, ["C_CONTIGUOUS", "WRITEABLE"])
             if not self._finite_checked:
                 _check_finite_from(pts, n, self.path)
@@ -240,7 +253,22 @@ def _open_format(p: Path, suffix: str, m: int):
                 while s is not None and (c := s.next_chunk(m)) is not None:
                     yield c
 
+            def ply_chunks_reused() -> Iterator[np.ndarray]:
+                s = _core.cloud_ply_chunks(str(p))
+                buf = np.empty((min(m, max(1, int(s0.count))), 3))
+                while s is not None and (k := s.next_into(buf)):
+                    yield buf[:k]
+
+            ply_chunks.reusing = ply_chunks_reused  # type: ignore[attr-defined]
             return Raw(empty, f"ply {_ply_head(p)[1]}"), ply_chunks, int(s0.count), True, None
+        a0 = _core.cloud_ply_ascii_chunks(str(p))
+        if a0 is not None:
+            def ply_ascii_chunks() -> Iterator[np.ndarray]:
+                s = _core.cloud_ply_ascii_chunks(str(p))
+                while s is not None and (c := s.next_chunk(m)) is not None:
+                    yield c
+
+            return Raw(empty, "ply ascii"), ply_ascii_chunks, int(a0.count), True, None
         raw = ply.read(p, 3)
         return _whole(raw, m)
     if suffix == ".npy":
