@@ -18,7 +18,10 @@ Eqs. 5.13-5.15):
   to that plane (the 2-D maximum inscribed / minimum circumscribed circle of the points
   projected along the plane's normal, exact) or, given as ``D = { feature = ..., angle =
   60 }``, at that basic angle to the plane, free to turn about its normal (the best
-  cylinder over the turn; the axis's lean then fixes the frame's x);
+  cylinder over the turn, searched in one kernel call, ``gagekit_gdt::turn::axis_on_cone``:
+  a grid of the turn within 10 degrees of the least-squares axis's, golden-section
+  refinement to machine precision of the turn; each value the exact fixed-direction
+  cylinder; the axis's lean then fixes the frame's x);
 - ``datum_fit = "least-squares"`` replaces each criterion by least squares.
 
 **Datum frame.** z: the primary plane's normal into the material, or the primary axis
@@ -46,7 +49,7 @@ import numpy as np
 from .. import _core
 from ..errors import ConfigError
 from ..form import fit_cylinder, fit_sphere
-from .features import FeatureData, _basis, _unit, cone_dir, golden_min
+from .features import FeatureData, _unit
 from .spec import DatumRef, PartSpec
 
 __all__ = ["SimulatedDatum", "DatumFrame", "DatumSystem"]
@@ -111,6 +114,12 @@ class DatumFrame:
         """Scan coordinates -> datum-frame coordinates."""
         return (np.asarray(p, dtype=float) - self.origin) @ self.axes.T
 
+    def kernel_args(self) -> tuple:
+        """The frame as the turn-search kernels take it: (origin, (x, y, z), free
+        translations, free rotation)."""
+        return (tuple(self.origin), tuple(tuple(a) for a in self.axes), [tuple(t) for t in self.free_translations],
+                self.free_rotation)
+
     def to_dict(self) -> dict[str, Any]:
         return {"datums": list(self.datums), "origin": self.origin.tolist(), "axes": {k: self.axes[i].tolist() for i, k in enumerate("xyz")},
                 "right_handed": self.right_handed,
@@ -119,42 +128,6 @@ class DatumFrame:
 
 def _angle_deg(a: np.ndarray, b: np.ndarray) -> float:
     return math.degrees(math.acos(min(1.0, abs(float(a @ b)))))
-
-
-#: Half width (rad) of the turn searched about the datum plane's normal around the
-#: least-squares axis, for a datum axis at a basic angle to the plane.
-CONE_TURN = math.radians(10.0)
-
-
-def _axis_on_cone(points: np.ndarray, a: np.ndarray, tilt: float, d_ls: np.ndarray, fit: str):
-    """(point, direction, radius) of the datum axis constrained at ``tilt`` (rad) from the
-    plane normal ``a`` and free to turn about it (ISO 5459: the orientation constraint of
-    the secondary datum, one rotation left): the maximum inscribed (minimum
-    circumscribed) cylinder over the turn, by a 41-point grid of the turn within
-    ``CONE_TURN`` of the least-squares axis's and golden-section search in the best
-    cell; each value is the exact fixed-direction cylinder (2-D Welzl / Voronoi). The
-    least-squares option takes the direction on the cone nearest the least-squares axis."""
-    u, v = _basis(a)
-    phi0 = math.atan2(float(d_ls @ v), float(d_ls @ u))
-    if fit == "least-squares":
-        d = cone_dir(a, tilt, phi0)
-        point, direction, radius, _, _ = _core.gdt_axis_along(points, tuple(d), fit)
-        return point, direction, radius
-    sign = -1.0 if fit == "inscribed" else 1.0  # maximise the inscribed radius
-
-    def value(phi: float) -> float:
-        return sign * float(_core.gdt_axis_along(points, tuple(cone_dir(a, tilt, phi)), fit)[2])
-
-    grid = 40
-    step = 2 * CONE_TURN / grid
-    phis = [phi0 - CONE_TURN + k * step for k in range(grid + 1)]
-    vals = [value(p) for p in phis]
-    k = min(range(grid + 1), key=lambda i: (vals[i], i))
-    fx, x = golden_min(value, phis[max(k - 1, 0)], phis[min(k + 1, grid)])
-    if vals[k] < fx:
-        x = phis[k]
-    point, direction, radius, _, _ = _core.gdt_axis_along(points, tuple(cone_dir(a, tilt, x)), fit)
-    return point, direction, radius
 
 
 class DatumSystem:
@@ -285,7 +258,8 @@ class DatumSystem:
                 point, direction, radius, _, _ = _core.gdt_axis_along(fd.points, tuple(d0), fit)
                 method = f"{kind_name}, perpendicular to {planes[0].letter}"
             else:
-                point, direction, radius = _axis_on_cone(fd.points, d0, math.radians(tilt), d_ls, fit)
+                # free to turn about the plane's normal: the best cylinder over the turn (one kernel search)
+                point, direction, radius, _, _ = _core.gdt_axis_on_cone(fd.points, tuple(d0), math.radians(tilt), tuple(d_ls), fit)
                 method = f"{kind_name}, at {ref.angle:g} degrees to {planes[0].letter}"
             return SimulatedDatum(ref.letter, fd.name, "axis", method, np.array(point), np.array(direction), before, radius=float(radius))
         if fd.shape == "cone" or (fd.shape == "cylinder" and fit == "least-squares"):

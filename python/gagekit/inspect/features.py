@@ -16,9 +16,8 @@ or cone's **derived axis**:
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
-from typing import Any, Callable, Optional
+from typing import Any, Optional
 
 import numpy as np
 
@@ -28,7 +27,7 @@ from ..form import fit_circle, fit_circle_3d, fit_cone, fit_cylinder, fit_line, 
 from .._rotation import rotation_from_vector
 from .spec import MIN_POINTS, Feature
 
-__all__ = ["FeatureData", "extract", "cone_dir", "golden_min"]
+__all__ = ["FeatureData", "extract"]
 
 
 def _unit(v: Any) -> np.ndarray:
@@ -281,31 +280,6 @@ def _basis(d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     a = -1.0 / (s + d[2])
     b = d[0] * d[1] * a
     return np.array([1.0 + s * d[0] * d[0] * a, s * b, -s * d[0]]), np.array([b, s + d[1] * d[1] * a, -d[1]])
-
-
-def cone_dir(a: np.ndarray, angle: float, phi: float) -> np.ndarray:
-    """The unit direction at ``angle`` (rad) from the unit ``a``, turned by ``phi`` about it."""
-    u, v = _basis(a)
-    return math.cos(angle) * a + math.sin(angle) * (math.cos(phi) * u + math.sin(phi) * v)
-
-
-def golden_min(f: Callable[[float], float], lo: float, hi: float, iterations: int = 60) -> tuple[float, float]:
-    """(value, x) of the minimum of ``f`` on [lo, hi] by golden-section search (a unimodal
-    bracket; deterministic)."""
-    g = 0.5 * (math.sqrt(5.0) - 1.0)
-    x1, x2 = hi - g * (hi - lo), lo + g * (hi - lo)
-    f1, f2 = f(x1), f(x2)
-    for _ in range(iterations):
-        if f1 <= f2:
-            hi, x2, f2 = x2, x1, f1
-            x1 = hi - g * (hi - lo)
-            f1 = f(x1)
-        else:
-            lo, x1, f1 = x1, x2, f2
-            x2 = lo + g * (hi - lo)
-            f2 = f(x2)
-    x = 0.5 * (lo + hi)
-    return f(x), x
 
 
 def extract(points: np.ndarray, features: dict[str, Feature], source: str = "part", cad: Any = None) -> dict[str, FeatureData]:

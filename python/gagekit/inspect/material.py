@@ -31,17 +31,17 @@ and circle centres parallel to one shifted datum axis (a cylinder or circle datu
 
 from __future__ import annotations
 
-import math
 from dataclasses import replace
-from typing import Any, Optional
+from typing import Any
 
 import numpy as np
 
+from .. import _core
 from ..errors import ConfigError
 from .features import FeatureData, _unit
 from .sizes import mating_size
 from .spec import Tolerance
-from .zone_tools import Measurement, _element, _mec_radius, _min_max_sinusoids, _min_over_turn, _rot_z
+from .zone_tools import Measurement, _element
 
 __all__ = ["apply_material", "shift_radius", "min_in_disk"]
 
@@ -87,18 +87,9 @@ def shift_radius(system: Any, letter: str, mod: str, where: str) -> float:
 
 def min_in_disk(w: np.ndarray, rho: float) -> tuple[float, np.ndarray]:
     """Exact min over |s| <= rho of max_i |w_i - s| for 2-D points ``w`` (see the module
-    docstring): (value, s)."""
-    r, c = _mec_radius(np.ascontiguousarray(w))
-    if float(np.linalg.norm(c)) <= rho:
-        return r, np.asarray(c, dtype=float)
-    if rho <= 0.0:
-        return float(np.linalg.norm(w, axis=1).max()), np.zeros(2)
-    a = np.einsum("ij,ij->i", w, w) + rho * rho
-    b = 2.0 * rho * np.linalg.norm(w, axis=1)
-    phi = np.arctan2(w[:, 1], w[:, 0])
-    v, psi = _min_max_sinusoids(a, b, phi)
-    s = rho * np.array([math.cos(psi), math.sin(psi)])
-    return float(np.linalg.norm(w - s, axis=1).max()), s
+    docstring; ``gagekit_gdt::turn::min_in_disk``): (value, s)."""
+    v, s = _core.gdt_min_in_disk(np.ascontiguousarray(w, dtype=float), float(rho))
+    return v, np.array(s)
 
 
 def _position_with_shift(tol: Tolerance, fd: FeatureData, system: Any, letter: str, rho: float, where: str) -> tuple[float, float]:
@@ -125,19 +116,8 @@ def _position_with_shift(tol: Tolerance, fd: FeatureData, system: Any, letter: s
     u = _unit(np.cross(a, [1.0, 0.0, 0.0]) if abs(a[0]) < 0.9 else np.cross(a, [0.0, 1.0, 0.0]))
     v = np.cross(a, u)
 
-    def value(psi: float) -> tuple[float, float]:
-        rp, rd = _rot_z(frame, psi)
-        P = rp(P0)
-        q = pts - P
-        w2 = np.column_stack([q @ u, q @ v])
-        r, s = min_in_disk(w2, rho)
-        return r, float(np.linalg.norm(s))
-
-    if frame.free_rotation:
-        _, psi = _min_over_turn(lambda x: value(x)[0])
-    else:
-        psi = 0.0
-    r, used = value(psi)
+    # the turn about z, when the datums leave it free, searched in the same kernel call
+    r, used, _ = _core.gdt_position_with_shift(np.ascontiguousarray(pts), frame.kernel_args(), tuple(P0), tuple(u), tuple(v), rho)
     return 2.0 * r, used
 
 

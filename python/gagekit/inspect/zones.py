@@ -44,11 +44,12 @@ Location
     sphere's centre -- a sphere (spherical diameter); of a circle's centre -- a cylinder
     along ``nominal.direction`` (or the circle's normal) (diameter); of a plane -- two
     parallel planes symmetric about the basic plane (width). Translations and the
-    rotation about z that the datum frame leaves free are optimised (exactly for
-    translations: minimum circumscribed circle / 1-D convex minimum; for the rotation
-    alone, of a centre or of an axis along z, exactly -- the minimum of an upper envelope
-    of sinusoids; otherwise by a 720-point grid and golden-section search, see
-    ``_exact_turn``). Relative to a lone datum point every rotation is free: only the
+    rotation about z that the datum frame leaves free are optimised in one kernel call
+    (``gagekit_gdt::turn``: exactly for translations -- minimum circumscribed circle /
+    1-D convex minimum; for the rotation alone, of a centre or of an axis along z,
+    exactly -- the minimum of an upper envelope of sinusoids; otherwise a 720-point grid
+    and golden-section refinement of its best local minima to machine precision; a
+    plane's zone polished exactly on its active extreme points). Relative to a lone datum point every rotation is free: only the
     distance of a centre from it is located.
   coaxiality (ISO 1101 Sec. 18.13): a cylinder coaxial with the datum axis containing the
     derived axis (a circle's or sphere's centre: concentricity) -- diameter.
@@ -66,7 +67,7 @@ Run-out (ISO 1101 Sec. 18.15-18.16), relative to the datum axis:
 from __future__ import annotations
 
 import math
-from typing import Any, Optional
+from typing import Any
 
 import numpy as np
 
@@ -74,9 +75,9 @@ from .. import _core
 from ..errors import ConfigError, DegenerateGeometryError
 from ..form import fit_circle, fit_cone, fit_cylinder, fit_line, fit_sphere
 from .datums import DatumSystem, SimulatedDatum
-from .features import FeatureData, _unit, cone_dir
+from .features import FeatureData, _unit
 from .spec import Tolerance
-from .zone_tools import Measurement, _element, _mec_radius, _min_max_sinusoids, _min_over_turn, _plane_2d, _rot_z
+from .zone_tools import Measurement, _element, _plane_2d
 
 __all__ = ["Measurement", "evaluate", "ZONE_KINDS"]
 
@@ -94,41 +95,10 @@ def _slab(points: np.ndarray, mode: str, axis: Any = (0.0, 0.0, 1.0), angle: flo
     return float(width), np.array(normal)
 
 
-def _exact_turn(pts: np.ndarray, frame, P0: np.ndarray, D0: Optional[np.ndarray]) -> Optional[tuple[float, float]]:
-    """Exact minimum over the free turn psi about the frame's z of the largest distance of
-    ``pts`` to the nominal point (``D0`` None) or to the nominal line (``D0`` along z),
-    when no translation is free: each squared distance is a sinusoid in psi (the nominal
-    turns about z through the origin), so the optimum is an envelope vertex
-    (:func:`_min_max_sinusoids`). ``None`` where that does not hold: with free translations
-    the inner problem is a minimum enclosing circle whose radius is not a sinusoid of psi,
-    and a nominal line not along z moves its perpendicular plane with psi (the distances
-    are then quartic trigonometric functions) -- those keep the grid and golden-section
-    search, to 1e-15 rad of the cell's minimum."""
-    z = frame.axes[2]
-    if len(frame.free_translations):
-        return None
-    if D0 is not None and abs(abs(float(D0 @ z)) - 1.0) > 1e-12:
-        return None
-    o = frame.origin
-    u, v = frame.axes[0], frame.axes[1]
-    q = pts - o
-    b0 = np.asarray(P0, dtype=float) - o
-    if D0 is not None:  # distances to a line along z: only the components normal to z count
-        q = q - np.outer(q @ z, z)
-        b0 = b0 - (b0 @ z) * z
-    # |q_i - R(psi) b0|^2 = |q_i|^2 + |b0|^2 - 2 q_i . R(psi) b0; R turns about z
-    bz, bu, bv = b0 @ z, b0 @ u, b0 @ v
-    qz, qu, qv = q @ z, q @ u, q @ v
-    a = np.einsum("ij,ij->i", q, q) + b0 @ b0 - 2.0 * qz * bz
-    # q.(R b0)_perp = (qu bu + qv bv) cos psi + (qv bu - qu bv) sin psi = m cos(psi - phi)
-    cc, ss = qu * bu + qv * bv, qv * bu - qu * bv
-    value, psi = _min_max_sinusoids(a, 2.0 * np.hypot(cc, ss), np.arctan2(ss, cc))
-    return math.sqrt(max(value, 0.0)), psi
-
-
 def _cylinder_zone(points: np.ndarray, d: np.ndarray) -> float:
-    """Diameter of the smallest cylinder of direction d containing the points."""
-    return 2.0 * _mec_radius(_plane_2d(points, _unit(d)))[0]
+    """Diameter of the smallest cylinder of direction d containing the points (the minimum
+    circumscribed circle of their projection, Welzl, exact)."""
+    return 2.0 * float(_core.gdt_axis_along(np.ascontiguousarray(points), tuple(float(x) for x in d), "circumscribed")[2])
 
 
 # -- the evaluation ----------------------------------------------------------------------
@@ -296,45 +266,8 @@ def _orientation(tol, fd, system):
     _, d_ls = fd.axis_line()
     s = 1.0 if float(d_ls @ a) >= 0 else -1.0
     cone = (math.pi / 2 - theta) if plane_datum else theta
-    value, phi = _min_over_turn(lambda ph: _cylinder_zone(pts, cone_dir(s * a, cone, ph)))
-    return Measurement(value, "diameter", element, n_pts, {"zone_axis": cone_dir(s * a, cone, phi).tolist()})
-
-
-def _free_perp(frame, D: Optional[np.ndarray]) -> np.ndarray:
-    """Orthonormal basis (rows) of the free translations, without their part along D."""
-    T = frame.free_translations
-    if len(T) == 0:
-        return np.zeros((0, 3))
-    if D is not None:
-        T = T - np.outer(T @ D, D)
-    u, s, vt = np.linalg.svd(T, full_matrices=False)
-    return vt[s > 1e-9]
-
-
-def _radius_free(w: np.ndarray, F: np.ndarray) -> float:
-    """min over s in span(F) of max_i |w_i - s|, w_i 3-D vectors normal to the zone axis."""
-    if len(F) == 0:
-        return float(np.linalg.norm(w, axis=1).max())
-    if len(F) >= 2:
-        # the zone's centre moves freely in the plane: the minimum circumscribed circle
-        xy = np.column_stack([w @ F[0], w @ F[1]])
-        return _mec_radius(np.ascontiguousarray(xy))[0]
-    f = F[0]
-    a = w @ f
-    b2 = np.maximum(np.einsum("ij,ij->i", w, w) - a * a, 0.0)
-    # convex in s: max_i sqrt((a_i - s)^2 + b_i^2); golden section on [min a, max a] to machine precision
-    lo, hi = float(a.min()), float(a.max())
-    g = 0.5 * (math.sqrt(5.0) - 1.0)
-    F_ = lambda s: float(np.sqrt(((a - s) ** 2 + b2).max()))  # noqa: E731
-    for _ in range(200):
-        if hi - lo <= 1e-15 * max(1.0, abs(lo), abs(hi)):
-            break
-        m1, m2 = hi - g * (hi - lo), lo + g * (hi - lo)
-        if F_(m1) <= F_(m2):
-            hi = m2
-        else:
-            lo = m1
-    return F_(0.5 * (lo + hi))
+    value, axis = _core.gdt_cylinder_on_cone(np.ascontiguousarray(pts), tuple(s * a), cone)
+    return Measurement(float(value), "diameter", element, n_pts, {"zone_axis": list(axis)})
 
 
 def _position(tol, fd, system):
@@ -342,21 +275,13 @@ def _position(tol, fd, system):
     if len(sims) == 1 and sims[0].type == "point":
         return _position_about_point(tol, fd, system, sims[0])
     frame = system.frame(tol.datums)
-    rotate = frame.free_rotation
     P0 = frame.point_to_scan(tol.nominal_point)
     n_pts = len(fd.points)
     if fd.shape == "plane":
         return _plane_location(tol, fd, frame, "surface")
     if fd.shape == "sphere":
         c = np.array(fd.lsq().center)
-        F = _free_perp(frame, None)
-
-        def value(psi):
-            rp, _ = _rot_z(frame, psi)
-            return _radius_free((c - rp(P0))[None, :], F)
-
-        exact = _exact_turn(c[None, :], frame, P0, None) if rotate else None
-        r = exact[0] if exact else (_min_over_turn(value)[0] if rotate else value(0.0))
+        r, _ = _core.gdt_position_zone(c[None, :], frame.kernel_args(), tuple(P0), None)
         return Measurement(2 * r, "spherical diameter", "centre (least-squares sphere)", n_pts, {"nominal": P0.tolist()})
     if fd.shape == "circle":
         D0 = frame.direction_to_scan(tol.nominal_direction) if tol.nominal_direction is not None else _unit(fd.lsq().normal)
@@ -364,16 +289,7 @@ def _position(tol, fd, system):
     else:
         D0 = frame.direction_to_scan(tol.nominal_direction)
         pts, element = _element(fd)
-
-    def value(psi):
-        rp, rd = _rot_z(frame, psi)
-        P, D = rp(P0), rd(D0)
-        q = pts - P
-        w = q - np.outer(q @ D, D)
-        return _radius_free(w, _free_perp(frame, D))
-
-    exact = _exact_turn(pts, frame, P0, D0) if rotate else None
-    r = exact[0] if exact else (_min_over_turn(value)[0] if rotate else value(0.0))
+    r, _ = _core.gdt_position_zone(np.ascontiguousarray(pts), frame.kernel_args(), tuple(P0), tuple(D0))
     return Measurement(2 * r, "diameter", element, n_pts, {"nominal_point": P0.tolist(), "nominal_direction": D0.tolist()})
 
 
@@ -395,22 +311,8 @@ def _position_about_point(tol, fd, system, datum):
 def _plane_location(tol, fd, frame, element):
     P0 = frame.point_to_scan(tol.nominal_point)
     N0 = frame.direction_to_scan(tol.nominal_direction)
-    pts = fd.points
-    T = frame.free_translations
-
-    def value(psi):
-        rp, rd = _rot_z(frame, psi)
-        P, N = rp(P0), rd(N0)
-        h = (pts - P) @ N
-        if len(T) and np.abs(T @ N).max() > 1e-9:
-            return float(h.max() - h.min())  # the offset is free: the zone floats along its normal
-        return 2.0 * float(np.abs(h).max())
-
-    if frame.free_rotation and abs(float(N0 @ frame.axes[2])) < 1.0 - 1e-12:
-        v = _min_over_turn(value)[0]
-    else:
-        v = value(0.0)
-    return Measurement(v, "width", element, len(pts), {"nominal_point": P0.tolist(), "nominal_normal": N0.tolist()})
+    v, _ = _core.gdt_plane_location(fd.points, frame.kernel_args(), tuple(P0), tuple(N0))
+    return Measurement(float(v), "width", element, len(fd.points), {"nominal_point": P0.tolist(), "nominal_normal": N0.tolist()})
 
 
 def _profile(tol, fd, system):

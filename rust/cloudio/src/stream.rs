@@ -43,7 +43,7 @@ impl AsciiStream {
         let mut file = File::open(path).map_err(io_error(what))?;
         let block = block.max(1 << 16);
         let mut head = Vec::new();
-        let mut eof = false;
+        let mut eof;
         loop {
             let want = head.len().max(block);
             let got = (&mut file).take(want as u64).read_to_end(&mut head).map_err(io_error(what))?;
@@ -130,8 +130,21 @@ impl PlyStream {
         if m == 0 {
             return Ok(None);
         }
-        let at = (self.rec.offset + self.next * self.rec.stride) as u64;
         let mut out = vec![0.0f64; 3 * m];
+        self.next_into(&mut out)?;
+        Ok(Some(out))
+    }
+
+    /// The next vertices into `out` (as many as fit: `out.len() / 3`, fewer at the end of
+    /// the file), reusing the caller's buffer (no fresh pages a chunk); the number read,
+    /// 0 at the end.
+    pub fn next_into(&mut self, out: &mut [f64]) -> Result<usize> {
+        let m = (out.len() / 3).min(self.rec.count - self.next);
+        if m == 0 {
+            return Ok(0);
+        }
+        let out = &mut out[..3 * m];
+        let at = (self.rec.offset + self.next * self.rec.stride) as u64;
         if self.rec.is_f64_xyz() && cfg!(target_endian = "little") {
             // the records are the points: read them straight into the output
             // SAFETY: any 8 bytes are a valid f64 bit pattern; the slice covers `out` exactly.
@@ -149,10 +162,10 @@ impl PlyStream {
         } else {
             self.buf.resize(m * self.rec.stride, 0);
             self.file.read_exact_at(&mut self.buf, at).map_err(io_error(&self.what))?;
-            self.rec.decode(&self.buf, self.next, &mut out, &self.what)?;
+            self.rec.decode(&self.buf, self.next, out, &self.what)?;
         }
         self.next += m;
-        Ok(Some(out))
+        Ok(m)
     }
 }
 
@@ -234,11 +247,19 @@ mod timing {
         let p = std::path::Path::new("/tmp/scale_a.xyz");
         let bytes = std::fs::read(p).unwrap();
         let opts = crate::ascii::AsciiOptions::default();
+        // user and system CPU seconds of this process (the machine may be shared)
+        let cpu = || {
+            let s = std::fs::read_to_string("/proc/self/stat").unwrap();
+            let f: Vec<f64> = s.rsplit(')').next().unwrap().split_whitespace().skip(11).take(2).map(|x| x.parse().unwrap()).collect();
+            (f[0] / 100.0, f[1] / 100.0)
+        };
         for _ in 0..3 {
             let t = std::time::Instant::now();
+            let c0 = cpu();
             let r = crate::ascii::parse_ascii(&bytes, &opts, "t").unwrap();
             let el = t.elapsed().as_secs_f64();
-            println!("parse {:.3}s {:.0} MB/s n={}", el, bytes.len() as f64 / el / 1e6, r.coords.len());
+            let c1 = cpu();
+            println!("parse {:.3}s {:.0} MB/s n={} cpu user {:.2}s sys {:.2}s", el, bytes.len() as f64 / el / 1e6, r.coords.len(), c1.0 - c0.0, c1.1 - c0.1);
             let t = std::time::Instant::now();
             let n: usize = memchr::memchr_iter(b'\n', &bytes).count();
             println!("count {:.3}s {n}", t.elapsed().as_secs_f64());

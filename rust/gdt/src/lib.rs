@@ -15,6 +15,10 @@
 //! - [`datum`]: datum planes (constrained Chebyshev tangent plane on the air side,
 //!   ISO 5459) and axes of a fixed direction (maximum inscribed / minimum
 //!   circumscribed / least-squares cylinder along a given direction).
+//! - [`turn`]: the searches over a turn angle a datum system leaves free: a datum axis
+//!   at a basic angle to a datum plane, angularity of an axis, position of centres, axes
+//!   and planes with the rotation about z free, the datum shift (exact where the optimum
+//!   is an envelope vertex, otherwise grid and golden section to machine precision).
 //! - [`size`]: local sizes of features of size (ISO 14405-1): two-point sizes in
 //!   sections, widths between two faces, the distance of two convex hulls.
 //!
@@ -24,9 +28,12 @@
 pub mod datum;
 pub mod min_width3;
 pub mod size;
+pub mod turn;
 pub mod vec3;
 pub mod width2;
 pub mod width3;
 
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod turn_tests;

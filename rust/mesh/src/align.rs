@@ -5,13 +5,18 @@
 //! Start: the given pose and, unless degrees of freedom are locked, the 24 rotations that
 //! put the scan's principal axes on the surface's (area-weighted, exact per triangle) in
 //! every order and sign (the cube group), centroid on centroid. Each start is screened by
-//! 10 iterations on 400 points, the 3 best by their median |distance| are iterated (30) on
+//! 10 iterations on 256 points (the starts in parallel), the 3 best by their median |distance| are iterated (30) on
 //! 2000; the smallest median |distance| wins (ties: the first). Then coarse to fine:
 //! evenly spaced subsamples of 30 000, 100 000 and 300 000 points, each iterated until its
 //! step is below 1e-7 rad and 1e-5 mm (a subsample's optimum differs from the whole
 //! cloud's by more), and last every point, until the step is below 1e-8 rad and 1e-6 mm:
 //! the answer is the whole cloud's robust fit (tested against iterating on every point
-//! from the start). Each point's query starts from its previous nearest triangle.
+//! from the start). Each point keeps its nearest triangle and that triangle's margin (no
+//! other triangle was nearer than it) from iteration to iteration and from stage to
+//! stage: while the point has moved less than the margin allows, the triangle is certified
+//! the nearest without a search ([`crate::distance::Cache`]; the same answer, to the bit,
+//! as the search), so the late iterations, which move every point by microns, cost one
+//! point-triangle distance per point.
 //!
 //! Iteration: linearise d_i(p) = d_i + J_i . delta over the free parameters (translations
 //! and Rz Ry Rx angles, [`crate::rigid`]), J_i = [g_i, g_i . (dR/da x_i)] with g_i the
@@ -21,7 +26,7 @@
 //! equations by SVD (minimum-norm: motions the surface does not constrain, e.g. sliding
 //! along a plane, stay put).
 
-use crate::distance::Hit;
+use crate::distance::{Cache, Hit};
 use crate::mesh::TriMesh;
 use crate::rigid::{apply, rotation_and_derivatives, Pose, M3};
 use gagekit_core::{check_finite, interrupt, GkError, Result};
@@ -32,7 +37,7 @@ use rayon::prelude::*;
 /// Points per chunk of the parallel passes (fixed: results never depend on threads).
 const CHUNK: usize = 256;
 /// Sample sizes of the start search and of the refinement stages.
-const SCREEN_SAMPLE: usize = 400;
+const SCREEN_SAMPLE: usize = 256;
 const START_SAMPLE: usize = 2000;
 /// Starts iterated further after the screening.
 const KEEP_STARTS: usize = 3;
@@ -86,8 +91,9 @@ impl<'a> Frame<'a> {
     }
 
     /// Distances of the points `idx` moved by the parameters `p` (after `base`), each query
-    /// started from `hints` (updated); points beyond the bound are left out.
-    pub fn eval(&self, idx: &[u32], p: &[f64; 6], hints: &mut [u32]) -> Result<Vec<Option<Eval>>> {
+    /// answered from its cache in `hints` (updated; [`TriMesh::hit_cached`]) or started
+    /// from the chunk's previous point's; points beyond the bound are left out.
+    pub fn eval(&self, idx: &[u32], p: &[f64; 6], hints: &mut [Cache]) -> Result<Vec<Option<Eval>>> {
         let pose = Pose::from_params(p);
         let signed = self.mesh.signed();
         let mut out: Vec<Option<Eval>> = vec![None; idx.len()];
@@ -95,16 +101,23 @@ impl<'a> Frame<'a> {
             if c % 64 == 0 {
                 interrupt::check()?;
             }
-            let mut prev = None;
+            let mut prev = Cache::EMPTY;
             for k in 0..o.len() {
                 let i = idx[c * CHUNK + k];
                 let x = self.x(i as usize);
                 let q = pose.apply(x);
-                let hint = if h[k] != u32::MAX { Some(h[k]) } else { prev };
-                let hit: Option<Hit> = self.mesh.hit(q, self.bound2, hint, signed);
+                // a point without a triangle yet starts from the chunk's previous point's
+                // (its triangle, and its margin less the distance between them)
+                let mut cache = h[k];
+                if cache.slot == u32::MAX {
+                    cache = prev;
+                }
+                let hit: Option<Hit> = self.mesh.hit_cached(q, self.bound2, &mut cache, signed);
+                if hit.is_some() {
+                    h[k] = cache;
+                    prev = cache;
+                }
                 if let Some(hit) = hit {
-                    h[k] = hit.slot;
-                    prev = Some(hit.slot);
                     o[k] = Some(Eval { index: i, d: hit.distance - self.offset, g: hit.gradient, x });
                 }
             }
@@ -182,7 +195,7 @@ pub struct Iterated {
 /// Iterate the robust Gauss-Newton steps on the points `idx` from `p` until the step is
 /// below `tol` or `max_iter` steps are done. `last`: evaluate the final pose too (the
 /// median, RMS and count of [`Iterated`]; NaN and 0 otherwise).
-pub fn iterate(frame: &Frame, idx: &[u32], p: &mut [f64; 6], hints: &mut [u32], max_iter: usize, tol: Tol, last: bool) -> Result<Iterated> {
+pub fn iterate(frame: &Frame, idx: &[u32], p: &mut [f64; 6], hints: &mut [Cache], max_iter: usize, tol: Tol, last: bool) -> Result<Iterated> {
     let nf = frame.free.len();
     let mut it = 0;
     let summary = |ev: &[Option<Eval>], it: usize| -> Iterated {
@@ -390,14 +403,20 @@ impl Default for FitOptions {
 pub fn refine(frame: &Frame, p: &mut [f64; 6], stages: &[usize]) -> Result<(Iterated, usize)> {
     let n = frame.n();
     let mut iterations = 0;
+    // every point's cache, kept from stage to stage (a point of several subsamples
+    // starts each from where the last left it)
+    let mut caches = vec![Cache::EMPTY; n];
     for &m in stages {
         let idx = sample(n, m);
-        let mut hints = vec![u32::MAX; idx.len()];
+        let mut hints: Vec<Cache> = idx.iter().map(|&i| caches[i as usize]).collect();
         if m >= n {
             let r = iterate(frame, &idx, p, &mut hints, MAX_FINAL, FINE, true)?;
             return Ok((r, iterations + r.iterations));
         }
         iterations += iterate(frame, &idx, p, &mut hints, 30, COARSE, false)?.iterations;
+        for (&i, h) in idx.iter().zip(hints) {
+            caches[i as usize] = h;
+        }
     }
     Err(GkError::invalid("best-fit: the stages must end with every point"))
 }
@@ -409,7 +428,7 @@ pub fn best_fit(mesh: &TriMesh, points: &[f64], opt: &FitOptions) -> Result<Best
     // the RMS before, on an evenly spaced sample (far points cost the most to query; the
     // caller measures the whole cloud at its initial pose when it needs it)
     let idx_before = sample(n, START_SAMPLE);
-    let mut hints_before = vec![u32::MAX; idx_before.len()];
+    let mut hints_before = vec![Cache::EMPTY; idx_before.len()];
     let rms_before = iterate(&before, &idx_before, &mut [0.0; 6], &mut hints_before, 0, FINE, true).map(|r| r.rms).unwrap_or(f64::NAN);
     let mut starts = vec![opt.initial];
     if opt.search && opt.free.iter().all(|&f| f) {
@@ -419,12 +438,20 @@ pub fn best_fit(mesh: &TriMesh, points: &[f64], opt: &FitOptions) -> Result<Best
     let screen = sample(n, SCREEN_SAMPLE);
     let mut scored: Vec<(f64, usize, [f64; 6])> = Vec::new();
     let mut iterations = 0;
-    for (k, s) in starts.iter().enumerate() {
-        let frame = Frame::new(mesh, points, *s, opt.max_distance, opt.free)?;
-        let mut p = [0.0; 6];
-        let mut hints = vec![u32::MAX; screen.len()];
-        match iterate(&frame, &screen, &mut p, &mut hints, if starts.len() > 1 { 10 } else { 0 }, FINE, true) {
-            Ok(r) => {
+    // the starts in parallel (each on one chunk of points), their results taken in order
+    let screened: Vec<Result<(Iterated, [f64; 6])>> = starts
+        .par_iter()
+        .map(|s| {
+            let frame = Frame::new(mesh, points, *s, opt.max_distance, opt.free)?;
+            let mut p = [0.0; 6];
+            let mut hints = vec![Cache::EMPTY; screen.len()];
+            let r = iterate(&frame, &screen, &mut p, &mut hints, if starts.len() > 1 { 10 } else { 0 }, FINE, true)?;
+            Ok((r, p))
+        })
+        .collect();
+    for (k, res) in screened.into_iter().enumerate() {
+        match res {
+            Ok((r, p)) => {
                 iterations += r.iterations;
                 scored.push((r.median, k, p));
             }
@@ -438,7 +465,7 @@ pub fn best_fit(mesh: &TriMesh, points: &[f64], opt: &FitOptions) -> Result<Best
     for &(_, k, p0) in scored.iter().take(KEEP_STARTS) {
         let frame = Frame::new(mesh, points, starts[k], opt.max_distance, opt.free)?;
         let mut p = p0;
-        let mut hints = vec![u32::MAX; idx0.len()];
+        let mut hints = vec![Cache::EMPTY; idx0.len()];
         let r = match iterate(&frame, &idx0, &mut p, &mut hints, 30, FINE, true) {
             Ok(v) => v,
             Err(e) if e.kind == gagekit_core::ErrorKind::DegenerateGeometry && starts.len() > 1 => continue,

@@ -373,17 +373,41 @@ impl Bvh {
     /// (its distance starts the bound).
     #[inline]
     pub fn nearest(&self, p: V3, bound2: f64, hint: Option<u32>) -> Option<Nearest> {
+        let start = hint.filter(|&h| (h as usize) < self.corners.len()).map(|h| self.to_slot(p, h));
+        self.search::<false>(p, bound2, start).0
+    }
+
+    /// [`Bvh::nearest`] from a triangle already measured (`start`, e.g. [`Bvh::to_slot`]
+    /// of a hint), and the margin: a lower bound of the squared distance from `p` of
+    /// every triangle but the one returned (the least bound the search pruned by: a box
+    /// it did not open, a triangle it did not keep). The margin certifies later queries
+    /// near `p` without a search (see [`crate::distance::Cache`]).
+    #[inline]
+    pub fn nearest_with_margin(&self, p: V3, bound2: f64, start: Option<Nearest>) -> (Option<Nearest>, f64) {
+        self.search::<true>(p, bound2, start)
+    }
+
+    #[inline(always)]
+    fn search<const MARGIN: bool>(&self, p: V3, bound2: f64, start: Option<Nearest>) -> (Option<Nearest>, f64) {
         let mut best: Option<Nearest> = None;
         let mut best_d2 = bound2;
         let mut skip = u32::MAX;
-        if let Some(h) = hint {
-            if (h as usize) < self.corners.len() {
-                let n = self.to_slot(p, h);
-                if n.d2 <= best_d2 {
-                    best_d2 = n.d2;
-                    best = Some(n);
-                    skip = h;
+        let mut margin = f64::INFINITY;
+        // record a lower bound of something pruned (compiled out without MARGIN)
+        macro_rules! pruned {
+            ($d:expr) => {
+                if MARGIN {
+                    margin = margin.min($d);
                 }
+            };
+        }
+        if let Some(n) = start {
+            if n.d2 <= best_d2 {
+                best_d2 = n.d2;
+                best = Some(n);
+                skip = n.slot;
+            } else {
+                pruned!(n.d2);
             }
         }
         // open: a box (or triangle) at squared distance d may hold something better
@@ -394,7 +418,8 @@ impl Bvh {
         }
         let d_root = box_distance2(&p, &self.root_lo, &self.root_hi);
         if !open!(d_root) {
-            return best;
+            pruned!(d_root);
+            return (best, margin);
         }
         let mut stack = [(Child { index: 0, count: 0 }, 0.0f64); MAX_DEPTH + 2];
         let mut sp = 0usize;
@@ -410,8 +435,13 @@ impl Bvh {
                     let v = sub(p, foot);
                     let d2 = dot(v, v);
                     if open!(d2) {
+                        if let Some(b) = &best {
+                            pruned!(b.d2);
+                        }
                         best_d2 = d2;
                         best = Some(Nearest { slot, d2, foot, feature });
+                    } else {
+                        pruned!(d2);
                     }
                 }
             } else {
@@ -422,15 +452,18 @@ impl Bvh {
                     if open!(df) {
                         stack[sp] = (far, df);
                         sp += 1;
+                    } else {
+                        pruned!(df);
                     }
                     cur = near;
                     continue;
                 }
+                pruned!(dn);
             }
             // pop the next subtree still worth visiting
             loop {
                 if sp == 0 {
-                    return best;
+                    return (best, margin);
                 }
                 sp -= 1;
                 let (c, d) = stack[sp];
@@ -438,6 +471,7 @@ impl Bvh {
                     cur = c;
                     break;
                 }
+                pruned!(d);
             }
         }
     }

@@ -5,8 +5,10 @@
 //! chunks of [`CHUNK`]; inside a chunk they are queried in that order, each starting from
 //! the previous point's nearest triangle (its distance bounds the search: neighbours on
 //! the curve are neighbours in space, so most of the tree is pruned at once, whatever the
-//! order of the file). The order and the chunks depend on the points only, never on the
-//! thread count, so neither does any result.
+//! order of the file); when the previous point's triangle is nearer than that point's
+//! margin less the step between them, it is the answer without a search
+//! ([`TriMesh::hit_cached`]). The order and the chunks depend on the points only, never on
+//! the thread count, so neither does any result.
 //!
 //! The distance is exact for the mesh: the closest point of the nearest triangle
 //! ([`crate::closest`]); inside a face it is the plane distance n . (p - a). Its sign
@@ -58,6 +60,20 @@ pub struct Hit {
     pub feature: Feature,
 }
 
+/// A point's memory between queries ([`TriMesh::hit_cached`]): the position last
+/// searched from, the nearest triangle's slot there (`u32::MAX`: none yet) and the margin
+/// (mm) within which no other triangle lies around that position.
+#[derive(Debug, Clone, Copy)]
+pub struct Cache {
+    pub slot: u32,
+    pub margin: f64,
+    pub at: V3,
+}
+
+impl Cache {
+    pub const EMPTY: Cache = Cache { slot: u32::MAX, margin: 0.0, at: [0.0; 3] };
+}
+
 impl TriMesh {
     /// Turn a nearest triangle into a (signed) hit.
     #[inline]
@@ -105,6 +121,37 @@ impl TriMesh {
         self.bvh.nearest(p, bound2, hint).map(|n| self.hit_of(p, &n, signed && self.signed()))
     }
 
+    /// [`TriMesh::hit`] for a point queried again and again as it moves a little (the
+    /// iterations of an alignment, the next point of a scan line): `cache` holds a
+    /// searched position, its nearest triangle and its margin (every other triangle was at
+    /// least that far, [`crate::bvh::Bvh::nearest_with_margin`]). When the cached triangle
+    /// is nearer to `p` than the margin less the distance from that position (by the
+    /// triangle inequality no other triangle can be as near; with a slack far above
+    /// rounding), it is the nearest and no search is made; otherwise a search starting
+    /// from it refreshes the cache. The answer is the one [`TriMesh::hit`] gives with the
+    /// cached triangle as hint, to the bit.
+    #[inline]
+    pub fn hit_cached(&self, p: V3, bound2: f64, cache: &mut Cache, signed: bool) -> Option<Hit> {
+        let signed = signed && self.signed();
+        let mut start = None;
+        if (cache.slot as usize) < self.bvh.corners.len() {
+            let n = self.bvh.to_slot(p, cache.slot);
+            if n.d2 <= bound2 && cache.margin > 0.0 {
+                let moved = norm(sub(p, cache.at));
+                let d = n.d2.sqrt();
+                let slack = 1e-11 * (1.0 + p[0].abs().max(p[1].abs()).max(p[2].abs()) + d);
+                if d + moved + 2.0 * slack < cache.margin {
+                    return Some(self.hit_of(p, &n, signed));
+                }
+            }
+            start = Some(n);
+        }
+        let (found, margin2) = self.bvh.nearest_with_margin(p, bound2, start);
+        let n = found?;
+        *cache = Cache { slot: n.slot, margin: margin2.sqrt(), at: p };
+        Some(self.hit_of(p, &n, signed))
+    }
+
     /// Distances of every point (flat (n, 3), finite) to the surface; see [`Query`].
     /// The points are queried in a coherent order ([`query_order`]), in fixed chunks of
     /// [`CHUNK`], each point's search bounded from the start by its predecessor's triangle.
@@ -132,15 +179,13 @@ impl TriMesh {
             if c % 64 == 0 {
                 interrupt::check()?;
             }
-            let mut hint = None;
+            // the previous point's triangle and margin: its search bound, or its answer
+            let mut cache = Cache::EMPTY;
             for k in 0..d.len() {
                 let i = order[c * CHUNK + k] as usize;
                 let p = [points[3 * i], points[3 * i + 1], points[3 * i + 2]];
-                let (dk, tk, fk) = match self.hit(p, bound2, hint, signed) {
-                    Some(h) => {
-                        hint = Some(h.slot);
-                        (h.distance, h.triangle as i64, h.foot)
-                    }
+                let (dk, tk, fk) = match self.hit_cached(p, bound2, &mut cache, signed) {
+                    Some(h) => (h.distance, h.triangle as i64, h.foot),
                     None => (f64::NAN, -1, [f64::NAN; 3]),
                 };
                 d[k] = dk;

@@ -135,7 +135,7 @@ pub fn minimax(
     frame.offset = offset;
     let n = frame.n();
     let idx = sample(n, usize::MAX);
-    let mut hints = vec![u32::MAX; n];
+    let mut hints = vec![crate::distance::Cache::EMPTY; n];
     let mut p = [0.0; 6];
     let mut ev = frame.eval(&idx, &p, &mut hints)?;
     let (mut t, n_used, mut rms) = max_abs(&ev);

@@ -450,3 +450,34 @@ fn shuffled_points_give_the_same_distances() {
         assert!((a.distance[i] - b.distance[k]).abs() <= 1e-12, "point {i}: {} vs {}", a.distance[i], b.distance[k]);
     }
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(48))]
+
+    /// A cached query (a point walking in small and large steps, its triangle certified by
+    /// the margin when it can be) gives the plain search's answer from the same hint, to
+    /// the bit: the same triangle, distance, closest point and feature.
+    #[test]
+    fn cached_queries_equal_the_search(seed in 0u64..1_000_000, n in 1usize..300, step in 1e-6f64..2.0) {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let corners = soup(&mut rng, n);
+        let v: Vec<f64> = corners.iter().flat_map(|c| c.iter().flatten().copied()).collect();
+        let t: Vec<u32> = (0..3 * corners.len() as u32).collect();
+        let Ok(mesh) = TriMesh::new(&v, &t) else { return Ok(()) };
+        let mut cache = crate::distance::Cache::EMPTY;
+        let mut p = [rng.random_range(-12.0..12.0), rng.random_range(-12.0..12.0), rng.random_range(-12.0..12.0)];
+        for _ in 0..60 {
+            let hint = (cache.slot != u32::MAX).then_some(cache.slot);
+            let plain = mesh.hit(p, f64::INFINITY, hint, false).unwrap();
+            let cached = mesh.hit_cached(p, f64::INFINITY, &mut cache, false).unwrap();
+            prop_assert_eq!(plain.slot, cached.slot);
+            prop_assert_eq!(plain.distance.to_bits(), cached.distance.to_bits());
+            prop_assert_eq!(plain.foot.map(f64::to_bits), cached.foot.map(f64::to_bits));
+            prop_assert_eq!(plain.feature, cached.feature);
+            let s = if rng.random_range(0.0..1.0) < 0.8 { step * 1e-3 } else { step };
+            for k in 0..3 {
+                p[k] += rng.random_range(-s..s);
+            }
+        }
+    }
+}

@@ -1,8 +1,8 @@
 //! Bindings of gagekit-cloudio: point-cloud reading (ASCII, PLY, E57) and ASCII writing.
 
-use crate::arrays::{matrix, rows};
+use crate::arrays::{indices, matrix, rows};
 use crate::errors::{invalid, run};
-use gagekit_cloudio::{data_columns, read_ascii_file, scale_in_place, read_e57, write_ascii, AsciiOptions, AsciiStream, PlyFile, PlyStream};
+use gagekit_cloudio::{cut_chunk, data_columns, scale_in_place, AsciiFile, Keep, read_e57, write_ascii, AsciiOptions, AsciiStream, PlyFile, PlyStream};
 use gagekit_core::GkError;
 use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray2, PyReadwriteArray2};
 use pyo3::prelude::*;
@@ -18,7 +18,8 @@ pub struct AsciiCloud {
     columns: Vec<usize>,
 }
 
-/// Read an ASCII point file.
+/// Read an ASCII point file: mapped, lines counted, then parsed in parallel straight
+/// into numpy's allocation (no copy of the file's bytes nor of the result).
 #[pyfunction]
 #[pyo3(signature = (path, dim=3, skip_lines=0))]
 fn cloud_read_ascii<'py>(
@@ -27,10 +28,20 @@ fn cloud_read_ascii<'py>(
     dim: usize,
     skip_lines: usize,
 ) -> PyResult<AsciiCloud> {
-    let parsed = run(py, || read_ascii_file(std::path::Path::new(&path), &AsciiOptions { dim, skip_lines }, &path))?;
-    let n = parsed.coords.len() / dim;
-    let arr = PyArray1::from_vec(py, parsed.coords).reshape([n, dim])?;
-    Ok(AsciiCloud { points: arr.into_any().unbind(), header_lines: parsed.header_lines, columns: parsed.columns })
+    let file = run(py, || AsciiFile::open(std::path::Path::new(&path), &AsciiOptions { dim, skip_lines }, &path))?;
+    let max = file.max_points();
+    // SAFETY: uninitialised until `read_into` has written its first `n` rows; only those
+    // are handed to Python, and on an error the array is dropped unseen.
+    let arr = unsafe { PyArray2::<f64>::new(py, [max, dim], false) };
+    let n = {
+        // SAFETY: the array was just created, is C-contiguous and nothing else refers to it.
+        let out = unsafe { arr.as_slice_mut() }.map_err(|e| invalid(e.to_string()))?;
+        run(py, || file.read_into(out))?
+    };
+    // blank or comment lines among the data: the points are the first n rows
+    let points = if n == max { arr.into_any() } else { arr.call_method1("__getitem__", (pyo3::types::PySlice::new(py, 0, n as isize, 1),))?.call_method0("copy")? };
+    let lay = file.layout();
+    Ok(AsciiCloud { points: points.unbind(), header_lines: lay.header_lines, columns: lay.columns.clone() })
 }
 
 /// Number of values on the first data line of a text file's beginning `head` (its first
@@ -189,6 +200,17 @@ impl PlyChunks {
         let chunk = run(py, || inner.next_chunk(max_points))?;
         chunk.map(|c| Ok(matrix(py, c, 3)?.into_any().unbind())).transpose()
     }
+
+    /// The next vertices into the C-contiguous (m, 3) float64 array `out` (a buffer
+    /// reused from chunk to chunk); the number read, 0 at the end.
+    fn next_into(&mut self, py: Python<'_>, mut out: PyReadwriteArray2<'_, f64>) -> PyResult<usize> {
+        if out.as_array().ncols() != 3 {
+            return Err(invalid("out: expected an (m, 3) array"));
+        }
+        let buf = out.as_slice_mut().map_err(|_| invalid("out: expected a C-contiguous float64 array"))?;
+        let inner = &mut self.inner;
+        run(py, || inner.next_into(buf))
+    }
 }
 
 /// Open a binary PLY file (every element of fixed-size records) for reading its vertices
@@ -199,11 +221,41 @@ fn cloud_ply_chunks(py: Python<'_>, path: String) -> PyResult<Option<PlyChunks>>
     Ok(s.map(|inner| PlyChunks { inner }))
 }
 
+/// One region's share of a streamed chunk: (points inside, every inside index or None,
+/// kept indices, kept points (m, 3)); indices are rows of the chunk.
+type CutRow<'py> = (usize, Option<Bound<'py, PyArray1<i64>>>, Bound<'py, PyArray1<i64>>, Bound<'py, PyArray2<f64>>);
+
+/// Classify a chunk of points into region boxes ((k, 9): centre, size, rotation vector)
+/// and keep, per box, every inside point or (`hull[i]`) the hull vertices of them;
+/// `inside` also returns every inside index of the hull boxes (`gagekit-cloudio`'s
+/// `cut_chunk`: one call a chunk, parallel inside).
+#[pyfunction]
+#[pyo3(signature = (points, boxes, hull, inside=false))]
+fn cloud_cut_chunk<'py>(
+    py: Python<'py>,
+    points: PyReadonlyArray2<'py, f64>,
+    boxes: PyReadonlyArray2<'py, f64>,
+    hull: Vec<bool>,
+    inside: bool,
+) -> PyResult<Vec<CutRow<'py>>> {
+    let pts = rows(py, &points, 3, "points")?;
+    let bx = crate::geometry::boxes_from(py, &boxes)?;
+    if hull.len() != bx.len() {
+        return Err(invalid(format!("hull: expected {} flags (one per box), got {}", bx.len(), hull.len())));
+    }
+    let keep: Vec<Keep> = hull.iter().map(|&h| if h { Keep::Hull } else { Keep::All }).collect();
+    let cuts = run(py, || cut_chunk(pts, &bx, &keep, inside))?;
+    cuts.into_iter()
+        .map(|c| Ok((c.count, c.inside.map(|v| indices(py, v)), indices(py, c.kept), matrix(py, c.points, 3)?)))
+        .collect()
+}
+
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<AsciiChunks>()?;
     m.add_class::<PlyChunks>()?;
     m.add_function(wrap_pyfunction!(cloud_ascii_chunks, m)?)?;
     m.add_function(wrap_pyfunction!(cloud_ply_chunks, m)?)?;
+    m.add_function(wrap_pyfunction!(cloud_cut_chunk, m)?)?;
     m.add_class::<AsciiCloud>()?;
     m.add_function(wrap_pyfunction!(cloud_read_ascii, m)?)?;
     m.add_function(wrap_pyfunction!(cloud_ascii_columns, m)?)?;

@@ -5,6 +5,7 @@ use crate::errors::run;
 use gagekit_core::GkError;
 use gagekit_gdt::datum::{self, AxisFit, Orientation, PlaneFit};
 use gagekit_gdt::size::{self, Sections};
+use gagekit_gdt::turn::{self, Frame};
 use gagekit_gdt::width2;
 use numpy::{PyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
@@ -73,21 +74,108 @@ fn gdt_datum_plane<'py>(
     Ok((v3(d.point), v3(d.normal), d.offset, d.deviation))
 }
 
+fn axis_fit(fit: &str) -> gagekit_core::Result<AxisFit> {
+    Ok(match fit {
+        "inscribed" => AxisFit::Inscribed,
+        "circumscribed" => AxisFit::Circumscribed,
+        "least-squares" => AxisFit::LeastSquares,
+        other => return Err(GkError::config(format!("unknown axis fit {other:?}"))),
+    })
+}
+
 /// Cylinder of a fixed axis direction: (point, direction, radius, r_min, r_max).
 #[pyfunction]
 fn gdt_axis_along<'py>(py: Python<'py>, points: PyReadonlyArray2<'py, f64>, direction: V3, fit: &str) -> PyResult<(V3, V3, f64, f64, f64)> {
     let pts = rows(py, &points, 3, "points")?;
     let fit = fit.to_string();
-    let a = run(py, move || {
-        let fit = match fit.as_str() {
-            "inscribed" => AxisFit::Inscribed,
-            "circumscribed" => AxisFit::Circumscribed,
-            "least-squares" => AxisFit::LeastSquares,
-            other => return Err(GkError::config(format!("unknown axis fit {other:?}"))),
-        };
-        datum::axis_along(pts, arr(direction), fit)
-    })?;
+    let a = run(py, move || datum::axis_along(pts, arr(direction), axis_fit(&fit)?))?;
     Ok((v3(a.point), v3(a.direction), a.radius, a.r_min, a.r_max))
+}
+
+/// Datum axis at `tilt` rad from the plane normal `normal`, free to turn about it
+/// (ISO 5459; `gagekit_gdt::turn::axis_on_cone`): (point, direction, radius, r_min, r_max).
+#[pyfunction]
+fn gdt_axis_on_cone<'py>(
+    py: Python<'py>,
+    points: PyReadonlyArray2<'py, f64>,
+    normal: V3,
+    tilt: f64,
+    ls_direction: V3,
+    fit: &str,
+) -> PyResult<(V3, V3, f64, f64, f64)> {
+    let pts = rows(py, &points, 3, "points")?;
+    let fit = fit.to_string();
+    let a = run(py, move || turn::axis_on_cone(pts, arr(normal), tilt, arr(ls_direction), axis_fit(&fit)?))?;
+    Ok((v3(a.point), v3(a.direction), a.radius, a.r_min, a.r_max))
+}
+
+/// Smallest cylinder whose axis is at `angle` rad from `axis`, free to turn about it
+/// (angularity of a derived axis): (diameter, axis direction).
+#[pyfunction]
+fn gdt_cylinder_on_cone<'py>(py: Python<'py>, points: PyReadonlyArray2<'py, f64>, axis: V3, angle: f64) -> PyResult<(f64, V3)> {
+    let pts = rows(py, &points, 3, "points")?;
+    let (w, d) = run(py, move || turn::cylinder_on_cone(pts, arr(axis), angle))?;
+    Ok((w, v3(d)))
+}
+
+type FrameArgs = (V3, (V3, V3, V3), Vec<V3>, bool);
+
+fn frame(f: &FrameArgs) -> gagekit_core::Result<Frame> {
+    let (o, (x, y, z), free, rot) = f;
+    Frame::checked(arr(*o), [arr(*x), arr(*y), arr(*z)], free.iter().map(|t| arr(*t)).collect(), *rot)
+}
+
+/// Position zone radius of (n, 3) points about a nominal point (`direction` None) or
+/// line, optimised over what the datum frame `(origin, (x, y, z), free translations,
+/// free rotation)` leaves free: (radius, turn).
+#[pyfunction]
+#[pyo3(signature = (points, frame_, point, direction=None))]
+fn gdt_position_zone<'py>(
+    py: Python<'py>,
+    points: PyReadonlyArray2<'py, f64>,
+    frame_: FrameArgs,
+    point: V3,
+    direction: Option<V3>,
+) -> PyResult<(f64, f64)> {
+    let pts = rows(py, &points, 3, "points")?;
+    run(py, move || turn::position(pts, &frame(&frame_)?, arr(point), direction.map(arr)))
+}
+
+/// Width of the location zone of a plane about the nominal plane (`point`, `normal`),
+/// optimised over the frame's free turn: (width, turn).
+#[pyfunction]
+fn gdt_plane_location<'py>(py: Python<'py>, points: PyReadonlyArray2<'py, f64>, frame_: FrameArgs, point: V3, normal: V3) -> PyResult<(f64, f64)> {
+    let pts = rows(py, &points, 3, "points")?;
+    run(py, move || turn::plane_location(pts, &frame(&frame_)?, arr(point), arr(normal)))
+}
+
+/// Position with a datum shift of radius `rho` in the plane (`u`, `v`) normal to the
+/// shifted datum axis: (radius, shift used, turn).
+#[pyfunction]
+#[allow(clippy::too_many_arguments)]
+fn gdt_position_with_shift<'py>(
+    py: Python<'py>,
+    points: PyReadonlyArray2<'py, f64>,
+    frame_: FrameArgs,
+    point: V3,
+    u: V3,
+    v: V3,
+    rho: f64,
+) -> PyResult<(f64, f64, f64)> {
+    let pts = rows(py, &points, 3, "points")?;
+    run(py, move || turn::position_with_shift(pts, &frame(&frame_)?, arr(point), arr(u), arr(v), rho))
+}
+
+/// Exact min over |s| <= rho of max_i |w_i - s| for (n, 2) points: (value, s).
+#[pyfunction]
+fn gdt_min_in_disk<'py>(py: Python<'py>, points: PyReadonlyArray2<'py, f64>, rho: f64) -> PyResult<(f64, (f64, f64))> {
+    let pts = rows(py, &points, 2, "points")?;
+    let (r, s) = run(py, move || {
+        gagekit_core::check_finite(pts, 2, "points")?;
+        let w: Vec<[f64; 2]> = pts.chunks_exact(2).map(|p| [p[0], p[1]]).collect();
+        turn::min_in_disk(&w, rho)
+    })?;
+    Ok((r, (s[0], s[1])))
 }
 
 /// Two-point sizes (ISO 14405-1) about an axis: (sizes, section index, direction angle,
@@ -151,5 +239,11 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(gdt_slab, m)?)?;
     m.add_function(wrap_pyfunction!(gdt_datum_plane, m)?)?;
     m.add_function(wrap_pyfunction!(gdt_axis_along, m)?)?;
+    m.add_function(wrap_pyfunction!(gdt_axis_on_cone, m)?)?;
+    m.add_function(wrap_pyfunction!(gdt_cylinder_on_cone, m)?)?;
+    m.add_function(wrap_pyfunction!(gdt_position_zone, m)?)?;
+    m.add_function(wrap_pyfunction!(gdt_plane_location, m)?)?;
+    m.add_function(wrap_pyfunction!(gdt_position_with_shift, m)?)?;
+    m.add_function(wrap_pyfunction!(gdt_min_in_disk, m)?)?;
     Ok(())
 }
