@@ -291,3 +291,23 @@ def test_vertex_deviations_are_the_means_of_the_points_nearest_to_each_vertexs_t
             assert mean[k] == pytest.approx(np.mean(d.distance[near]), abs=1e-12)
     nan = vertex_deviations(model, np.array([d.triangle[0], -1]), np.array([np.nan, 0.5]))
     assert nan[1].sum() == 0                                               # NaN deviations and no triangle: unused
+
+
+def test_a_3mf_model_in_the_folder_is_listed_and_served(tmp_path):
+    import zipfile
+
+    v, t = cad_models.box((1.0, 1.0, 1.0))
+    vs = "".join(f'<vertex x="{a}" y="{b}" z="{c}"/>' for a, b, c in v.tolist())
+    ts = "".join(f'<triangle v1="{a}" v2="{b}" v3="{c}"/>' for a, b, c in t.tolist())
+    with zipfile.ZipFile(tmp_path / "cube.3mf", "w") as z:
+        z.writestr("3D/3dmodel.model", '<model unit="centimeter" xmlns="http://schemas.microsoft.com/3dmanufacturing/'
+                   f'core/2015/02"><resources><object id="1" name="cube"><mesh><vertices>{vs}</vertices><triangles>{ts}'
+                   '</triangles></mesh></object></resources><build><item objectid="1"/></build></model>')
+    np.savetxt(tmp_path / "scan.xyz", np.array([[0.0, 0.0, 10.5], [0.0, 0.0, 11.0], [0.0, 0.0, 9.0]]))
+    session = Session(load_scan(tmp_path / "scan.xyz"), None, kind="part")
+    client = TestClient(create_app(session, tmp_path, allowed_hosts=LOOPBACK_HOSTS), base_url="http://127.0.0.1:8765")
+    assert client.get("/api/files").json()["cads"] == ["cube.3mf"]
+    info = client.post("/api/cad", json={"path": "cube.3mf"}).json()
+    assert info["format"] == "3mf" and info["unit"] == "cm" and info["triangles"] == 12
+    tri, dev = _distances(session)
+    np.testing.assert_allclose(dev, [0.5, 1.0, -1.0], atol=1e-12)          # the cube is +-10 mm
