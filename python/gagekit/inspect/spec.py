@@ -29,6 +29,13 @@ All lengths are millimetres in the scan's frame, angles degrees. Layout::
     angle = 45.0                 # angularity: basic angle between feature and datum
     half_angle = 30.0            # conicity: basic half apex angle of the cone (default: free)
 
+    [[tolerance]]                # profile of a line (ISO 1101 Sec. 18.6) of a surface by CAD faces
+    feature = "top"
+    characteristic = "profile-line"
+    tolerance = 0.05
+    direction = [0, 1, 0]        # the normal of the parallel section planes
+    sections = 5                 # or spacing = 6.4 (mm)
+
     [[tolerance]]                # a size (ISO 14405-1), :mod:`.sizes`
     feature = "bore"
     characteristic = "size"
@@ -107,6 +114,7 @@ APPLIES_TO: dict[str, tuple[str, ...]] = {
     "position": ("plane", "cylinder", "cone", "circle", "sphere"),
     "coaxiality": ("cylinder", "cone", "circle", "sphere"),
     "profile": ("plane", "surface"),
+    "profile-line": ("surface",),
     "circular-runout": ("cylinder", "cone", "circle", "plane"),
     "total-runout": ("cylinder", "cone", "plane"),
     "size": FEATURES_OF_SIZE,
@@ -198,6 +206,9 @@ class Tolerance:
     form_filter: Optional[str] = None
     filter_upr: Optional[float] = None
     reference: Optional[str] = None
+    # line profile (ISO 1101 Sec. 18.6): the normal of its parallel section planes, their spacing (mm)
+    direction: Optional[tuple[float, float, float]] = None
+    spacing: Optional[float] = None
 
     @property
     def upper_limit(self) -> Optional[float]:
@@ -401,8 +412,23 @@ def _callout(t: Any, k: int, where: str, features: Mapping[str, Feature], datums
         raise ConfigError(f"{where}: 'nominal' must be a table {{ point, direction }}")
     npoint = None if nom is None or nom.point is None else tuple(nom.point)
     ndir = None if nom is None else _nonzero(nom.direction, where, "nominal.direction")
-    if t.offset is not None and not (char == "profile" and shape == "surface"):
-        raise ConfigError(f"{where}: 'offset' (ISO 1101 UZ) applies to the profile of a surface only")
+    if t.offset is not None and not (char in ("profile", "profile-line") and shape == "surface"):
+        raise ConfigError(f"{where}: 'offset' (ISO 1101 UZ) applies to the profile of a surface or a line only")
+    line_dir, spacing = None, None
+    if char == "profile-line":
+        if t.direction is None:
+            raise ConfigError(f"{where}: 'direction' is missing: the normal of the section planes (CAD axes)")
+        line_dir = _nonzero(t.direction, where, "direction")
+        if t.spacing is not None:
+            if t.sections is not None:
+                raise ConfigError(f"{where}: give 'sections' (a count) or 'spacing' (mm), not both")
+            spacing = t.spacing
+            if not spacing > 0:
+                raise ConfigError(f"{where}: 'spacing' must be a positive number of mm, got {spacing}")
+    else:
+        for key in ("direction", "spacing"):
+            if key in given:
+                raise ConfigError(f"{where}: '{key}' applies to profile-line (the section planes) only")
     if shape == "surface":
         if npoint is not None or ndir is not None:
             raise ConfigError(f"{where}: a surface's nominal is its CAD faces; drop 'nominal'")
@@ -411,7 +437,8 @@ def _callout(t: Any, k: int, where: str, features: Mapping[str, Feature], datums
     if char in ("position", "profile") and shape in ("plane", "cylinder", "cone") and ndir is None:
         raise ConfigError(f"{where}: 'nominal' needs a 'direction' (the basic {'normal' if shape == 'plane' else 'axis'} in the datum frame)")
     return Tolerance(fname, char, float(tol), tuple(raw_d), npoint, ndir, angle, t.name, t.sections, k, **ids,
-                     offset=t.offset or 0.0, material=t.material, datum_material=dmat, **_form_filter(t, char, where))
+                     offset=t.offset or 0.0, material=t.material, datum_material=dmat, **_form_filter(t, char, where),
+                     direction=line_dir, spacing=spacing)
 
 
 #: ISO 12181-1 reference circles of a filtered roundness callout

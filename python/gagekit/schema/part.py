@@ -22,7 +22,7 @@ __all__ = ["PartFile", "PartStyle", "SHAPES", "CHARACTERISTICS", "MAX_SECTIONS"]
 SHAPES = ("plane", "cylinder", "circle", "sphere", "line", "cone", "surface", "slot", "tab")
 FORM = ("flatness", "straightness", "roundness", "cylindricity", "sphericity", "conicity")
 ORIENTATION = ("parallelism", "perpendicularity", "angularity")
-LOCATION = ("position", "coaxiality", "profile")
+LOCATION = ("position", "coaxiality", "profile", "profile-line")
 RUNOUT = ("circular-runout", "total-runout")
 SIZES = ("size", "distance", "angle")
 CHARACTERISTICS = FORM + ORIENTATION + LOCATION + RUNOUT + SIZES
@@ -176,6 +176,10 @@ class ToleranceTable(Table):
     """Roundness: the profile filter (ISO 12181-2)."""
     reference: Optional[str] = None
     """Roundness: the reference circle MZCI, LSCI, MCCI or MICI (ISO 12181-1)."""
+    direction: Optional[Vec3] = None
+    """Profile of a line (ISO 1101 Sec. 18.6): the normal of the parallel section planes (CAD axes)."""
+    spacing: Optional[float] = None
+    """Profile of a line: the distance between the section planes (mm, > 0; instead of sections)."""
 
 
 class QifTable(Table):
