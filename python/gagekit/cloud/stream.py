@@ -32,7 +32,7 @@ from __future__ import annotations
 
 import os
 import re
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Callable, Iterator, Optional, Union
 
@@ -151,12 +151,22 @@ class CloudStream:
     _raw_chunks: Callable[[], Iterator[np.ndarray]] = field(repr=False, default=None)  # type: ignore[assignment]
     _finite_checked: bool = field(repr=False, default=True)
     _at_end: Optional[Callable[[int], None]] = field(repr=False, default=None)
+    _reuse: bool = field(repr=False, default=False)
     points_read: Optional[int] = None
+
+    def reusing(self) -> "CloudStream":
+        """The same stream, whose chunks may share one buffer: each chunk is valid until
+        the next is read (no fresh memory a chunk; for consumers that copy what they keep,
+        as :func:`~gagekit.cloud.streamed.cut_stream` does)."""
+        return replace(self, _reuse=True)
 
     def __iter__(self) -> Iterator[np.ndarray]:
         scale = [self.scale_to_mm, self.scale_to_mm, self.z_scale_to_mm]
         n = 0
-        for raw in self._raw_chunks():
+        source = self._raw_chunks
+        if self._reuse:
+            source = getattr(source, "reusing", source)
+        for raw in source():
             pts = np.require(raw, np.float64, ["C_CONTIGUOUS", "WRITEABLE"])
             if not self._finite_checked:
                 _check_finite_from(pts, n, self.path)
@@ -240,6 +250,13 @@ def _open_format(p: Path, suffix: str, m: int):
                 while s is not None and (c := s.next_chunk(m)) is not None:
                     yield c
 
+            def ply_chunks_reused() -> Iterator[np.ndarray]:
+                s = _core.cloud_ply_chunks(str(p))
+                buf = np.empty((min(m, max(1, int(s0.count))), 3))
+                while s is not None and (k := s.next_into(buf)):
+                    yield buf[:k]
+
+            ply_chunks.reusing = ply_chunks_reused  # type: ignore[attr-defined]
             return Raw(empty, f"ply {_ply_head(p)[1]}"), ply_chunks, int(s0.count), True, None
         raw = ply.read(p, 3)
         return _whole(raw, m)

@@ -18,8 +18,10 @@ from typing import Iterable, Optional, Sequence
 
 import numpy as np
 
+from .. import _core
+from .._util import as_points
 from .hull import convex_hull_indices
-from .regions import Box, classify
+from .regions import Box
 
 REHULL = 1 << 20
 """Kept hull vertices of a region above which they are re-hulled during the pass."""
@@ -44,12 +46,20 @@ class StreamedRegion:
     _pending: int = 0
 
     def add(self, ids: np.ndarray, pts: np.ndarray) -> None:
-        self.count += len(ids)
-        if self.all_indices is not None:
-            self.all_indices.append(ids)
+        """Points inside the region (their numbers ``ids``), hull-filtered here for ``keep="hull"``."""
         if self.keep == "hull" and len(ids):
             h = convex_hull_indices(pts)
-            ids, pts = ids[h], pts[h]
+            self.add_kept(len(ids), ids, ids[h], pts[h])
+        else:
+            self.add_kept(len(ids), ids, ids, pts)
+
+    def add_kept(self, count: int, inside: Optional[np.ndarray], ids: np.ndarray, pts: np.ndarray) -> None:
+        """What a chunk kept of the region: ``count`` points inside (their numbers
+        ``inside``, needed only with ``all_indices``), ``ids`` and ``pts`` already kept
+        (every inside point, or the hull vertices of them for ``keep="hull"``)."""
+        self.count += count
+        if self.all_indices is not None:
+            self.all_indices.append(inside)
         self.indices.append(ids)
         self.points.append(pts)
         self._pending += len(ids)
@@ -74,9 +84,15 @@ class StreamedRegion:
     def point_array(self) -> np.ndarray:
         return np.ascontiguousarray(np.vstack(self.points)) if self.points else np.zeros((0, 3))
 
-    def sample(self, rng: np.random.Generator, ids: np.ndarray, pts: np.ndarray, size: int) -> None:
-        """Bottom-k sampling: every point gets a seeded key, the ``size`` smallest stay."""
+    def sample(self, rng: np.random.Generator, ids: np.ndarray, chunk: np.ndarray, offset: int, size: int) -> None:
+        """Bottom-k sampling: every point inside (numbers ``ids``, rows ``ids - offset`` of
+        ``chunk``) gets a seeded key, the ``size`` smallest stay. Once ``size`` are held, a
+        key above the largest held cannot enter: only the others are gathered."""
         keys = rng.random(len(ids))
+        if self.sample_keys is not None and len(self.sample_keys) >= size:
+            lower = keys < self.sample_keys.max()
+            keys, ids = keys[lower], ids[lower]
+        pts = chunk[ids - offset]
         if self.sample_keys is None:
             self.sample_keys, self.sample_idx, self.sample_pts = keys, ids, pts
         else:
@@ -109,6 +125,13 @@ class Pass:
         raise KeyError(name)
 
 
+def _reused(chunks: Iterable[np.ndarray]) -> Iterable[np.ndarray]:
+    """A :class:`~gagekit.cloud.stream.CloudStream` read into one reused buffer: the
+    passes here copy what they keep of a chunk before the next is read."""
+    reusing = getattr(chunks, "reusing", None)
+    return reusing() if callable(reusing) else chunks
+
+
 def cut_stream(chunks: Iterable[np.ndarray], boxes: Sequence[Box], keep: Sequence[str], *,
                all_indices: bool = False, sample: int = 0, seed: int = 0) -> Pass:
     """One pass over ``chunks`` ((m, 3) arrays in file order): every chunk classified into
@@ -116,17 +139,21 @@ def cut_stream(chunks: Iterable[np.ndarray], boxes: Sequence[Box], keep: Sequenc
     vertices). ``all_indices`` also keeps every inside point's number (int64, 8 bytes a
     point); ``sample`` > 0 draws that many points per box (seeded) for pictures."""
     regions = [StreamedRegion(b.name, k, all_indices=[] if all_indices else None) for b, k in zip(boxes, keep)]
+    rows = np.array([b.row() for b in boxes], dtype=np.float64).reshape(-1, 9)
+    hull = [k == "hull" for k in keep]
+    want_inside = bool(all_indices or sample)
     rng = np.random.default_rng(seed)
     n = 0
-    for pts in chunks:
+    for pts in _reused(chunks):
         m = len(pts)
         if boxes:
-            for r, idx in zip(regions, classify(pts, boxes)):
-                ids = idx + n
-                sel = pts[idx]
-                r.add(ids, sel)
-                if sample and len(ids):
-                    r.sample(rng, ids, sel, sample)
+            # one Rust call: classify, gather, hull-filter (Sec. 5.4.1), parallel inside
+            cuts = _core.cloud_cut_chunk(as_points(pts), rows, hull, want_inside)
+            for r, (count, inside, kept, kpts) in zip(regions, cuts):
+                inside = (kept if inside is None else inside) + n
+                r.add_kept(count, inside, kept + n, kpts)
+                if sample and count:
+                    r.sample(rng, inside, pts, n, sample)
         n += m
     return Pass(n, [r.finish() for r in regions])
 
@@ -136,7 +163,7 @@ def hull_stream(chunks: Iterable[np.ndarray]) -> tuple[int, np.ndarray, np.ndarr
     each chunk hull-filtered, then the hull of the kept vertices (Eq. 5.21)."""
     acc = StreamedRegion("cloud", "hull")
     n = 0
-    for pts in chunks:
+    for pts in _reused(chunks):
         acc.add(np.arange(n, n + len(pts), dtype=np.int64), pts)
         n += len(pts)
     acc.finish()

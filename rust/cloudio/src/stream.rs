@@ -130,8 +130,21 @@ impl PlyStream {
         if m == 0 {
             return Ok(None);
         }
-        let at = (self.rec.offset + self.next * self.rec.stride) as u64;
         let mut out = vec![0.0f64; 3 * m];
+        self.next_into(&mut out)?;
+        Ok(Some(out))
+    }
+
+    /// The next vertices into `out` (as many as fit: `out.len() / 3`, fewer at the end of
+    /// the file), reusing the caller's buffer (no fresh pages a chunk); the number read,
+    /// 0 at the end.
+    pub fn next_into(&mut self, out: &mut [f64]) -> Result<usize> {
+        let m = (out.len() / 3).min(self.rec.count - self.next);
+        if m == 0 {
+            return Ok(0);
+        }
+        let out = &mut out[..3 * m];
+        let at = (self.rec.offset + self.next * self.rec.stride) as u64;
         if self.rec.is_f64_xyz() && cfg!(target_endian = "little") {
             // the records are the points: read them straight into the output
             // SAFETY: any 8 bytes are a valid f64 bit pattern; the slice covers `out` exactly.
@@ -149,10 +162,10 @@ impl PlyStream {
         } else {
             self.buf.resize(m * self.rec.stride, 0);
             self.file.read_exact_at(&mut self.buf, at).map_err(io_error(&self.what))?;
-            self.rec.decode(&self.buf, self.next, &mut out, &self.what)?;
+            self.rec.decode(&self.buf, self.next, out, &self.what)?;
         }
         self.next += m;
-        Ok(Some(out))
+        Ok(m)
     }
 }
 

@@ -108,7 +108,7 @@ impl TriMesh {
                 first.join(", ")
             )));
         }
-        let edges = sorted_edges(&tris);
+        let edges = sorted_edges(&tris, nv);
         let topology = topology(&verts, &tris, &edges);
         if topology.flipped {
             for n in normals.iter_mut() {
@@ -157,21 +157,36 @@ impl TriMesh {
     }
 }
 
-/// Every triangle's edges as (low vertex, high vertex, triangle, k), sorted (in parallel;
-/// the entries are distinct, so the order is unique): the groups of one undirected edge.
-fn sorted_edges(tris: &[[u32; 3]]) -> Vec<(u64, u32, u8)> {
+/// Every triangle's edges as (low vertex, high vertex, triangle, k), sorted (the entries
+/// are distinct, so the order is unique): the groups of one undirected edge. A counting
+/// sort by the low vertex (linear), then each vertex's few edges sorted in parallel.
+fn sorted_edges(tris: &[[u32; 3]], nv: usize) -> Vec<(u64, u32, u8)> {
     use rayon::prelude::*;
-    let mut edges: Vec<(u64, u32, u8)> = tris
-        .par_iter()
-        .enumerate()
-        .flat_map_iter(|(i, t)| {
-            (0..3u8).map(move |k| {
-                let (u, v) = (t[k as usize], t[(k as usize + 1) % 3]);
-                (((u.min(v) as u64) << 32) | u.max(v) as u64, i as u32, k)
-            })
-        })
-        .collect();
-    edges.par_sort_unstable();
+    let key = |t: &[u32; 3], k: usize| {
+        let (u, v) = (t[k], t[(k + 1) % 3]);
+        ((u.min(v) as u64) << 32) | u.max(v) as u64
+    };
+    // start[v]: where the edges of low vertex v begin
+    let mut start = vec![0usize; nv + 1];
+    for t in tris {
+        for k in 0..3 {
+            start[(key(t, k) >> 32) as usize + 1] += 1;
+        }
+    }
+    for v in 0..nv {
+        start[v + 1] += start[v];
+    }
+    let mut fill = start.clone();
+    let mut edges = vec![(0u64, 0u32, 0u8); 3 * tris.len()];
+    for (i, t) in tris.iter().enumerate() {
+        for k in 0..3 {
+            let e = key(t, k);
+            let at = &mut fill[(e >> 32) as usize];
+            edges[*at] = (e, i as u32, k as u8);
+            *at += 1;
+        }
+    }
+    edges.par_chunk_by_mut(|a, b| a.0 >> 32 == b.0 >> 32).for_each(|g| g.sort_unstable());
     edges
 }
 
@@ -229,13 +244,22 @@ fn angle(u: V3, v: V3) -> f64 {
 }
 
 fn pseudonormals(verts: &[V3], tris: &[[u32; 3]], normals: &[V3], edges: &[(u64, u32, u8)]) -> (Vec<V3>, Vec<[V3; 3]>) {
+    use rayon::prelude::*;
+    // each corner's angle (in parallel), then summed per vertex in triangle order
+    let angles: Vec<[f64; 3]> = tris
+        .par_iter()
+        .map(|t| {
+            std::array::from_fn(|k| {
+                let p = verts[t[k] as usize];
+                angle(sub(verts[t[(k + 1) % 3] as usize], p), sub(verts[t[(k + 2) % 3] as usize], p))
+            })
+        })
+        .collect();
     let mut vn = vec![[0.0; 3]; verts.len()];
-    for (t, n) in tris.iter().zip(normals) {
+    for ((t, n), a) in tris.iter().zip(normals).zip(&angles) {
         for k in 0..3 {
-            let p = verts[t[k] as usize];
-            let a = angle(sub(verts[t[(k + 1) % 3] as usize], p), sub(verts[t[(k + 2) % 3] as usize], p));
             let i = t[k] as usize;
-            vn[i] = add(vn[i], scale(*n, a));
+            vn[i] = add(vn[i], scale(*n, a[k]));
         }
     }
     // edge normals: the sum of the normals of the triangles sharing the edge

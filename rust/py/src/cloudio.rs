@@ -1,8 +1,8 @@
 //! Bindings of gagekit-cloudio: point-cloud reading (ASCII, PLY, E57) and ASCII writing.
 
-use crate::arrays::{matrix, rows};
+use crate::arrays::{indices, matrix, rows};
 use crate::errors::{invalid, run};
-use gagekit_cloudio::{data_columns, scale_in_place, AsciiFile, read_e57, write_ascii, AsciiOptions, AsciiStream, PlyFile, PlyStream};
+use gagekit_cloudio::{cut_chunk, data_columns, scale_in_place, AsciiFile, Keep, read_e57, write_ascii, AsciiOptions, AsciiStream, PlyFile, PlyStream};
 use gagekit_core::GkError;
 use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray2, PyReadwriteArray2};
 use pyo3::prelude::*;
@@ -200,6 +200,17 @@ impl PlyChunks {
         let chunk = run(py, || inner.next_chunk(max_points))?;
         chunk.map(|c| Ok(matrix(py, c, 3)?.into_any().unbind())).transpose()
     }
+
+    /// The next vertices into the C-contiguous (m, 3) float64 array `out` (a buffer
+    /// reused from chunk to chunk); the number read, 0 at the end.
+    fn next_into(&mut self, py: Python<'_>, mut out: PyReadwriteArray2<'_, f64>) -> PyResult<usize> {
+        if out.as_array().ncols() != 3 {
+            return Err(invalid("out: expected an (m, 3) array"));
+        }
+        let buf = out.as_slice_mut().map_err(|_| invalid("out: expected a C-contiguous float64 array"))?;
+        let inner = &mut self.inner;
+        run(py, || inner.next_into(buf))
+    }
 }
 
 /// Open a binary PLY file (every element of fixed-size records) for reading its vertices
@@ -210,11 +221,41 @@ fn cloud_ply_chunks(py: Python<'_>, path: String) -> PyResult<Option<PlyChunks>>
     Ok(s.map(|inner| PlyChunks { inner }))
 }
 
+/// One region's share of a streamed chunk: (points inside, every inside index or None,
+/// kept indices, kept points (m, 3)); indices are rows of the chunk.
+type CutRow<'py> = (usize, Option<Bound<'py, PyArray1<i64>>>, Bound<'py, PyArray1<i64>>, Bound<'py, PyArray2<f64>>);
+
+/// Classify a chunk of points into region boxes ((k, 9): centre, size, rotation vector)
+/// and keep, per box, every inside point or (`hull[i]`) the hull vertices of them;
+/// `inside` also returns every inside index of the hull boxes (`gagekit-cloudio`'s
+/// `cut_chunk`: one call a chunk, parallel inside).
+#[pyfunction]
+#[pyo3(signature = (points, boxes, hull, inside=false))]
+fn cloud_cut_chunk<'py>(
+    py: Python<'py>,
+    points: PyReadonlyArray2<'py, f64>,
+    boxes: PyReadonlyArray2<'py, f64>,
+    hull: Vec<bool>,
+    inside: bool,
+) -> PyResult<Vec<CutRow<'py>>> {
+    let pts = rows(py, &points, 3, "points")?;
+    let bx = crate::geometry::boxes_from(py, &boxes)?;
+    if hull.len() != bx.len() {
+        return Err(invalid(format!("hull: expected {} flags (one per box), got {}", bx.len(), hull.len())));
+    }
+    let keep: Vec<Keep> = hull.iter().map(|&h| if h { Keep::Hull } else { Keep::All }).collect();
+    let cuts = run(py, || cut_chunk(pts, &bx, &keep, inside))?;
+    cuts.into_iter()
+        .map(|c| Ok((c.count, c.inside.map(|v| indices(py, v)), indices(py, c.kept), matrix(py, c.points, 3)?)))
+        .collect()
+}
+
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<AsciiChunks>()?;
     m.add_class::<PlyChunks>()?;
     m.add_function(wrap_pyfunction!(cloud_ascii_chunks, m)?)?;
     m.add_function(wrap_pyfunction!(cloud_ply_chunks, m)?)?;
+    m.add_function(wrap_pyfunction!(cloud_cut_chunk, m)?)?;
     m.add_class::<AsciiCloud>()?;
     m.add_function(wrap_pyfunction!(cloud_read_ascii, m)?)?;
     m.add_function(wrap_pyfunction!(cloud_ascii_columns, m)?)?;

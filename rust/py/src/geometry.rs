@@ -7,7 +7,7 @@ use gagekit_geometry::{CellGrid, OrientedBox};
 use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 
-fn boxes_from(py: Python<'_>, boxes: &PyReadonlyArray2<'_, f64>) -> PyResult<Vec<OrientedBox>> {
+pub(crate) fn boxes_from(py: Python<'_>, boxes: &PyReadonlyArray2<'_, f64>) -> PyResult<Vec<OrientedBox>> {
     let flat = rows(py, boxes, 9, "regions")?;
     Ok(flat
         .chunks_exact(9)
