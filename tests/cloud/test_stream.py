@@ -88,6 +88,32 @@ def test_errors_name_the_point_in_the_whole_file(tmp_path):
         streamed(empty)
 
 
+def test_ascii_ply_streams_by_lines(tmp_path):
+    """An ASCII PLY file is read in blocks of vertex lines (bounded memory): an element
+    before the vertices, blank lines, faces after them; the same points, the same errors
+    (count checks, a bad value naming its line) as the whole read."""
+    rng = np.random.default_rng(5)
+    pts = rng.uniform(-50, 50, (2500, 3)).round(5)
+    head = ("ply\nformat ascii 1.0\ncomment t\nelement camera 2\nproperty float k\nelement vertex {n}\n"
+            "property float x\nproperty uchar red\nproperty list uchar int extra\nproperty double y\nproperty double z\n"
+            "element face 2\nproperty list uchar int vertex_indices\nend_header\n")
+    rows = [f"{x!r} 7 2 1 2 {y!r} {z!r}" + ("\n" if i % 400 == 0 else "") for i, (x, y, z) in enumerate(pts.tolist())]
+    body = "1.5\n\n2.5\n" + "\n".join(rows) + "\n3 0 1 2\n3 2 1 0\n"
+    good = tmp_path / "a.ply"
+    good.write_text(head.format(n=len(pts)) + body)
+    assert open_cloud(good, chunk=10).format == read_cloud(good).format == "ply ascii"
+    for chunk in (1, 333, 10**6):
+        assert same(streamed(good, chunk), pts)
+    for n, text in ((len(pts) + 1, body), (len(pts) - 1, body), (len(pts), body.replace(rows[1777], "1 7 2 1 2 x 3"))):
+        bad = tmp_path / "bad.ply"
+        bad.write_text(head.format(n=n) + text)
+        with pytest.raises(FileFormatError) as whole:
+            read_cloud(bad)
+        with pytest.raises(FileFormatError) as part:
+            streamed(bad, 100)
+        assert str(part.value) == str(whole.value)
+
+
 def test_memory_budget():
     assert memory_budget("512M") == 512 << 20 and memory_budget("2G") == 2 << 30
     assert memory_budget(None) >= 64 << 20

@@ -173,7 +173,7 @@ def test_files_lists_no_symlink_leading_outside_the_folder(casting, tmp_path):
     try:
         status, files, _ = studio.request("GET", "/api/files")
         assert status == 200
-        assert files == {"scans": ["casting.ply", "inside.ply"], "specs": ["casting.toml", "sub/up.toml"]}
+        assert files == {"scans": ["casting.ply", "inside.ply"], "specs": ["casting.toml", "sub/up.toml"], "cads": []}
         assert_4xx(studio.request("POST", "/api/scan", body({"path": "link.ply"})), "outside")
         assert_4xx(studio.request("POST", "/api/spec", body({"path": "linkdir/secret.toml"})), "outside")
     finally:

@@ -16,10 +16,13 @@ XYZ/CSV/TXT/ASC/PTS/.ds   Rust ``AsciiStream``: blocks cut after a line break, e
 PLY binary                Rust ``PlyStream``: ranges of vertex records by positioned reads,
                           decoded in parallel (every element of fixed-size records: the
                           header's sizes are checked first, as a whole read checks them).
+PLY ASCII                 Rust ``PlyAsciiStream``: a first pass counts the body's lines against
+                          the header (the whole read's check), then blocks of vertex lines,
+                          each parsed in parallel (faces after the vertices are not read).
 .npy                      ``numpy.fromfile`` of row ranges (C order); Fortran order by slices
                           of a memory map.
 LAS/LAZ                   ``laspy``'s chunk iterator (LAZ decompressed chunk by chunk).
-E57, PLY ASCII, PLY with  read whole, then handed out in chunks: memory is that of a whole read
+E57, binary PLY with      read whole, then handed out in chunks: memory is that of a whole read
 faces (lists)             (E57 scans are decoded as whole byte streams; see docs).
 ========================  =====================================================================
 
@@ -258,6 +261,14 @@ def _open_format(p: Path, suffix: str, m: int):
 
             ply_chunks.reusing = ply_chunks_reused  # type: ignore[attr-defined]
             return Raw(empty, f"ply {_ply_head(p)[1]}"), ply_chunks, int(s0.count), True, None
+        a0 = _core.cloud_ply_ascii_chunks(str(p))
+        if a0 is not None:
+            def ply_ascii_chunks() -> Iterator[np.ndarray]:
+                s = _core.cloud_ply_ascii_chunks(str(p))
+                while s is not None and (c := s.next_chunk(m)) is not None:
+                    yield c
+
+            return Raw(empty, "ply ascii"), ply_ascii_chunks, int(a0.count), True, None
         raw = ply.read(p, 3)
         return _whole(raw, m)
     if suffix == ".npy":

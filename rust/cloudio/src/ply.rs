@@ -564,25 +564,8 @@ fn read_ascii(
     let line0 = bytes[..body].iter().filter(|&&b| b == b'\n').count();
     // non-blank lines in order
     let data: Vec<usize> = (0..nlines).filter(|&k| !trim(line_at(text, &starts, k)).is_empty()).collect();
-    let declared: usize = elements.iter().map(|e| e.count).sum();
-    if data.len() < declared {
-        return Err(GkError::file_format(format!(
-            "{what}: the PLY header declares {} ({declared} lines) but the file has {} data lines: truncated or a wrong count",
-            count_desc(elements),
-            data.len()
-        )));
-    }
-    if data.len() > declared {
-        let extra = data.len() - declared;
-        let more = if vi + 1 == elements.len() {
-            format!(" (the file holds {} vertices)", elements[vi].count + extra)
-        } else {
-            String::new()
-        };
-        return Err(GkError::file_format(format!(
-            "{what}: {extra} lines follow the data the PLY header declares ({}){more}: the header's counts are wrong",
-            count_desc(elements)
-        )));
+    if let Some(e) = ascii_count_error(elements, vi, data.len(), what) {
+        return Err(e);
     }
     let first: usize = elements[..vi].iter().map(|e| e.count).sum();
     let el = &elements[vi];
@@ -590,36 +573,184 @@ fn read_ascii(
     coords.par_chunks_mut(3 * 4096).enumerate().try_for_each(|(c, out)| {
         for (j, o) in out.chunks_exact_mut(3).enumerate() {
             let k = lines[c * 4096 + j];
-            let line = trim(line_at(text, &starts, k));
-            let lno = line0 + k + 1;
-            let err = |m: &str| GkError::file_format(format!("{what}: line {lno}: {m}"));
-            let mut tok = line.split(|b| b.is_ascii_whitespace()).filter(|t| !t.is_empty());
-            for (pi, p) in el.props.iter().enumerate() {
-                let n = match p.list {
-                    Some(_) => {
-                        let t = tok.next().ok_or_else(|| err("too few values for the vertex properties"))?;
-                        let n = parse_f64(t).filter(|n| (0.0..=1e9).contains(n) && n.fract() == 0.0);
-                        n.ok_or_else(|| err("a list length is not a count"))? as usize
-                    }
-                    None => 1,
-                };
-                for _ in 0..n {
-                    let t = tok.next().ok_or_else(|| err("too few values for the vertex properties"))?;
-                    let v = parse_f64(t).ok_or_else(|| err(&format!("{:?} is not a number", String::from_utf8_lossy(t))))?;
-                    if let Some(a) = idx.iter().position(|&x| x == pi) {
-                        if !v.is_finite() {
-                            return Err(err("non-finite coordinate (NaN or inf)"));
-                        }
-                        o[a] = v;
-                    }
-                }
-            }
-            if tok.next().is_some() {
-                return Err(err("more values than the vertex properties of the header"));
-            }
+            ascii_vertex(line_at(text, &starts, k), el, idx, line0 + k + 1, what, o)?;
         }
         Ok(())
     })
+}
+
+/// The x, y, z of one vertex line of an ASCII PLY body (1-based line `lno` of the file)
+/// into `o`: every property of the vertex element in order (lists by their length).
+fn ascii_vertex(line: &[u8], el: &Element, idx: [usize; 3], lno: usize, what: &str, o: &mut [f64]) -> Result<()> {
+    let line = trim(line);
+    let err = |m: &str| GkError::file_format(format!("{what}: line {lno}: {m}"));
+    let mut tok = line.split(|b| b.is_ascii_whitespace()).filter(|t| !t.is_empty());
+    for (pi, p) in el.props.iter().enumerate() {
+        let n = match p.list {
+            Some(_) => {
+                let t = tok.next().ok_or_else(|| err("too few values for the vertex properties"))?;
+                let n = parse_f64(t).filter(|n| (0.0..=1e9).contains(n) && n.fract() == 0.0);
+                n.ok_or_else(|| err("a list length is not a count"))? as usize
+            }
+            None => 1,
+        };
+        for _ in 0..n {
+            let t = tok.next().ok_or_else(|| err("too few values for the vertex properties"))?;
+            let v = parse_f64(t).ok_or_else(|| err(&format!("{:?} is not a number", String::from_utf8_lossy(t))))?;
+            if let Some(a) = idx.iter().position(|&x| x == pi) {
+                if !v.is_finite() {
+                    return Err(err("non-finite coordinate (NaN or inf)"));
+                }
+                o[a] = v;
+            }
+        }
+    }
+    if tok.next().is_some() {
+        return Err(err("more values than the vertex properties of the header"));
+    }
+    Ok(())
+}
+
+/// The errors of an ASCII PLY body holding `data` non-blank lines where the header
+/// declares other counts (the whole read's words).
+fn ascii_count_error(elements: &[Element], vi: usize, data: usize, what: &str) -> Option<GkError> {
+    let declared: usize = elements.iter().map(|e| e.count).sum();
+    if data < declared {
+        return Some(GkError::file_format(format!(
+            "{what}: the PLY header declares {} ({declared} lines) but the file has {data} data lines: truncated or a wrong count",
+            count_desc(elements),
+        )));
+    }
+    if data > declared {
+        let extra = data - declared;
+        let more = if vi + 1 == elements.len() {
+            format!(" (the file holds {} vertices)", elements[vi].count + extra)
+        } else {
+            String::new()
+        };
+        return Some(GkError::file_format(format!(
+            "{what}: {extra} lines follow the data the PLY header declares ({}){more}: the header's counts are wrong",
+            count_desc(elements)
+        )));
+    }
+    None
+}
+
+/// The vertices of an ASCII PLY file read in blocks of lines, with bounded memory: a
+/// first pass counts the body's non-blank lines (the whole read's count check, same
+/// errors), then each [`PlyAsciiStream::next_chunk`] parses the next vertex lines in
+/// parallel, by the whole read's rules ([`ascii_vertex`]: same values, same errors,
+/// same line numbers).
+pub struct PlyAsciiStream {
+    file: std::fs::File,
+    what: String,
+    el: Element,
+    idx: [usize; 3],
+    /// Non-blank body lines before the first vertex (elements before `vertex`).
+    skip: usize,
+    /// Vertices read so far.
+    done: usize,
+    /// Bytes read and not yet consumed (whole lines from `line` on, then a partial line).
+    carry: Vec<u8>,
+    /// 1-based file line number of the first line of `carry`.
+    line: usize,
+    eof: bool,
+    block: usize,
+}
+
+const PLY_BLOCK: usize = 8 << 20;
+
+impl PlyAsciiStream {
+    /// Open an ASCII PLY file (`Ok(None)` for a binary one): header checked, body lines
+    /// counted against it in one bounded pass.
+    pub fn open(path: &std::path::Path, what: &str) -> Result<Option<PlyAsciiStream>> {
+        use std::io::{Read, Seek};
+        let ply = PlyFile::open_lazy(path, what)?;
+        if ply.format != Format::Ascii {
+            return Ok(None);
+        }
+        let (elements, vi, idx, body) = (ply.elements.clone(), ply.vi, ply.idx, ply.body);
+        let line0 = ply.map[..body].iter().filter(|&&b| b == b'\n').count();
+        drop(ply);
+        let io = |e: std::io::Error| crate::read_error(what, e);
+        let mut file = std::fs::File::open(path).map_err(io)?;
+        file.seek(std::io::SeekFrom::Start(body as u64)).map_err(io)?;
+        let (mut data, mut buf, mut carry) = (0usize, vec![0u8; PLY_BLOCK], Vec::new());
+        loop {
+            let got = file.read(&mut buf).map_err(io)?;
+            if memchr::memchr(0, &buf[..got]).is_some() {
+                return Err(bad(what, "binary bytes in an ASCII PLY body"));
+            }
+            carry.extend_from_slice(&buf[..got]);
+            let cut = if got == 0 { carry.len() } else { memchr::memrchr(b'\n', &carry).map_or(0, |i| i + 1) };
+            data += carry[..cut].split(|&b| b == b'\n').filter(|l| !trim(l).is_empty()).count();
+            carry.drain(..cut);
+            if got == 0 {
+                break;
+            }
+        }
+        if let Some(e) = ascii_count_error(&elements, vi, data, what) {
+            return Err(e);
+        }
+        file.seek(std::io::SeekFrom::Start(body as u64)).map_err(io)?;
+        let skip = elements[..vi].iter().map(|e| e.count).sum();
+        let el = elements[vi].clone();
+        Ok(Some(PlyAsciiStream { file, what: what.to_string(), el, idx, skip, done: 0, carry: Vec::new(), line: line0 + 1, eof: false, block: PLY_BLOCK }))
+    }
+
+    /// Number of vertices.
+    pub fn count(&self) -> usize {
+        self.el.count
+    }
+
+    /// The next at most `max_points` vertices (x, y, z each), or `None` at the end.
+    pub fn next_chunk(&mut self, max_points: usize) -> Result<Option<Vec<f64>>> {
+        use std::io::Read;
+        let want = max_points.max(1).min(self.el.count - self.done);
+        if want == 0 {
+            return Ok(None);
+        }
+        // (1-based line, start, end) of the next `want` vertex lines, in `carry`
+        let mut lines: Vec<(usize, usize, usize)> = Vec::with_capacity(want);
+        let (mut pos, mut lno) = (0usize, self.line);
+        while lines.len() < want {
+            let Some(e) = memchr::memchr(b'\n', &self.carry[pos..]).map(|i| pos + i).or((self.eof && pos < self.carry.len()).then_some(self.carry.len())) else {
+                if self.eof {
+                    break; // counted at open: cannot happen unless the file changed
+                }
+                let mut buf = vec![0u8; self.block];
+                let got = self.file.read(&mut buf).map_err(|e| crate::read_error(&self.what, e))?;
+                self.eof = got == 0;
+                self.carry.extend_from_slice(&buf[..got]);
+                continue;
+            };
+            if !trim(&self.carry[pos..e]).is_empty() {
+                if self.skip > 0 {
+                    self.skip -= 1;
+                } else {
+                    lines.push((lno, pos, e));
+                }
+            }
+            pos = (e + 1).min(self.carry.len());
+            lno += 1;
+        }
+        if lines.len() < want {
+            return Err(bad(&self.what, "the file changed while it was read"));
+        }
+        let mut out = vec![0.0; 3 * want];
+        let (carry, el, idx, what) = (&self.carry, &self.el, self.idx, self.what.as_str());
+        out.par_chunks_mut(3 * 4096).enumerate().try_for_each(|(c, o)| {
+            for (j, p) in o.chunks_exact_mut(3).enumerate() {
+                let (l, a, b) = lines[c * 4096 + j];
+                ascii_vertex(&carry[a..b], el, idx, l, what, p)?;
+            }
+            Ok::<(), GkError>(())
+        })?;
+        self.carry.drain(..pos);
+        self.line = lno;
+        self.done += want;
+        Ok(Some(out))
+    }
 }
 
 #[cfg(test)]

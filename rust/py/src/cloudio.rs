@@ -2,7 +2,7 @@
 
 use crate::arrays::{indices, matrix, rows};
 use crate::errors::{invalid, run};
-use gagekit_cloudio::{cut_chunk, data_columns, scale_in_place, AsciiFile, Keep, read_e57, write_ascii, AsciiOptions, AsciiStream, PlyFile, PlyStream};
+use gagekit_cloudio::{cut_chunk, data_columns, scale_in_place, AsciiFile, Keep, PlyAsciiStream, read_e57, write_ascii, AsciiOptions, AsciiStream, PlyFile, PlyStream};
 use gagekit_core::GkError;
 use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray2, PyReadwriteArray2};
 use pyo3::prelude::*;
@@ -221,6 +221,36 @@ fn cloud_ply_chunks(py: Python<'_>, path: String) -> PyResult<Option<PlyChunks>>
     Ok(s.map(|inner| PlyChunks { inner }))
 }
 
+/// The vertices of an ASCII PLY file read in blocks of lines (`gagekit-cloudio`'s `PlyAsciiStream`).
+#[pyclass(module = "gagekit._core")]
+pub struct PlyAsciiChunks {
+    inner: PlyAsciiStream,
+}
+
+#[pymethods]
+impl PlyAsciiChunks {
+    /// Number of vertices.
+    #[getter]
+    fn count(&self) -> usize {
+        self.inner.count()
+    }
+
+    /// The next at most `max_points` vertices as an (m, 3) array, None at the end.
+    fn next_chunk(&mut self, py: Python<'_>, max_points: usize) -> PyResult<Option<Py<PyAny>>> {
+        let inner = &mut self.inner;
+        let chunk = run(py, || inner.next_chunk(max_points))?;
+        chunk.map(|c| Ok(matrix(py, c, 3)?.into_any().unbind())).transpose()
+    }
+}
+
+/// Open an ASCII PLY file for reading its vertices in blocks of lines (its body's lines
+/// counted against the header first, as a whole read checks them); None for a binary one.
+#[pyfunction]
+fn cloud_ply_ascii_chunks(py: Python<'_>, path: String) -> PyResult<Option<PlyAsciiChunks>> {
+    let s = run(py, || PlyAsciiStream::open(std::path::Path::new(&path), &path))?;
+    Ok(s.map(|inner| PlyAsciiChunks { inner }))
+}
+
 /// One region's share of a streamed chunk: (points inside, every inside index or None,
 /// kept indices, kept points (m, 3)); indices are rows of the chunk.
 type CutRow<'py> = (usize, Option<Bound<'py, PyArray1<i64>>>, Bound<'py, PyArray1<i64>>, Bound<'py, PyArray2<f64>>);
@@ -256,6 +286,8 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(cloud_ascii_chunks, m)?)?;
     m.add_function(wrap_pyfunction!(cloud_ply_chunks, m)?)?;
     m.add_function(wrap_pyfunction!(cloud_cut_chunk, m)?)?;
+    m.add_class::<PlyAsciiChunks>()?;
+    m.add_function(wrap_pyfunction!(cloud_ply_ascii_chunks, m)?)?;
     m.add_class::<AsciiCloud>()?;
     m.add_function(wrap_pyfunction!(cloud_read_ascii, m)?)?;
     m.add_function(wrap_pyfunction!(cloud_ascii_columns, m)?)?;
