@@ -29,6 +29,13 @@ All lengths are millimetres in the scan's frame, angles degrees. Layout::
     angle = 45.0                 # angularity: basic angle between feature and datum
     half_angle = 30.0            # conicity: basic half apex angle of the cone (default: free)
 
+    [[tolerance]]                # profile of a line (ISO 1101 Sec. 18.6) of a surface by CAD faces
+    feature = "top"
+    characteristic = "profile-line"
+    tolerance = 0.05
+    direction = [0, 1, 0]        # the normal of the parallel section planes
+    sections = 5                 # or spacing = 6.4 (mm)
+
     [[tolerance]]                # a size (ISO 14405-1), :mod:`.sizes`
     feature = "bore"
     characteristic = "size"
@@ -81,7 +88,7 @@ __all__ = [
 SHAPES = ("plane", "cylinder", "circle", "sphere", "line", "cone", "surface", "slot", "tab")
 FORM = ("flatness", "straightness", "roundness", "cylindricity", "sphericity", "conicity")
 ORIENTATION = ("parallelism", "perpendicularity", "angularity")
-LOCATION = ("position", "coaxiality", "profile")
+LOCATION = ("position", "coaxiality", "profile", "profile-line")
 RUNOUT = ("circular-runout", "total-runout")
 SIZES = ("size", "distance", "angle")
 CHARACTERISTICS = FORM + ORIENTATION + LOCATION + RUNOUT + SIZES
@@ -107,6 +114,7 @@ APPLIES_TO: dict[str, tuple[str, ...]] = {
     "position": ("plane", "cylinder", "cone", "circle", "sphere"),
     "coaxiality": ("cylinder", "cone", "circle", "sphere"),
     "profile": ("plane", "surface"),
+    "profile-line": ("surface",),
     "circular-runout": ("cylinder", "cone", "circle", "plane"),
     "total-runout": ("cylinder", "cone", "plane"),
     "size": FEATURES_OF_SIZE,
@@ -125,7 +133,7 @@ _FEATURE_KEYS = {"name", "shape", "region", "outward", "kind", "direction", "axi
                  "faces", "band"}
 _TOL_KEYS = {"feature", "characteristic", "tolerance", "datums", "nominal", "angle", "name", "sections", "qif_id", "qpid",
              "offset", "upper", "lower", "fit", "modifier", "angles", "envelope", "to", "material", "filter", "reference",
-             "half_angle"}
+             "half_angle", "direction", "spacing"}
 _PART_KEYS = {"name", "datum_fit", "axis", "sections", "cad", "band", "standard"}
 _TOP_KEYS = {"part", "feature", "datums", "tolerance", "region", "qif"}
 #: the [qif] table of a drawing imported from a QIF model (``gagekit qif import``)
@@ -210,6 +218,9 @@ class Tolerance:
     form_filter: Optional[str] = None
     filter_upr: Optional[float] = None
     reference: Optional[str] = None
+    # line profile (ISO 1101 Sec. 18.6): the normal of its parallel section planes, their spacing (mm)
+    direction: Optional[tuple[float, float, float]] = None
+    spacing: Optional[float] = None
 
     @property
     def upper_limit(self) -> Optional[float]:
@@ -515,9 +526,24 @@ def part_spec_from_dict(doc: Mapping[str, Any], source: str = "part") -> PartSpe
                 ndir = _vec3(nom["direction"], where, "nominal.direction", nonzero=True)
         offset = 0.0
         if "offset" in t:
-            if not (char == "profile" and shape == "surface"):
-                raise ConfigError(f"{where}: 'offset' (ISO 1101 UZ) applies to the profile of a surface only")
+            if not (char in ("profile", "profile-line") and shape == "surface"):
+                raise ConfigError(f"{where}: 'offset' (ISO 1101 UZ) applies to the profile of a surface or a line only")
             offset = _number(t["offset"], where, "offset")
+        line_dir, spacing = None, None
+        if char == "profile-line":
+            if "direction" not in t:
+                raise ConfigError(f"{where}: 'direction' is missing: the normal of the section planes (CAD axes)")
+            line_dir = _vec3(t["direction"], where, "direction", nonzero=True)
+            if "spacing" in t:
+                if "sections" in t:
+                    raise ConfigError(f"{where}: give 'sections' (a count) or 'spacing' (mm), not both")
+                spacing = _number(t["spacing"], where, "spacing")
+                if not spacing > 0:
+                    raise ConfigError(f"{where}: 'spacing' must be a positive number of mm, got {spacing}")
+        else:
+            for key in ("direction", "spacing"):
+                if key in t:
+                    raise ConfigError(f"{where}: '{key}' applies to profile-line (the section planes) only")
         if shape == "surface":
             if npoint is not None or ndir is not None:
                 raise ConfigError(f"{where}: a surface's nominal is its CAD faces; drop 'nominal'")
@@ -528,7 +554,8 @@ def part_spec_from_dict(doc: Mapping[str, Any], source: str = "part") -> PartSpe
         sections = _sections(t["sections"], where) if "sections" in t else None
         ids = {key: _qif_ref(t.get(key, ""), where, key) for key in ("qif_id", "qpid")}
         tols.append(Tolerance(fname, char, tol, tuple(raw_d), npoint, ndir, angle, str(t.get("name", "")), sections, k, **ids,
-                              offset=offset, material=material, datum_material=dmat, **_form_filter(t, char, where)))
+                              offset=offset, material=material, datum_material=dmat, **_form_filter(t, char, where),
+                              direction=line_dir, spacing=spacing))
     cad = part.get("cad")
     if cad is not None:
         if not isinstance(cad, str) or not cad:
