@@ -5,7 +5,6 @@ are 4xx JSON errors, files confined to the studio folder; large models are decim
 
 import base64
 import importlib.util
-import json
 import os
 import shutil
 import urllib.request
@@ -22,26 +21,13 @@ from gagekit.samples import data_path
 from gagekit.studio.app import LOOPBACK_HOSTS, create_app
 from gagekit.studio.cadview import MAX_CAD_TRIANGLES, decimate
 from gagekit.studio.session import Session, load_scan
-from servers import StudioServer
+from servers import StudioServer, assert_4xx, body
 
 pytest.importorskip("uvicorn", reason="the studio extra (uvicorn, starlette) is needed")
 
 _spec = importlib.util.spec_from_file_location("cad_models", Path(__file__).parents[1] / "cad" / "cad_models.py")
 cad_models = importlib.util.module_from_spec(_spec)
 _spec.loader.exec_module(cad_models)
-
-
-def body(obj) -> bytes:
-    return json.dumps(obj).encode()
-
-
-def assert_4xx(answer, *words):
-    status, data, _ = answer
-    assert 400 <= status < 500, answer
-    assert isinstance(data, dict) and isinstance(data.get("error"), str) and data["error"], answer
-    for w in words:
-        assert w in data["error"], answer
-    return status
 
 
 def mesh_of(studio: StudioServer):
@@ -144,9 +130,9 @@ def test_bad_cad_requests_are_4xx_json_errors_confined_to_the_folder(bracket, tm
     studio = StudioServer(str(bracket / "bracket.ply"), str(bracket / "part.toml"))
     try:
         post = lambda data: studio.request("POST", "/api/cad", body(data), timeout=30)  # noqa: E731
-        assert assert_4xx(post({"path": "../secret.stl"}), "outside") == 403
-        assert assert_4xx(post({"path": str(tmp_path / "secret.stl")}), "outside") == 403
-        assert assert_4xx(post({"path": "link.stl"}), "outside") == 403
+        assert_4xx(post({"path": "../secret.stl"}), "outside", status=403)
+        assert_4xx(post({"path": str(tmp_path / "secret.stl")}), "outside", status=403)
+        assert_4xx(post({"path": "link.stl"}), "outside", status=403)
         assert_4xx(post({"path": "notes.txt"}), "must end in")
         assert_4xx(post({"path": "missing.stl"}), "missing.stl")
         assert_4xx(post({"path": "pipe.stl"}), "FIFO")
@@ -165,11 +151,11 @@ def test_bad_cad_requests_are_4xx_json_errors_confined_to_the_folder(bracket, tm
         assert studio.request("POST", "/api/spec", body({"path": "outside.toml", "kind": "part"}))[0] == 200
         cad = studio.request("GET", "/api/state")[1]["cad"]
         assert cad["drawing"] is None and "outside the studio folder" in cad["drawing_error"]
-        assert assert_4xx(post({}), "outside") == 403
+        assert_4xx(post({}), "outside", status=403)
         doc = {"part": {"name": "x", "cad": "../secret.stl"},
                "feature": [{"name": "s", "shape": "surface", "faces": ["x"]}],
                "tolerance": [{"feature": "s", "characteristic": "profile", "tolerance": 0.1}]}
-        assert assert_4xx(studio.request("POST", "/api/run", body({"doc": doc}), timeout=60), "outside") == 403
+        assert_4xx(studio.request("POST", "/api/run", body({"doc": doc}), timeout=60), "outside", status=403)
         assert studio.request("GET", "/api/state")[0] == 200                 # still serving
     finally:
         studio.stop()
