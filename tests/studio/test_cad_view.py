@@ -5,7 +5,6 @@ are 4xx JSON errors, files confined to the studio folder; large models are decim
 
 import base64
 import importlib.util
-import json
 import os
 import shutil
 import urllib.request
@@ -22,26 +21,13 @@ from gagekit.samples import data_path
 from gagekit.studio.app import LOOPBACK_HOSTS, create_app
 from gagekit.studio.cadview import MAX_CAD_TRIANGLES, decimate
 from gagekit.studio.session import Session, load_scan
-from servers import StudioServer
+from servers import StudioServer, assert_4xx, body
 
 pytest.importorskip("uvicorn", reason="the studio extra (uvicorn, starlette) is needed")
 
 _spec = importlib.util.spec_from_file_location("cad_models", Path(__file__).parents[1] / "cad" / "cad_models.py")
 cad_models = importlib.util.module_from_spec(_spec)
 _spec.loader.exec_module(cad_models)
-
-
-def body(obj) -> bytes:
-    return json.dumps(obj).encode()
-
-
-def assert_4xx(answer, *words):
-    status, data, _ = answer
-    assert 400 <= status < 500, answer
-    assert isinstance(data, dict) and isinstance(data.get("error"), str) and data["error"], answer
-    for w in words:
-        assert w in data["error"], answer
-    return status
 
 
 def mesh_of(studio: StudioServer):
@@ -144,9 +130,9 @@ def test_bad_cad_requests_are_4xx_json_errors_confined_to_the_folder(bracket, tm
     studio = StudioServer(str(bracket / "bracket.ply"), str(bracket / "part.toml"))
     try:
         post = lambda data: studio.request("POST", "/api/cad", body(data), timeout=30)  # noqa: E731
-        assert assert_4xx(post({"path": "../secret.stl"}), "outside") == 403
-        assert assert_4xx(post({"path": str(tmp_path / "secret.stl")}), "outside") == 403
-        assert assert_4xx(post({"path": "link.stl"}), "outside") == 403
+        assert_4xx(post({"path": "../secret.stl"}), "outside", status=403)
+        assert_4xx(post({"path": str(tmp_path / "secret.stl")}), "outside", status=403)
+        assert_4xx(post({"path": "link.stl"}), "outside", status=403)
         assert_4xx(post({"path": "notes.txt"}), "must end in")
         assert_4xx(post({"path": "missing.stl"}), "missing.stl")
         assert_4xx(post({"path": "pipe.stl"}), "FIFO")
@@ -165,11 +151,11 @@ def test_bad_cad_requests_are_4xx_json_errors_confined_to_the_folder(bracket, tm
         assert studio.request("POST", "/api/spec", body({"path": "outside.toml", "kind": "part"}))[0] == 200
         cad = studio.request("GET", "/api/state")[1]["cad"]
         assert cad["drawing"] is None and "outside the studio folder" in cad["drawing_error"]
-        assert assert_4xx(post({}), "outside") == 403
+        assert_4xx(post({}), "outside", status=403)
         doc = {"part": {"name": "x", "cad": "../secret.stl"},
                "feature": [{"name": "s", "shape": "surface", "faces": ["x"]}],
                "tolerance": [{"feature": "s", "characteristic": "profile", "tolerance": 0.1}]}
-        assert assert_4xx(studio.request("POST", "/api/run", body({"doc": doc}), timeout=60), "outside") == 403
+        assert_4xx(studio.request("POST", "/api/run", body({"doc": doc}), timeout=60), "outside", status=403)
         assert studio.request("GET", "/api/state")[0] == 200                 # still serving
     finally:
         studio.stop()
@@ -291,3 +277,23 @@ def test_vertex_deviations_are_the_means_of_the_points_nearest_to_each_vertexs_t
             assert mean[k] == pytest.approx(np.mean(d.distance[near]), abs=1e-12)
     nan = vertex_deviations(model, np.array([d.triangle[0], -1]), np.array([np.nan, 0.5]))
     assert nan[1].sum() == 0                                               # NaN deviations and no triangle: unused
+
+
+def test_a_3mf_model_in_the_folder_is_listed_and_served(tmp_path):
+    import zipfile
+
+    v, t = cad_models.box((1.0, 1.0, 1.0))
+    vs = "".join(f'<vertex x="{a}" y="{b}" z="{c}"/>' for a, b, c in v.tolist())
+    ts = "".join(f'<triangle v1="{a}" v2="{b}" v3="{c}"/>' for a, b, c in t.tolist())
+    with zipfile.ZipFile(tmp_path / "cube.3mf", "w") as z:
+        z.writestr("3D/3dmodel.model", '<model unit="centimeter" xmlns="http://schemas.microsoft.com/3dmanufacturing/'
+                   f'core/2015/02"><resources><object id="1" name="cube"><mesh><vertices>{vs}</vertices><triangles>{ts}'
+                   '</triangles></mesh></object></resources><build><item objectid="1"/></build></model>')
+    np.savetxt(tmp_path / "scan.xyz", np.array([[0.0, 0.0, 10.5], [0.0, 0.0, 11.0], [0.0, 0.0, 9.0]]))
+    session = Session(load_scan(tmp_path / "scan.xyz"), None, kind="part")
+    client = TestClient(create_app(session, tmp_path, allowed_hosts=LOOPBACK_HOSTS), base_url="http://127.0.0.1:8765")
+    assert client.get("/api/files").json()["cads"] == ["cube.3mf"]
+    info = client.post("/api/cad", json={"path": "cube.3mf"}).json()
+    assert info["format"] == "3mf" and info["unit"] == "cm" and info["triangles"] == 12
+    tri, dev = _distances(session)
+    np.testing.assert_allclose(dev, [0.5, 1.0, -1.0], atol=1e-12)          # the cube is +-10 mm

@@ -15,22 +15,9 @@ from pathlib import Path
 import pytest
 
 from gagekit.samples import data_path
-from servers import StudioServer
+from servers import StudioServer, assert_4xx, body
 
 pytest.importorskip("uvicorn", reason="the studio extra (uvicorn, starlette) is needed")
-
-
-def body(obj) -> bytes:
-    return json.dumps(obj).encode()
-
-
-def assert_4xx(answer, *words):
-    status, data, seconds = answer
-    assert 400 <= status < 500, answer
-    assert isinstance(data, dict) and isinstance(data.get("error"), str) and data["error"], answer
-    for w in words:
-        assert w in data["error"], answer
-    return data
 
 
 @pytest.fixture()

@@ -338,6 +338,16 @@ def _profile(tol, fd, system):
     return _plane_location(tol, fd, system.frame(tol.datums), "surface")
 
 
+def _profile_line(tol, fd, system):
+    from ..cad.features import line_profile
+
+    value, details = line_profile(tol, fd, system)
+    n = len(details["sections"])
+    return Measurement(value, "width", f"{n} line sections of the surface (CAD faces" +
+                       (", zones fixed by the datums)" if tol.datums else ", no datums: each zone floats in its plane)"),
+                       len(fd.points), details)
+
+
 def _coaxiality(tol, fd, system):
     d = system.datum(tol.datums[:1])
     if fd.shape in ("circle", "sphere"):
@@ -401,6 +411,7 @@ _DISPATCH = {
     "position": _position,
     "coaxiality": _coaxiality,
     "profile": _profile,
+    "profile-line": _profile_line,
     "circular-runout": _runout,
     "total-runout": _runout,
 }

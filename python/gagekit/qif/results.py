@@ -53,7 +53,7 @@ QIF_TYPE = {
     "sphericity": "Sphericity", "parallelism": "Parallelism", "perpendicularity": "Perpendicularity",
     "angularity": "Angularity", "position": "Position", "coaxiality": "Coaxiality", "profile": "SurfaceProfile",
     "circular-runout": "CircularRunout", "total-runout": "TotalRunout", "size": "Diameter", "distance": "DistanceBetween",
-    "angle": "AngleBetween", "conicity": "Conicity",
+    "angle": "AngleBetween", "conicity": "Conicity", "profile-line": "LineProfile",
 }
 _FORM = ("Flatness", "Straightness", "Circularity", "Cylindricity", "Sphericity", "Conicity")
 _SHAPE_TYPE = {"plane": "Plane", "cylinder": "Cylinder", "circle": "Circle", "sphere": "Sphere", "line": "Line", "cone": "Cone"}
