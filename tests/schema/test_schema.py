@@ -60,7 +60,8 @@ def _validator(kind: str) -> jsonschema.Draft202012Validator:
 
 
 def _bundled() -> list[tuple[str, Path]]:
-    files = [(_kind(tomllib.loads(p.read_text())), p) for p in sorted(DATA.glob("*.toml"))]
+    drawings = [*sorted(DATA.glob("*.toml")), *sorted((ROOT / "tests" / "golden").glob("*.toml"))]
+    files = [(_kind(tomllib.loads(p.read_text())), p) for p in drawings]
     return files + [("machine", MACHINE)]
 
 
