@@ -62,8 +62,8 @@ def write_scan(path: Path, n: int, seed: int = 0) -> str:
     return to_toml(doc, "bench_scale: casting_ok gages")
 
 
-def run_child(scan: Path, gages: Path, memory: str) -> tuple[float, float, dict]:
-    """(wall s, peak RSS MB, result) of one child process."""
+def run_child(scan: Path, gages: Path, memory: str) -> tuple[float, float, float, dict]:
+    """(wall s, CPU s (user + system), peak RSS MB, result) of one child process."""
     t = time.perf_counter()
     pid = os.fork()
     if pid == 0:  # the child: exec gagekit with stdout into a temp file
@@ -78,7 +78,7 @@ def run_child(scan: Path, gages: Path, memory: str) -> tuple[float, float, dict]
     out.unlink()
     if status != 0:
         raise SystemExit(f"gagekit gage check --memory {memory} failed (status {status})")
-    return seconds, usage.ru_maxrss / 1024.0, json.loads(text)
+    return seconds, usage.ru_utime + usage.ru_stime, usage.ru_maxrss / 1024.0, json.loads(text)
 
 
 def drop_caches() -> bool:
@@ -110,7 +110,9 @@ def main() -> None:
     args = ap.parse_args()
     sizes = [int(s) for s in args.sizes.split(",") if s] + ([1000] if args.huge else [])
     modes = [m for m in MODES if m[0] in args.modes.split(",")]
-    print(f"{'case':<22}{'mode':<13}{'time s':>9}{'peak RSS MB':>13}{'objective':>22}  equal to whole")
+    print(f"# load average at start: {' '.join(f'{x:.1f}' for x in os.getloadavg())} ({os.cpu_count()} cores); "
+          "cpu s: the child's user + system time (less sensitive to a shared machine than the wall time)")
+    print(f"{'case':<22}{'mode':<13}{'time s':>9}{'cpu s':>9}{'peak RSS MB':>13}{'objective':>22}  equal to whole")
     for millions in sizes:
         n = millions * 1_000_000
         with tempfile.TemporaryDirectory(dir=args.dir) as d:
@@ -124,11 +126,11 @@ def main() -> None:
             for mode, memory in modes:
                 if args.cold:
                     drop_caches()
-                seconds, rss, res = run_child(scan, gages, memory)
+                seconds, cpu, rss, res = run_child(scan, gages, memory)
                 ref = res if ref is None else ref
                 same = "yes" if res == ref else "NO"
-                print(f"{millions:>4} M points{'':<10}{mode:<13}{seconds:>9.1f}{rss:>13.0f}{res['objective']:>22.15g}  {same}",
-                      flush=True)
+                print(f"{millions:>4} M points{'':<10}{mode:<13}{seconds:>9.1f}{cpu:>9.1f}{rss:>13.0f}"
+                      f"{res['objective']:>22.15g}  {same}", flush=True)
             if args.cold:
                 print(f"# disk: sequential read of the file after dropping the cache: {disk_speed(scan):.0f} MB/s")
 

@@ -206,3 +206,21 @@ class StudioServer:
             except subprocess.TimeoutExpired:
                 self.proc.kill()
                 self.proc.wait()
+
+
+def body(obj) -> bytes:
+    """A JSON request body."""
+    import json
+
+    return json.dumps(obj).encode()
+
+
+def assert_4xx(answer, *words, status: Optional[int] = None):
+    """``answer`` of :meth:`StudioServer.request` is a 4xx JSON error (``status`` if given)
+    whose message holds ``words``; returns its JSON."""
+    code, data, _ = answer
+    assert 400 <= code < 500 and (status is None or code == status), answer
+    assert isinstance(data, dict) and isinstance(data.get("error"), str) and data["error"], answer
+    for w in words:
+        assert w in data["error"], answer
+    return data

@@ -1,7 +1,7 @@
 """The commands whose ``--json`` numbers must not change when the code is reorganised
 (issue 23: "every number every command prints stays the same"). Each case is a name and
 the arguments after ``gagekit``; ``{sample}`` fields are bundled samples, ``{tmp}`` a
-scratch folder. ``python tests/golden/regenerate.py`` records them after an intended
+scratch folder, ``{golden}`` this folder. ``python tests/golden/regenerate.py`` records them after an intended
 change of behaviour (say which in the commit)."""
 
 from __future__ import annotations
@@ -23,6 +23,7 @@ CASES: dict[str, list[str]] = {
     "gage_check_ok": ["gage", "check", "{casting}", "{casting-gages}", "--json"],
     "gage_check_short": ["gage", "check", "{casting-short}", "{casting-short-gages}", "--json"],
     "inspect_bracket": ["inspect", "{bracket}", "{bracket-part}", "--json"],
+    "inspect_bracket_turns": ["inspect", "{bracket}", "{golden}/bracket_turns.toml", "--json"],
     "form_cylinder_set1_mz": ["form", "fit", "cylinder", "{cylinder-set1}", "-c", "minimum-zone", "--seed", "0", "--json"],
     "form_cylinder_set3_lsq": ["form", "fit", "cylinder", "{cylinder-set3}", "-c", "least-squares", "--json"],
     "form_circle_all": ["form", "circle", "{round}", "-c", "all", "--json"],
@@ -45,7 +46,7 @@ def _fill(args: list[str], tmp: Path) -> list[str]:
     for a in args:
         if a.startswith("{") and a.endswith("}") and a[1:-1] in SAMPLES:
             a = str(sample_path(a[1:-1]))
-        out.append(a.replace("{tmp}", str(tmp)))
+        out.append(a.replace("{tmp}", str(tmp)).replace("{golden}", str(HERE)))
     return out
 
 

@@ -153,7 +153,7 @@ def test_save_round_trip_is_byte_identical_and_edits_are_atomic(client, folder):
 
 def test_open_scan_spec_and_list_files(client, folder):
     files = client.get("/api/files").json()
-    assert files == {"scans": ["casting.ply"], "specs": ["casting.toml"]}
+    assert files == {"scans": ["casting.ply"], "specs": ["casting.toml"], "cads": []}
     pts = gagekit.read_points(CASTING)[:5000]
     gagekit.write_points(folder / "sub" / "small.ply", pts)
     info = client.post("/api/scan", json={"path": "sub/small.ply"}).json()

@@ -259,3 +259,57 @@ def test_part_mode_fits_the_callout_table_and_hides_apply_t(browser, tmp_path):
         assert page.is_visible("label:has(#apply-t)")   # a gage file: shown
     finally:
         studio.stop()
+
+
+def test_cad_model_beside_the_scan_coloured_after_run(browser, tmp_path):
+    """Part mode with `[part] cad`: the CAD model is drawn beside the scan as a three.js mesh
+    (the server's triangles), grey until Run; after Run each vertex carries the colour the
+    server computed (the colouring of `gagekit compare --report`), with its legend."""
+    import base64
+
+    from gagekit.cad import read_cad
+
+    scan, part, obj = tmp_path / "bracket.ply", tmp_path / "part.toml", tmp_path / "bracket.obj"
+    shutil.copy(data_path("bracket.ply"), scan)
+    shutil.copy(data_path("bracket.obj"), obj)
+    part.write_text(data_path("bracket_cad.toml").read_text().replace('cad = "bracket.step"', 'cad = "bracket.obj"'))
+    model = read_cad(obj)
+    studio = Studio(str(scan), str(part))
+    try:
+        page, problems = open_page(browser, studio.url)
+        page.wait_for_function("window.__studio.cadSettled", timeout=60000)
+        drawn = page.evaluate("""() => { const m = window.__studio.view.cad;
+            return {v: m.geometry.getAttribute('position').count, t: m.geometry.index.count / 3, visible: m.visible,
+                    grey: Array.from(m.geometry.getAttribute('color').array.slice(0, 6))}; }""")
+        assert drawn == {"v": len(model.vertices), "t": len(model.triangles), "visible": True, "grey": [185] * 6}
+        assert page.input_value("#cad-file") == "bracket.obj"
+        assert page.is_hidden("#cad-legend")
+        # the mesh is drawn: the view with the model differs from the view without it
+        shown, hidden = tmp_path / "cad.png", tmp_path / "nocad.png"
+        page.screenshot(path=str(shown))
+        not_blank(shown)
+        page.uncheck("#cad-show")
+        page.evaluate("window.__studio.view.render()")
+        page.screenshot(path=str(hidden))
+        from PIL import Image
+
+        a = np.asarray(Image.open(shown).convert("RGB")).astype(float)[:, :-490]
+        b = np.asarray(Image.open(hidden).convert("RGB")).astype(float)[:, :-490]
+        assert (np.abs(a - b).sum(axis=2) > 30).mean() > 0.05, "showing the CAD model changes little of the view"
+        page.check("#cad-show")
+        page.click("#run")
+        page.wait_for_function("window.__studio.cad && window.__studio.cad.coloured", timeout=120000)
+        assert not page.is_hidden("#cad-legend")
+        lim = page.evaluate("window.__studio.cad.limit")
+        assert page.inner_text("#cad-legend-max") == f"{lim:.3f}"
+        colours = page.evaluate("Array.from(window.__studio.view.cad.geometry.getAttribute('color').array)")
+        want = base64.b64decode(page.evaluate("window.__studio.state.run.cad.colours"))
+        assert bytes(colours) == want and len(want) == 3 * len(model.vertices)
+        rgb = np.frombuffer(want, np.uint8).reshape(-1, 3)
+        assert (rgb != 200).any(axis=1).sum() > 1000          # coloured where the scan is, grey elsewhere
+        coloured = tmp_path / "coloured.png"
+        page.screenshot(path=str(coloured))
+        not_blank(coloured)
+        assert problems == [] and page.evaluate("window.__studio.errors") == []
+    finally:
+        studio.stop()

@@ -15,22 +15,9 @@ from pathlib import Path
 import pytest
 
 from gagekit.samples import data_path
-from servers import StudioServer
+from servers import StudioServer, assert_4xx, body
 
 pytest.importorskip("uvicorn", reason="the studio extra (uvicorn, starlette) is needed")
-
-
-def body(obj) -> bytes:
-    return json.dumps(obj).encode()
-
-
-def assert_4xx(answer, *words):
-    status, data, seconds = answer
-    assert 400 <= status < 500, answer
-    assert isinstance(data, dict) and isinstance(data.get("error"), str) and data["error"], answer
-    for w in words:
-        assert w in data["error"], answer
-    return data
 
 
 @pytest.fixture()
@@ -173,7 +160,7 @@ def test_files_lists_no_symlink_leading_outside_the_folder(casting, tmp_path):
     try:
         status, files, _ = studio.request("GET", "/api/files")
         assert status == 200
-        assert files == {"scans": ["casting.ply", "inside.ply"], "specs": ["casting.toml", "sub/up.toml"]}
+        assert files == {"scans": ["casting.ply", "inside.ply"], "specs": ["casting.toml", "sub/up.toml"], "cads": []}
         assert_4xx(studio.request("POST", "/api/scan", body({"path": "link.ply"})), "outside")
         assert_4xx(studio.request("POST", "/api/spec", body({"path": "linkdir/secret.toml"})), "outside")
     finally:

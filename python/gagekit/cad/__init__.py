@@ -20,12 +20,13 @@ from .model import CadFace, CadModel, Distances
 __all__ = ["read_cad", "CadModel", "CadFace", "Distances", "compare", "CompareResult", "ALIGN_METHODS",
            "parse_lock", "CAD_SUFFIXES"]
 
-CAD_SUFFIXES = (".step", ".stp", ".stl", ".obj", ".ply")
+CAD_SUFFIXES = (".step", ".stp", ".stl", ".obj", ".ply", ".3mf")
 
 
 def read_cad(path: Any, units: Optional[str] = None) -> CadModel:
     """Read a CAD model (by its extension): STEP (``.step``/``.stp``, its declared unit;
-    needs ``gagekit[cad]``), STL, OBJ or PLY with faces (``units``, default mm).
+    needs ``gagekit[cad]``), 3MF (its declared unit), STL, OBJ or PLY with faces
+    (``units``, default mm).
 
     Raises :class:`~gagekit.errors.FileFormatError` for a file that cannot be read and
     :class:`~gagekit.errors.DegenerateGeometryError` / ``InvalidInputError`` for a mesh
@@ -58,14 +59,18 @@ def read_cad(path: Any, units: Optional[str] = None) -> CadModel:
         from . import meshes
 
         unit = override or "mm"
-        if suffix == ".stl":
+        if suffix == ".3mf":
+            v, t, faces, tf, unit = meshes.read_3mf(p)
+            if override is not None and override != unit:
+                warnings.append(f"{p}: a 3MF file declares its unit ({unit}); --cad-units {override} is ignored")
+        elif suffix == ".stl":
             v, t, faces, tf = meshes.read_stl(p, read_bytes(p, "CAD file"))
         elif suffix == ".obj":
             v, t, faces, tf = meshes.read_obj(p, read_text(p, "CAD file"))
         elif suffix == ".ply":
             v, t, faces, tf = meshes.read_ply_mesh(p)
         else:
-            raise FileFormatError(f"{p}: unknown CAD format '{suffix}'; gagekit reads STEP (.step, .stp), STL, OBJ and PLY meshes")
+            raise FileFormatError(f"{p}: unknown CAD format '{suffix}'; gagekit reads STEP (.step, .stp), STL, OBJ, PLY and 3MF meshes")
         s = _units.scale_to_mm(unit)
         if s != 1.0:
             v = v * s

@@ -31,7 +31,7 @@ from .._util import as_points
 from ..errors import ConfigError, DegenerateGeometryError
 from .model import CadModel, transform  # noqa: F401  (transform is also reached from here)
 
-__all__ = ["compare", "CompareResult", "ALIGN_METHODS", "DOF_NAMES", "parse_lock", "transform"]
+__all__ = ["compare", "CompareResult", "ALIGN_METHODS", "DOF_NAMES", "parse_lock", "transform", "vertex_deviations"]
 
 ALIGN_METHODS = ("none", "best-fit", "minimax", "datums")
 DOF_NAMES = ("x", "y", "z", "rx", "ry", "rz")
@@ -163,6 +163,23 @@ def compare(points: Any, model: CadModel, align: str = "none", lock: Any = None,
                      rms_after=rms_after, iterations=int(iterations))
     return CompareResult(int(len(pts)), model.to_dict(), alignment, dist.distance, dist.face, aligned, model.faces,
                          dist.signed, model.method, max_distance, time.perf_counter() - t0, model)
+
+
+def vertex_deviations(model: CadModel, triangle: np.ndarray, deviation: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The deviation map on the model's vertices (``compare --report``, the studio): per
+    vertex the mean deviation of the points whose nearest triangle has it as a corner,
+    and the count of those points (0: no point near; its mean is then 0).
+
+    ``triangle``: each point's nearest triangle (-1: none, e.g. beyond ``max_distance``);
+    ``deviation``: each point's signed deviation (NaN: not used)."""
+    tri = np.asarray(triangle, dtype=np.int64)
+    d = np.asarray(deviation, dtype=np.float64)
+    ok = (tri >= 0) & np.isfinite(d)
+    corners = np.asarray(model.triangles)[tri[ok]].ravel()
+    nv = len(model.vertices)
+    total = np.bincount(corners, weights=np.repeat(d[ok], 3), minlength=nv)
+    count = np.bincount(corners, minlength=nv)
+    return np.where(count > 0, total / np.maximum(count, 1), 0.0), count
 
 
 def write_deviations(path: Any, result: CompareResult) -> None:

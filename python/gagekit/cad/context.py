@@ -5,35 +5,39 @@ within ``band`` (see :mod:`.features` for the rule)."""
 from __future__ import annotations
 
 from functools import lru_cache
+from typing import Optional
 
 import numpy as np
 
-__all__ = ["BAND_REACH", "CadContext"]
+__all__ = ["BAND_REACH", "CadContext", "cad_model"]
 
 #: Points farther than this from the faces never count for the default band.
 BAND_REACH = 1.0
 
 
 @lru_cache(maxsize=4)
-def _model(path: str):
+def cad_model(path: str):
+    """The CAD model of a drawing's ``[part] cad`` (read once per path: a STEP model's
+    tessellation takes seconds; the inspection and the studio share it)."""
     from . import read_cad
 
     return read_cad(path)
 
 
 class CadContext:
-    """The CAD model and every scan point's signed distance and nearest face."""
+    """The CAD model and every scan point's signed distance, nearest face and triangle."""
 
-    def __init__(self, model, distance: np.ndarray, face: np.ndarray) -> None:
+    def __init__(self, model, distance: np.ndarray, face: np.ndarray, triangle: Optional[np.ndarray] = None) -> None:
         self.model = model
         self.distance = distance
         self.face = face
+        self.triangle = triangle
 
     @classmethod
     def of_scan(cls, path: str, points: np.ndarray) -> "CadContext":
-        model = _model(str(path))
+        model = cad_model(str(path))
         d = model.distances(points)
-        return cls(model, d.distance, d.face)
+        return cls(model, d.distance, d.face, d.triangle)
 
     def face_set(self, feature, where: str) -> list[int]:
         return sorted({self.model.face_index(k, f"{where}: 'faces'") for k in feature.faces})

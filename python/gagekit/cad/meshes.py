@@ -7,6 +7,14 @@ caller gives it (``--cad-units``, default mm).
 - OBJ: ``v`` and ``f`` lines (``f a/b/c ...``, negative indices, polygons split into fans);
   ``g`` / ``o`` groups become faces, so per-face statistics follow the file's groups.
 - PLY (plyfile): ``vertex`` x, y, z and ``face`` ``vertex_indices`` (or ``vertex_index``).
+- 3MF (3D Manufacturing Format core specification 1.3): a zip whose start part (named by
+  ``_rels/.rels``, else ``3D/3dmodel.model``) is one XML ``<model unit="...">``; every
+  ``<build><item>`` places an ``<object>`` (a ``<mesh>`` of ``<vertex x y z>`` and
+  ``<triangle v1 v2 v3>``, or ``<components>`` of other objects) by its 3x4 ``transform``
+  (row vectors: ``[x y z 1] M``). Each build item becomes a face (its object's ``name``).
+  The unit is the file's (``micron``, ``millimeter`` (default), ``centimeter``, ``inch``,
+  ``foot``, ``meter``), read with the standard library's XML parser (expat: no external
+  entities, bounded entity expansion).
 
 Every malformed file is a :class:`~gagekit.errors.FileFormatError` naming it.
 """
@@ -21,7 +29,13 @@ import numpy as np
 from ..errors import FileFormatError
 from .model import CadFace
 
-__all__ = ["read_stl", "read_obj", "read_ply_mesh", "weld"]
+__all__ = ["read_stl", "read_obj", "read_ply_mesh", "read_3mf", "weld", "UNITS_3MF"]
+
+#: The unit names of 3MF's ``<model unit>`` and gagekit's.
+UNITS_3MF = {"micron": "um", "millimeter": "mm", "centimeter": "cm", "inch": "in", "foot": "ft", "meter": "m"}
+_NS_3MF = "{http://schemas.microsoft.com/3dmanufacturing/core/2015/02}"
+#: Largest uncompressed model part read (bytes): a zip bomb stops here, not in memory.
+MAX_3MF_MODEL = 2 * 1024 ** 3
 
 
 def weld(corners: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -140,3 +154,120 @@ def read_ply_mesh(p: Path) -> tuple[np.ndarray, np.ndarray, list[CadFace], np.nd
     if t.min() < 0 or t.max() >= len(v):
         raise FileFormatError(f"{p}: a face names a vertex that does not exist")
     return v, t, [CadFace(0, 0, p.stem)], np.zeros(len(t), dtype=np.int64)
+
+
+def read_3mf(p: Path) -> tuple[np.ndarray, np.ndarray, list[CadFace], np.ndarray, str]:
+    """(vertices, triangles, faces, triangle face, unit) of a 3MF file (module docstring)."""
+    import re as _re
+    import xml.etree.ElementTree as ET
+    import zipfile
+
+    try:
+        zf = zipfile.ZipFile(p)
+    except (zipfile.BadZipFile, OSError) as exc:
+        raise FileFormatError(f"{p}: not a 3MF file (a 3MF file is a zip archive: {exc})") from None
+    with zf:
+        names = set(zf.namelist())
+        part = None
+        if "_rels/.rels" in names:
+            try:
+                rels = ET.fromstring(zf.read("_rels/.rels"))
+            except ET.ParseError as exc:
+                raise FileFormatError(f"{p}: _rels/.rels is not valid XML ({exc})") from None
+            for r in rels.iter():
+                if r.tag.endswith("Relationship") and str(r.get("Type", "")).endswith("/3dmodel"):
+                    part = str(r.get("Target", "")).lstrip("/")
+                    break
+        if part is None or part not in names:
+            part = "3D/3dmodel.model" if "3D/3dmodel.model" in names else next(
+                (n for n in sorted(names) if n.lower().endswith(".model")), None)
+        if part is None:
+            raise FileFormatError(f"{p}: the 3MF archive holds no 3D model part (3D/3dmodel.model)")
+        if zf.getinfo(part).file_size > MAX_3MF_MODEL:
+            raise FileFormatError(f"{p}: the 3MF model part is larger than {MAX_3MF_MODEL} bytes uncompressed")
+        try:
+            root = ET.fromstring(zf.read(part))
+        except ET.ParseError as exc:
+            raise FileFormatError(f"{p}: {part} is not valid XML ({exc})") from None
+        except (zipfile.BadZipFile, OSError, EOFError) as exc:
+            raise FileFormatError(f"{p}: {part} cannot be read from the archive ({exc})") from None
+    if root.tag != f"{_NS_3MF}model":
+        raise FileFormatError(f"{p}: {part} is not a 3MF core <model> (root element {root.tag!r})")
+    unit_name = root.get("unit", "millimeter")
+    if unit_name not in UNITS_3MF:
+        raise FileFormatError(f"{p}: unknown 3MF unit {unit_name!r}; the specification allows {', '.join(UNITS_3MF)}")
+    objects = {}
+    for obj in root.iter(f"{_NS_3MF}object"):
+        objects[obj.get("id")] = obj
+
+    def number(e, key: str) -> float:
+        try:
+            v = float(e.get(key, ""))
+        except ValueError:
+            raise FileFormatError(f"{p}: <{e.tag.split('}')[-1]}> has {key}={e.get(key)!r}, not a number") from None
+        return v
+
+    def matrix(text) -> np.ndarray:
+        m = np.eye(4)
+        if text is None:
+            return m
+        try:
+            vals = [float(x) for x in _re.split(r"\s+", text.strip())]
+        except ValueError:
+            vals = []
+        if len(vals) != 12:
+            raise FileFormatError(f"{p}: transform {text!r} is not 12 numbers")
+        m[:, :3] = np.array(vals).reshape(4, 3)
+        return m  # row vectors: [x y z 1] @ m
+
+    def mesh_of(oid, seen: tuple) -> list[tuple[np.ndarray, np.ndarray]]:
+        if oid not in objects:
+            raise FileFormatError(f"{p}: a build item or component names object {oid!r}, which is not defined")
+        if oid in seen:
+            raise FileFormatError(f"{p}: object {oid!r} contains itself through its components")
+        obj = objects[oid]
+        mesh = obj.find(f"{_NS_3MF}mesh")
+        if mesh is not None:
+            vx = mesh.find(f"{_NS_3MF}vertices")
+            tx = mesh.find(f"{_NS_3MF}triangles")
+            v = np.array([[number(e, "x"), number(e, "y"), number(e, "z")]
+                          for e in (vx if vx is not None else [])], dtype=np.float64).reshape(-1, 3)
+            try:
+                t = np.array([[int(e.get("v1")), int(e.get("v2")), int(e.get("v3"))]
+                              for e in (tx if tx is not None else [])], dtype=np.int64).reshape(-1, 3)
+            except (TypeError, ValueError):
+                raise FileFormatError(f"{p}: object {oid!r}: a <triangle> needs integer v1, v2, v3") from None
+            if len(t) and (t.min() < 0 or t.max() >= len(v)):
+                raise FileFormatError(f"{p}: object {oid!r}: a triangle names a vertex that does not exist "
+                                      f"({len(v)} vertices)")
+            return [(v, t)]
+        out = []
+        comps = obj.find(f"{_NS_3MF}components")
+        for c in (comps if comps is not None else []):
+            m = matrix(c.get("transform"))
+            for v, t in mesh_of(c.get("objectid"), seen + (oid,)):
+                out.append((np.column_stack([v, np.ones(len(v))]) @ m[:, :3], t))
+        return out
+
+    build = root.find(f"{_NS_3MF}build")
+    items = list(build.iter(f"{_NS_3MF}item")) if build is not None else []
+    if not items:
+        raise FileFormatError(f"{p}: the 3MF model has no <build><item> (nothing to make)")
+    verts, tris, tface, faces = [], [], [], []
+    base = 0
+    for k, item in enumerate(items):
+        m = matrix(item.get("transform"))
+        oid = item.get("objectid")
+        n0 = sum(len(t) for t in tris)
+        for v, t in mesh_of(oid, ()):
+            verts.append(np.column_stack([v, np.ones(len(v))]) @ m[:, :3])
+            tris.append(t + base)
+            base += len(v)
+        n = sum(len(t) for t in tris) - n0
+        name = objects[oid].get("name") or f"object {oid}"
+        faces.append(CadFace(k, int(oid) if str(oid).isdigit() else k, name))
+        tface.append(np.full(n, k, dtype=np.int64))
+    t = np.concatenate(tris) if tris else np.zeros((0, 3), np.int64)
+    if len(t) == 0:
+        raise FileFormatError(f"{p}: the 3MF model holds no triangles")
+    return np.concatenate(verts), t, faces, np.concatenate(tface), UNITS_3MF[unit_name]

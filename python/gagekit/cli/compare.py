@@ -34,9 +34,9 @@ def human(result) -> str:
 
 def compare(
     scan: Path = typer.Argument(..., help="Scanned cloud: XYZ/CSV/TXT, NIST .ds, PLY, .npy, LAS/LAZ, E57."),
-    cad: Path = typer.Argument(..., help="CAD model: STEP (.step/.stp, needs gagekit[cad]), STL, OBJ or PLY mesh."),
+    cad: Path = typer.Argument(..., help="CAD model: STEP (.step/.stp, needs gagekit[cad]), STL, OBJ, PLY or 3MF mesh."),
     units: Optional[str] = UNITS_OPTION,
-    cad_units: Optional[str] = typer.Option(None, "--cad-units", help="Unit of a mesh file (STL/OBJ/PLY carry none): mm (default), cm, m, um, in, ft. STEP declares its own."),
+    cad_units: Optional[str] = typer.Option(None, "--cad-units", help="Unit of a mesh file (STL/OBJ/PLY carry none): mm (default), cm, m, um, in, ft. STEP and 3MF declare their own."),
     align: str = typer.Option("none", "--align", help="none (the scan is in CAD coordinates), best-fit, minimax or datums (needs --part)."),
     part: Optional[Path] = typer.Option(None, "--part", help="PART.toml: the drawing's datums (for --align datums)."),
     lock: Optional[str] = typer.Option(None, "--lock", help="Degrees of freedom to keep, e.g. z,rx,ry (of x,y,z,rx,ry,rz, in CAD axes)."),

@@ -97,7 +97,7 @@ def _evaluate(spec: PartSpec, feats: dict, n: int, t0: float) -> InspectionResul
         m = evaluate(tol, fd, system)
         results.append(CalloutResult(tol.feature, tol.characteristic, tol.tolerance, float(m.value), m.zone, tol.datums,
                                      m.n_points, m.element, tol.name, tol.angle, m.details, m.margin, m.extra))
-    refs = sorted({t.datums for t in spec.tolerances if t.datums and t.characteristic in ("position", "profile")} |
+    refs = sorted({t.datums for t in spec.tolerances if t.datums and t.characteristic in ("position", "profile", "profile-line")} |
                   {t.datums for t in spec.tolerances if t.datums}, key=lambda d: (-len(d), d))
     frames = []
     for r in refs:

@@ -14,8 +14,12 @@ import numpy as np
 
 from .inspect import MAX_PLOT_POINTS, _Encoder, _subsample
 
-__all__ = ["add_compare", "write_report", "callouts", "MAX_MESH_TRIANGLES"]
+__all__ = ["add_compare", "write_report", "callouts", "colour_limit", "vertex_rgb", "colour_stops", "MAX_MESH_TRIANGLES"]
 
+#: The deviation map's colour scale (matplotlib's name): blue inside the material, red outside.
+COLOURMAP = "RdBu_r"
+#: The colour of a vertex no point is near.
+NO_POINT = (200, 200, 200)
 #: Larger models are drawn by their points only (a browser cannot turn more smoothly).
 MAX_MESH_TRIANGLES = 400_000
 
@@ -36,31 +40,43 @@ def callouts(result) -> list[dict[str, Any]]:
     return out
 
 
-def _vertex_colours(result, lim: float) -> list[str]:
+def colour_limit(deviation: np.ndarray) -> float:
+    """The half range of the deviation colour scale (mm): the 99.5th percentile of the
+    finite |deviations| (a few outliers do not wash out the map), 1 um when all are 0."""
+    d = np.abs(np.asarray(deviation, dtype=np.float64))
+    d = d[np.isfinite(d)]
+    lim = float(np.percentile(d, 99.5)) if len(d) else 1.0
+    return lim or 1e-3
+
+
+def vertex_rgb(mean: np.ndarray, count: np.ndarray, lim: float) -> np.ndarray:
+    """(n, 3) uint8 colours of the deviation map's vertices (:func:`gagekit.cad.compare.vertex_deviations`):
+    RdBu_r from -``lim`` (blue, inside the material) to +``lim`` (red, outside), grey where no point is."""
     import matplotlib
 
+    rgba = matplotlib.colormaps[COLOURMAP](np.clip(0.5 + 0.5 * np.asarray(mean, dtype=np.float64) / lim, 0.0, 1.0))
+    rgb = (255 * np.asarray(rgba)[:, :3]).astype(np.uint8)
+    rgb[np.asarray(count) == 0] = NO_POINT
+    return rgb.reshape(-1, 3)
+
+
+def colour_stops(n: int = 11) -> list[str]:
+    """The colour scale of :func:`vertex_rgb` as ``n`` evenly spaced ``#rrggbb`` stops from
+    -lim to +lim (a legend's gradient)."""
+    import matplotlib
+
+    rgba = matplotlib.colormaps[COLOURMAP](np.linspace(0.0, 1.0, n))
+    return ["#%02x%02x%02x" % tuple(int(255 * c) for c in q[:3]) for q in rgba]
+
+
+def _vertex_colours(result, lim: float) -> list[str]:
+    from ..cad.compare import vertex_deviations
+
     model = result.model
-    mesh_tri = model.triangles
     used = np.isfinite(result.deviation)
-    d = result.deviation[used]
     tri = model.distances(result.aligned[used]).triangle  # nearest triangle of each used point
-    ok = tri >= 0
-    corners = mesh_tri[tri[ok]].ravel()
-    vals = np.repeat(d[ok], 3)
-    nv = len(model.vertices)
-    s = np.bincount(corners, weights=vals, minlength=nv)
-    c = np.bincount(corners, minlength=nv)
-    cmap = matplotlib.colormaps["RdBu_r"]
-    mean = np.where(c > 0, s / np.maximum(c, 1), 0.0)
-    rgba = cmap(np.clip(0.5 + 0.5 * mean / lim, 0.0, 1.0))
-    out = []
-    for k in range(nv):
-        if c[k] == 0:
-            out.append("rgb(200,200,200)")
-        else:
-            r, g, b, _ = rgba[k]
-            out.append(f"rgb({int(255 * r)},{int(255 * g)},{int(255 * b)})")
-    return out
+    mean, count = vertex_deviations(model, tri, result.deviation[used])
+    return [f"rgb({r},{g},{b})" for r, g, b in vertex_rgb(mean, count, lim).tolist()]
 
 
 def _figure(result, slug: str) -> str:
@@ -70,8 +86,7 @@ def _figure(result, slug: str) -> str:
     idx = used[_subsample(len(used), MAX_PLOT_POINTS)]
     p = result.aligned[idx]
     c = 1e3 * result.deviation[idx]
-    lim = float(np.percentile(np.abs(result.deviation[used]), 99.5)) if len(used) else 1.0
-    lim = lim or 1e-3
+    lim = colour_limit(result.deviation[used])
     fig = go.Figure()
     model = result.model
     if model is not None and len(model.triangles) <= MAX_MESH_TRIANGLES:

@@ -76,7 +76,7 @@ def serve(scan: Path, spec: Optional[Path] = None, *, units: Optional[str] = Non
         allowed = None
     echo(f"gagekit studio: reading {scan} ...")
     loaded = load_scan(scan.resolve(), units, lod_max)
-    session = Session(loaded, spec.resolve() if spec is not None else None, lod_max, kind=kind)
+    session = Session(loaded, spec.resolve() if spec is not None else None, lod_max, kind=kind, root=root)
     app = create_app(session, root, token=token, allowed_hosts=allowed)
 
     family = socket.AF_INET6 if ":" in bind.strip("[]") else socket.AF_INET

@@ -19,7 +19,17 @@ Endpoints (all JSON unless said otherwise; errors are ``{"error": message}`` wit
 ``POST /api/run``           ``{"doc", "groups"?}``: the gage check, T*, per-point distances;
                             for a drawing the inspection and per-point deviations
 ``POST /api/save``          ``{"doc", "path"?}``: write the gage file (atomic)
+``POST /api/cad``           ``{"path"?, "units"?, "max_distance"?}``: open a CAD model beside the
+                            scan (STEP with the ``cad`` extra, STL, OBJ, PLY with faces; no
+                            path: the drawing's ``[part] cad``), or ``{"close": true}``
+``GET  /api/cad/mesh``      the shown mesh (octet-stream): float32 x, y, z of ``X-Vertex-Count``
+                            vertices minus ``X-Origin``, then uint32 corners of
+                            ``X-Triangle-Count`` triangles; decimated above
+                            :data:`~.cadview.MAX_CAD_TRIANGLES`
 ==========================  ==============================================================
+
+After ``/api/run`` on a drawing, ``cad`` holds the open model's per-vertex colours
+(:mod:`.cadview`: the colouring of ``gagekit compare --report``) and the colour scale.
 
 Requests name files relative to the studio folder; a path that leads outside it is
 refused (403), and so is a file that is not a regular file (a FIFO would block the
@@ -53,8 +63,10 @@ from starlette.routing import Mount, Route
 from starlette.staticfiles import StaticFiles
 from starlette.types import ASGIApp, Receive, Scope, Send
 
+from ..cad import CAD_SUFFIXES as _CAD_SUFFIXES
 from ..errors import ConfigError, GagekitError
-from .session import Session, SpecError
+from .cadview import ply_has_faces
+from .session import OutsideError, Session, SpecError
 
 STATIC = Path(__file__).with_name("static")
 MAX_BODY = 4 * 1024 * 1024
@@ -64,6 +76,8 @@ MAX_DEPTH = 32
 MAX_INT = 2 ** 53
 """Largest integer magnitude accepted in a request (JSON's exact integers, RFC 8259 Sec. 6)."""
 SCAN_SUFFIXES = {".ply", ".xyz", ".csv", ".txt", ".asc", ".pts", ".ds", ".npy", ".las", ".laz", ".e57"}
+CAD_SUFFIXES = set(_CAD_SUFFIXES)
+"""CAD models the studio opens (a ``.ply`` is a CAD model when it has faces)."""
 COOKIE = "gagekit_studio"
 LOOPBACK_HOSTS = ["127.0.0.1", "localhost", "::1", "[::1]"]
 
@@ -223,6 +237,7 @@ def create_app(session: Session, root: Path, *, token: Optional[str] = None,
                allowed_hosts: Optional[list] = None) -> Starlette:
     """The studio application over ``session``; files named by requests must lie in ``root``."""
     root = root.resolve()
+    session.root = root  # a drawing's CAD model too
 
     async def index(request: Request) -> Response:
         return FileResponse(STATIC / "index.html", headers={"Cache-Control": "no-store"})
@@ -231,6 +246,7 @@ def create_app(session: Session, root: Path, *, token: Optional[str] = None,
         from ..inspect import APPLIES_TO, SHAPES
 
         return JSONResponse({"scan": session.scan.info(), "spec": await run_in_threadpool(session.spec_model),
+                             "cad": await run_in_threadpool(session.cad_state),
                              "root": str(root), "max_body": MAX_BODY,
                              "inspection": {"shapes": list(SHAPES), "applies_to": APPLIES_TO}})
 
@@ -258,15 +274,21 @@ def create_app(session: Session, root: Path, *, token: Optional[str] = None,
                 found += [Path(top) / n for n in names if not n.startswith(".")]
                 if len(found) > 5000:
                     break
-            scans, specs = [], []
+            scans, specs, cads = [], [], []
             for p in sorted(found)[:5000]:
                 suffix = p.suffix.lower()
-                if suffix not in SCAN_SUFFIXES and suffix != ".toml":
+                if suffix not in SCAN_SUFFIXES and suffix not in CAD_SUFFIXES and suffix != ".toml":
                     continue
                 if not p.is_file() or (p.is_symlink() and not _inside(root, p.resolve())):
                     continue
-                (scans if suffix in SCAN_SUFFIXES else specs).append(p.relative_to(root).as_posix())
-            return {"scans": scans, "specs": specs}
+                rel = p.relative_to(root).as_posix()
+                if suffix in SCAN_SUFFIXES:
+                    scans.append(rel)
+                if suffix in CAD_SUFFIXES and (suffix != ".ply" or ply_has_faces(p)):
+                    cads.append(rel)
+                if suffix == ".toml":
+                    specs.append(rel)
+            return {"scans": scans, "specs": specs, "cads": cads}
 
         return JSONResponse(await run_in_threadpool(listing))
 
@@ -302,6 +324,31 @@ def create_app(session: Session, root: Path, *, token: Optional[str] = None,
             raise RequestError(400, f"gage file: folder '{path.parent.name}' does not exist")
         return JSONResponse(await run_in_threadpool(session.save, doc, path))
 
+    async def open_cad(request: Request) -> Response:
+        data = await read_json(request)
+        if data.get("close") is True:
+            return JSONResponse(await run_in_threadpool(session.close_cad))
+        rel = data.get("path")
+        path = None if rel is None else confined(root, rel, CAD_SUFFIXES, "CAD file", regular=True)
+        units = data.get("units")
+        if units is not None and not isinstance(units, str):
+            raise RequestError(400, "units: expected a unit name such as \"mm\"")
+        limit = data.get("max_distance")
+        if limit is not None and (isinstance(limit, bool) or not isinstance(limit, (int, float)) or not limit > 0):
+            raise RequestError(400, "max_distance: expected a positive number of mm (or null: every point)")
+        return JSONResponse(await run_in_threadpool(session.open_cad, path, units,
+                                                    None if limit is None else float(limit)))
+
+    async def cad_mesh(request: Request) -> Response:
+        view = session.cad_mesh()
+        if view is None:
+            raise RequestError(404, "no CAD model is open (POST /api/cad first)")
+        data = await run_in_threadpool(view.buffer)
+        return Response(data, media_type="application/octet-stream",
+                        headers={"X-Vertex-Count": str(len(view.vertices)), "X-Triangle-Count": str(len(view.triangles)),
+                                 "X-Origin": ",".join(repr(float(x)) for x in view.origin), "X-Cad-Key": str(view.key),
+                                 "Cache-Control": "no-store"})
+
     async def request_error(request: Request, exc: RequestError) -> Response:
         return JSONResponse({"error": exc.message}, status_code=exc.status)
 
@@ -310,6 +357,8 @@ def create_app(session: Session, root: Path, *, token: Optional[str] = None,
                             status_code=422)
 
     async def gagekit_error(request: Request, exc: GagekitError) -> Response:
+        if isinstance(exc, OutsideError):
+            return JSONResponse({"error": str(exc)}, status_code=403)
         status = 422 if isinstance(exc, ConfigError) else 400
         body: dict = {"error": str(exc)}
         if isinstance(exc, ConfigError):
@@ -335,6 +384,8 @@ def create_app(session: Session, root: Path, *, token: Optional[str] = None,
         Route("/api/select", select, methods=["POST"]),
         Route("/api/run", run, methods=["POST"]),
         Route("/api/save", save, methods=["POST"]),
+        Route("/api/cad", open_cad, methods=["POST"]),
+        Route("/api/cad/mesh", cad_mesh),
         Mount("/static", StaticFiles(directory=STATIC), name="static"),
     ]
     middleware = []

@@ -11,6 +11,7 @@ points.
 from __future__ import annotations
 
 import base64
+import dataclasses
 import math
 import threading
 import time
@@ -28,6 +29,7 @@ from ..errors import ConfigError, GagekitError, InvalidInputError
 from ..gage.analysis import check_gages, datum_alignment, gage_distances, region_in_scanner
 from ..gage.spec import Region
 from . import specdoc
+from .cadview import MAX_CAD_TRIANGLES, CadView
 
 LOD_MAX = 1_000_000
 """Most points sent to the browser for display (a million points draw in under a second
@@ -111,10 +113,15 @@ def box_of(table: Any, what: str = "region") -> Region:
 class Session:
     """One scan, one gage file, the alignment found for it; safe to share between threads."""
 
-    def __init__(self, scan: Scan, spec_path: Optional[Path], lod_max: int = LOD_MAX, kind: str = "gage") -> None:
+    def __init__(self, scan: Scan, spec_path: Optional[Path], lod_max: int = LOD_MAX, kind: str = "gage",
+                 root: Optional[Path] = None) -> None:
         self.lock = threading.RLock()
         self.scan = scan
         self.lod_max = lod_max
+        self.root = (root or scan.path.parent).resolve()
+        """the studio folder: a CAD model named by a drawing must lie inside it"""
+        self.cad: Optional[CadView] = None
+        self.cad_max_triangles = MAX_CAD_TRIANGLES
         self.spec_path: Optional[Path] = None
         self.spec_text = ""
         self.alignment = None
@@ -192,6 +199,85 @@ class Session:
         return {"path": str(target), "name": target.name, "bytes": len(text.encode("utf-8")),
                 "unchanged": same and text == original, "validation": check.to_dict()}
 
+    # ------------------------------------------------------------------ CAD model
+
+    def drawing_cad(self, doc: Any = None) -> Optional[Path]:
+        """The file of the drawing's ``[part] cad`` (relative to the drawing's folder), or
+        None; :class:`OutsideError` when it leads outside the studio folder."""
+        if doc is None:
+            try:
+                doc = specdoc.parse_text(self.spec_text, self.source) if self.spec_text.strip() else None
+            except ConfigError:
+                return None
+        part = doc.get("part") if isinstance(doc, dict) else None
+        rel = part.get("cad") if isinstance(part, dict) else None
+        if not isinstance(rel, str) or not rel:
+            return None
+        base = self.spec_path.parent if self.spec_path is not None else self.root
+        full = (base / rel).resolve()
+        if full != self.root and self.root not in full.parents:
+            raise OutsideError(f"[part] cad: '{rel}' is outside the studio folder {self.root}")
+        return full
+
+    def cad_state(self) -> dict:
+        """The open CAD model (or None) and the drawing's (relative to the studio folder)."""
+        drawing, error = None, None
+        try:
+            full = self.drawing_cad()
+            drawing = None if full is None else full.relative_to(self.root).as_posix()
+        except OutsideError as exc:
+            error = str(exc)
+        with self.lock:
+            view = self.cad
+        return {"open": None if view is None else view.info(), "drawing": drawing, "drawing_error": error}
+
+    def open_cad(self, path: Optional[Path], units: Optional[str] = None, max_distance: Optional[float] = None) -> dict:
+        """Open a CAD model beside the scan: ``path`` (inside the studio folder) or, when
+        None, the drawing's ``[part] cad`` (read once, shared with the inspection)."""
+        from ..cad.context import cad_model
+
+        if max_distance is not None and not (math.isfinite(max_distance) and max_distance > 0):
+            raise ConfigError(f"max_distance must be a positive number of mm, got {max_distance}")
+        if path is None:
+            path = self.drawing_cad()
+            if path is None:
+                raise ConfigError(f"{self.source}: the drawing names no CAD model ([part] cad); choose a CAD file")
+        if units is None and path == self.drawing_cad():
+            model = cad_model(str(path))
+        else:
+            from ..cad import read_cad
+
+            model = read_cad(path, units)
+        view = CadView(model, path.relative_to(self.root).as_posix() if self.root in path.parents else path.name,
+                       max_distance, self.cad_max_triangles)
+        with self.lock:
+            self.cad = view
+        return view.info()
+
+    def close_cad(self) -> dict:
+        with self.lock:
+            self.cad = None
+        return self.cad_state()
+
+    def cad_mesh(self) -> Optional[CadView]:
+        with self.lock:
+            return self.cad
+
+    def _cad_colours(self, ctx: Any) -> Optional[dict]:
+        """The open CAD model's vertex colours from every scan point's deviation (the
+        inspection's distances when it is the drawing's model, else computed here)."""
+        with self.lock:
+            view = self.cad
+        if view is None:
+            return None
+        pts = self.scan.points
+        if ctx is not None and ctx.model is view.model and ctx.triangle is not None:
+            tri, dev = ctx.triangle, ctx.distance
+        else:
+            d = view.model.distances(pts)
+            tri, dev = d.triangle, d.distance
+        return dict(view.colours(tri, dev), info=view.info())
+
     # ------------------------------------------------------------------ regions
 
     def _aligned(self, doc: Any):
@@ -252,6 +338,9 @@ class Session:
         out = []
         for k, t in enumerate(tables):
             name = t.get("name") if isinstance(t, dict) else None
+            if isinstance(t, dict) and "faces" in t and "region" not in t:  # located by CAD faces at Run
+                out.append({"name": name, "count": None, "error": None, "faces": t["faces"]})
+                continue
             try:
                 region = t.get("region") if isinstance(t, dict) else None
                 box = box_of(dict(region, frame="scanner") if isinstance(region, dict) else region,
@@ -294,7 +383,7 @@ class Session:
         if check.spec is None:
             raise SpecError(check)
         if specdoc.kind_of(doc) == "part":
-            return self._inspect(check)
+            return self._inspect(check, doc)
         scan = self.scan
         t0 = time.perf_counter()
         result = check_gages(scan.points, check.spec, groups=groups)
@@ -311,10 +400,9 @@ class Session:
                 "validation": check.to_dict(),
                 "view_matrix": view.tolist(), "align_matrix": H.tolist(),
                 "values": _b64(values.astype("<f4")),
-                "value_range": [float(finite.min()), float(finite.max())] if len(finite) else None}
+                "value_range": [float(finite.min()), float(finite.max())] if len(finite) else None, "cad": None}
 
-
-    def _inspect(self, check: "specdoc.Validation") -> dict:
+    def _inspect(self, check: "specdoc.Validation", doc: dict) -> dict:
         """The inspection of the drawing (:func:`gagekit.inspect`) on all points, and per
         displayed point of a feature its signed deviation from the feature's least-squares
         fit (mm; NaN outside every feature)."""
@@ -322,8 +410,17 @@ class Session:
         from ..inspect import inspect
 
         scan = self.scan
-        result = inspect(scan.points, check.spec)
+        spec = check.spec
+        if spec.cad is not None:  # relative to the drawing's folder, inside the studio folder
+            spec = dataclasses.replace(spec, cad=str(self.drawing_cad(doc)))
+        result = inspect(scan.points, spec)
         check_finite_result(result)
+        ctx = next((fd._cache["cad"] for fd in result.feature_data.values() if "cad" in fd._cache), None)
+        if ctx is not None and self.cad is None:  # the drawing's model: shown once the inspection has read it
+            with self.lock:
+                self.cad = CadView(ctx.model, Path(spec.cad).relative_to(self.root).as_posix(), None,
+                                   self.cad_max_triangles)
+        cad = self._cad_colours(ctx)
         values = np.full(len(scan.lod), np.nan)
         for name, fd in result.feature_data.items():
             pos = np.searchsorted(scan.lod, fd.indices)
@@ -335,7 +432,11 @@ class Session:
         return {"kind": "part", "result": to_jsonable(result), "seconds": round(result.seconds, 3),
                 "validation": check.to_dict(), "view_matrix": np.eye(4).tolist(), "align_matrix": np.eye(4).tolist(),
                 "values": _b64(values.astype("<f4")),
-                "value_range": [float(finite.min()), float(finite.max())] if len(finite) else None}
+                "value_range": [float(finite.min()), float(finite.max())] if len(finite) else None, "cad": cad}
+
+
+class OutsideError(ConfigError):
+    """A file named by the drawing leads outside the studio folder (HTTP 403)."""
 
 
 class SpecError(GagekitError):
@@ -361,4 +462,4 @@ def _alignment_dict(alignment) -> Optional[dict]:
     return {"H": np.asarray(alignment.H).tolist(), "C": np.asarray(alignment.frame).tolist()}
 
 
-__all__ = ["Session", "Scan", "load_scan", "box_of", "SpecError", "LOD_MAX"]
+__all__ = ["Session", "Scan", "load_scan", "box_of", "SpecError", "OutsideError", "LOD_MAX"]

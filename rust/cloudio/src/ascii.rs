@@ -683,8 +683,7 @@ pub fn parse_ascii(bytes: &[u8], opts: &AsciiOptions, what: &str) -> Result<Pars
 
 /// An ASCII point file, memory-mapped (no copy of its bytes), checked, its layout read and
 /// its lines counted: [`AsciiFile::read_into`] then parses it into an array of
-/// [`AsciiFile::max_points`] points the caller allocates (numpy's own, for Python: no
-/// copy of the result either).
+/// [`AsciiFile::max_points`] points the caller allocates.
 pub struct AsciiFile {
     map: memmap2::Mmap,
     /// Offset of the data (after the byte-order mark, skipped and header lines).

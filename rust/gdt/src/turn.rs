@@ -145,6 +145,24 @@ pub fn min_max_sinusoids(a: &[f64], b: &[f64], phi: &[f64]) -> (f64, f64) {
     (vals[k], cand[k])
 }
 
+/// The largest and smallest of g_i(psi) = k_i + c_i cos psi + s_i sin psi over the rows
+/// `[k_i, c_i, s_i]` of `coef`, each with its (first) index: the extremes of a linear
+/// function whose direction turns about an axis.
+pub(crate) fn extremes(coef: &[[f64; 3]], psi: f64) -> ((f64, usize), (f64, usize)) {
+    let (c, s) = (psi.cos(), psi.sin());
+    let (mut hi, mut lo) = ((f64::NEG_INFINITY, 0usize), (f64::INFINITY, 0usize));
+    for (i, g) in coef.iter().enumerate() {
+        let h = g[0] + c * g[1] + s * g[2];
+        if h > hi.0 {
+            hi = (h, i);
+        }
+        if h < lo.0 {
+            lo = (h, i);
+        }
+    }
+    (hi, lo)
+}
+
 // -- small exact pieces -------------------------------------------------------------------
 
 /// Minimum enclosing circle of 2-D points (Welzl, exact): (radius recomputed as the
@@ -392,17 +410,7 @@ pub fn plane_location(pts: &[f64], frame: &Frame, p0: V3, n0: V3) -> Result<(f64
         }
     });
     let eval = |psi: f64| -> (f64, usize, usize) {
-        let (c, s) = (psi.cos(), psi.sin());
-        let (mut hi, mut lo) = ((f64::NEG_INFINITY, 0usize), (f64::INFINITY, 0usize));
-        for (i, g) in coef.iter().enumerate() {
-            let h = g[0] + c * g[1] + s * g[2];
-            if h > hi.0 {
-                hi = (h, i);
-            }
-            if h < lo.0 {
-                lo = (h, i);
-            }
-        }
+        let (hi, lo) = extremes(&coef, psi);
         if floating {
             (hi.0 - lo.0, hi.1, lo.1)
         } else if hi.0 >= -lo.0 {

@@ -94,18 +94,7 @@ pub fn on_cone(pts: &[f64], axis: V3, angle: f64) -> Result<Slab> {
         })
         .collect();
     let eval = |f: f64| -> (f64, usize, usize) {
-        let (cf, sf) = (f.cos(), f.sin());
-        let mut hi = (f64::NEG_INFINITY, 0usize);
-        let mut lo = (f64::INFINITY, 0usize);
-        for (k, g) in coef.iter().enumerate() {
-            let val = g[0] + cf * g[1] + sf * g[2];
-            if val > hi.0 {
-                hi = (val, k);
-            }
-            if val < lo.0 {
-                lo = (val, k);
-            }
-        }
+        let (hi, lo) = crate::turn::extremes(&coef, f);
         (hi.0 - lo.0, hi.1, lo.1)
     };
     let step = std::f64::consts::TAU / CONE_GRID as f64;

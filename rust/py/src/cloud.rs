@@ -2,7 +2,7 @@
 
 use crate::arrays::{indices, matrix, rows};
 use crate::errors::{invalid, run};
-use gagekit_cloudio::{cut_chunk, data_columns, scale_in_place, AsciiFile, Keep, PlyAsciiStream, read_e57, write_ascii, AsciiOptions, AsciiStream, PlyFile, PlyStream};
+use gagekit_cloudio::{cut_chunk, data_columns, read_ascii_file, scale_in_place, Keep, PlyAsciiStream, read_e57, write_ascii, AsciiOptions, AsciiStream, PlyFile, PlyStream};
 use gagekit_core::GkError;
 use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray2, PyReadwriteArray2};
 use pyo3::prelude::*;
@@ -20,7 +20,9 @@ pub struct AsciiCloud {
 }
 
 /// Read an ASCII point file: mapped, lines counted, then parsed in parallel straight
-/// into numpy's allocation (no copy of the file's bytes nor of the result).
+/// into one Rust allocation that numpy then owns (no copy of the file's bytes nor of the
+/// result). Not numpy's allocator: it asks for transparent huge pages, whose compaction
+/// on a busy machine cost more system time than the whole parse (measured).
 #[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyfunction(module = "gagekit._core.cloud"))]
 #[pyfunction]
 #[pyo3(name = "read_ascii")]
@@ -31,20 +33,10 @@ fn cloud_read_ascii<'py>(
     dim: usize,
     skip_lines: usize,
 ) -> PyResult<AsciiCloud> {
-    let file = run(py, || AsciiFile::open(std::path::Path::new(&path), &AsciiOptions { dim, skip_lines }, &path))?;
-    let max = file.max_points();
-    // SAFETY: uninitialised until `read_into` has written its first `n` rows; only those
-    // are handed to Python, and on an error the array is dropped unseen.
-    let arr = unsafe { PyArray2::<f64>::new(py, [max, dim], false) };
-    let n = {
-        // SAFETY: the array was just created, is C-contiguous and nothing else refers to it.
-        let out = unsafe { arr.as_slice_mut() }.map_err(|e| invalid(e.to_string()))?;
-        run(py, || file.read_into(out))?
-    };
-    // blank or comment lines among the data: the points are the first n rows
-    let points = if n == max { arr.into_any() } else { arr.call_method1("__getitem__", (pyo3::types::PySlice::new(py, 0, n as isize, 1),))?.call_method0("copy")? };
-    let lay = file.layout();
-    Ok(AsciiCloud { points: points.unbind(), header_lines: lay.header_lines, columns: lay.columns.clone() })
+    let parsed = run(py, || read_ascii_file(std::path::Path::new(&path), &AsciiOptions { dim, skip_lines }, &path))?;
+    let n = parsed.coords.len() / dim;
+    let arr = PyArray1::from_vec(py, parsed.coords).reshape([n, dim])?;
+    Ok(AsciiCloud { points: arr.into_any().unbind(), header_lines: parsed.header_lines, columns: parsed.columns })
 }
 
 /// Number of values on the first data line of a text file's beginning `head` (its first

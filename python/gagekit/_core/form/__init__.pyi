@@ -219,6 +219,12 @@ class CylinderResult:
     def max_distance(self) -> builtins.float: ...
     @property
     def outside(self) -> typing.Optional[OutsideResult]: ...
+    @property
+    def warm_fallback(self) -> typing.Optional[builtins.bool]:
+        r"""
+        With a warm start: `True` when the local method could not decide and the global
+        search ran; `None` without a warm start.
+        """
 
 @typing.final
 class FlatnessResult:
@@ -563,16 +569,19 @@ def criterion(name: builtins.str, allowed: typing.Sequence[builtins.str] = ..., 
     ConfigError listing the names `allowed` (all when empty) for `shape`.
     """
 
-def cylinder_fit(points: numpy.typing.NDArray[numpy.float64], criterion: builtins.str, seed: builtins.int = ..., particles: builtins.int = ..., max_iterations: builtins.int = ..., stall_iterations: builtins.int = ..., axis: typing.Optional[typing.Sequence[builtins.float]] = None, max_tilt: builtins.float = ..., refine_starts: builtins.int = ..., hop_rounds: builtins.int = ...) -> CylinderResult:
+def cylinder_fit(points: numpy.typing.NDArray[numpy.float64], criterion: builtins.str, seed: builtins.int = ..., particles: builtins.int = ..., max_iterations: builtins.int = ..., stall_iterations: builtins.int = ..., axis: typing.Optional[typing.Sequence[builtins.float]] = None, max_tilt: builtins.float = ..., refine_starts: builtins.int = ..., hop_rounds: builtins.int = ..., warm: typing.Optional[tuple[typing.Sequence[builtins.float], typing.Sequence[builtins.float]]] = None) -> CylinderResult:
     r"""
     Minimax cylinder by the projection model + PSO (Sec. 6.3). `criterion`: any name of
     the criterion table but least squares; the axis is searched within `max_tilt` (rad,
-    [0, pi/2]) of `axis` (default: the least-squares axis).
+    [0, pi/2]) of `axis` (default: the least-squares axis). `warm`: (point, direction) of a
+    nearby fit's axis to start the exact local method from
+    ([`gagekit_form::cylinder::fit_near`]; the global search when it cannot decide).
     """
 
-def cylinder_lsq(points: numpy.typing.NDArray[numpy.float64], start_axis: typing.Optional[typing.Sequence[builtins.float]] = None) -> LeastSquaresCylinderResult:
+def cylinder_lsq(points: numpy.typing.NDArray[numpy.float64], start_axis: typing.Optional[typing.Sequence[builtins.float]] = None, warm: typing.Optional[typing.Sequence[builtins.float]] = None) -> LeastSquaresCylinderResult:
     r"""
-    Least-squares cylinder of (n, 3) points (from the principal axes and `start_axis`).
+    Least-squares cylinder of (n, 3) points (from the principal axes and `start_axis`;
+    `warm`: from the axis `warm` of a nearby fit alone).
     """
 
 def flatness(points: numpy.typing.NDArray[numpy.float64], reference: builtins.str = ..., up: typing.Optional[tuple[builtins.float, builtins.float, builtins.float]] = None) -> FlatnessResult:

@@ -40,3 +40,13 @@ export function bytes(b64) {
 export function floats(b64) { return new Float32Array(bytes(b64).buffer); }
 
 export function uint32s(b64) { return new Uint32Array(bytes(b64).buffer); }
+
+// the CAD model's shown mesh: {xyz: Float32Array (minus origin), tris: Uint32Array, origin, key}
+export async function cadMesh() {
+  const res = await fetch("/api/cad/mesh", { credentials: "same-origin" });
+  if (!res.ok) { let body = null; try { body = await res.json(); } catch (e) { body = null; } throw new ApiError(res.status, body); }
+  const nv = Number(res.headers.get("X-Vertex-Count")), nt = Number(res.headers.get("X-Triangle-Count"));
+  const buf = await res.arrayBuffer();
+  return { xyz: new Float32Array(buf, 0, 3 * nv), tris: new Uint32Array(buf, 12 * nv, 3 * nt),
+    origin: res.headers.get("X-Origin").split(",").map(Number), key: Number(res.headers.get("X-Cad-Key")) };
+}

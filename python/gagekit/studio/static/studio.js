@@ -10,7 +10,7 @@ const NORMALS = { "+x": [1, 0, 0], "-x": [-1, 0, 0], "+y": [0, 1, 0], "-y": [0, 
 const $ = (id) => document.getElementById(id);
 
 const studio = window.__studio = { ready: false, errors: [], firstRenderMs: null, selectMs: [] };
-const state = { scan: null, spec: null, doc: null, kind: "gage", selected: null, counts: [], align: null, run: null, applyT: false, inspection: null };
+const state = { scan: null, spec: null, doc: null, kind: "gage", selected: null, counts: [], align: null, run: null, applyT: false, inspection: null, cadKey: null };
 let view;
 
 // ------------------------------------------------------------------ helpers
@@ -23,13 +23,18 @@ const features = () => (state.doc.feature = state.doc.feature || []);
 const tolerances = () => (state.doc.tolerance = state.doc.tolerance || []);
 // the boxes: a gage file's [[region]] tables, or a drawing's feature regions (inline
 // tables of [[feature]], in the scan's frame) carrying their feature's name unseen by JSON
+const FACE_BOXES = new WeakMap();
 function regions() {
   if (!isPart()) return (state.doc.region = state.doc.region || []);
   return features().map((f) => {
-    if (!f.region || typeof f.region !== "object" || Array.isArray(f.region)) f.region = { center: [0, 0, 0], size: [1, 1, 1] };
-    Object.defineProperty(f.region, "name", { value: f.name, enumerable: false, configurable: true, writable: true });
-    Object.defineProperty(f.region, "frame", { value: "scanner", enumerable: false, configurable: true, writable: true });
-    return f.region;
+    // a feature located by CAD faces has no box: a detached empty one keeps the indices in step
+    const byFaces = Array.isArray(f.faces) && !f.region;
+    if (byFaces && !FACE_BOXES.has(f)) FACE_BOXES.set(f, { center: [0, 0, 0], size: [0, 0, 0] });
+    if (!byFaces && (!f.region || typeof f.region !== "object" || Array.isArray(f.region))) f.region = { center: [0, 0, 0], size: [1, 1, 1] };
+    const box = byFaces ? FACE_BOXES.get(f) : f.region;
+    Object.defineProperty(box, "name", { value: f.name, enumerable: false, configurable: true, writable: true });
+    Object.defineProperty(box, "frame", { value: "scanner", enumerable: false, configurable: true, writable: true });
+    return box;
   });
 }
 const gages = () => (state.doc.gage = state.doc.gage || []);
@@ -526,7 +531,7 @@ async function run() {
     const res = await api.post("/api/run", { doc: state.doc });
     state.run = res;
     const r = res.result;
-    if (res.kind === "part") { showInspection(res); studio.lastRunMs = performance.now() - t0; return; }
+    if (res.kind === "part") { showInspection(res); await showInspectionCad(res); studio.lastRunMs = performance.now() - t0; return; }
     $("run-status").textContent = `${r.status} (${res.seconds} s on ${state.scan.count.toLocaleString()} points)`;
     const tb = $("results").tBodies[0];
     tb.textContent = "";
@@ -582,6 +587,83 @@ function showInspection(res) {
   showValidation(res.validation);
   $("legend-caption").textContent = "deviation from the feature's least-squares fit (mm)";
   showColours(res);
+}
+
+async function showInspectionCad(res) {
+  if (!res.cad) return;
+  if (res.cad.key !== state.cadKey) await drawCad(res.cad.info);
+  showCadColours(res.cad);
+}
+
+// ------------------------------------------------------------------ the CAD model beside the scan
+
+function cadError(message) {
+  const el = document.querySelector('.errors[data-table="cad"]');
+  el.textContent = message || "";
+}
+
+async function drawCad(info) {
+  const mesh = await api.cadMesh();
+  view.setCad(mesh.xyz, mesh.tris, mesh.origin);
+  view.showCad($("cad-show").checked);
+  state.cadKey = mesh.key;
+  studio.cad = { key: mesh.key, vertices: mesh.xyz.length / 3, triangles: mesh.tris.length / 3, coloured: false };
+  $("cad-legend").hidden = true;
+  if (info) {
+    $("cad-info").textContent = `${info.name}: ${info.faces} faces, ${info.triangles.toLocaleString()} triangles` +
+      (info.decimated ? ` (${info.shown_triangles.toLocaleString()} shown, decimated above ${info.max_triangles.toLocaleString()})` : "") +
+      (info.signed ? "" : "; open mesh: unsigned distances") + "; coloured after Run";
+    const opt = [...$("cad-file").options].find((o) => o.value === info.name);
+    if (!opt) $("cad-file").add(new Option(info.name, info.name));
+    $("cad-file").value = info.name;
+  }
+}
+
+async function openCad(path) {
+  cadError("");
+  $("cad-info").textContent = "reading the CAD model…";
+  try {
+    const info = await api.post("/api/cad", path ? { path } : {});
+    await drawCad(info);
+  } catch (e) {
+    $("cad-info").textContent = "";
+    cadError(e.message);
+    studio.cadError = e.message;
+  }
+}
+
+function showCadColours(cad) {
+  view.colourCad(api.bytes(cad.colours));
+  const bar = document.querySelector("#cad-legend .bar");
+  bar.style.background = `linear-gradient(to right, ${cad.stops.join(", ")})`;
+  $("cad-legend-min").textContent = fmt(-cad.limit, 3);
+  $("cad-legend-max").textContent = fmt(cad.limit, 3);
+  $("cad-legend").hidden = !$("cad-show").checked;
+  studio.cad.coloured = true;
+  studio.cad.limit = cad.limit;
+}
+
+async function startCad(st) {
+  const files = await api.get("/api/files");
+  (files.cads || []).forEach((f) => $("cad-file").add(new Option(f, f)));
+  $("cad-file").addEventListener("change", async () => {
+    const v = $("cad-file").value;
+    if (!v) {
+      await api.post("/api/cad", { close: true });
+      view.clearCad(); state.cadKey = null; studio.cad = null;
+      $("cad-info").textContent = ""; $("cad-legend").hidden = true; cadError("");
+      return;
+    }
+    await openCad(v);
+  });
+  $("cad-show").addEventListener("change", () => {
+    view.showCad($("cad-show").checked);
+    $("cad-legend").hidden = !$("cad-show").checked || !(studio.cad && studio.cad.coloured);
+  });
+  const cad = st.cad || {};
+  if (cad.drawing_error) cadError(cad.drawing_error);
+  if (cad.open) await drawCad(cad.open);
+  else if (cad.drawing) await openCad(null);
 }
 
 function setApplyT(on) {
@@ -661,6 +743,11 @@ async function start() {
   await refreshRegions();
   view.viewAlong("iso");
   studio.ready = true;
+  if (isPart()) { // the CAD model may take seconds to read (a STEP model's tessellation): after the scan
+    studio.cadStarted = true;
+    await startCad(st);
+    studio.cadSettled = true;
+  }
 }
 
 // for tests and benchmarks: move box i to a centre and wait for its recount

@@ -23,6 +23,13 @@ export class View {
     this.partGroup = new THREE.Group();
     this.scene.add(this.scanGroup, this.partGroup);
     this.scene.add(new THREE.AmbientLight(0xffffff, 1));
+    // the CAD model (in part mode the scan's frame is the CAD's): lit from the camera
+    this.cadGroup = new THREE.Group();
+    this.scanGroup.add(this.cadGroup);
+    this.cadLight = new THREE.DirectionalLight(0xffffff, 0.55);
+    this.camera.add(this.cadLight);
+    this.scene.add(this.camera);
+    this.cad = null;
     this.orbit = new OrbitControls(this.camera, this.renderer.domElement);
     this.orbit.screenSpacePanning = true;
     this.orbit.addEventListener("change", () => this.requestRender());
@@ -145,6 +152,53 @@ export class View {
     this.valueColours = c;
     this.highlight(null);
   }
+
+  // ------------------------------------------------------------------ CAD model
+
+  // xyz: Float32Array of vertices minus origin, tris: Uint32Array of corners (mm, CAD frame)
+  setCad(xyz, tris, origin) {
+    this.clearCad();
+    const geom = new THREE.BufferGeometry();
+    geom.setAttribute("position", new THREE.BufferAttribute(xyz, 3));
+    geom.setIndex(new THREE.BufferAttribute(tris, 1));
+    const n = xyz.length / 3, grey = new Uint8Array(3 * n).fill(185);
+    geom.setAttribute("color", new THREE.BufferAttribute(grey, 3, true));
+    geom.computeVertexNormals();
+    geom.computeBoundingSphere();
+    // behind the points lying on it (polygon offset), both sides lit, ambient + camera light
+    const mat = new THREE.MeshPhongMaterial({ vertexColors: THREE.VertexColors, color: 0xa0a0a0, side: THREE.DoubleSide, shininess: 10,
+      polygonOffset: true, polygonOffsetFactor: 1, polygonOffsetUnits: 1, transparent: true, opacity: 0.9 });
+    this.cad = new THREE.Mesh(geom, mat);
+    this.cad.position.set(origin[0], origin[1], origin[2]);
+    this.cad.name = "cad";
+    this.cadGroup.add(this.cad);
+    if (!this.points) { // no scan drawn yet: frame the model
+      const b = new THREE.Box3().setFromObject(this.cad);
+      this.bbox = { min: b.min.toArray(), max: b.max.toArray() };
+      this.diagonal = Math.max(b.max.clone().sub(b.min).length(), 1e-6);
+    }
+    this.requestRender();
+  }
+
+  clearCad() {
+    if (!this.cad) return;
+    this.cadGroup.remove(this.cad);
+    this.cad.geometry.dispose();
+    this.cad.material.dispose();
+    this.cad = null;
+    this.requestRender();
+  }
+
+  // rgb: Uint8Array, 3 per vertex (null: plain grey)
+  colourCad(rgb) {
+    if (!this.cad) return;
+    const attr = this.cad.geometry.getAttribute("color");
+    if (rgb && rgb.length === attr.array.length) attr.array.set(rgb); else attr.array.fill(185);
+    attr.needsUpdate = true;
+    this.requestRender();
+  }
+
+  showCad(on) { this.cadGroup.visible = on; this.requestRender(); }
 
   setFrame(matrix) { // 4x4 row-major, scanner -> view (H, or T* H)
     const m = new THREE.Matrix4();
