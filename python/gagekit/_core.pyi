@@ -391,7 +391,8 @@ class LeastSquaresCylinderResult:
     form_error: float
     arc: float
 
-def form_cylinder_lsq(points: _F64, start_axis: Optional[Sequence[float]] = None) -> LeastSquaresCylinderResult: ...
+def form_cylinder_lsq(points: _F64, start_axis: Optional[Sequence[float]] = None,
+                      warm: Optional[Sequence[float]] = None) -> LeastSquaresCylinderResult: ...
 
 class MinZoneFlatResult:
     """A minimum-zone plane (flatness) or 2-D line (straightness) with its certificate."""
@@ -434,11 +435,13 @@ class CylinderResult:
     arc: float
     ill_posed: bool
     lsq_axis: Optional[tuple[tuple[float, float, float], tuple[float, float, float]]]
+    warm_fallback: Optional[bool]
 
 def form_cylinder_fit(
     points: _F64, criterion: str, seed: int = 0, particles: int = 20, max_iterations: int = 300,
     stall_iterations: int = 6, axis: Optional[Sequence[float]] = None, max_tilt: float = ...,
     refine_starts: int = 8, hop_rounds: int = 3,
+    warm: Optional[tuple[Sequence[float], Sequence[float]]] = None,
 ) -> CylinderResult: ...
 
 class Line3Result:

@@ -122,3 +122,39 @@ def test_inspect_batch_on_dask_and_postgresql(brackets, dask_cluster, postgres_u
     assert without_seconds(next(d for d in got if d["scan"] == str(scans[1]))["result"]) == without_seconds(single)
     rows = [r for r in callouts(postgres_url) if r["feature"] == "bore" and r["characteristic"] == "position"]
     assert len(rows) == 2 and {r["datums"] for r in rows} == {"A|B|C"}
+
+
+def test_inspect_batch_with_uncertainty_stores_u_and_decisions_for_stats(brackets, tmp_path):
+    """`inspect batch --uncertainty`: each scan's result is `inspect --uncertainty --json`'s
+    (same seed, same numbers on any thread count), every callout row stores u, U, the
+    decision and the rule, and `stats` takes the measurement's u from the stored results
+    (sqrt(mean u^2)) when --measurement-uncertainty is not given."""
+    part, scans = brackets
+    url = f"sqlite:///{tmp_path / 'u.db'}"
+    opts = ["--uncertainty", "10", "--noise", "0.001", "--seed", "3"]
+    got, summary = lines(gk("inspect", "batch", part, *scans[:2], "--db", url, "--json", "-w", "2", *opts))
+    assert summary == {"scans": 2, "ok": 2, "failed": 0, "skipped": 0}
+    single = json.loads(gk("inspect", scans[1], part, "--json", *opts, "--threads", "2").stdout)
+    by = {os.path.basename(d["scan"]): d["result"] for d in got}
+    batch = by[scans[1].name]
+    for a, b in zip(batch["tolerances"], single["tolerances"]):
+        assert a["uncertainty"] == b["uncertainty"] and a["decision"] == b["decision"]
+    assert batch["monte_carlo"]["trials"] == 10 and batch["decision_rule"]["name"] == "iso14253"
+    engine = create_engine(url)
+    t = m.InspectionResult.__table__
+    with engine.connect() as conn:
+        rows = [dict(r._mapping) for r in conn.execute(sa.select(t.c.tolerance, t.c.value, t.c.u, t.c.expanded_u,
+                                                                 t.c.decision, t.c.decision_rule))]
+    engine.dispose()
+    assert len(rows) == 2 * len(single["tolerances"])
+    assert all(r["u"] is not None and r["expanded_u"] >= 0 and r["decision_rule"] == "iso14253" for r in rows)
+    assert {r["decision"] for r in rows} <= {"conforming", "not-proven", "nonconforming"}
+    stats = json.loads(gk("stats", "--db", url, "--spec", part, "--json").stdout)
+    (spec,) = stats["specs"]
+    flat = next(c for c in spec["characteristics"] if c["name"] == "tolerance: flatness of A")
+    us = [r["u"] for r in rows if r["tolerance"] == "flatness of A"]
+    assert flat["measurement"]["u"] == pytest.approx(float(np.sqrt(np.mean(np.square(us)))), rel=1e-12)
+    assert flat["measurement"]["source"].startswith("stored results")
+    # a decision rule without --uncertainty is refused before the batch starts
+    proc = gk("inspect", "batch", part, *scans[:1], "--db", f"sqlite:///{tmp_path / 'x.db'}", "--decision-rule", "simple")
+    assert proc.returncode == 2 and "needs --uncertainty" in proc.stderr

@@ -61,6 +61,7 @@ RECIPES: dict[str, list] = {
     "demo": ["--quick", "--out", "T/demo"],
     "compare": [data_path("bracket.ply"), data_path("bracket.step"), "--align", "none", "--deviations", "T/dev.npy"],
     "qif import": [data_path("nist_ctc_01_asme1_ap242.qif.gz"), "--out", "T/ctc01.toml"],
+    "schema": ["part", "--out", "T/part.schema.json"],
     "studio": None,  # a web server that runs until stopped: tests/studio runs it
 }
 

@@ -182,3 +182,34 @@ def test_gage_check_results_validate(tmp_path, qif_schema):
     T = np.array(res["transform"]["matrix"])
     z = [float(v) for v in tree.findtext(".//q:Transform/q:Rotation/q:ZDirection", namespaces=NS).split()]
     assert z == T[:3, 2].tolist()
+
+
+def test_results_with_their_uncertainty_validate(tmp_path, qif_schema):
+    """`--uncertainty` results: each actual's Value carries combinedUncertainty (u) and
+    meanError (|bias|), QIF's MeasuredDecimalType; U, k, the coverage interval and the
+    decision rule are its Attributes; Status follows the ISO 14253-1 decision (not-proven:
+    INDETERMINATE). The document still validates against the QIF 3.0 XSDs."""
+    out = tmp_path / "bracket-u.qif"
+    proc = _gagekit("inspect", data_path("bracket.ply"), data_path("bracket.toml"), "--json", "--qif-results", out,
+                    "--uncertainty", "10", "--noise", "0.001")
+    res = json.loads(proc.stdout)
+    tree = assert_valid(qif_schema, out)
+    ms = _measurements(tree)
+    assert len(ms) == len(res["tolerances"]) == 20
+    status = {"conforming": "PASS", "nonconforming": "FAIL", "not-proven": "INDETERMINATE"}
+    for m, t in zip(ms, res["tolerances"]):
+        v = m.find("q:Value", namespaces=NS)
+        assert float(v.text) == t["measured"]
+        assert float(v.get("combinedUncertainty")) == t["uncertainty"]["u"]
+        assert float(v.get("meanError")) == abs(t["uncertainty"]["bias"])
+        attrs = {a.get("name"): a.get("value") for a in m.findall("q:Attributes/*", namespaces=NS)}
+        assert float(attrs["U"]) == t["uncertainty"]["U"] and attrs["decision_rule"] == "iso14253"
+        assert m.findtext("q:Status/q:CharacteristicStatusEnum", namespaces=NS) == status[t["decision"]]
+    gout = tmp_path / "gage-u.qif"
+    proc = _gagekit("gage", "check", data_path("casting_ok.ply"), data_path("casting_ok.toml"), "--no-groups", "--json",
+                    "--qif-results", gout, "--uncertainty", "10", "--noise", "0.01")
+    res = json.loads(proc.stdout)
+    tree = assert_valid(qif_schema, gout)
+    for m, g in zip(_measurements(tree), res["gages"]):
+        assert float(m.find("q:Value", namespaces=NS).get("combinedUncertainty")) == g["uncertainty"]["u"]
+        assert m.findtext("q:Status/q:CharacteristicStatusEnum", namespaces=NS) == status[g["decision"]]

@@ -179,7 +179,8 @@ def test_a_database_of_the_first_schema_is_upgraded_with_its_results(db_url):
     with store.engine.connect() as conn:
         got = [dict(r._mapping) for r in conn.execute(
             sa.select(t.c.result_id, t.c.tolerance, t.c.characteristic, t.c.value, t.c.lower, t.c.upper, t.c.conforming,
-                      t.c.feature, t.c.datums, t.c.zone, t.c.n_points).order_by(t.c.result_id, t.c.id))]
+                      t.c.feature, t.c.datums, t.c.zone, t.c.n_points, t.c.u, t.c.expanded_u, t.c.decision,
+                      t.c.decision_rule).order_by(t.c.result_id, t.c.id))]
     # the upgraded rows are exactly the rows this gagekit writes for the same results
     assert got == [{"result_id": k, **row} for k in (1, 2) for row in inspection_rows(inspection_json(k))]
     assert [r["tolerance"] for r in got[:4]] == ["flatness of A", "perpendicularity of C |A|",

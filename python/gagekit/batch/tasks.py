@@ -110,6 +110,18 @@ def _stream(path: str, units: Optional[str]):
     return open_cloud(path, units, memory=budget) if should_stream(path, budget) else None
 
 
+def _monte_carlo(options: Mapping[str, Any]) -> Optional[dict]:
+    """The keyword arguments of the uncertainty functions from a batch's ``uncertainty``
+    option ({trials, model (the MeasurementModel's fields), seed, threads, rule}), or None."""
+    unc = options.get("uncertainty")
+    if unc is None:
+        return None
+    from ..uncertainty.model import MeasurementModel
+
+    return {"model": MeasurementModel(**unc["model"]), "trials": unc["trials"], "seed": int(unc["seed"]),
+            "threads": int(unc["threads"]), "rule": unc["rule"]}
+
+
 def _gage(path: str, document: Mapping[str, Any], options: Mapping[str, Any]) -> dict:
     from .._util import to_jsonable
     from ..gage import GageSpec, check_gages
@@ -120,6 +132,14 @@ def _gage(path: str, document: Mapping[str, Any], options: Mapping[str, Any]) ->
         spec = GageSpec.from_dict(document["spec"], options.get("source") or "gage spec")
     groups = options.get("groups", True)
     stream = _stream(path, options.get("units"))
+    mc = _monte_carlo(options)
+    if mc is not None:
+        from ..gage.uncertainty import check_gages_uncertainty
+
+        scan = stream if stream is not None else _read(path, options.get("units"))
+        return to_jsonable(check_gages_uncertainty(scan, spec, mc["model"], mc["trials"], seed=mc["seed"],
+                                                   threads=mc["threads"], rule=mc["rule"], groups=groups,
+                                                   stream=stream is not None))
     if stream is not None:
         return to_jsonable(check_gages_stream(stream, spec, groups=groups))
     pts = _read(path, options.get("units"))
@@ -143,7 +163,15 @@ def _inspect(path: str, document: Mapping[str, Any], options: Mapping[str, Any])
 
     spec = part_spec_from_dict(document["part"], options.get("source") or "part spec")
     stream = _stream(path, options.get("units")) if getattr(spec, "cad", None) is None else None
-    result = inspect_stream(stream, spec) if stream is not None else inspect(_read(path, options.get("units")), spec)
+    mc = _monte_carlo(options)
+    if mc is not None:
+        from ..uncertainty import inspect_uncertainty
+
+        scan = stream if stream is not None else _read(path, options.get("units"))
+        result = inspect_uncertainty(scan, spec, mc["model"], mc["trials"], seed=mc["seed"], threads=mc["threads"],
+                                     rule=mc["rule"], stream=stream is not None)
+    else:
+        result = inspect_stream(stream, spec) if stream is not None else inspect(_read(path, options.get("units")), spec)
     check_finite_result(result)
     return to_jsonable(result)
 

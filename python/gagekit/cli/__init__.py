@@ -23,6 +23,7 @@ from . import form_params  # gagekit form roundness / straightness / flatness
 from ._common import warn
 from . import inspect as inspect_cmd
 from . import grr as grr_cmd  # gagekit stats grr
+from . import schema as schema_cmd  # gagekit schema KIND
 
 app = typer.Typer(
     name="gagekit",
@@ -55,6 +56,7 @@ inspect_cmd.app.command("batch")(batch.inspect_batch)
 app.add_typer(inspect_cmd.app, name="inspect")
 app.command("studio")(studio.studio)
 app.command("compare")(compare.compare)
+app.command("schema")(schema_cmd.schema)
 
 
 def _plain_help(t: typer.Typer) -> None:

@@ -62,3 +62,24 @@ def rule_of(text: Optional[str], with_uncertainty: bool) -> Any:
     from ..uncertainty import parse_decision_rule
 
     return parse_decision_rule(text, with_uncertainty)
+
+
+def batch_options(uncertainty: Optional[str], noise: Optional[str], measurement: Optional[Path],
+                  decision_rule: Optional[str], seed: int, threads: Optional[int]) -> dict:
+    """The ``uncertainty`` option of a batch job (checked now: a bad model stops the batch
+    before it starts), or {} without --uncertainty. JSON-able, so that it joins the spec
+    hash (other settings: another result). Each worker runs its trials on ``threads``
+    threads (default 1: the workers are the parallelism)."""
+    from dataclasses import asdict
+
+    mc = uncertainty_settings(uncertainty, noise, measurement)
+    if mc is None:
+        if decision_rule is not None:
+            from ..errors import ConfigError
+
+            raise ConfigError("--decision-rule in a batch needs --uncertainty N|auto (the rule decides with U)")
+        return {}
+    trials, model = mc
+    rule = rule_of(decision_rule, True)
+    return {"uncertainty": {"trials": trials, "model": asdict(model), "seed": int(seed), "threads": int(threads or 1),
+                            "rule": decision_rule if decision_rule is not None else rule.label}}

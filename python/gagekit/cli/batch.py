@@ -23,7 +23,13 @@ from typing import Callable, List, Optional
 import typer
 
 from ._common import UNITS_OPTION, seed_option, warn
+from ._uncertainty import MEASUREMENT_OPTION, NOISE_OPTION, RULE_OPTION, UNCERTAINTY_OPTION, batch_options
 from .qif import INSTRUMENT_OPTION, QIF_RESULTS_OPTION, check_output, write_results
+
+BATCH_THREADS_OPTION = typer.Option(
+    None, "--threads", min=1, max=1024,
+    help="Threads for each scan's Monte Carlo trials (default 1: the workers run in parallel); the result does not "
+         "depend on it.")
 
 SCANS_ARG = typer.Argument(..., help="Scan files, folders (searched for scan files) or glob patterns ('scans/*.ply').")
 WORKERS_OPTION = typer.Option(None, "--workers", "-w", help="Local worker processes (default: one per core).")
@@ -134,8 +140,15 @@ def gage_batch(
     no_groups: bool = typer.Option(False, "--no-groups", help="Skip the infeasible-group LPs of Eq. 5.10."),
     retry_failed: bool = RETRY_OPTION,
     part: Optional[str] = PART_OPTION,
+    uncertainty: Optional[str] = UNCERTAINTY_OPTION,
+    noise: Optional[str] = NOISE_OPTION,
+    measurement: Optional[Path] = MEASUREMENT_OPTION,
+    decision_rule: Optional[str] = RULE_OPTION,
+    seed: int = seed_option(help="Seed of the Monte Carlo trials (--uncertainty)"),
+    threads: Optional[int] = BATCH_THREADS_OPTION,
 ) -> None:
-    """Virtual-gage check (Eq. 5.11) of many scans: each result as `gage check --json` prints it."""
+    """Virtual-gage check (Eq. 5.11) of many scans: each result as `gage check --json` prints it
+    (with --uncertainty: each allowance's U and ISO 14253-1 decision, per scan, in the database)."""
     from .._util import load_toml
     from ..batch import Job
     from ..gage import GageSpec
@@ -146,7 +159,8 @@ def gage_batch(
         GageSpec.from_dict(doc, str(gages))  # a bad gage file stops the batch before it starts
     for w in caught:
         warn(w.message)
-    options = {"groups": not no_groups, **_units(units)}
+    options = {"groups": not no_groups, **_units(units),
+               **batch_options(uncertainty, noise, measurement, decision_rule, seed, threads)}
     job = Job("gage", {"spec": doc}, options, source=str(gages), part=part or gages.stem)
     run(job, scans, db, report, workers, scheduler, as_json, retry_failed, f"Virtual-gage batch: {gages.name}")
 
@@ -189,8 +203,15 @@ def inspect_batch(
     part_name: Optional[str] = PART_OPTION,
     qif_results: Optional[Path] = QIF_RESULTS_OPTION,
     instrument: str = INSTRUMENT_OPTION,
+    uncertainty: Optional[str] = UNCERTAINTY_OPTION,
+    noise: Optional[str] = NOISE_OPTION,
+    measurement: Optional[Path] = MEASUREMENT_OPTION,
+    decision_rule: Optional[str] = RULE_OPTION,
+    seed: int = seed_option(help="Seed of the Monte Carlo trials (--uncertainty)"),
+    threads: Optional[int] = BATCH_THREADS_OPTION,
 ) -> None:
-    """GD&T inspection (ISO 1101 / ISO 5459) of many scans: each result as `gagekit inspect --json` prints it."""
+    """GD&T inspection (ISO 1101 / ISO 5459) of many scans: each result as `gagekit inspect --json` prints it
+    (with --uncertainty: each callout's U and ISO 14253-1 decision, per scan, in the database)."""
     from .._util import load_toml
     from ..batch import Job
     from ..inspect import part_spec_from_dict
@@ -198,7 +219,8 @@ def inspect_batch(
     check_output(qif_results)
     doc = load_toml(part)
     spec = part_spec_from_dict(doc, str(part))  # a bad drawing stops the batch before it starts
-    job = Job("inspect", {"part": doc}, _units(units), source=str(part), part=part_name or spec.name)
+    options = {**_units(units), **batch_options(uncertainty, noise, measurement, decision_rule, seed, threads)}
+    job = Job("inspect", {"part": doc}, options, source=str(part), part=part_name or spec.name)
 
     def qif(lines: list) -> None:  # one MeasurementResults per inspected scan, in the order of the scans
         runs = sorted(({"scan": x["scan"], "result": x["result"]} for x in lines if x.get("result") is not None),

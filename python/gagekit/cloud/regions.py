@@ -84,7 +84,11 @@ def regions_from_tables(tables: Sequence[dict], source: str = "regions") -> list
 
 
 def load_regions(path) -> list[Box]:
-    """Read the ``[[region]]`` tables of a TOML file (a gage file or a regions file)."""
+    """Read the ``[[region]]`` tables of a TOML file (a gage file or a regions file), validated
+    against the regions schema (:mod:`gagekit.schema.gages`, ``gagekit schema regions``)."""
     from .._util import load_toml
+    from ..schema import validate_document
 
-    return regions_from_tables(load_toml(path, "regions").get("region", []), str(path))
+    doc = load_toml(path, "regions")
+    validate_document("regions", doc, str(path))
+    return regions_from_tables(doc["region"], str(path))

@@ -9,9 +9,12 @@ minimum zone; otherwise the points outside join the subset and the fit runs agai
 answer equals the fit of every point up to :data:`gagekit._util.LENGTH_RESOLUTION_MM`
 (1 pm, the containment test's tolerance), and to the fits' own global search.
 
-Used for spheres (the certified branch and bound's cost grows with the points: 10-20x
-faster on the bracket's ball). Not for cylinders: the swarm's 2-D exact fits already work
-on the projected convex hulls, and a band of extreme points is all hull (slower, measured).
+Used in Monte Carlo trials for spheres (the certified branch and bound's cost grows with
+the points: 10-20x faster on the bracket's ball), minimum-zone circles (a roundness
+section: started from the least-squares centre) and the thinnest slab (flatness: started
+from the measured zone's normal). Not for cylinders: those start the exact local method
+from the measured axis instead (:func:`gagekit.form.fit_cylinder` ``warm=``), on the
+kernel's own active subset.
 """
 
 from __future__ import annotations
@@ -21,8 +24,9 @@ from typing import Any, Callable
 import numpy as np
 
 from .._util import LENGTH_RESOLUTION_MM
+from ..errors import GagekitError
 
-__all__ = ["minimum_zone_sphere_near", "active_fit"]
+__all__ = ["minimum_zone_sphere_near", "minimum_zone_circle_near", "thinnest_slab_near", "active_fit"]
 
 #: Points within this fraction of the zone width of either boundary of the nearby zone start the active set.
 BAND = 0.2
@@ -35,7 +39,12 @@ def active_fit(points: np.ndarray, start: np.ndarray, fit: Callable[[np.ndarray]
     gives (every point's radial distance, inner, outer) of a fit."""
     sel = np.asarray(start, dtype=bool).copy()
     while True:
-        f = fit(np.ascontiguousarray(points[sel]))
+        if sel.all():
+            return fit(points)
+        try:
+            f = fit(np.ascontiguousarray(points[sel]))
+        except GagekitError:  # a subset too small or degenerate for the kernel: the fit of every point
+            return fit(points)
         r, lo, hi = bounds(f, points)
         out = (r < lo - LENGTH_RESOLUTION_MM) | (r > hi + LENGTH_RESOLUTION_MM)
         if not out.any():
@@ -43,10 +52,21 @@ def active_fit(points: np.ndarray, start: np.ndarray, fit: Callable[[np.ndarray]
         sel |= out
 
 
+#: ... and at least this many points of each extreme.
+MIN_EXTREMES = 16
+
+
 def _band(r: np.ndarray) -> np.ndarray:
     lo, hi = float(r.min()), float(r.max())
     w = BAND * (hi - lo)
-    return (r <= lo + w) | (r >= hi - w)
+    sel = (r <= lo + w) | (r >= hi - w)
+    if len(r) > 2 * MIN_EXTREMES:
+        order = np.argsort(r, kind="stable")
+        sel[order[:MIN_EXTREMES]] = True
+        sel[order[-MIN_EXTREMES:]] = True
+    else:
+        sel[:] = True
+    return sel
 
 
 def minimum_zone_sphere_near(points: np.ndarray, near_center: Any) -> Any:
@@ -57,3 +77,27 @@ def minimum_zone_sphere_near(points: np.ndarray, near_center: Any) -> Any:
     start = _band(np.linalg.norm(points - np.asarray(near_center, dtype=float), axis=1))
     return active_fit(points, start, lambda p: fit_sphere(p, "minimum-zone"),
                       lambda f, p: (np.linalg.norm(p - np.asarray(f.center), axis=1), f.inner_radius, f.outer_radius))
+
+
+def minimum_zone_circle_near(xy: np.ndarray, near_center: Any) -> Any:
+    """:func:`gagekit.form.fit_circle` ``(xy, "mz")`` of (n, 2) points on an active set
+    started from a nearby centre (e.g. the least-squares centre): exact by verification
+    (module docstring)."""
+    from .circle import fit_circle
+
+    start = _band(np.linalg.norm(xy - np.asarray(near_center, dtype=float), axis=1))
+    return active_fit(xy, start, lambda p: fit_circle(p, "mz"),
+                      lambda f, p: (np.linalg.norm(p - np.asarray(f.center), axis=1), f.r_in, f.r_out))
+
+
+def thinnest_slab_near(points: np.ndarray, near_normal: Any) -> tuple[float, np.ndarray]:
+    """(width, normal) of the thinnest slab of (n, 3) points (the flatness zone: the
+    kernel's exact minimum width) on an active set started from the points near the two
+    planes of a nearby zone of normal ``near_normal``: a slab of the subset that holds
+    every point is the thinnest of all points (the subset's cannot be wider)."""
+    from .. import _core
+
+    start = _band(points @ np.asarray(near_normal, dtype=float))
+    normal, _, _, width = active_fit(points, start, lambda p: _core.gdt_slab(p, "free", (0.0, 0.0, 1.0), 0.0),
+                                     lambda f, p: (p @ np.asarray(f[0]), f[1], f[2]))
+    return float(width), np.array(normal)

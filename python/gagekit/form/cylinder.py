@@ -71,6 +71,7 @@ class CylinderFit:
     warnings: tuple[str, ...] = ()
     tilt_deg: Optional[float] = None
     reference_axis: Optional[tuple[float, float, float]] = None
+    warm_fallback: Optional[bool] = None
     shape: str = field(default="cylinder", init=False)
 
     @property
@@ -117,6 +118,7 @@ def fit_cylinder(
     hop_rounds: int = 3,
     axis: Optional[Any] = None,
     max_tilt: float = DEFAULT_MAX_TILT,
+    warm: Optional[tuple[Any, Any]] = None,
 ) -> CylinderFit:
     """Fit a cylinder to (n, 3) points (mm).
 
@@ -157,6 +159,16 @@ def fit_cylinder(
         result reports ``tilt_deg``, the angle between the fitted and the reference axis;
         when the free search finds a better optimum outside the cone, ``warnings`` gives
         its value (a better one inside the cone replaces the result).
+    warm
+        (point, direction) of the axis of a fit of nearby points -- a Monte Carlo trial
+        starts from the measured fit: the exact local method (the 2-D fit along that
+        direction, the SLP local search, basin hopping) runs from it, above 2000 points on
+        an active subset grown until every point lies inside the fitted cylinder(s), and
+        the global search above runs only when the local method cannot decide (the axis
+        on the cone's boundary, no convergence, the MIC of a partial arc);
+        ``warm_fallback`` says which. The free search outside the cone is skipped (no
+        ``outside`` warning). Least squares: Levenberg-Marquardt from that direction
+        alone (not from the principal axes too).
 
     Returns
     -------
@@ -171,8 +183,15 @@ def fit_cylinder(
     crit = criterion_name(criterion, _ALLOWED, "cylinder")
     pts = _points(points, (3,), "cylinder")
     nominal, tilt_rad = search_settings(axis, max_tilt, "cylinder")
+    start = None
+    if warm is not None:
+        try:
+            wp, wd = (tuple(float(x) for x in np.asarray(v, dtype=float).reshape(3)) for v in warm)
+        except (TypeError, ValueError):
+            raise ConfigError(f"cylinder: warm must be (point, direction), two 3-vectors, got {warm!r}") from None
+        start = (wp, wd)
     if crit == "least-squares":
-        ls = _core.form_cylinder_lsq(pts)
+        ls = _core.form_cylinder_lsq(pts, None, None if start is None else start[1])
         arc = math.degrees(ls.arc)
         # the angles of the least-squares axis as numpy computed them before the kernel
         # returned complete fits (its BLAS norm can differ from nalgebra's by an ulp, and
@@ -190,7 +209,7 @@ def fit_cylinder(
         raise ConfigError(f"cylinder: seed must be a non-negative integer, got {seed}")
     r = _core.form_cylinder_fit(
         pts, crit, int(seed), int(particles), int(iterations), int(stall_iterations),
-        nominal, tilt_rad, int(refine_starts), int(hop_rounds),
+        nominal, tilt_rad, int(refine_starts), int(hop_rounds), start,
     )
     cert = _cert(r)
     if crit == "min-circumscribed":
@@ -225,6 +244,7 @@ def fit_cylinder(
         warnings=tuple(warnings),
         tilt_deg=math.degrees(r.tilt),
         reference_axis=_vec(r.reference),
+        warm_fallback=r.warm_fallback,
     )
 
 

@@ -285,7 +285,12 @@ def fit_sphere(points: Any, criterion: str = "least-squares") -> SphereFit:
         z = _core.form_sphere_fit(pts, crit)
         radius = {"min-circumscribed": z.r_out, "max-inscribed": z.r_in}.get(crit, 0.5 * (z.r_in + z.r_out))
         cert = _cert(z)
-        control = z.control_out if crit != "minimum-zone" else list(z.control_in) + [i for i in z.control_out if i not in z.control_in]
+        if crit == "minimum-zone":
+            inner = list(z.control_in)
+            seen = set(inner)
+            control = inner + [i for i in z.control_out if i not in seen]
+        else:
+            control = z.control_out
         return SphereFit(
             crit, len(pts), _vec(z.center), float(radius), cert.max_distance - cert.min_distance, cert,
             inner_radius=float(z.r_in) if crit == "minimum-zone" else None,

@@ -48,7 +48,7 @@ import numpy as np
 
 from .. import _core
 from ..errors import ConfigError
-from ..form import fit_cylinder, fit_sphere
+from ..form import fit_sphere
 from .features import FeatureData, _unit
 from .spec import DatumRef, PartSpec
 
@@ -273,7 +273,7 @@ class DatumSystem:
             return SimulatedDatum(ref.letter, fd.name, "axis", f"{method} circle", np.array(point), np.array(direction), before,
                                   radius=float(radius))
         crit = "max-inscribed" if fit == "inscribed" else "min-circumscribed"
-        cyl = fit_cylinder(fd.points, crit, seed=0, axis=tuple(d_ls), max_tilt=10.0)
+        cyl = fd.chebyshev_cylinder(crit)
         d = _unit(cyl.direction)
         d = d if float(d @ d_ls) >= 0 else -d
         name = "maximum inscribed cylinder" if fit == "inscribed" else "minimum circumscribed cylinder"

@@ -74,7 +74,7 @@ class FeatureData:
             elif shape == "sphere":
                 fit = fit_sphere(p)
             elif shape == "cylinder":
-                fit = fit_cylinder(p)
+                fit = fit_cylinder(p, warm=self._cache.get("warm", {}).get("least-squares"))
             else:
                 fit = fit_cone(p)
             self._cache["lsq"] = fit
@@ -131,14 +131,36 @@ class FeatureData:
             d = -d
         return p, d
 
+    def chebyshev_cylinder(self, criterion: str) -> Any:
+        """The minimax cylinder ``criterion`` (minimum-zone, min-circumscribed,
+        max-inscribed) of the points, searched within 10 degrees of the least-squares axis
+        (seed 0), computed once: cylindricity, a datum axis and a size share it. A Monte
+        Carlo trial's feature holds the measured fits' axes in ``_cache["warm"]``
+        ({criterion: (point, direction)}): the fit then starts from there
+        (:func:`gagekit.form.fit_cylinder` ``warm=``; exact local method, the global
+        search where it cannot decide). (A trial's plane holds the measured flatness
+        zone's normal as ``"slab"``: :meth:`min_zone`.)"""
+        key = ("cylinder", criterion)
+        if key not in self._cache:
+            _, d = self.axis_line()
+            warm = self._cache.get("warm", {}).get(criterion)
+            self._cache[key] = fit_cylinder(self.points, criterion, seed=0, axis=tuple(d), max_tilt=10.0, warm=warm)
+        return self._cache[key]
+
     def min_zone(self) -> tuple[float, np.ndarray]:
         """(width, normal) of the minimum zone of the points (flatness, ISO 12781; exact: the
         minimum width of the set, hull facets and antipodal edge pairs), computed once: the
         flatness callout and the free datum plane share it. The normal points into the
         material (against ``outward``) when the feature has one."""
         if "mz" not in self._cache:
-            normal, _, _, width = _core.gdt_slab(self.points, "free", (0.0, 0.0, 1.0), 0.0)
-            n = np.array(normal)
+            near = self._cache.get("warm", {}).get("slab")  # a Monte Carlo trial: the measured zone's normal
+            if near is not None:
+                from ..form.active import thinnest_slab_near
+
+                width, n = thinnest_slab_near(self.points, near)
+            else:
+                normal, _, _, width = _core.gdt_slab(self.points, "free", (0.0, 0.0, 1.0), 0.0)
+                n = np.array(normal)
             if self.spec.outward is not None and float(n @ np.asarray(self.spec.outward)) > 0:
                 n = -n  # the zone's normal reported into the material, as a datum frame's axis
             self._cache["mz"] = (float(width), n)

@@ -63,7 +63,7 @@ import numpy as np
 
 from .. import _core
 from ..errors import ConfigError, DegenerateGeometryError
-from ..form import fit_circle, fit_cylinder, fit_sphere
+from ..form import fit_circle, fit_sphere
 from .features import FeatureData, _unit
 from .spec import RANK_ORDER, Tolerance
 from .zone_tools import Measurement, _plane_2d
@@ -183,8 +183,7 @@ def mating_size(fd: FeatureData, which: str, sections: Optional[int] = None) -> 
         if which == "GG":
             v = 2.0 * float(fd.lsq().radius)
         else:
-            _, d = fd.axis_line()
-            v = 2.0 * float(fit_cylinder(fd.points, crit, seed=0, axis=tuple(d), max_tilt=10.0).radius)
+            v = 2.0 * float(fd.chebyshev_cylinder(crit).radius)
     fd._cache[key] = v
     return v
 

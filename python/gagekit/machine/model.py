@@ -34,6 +34,7 @@ import numpy as np
 from .. import _core
 from .._util import parse_toml, read_text
 from ..errors import ConfigError, InvalidInputError
+from ..schema import validate_document
 
 __all__ = [
     "Machine",
@@ -49,12 +50,8 @@ __all__ = [
 
 _NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 _RESERVED = {"x", "y", "z"}
-_TOP_KEYS = {"name", "description", "length_unit", "angle_unit", "chain", "joints", "shapes", "tool"}
-_JOINT_KEYS = {"type", "axis", "range", "fourier_terms", "description"}
-_SHAPE_KEYS = {"offset", "description"}
 _ANGLE_UNITS = {"deg": math.pi / 180.0, "rad": 1.0}
 _UNIT_TOL = 1e-6
-_MAX_TERMS = 64
 
 
 @dataclass(frozen=True)
@@ -413,31 +410,15 @@ def load_machine(path: Union[str, Path]) -> Machine:
 
 
 def parse_machine(text: str, source: str = "<machine>") -> Machine:
-    """Validate the text of a machine file; see :func:`load_machine`."""
+    """Validate the text of a machine file against its schema (:mod:`gagekit.schema.machine`,
+    ``gagekit schema machine``), then the rules of the chain; see :func:`load_machine`."""
     doc = parse_toml(text, source)
+    f = validate_document("machine", doc, source)
 
     def fail(msg: str) -> ConfigError:
         return ConfigError(f"{source}: {msg}")
 
-    unknown = sorted(set(doc) - _TOP_KEYS)
-    if unknown:
-        raise fail(f"unknown top-level key '{unknown[0]}' (allowed: {', '.join(sorted(_TOP_KEYS))})")
-    lu = doc.get("length_unit", "mm")
-    if lu != "mm":
-        raise fail(f'length_unit must be "mm" (gagekit works in millimetres), got {lu!r}')
-    au = doc.get("angle_unit", "deg")
-    if not isinstance(au, str) or au not in _ANGLE_UNITS:
-        raise fail(f'angle_unit must be "deg" or "rad", got {au!r}')
-    name = doc.get("name", Path(source).stem)
-    if not isinstance(name, str):
-        raise fail(f"name must be a string, got {name!r}")
-    joints = _table(doc, "joints", fail)
-    shapes = _table(doc, "shapes", fail)
-    if "chain" not in doc:
-        raise fail('missing "chain": list the joints and shapes from the table to the spindle')
-    chain = doc["chain"]
-    if not isinstance(chain, list) or not chain or not all(isinstance(c, str) for c in chain):
-        raise fail(f"chain must be a non-empty list of element names, got {chain!r}")
+    joints, shapes, chain = f.joints, f.shapes, f.chain
     for n in set(joints) & set(shapes):
         raise fail(f"'{n}' is defined both as [joints.{n}] and [shapes.{n}]")
     seen = set()
@@ -456,79 +437,27 @@ def parse_machine(text: str, source: str = "<machine>") -> Machine:
                 f"element name '{n}' is not allowed: use letters, digits and _ (not starting with a digit), "
                 "and not x, y or z (observation columns)"
             )
-    elements: list = []
-    for c in chain:
-        if c in joints:
-            elements.append(_joint(c, joints[c], au, fail))
-        else:
-            elements.append(_shape(c, shapes[c], fail))
+    elements: list = [_joint(c, joints[c], fail) if c in joints else ShapeSpec(name=c, offset=tuple(shapes[c].offset))
+                      for c in chain]
     if not any(isinstance(e, JointSpec) for e in elements):
         raise fail("the chain has no joint: nothing moves")
-    tool = doc.get("tool")
-    if not isinstance(tool, dict) or "offset" not in tool:
-        raise fail("missing [tool] offset: the target r_t in the spindle frame, e.g. offset = [0, 0, -312.035]")
-    extra = sorted(set(tool) - {"offset", "description"})
-    if extra:
-        raise fail(f"tool: unknown key '{extra[0]}' (allowed: offset)")
-    offset = _vec3(tool["offset"], "tool.offset", fail)
-    m = Machine(name=name, chain=tuple(chain), elements=tuple(elements), tool=offset, angle_unit=au, source=source)
+    name = f.name if "name" in f.model_fields_set else Path(source).stem
+    m = Machine(name=name, chain=tuple(chain), elements=tuple(elements), tool=tuple(f.tool.offset),
+                angle_unit=f.angle_unit, source=source)
     m.n_parameters  # the Rust side validates the chain once more
     return m
 
 
-def _table(doc: dict, key: str, fail) -> dict:
-    t = doc.get(key, {})
-    if not isinstance(t, dict) or not all(isinstance(v, dict) for v in t.values()):
-        raise fail(f"[{key}] must be tables such as [{key}.NAME]")
-    return t
-
-
-def _number(v: Any) -> bool:
-    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
-
-
-def _vec3(v: Any, what: str, fail) -> tuple[float, float, float]:
-    if not isinstance(v, list) or len(v) != 3 or not all(_number(x) for x in v):
-        raise fail(f"{what} must be three finite numbers, got {v!r}")
-    return (float(v[0]), float(v[1]), float(v[2]))
-
-
-def _joint(name: str, t: dict, au: str, fail) -> JointSpec:
+def _joint(name: str, t: Any, fail) -> JointSpec:
+    """A joint's rules between keys: a unit axis, min < max, Fourier terms on rotary joints only."""
     where = f"joints.{name}"
-    extra = sorted(set(t) - _JOINT_KEYS)
-    if extra:
-        raise fail(f"{where}: unknown key '{extra[0]}' (allowed: {', '.join(sorted(_JOINT_KEYS - {'description'}))})")
-    kind = t.get("type")
-    if kind not in ("prismatic", "rotary"):
-        raise fail(f'{where}.type must be "prismatic" or "rotary", got {kind!r}')
-    for key in ("axis", "range"):
-        if key not in t:
-            raise fail(f"{where}: missing {key}")
-    axis = _vec3(t["axis"], f"{where}.axis", fail)
-    norm = math.sqrt(sum(a * a for a in axis))
+    norm = math.sqrt(sum(a * a for a in t.axis))
     if abs(norm - 1.0) > _UNIT_TOL:
         raise fail(f"{where}.axis must be a unit vector, its length is {norm:.6g}")
-    axis = tuple(a / norm for a in axis)
-    r = t["range"]
-    if not isinstance(r, list) or len(r) != 2 or not all(_number(x) for x in r):
-        raise fail(f"{where}.range must be two finite numbers [min, max], got {r!r}")
-    if not r[0] < r[1]:
-        raise fail(f"{where}.range: min {r[0]} must be less than max {r[1]}")
-    terms = 0
-    if kind == "rotary":
-        terms = t.get("fourier_terms", 1)
-        if not isinstance(terms, int) or isinstance(terms, bool) or not 1 <= terms <= _MAX_TERMS:
-            raise fail(f"{where}.fourier_terms must be an integer from 1 to {_MAX_TERMS}, got {terms!r}")
-    elif "fourier_terms" in t:
+    axis = tuple(a / norm for a in t.axis)
+    lo, hi = t.range
+    if not lo < hi:
+        raise fail(f"{where}.range: min {lo} must be less than max {hi}")
+    if t.type != "rotary" and "fourier_terms" in t.model_fields_set:
         raise fail(f"{where}: fourier_terms applies to rotary joints only")
-    return JointSpec(name=name, kind=kind, axis=axis, range=(float(r[0]), float(r[1])), terms=terms)
-
-
-def _shape(name: str, t: dict, fail) -> ShapeSpec:
-    where = f"shapes.{name}"
-    extra = sorted(set(t) - _SHAPE_KEYS)
-    if extra:
-        raise fail(f"{where}: unknown key '{extra[0]}' (allowed: offset)")
-    if "offset" not in t:
-        raise fail(f"{where}: missing offset")
-    return ShapeSpec(name=name, offset=_vec3(t["offset"], f"{where}.offset", fail))
+    return JointSpec(name=name, kind=t.type, axis=axis, range=(lo, hi), terms=t.fourier_terms if t.type == "rotary" else 0)

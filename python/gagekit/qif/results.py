@@ -36,7 +36,7 @@ import json
 import math
 import uuid
 from pathlib import Path
-from typing import Any, Optional, Sequence
+from typing import Any, Mapping, Optional, Sequence
 
 import numpy as np
 
@@ -136,9 +136,55 @@ def _header(root: Any) -> None:
     _place(root, h)
 
 
-def _status(parent: Any, ok: bool, kind: str = "Characteristic") -> None:
+def _status(parent: Any, ok: bool, kind: str = "Characteristic", decision: Optional[str] = None) -> None:
+    """PASS / FAIL; with an ISO 14253-1 ``decision`` (a result with its uncertainty):
+    conforming PASS, nonconforming FAIL, not-proven INDETERMINATE."""
     s = X.sub(parent, "Status" if kind == "Characteristic" else "InspectionStatus")
-    X.sub(s, f"{kind}StatusEnum", "PASS" if ok else "FAIL")
+    status = "PASS" if ok else "FAIL"
+    if decision is not None:
+        status = {"conforming": "PASS", "nonconforming": "FAIL"}.get(decision, "INDETERMINATE")
+    X.sub(s, f"{kind}StatusEnum", status)
+
+
+#: the order of ISO 14253-1 decisions, best first (a group takes its worst member's)
+_DECISIONS = ("conforming", "not-proven", "nonconforming")
+
+
+def _worst(decisions: Sequence[Optional[str]]) -> Optional[str]:
+    known = [d for d in decisions if d in _DECISIONS]
+    return max(known, key=_DECISIONS.index) if known and len(known) == len(decisions) else None
+
+
+def _uncertainty_attributes(el: Any, unc: Optional[Mapping[str, Any]], rule: Optional[str], scale: float) -> None:
+    """A measurement's uncertainty as QIF attributes (its first child, ``Attributes`` of
+    CharacteristicBaseType): ``U`` (expanded, 95 %), ``k``, ``coverage``, the coverage
+    interval's ends, the ``decision_rule`` (ISO 14253-1) and the method (JCGM 101). The
+    combined standard uncertainty and the bias go on ``Value`` itself
+    (``combinedUncertainty``, ``meanError``: QIF's MeasuredDecimalType)."""
+    if not unc:
+        return
+    a = X.sub(el, "Attributes")
+
+    def attribute(kind: str, key: str, value: str) -> None:  # QIF's attribute "name" (sub's own argument is name)
+        X.etree().SubElement(a, X.Q + kind, {"name": key, "value": value})
+
+    for key, v in (("U", unc["U"] / scale), ("k", unc["k"]), ("coverage", unc["coverage"]),
+                   ("interval_low", unc["interval"][0] / scale), ("interval_high", unc["interval"][1] / scale)):
+        attribute("AttributeD1", key, X.dec(v))
+    if rule:
+        attribute("AttributeStr", "decision_rule", rule)
+    attribute("AttributeStr", "uncertainty_method", str(unc.get("method", "")))
+    a.set("n", str(len(a)))
+
+
+def _value(el: Any, value: float, unc: Optional[Mapping[str, Any]], scale: float) -> None:
+    """``Value`` with, for a result with its uncertainty, ``combinedUncertainty`` = u and
+    ``meanError`` = |bias| (the Monte Carlo's; QIF wants both or neither)."""
+    if unc:
+        X.sub(el, "Value", _num(value), combinedUncertainty=X.dec(unc["u"] / scale),
+              meanError=X.dec(abs(unc["bias"]) / scale))
+    else:
+        X.sub(el, "Value", _num(value))
 
 
 # -- the plan part: definitions, nominals, items ----------------------------------------
@@ -474,17 +520,22 @@ def _results(results_el: Any, runs: Sequence[dict], spec: Any, plan: _Plan, ids:
         at = _new("ActualTransforms", n=0)
         for fr in res.get("frames", []):
             _transform(at, fr, ids, plan)
+        rule = (res.get("decision_rule") or {}).get("name") if isinstance(res.get("decision_rule"), Mapping) else None
         for item, (qt, members) in groups.items():
             el = X.sub(cm, f"{qt}CharacteristicMeasurement", id=ids())
-            _status(el, all(bool(r["pass"]) for _, r in members))
+            angular = members[0][0].characteristic == "angle"
+            scale = plan.angle_scale if angular else plan.pmi_scale
+            top = max((r for _, r in members), key=lambda r: float(r["measured"]))  # the value written
+            unc = top.get("uncertainty") if isinstance(top.get("uncertainty"), Mapping) else None
+            _uncertainty_attributes(el, unc, rule, scale)
+            _status(el, all(bool(r["pass"]) for _, r in members),
+                    decision=_worst([r.get("decision") for _, r in members]) if unc else None)
             X.sub(el, "CharacteristicItemId", item)
             fm = [fmeas[t.feature] for t, _ in members if t.feature in fmeas]
             if fm:
                 _id_list(el, "FeatureMeasurementIds", fm)
             X.sub(el, "MeasurementDeviceIds", n=1).append(_new("Id", plan.device))
-            angular = members[0][0].characteristic == "angle"
-            value = max(float(r["measured"]) for _, r in members) / (plan.angle_scale if angular else plan.pmi_scale)
-            X.sub(el, "Value", _num(value))
+            _value(el, float(top["measured"]) / scale, unc, scale)
         if len(at):
             at.set("n", str(len(at)))
             mc.addnext(at)
@@ -606,12 +657,15 @@ def gage_results_document(scan: Any, result: dict, instrument: str = "") -> Any:
     _scan_reference(mr, scan, "point cloud checked with virtual gages")
     mc = X.sub(mr, "MeasuredCharacteristics")
     cm = X.sub(mc, "CharacteristicMeasurements", n=len(gages))
+    rule = (result.get("decision_rule") or {}).get("name") if isinstance(result.get("decision_rule"), Mapping) else None
     for g, item in zip(gages, items):
         el = X.sub(cm, "UserDefinedLinearCharacteristicMeasurement", id=ids())
-        _status(el, float(g.get("slack", 0.0)) == 0.0)
+        unc = g.get("uncertainty") if isinstance(g.get("uncertainty"), Mapping) else None
+        _uncertainty_attributes(el, unc, rule, 1.0)
+        _status(el, float(g.get("slack", 0.0)) == 0.0, decision=g.get("decision") if unc else None)
         X.sub(el, "CharacteristicItemId", item)
         X.sub(el, "MeasurementDeviceIds", n=1).append(_new("Id", device))
-        X.sub(el, "Value", _num(g["allowance_after"]))
+        _value(el, g["allowance_after"], unc, 1.0)
     T = np.asarray(result.get("transform", {}).get("matrix", np.eye(4)), dtype=float)
     at = X.sub(mr, "ActualTransforms", n=1)
     tr = X.sub(at, "Transform", id=ids())

@@ -69,10 +69,10 @@ class PartDraft:
 
 def _spec_accepts() -> dict:
     """What the installed PART.toml reader evaluates beyond the geometric callouts."""
-    from ..inspect import spec as S
+    from ..schema.part import CHARACTERISTICS, ToleranceTable
 
-    keys = getattr(S, "_TOL_KEYS", set())
-    chars = set(S.CHARACTERISTICS)
+    keys = set(ToleranceTable.model_fields)  # the keys of a [[tolerance]] table (its schema)
+    chars = set(CHARACTERISTICS)
     return {"size": "size" in chars, "distance": "distance" in chars, "angle": "angle" in chars,
             "material": "material" in keys, "datum_modifiers": "material" in keys}
 

@@ -31,6 +31,7 @@ across days instead of across the cycles of one day.
 
 from __future__ import annotations
 
+import math
 from collections import defaultdict
 from datetime import datetime, timedelta, timezone
 from typing import Any, Optional
@@ -130,12 +131,22 @@ def _results(conn, spec_id: int, extra_cols, join_table, *where):
     return rows
 
 
-def _series(name: str, unit: str, rows: list, col: int, res: dict, **limits) -> dict:
+def _series(name: str, unit: str, rows: list, col: int, res: dict, u_col: Optional[int] = None, **limits) -> dict:
     """One characteristic from ``_results`` rows (value in column ``col``); ``res`` may carry
-    the measurement's standard uncertainty under ``"u"`` (lengths only)."""
+    the measurement's standard uncertainty under ``"u"`` (lengths only). Without it, the
+    uncertainties stored with the results (column ``u_col``: each result's Monte Carlo u,
+    ``--uncertainty``) give u = sqrt(mean u_i^2), the measurement variance averaged over
+    the results that have one (``measurement.source`` says so)."""
     u = res.get("u") if unit == "mm" and not name.startswith("T* ") else None
-    return characteristic(name, unit, [r[col] for r in rows], [r[2] for r in rows], [r[1] for r in rows],
-                          resolution=res.get(unit, 0.0), time_source=[r[3] for r in rows], measurement_u=u, **limits)
+    stored = [float(r[u_col]) for r in rows if r[u_col] is not None] if u_col is not None and u is None else []
+    if stored:
+        u = math.sqrt(sum(x * x for x in stored) / len(stored))
+    d = characteristic(name, unit, [r[col] for r in rows], [r[2] for r in rows], [r[1] for r in rows],
+                       resolution=res.get(unit, 0.0), time_source=[r[3] for r in rows], measurement_u=u, **limits)
+    if stored and isinstance(d.get("measurement"), dict):
+        d["measurement"]["source"] = (f"stored results: sqrt(mean u^2) of the Monte Carlo u of {len(stored)} of "
+                                        f"{len(rows)} results (JCGM 101)")
+    return d
 
 
 def _gage_spec(conn, spec, res: dict) -> list[dict]:
@@ -154,13 +165,13 @@ def _gage_spec(conn, spec, res: dict) -> list[dict]:
         max_angle = math.radians(max_angle)
     out = []
     rows = _results(conn, spec.id, [m.GageAllowance.gage, m.GageAllowance.allowance_after,
-                                     m.GageAllowance.allowance_before, m.GageAllowance.q], m.GageAllowance)
+                                     m.GageAllowance.allowance_before, m.GageAllowance.q, m.GageAllowance.u], m.GageAllowance)
     by: dict[str, list] = defaultdict(list)
     for r in rows:
         by[r[4]].append(r)
     for col, what, lower in ((5, "allowance after T*", 0.0), (6, "allowance before T*", None), (7, "stock q after T*", None)):
-        for g, s in by.items():
-            out.append(_series(f"{what}: {g}", "mm", s, col, res, lower=lower))
+        for g, s in by.items():  # the stored u is the allowance after T*'s
+            out.append(_series(f"{what}: {g}", "mm", s, col, res, u_col=8 if col == 5 else None, lower=lower))
     cols = [getattr(m.GageCheck, k) for k in ("alpha", "beta", "gamma", "dx", "dy", "dz")]
     rows = _results(conn, spec.id, cols, m.GageCheck)
     if rows:
@@ -184,11 +195,11 @@ def _form_spec(conn, spec, tolerance: Optional[float], res: dict) -> list[dict]:
 
 def _inspect_spec(conn, spec, res: dict) -> list[dict]:
     rows = _results(conn, spec.id, [m.InspectionResult.tolerance, m.InspectionResult.value, m.InspectionResult.lower,
-                                    m.InspectionResult.upper], m.InspectionResult)
+                                    m.InspectionResult.upper, m.InspectionResult.u], m.InspectionResult)
     by: dict[str, list] = defaultdict(list)
     for r in rows:
         by[r[4]].append(r)
-    return [_series(f"tolerance: {t}", "mm", s, 5, res, lower=s[-1][6], upper=s[-1][7]) for t, s in by.items()]
+    return [_series(f"tolerance: {t}", "mm", s, 5, res, u_col=8, lower=s[-1][6], upper=s[-1][7]) for t, s in by.items()]
 
 
 def _machines(conn) -> list[dict]:

@@ -139,6 +139,15 @@ class GageAllowance(Base):
     allowance_after: Mapped[float] = mapped_column(Float, nullable=False)
     q: Mapped[float] = mapped_column(Float, nullable=False)
     slack: Mapped[float] = mapped_column(Float, nullable=False)
+    # since revision 0004: the result's uncertainty (JCGM 101) and ISO 14253-1 decision,
+    # NULL for a result computed without --uncertainty
+    u: Mapped[Optional[float]] = mapped_column(Float, nullable=True)
+    """standard uncertainty (k = 1) of the allowance after T*, mm"""
+    expanded_u: Mapped[Optional[float]] = mapped_column(Float, nullable=True)
+    """expanded uncertainty U (half the 95 % coverage interval), mm"""
+    decision: Mapped[Optional[str]] = mapped_column(String(16), nullable=True)
+    """``conforming``, ``not-proven`` or ``nonconforming``"""
+    decision_rule: Mapped[Optional[str]] = mapped_column(String(64), nullable=True)
 
 
 class FormResult(Base):
@@ -174,6 +183,15 @@ class InspectionResult(Base):
     zone: Mapped[Optional[str]] = mapped_column(String(32), nullable=True)
     """``width``, ``diameter`` or ``spherical diameter``: what ``value`` and ``upper`` are"""
     n_points: Mapped[Optional[int]] = mapped_column(Integer, nullable=True)
+    # since revision 0004: the result's uncertainty (JCGM 101) and ISO 14253-1 decision,
+    # NULL for a result computed without --uncertainty
+    u: Mapped[Optional[float]] = mapped_column(Float, nullable=True)
+    """standard uncertainty (k = 1) of the value, mm"""
+    expanded_u: Mapped[Optional[float]] = mapped_column(Float, nullable=True)
+    """expanded uncertainty U (half the 95 % coverage interval), mm"""
+    decision: Mapped[Optional[str]] = mapped_column(String(16), nullable=True)
+    """``conforming``, ``not-proven`` or ``nonconforming``"""
+    decision_rule: Mapped[Optional[str]] = mapped_column(String(64), nullable=True)
 
 
 # ----------------------------------------------------------------------------- machines

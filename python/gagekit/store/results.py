@@ -102,9 +102,11 @@ def _details(kind: str, result_id: int, result: Mapping[str, Any]) -> list[tuple
         t = result["transform"]
         check = {"result_id": result_id, "status": result["status"], "objective": result["objective"],
                  "largest_release": result["largest_release"], **{k: t[k] for k in ("alpha", "beta", "gamma", "dx", "dy", "dz")}}
+        rule = _rule_name(result)
         gages = [{"result_id": result_id, "gage": g["name"], "region": g["region"], "points": g["points"],
                   "filtered_points": g["filtered_points"], "allowance_before": g["allowance_before"],
-                  "allowance_after": g["allowance_after"], "q": g["q"], "slack": g["slack"]} for g in result["gages"]]
+                  "allowance_after": g["allowance_after"], "q": g["q"], "slack": g["slack"],
+                  **_uncertainty_columns(g, rule)} for g in result["gages"]]
         return [(m.GageCheck.__table__, [check]), (m.GageAllowance.__table__, gages)]
     if kind == "form":
         row = {"result_id": result_id, "shape": result["shape"], "criterion": result["criterion"],
@@ -116,11 +118,26 @@ def _details(kind: str, result_id: int, result: Mapping[str, Any]) -> list[tuple
     return []
 
 
+def _rule_name(result: Mapping[str, Any]) -> Optional[str]:
+    """The decision rule a result was decided by (its JSON ``decision_rule.name``), if any."""
+    rule = result.get("decision_rule")
+    return rule.get("name") if isinstance(rule, Mapping) else None
+
+
+def _uncertainty_columns(row: Mapping[str, Any], rule: Optional[str]) -> dict:
+    """``u``, ``expanded_u``, ``decision``, ``decision_rule`` of a callout's / a gage's JSON
+    (None where it has no uncertainty: computed without --uncertainty)."""
+    unc = row.get("uncertainty") if isinstance(row.get("uncertainty"), Mapping) else {}
+    decided = row.get("decision") if unc else None
+    return {"u": unc.get("u"), "expanded_u": unc.get("U"), "decision": decided, "decision_rule": rule if unc else None}
+
+
 def inspection_rows(result: Mapping[str, Any]) -> list[dict]:
     """The ``inspection_results`` rows of an inspection's JSON (``gagekit inspect --json``):
     per callout its name (the callout's ``name``, else "characteristic of feature |datums|";
     a repeated name is numbered), value against the tolerance as upper limit, and what it is."""
     rows, seen = [], set()
+    rule = _rule_name(result)
     for t in result.get("tolerances", []):
         datums = list(t.get("datums") or [])
         name = t.get("name") or (f"{t['characteristic']} of {t['feature']}" + (f" |{'|'.join(datums)}|" if datums else ""))
@@ -132,7 +149,8 @@ def inspection_rows(result: Mapping[str, Any]) -> list[dict]:
         upper = t.get("upper_limit", t.get("tolerance_zone", t["tolerance"]))
         rows.append({"tolerance": name, "characteristic": t["characteristic"], "value": t["measured"],
                      "lower": t.get("lower_limit"), "upper": upper, "conforming": bool(t["pass"]), "feature": t.get("feature"),
-                     "datums": "|".join(datums), "zone": t.get("zone"), "n_points": t.get("n_points")})
+                     "datums": "|".join(datums), "zone": t.get("zone"), "n_points": t.get("n_points"),
+                     **_uncertainty_columns(t, rule)})
     return rows
 
 

@@ -86,6 +86,8 @@ class MonteCarlo:
     threads: int
     seconds: float = 0.0
     samples: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)), repr=False)
+    #: Fits the trials started from the measured ones, and how many needed the global search.
+    warm_starts: Optional[dict[str, Any]] = None
 
     def __getitem__(self, key: str) -> Uncertainty:
         return self.uncertainties[key]
@@ -97,7 +99,7 @@ class MonteCarlo:
                 "significant_digits": self.digits, "stabilized": self.stabilized,
                 "numerical_tolerance": dict(self.numerical_tolerance), "coverage": 0.95,
                 "interval": "probabilistically symmetric (JCGM 101 7.7)", "model": self.model.to_dict(),
-                "seconds": self.seconds}
+                "seconds": self.seconds, **({} if self.warm_starts is None else {"warm_starts": dict(self.warm_starts)})}
 
     def to_dict(self) -> dict[str, Any]:
         return {k: v.to_dict() for k, v in self.uncertainties.items()}

@@ -51,6 +51,29 @@ def _active_set(feats: Mapping[str, Any]) -> tuple[np.ndarray, dict[str, np.ndar
     return active, rows
 
 
+#: How a trial's minimax cylinders start (the JSON ``monte_carlo.warm_starts.method``).
+WARM_METHOD = ("the exact local method (2-D fit, SLP, basin hopping) from the measured fit's axis, verified on "
+               "every point; the global search where it cannot decide (a fallback)")
+
+
+def _warm_starts(feats: Mapping[str, Any]) -> dict[str, dict[str, Any]]:
+    """{feature: {criterion: (point, direction)}} of the minimax cylinders the measured
+    evaluation fitted (:meth:`FeatureData.chebyshev_cylinder`) and ``"slab"``: the normal
+    of a plane's flatness zone (:meth:`FeatureData.min_zone`): each trial starts there.
+    Every feature gets an entry (a trial's feature is known by it)."""
+    out: dict[str, dict[str, Any]] = {}
+    for name, fd in feats.items():
+        w = out[name] = {}
+        for k, v in fd._cache.items():
+            if isinstance(k, tuple) and k[0] == "cylinder":
+                w[k[1]] = (tuple(v.point), tuple(v.direction))
+        if "mz" in fd._cache:
+            w["slab"] = tuple(fd._cache["mz"][1])
+        if fd.shape == "cylinder" and "lsq" in fd._cache:
+            w["least-squares"] = (tuple(fd._cache["lsq"].point), tuple(fd._cache["lsq"].direction))
+    return out
+
+
 def _auto_sigma_features(feats: Mapping[str, Any]) -> tuple[float, str]:
     sets = [(fd.deviations(), FEATURE_PARAMETERS.get(fd.shape, 6)) for fd in feats.values() if fd.shape != "surface"]
     if not sets:
@@ -115,6 +138,8 @@ def inspect_uncertainty(points: Any, spec: Any, model: MeasurementModel, trials:
     for tol, row in zip(spec.tolerances, result.tolerances):
         if tol.characteristic == "sphericity" and "center" in row.details:
             near[tol.feature] = row.details
+    warm = _warm_starts(feats)
+    fits: list[Optional[bool]] = []  # each trial's warm-started fits: did the global search run?
 
     def values(res: Any) -> dict[str, float]:
         out = {}
@@ -131,10 +156,17 @@ def inspect_uncertainty(points: Any, spec: Any, model: MeasurementModel, trials:
                 f._cache["cad"] = fd._cache["cad"]
             if name in near:
                 f._cache["near_zone"] = near[name]
+            f._cache["warm"] = warm[name]
             fs[name] = f
-        return values(_evaluate(spec, fs, n, 0.0))
+        out = values(_evaluate(spec, fs, n, 0.0))
+        fits.extend(v.warm_fallback for f in fs.values() for k, v in f._cache.items()
+                    if isinstance(k, tuple) and k[0] == "cylinder" and v.warm_fallback is not None)
+        return out
 
     mc = monte_carlo(evaluate, active, model, trials, seed=seed, threads=threads, values=values(result), digits=digits)
+    if fits:
+        mc = replace(mc, warm_starts={"fits": len(fits), "fallbacks": sum(1 for f in fits if f),
+                                      "method": WARM_METHOD})
     out = decide_inspection(result, rule, mc)
     return replace(out, seconds=time.perf_counter() - t0)
 

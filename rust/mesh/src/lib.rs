@@ -7,8 +7,9 @@
 //!
 //! - [`closest`]: the exact closest point of a triangle (Ericson, *Real-Time Collision
 //!   Detection*, Sec. 5.1.5) and the feature (vertex, edge, face) it lies on.
-//! - [`bvh`]: a bounding-volume hierarchy over the triangles (median split on the longest
-//!   axis, built in parallel) and the nearest-triangle query.
+//! - [`bvh`]: a bounding-volume hierarchy over the triangles (binned SAH, built in
+//!   parallel) and the nearest-triangle query, with the margin that certifies a later
+//!   query near the same point without a search.
 //! - [`mesh`]: validated meshes (finite vertices, no degenerate triangles), their
 //!   topology (closed, manifold, consistently oriented) and the angle-weighted
 //!   pseudonormals of Baerentzen and Aanaes (IEEE TVCG 11(3), 2005) that sign distances.

@@ -244,16 +244,22 @@ pub struct LeastSquaresCylinderResult {
     pub arc: f64,
 }
 
-/// Least-squares cylinder of (n, 3) points (from the principal axes and `start_axis`).
+/// Least-squares cylinder of (n, 3) points (from the principal axes and `start_axis`;
+/// `warm`: from the axis `warm` of a nearby fit alone).
 #[pyfunction]
-#[pyo3(signature = (points, start_axis=None))]
+#[pyo3(signature = (points, start_axis=None, warm=None))]
 fn form_cylinder_lsq(
     py: Python<'_>,
     points: PyReadonlyArray2<'_, f64>,
     start_axis: Option<[f64; 3]>,
+    warm: Option<[f64; 3]>,
 ) -> PyResult<LeastSquaresCylinderResult> {
+    use gagekit_form::cylinder::{least_squares, least_squares_near};
     let pts = rows(py, &points, 3, "points")?;
-    let c = run(py, || gagekit_form::cylinder::least_squares(pts, start_axis))?;
+    let c = run(py, || match warm {
+        Some(a) => least_squares_near(pts, a),
+        None => least_squares(pts, start_axis),
+    })?;
     Ok(LeastSquaresCylinderResult {
         point: c.point,
         direction: c.direction,
@@ -330,6 +336,8 @@ impl OutsideResult {
 #[pyclass(frozen, module = "gagekit._core")]
 pub struct CylinderResult {
     fit: gagekit_form::cylinder::CylinderFit,
+    /// With a warm start: whether the global search had to run (`None` without one).
+    warm_fallback: Option<bool>,
 }
 
 mirror!(CylinderResult {
@@ -352,6 +360,12 @@ mirror!(CylinderResult {
     fn outside(&self, py: Python<'_>) -> PyResult<Option<Py<OutsideResult>>> {
         OutsideResult::wrap(py, self.fit.outside.clone())
     }
+    /// With a warm start: `True` when the local method could not decide and the global
+    /// search ran; `None` without a warm start.
+    #[getter]
+    fn warm_fallback(&self) -> Option<bool> {
+        self.warm_fallback
+    }
 });
 
 fn search_of(axis: Option<[f64; 3]>, max_tilt: f64) -> gagekit_form::cylinder::Search {
@@ -360,9 +374,11 @@ fn search_of(axis: Option<[f64; 3]>, max_tilt: f64) -> gagekit_form::cylinder::S
 
 /// Minimax cylinder by the projection model + PSO (Sec. 6.3). `criterion`: any name of
 /// the criterion table but least squares; the axis is searched within `max_tilt` (rad,
-/// [0, pi/2]) of `axis` (default: the least-squares axis).
+/// [0, pi/2]) of `axis` (default: the least-squares axis). `warm`: (point, direction) of a
+/// nearby fit's axis to start the exact local method from
+/// ([`gagekit_form::cylinder::fit_near`]; the global search when it cannot decide).
 #[pyfunction]
-#[pyo3(signature = (points, criterion, seed=0, particles=20, max_iterations=300, stall_iterations=6, axis=None, max_tilt=gagekit_form::cylinder::DEFAULT_MAX_TILT, refine_starts=8, hop_rounds=3))]
+#[pyo3(signature = (points, criterion, seed=0, particles=20, max_iterations=300, stall_iterations=6, axis=None, max_tilt=gagekit_form::cylinder::DEFAULT_MAX_TILT, refine_starts=8, hop_rounds=3, warm=None))]
 #[allow(clippy::too_many_arguments)]
 fn form_cylinder_fit(
     py: Python<'_>,
@@ -376,16 +392,20 @@ fn form_cylinder_fit(
     max_tilt: f64,
     refine_starts: usize,
     hop_rounds: usize,
+    warm: Option<([f64; 3], [f64; 3])>,
 ) -> PyResult<CylinderResult> {
-    use gagekit_form::cylinder::{fit, Criterion, Options};
+    use gagekit_form::cylinder::{fit, fit_near, Criterion, Options, Warm};
     let pts = rows(py, &points, 3, "points")?;
     let opts = Options { seed, particles, max_iterations, stall_iterations, search: search_of(axis, max_tilt), refine_starts, hop_rounds };
-    let r = run(py, || {
+    let (r, warm_fallback) = run(py, || {
         let allowed = [FitCriterion::MinCircumscribed, FitCriterion::MaxInscribed, FitCriterion::MinZone];
-        let crit = FitCriterion::parse_for(criterion, &allowed, "cylinder")?;
-        fit(pts, Criterion::from_fit(crit).unwrap_or(Criterion::MinZone), &opts)
+        let crit = Criterion::from_fit(FitCriterion::parse_for(criterion, &allowed, "cylinder")?).unwrap_or(Criterion::MinZone);
+        match warm {
+            None => fit(pts, crit, &opts).map(|r| (r, None)),
+            Some((point, direction)) => fit_near(pts, crit, &opts, &Warm { point, direction }).map(|(r, f)| (r, Some(f))),
+        }
     })?;
-    Ok(CylinderResult { fit: r })
+    Ok(CylinderResult { fit: r, warm_fallback })
 }
 
 /// A minimum-zone line in space (straightness): the thinnest enclosing cylinder.

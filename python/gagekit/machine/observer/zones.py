@@ -87,19 +87,14 @@ def dissertation_zones(space: ObserverSpace, points: int) -> list[Zone]:
 def read_zones(path: Union[str, Path], space: ObserverSpace) -> list[Zone]:
     """Zones file: ``[[zone]]`` tables with ``count`` and ``NAME = [lower, upper]`` per variable
     (joint names or the redundant sum, e.g. ``"Z+W"``); unnamed variables span their range."""
+    from ...schema import validate_document
+
     doc = load_toml(path, "zones")
-    items = doc.get("zone")
-    if not isinstance(items, list) or not items:
-        raise ConfigError(f"{path}: expected one or more [[zone]] tables")
+    validate_document("zones", doc, str(path))  # count, intervals, unknown top-level keys
     zones = []
-    for k, z in enumerate(items):
-        if not isinstance(z, dict) or "count" not in z:
-            raise ConfigError(f"{path}: zone {k + 1} needs a count")
-        cnt = z["count"]
-        if isinstance(cnt, bool) or not isinstance(cnt, int) or cnt < 0:
-            raise ConfigError(f"{path}: zone {k + 1}: count must be a non-negative integer")
+    for k, z in enumerate(doc["zone"]):
         lo, hi = _named_box(space, z, f"{path}: zone {k + 1}")
-        zones.append((lo, hi, cnt, None))
+        zones.append((lo, hi, z["count"], None))
     return zones
 
 

@@ -28,7 +28,16 @@ impl LeastSquaresCylinder {
 /// Least-squares cylinder of 3-D points (flat, row-major), from the principal axes and
 /// `start_axis` when given (see [`crate::lsq::cylinder`]).
 pub fn least_squares(pts: &[f64], start_axis: Option<[f64; 3]>) -> Result<LeastSquaresCylinder> {
-    let c = lsq::cylinder(pts, start_axis)?;
+    complete(pts, lsq::cylinder(pts, start_axis)?)
+}
+
+/// [`least_squares`] from a nearby fit's `axis` alone ([`crate::lsq::cylinder_near`]; a
+/// Monte Carlo trial starts from the measured axis).
+pub fn least_squares_near(pts: &[f64], axis: [f64; 3]) -> Result<LeastSquaresCylinder> {
+    complete(pts, lsq::cylinder_near(pts, axis)?)
+}
+
+fn complete(pts: &[f64], c: lsq::Cylinder) -> Result<LeastSquaresCylinder> {
     Ok(LeastSquaresCylinder {
         point: c.point,
         direction: c.direction,

@@ -58,7 +58,7 @@ pub(crate) mod subset;
 #[cfg(test)]
 mod tests;
 
-pub use least_squares::{least_squares, LeastSquaresCylinder};
+pub use least_squares::{least_squares, least_squares_near, LeastSquaresCylinder};
 pub use projection::{angles, arc, axis, project};
 use search::Region;
 
@@ -290,6 +290,14 @@ pub fn tilt(a: &[f64; 3], b: &[f64; 3]) -> f64 {
 ///
 /// Large inputs (more than 2000 points) are fitted on an active subset (`subset`).
 pub fn fit(pts: &[f64], crit: Criterion, opts: &Options) -> Result<CylinderFit> {
+    let (nominal, spread) = checked(pts, opts)?;
+    fit_spread(pts, crit, opts, nominal, spread)
+}
+
+/// The checks of [`fit`] and [`fit_near`]: finite points of sane magnitude, at least 5,
+/// neither coincident nor collinear, valid search settings. Returns the validated nominal
+/// axis and the largest principal spread of the points.
+fn checked(pts: &[f64], opts: &Options) -> Result<(Option<Vector3<f64>>, f64)> {
     check_finite(pts, 3, "points")?;
     lsq::check_magnitude(pts, 3)?;
     let nominal = opts.search.validate()?;
@@ -305,7 +313,62 @@ pub fn fit(pts: &[f64], crit: Criterion, opts: &Options) -> Result<CylinderFit> 
     if lsq::negligible(sv[1], sv[0]) {
         return Err(GkError::degenerate("cylinder: the points are collinear; no cylinder is determined"));
     }
-    fit_spread(pts, crit, opts, nominal, sv[0])
+    Ok((nominal, sv[0]))
+}
+
+/// A warm start for [`fit_near`]: the axis (a point on it and its direction) of a fit of
+/// nearby points -- a Monte Carlo trial's perturbed points start from the measured fit.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Warm {
+    pub point: [f64; 3],
+    pub direction: [f64; 3],
+}
+
+/// [`fit`] started from a nearby fit's axis, for points within a few noise sigmas of
+/// those of the nearby fit (a Monte Carlo trial of the measured points).
+///
+/// The optimum of the nearby points lies in the basin the perturbed points' optimum has
+/// moved from, so the exact local method of the global search runs from it: the exact
+/// 2-D fit along the warm direction, the SLP local search (`slp`) and basin hopping,
+/// above 2000 points on an active subset grown until every point lies inside the fitted
+/// cylinder(s) (`subset`; the result is then the fit of all points). When the local
+/// method cannot decide alone -- the axis ends on the boundary of the search cone, the
+/// search does not converge, a maximum inscribed cylinder of a partial arc -- the global
+/// search [`fit`] runs instead, and the second value is `true` (a fallback). The warm
+/// result skips the free search outside the cone (`outside` stays `None`: that is a
+/// warning the nearby fit already gave) and, without a nominal axis, the least-squares
+/// axis is the search cone's reference as in [`fit`].
+pub fn fit_near(pts: &[f64], crit: Criterion, opts: &Options, warm: &Warm) -> Result<(CylinderFit, bool)> {
+    let (wp, wd) = (Vector3::from(warm.point), Vector3::from(warm.direction));
+    if !(wp.iter().chain(wd.iter()).all(|x| x.is_finite()) && wd.norm() > 0.0) {
+        return Err(GkError::invalid(format!("cylinder: the warm start must be a finite point and a non-zero direction, got {warm:?}")));
+    }
+    let (nominal, spread) = checked(pts, opts)?;
+    let lsq_fit = if nominal.is_none() { lsq::cylinder(pts, None).ok() } else { None };
+    let reference = match (nominal, &lsq_fit) {
+        (Some(a), _) => a,
+        (None, Some(c)) => Vector3::from(c.direction),
+        (None, None) => return fit_spread(pts, crit, opts, nominal, spread).map(|r| (r, true)),
+    };
+    let max_tilt = opts.search.max_tilt.min(FRAC_PI_2);
+    let free = max_tilt >= FRAC_PI_2 - 1e-12;
+    let region = if free { Region::free() } else { Region::cone(reference, max_tilt) };
+    let start = slp::Axis::new(wd, wp);
+    let Some(mut r) = subset::fit_near_in(pts, crit, opts, &start, &region, spread)? else {
+        return fit_spread(pts, crit, opts, nominal, spread).map(|r| (r, true));
+    };
+    let reference = lsq::upper([reference[0], reference[1], reference[2]]);
+    r.tilt = tilt(&r.direction, &reference);
+    r.reference = reference;
+    r.at_limit = false;
+    r.lsq_axis = lsq_fit.as_ref().map(|c| (c.point, c.direction));
+    let (point, direction) = match (crit, r.lsq_axis) {
+        (Criterion::MaxInscribed, Some(ax)) => ax,
+        _ => (r.point, r.direction),
+    };
+    r.arc = arc(pts, &point, &direction);
+    r.ill_posed = crit == Criterion::MaxInscribed && r.arc.to_degrees() < 90.0;
+    Ok((r, false))
 }
 
 /// [`fit`] after its checks: `nominal` is the validated unit axis (if given), `spread`

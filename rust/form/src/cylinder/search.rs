@@ -138,6 +138,54 @@ pub(super) fn fit_direct(
     Ok(r)
 }
 
+/// The warm-started fit of all given points within `region` (see [`super::fit_near`]):
+/// the exact 2-D fit along the warm axis's direction, the SLP local search from it and
+/// basin hopping around the best, all on these points. `None` when the local method
+/// cannot decide the result alone: its axis on the region's boundary (the global search
+/// walks the boundary ring), a search that hit its step limit, a maximum inscribed
+/// cylinder held by fewer than 3 points (a partial arc: the exact values need the
+/// Nelder-Mead search), or no finite value.
+pub(super) fn fit_warm(
+    pts: &[f64],
+    crit: Criterion,
+    opts: &Options,
+    warm: &slp::Axis,
+    region: &Region,
+) -> Result<Option<CylinderFit>> {
+    let c = centroid(pts, 3);
+    let q: Vec<f64> = pts.chunks_exact(3).flat_map(|p| [p[0] - c[0], p[1] - c[1], p[2] - c[2]]).collect();
+    let size = q.chunks_exact(3).map(|p| (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt()).fold(0.0, f64::max);
+    let len = q.chunks_exact(3).map(|p| Vector3::new(p[0], p[1], p[2]).dot(&warm.dir).abs()).fold(1e-3 * size, f64::max);
+    let pb = Problem { q, centroid: c, crit, size, len, region };
+    if region.s_max == 0.0 {
+        return fixed(&pb, pts, &region.basis.2).map(Some);
+    }
+    if !region.contains(&warm.dir) {
+        return Ok(None);
+    }
+    let Some(mut best) = pb.exact(&warm.dir) else { return Ok(None) };
+    let mut evaluations = 1;
+    let (value, ax, steps) = pb.local(best.1, START_STEP * pb.len);
+    evaluations += steps;
+    if steps > slp::MAX_STEPS {
+        return Ok(None);
+    }
+    if value < best.0 {
+        best = (value, ax);
+    }
+    evaluations += hop(&pb, opts.hop_rounds, &mut best);
+    let on_boundary = region.s_max < FRAC_PI_2 && best.1.dir.dot(&region.basis.2).abs().acos() >= region.s_max - 1e-9;
+    if !best.0.is_finite() || on_boundary {
+        return Ok(None);
+    }
+    if crit == Criterion::MaxInscribed && fit2d(&pb.q, &best.1.dir, crit).is_ok_and(|(_, _, z)| z.control_in.len() < 3) {
+        return Ok(None);
+    }
+    let mut r = result(&pb, pts, &best.1.dir)?;
+    r.evaluations = evaluations;
+    Ok(Some(r))
+}
+
 /// A fixed direction (`max_tilt` 0): the exact 2-D fit along it.
 fn fixed(pb: &Problem<'_>, pts: &[f64], a: &Vector3<f64>) -> Result<CylinderFit> {
     let (_, _, zone) = fit2d(&pb.q, a, pb.crit)?;

@@ -47,7 +47,7 @@ pub(crate) struct Local {
 }
 
 /// Most steps of one search.
-const MAX_STEPS: usize = 200;
+pub(crate) const MAX_STEPS: usize = 200;
 
 /// A cone's taper for the same local search (issue 25: cones). The residual of a point
 /// is its distance to the cone of half angle `psi` through the reference section (the

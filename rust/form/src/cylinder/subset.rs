@@ -4,7 +4,8 @@
 //! points: the objective of a subset never exceeds that of all points, and the two
 //! agree at the reported axis.
 
-use super::search::{fit_direct, Region};
+use super::search::{fit_direct, fit_warm, Region};
+use super::slp;
 use super::{Criterion, CylinderFit, Options};
 use crate::lsq::{self, Cylinder};
 use gagekit_core::{GkError, Result};
@@ -34,14 +35,7 @@ pub(super) fn fit_in(
     };
     // first subset: extreme residuals of the least-squares cylinder
     let dist: Vec<f64> = lsq::axis_distances(pts, &lc.point, &lc.direction).collect();
-    let mut order: Vec<usize> = (0..n).collect();
-    order.sort_by(|&i, &j| dist[i].total_cmp(&dist[j]).then(i.cmp(&j)));
-    let k = SUBSET_EXTREMES;
-    let subset: Vec<usize> = match crit {
-        Criterion::MinCircumscribed => order[n - 2 * k..].to_vec(),
-        Criterion::MaxInscribed => order[..2 * k].iter().chain(&order[n - k..]).copied().collect(),
-        Criterion::MinZone => order[..k].iter().chain(&order[n - k..]).copied().collect(),
-    };
+    let subset = first_subset(&dist, crit);
     let (mut iterations, mut evaluations) = (0, 0);
     let fit_sub = |sub: &[f64]| -> Result<CylinderFit> {
         let r = fit_direct(sub, crit, opts, lsq_axis, region)?;
@@ -49,17 +43,7 @@ pub(super) fn fit_in(
         evaluations += r.evaluations;
         Ok(r)
     };
-    let violations = |r: &CylinderFit| -> Vec<f64> {
-        let tol = 1e-12 * spread.max(r.r_out);
-        let d: Vec<f64> = lsq::axis_distances(pts, &r.point, &r.direction).collect();
-        d.iter()
-            .map(|&d| {
-                let hi = if crit == Criterion::MaxInscribed { 0.0 } else { d - r.r_out };
-                let lo = if crit == Criterion::MinCircumscribed { 0.0 } else { r.r_in - d };
-                hi.max(lo) - tol
-            })
-            .collect()
-    };
+    let violations = |r: &CylinderFit| violations(pts, crit, r, spread);
     let (mut r, subset) = settle(pts, subset, "cylinder", fit_sub, violations)?;
     r.control_in = r.control_in.iter().map(|&j| subset[j]).collect();
     r.control_out = r.control_out.iter().map(|&j| subset[j]).collect();
@@ -67,6 +51,74 @@ pub(super) fn fit_in(
     r.iterations = iterations;
     r.evaluations = evaluations;
     Ok(r)
+}
+
+/// The warm-started fit within `region` of all points (see [`super::fit_near`]): above
+/// 2000 points on an active subset that starts from the points of most extreme distance
+/// to the warm axis; `None` when the local method cannot decide (see `fit_warm`).
+pub(super) fn fit_near_in(
+    pts: &[f64],
+    crit: Criterion,
+    opts: &Options,
+    warm: &slp::Axis,
+    region: &Region,
+    spread: f64,
+) -> Result<Option<CylinderFit>> {
+    let n = pts.len() / 3;
+    if n <= SUBSET_ABOVE {
+        return fit_warm(pts, crit, opts, warm, region);
+    }
+    let (p, d) = ([warm.point[0], warm.point[1], warm.point[2]], [warm.dir[0], warm.dir[1], warm.dir[2]]);
+    let dist: Vec<f64> = lsq::axis_distances(pts, &p, &d).collect();
+    let subset = first_subset(&dist, crit);
+    let (mut iterations, mut evaluations, mut undecided) = (0, 0, false);
+    let fit_sub = |sub: &[f64]| -> Result<Option<CylinderFit>> {
+        let r = fit_warm(sub, crit, opts, warm, region)?;
+        if let Some(r) = &r {
+            iterations += r.iterations;
+            evaluations += r.evaluations;
+        } else {
+            undecided = true;
+        }
+        Ok(r)
+    };
+    let violations = |r: &Option<CylinderFit>| -> Vec<f64> { r.as_ref().map_or_else(Vec::new, |r| violations(pts, crit, r, spread)) };
+    let (r, subset) = settle(pts, subset, "cylinder", fit_sub, violations)?;
+    let Some(mut r) = r.filter(|_| !undecided) else { return Ok(None) };
+    r.control_in = r.control_in.iter().map(|&j| subset[j]).collect();
+    r.control_out = r.control_out.iter().map(|&j| subset[j]).collect();
+    r.extent = lsq::axis_extent(pts, &r.point, &r.direction);
+    r.iterations = iterations;
+    r.evaluations = evaluations;
+    Ok(Some(r))
+}
+
+/// The first active subset: the [`SUBSET_EXTREMES`] points of smallest and largest
+/// distance `dist` each criterion needs (MCC: the 2k largest; MIC: the 2k smallest and
+/// k largest; MZC: k of each).
+fn first_subset(dist: &[f64], crit: Criterion) -> Vec<usize> {
+    let n = dist.len();
+    let mut order: Vec<usize> = (0..n).collect();
+    order.sort_by(|&i, &j| dist[i].total_cmp(&dist[j]).then(i.cmp(&j)));
+    let k = SUBSET_EXTREMES;
+    match crit {
+        Criterion::MinCircumscribed => order[n - 2 * k..].to_vec(),
+        Criterion::MaxInscribed => order[..2 * k].iter().chain(&order[n - k..]).copied().collect(),
+        Criterion::MinZone => order[..k].iter().chain(&order[n - k..]).copied().collect(),
+    }
+}
+
+/// How far each point lies outside the fitted cylinder(s) `r` (positive: outside, beyond
+/// a tolerance of 1e-12 of the part's size).
+fn violations(pts: &[f64], crit: Criterion, r: &CylinderFit, spread: f64) -> Vec<f64> {
+    let tol = 1e-12 * spread.max(r.r_out);
+    lsq::axis_distances(pts, &r.point, &r.direction)
+        .map(|d| {
+            let hi = if crit == Criterion::MaxInscribed { 0.0 } else { d - r.r_out };
+            let lo = if crit == Criterion::MinCircumscribed { 0.0 } else { r.r_in - d };
+            hi.max(lo) - tol
+        })
+        .collect()
 }
 
 /// The active-subset iteration: fit the points `subset` of `pts` (flat, row-major), add

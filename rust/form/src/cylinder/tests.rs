@@ -103,3 +103,59 @@ fn projection_follows_the_errata() {
     let (t2, f2) = angles(&[-a[0], -a[1], -a[2]]);
     assert!((t2 - t).abs() < 1e-15 && (f2 - f).abs() < 1e-15);
 }
+
+/// A deterministic perturbation of every coordinate by up to `amp` (mm).
+fn jitter(pts: &[f64], amp: f64, salt: usize) -> Vec<f64> {
+    pts.iter()
+        .enumerate()
+        .map(|(i, x)| x + amp * (((i * 2654435761 + salt * 40503) % 1000) as f64 / 500.0 - 1.0))
+        .collect()
+}
+
+/// Warm starts (a Monte Carlo trial of the measured points): from the unperturbed fit's
+/// axis, the local method on perturbed copies gives the global search's value, on the
+/// active subset (2050 points) and directly (24 points), for every criterion.
+#[test]
+fn warm_start_equals_the_global_search_on_perturbed_points() {
+    for (pts, crits) in [
+        (noisy(2050), vec![Criterion::MinCircumscribed, Criterion::MinZone]),
+        (SET3.to_vec(), vec![Criterion::MinCircumscribed, Criterion::MaxInscribed, Criterion::MinZone]),
+    ] {
+        for crit in crits {
+            let opts = Options { max_iterations: 60, ..Options::default() };
+            let measured = fit(&pts, crit, &opts).unwrap();
+            let warm = Warm { point: measured.point, direction: measured.direction };
+            for salt in 0..3 {
+                let trial = jitter(&pts, 5e-4, salt);
+                let global = fit(&trial, crit, &opts).unwrap();
+                let (near, fallback) = fit_near(&trial, crit, &opts, &warm).unwrap();
+                assert!(!fallback, "{crit:?} trial {salt}: fell back");
+                assert!(near.outside.is_none());
+                assert!((near.size() - global.size()).abs() < 1e-9, "{crit:?} trial {salt}: {} vs {}", near.size(), global.size());
+                let e = lsq::axis_extent(&trial, &near.point, &near.direction);
+                assert!(crit == Criterion::MaxInscribed || e.max <= near.r_out + 1e-9, "{crit:?}: a point outside");
+                assert!(crit == Criterion::MinCircumscribed || e.min >= near.r_in - 1e-9, "{crit:?}: a point inside");
+            }
+        }
+    }
+}
+
+/// A warm start whose optimum lies on the boundary of the search cone falls back to the
+/// global search (which walks the boundary ring); a bad warm start is refused.
+#[test]
+fn warm_start_on_the_cone_boundary_falls_back() {
+    let pts = noisy(400);
+    let lsq_dir = lsq::cylinder(&pts, None).unwrap().direction;
+    // a cone of 1e-4 rad about an axis tilted 0.01 rad off: the optimum sits on its rim
+    let a = Vector3::from(lsq_dir);
+    let (u, _) = orthonormal_basis(&a);
+    let off = (a + u * 0.01).normalize();
+    let opts = Options { search: Search { axis: Some([off[0], off[1], off[2]]), max_tilt: 1e-4 }, ..Options::default() };
+    let global = fit(&pts, Criterion::MinZone, &opts).unwrap();
+    let warm = Warm { point: global.point, direction: global.direction };
+    let (near, fallback) = fit_near(&pts, Criterion::MinZone, &opts, &warm).unwrap();
+    assert!(fallback);
+    assert_eq!(near.size(), global.size());
+    let bad = Warm { point: [0.0; 3], direction: [0.0; 3] };
+    assert!(fit_near(&pts, Criterion::MinZone, &Options::default(), &bad).is_err());
+}

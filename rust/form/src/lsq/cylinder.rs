@@ -71,6 +71,17 @@ const SUBSAMPLE: usize = 20_000;
 /// given): the projected points' least-squares circle gives the start
 /// position and radius; the lowest-cost refinement wins.
 pub fn cylinder(pts: &[f64], start_axis: Option<[f64; 3]>) -> Result<Cylinder> {
+    cylinder_from(pts, start_axis, true)
+}
+
+/// [`cylinder`] from `axis` alone (no principal-axis starts): for points near those of a
+/// fit whose axis is `axis` (a Monte Carlo trial of the measured points), whose minimum
+/// lies in the basin of that axis.
+pub fn cylinder_near(pts: &[f64], axis: [f64; 3]) -> Result<Cylinder> {
+    cylinder_from(pts, Some(axis), false)
+}
+
+fn cylinder_from(pts: &[f64], start_axis: Option<[f64; 3]>, principal: bool) -> Result<Cylinder> {
     check_points(pts, 3, 5, "cylinder")?;
     let c = centroid(pts, 3);
     let q = centred3(pts, 3, &c);
@@ -81,7 +92,7 @@ pub fn cylinder(pts: &[f64], start_axis: Option<[f64; 3]>) -> Result<Cylinder> {
     if sv[1] <= DEGENERATE * sv[0] {
         return Err(GkError::degenerate("cylinder: the points are collinear; no cylinder is determined"));
     }
-    let mut starts: Vec<Vector3<f64>> = axes.to_vec();
+    let mut starts: Vec<Vector3<f64>> = if principal { axes.to_vec() } else { Vec::new() };
     if let Some(a) = start_axis {
         let a = vec3(&a);
         if a.norm() > 0.0 && a.iter().all(|v| v.is_finite()) {

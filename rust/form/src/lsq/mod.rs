@@ -29,7 +29,7 @@ use nalgebra::Vector3;
 
 pub use circle3::{circle3, Circle3};
 pub use cone::{cone, cone_with, Cone};
-pub use cylinder::{cylinder, Cylinder};
+pub use cylinder::{cylinder, cylinder_near, Cylinder};
 pub use extent::{axis_distances, axis_extent, center_extent, circle3_extent, cone_extent, line_extent, plane_extent, Extent};
 pub use frame::{centroid, check_magnitude, negligible, orthonormal_basis, plane_frame, principal_spread, upper, MAX_COORD};
 pub use line::{line, Line};
