@@ -12,7 +12,8 @@
 //!   ([`crate::datum::axis_along`]: 2-D Voronoi / Welzl), but as a function of the turn
 //!   it is only piecewise smooth and need not be unimodal: a 41-point grid within
 //!   [`CONE_TURN`] of the least-squares axis's turn, then golden-section search in the
-//!   best cell refined until the bracket stops shrinking (machine precision of the turn).
+//!   best cell (each value costs a Voronoi diagram) refined until the bracket stops
+//!   shrinking (machine precision of the turn).
 //!   Not certified global; the grid cell is the bracket.
 //! - [`cylinder_on_cone`]: the smallest cylindrical zone at a basic angle, free to turn
 //!   (angularity of a derived axis, ISO 1101 Sec. 18.11): the same structure over a full
@@ -45,8 +46,8 @@ pub const CONE_GRID: usize = 40;
 /// Grid of a full-turn search.
 pub const TURN_GRID: usize = 720;
 
-/// Best local minima of a grid refined by golden section.
-const CELLS: usize = 3;
+/// Best local minima of a full-turn grid refined by golden section.
+pub const TURN_CELLS: usize = 3;
 
 // -- the one-dimensional searches ---------------------------------------------------------
 
@@ -80,19 +81,20 @@ pub fn golden<F: Fn(f64) -> f64>(f: &F, mut lo: f64, mut hi: f64) -> (f64, f64) 
 
 /// Minimum of `f` over `n + 1` grid points `lo + k (hi - lo) / n` (`cyclic`: `n` points
 /// of a full turn), then golden-section search in the two cells around each of the best
-/// [`CELLS`] local minima of the grid; a refined value is kept only when it is no worse
+/// `cells` local minima of the grid; a refined value is kept only when it is no worse
 /// than the grid's best. Returns (value, x). Grid values in parallel, deterministic.
-pub fn min_on_grid<F: Fn(f64) -> f64 + Sync>(f: &F, lo: f64, hi: f64, n: usize, cyclic: bool) -> (f64, f64) {
+pub fn min_on_grid<F: Fn(f64) -> f64 + Sync>(f: &F, lo: f64, hi: f64, n: usize, cyclic: bool, cells: usize) -> (f64, f64) {
     let step = (hi - lo) / n as f64;
     let m = if cyclic { n } else { n + 1 };
     let vals: Vec<f64> = (0..m).into_par_iter().map(|k| f(lo + k as f64 * step)).collect();
     let left = |k: usize| if cyclic { Some((k + m - 1) % m) } else { k.checked_sub(1) };
     let right = |k: usize| if cyclic { Some((k + 1) % m) } else { (k + 1 < m).then_some(k + 1) };
+    let want = cells.max(1);
     let mut cells: Vec<usize> = (0..m)
         .filter(|&k| left(k).is_none_or(|j| vals[k] <= vals[j]) && right(k).is_none_or(|j| vals[k] <= vals[j]))
         .collect();
     cells.sort_by(|&i, &j| vals[i].total_cmp(&vals[j]).then(i.cmp(&j)));
-    cells.truncate(CELLS);
+    cells.truncate(want);
     let k0 = cells[0];
     let mut best = (vals[k0], lo + k0 as f64 * step);
     // the cells refined in parallel, compared in their fixed order (deterministic)
@@ -335,7 +337,7 @@ pub fn position(pts: &[f64], frame: &Frame, p0: V3, d0: Option<V3>) -> Result<(f
             f64::INFINITY
         })
     };
-    let out = if frame.free_rotation { min_on_grid(&value, 0.0, std::f64::consts::TAU, TURN_GRID, true) } else { (value(0.0), 0.0) };
+    let out = if frame.free_rotation { min_on_grid(&value, 0.0, std::f64::consts::TAU, TURN_GRID, true, TURN_CELLS) } else { (value(0.0), 0.0) };
     match fail.into_inner().unwrap() {
         Some(e) => Err(e),
         None => Ok(out),
@@ -422,7 +424,7 @@ pub fn plane_location(pts: &[f64], frame: &Frame, p0: V3, n0: V3) -> Result<(f64
     if !search {
         return Ok((eval(0.0).0, 0.0));
     }
-    let (mut w, mut f) = min_on_grid(&|x| eval(x).0, 0.0, std::f64::consts::TAU, TURN_GRID, true);
+    let (mut w, mut f) = min_on_grid(&|x| eval(x).0, 0.0, std::f64::consts::TAU, TURN_GRID, true, TURN_CELLS);
     // exact polish: with the active extremes fixed the width is one sinusoid
     let (_, i, j) = eval(f);
     let pick = |k: usize, s: f64| if k == usize::MAX { [0.0; 3] } else { [s * coef[k][0], s * coef[k][1], s * coef[k][2]] };
@@ -467,7 +469,7 @@ pub fn position_with_shift(pts: &[f64], frame: &Frame, p0: V3, u: V3, v: V3, rho
             }
         }
     };
-    let psi = if frame.free_rotation { min_on_grid(&|x| value(x).0, 0.0, std::f64::consts::TAU, TURN_GRID, true).1 } else { 0.0 };
+    let psi = if frame.free_rotation { min_on_grid(&|x| value(x).0, 0.0, std::f64::consts::TAU, TURN_GRID, true, TURN_CELLS).1 } else { 0.0 };
     let (r, used) = value(psi);
     match fail.into_inner().unwrap() {
         Some(e) => Err(e),
@@ -498,7 +500,7 @@ pub fn cylinder_on_cone(pts: &[f64], a: V3, angle: f64) -> Result<(f64, V3)> {
         let xy: Vec<[f64; 2]> = q.iter().map(|p| [dot(*p, u), dot(*p, v)]).collect();
         2.0 * mec(&xy).map(|m| m.0).unwrap_or(f64::INFINITY)
     };
-    let (w, phi) = min_on_grid(&value, 0.0, std::f64::consts::TAU, TURN_GRID, true);
+    let (w, phi) = min_on_grid(&value, 0.0, std::f64::consts::TAU, TURN_GRID, true, TURN_CELLS);
     Ok((w, cone_dir(a, angle, phi)))
 }
 
@@ -539,7 +541,7 @@ pub fn axis_on_cone(pts: &[f64], a: V3, tilt: f64, d_ls: V3, fit: AxisFit) -> Re
             }
         }
     };
-    let (_, phi) = min_on_grid(&value, phi0 - CONE_TURN, phi0 + CONE_TURN, CONE_GRID, false);
+    let (_, phi) = min_on_grid(&value, phi0 - CONE_TURN, phi0 + CONE_TURN, CONE_GRID, false, 1);
     if let Some(e) = fail.into_inner().unwrap() {
         return Err(e);
     }

@@ -102,11 +102,11 @@ fn min_on_grid_finds_the_deeper_of_two_basins() {
     // a wide shallow basin at 1 and a narrow deeper one at 5.55 (off the grid): the best
     // local minima, not the best grid values, are refined
     let f = |x: f64| (0.01 * (x - 1.0).powi(2) - 0.29).min(-0.3 + 50.0 * (x - 5.55).powi(2));
-    let (v, x) = turn::min_on_grid(&f, 0.0, TAU, 720, true);
+    let (v, x) = turn::min_on_grid(&f, 0.0, TAU, 720, true, turn::TURN_CELLS);
     assert!((x - 5.55).abs() < 1e-7, "{x}");
     assert!((v + 0.3).abs() < 1e-13, "{v}");
     // an open interval: the minimum at its end is kept
-    let (v, x) = turn::min_on_grid(&|x: f64| x, 2.0, 3.0, 40, false);
+    let (v, x) = turn::min_on_grid(&|x: f64| x, 2.0, 3.0, 40, false, 1);
     assert!(x == 2.0 && v == 2.0);
 }
 
