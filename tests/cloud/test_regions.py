@@ -66,3 +66,21 @@ def test_regions_from_toml(tmp_path):
     f.write_text("[[region]\n")
     with pytest.raises(ConfigError, match="not valid TOML"):
         gagekit.load_regions(f)
+
+
+def test_a_regions_file_in_degrees_is_read_as_the_gage_reader_reads_it(tmp_path):
+    # load_regions (``cloud regions`` without an [alignment]) used to take degrees as radians
+    from gagekit.gage.spec import parse_region_spec
+    from gagekit._util import load_toml
+
+    body = '[[region]]\nname = "tilted"\ncenter = [0, 0, 0]\nsize = [4, 1, 1]\nrotation = [0, 0, 90]\n'
+    deg = tmp_path / "deg.toml"
+    deg.write_text('angle_unit = "deg"\n' + body)
+    rad = tmp_path / "rad.toml"
+    rad.write_text(body.replace("[0, 0, 90]", f"[0, 0, {np.pi / 2!r}]"))
+    got = gagekit.load_regions(deg)[0]
+    assert got.rotation == pytest.approx((0.0, 0.0, np.pi / 2), abs=1e-15)
+    assert got.rotation == pytest.approx(parse_region_spec(load_toml(deg, "regions"), str(deg)).regions[0].box.rotation, abs=1e-15)
+    pts = np.array([[0.0, 1.5, 0.0], [1.5, 0.0, 0.0]])  # inside only when turned by 90 degrees
+    assert [list(i) for i in gagekit.classify(pts, gagekit.load_regions(deg))] == [[0]]
+    assert [list(i) for i in gagekit.classify(pts, gagekit.load_regions(rad))] == [[0]]

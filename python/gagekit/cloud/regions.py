@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import Sequence
 
@@ -67,9 +68,10 @@ def select(points, region: Box) -> np.ndarray:
     return classify(points, [region])[0]
 
 
-def regions_from_tables(tables: Sequence[dict], source: str = "regions") -> list[Box]:
+def regions_from_tables(tables: Sequence[dict], source: str = "regions", angle_scale: float = 1.0) -> list[Box]:
     """Boxes from ``[[region]]`` tables (``name``, ``center``, ``size``, optional
-    ``rotation``; other keys such as ``frame`` are left to the caller).
+    ``rotation``, multiplied by ``angle_scale`` to radians; other keys such as ``frame`` are
+    left to the caller).
 
     Raises :class:`ConfigError` naming the file and the region for a missing or
     malformed key, a non-positive size or a repeated name.
@@ -79,7 +81,10 @@ def regions_from_tables(tables: Sequence[dict], source: str = "regions") -> list
         for key in ("center", "size"):
             if key not in t:
                 raise ConfigError(f"{source}: region '{name}' has no '{key}'")
-        boxes.append(Box(t["center"], t["size"], t.get("rotation", (0.0, 0.0, 0.0)), name=name))
+        rotation = t.get("rotation", (0.0, 0.0, 0.0))
+        if angle_scale != 1.0:
+            rotation = [float(v) * angle_scale for v in rotation]
+        boxes.append(Box(t["center"], t["size"], rotation, name=name))
     return boxes
 
 
@@ -90,5 +95,6 @@ def load_regions(path) -> list[Box]:
     from ..schema import validate_document
 
     doc = load_toml(path, "regions")
-    validate_document("regions", doc, str(path))
-    return regions_from_tables(doc["region"], str(path))
+    f = validate_document("regions", doc, str(path))
+    # rotations in the file's angle unit, as the gage reader takes them
+    return regions_from_tables(doc["region"], str(path), math.pi / 180.0 if f.angle_unit == "deg" else 1.0)
