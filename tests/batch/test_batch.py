@@ -279,3 +279,29 @@ def test_the_human_line_of_a_failed_scan_names_its_path_once(tmp_path):
     assert proc.returncode == 0, proc.stderr
     line = next(ln for ln in proc.stdout.splitlines() if ln.startswith("error"))
     assert line.count(str(bad)) == 1 and "line 3" in line, line
+
+
+def test_gage_batch_with_uncertainty_stores_u_and_decisions(casting_set, tmp_path):
+    """`gage batch --uncertainty`: each scan's result is `gage check --uncertainty --json`'s
+    (same seed: same numbers, the batch's workers each on one thread), and every allowance row
+    stores u, U, the decision and the rule (issue 26)."""
+    gages, scans = casting_set
+    url = f"sqlite:///{tmp_path / 'gu.db'}"
+    opts = ["--uncertainty", "10", "--noise", "0.002", "--seed", "4"]
+    got, summary = lines(gk("gage", "batch", gages, *scans[:2], "--db", url, "--json", "-w", "2", *opts))
+    assert summary == {"scans": 2, "ok": 2, "failed": 0, "skipped": 0}
+    single = json.loads(gk("gage", "check", scans[1], gages, "--json", *opts, "--threads", "2").stdout)
+    result = next(d for d in got if d["scan"] == str(scans[1]))["result"]
+    assert result["decision"] == single["decision"] and result["decision_rule"] == single["decision_rule"]
+    assert [g["uncertainty"] for g in result["gages"]] == [g["uncertainty"] for g in single["gages"]]
+    assert [g["decision"] for g in result["gages"]] == [g["decision"] for g in single["gages"]]
+    t = m.GageAllowance.__table__
+    engine = create_engine(url)
+    with engine.connect() as conn:
+        rows = [dict(r._mapping) for r in conn.execute(sa.select(t.c.gage, t.c.u, t.c.expanded_u, t.c.decision,
+                                                                 t.c.decision_rule))]
+    engine.dispose()
+    assert len(rows) == 2 * len(single["gages"])
+    assert all(r["u"] is not None and r["u"] >= 0 and r["expanded_u"] >= 0 for r in rows)
+    assert {r["decision"] for r in rows} <= {"conforming", "not-proven", "nonconforming"}
+    assert {r["decision_rule"] for r in rows} == {"iso14253"}
