@@ -361,14 +361,21 @@ pub fn fit_near(pts: &[f64], crit: Criterion, opts: &Options, warm: &Warm) -> Re
     r.tilt = tilt(&r.direction, &reference);
     r.reference = reference;
     r.at_limit = false;
-    r.lsq_axis = lsq_fit.as_ref().map(|c| (c.point, c.direction));
+    finish(&mut r, pts, crit, lsq_fit.as_ref());
+    Ok((r, false))
+}
+
+/// The fields every fit of all the points ends with: the least-squares axis, the arc the
+/// points cover about the axis (the least-squares one for a maximum inscribed cylinder) and
+/// whether that arc makes the maximum inscribed cylinder ill-posed (< 90 degrees).
+fn finish(r: &mut CylinderFit, pts: &[f64], crit: Criterion, lsq_fit: Option<&lsq::Cylinder>) {
+    r.lsq_axis = lsq_fit.map(|c| (c.point, c.direction));
     let (point, direction) = match (crit, r.lsq_axis) {
         (Criterion::MaxInscribed, Some(ax)) => ax,
         _ => (r.point, r.direction),
     };
     r.arc = arc(pts, &point, &direction);
     r.ill_posed = crit == Criterion::MaxInscribed && r.arc.to_degrees() < 90.0;
-    Ok((r, false))
 }
 
 /// [`fit`] after its checks: `nominal` is the validated unit axis (if given), `spread`
@@ -414,12 +421,6 @@ pub(crate) fn fit_spread(
     r.tilt = tilt(&r.direction, &reference);
     r.reference = reference;
     r.at_limit = !free && max_tilt > 0.0 && r.tilt >= max_tilt - 1e-9;
-    r.lsq_axis = lsq_fit.as_ref().map(|c| (c.point, c.direction));
-    let (point, direction) = match (crit, r.lsq_axis) {
-        (Criterion::MaxInscribed, Some(ax)) => ax,
-        _ => (r.point, r.direction),
-    };
-    r.arc = arc(pts, &point, &direction);
-    r.ill_posed = crit == Criterion::MaxInscribed && r.arc.to_degrees() < 90.0;
+    finish(&mut r, pts, crit, lsq_fit.as_ref());
     Ok(r)
 }
