@@ -220,7 +220,7 @@ def test_export_writes_every_table(db_url, tmp_path, fmt):
     import pyarrow.csv as pacsv
     import pyarrow.parquet as pq
 
-    from gagekit.store.export import export_tables
+    from gagekit.store.dump import export_tables
 
     store = ResultStore(db_url)
     sid = store.ensure_spec("gage", "d" * 64, {"spec": {"x": 1}}, "g.toml", "p")

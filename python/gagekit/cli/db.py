@@ -35,7 +35,7 @@ def export(
     as_json: bool = JSON_OPTION,
 ) -> None:
     """Write every table to Parquet or CSV files (one per table)."""
-    from ..store.export import export_tables
+    from ..store.dump import export_tables
 
     files = export_tables(url, out if out is not None else Path("gagekit-export"), fmt.lower())
     emit({"files": [str(f) for f in files]}, as_json, lambda r: "\n".join(r["files"]))
