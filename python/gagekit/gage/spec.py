@@ -158,11 +158,6 @@ def load_gage_spec(path: Union[str, Path]) -> GageSpec:
 # unknown keys; what follows are the rules between keys, in one place.
 
 
-def _scaled_rotation(raw: Any, ang: float) -> Any:
-    """A region's rotation in the file's angle unit, to radians."""
-    return [float(v) * ang for v in raw]
-
-
 def _unique(names: Union[str, list], where: str, source: str) -> tuple[str, ...]:
     v = [names] if isinstance(names, str) else list(names)
     if len(set(v)) != len(v):
@@ -202,10 +197,8 @@ def _parse_motion(mt: Any, source: str, ang: float) -> MotionSet:
 def _parse_regions(doc: Mapping[str, Any], source: str, ang: float) -> tuple[Region, ...]:
     """[[region]]: the sampling volumes (Sec. 5.4.1) and their frames."""
     tables = doc.get("region", [])
-    if ang != 1.0:
-        tables = [dict(t, rotation=_scaled_rotation(t["rotation"], ang)) if "rotation" in t else t for t in tables]
     try:
-        boxes = regions_from_tables(tables, source)
+        boxes = regions_from_tables(tables, source, ang)
     except ConfigError as exc:
         msg = str(exc)
         raise ConfigError(msg if msg.startswith(source) else f"{source}: {msg}") from None
