@@ -27,9 +27,10 @@ A model is a few numbers, from a ``[measurement]`` table of a TOML file or from 
     measurement: along the line of sight (a range offset, which changes sizes) with
     ``origin``, else a translation of the whole scan (every coordinate).
 
-Every draw of one simulated measurement comes from its own generator seeded by
-(seed, trial index) (:func:`trial_rng`), so a trial's perturbation never depends on the
-order or the number of threads the trials run on.
+Every draw of one simulated measurement comes from its own generator keyed by
+(seed, trial index) (:meth:`MeasurementModel.simulate`: the kernel's ChaCha8 stream,
+``gagekit_gdt::plan::perturb``), so a trial's perturbation never depends on the order or
+the number of threads the trials run on.
 """
 
 from __future__ import annotations
@@ -102,40 +103,28 @@ class MeasurementModel:
     def with_sigma(self, sigma: float, note: str = "") -> "MeasurementModel":
         return replace(self, sigma=float(sigma), sigma_auto=bool(note), sigma_note=note)
 
+    def kernel_args(self) -> tuple:
+        """The model as the kernels take it: (sigma, origin, sigma_per_m, probing, relative
+        scale, offset)."""
+        return (float(self.sigma), self.origin, float(self.sigma_per_m), float(self.probing), float(self.relative_scale),
+                float(self.offset))
+
+    def simulate(self, points: np.ndarray, seed: int, trial: int) -> np.ndarray:
+        """Simulated measurement ``trial`` of ``points`` ((n, 3), or (n, 2) for plane
+        figures; mm), a new array: every draw from the generator of (seed, trial) alone
+        (``gagekit_gdt::plan::perturb``, the one implementation the compiled inspection's
+        trials use too), so it never depends on the order or the threads of the trials."""
+        from .. import _core
+
+        p = np.ascontiguousarray(np.asarray(points, dtype=float))
+        if p.ndim != 2 or p.shape[1] not in (2, 3):
+            raise InvalidInputError(f"measurement model: points must be (n, 3) or (n, 2), got shape {p.shape}")
+        return _core.gdt.perturb(p, self.kernel_args(), int(seed), int(trial))
+
     def perturb(self, points: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-        """One simulated measurement of ``points`` ((n, 3), or (n, 2) for plane figures; mm):
-        a new array."""
-        p = np.asarray(points, dtype=float)
-        n, dim = p.shape
-        out = p.copy()
-        if self.origin is not None and dim != 3:
-            raise InvalidInputError(f"measurement model: a scanner origin needs 3-D points, got {dim}-D")
-        centre = np.zeros(dim) if self.origin is None else np.asarray(self.origin)
-        los = None
-        if self.origin is not None:
-            q = p - centre
-            rng_mm = np.linalg.norm(q, axis=1)
-            los = q / np.where(rng_mm > 0, rng_mm, 1.0)[:, None]
-        if self.sigma > 0 or self.sigma_per_m > 0:
-            if los is None:
-                out += rng.standard_normal((n, dim)) * self.sigma
-            else:
-                s = self.sigma + self.sigma_per_m * rng_mm / 1000.0
-                out += los * (rng.standard_normal(n) * s)[:, None]
-        if self.probing > 0:
-            d = rng.standard_normal((n, dim))
-            d /= np.linalg.norm(d, axis=1)[:, None]
-            out += d * rng.uniform(-0.5 * self.probing, 0.5 * self.probing, n)[:, None]
-        if self.offset > 0:
-            if los is None:
-                out += rng.standard_normal(dim) * self.offset
-            else:
-                out += los * (rng.standard_normal() * self.offset)
-        e = self.relative_scale
-        if e > 0:
-            s = rng.uniform(-e, e)
-            out = centre + (out - centre) * (1.0 + s)
-        return np.ascontiguousarray(out)
+        """One simulated measurement of ``points`` drawn from ``rng`` (it draws the seed of
+        :meth:`simulate`): a new array."""
+        return self.simulate(points, int(rng.integers(0, 2**63)), 0)
 
     def to_dict(self) -> dict[str, Any]:
         d: dict[str, Any] = {"sigma": self.sigma}

@@ -13,9 +13,10 @@ the uncertainty is counted) and summarises each output quantity by JCGM 101 Sec.
   noisy points (flatness, roundness, cylindricity, sphericity) is biased upward: the
   simulation's bias says by how much, beside U, instead of hiding it.
 
-Trials run on ``threads`` threads (the Rust kernels release the GIL); trial ``i``'s draws
-come from a generator seeded by (seed, i) alone, so the same seed gives the same values on
-any number of threads.
+Trials run on ``threads`` threads (the Rust kernels release the GIL; a compiled inspection
+runs a whole block of trials in one kernel call, ``block``); trial ``i``'s draws come from
+a generator keyed by (seed, i) alone (:meth:`MeasurementModel.simulate`), so the same seed
+gives the same values on any number of threads.
 
 Adaptive stopping (JCGM 101 Sec. 7.9.4): batches of ``batch`` trials until, with h >= 2
 batches, twice the standard deviation of the h batch means of y, u and both interval
@@ -36,7 +37,7 @@ from typing import Any, Callable, Mapping, Optional, Union
 import numpy as np
 
 from ..errors import GagekitError, InvalidInputError, NumericalError
-from .model import MeasurementModel, trial_rng
+from .model import MeasurementModel
 
 __all__ = ["Uncertainty", "MonteCarlo", "monte_carlo", "parse_trials", "MIN_TRIALS", "METHOD", "coverage_interval",
            "numerical_tolerance"]
@@ -88,6 +89,8 @@ class MonteCarlo:
     samples: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)), repr=False)
     #: Fits the trials started from the measured ones, and how many needed the global search.
     warm_starts: Optional[dict[str, Any]] = None
+    #: How each trial was evaluated (a compiled inspection, or why not).
+    evaluation: Optional[str] = None
 
     def __getitem__(self, key: str) -> Uncertainty:
         return self.uncertainties[key]
@@ -99,7 +102,8 @@ class MonteCarlo:
                 "significant_digits": self.digits, "stabilized": self.stabilized,
                 "numerical_tolerance": dict(self.numerical_tolerance), "coverage": 0.95,
                 "interval": "probabilistically symmetric (JCGM 101 7.7)", "model": self.model.to_dict(),
-                "seconds": self.seconds, **({} if self.warm_starts is None else {"warm_starts": dict(self.warm_starts)})}
+                "seconds": self.seconds, **({} if self.warm_starts is None else {"warm_starts": dict(self.warm_starts)}),
+                **({} if self.evaluation is None else {"evaluation": self.evaluation})}
 
     def to_dict(self) -> dict[str, Any]:
         return {k: v.to_dict() for k, v in self.uncertainties.items()}
@@ -193,6 +197,7 @@ def monte_carlo(
     batch: int = 100,
     max_trials: int = 10_000,
     values: Optional[Mapping[str, float]] = None,
+    block: Optional[Callable[[int, int], np.ndarray]] = None,
 ) -> MonteCarlo:
     """Run the Monte Carlo propagation (see the module docstring).
 
@@ -214,6 +219,10 @@ def monte_carlo(
         Adaptive stopping: significant digits of u, the batch size, the cap.
     values
         The measured values (``evaluate(points)`` when not given).
+    block
+        ``block(start, stop)``: the values of trials start .. stop - 1 as a (stop - start,
+        len(values)) array, computed at once (a compiled inspection's kernel,
+        :mod:`gagekit.uncertainty.plan`); ``evaluate`` then only gives the measured values.
     """
     import time
 
@@ -242,7 +251,7 @@ def monte_carlo(
 
     def one(i: int) -> np.ndarray:
         try:
-            out = evaluate(model.perturb(pts, trial_rng(int(seed), i)))
+            out = evaluate(model.simulate(pts, int(seed), i))
         except GagekitError as exc:
             raise type(exc)(f"Monte Carlo trial {i} (a simulated measurement): {exc}") from None
         try:
@@ -255,9 +264,16 @@ def monte_carlo(
         return row
 
     rows: list[np.ndarray] = []
-    pool = ThreadPoolExecutor(max_workers=nthreads) if nthreads > 1 else None
+    pool = ThreadPoolExecutor(max_workers=nthreads) if nthreads > 1 and block is None else None
 
     def run(start: int, stop: int) -> None:
+        if block is not None:
+            got = np.asarray(block(start, stop), dtype=float)
+            if got.shape != (stop - start, len(keys)) or not np.all(np.isfinite(got)):
+                raise NumericalError(f"Monte Carlo trials {start} to {stop - 1}: the evaluation returned "
+                                     f"{'non-finite values' if got.shape == (stop - start, len(keys)) else f'shape {got.shape}'}")
+            rows.extend(got)
+            return
         idx = range(start, stop)
         rows.extend(pool.map(one, idx) if pool is not None else map(one, idx))
 

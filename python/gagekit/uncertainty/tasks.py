@@ -56,6 +56,13 @@ WARM_METHOD = ("the exact local method (2-D fit, SLP, basin hopping) from the me
                "every point; the global search where it cannot decide (a fallback)")
 
 
+#: How the trials of a compiled inspection run (the JSON ``monte_carlo.evaluation``).
+PLAN_METHOD = ("compiled: each block of trials is one kernel call (gagekit_gdt::plan), the trials in parallel, "
+               "trial i's perturbation drawn by the generator of (seed, i)")
+#: ... and of one the plan does not cover.
+PYTHON_METHOD = "the Python evaluation of each trial"
+
+
 def _warm_starts(feats: Mapping[str, Any]) -> dict[str, dict[str, Any]]:
     """{feature: {criterion: (point, direction)}} of the minimax cylinders the measured
     evaluation fitted (:meth:`FeatureData.chebyshev_cylinder`) and ``"slab"``: the normal
@@ -163,10 +170,28 @@ def inspect_uncertainty(points: Any, spec: Any, model: MeasurementModel, trials:
                     if isinstance(k, tuple) and k[0] == "cylinder" and v.warm_fallback is not None)
         return out
 
-    mc = monte_carlo(evaluate, active, model, trials, seed=seed, threads=threads, values=values(result), digits=digits)
-    if fits:
-        mc = replace(mc, warm_starts={"fits": len(fits), "fallbacks": sum(1 for f in fits if f),
-                                      "method": WARM_METHOD})
+    from .montecarlo import default_threads
+    from .plan import compile_plan
+
+    plan, why = compile_plan(spec, feats, rows, warm, near)
+    counts = [0, 0]  # the compiled trials' warm-started cylinder fits, of them fallbacks
+    block = None
+    if plan is not None:
+        nthreads = default_threads() if threads is None else int(threads)
+
+        def block(start: int, stop: int) -> np.ndarray:
+            out, n_fits, n_fallbacks = plan.run(active, model.kernel_args(), int(seed), start, stop - start, max(nthreads, 1))
+            counts[0] += n_fits
+            counts[1] += n_fallbacks
+            return out
+
+    mc = monte_carlo(evaluate, active, model, trials, seed=seed, threads=threads, values=values(result), digits=digits,
+                     block=block)
+    how = (PLAN_METHOD if plan is not None else f"{PYTHON_METHOD} ({why})")
+    if fits or counts[0]:
+        mc = replace(mc, warm_starts={"fits": len(fits) + counts[0],
+                                      "fallbacks": sum(1 for f in fits if f) + counts[1], "method": WARM_METHOD})
+    mc = replace(mc, evaluation=how)
     out = decide_inspection(result, rule, mc)
     return replace(out, seconds=time.perf_counter() - t0)
 

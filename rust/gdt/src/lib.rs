@@ -19,6 +19,8 @@
 //!   at a basic angle to a datum plane, angularity of an axis, position of centres, axes
 //!   and planes with the rotation about z free, the datum shift (exact where the optimum
 //!   is an envelope vertex, otherwise grid and golden section to machine precision).
+//! - [`plan`]: a whole inspection compiled once and evaluated on many simulated
+//!   measurements in one call (the Monte Carlo uncertainty, JCGM 101).
 //! - [`size`]: local sizes of features of size (ISO 14405-1): two-point sizes in
 //!   sections, widths between two faces, the distance of two convex hulls.
 //!
@@ -27,6 +29,7 @@
 
 pub mod datum;
 pub mod min_width3;
+pub mod plan;
 pub mod size;
 pub mod turn;
 pub mod vec3;

@@ -6,8 +6,9 @@ use gagekit_core::GkError;
 use gagekit_gdt::datum::{self, AxisFit, Orientation, PlaneFit};
 use gagekit_gdt::size::{self, Sections};
 use gagekit_gdt::turn::{self, Frame};
+use gagekit_gdt::plan;
 use gagekit_gdt::width2;
-use numpy::{PyArray1, PyReadonlyArray2};
+use numpy::{PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 
 type V3 = (f64, f64, f64);
@@ -271,5 +272,159 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(gdt_plane_location, m)?)?;
     m.add_function(wrap_pyfunction!(gdt_position_with_shift, m)?)?;
     m.add_function(wrap_pyfunction!(gdt_min_in_disk, m)?)?;
+    m.add_function(wrap_pyfunction!(gdt_perturb, m)?)?;
+    m.add_class::<InspectionPlan>()?;
     Ok(())
+}
+
+// -- the compiled inspection of the Monte Carlo uncertainty (gagekit_gdt::plan) -------------
+
+type WarmAxis = Option<(V3, V3)>;
+/// (shape, rows, outward, sign hint, box axes, hole, least-squares direction, minimum-zone /
+/// min-circumscribed / max-inscribed axes, flatness normal, minimum-zone sphere centre)
+type FeatureArgs<'py> =
+    (String, PyReadonlyArray1<'py, i64>, Option<V3>, V3, (V3, V3, V3), bool, Option<V3>, WarmAxis, WarmAxis, WarmAxis, Option<V3>, Option<V3>);
+/// (characteristic, feature, tolerance, datum entries, frame, angle deg, sections, nominal point, nominal direction)
+type CalloutArgs = (String, usize, f64, Vec<usize>, Option<usize>, f64, usize, Option<V3>, Option<V3>);
+/// (sigma, origin, sigma_per_m, probing, relative scale, offset)
+type ModelArgs = (f64, Option<V3>, f64, f64, f64, f64);
+
+fn plan_feature(f: FeatureArgs<'_>) -> PyResult<plan::Feature> {
+    let (shape, rows, outward, hint, (bx, by, bz), hole, warm_lsq, mz, mc, mi, slab, sphere) = f;
+    let shape = match shape.as_str() {
+        "plane" => plan::Shape::Plane,
+        "line" => plan::Shape::Line,
+        "circle" => plan::Shape::Circle,
+        "sphere" => plan::Shape::Sphere,
+        "cylinder" => plan::Shape::Cylinder,
+        other => return Err(crate::errors::invalid(format!("inspection plan: unsupported shape {other:?}"))),
+    };
+    let rows = rows
+        .as_slice()
+        .map_err(|_| crate::errors::invalid("inspection plan: rows must be C-contiguous"))?
+        .iter()
+        .map(|&i| usize::try_from(i).map_err(|_| crate::errors::invalid(format!("inspection plan: row {i} out of range"))))
+        .collect::<PyResult<Vec<usize>>>()?;
+    let axis = |w: WarmAxis| w.map(|(p, d)| (arr(p), arr(d)));
+    Ok(plan::Feature {
+        shape,
+        rows,
+        outward: outward.map(arr),
+        sign_hint: arr(hint),
+        box_axes: [arr(bx), arr(by), arr(bz)],
+        hole,
+        warm_lsq: warm_lsq.map(arr),
+        warm_cylinder: [axis(mz), axis(mc), axis(mi)],
+        warm_slab: slab.map(arr),
+        warm_sphere: sphere.map(arr),
+    })
+}
+
+fn plan_callout(c: CalloutArgs) -> PyResult<plan::Callout> {
+    use plan::Characteristic as C;
+    let (name, feature, tolerance, datums, frame, angle, sections, nominal_point, nominal_direction) = c;
+    let characteristic = match name.as_str() {
+        "flatness" => C::Flatness,
+        "straightness" => C::Straightness,
+        "roundness" => C::Roundness,
+        "cylindricity" => C::Cylindricity,
+        "sphericity" => C::Sphericity,
+        "parallelism" => C::Parallelism,
+        "perpendicularity" => C::Perpendicularity,
+        "angularity" => C::Angularity,
+        "position" => C::Position,
+        "coaxiality" => C::Coaxiality,
+        "profile" => C::Profile,
+        "circular-runout" => C::CircularRunout,
+        "total-runout" => C::TotalRunout,
+        other => return Err(crate::errors::invalid(format!("inspection plan: unsupported characteristic {other:?}"))),
+    };
+    Ok(plan::Callout {
+        characteristic,
+        feature,
+        tolerance,
+        datums,
+        frame,
+        angle,
+        sections,
+        nominal_point: nominal_point.map(arr),
+        nominal_direction: nominal_direction.map(arr),
+    })
+}
+
+fn plan_model(m: ModelArgs) -> gagekit_core::Result<plan::perturb::Model> {
+    let (sigma, origin, sigma_per_m, probing, relative_scale, offset) = m;
+    plan::perturb::Model { sigma, origin: origin.map(arr), sigma_per_m, probing, relative_scale, offset }.checked()
+}
+
+/// An inspection compiled for the Monte Carlo trials (`gagekit_gdt::plan`): features
+/// (rows into the active points, warm starts), datums (feature, prior datum entries,
+/// basic angle), frames (datum entries) and callouts. `gagekit.uncertainty.plan` builds it.
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyclass)]
+#[pyclass(frozen, module = "gagekit._core.gdt")]
+pub struct InspectionPlan {
+    plan: plan::Plan,
+}
+
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pymethods)]
+#[pymethods]
+impl InspectionPlan {
+    #[new]
+    fn new(
+        features: Vec<FeatureArgs<'_>>,
+        datums: Vec<(usize, Vec<usize>, f64)>,
+        frames: Vec<Vec<usize>>,
+        callouts: Vec<CalloutArgs>,
+    ) -> PyResult<Self> {
+        let features = features.into_iter().map(plan_feature).collect::<PyResult<Vec<_>>>()?;
+        let datums = datums.into_iter().map(|(feature, prior, angle)| plan::Datum { feature, prior, angle }).collect();
+        let callouts = callouts.into_iter().map(plan_callout).collect::<PyResult<Vec<_>>>()?;
+        Ok(Self { plan: plan::Plan { features, datums, frames, callouts } })
+    }
+
+    /// The callouts' (measured, margin) of the active points (n, 3), one evaluation:
+    /// (values, warm-started cylinder fits, fallbacks to the global search).
+    fn evaluate<'py>(&self, py: Python<'py>, points: PyReadonlyArray2<'py, f64>) -> PyResult<(Bound<'py, PyArray1<f64>>, usize, usize)> {
+        let pts = rows(py, &points, 3, "points")?;
+        let v = run(py, || plan::evaluate(&self.plan, pts))?;
+        Ok((PyArray1::from_vec(py, v.values), v.warm_fits, v.fallbacks))
+    }
+
+    /// Trials `first .. first + count`, each a perturbation of the active points (n, 3)
+    /// by `model` (sigma, origin, sigma_per_m, probing, relative scale, offset) drawn by
+    /// the generator of (seed, trial), evaluated on `threads` threads (0: all): ((count,
+    /// 2 x callouts) values, warm-started cylinder fits, fallbacks).
+    #[allow(clippy::too_many_arguments)]
+    fn run<'py>(
+        &self,
+        py: Python<'py>,
+        points: PyReadonlyArray2<'py, f64>,
+        model: ModelArgs,
+        seed: u64,
+        first: u64,
+        count: usize,
+        threads: usize,
+    ) -> PyResult<(Bound<'py, PyArray2<f64>>, usize, usize)> {
+        let pts = rows(py, &points, 3, "points")?;
+        let v = run(py, || plan::run(&self.plan, pts, &plan_model(model)?, seed, first, count, threads))?;
+        let m = 2 * self.plan.callouts.len();
+        Ok((crate::arrays::matrix(py, v.values, m)?, v.warm_fits, v.fallbacks))
+    }
+}
+
+/// One simulated measurement of (n, 3) or (n, 2) points by the measurement model (sigma,
+/// origin, sigma_per_m, probing, relative scale, offset), drawn by the generator of
+/// (seed, trial) (`gagekit_gdt::plan::perturb`).
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyfunction(module = "gagekit._core.gdt"))]
+#[pyfunction]
+#[pyo3(name = "perturb")]
+fn gdt_perturb<'py>(py: Python<'py>, points: PyReadonlyArray2<'py, f64>, model: ModelArgs, seed: u64, trial: u64) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    use numpy::PyUntypedArrayMethods;
+    let dim = points.shape()[1];
+    let pts = points.as_slice().map_err(|_| crate::errors::invalid("points: array must be C-contiguous"))?;
+    let p = run(py, || {
+        gagekit_core::check_finite(pts, dim.max(1), "points")?;
+        plan::perturb::perturb(pts, dim, &plan_model(model)?, seed, trial)
+    })?;
+    crate::arrays::matrix(py, p, dim)
 }

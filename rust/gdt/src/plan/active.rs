@@ -1,0 +1,93 @@
+//! Minimum-zone fits on an active set, exact by verification (the kernel side of
+//! `gagekit.form.active`): the fit runs on the points near the two boundaries of a nearby
+//! zone (within [`BAND`] of its width, and at least [`MIN_EXTREMES`] of each extreme) and
+//! is verified on every point; points outside the subset's zone (beyond
+//! [`LENGTH_RESOLUTION`]) join the subset and the fit runs again. A zone of a subset that
+//! contains every point is the zone of every point (the full set's cannot be narrower).
+
+use crate::datum::{self, Orientation};
+use crate::vec3::{dot, V3};
+use gagekit_core::Result;
+use gagekit_form::circle;
+use gagekit_form::criterion::FitCriterion;
+use gagekit_form::sphere;
+
+/// Points within this fraction of the zone width of either boundary start the subset.
+pub const BAND: f64 = 0.2;
+/// ... and at least this many points of each extreme.
+pub const MIN_EXTREMES: usize = 16;
+/// The containment test's tolerance, mm (`gagekit._util.LENGTH_RESOLUTION_MM`).
+pub const LENGTH_RESOLUTION: f64 = 1e-9;
+
+/// The start mask of the points of distances `r` to a nearby zone's centre or plane.
+pub fn band(r: &[f64]) -> Vec<bool> {
+    let n = r.len();
+    if n <= 2 * MIN_EXTREMES {
+        return vec![true; n];
+    }
+    let lo = r.iter().cloned().fold(f64::INFINITY, f64::min);
+    let hi = r.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
+    let w = BAND * (hi - lo);
+    let mut sel: Vec<bool> = r.iter().map(|&x| x <= lo + w || x >= hi - w).collect();
+    let mut order: Vec<usize> = (0..n).collect();
+    order.sort_by(|&a, &b| r[a].total_cmp(&r[b]).then(a.cmp(&b)));
+    for &i in order[..MIN_EXTREMES].iter().chain(&order[n - MIN_EXTREMES..]) {
+        sel[i] = true;
+    }
+    sel
+}
+
+/// The fit of every point of `pts` (`dim` coordinates a point) by fitting the subset
+/// `sel` and growing it (module docstring). `bounds(fit, pts)`: every point's distance and
+/// the zone's (inner, outer) bound.
+pub fn active_fit<F, B, T>(pts: &[f64], dim: usize, mut sel: Vec<bool>, fit: F, bounds: B) -> Result<T>
+where
+    F: Fn(&[f64]) -> Result<T>,
+    B: Fn(&T, &[f64]) -> (Vec<f64>, f64, f64),
+{
+    loop {
+        if sel.iter().all(|&s| s) {
+            return fit(pts);
+        }
+        let sub: Vec<f64> = pts.chunks_exact(dim).zip(&sel).filter(|(_, &s)| s).flat_map(|(p, _)| p.iter().copied()).collect();
+        let f = match fit(&sub) {
+            Ok(f) => f,
+            Err(_) => return fit(pts), // a subset too small or degenerate for the kernel
+        };
+        let (r, lo, hi) = bounds(&f, pts);
+        let mut grew = false;
+        for (s, &x) in sel.iter_mut().zip(&r) {
+            if x < lo - LENGTH_RESOLUTION || x > hi + LENGTH_RESOLUTION {
+                *s = true;
+                grew = true;
+            }
+        }
+        if !grew {
+            return Ok(f);
+        }
+    }
+}
+
+fn radii(pts: &[f64], dim: usize, c: &[f64]) -> Vec<f64> {
+    pts.chunks_exact(dim).map(|p| p.iter().zip(c).map(|(a, b)| (a - b) * (a - b)).sum::<f64>().sqrt()).collect()
+}
+
+/// The minimum-zone circle of flat (n, 2) points started near `center`.
+pub fn circle_near(xy: &[f64], center: [f64; 2]) -> Result<circle::CircleFit> {
+    let start = band(&radii(xy, 2, &center));
+    active_fit(xy, 2, start, |p| circle::fit(p, FitCriterion::MinZone), |f, p| (radii(p, 2, &f.center), f.r_in, f.r_out))
+}
+
+/// The minimum-zone sphere of flat (n, 3) points started near `center`.
+pub fn sphere_near(pts: &[f64], center: V3) -> Result<sphere::SphereZone> {
+    let start = band(&radii(pts, 3, &center));
+    active_fit(pts, 3, start, sphere::min_zone, |f, p| (radii(p, 3, &f.center), f.r_in, f.r_out))
+}
+
+/// The thinnest slab (free orientation) of flat (n, 3) points started near `normal`.
+pub fn slab_near(pts: &[f64], normal: V3) -> Result<crate::width3::Slab> {
+    let h: Vec<f64> = pts.chunks_exact(3).map(|p| dot([p[0], p[1], p[2]], normal)).collect();
+    active_fit(pts, 3, band(&h), |p| datum::slab(p, Orientation::Free), |f, p| {
+        (p.chunks_exact(3).map(|q| dot([q[0], q[1], q[2]], f.normal)).collect(), f.lo, f.hi)
+    })
+}

@@ -1,0 +1,131 @@
+//! The compiled inspection on a synthetic part: a datum plane A, a plane B perpendicular to
+//! it and a bore; trials are the same on any thread count and in any split, the perturbation
+//! depends on (seed, trial) alone, and a bad plan is refused.
+
+use super::perturb::{perturb, Model};
+use super::*;
+use gagekit_core::ErrorKind;
+
+fn part() -> (Vec<f64>, Plan) {
+    let mut pts = Vec::new();
+    let mut rows = [Vec::new(), Vec::new(), Vec::new()];
+    for i in 0..20 {
+        for j in 0..20 {
+            rows[0].push(pts.len() / 3);
+            pts.extend([i as f64 * 3.0, j as f64 * 2.0, 1e-4 * ((i * 7 + j * 3) % 5) as f64]);
+        }
+    }
+    for i in 0..20 {
+        for j in 0..10 {
+            rows[1].push(pts.len() / 3);
+            pts.extend([i as f64 * 3.0, 1e-4 * ((i + j) % 3) as f64, 1.0 + j as f64 * 2.0]);
+        }
+    }
+    for i in 0..72 {
+        for j in 0..8 {
+            let a = i as f64 * 5f64.to_radians();
+            let r = 5.0 + 2e-4 * ((i * 5 + j) % 4) as f64;
+            rows[2].push(pts.len() / 3);
+            pts.extend([30.0 + r * a.cos(), 20.0 + r * a.sin(), 2.0 + j as f64 * 2.0]);
+        }
+    }
+    let eye = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+    let feature = |shape, rows: Vec<usize>, outward: Option<V3>| Feature {
+        shape,
+        rows,
+        outward,
+        sign_hint: [0.0, 0.0, 1.0],
+        box_axes: eye,
+        hole: true,
+        warm_lsq: None,
+        warm_cylinder: [None, None, None],
+        warm_slab: None,
+        warm_sphere: None,
+    };
+    let features = vec![
+        feature(Shape::Plane, rows[0].clone(), Some([0.0, 0.0, -1.0])),
+        feature(Shape::Plane, rows[1].clone(), Some([0.0, -1.0, 0.0])),
+        feature(Shape::Cylinder, rows[2].clone(), None),
+    ];
+    let datums = vec![Datum { feature: 0, prior: vec![], angle: 90.0 }, Datum { feature: 1, prior: vec![0], angle: 90.0 }];
+    let callout = |characteristic, feature, datums: Vec<usize>, frame, p: Option<V3>, d: Option<V3>| Callout {
+        characteristic,
+        feature,
+        tolerance: 0.05,
+        datums,
+        frame,
+        angle: 0.0,
+        sections: 4,
+        nominal_point: p,
+        nominal_direction: d,
+    };
+    let callouts = vec![
+        callout(Characteristic::Flatness, 0, vec![], None, None, None),
+        callout(Characteristic::Perpendicularity, 1, vec![0], None, None, None),
+        callout(Characteristic::Perpendicularity, 2, vec![0], None, None, None),
+        callout(Characteristic::Roundness, 2, vec![], None, None, None),
+        callout(Characteristic::Position, 2, vec![0, 1], Some(0), Some([30.0, 20.0, 0.0]), Some([0.0, 0.0, 1.0])),
+    ];
+    (pts, Plan { features, datums, frames: vec![vec![0, 1]], callouts })
+}
+
+fn noise(sigma: f64) -> Model {
+    Model { sigma, origin: None, sigma_per_m: 0.0, probing: 0.0, relative_scale: 0.0, offset: 0.0 }
+}
+
+#[test]
+fn the_measured_part_gives_its_zones() {
+    let (pts, plan) = part();
+    let v = evaluate(&plan, &pts).unwrap();
+    assert_eq!(v.values.len(), 10);
+    for pair in v.values.chunks_exact(2) {
+        assert!(pair[0] >= 0.0 && (pair[0] + pair[1] - 0.05).abs() < 1e-15);
+    }
+    assert!((v.values[0] - 4e-4).abs() < 1e-9, "flatness {}", v.values[0]);
+    assert!(v.values[6] <= 6e-4 + 1e-9, "roundness {}", v.values[6]);
+    assert!(v.values[8] < 1e-3, "position {}", v.values[8]); // the bore sits at its nominal (30, 20)
+}
+
+#[test]
+fn trials_are_the_same_on_any_thread_count_and_split() {
+    let (pts, plan) = part();
+    let m = noise(0.001);
+    let one = run(&plan, &pts, &m, 5, 0, 6, 1).unwrap();
+    let two = run(&plan, &pts, &m, 5, 0, 6, 2).unwrap();
+    let mut split = run(&plan, &pts, &m, 5, 0, 2, 2).unwrap().values;
+    split.extend(run(&plan, &pts, &m, 5, 2, 4, 2).unwrap().values);
+    assert_eq!(one, two);
+    assert_eq!(one.values, split);
+    let p = perturb(&pts, 3, &m, 5, 3).unwrap();
+    assert_eq!(evaluate(&plan, &p).unwrap().values, one.values[30..40].to_vec());
+}
+
+#[test]
+fn the_perturbation_depends_on_seed_and_trial_only() {
+    let (pts, _) = part();
+    let m = Model { probing: 0.002, relative_scale: 1e-5, offset: 0.001, ..noise(0.01) };
+    let a = perturb(&pts, 3, &m, 1, 2).unwrap();
+    assert_eq!(a, perturb(&pts, 3, &m, 1, 2).unwrap());
+    assert_ne!(a, perturb(&pts, 3, &m, 1, 3).unwrap());
+    assert_ne!(a, perturb(&pts, 3, &m, 2, 2).unwrap());
+    let d: Vec<f64> = perturb(&pts, 3, &noise(0.01), 0, 0).unwrap().iter().zip(&pts).map(|(a, b)| a - b).collect();
+    let n = d.len() as f64;
+    let mean = d.iter().sum::<f64>() / n;
+    let sd = (d.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / n).sqrt();
+    assert!(mean.abs() < 5e-4 && (sd - 0.01).abs() < 5e-4, "mean {mean} sd {sd}");
+    assert_eq!(perturb(&pts[..6], 2, &noise(0.01), 0, 0).unwrap().len(), 6);
+    assert_eq!(perturb(&pts, 2, &Model { origin: Some([0.0; 3]), ..noise(0.01) }, 0, 0).unwrap_err().kind, ErrorKind::InvalidInput);
+}
+
+#[test]
+fn a_bad_plan_is_refused() {
+    let (pts, mut plan) = part();
+    assert_eq!(evaluate(&plan, &pts[..30]).unwrap_err().kind, ErrorKind::InvalidInput);
+    let mut nan = pts.clone();
+    nan[4] = f64::NAN;
+    assert_eq!(evaluate(&plan, &nan).unwrap_err().kind, ErrorKind::InvalidInput);
+    plan.callouts[1].datums.clear();
+    assert_eq!(evaluate(&plan, &pts).unwrap_err().kind, ErrorKind::Config);
+    let bad = Model { sigma: -1.0, ..noise(0.0) };
+    assert!(bad.checked().is_err());
+}
