@@ -3,8 +3,9 @@ of the bundled bracket (20 callouts; datums, frames and zones re-evaluated on ev
 scan), isotropic noise sigma = 1 um.
 
 gagekit: :func:`gagekit.uncertainty.inspect_uncertainty` -- the feature regions are cut once
-and only their points (the active set) are perturbed; trials run on 2 threads (the Rust
-kernels release the GIL), each seeded by (seed, trial); each trial starts from the measured
+and only their points (the active set) are perturbed; the drawing is compiled once and each
+block of trials is one kernel call running its trials in parallel on 2 threads
+(``gagekit_gdt::plan``), each seeded by (seed, trial); each trial starts from the measured
 evaluation (docs/uncertainty.md, "How a trial is evaluated fast"): the minimax cylinders run
 the exact local method from the measured axis (the global search where it cannot decide:
 counted), the least-squares cylinders start from the measured axis, the minimum-zone

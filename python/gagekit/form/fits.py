@@ -282,25 +282,29 @@ def fit_sphere(points: Any, criterion: str = "least-squares") -> SphereFit:
     if crit != "least-squares":
         if pts.shape[1] != 3:
             raise ConfigError(f"sphere: {crit} needs (n, 3) points; for 2-D points use fit_circle")
-        z = _core.form.sphere_fit(pts, crit)
-        radius = {"min-circumscribed": z.r_out, "max-inscribed": z.r_in}.get(crit, 0.5 * (z.r_in + z.r_out))
-        cert = _cert(z)
-        if crit == "minimum-zone":
-            inner = list(z.control_in)
-            seen = set(inner)
-            control = inner + [i for i in z.control_out if i not in seen]
-        else:
-            control = z.control_out
-        return SphereFit(
-            crit, len(pts), _vec(z.center), float(radius), cert.max_distance - cert.min_distance, cert,
-            inner_radius=float(z.r_in) if crit == "minimum-zone" else None,
-            outer_radius=float(z.r_out) if crit == "minimum-zone" else None,
-            control_points=tuple(int(i) for i in control),
-            global_bound=float(z.bound) if crit != "min-circumscribed" else None,
-        )
+        return chebyshev_sphere(_core.form.sphere_fit(pts, crit), crit, len(pts))
     ls = _core.form.sphere_lsq(pts)
     shape = "sphere" if pts.shape[1] == 3 else "circle"
     return SphereFit(crit, len(pts), _vec(ls.center), float(ls.radius), float(ls.form_error), _cert(ls), shape)
+
+
+def chebyshev_sphere(z: Any, crit: str, n_points: int) -> SphereFit:
+    """The :class:`SphereFit` of a Chebyshev sphere from Rust (``_core.form.SphereResult``)."""
+    radius = {"min-circumscribed": z.r_out, "max-inscribed": z.r_in}.get(crit, 0.5 * (z.r_in + z.r_out))
+    cert = _cert(z)
+    if crit == "minimum-zone":
+        inner = list(z.control_in)
+        seen = set(inner)
+        control = inner + [i for i in z.control_out if i not in seen]
+    else:
+        control = z.control_out
+    return SphereFit(
+        crit, n_points, _vec(z.center), float(radius), cert.max_distance - cert.min_distance, cert,
+        inner_radius=float(z.r_in) if crit == "minimum-zone" else None,
+        outer_radius=float(z.r_out) if crit == "minimum-zone" else None,
+        control_points=tuple(int(i) for i in control),
+        global_bound=float(z.bound) if crit != "min-circumscribed" else None,
+    )
 
 
 def fit_circle_3d(points: Any, criterion: str = "least-squares") -> Circle3DFit:

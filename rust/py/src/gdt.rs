@@ -54,6 +54,21 @@ fn gdt_slab<'py>(py: Python<'py>, points: PyReadonlyArray2<'py, f64>, mode: &str
     Ok((v3(s.normal), s.lo, s.hi, s.width))
 }
 
+/// Thinnest slab (free orientation) of (n, 3) points on an active set started near the
+/// planes of normal `normal`, exact by verification on every point
+/// (`gagekit_gdt::plan::active`): (normal, lo, hi, width).
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyfunction(module = "gagekit._core.gdt"))]
+#[pyfunction]
+#[pyo3(name = "slab_near")]
+fn gdt_slab_near<'py>(py: Python<'py>, points: PyReadonlyArray2<'py, f64>, normal: V3) -> PyResult<(V3, f64, f64, f64)> {
+    let pts = rows(py, &points, 3, "points")?;
+    let s = run(py, move || {
+        gagekit_core::check_finite(pts, 3, "points")?;
+        plan::active::slab_near(pts, arr(normal))
+    })?;
+    Ok((v3(s.normal), s.lo, s.hi, s.width))
+}
+
 /// Simulated datum plane (ISO 5459): (point, normal out of the material, offset, deviation).
 #[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyfunction(module = "gagekit._core.gdt"))]
 #[pyfunction]
@@ -264,6 +279,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(gdt_hull_distance, m)?)?;
     m.add_function(wrap_pyfunction!(gdt_min_width_2d, m)?)?;
     m.add_function(wrap_pyfunction!(gdt_slab, m)?)?;
+    m.add_function(wrap_pyfunction!(gdt_slab_near, m)?)?;
     m.add_function(wrap_pyfunction!(gdt_datum_plane, m)?)?;
     m.add_function(wrap_pyfunction!(gdt_axis_along, m)?)?;
     m.add_function(wrap_pyfunction!(gdt_axis_on_cone, m)?)?;

@@ -48,6 +48,20 @@ fn form_circle_fit(py: Python<'_>, points: PyReadonlyArray2<'_, f64>, criterion:
     .map(CircleResult::from)
 }
 
+/// Minimum-zone circle of (n, 2) points on an active set started near `center`, exact by
+/// verification on every point (`gagekit_gdt::plan::active`).
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyfunction(module = "gagekit._core.form"))]
+#[pyfunction]
+#[pyo3(name = "circle_fit_near")]
+fn form_circle_fit_near(py: Python<'_>, points: PyReadonlyArray2<'_, f64>, center: [f64; 2]) -> PyResult<CircleResult> {
+    let pts = rows(py, &points, 2, "points")?;
+    run(py, || {
+        gagekit_core::check_finite(pts, 2, "points")?;
+        gagekit_gdt::plan::active::circle_near(pts, center)
+    })
+    .map(CircleResult::from)
+}
+
 /// 2-D circle by the PSO over the centre (Eqs. 6.1, 6.4, 6.5; a cross-check of the
 /// exact kernels) for MC, MI or MZ.
 #[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyfunction(module = "gagekit._core.form"))]
@@ -82,6 +96,7 @@ fn form_circle_pso(
 pub(super) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<CircleResult>()?;
     m.add_function(wrap_pyfunction!(form_circle_fit, m)?)?;
+    m.add_function(wrap_pyfunction!(form_circle_fit_near, m)?)?;
     m.add_function(wrap_pyfunction!(form_circle_pso, m)?)?;
     Ok(())
 }

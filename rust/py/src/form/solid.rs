@@ -490,6 +490,33 @@ fn form_sphere_fit(py: Python<'_>, points: PyReadonlyArray2<'_, f64>, criterion:
     })
 }
 
+/// Minimum-zone sphere of (n, 3) points on an active set started near `center`, exact by
+/// verification on every point (`gagekit_gdt::plan::active`).
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyfunction(module = "gagekit._core.form"))]
+#[pyfunction]
+#[pyo3(name = "sphere_fit_near")]
+fn form_sphere_fit_near(py: Python<'_>, points: PyReadonlyArray2<'_, f64>, center: [f64; 3]) -> PyResult<SphereResult> {
+    let pts = rows(py, &points, 3, "points")?;
+    let (z, e) = run(py, || {
+        gagekit_core::check_finite(pts, 3, "points")?;
+        let z = gagekit_gdt::plan::active::sphere_near(pts, center)?;
+        let e = lsq::center_extent(pts, 3, &z.center);
+        Ok((z, e))
+    })?;
+    Ok(SphereResult {
+        criterion: FitCriterion::MinZone.name().to_string(),
+        center: z.center,
+        r_in: z.r_in,
+        r_out: z.r_out,
+        control_in: z.control_in,
+        control_out: z.control_out,
+        min_distance: e.min,
+        max_distance: e.max,
+        iterations: z.iterations,
+        bound: z.bound,
+    })
+}
+
 /// A cone (issue 25 §3): the fields of the kernel's [`gagekit_form::cone::ConeFit`] (axis
 /// point of the reference section, direction along which the radius grows, apex, half
 /// angle rad, radii at the reference section, zone radii, control points, optimality gap),
@@ -549,6 +576,7 @@ pub(super) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Line3Result>()?;
     m.add_function(wrap_pyfunction!(form_circle_in_plane, m)?)?;
     m.add_function(wrap_pyfunction!(form_sphere_fit, m)?)?;
+    m.add_function(wrap_pyfunction!(form_sphere_fit_near, m)?)?;
     m.add_class::<Circle3Result>()?;
     m.add_class::<SphereResult>()?;
     m.add_class::<LeastSquaresCylinderResult>()?;
