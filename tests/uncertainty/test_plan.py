@@ -118,7 +118,7 @@ def test_a_bad_plan_or_model_is_refused_with_a_typed_error(bracket):
         plan.run(active, (-1.0, None, 0.0, 0.0, 0.0, 0.0), 0, 0, 2, 1)
     with pytest.raises(InvalidInputError, match="unsupported shape"):
         _core.gdt.InspectionPlan([("cone", np.arange(3), None, (0, 0, 1), ((1, 0, 0), (0, 1, 0), (0, 0, 1)), False,
-                                   None, None, None, None, None, None)], [], [], [])
+                                   (None, None, None, None, None, None))], [], [], [])
 
 
 def test_the_simulated_measurement_depends_on_seed_and_trial_only():

@@ -83,8 +83,8 @@ def _compile(spec, feats, rows, warm, near):
         box = fd.box_axes()
         features.append((fd.shape, np.ascontiguousarray(rows[name], dtype=np.int64), _vec(fd.spec.outward),
                          _vec(fd.sign_hint()), tuple(_vec(r) for r in box), fd.spec.kind == "hole",
-                         None if ls is None else _vec(ls[1]), *(_axis(w.get(c)) for c in _CRITERIA),
-                         _vec(w.get("slab")), _vec(near[name]["center"]) if name in near else None))
+                         (None if ls is None else _vec(ls[1]), *(_axis(w.get(c)) for c in _CRITERIA),
+                          _vec(w.get("slab")), _vec(near[name]["center"]) if name in near else None)))
         index[name] = len(features) - 1
         return index[name]
 

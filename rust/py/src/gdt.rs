@@ -296,17 +296,18 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
 // -- the compiled inspection of the Monte Carlo uncertainty (gagekit_gdt::plan) -------------
 
 type WarmAxis = Option<(V3, V3)>;
-/// (shape, rows, outward, sign hint, box axes, hole, least-squares direction, minimum-zone /
-/// min-circumscribed / max-inscribed axes, flatness normal, minimum-zone sphere centre)
-type FeatureArgs<'py> =
-    (String, PyReadonlyArray1<'py, i64>, Option<V3>, V3, (V3, V3, V3), bool, Option<V3>, WarmAxis, WarmAxis, WarmAxis, Option<V3>, Option<V3>);
+/// The measured starts: (least-squares direction, minimum-zone / min-circumscribed /
+/// max-inscribed axes, flatness normal, minimum-zone sphere centre)
+type WarmArgs = (Option<V3>, WarmAxis, WarmAxis, WarmAxis, Option<V3>, Option<V3>);
+/// (shape, rows, outward, sign hint, box axes, hole, the measured starts)
+type FeatureArgs<'py> = (String, PyReadonlyArray1<'py, i64>, Option<V3>, V3, (V3, V3, V3), bool, WarmArgs);
 /// (characteristic, feature, tolerance, datum entries, frame, angle deg, sections, nominal point, nominal direction)
 type CalloutArgs = (String, usize, f64, Vec<usize>, Option<usize>, f64, usize, Option<V3>, Option<V3>);
 /// (sigma, origin, sigma_per_m, probing, relative scale, offset)
 type ModelArgs = (f64, Option<V3>, f64, f64, f64, f64);
 
 fn plan_feature(f: FeatureArgs<'_>) -> PyResult<plan::Feature> {
-    let (shape, rows, outward, hint, (bx, by, bz), hole, warm_lsq, mz, mc, mi, slab, sphere) = f;
+    let (shape, rows, outward, hint, (bx, by, bz), hole, (warm_lsq, mz, mc, mi, slab, sphere)) = f;
     let shape = match shape.as_str() {
         "plane" => plan::Shape::Plane,
         "line" => plan::Shape::Line,

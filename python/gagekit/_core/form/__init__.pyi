@@ -25,6 +25,7 @@ __all__ = [
     "StraightnessResult",
     "circle3d_lsq",
     "circle_fit",
+    "circle_fit_near",
     "circle_in_plane",
     "circle_pso",
     "cone_fit",
@@ -42,6 +43,7 @@ __all__ = [
     "profile_spline_open",
     "roundness",
     "sphere_fit",
+    "sphere_fit_near",
     "sphere_lsq",
     "straightness",
 ]
@@ -540,6 +542,12 @@ def circle_fit(points: numpy.typing.NDArray[numpy.float64], criterion: builtins.
     criterion table (least squares, MC Eq. 6.1, MI Eq. 6.2, MZ Eqs. 6.5-6.8).
     """
 
+def circle_fit_near(points: numpy.typing.NDArray[numpy.float64], center: typing.Sequence[builtins.float]) -> CircleResult:
+    r"""
+    Minimum-zone circle of (n, 2) points on an active set started near `center`, exact by
+    verification on every point (`gagekit_gdt::plan::active`).
+    """
+
 def circle_in_plane(points: numpy.typing.NDArray[numpy.float64], criterion: builtins.str) -> Circle3Result:
     r"""
     Circle of (n, 3) points in any pose: least-squares plane, projection, 2-D fit of
@@ -637,6 +645,12 @@ def roundness(points: numpy.typing.NDArray[numpy.float64], upr: typing.Optional[
 def sphere_fit(points: numpy.typing.NDArray[numpy.float64], criterion: builtins.str) -> SphereResult:
     r"""
     Minimum circumscribed, maximum inscribed or minimum-zone sphere of (n, 3) points.
+    """
+
+def sphere_fit_near(points: numpy.typing.NDArray[numpy.float64], center: typing.Sequence[builtins.float]) -> SphereResult:
+    r"""
+    Minimum-zone sphere of (n, 3) points on an active set started near `center`, exact by
+    verification on every point (`gagekit_gdt::plan::active`).
     """
 
 def sphere_lsq(points: numpy.typing.NDArray[numpy.float64]) -> LeastSquaresSphereResult:

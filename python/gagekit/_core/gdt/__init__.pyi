@@ -6,6 +6,7 @@ import numpy
 import numpy.typing
 import typing
 __all__ = [
+    "InspectionPlan",
     "axis_along",
     "axis_on_cone",
     "cylinder_on_cone",
@@ -13,13 +14,36 @@ __all__ = [
     "hull_distance",
     "min_in_disk",
     "min_width_2d",
+    "perturb",
     "plane_location",
     "position_with_shift",
     "position_zone",
     "slab",
+    "slab_near",
     "two_point_sizes",
     "width_sizes",
 ]
+
+@typing.final
+class InspectionPlan:
+    r"""
+    An inspection compiled for the Monte Carlo trials (`gagekit_gdt::plan`): features
+    (rows into the active points, warm starts), datums (feature, prior datum entries,
+    basic angle), frames (datum entries) and callouts. `gagekit.uncertainty.plan` builds it.
+    """
+    def __new__(cls, features: typing.Sequence[tuple[builtins.str, numpy.typing.NDArray[numpy.int64], typing.Optional[tuple[builtins.float, builtins.float, builtins.float]], tuple[builtins.float, builtins.float, builtins.float], tuple[tuple[builtins.float, builtins.float, builtins.float], tuple[builtins.float, builtins.float, builtins.float], tuple[builtins.float, builtins.float, builtins.float]], builtins.bool, tuple[typing.Optional[tuple[builtins.float, builtins.float, builtins.float]], typing.Optional[tuple[tuple[builtins.float, builtins.float, builtins.float], tuple[builtins.float, builtins.float, builtins.float]]], typing.Optional[tuple[tuple[builtins.float, builtins.float, builtins.float], tuple[builtins.float, builtins.float, builtins.float]]], typing.Optional[tuple[tuple[builtins.float, builtins.float, builtins.float], tuple[builtins.float, builtins.float, builtins.float]]], typing.Optional[tuple[builtins.float, builtins.float, builtins.float]], typing.Optional[tuple[builtins.float, builtins.float, builtins.float]]]]], datums: typing.Sequence[tuple[builtins.int, typing.Sequence[builtins.int], builtins.float]], frames: typing.Sequence[typing.Sequence[builtins.int]], callouts: typing.Sequence[tuple[builtins.str, builtins.int, builtins.float, typing.Sequence[builtins.int], typing.Optional[builtins.int], builtins.float, builtins.int, typing.Optional[tuple[builtins.float, builtins.float, builtins.float]], typing.Optional[tuple[builtins.float, builtins.float, builtins.float]]]]) -> InspectionPlan: ...
+    def evaluate(self, points: numpy.typing.NDArray[numpy.float64]) -> tuple[numpy.typing.NDArray[numpy.float64], builtins.int, builtins.int]:
+        r"""
+        The callouts' (measured, margin) of the active points (n, 3), one evaluation:
+        (values, warm-started cylinder fits, fallbacks to the global search).
+        """
+    def run(self, points: numpy.typing.NDArray[numpy.float64], model: tuple[builtins.float, typing.Optional[tuple[builtins.float, builtins.float, builtins.float]], builtins.float, builtins.float, builtins.float, builtins.float], seed: builtins.int, first: builtins.int, count: builtins.int, threads: builtins.int) -> tuple[numpy.typing.NDArray[numpy.float64], builtins.int, builtins.int]:
+        r"""
+        Trials `first .. first + count`, each a perturbation of the active points (n, 3)
+        by `model` (sigma, origin, sigma_per_m, probing, relative scale, offset) drawn by
+        the generator of (seed, trial), evaluated on `threads` threads (0: all): ((count,
+        2 x callouts) values, warm-started cylinder fits, fallbacks).
+        """
 
 def axis_along(points: numpy.typing.NDArray[numpy.float64], direction: tuple[builtins.float, builtins.float, builtins.float], fit: builtins.str) -> tuple[tuple[builtins.float, builtins.float, builtins.float], tuple[builtins.float, builtins.float, builtins.float], builtins.float, builtins.float, builtins.float]:
     r"""
@@ -59,6 +83,13 @@ def min_width_2d(points: numpy.typing.NDArray[numpy.float64]) -> tuple[builtins.
     Minimum width of (n, 2) points: (width, normal, lo, hi).
     """
 
+def perturb(points: numpy.typing.NDArray[numpy.float64], model: tuple[builtins.float, typing.Optional[tuple[builtins.float, builtins.float, builtins.float]], builtins.float, builtins.float, builtins.float, builtins.float], seed: builtins.int, trial: builtins.int) -> numpy.typing.NDArray[numpy.float64]:
+    r"""
+    One simulated measurement of (n, 3) or (n, 2) points by the measurement model (sigma,
+    origin, sigma_per_m, probing, relative scale, offset), drawn by the generator of
+    (seed, trial) (`gagekit_gdt::plan::perturb`).
+    """
+
 def plane_location(points: numpy.typing.NDArray[numpy.float64], frame_: tuple[tuple[builtins.float, builtins.float, builtins.float], tuple[tuple[builtins.float, builtins.float, builtins.float], tuple[builtins.float, builtins.float, builtins.float], tuple[builtins.float, builtins.float, builtins.float]], typing.Sequence[tuple[builtins.float, builtins.float, builtins.float]], builtins.bool], point: tuple[builtins.float, builtins.float, builtins.float], normal: tuple[builtins.float, builtins.float, builtins.float]) -> tuple[builtins.float, builtins.float]:
     r"""
     Width of the location zone of a plane about the nominal plane (`point`, `normal`),
@@ -83,6 +114,13 @@ def slab(points: numpy.typing.NDArray[numpy.float64], mode: builtins.str, axis: 
     Thinnest slab of (n, 3) points with its normal constrained by `mode` ("free",
     "perpendicular" to `axis`, at `angle` rad to `axis`, "fixed" along `axis`):
     (normal, lo, hi, width).
+    """
+
+def slab_near(points: numpy.typing.NDArray[numpy.float64], normal: tuple[builtins.float, builtins.float, builtins.float]) -> tuple[tuple[builtins.float, builtins.float, builtins.float], builtins.float, builtins.float, builtins.float]:
+    r"""
+    Thinnest slab (free orientation) of (n, 3) points on an active set started near the
+    planes of normal `normal`, exact by verification on every point
+    (`gagekit_gdt::plan::active`): (normal, lo, hi, width).
     """
 
 def two_point_sizes(points: numpy.typing.NDArray[numpy.float64], origin: tuple[builtins.float, builtins.float, builtins.float], axis: tuple[builtins.float, builtins.float, builtins.float], reference: tuple[builtins.float, builtins.float, builtins.float], kind: builtins.str, sections: builtins.int, angles: builtins.int) -> tuple[numpy.typing.NDArray[numpy.float64], numpy.typing.NDArray[numpy.int64], numpy.typing.NDArray[numpy.float64], builtins.int]:
