@@ -156,3 +156,46 @@ def test_streamed_equals_whole(args):
 def test_bad_memory_option_is_one_line():
     proc = cli("cloud", "hull", DATA / "bracket.ply", "--memory", "12 apples")
     assert proc.returncode == 2 and proc.stderr.startswith("gagekit: error: memory:") and proc.stderr.count("\n") == 1
+
+
+E57_FILES = [TESTS / "e57" / f"{n}.e57" for n in ("bunnyDouble", "bunnyInt19", "tiny_spherical",
+                                                   "cartesian_invalid_state_single", "translationWithoutRotation")]
+
+
+@pytest.mark.parametrize("path", E57_FILES, ids=lambda p: p.name)
+def test_e57_streams_packet_by_packet_as_it_reads(path):
+    """Every sample E57 (Cartesian double, 19-bit scaled integers, spherical floats with
+    invalid states, a pose) is read data packet by data packet, not whole, and any chunk
+    size gives the whole read's points bit for bit."""
+    from gagekit import _core
+
+    s = _core.cloud.e57_chunks(str(path))
+    assert s is not None and s.scans >= 1
+    whole = read_cloud(path)
+    for chunk in (1, 97, 10**6):
+        if chunk == 1 and len(whole.points) > 5000:
+            continue
+        assert same(streamed(path, chunk), whole.points)
+
+
+def test_e57_stream_errors_are_the_whole_reads(tmp_path):
+    """A corrupt page, and a scan whose points are all at one place, give the whole read's
+    error when streamed."""
+    for bad in (TESTS / "e57" / "corrupt_crc.e57", TESTS / "e57" / "bad-crc.e57"):
+        with pytest.raises(FileFormatError) as whole:
+            read_cloud(bad)
+        with pytest.raises(FileFormatError) as part:
+            streamed(bad, 50)
+        assert "E57" in str(part.value) and str(whole.value).split(" (")[0] == str(part.value).split(" (")[0]
+    pye57 = pytest.importorskip("pye57")
+    n = 2651
+    f = tmp_path / "zero.e57"
+    w = pye57.E57(str(f), mode="w")
+    zero = np.zeros(n)
+    w.write_scan_raw({"cartesianX": zero + 1, "cartesianY": zero, "cartesianZ": zero})
+    w.close()
+    with pytest.raises(FileFormatError) as whole:
+        read_cloud(f)
+    with pytest.raises(FileFormatError) as part:
+        streamed(f, 100)
+    assert str(part.value) == str(whole.value) and f"all {n} points are at one place" in str(part.value)

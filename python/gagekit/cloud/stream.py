@@ -22,8 +22,11 @@ PLY ASCII                 Rust ``PlyAsciiStream``: a first pass counts the body'
 .npy                      ``numpy.fromfile`` of row ranges (C order); Fortran order by slices
                           of a memory map.
 LAS/LAZ                   ``laspy``'s chunk iterator (LAZ decompressed chunk by chunk).
-E57, binary PLY with      read whole, then handed out in chunks: memory is that of a whole read
-faces (lists)             (E57 scans are decoded as whole byte streams; see docs).
+E57                       Rust ``E57Stream``: data packet by data packet, the coordinate fields'
+                          bit streams decoded a chunk at a time (positioned reads through an
+                          8 MB window, page CRCs checked); files it does not handle (a scan
+                          without a coordinate triple...) are read whole.
+binary PLY with faces     read whole, then handed out in chunks: memory is that of a whole read.
 ========================  =====================================================================
 
 Memory: :func:`memory_budget` (``--memory``; default :data:`DEFAULT_MEMORY_FRACTION` of the
@@ -276,7 +279,7 @@ def _open_format(p: Path, suffix: str, m: int):
     if suffix in (".las", ".laz"):
         return _las(p, m)
     if suffix == ".e57":
-        return _whole(e57.read(p, 3), m)
+        return _e57(p, m)
     raise FileFormatError(f"{p}: cannot stream '{suffix}' files")  # pragma: no cover - suffixes above are all
 
 
@@ -291,6 +294,35 @@ def _whole(raw: Raw, m: int):
             yield np.array(pts[i:i + m], dtype=np.float64)  # a copy: the unit factor is applied in place
 
     return info, chunks, len(pts), raw.finite_checked, None
+
+
+def _e57(p: Path, m: int):
+    """E57 data packet by data packet (Rust ``E57Stream``), with the whole read's checks:
+    no scans, a non-finite point, every point at one place (checked on the whole pass)."""
+    from .formats import e57
+
+    s0 = _core.cloud.e57_chunks(str(p))
+    if s0 is None:
+        return _whole(e57.read(p, 3), m)
+    if s0.scans == 0:
+        raise FileFormatError(f"{p}: the E57 file holds no scans")
+    info = Raw(np.empty((0, 3)), "e57", unit="m", unit_basis="E57 standard (ASTM E2807): metres", scans=s0.scans)
+
+    def chunks() -> Iterator[np.ndarray]:
+        s = _core.cloud.e57_chunks(str(p))
+        first, spread, n = None, False, 0
+        while (c := s.next_chunk(m)) is not None:
+            if len(c):
+                if first is None:
+                    first = c[0].copy()
+                spread = spread or bool((c != first).any())
+                n += len(c)
+            yield c
+        if n > 1 and not spread:
+            raise e57.at_one_place(p, n, first)
+        info.invalid_dropped = s.invalid_dropped
+
+    return info, chunks, None, True, None
 
 
 def _nist_count(p: Path, n: int) -> None:

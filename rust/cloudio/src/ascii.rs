@@ -521,6 +521,11 @@ fn digits(s: &[u8], mut i: usize, mut m: u64) -> (usize, u64, usize) {
 /// same bits. Anything else goes to fast-float2.
 #[inline]
 fn parse_number(s: &[u8], at: usize) -> Option<(f64, usize)> {
+    if at + 32 <= s.len() {
+        if let Some(r) = short_decimal(&s[at..at + 32]) {
+            return Some(r);
+        }
+    }
     let n = s.len();
     let mut i = at;
     let neg = match s.get(i) {
@@ -552,6 +557,78 @@ fn parse_number(s: &[u8], at: usize) -> Option<(f64, usize)> {
     fast_float2::parse_partial::<f64, _>(&s[at..]).ok()
 }
 
+/// [`parse_number`] of the usual short decimal at the start of `s` (32 bytes): an
+/// optional sign, 1 to 7 integer digits, optionally a point and 1 to 7 decimals, then a
+/// byte that is neither a digit, a point nor an exponent. Straight-line code: one 8-byte
+/// digit run ([`digit_run`]) for each part, no loop and no bounds check (the 32 bytes
+/// cover the longest such token and the byte after it). The value is the same correctly
+/// rounded division m / 10^k as in [`parse_number`] (m < 10^14, k <= 7), so the same bits;
+/// `None` for anything else, which [`parse_number`] then reads.
+#[inline(always)]
+fn short_decimal(s: &[u8]) -> Option<(f64, usize)> {
+    let s: &[u8; 32] = s.try_into().ok()?;
+    let c0 = s[0];
+    let neg = u64::from(c0 == b'-');
+    // no branch on the sign (half the z values of a scan are negative: a branch on it
+    // is mispredicted half the time)
+    let j = (neg | u64::from(c0 == b'+')) as usize;
+    let (l1, v1) = digit_run(u64::from_le_bytes(s[j..j + 8].try_into().ok()?));
+    if l1.wrapping_sub(1) >= 7 {
+        return None; // no digit, or 8 or more
+    }
+    let mut end = j + l1;
+    let (mut m, mut k) = (v1, 0);
+    if s[end] == b'.' {
+        let (l2, v2) = digit_run(u64::from_le_bytes(s[end + 1..end + 9].try_into().ok()?));
+        if l2.wrapping_sub(1) >= 7 {
+            return None;
+        }
+        m = v1 * POW10_U64[l2] + v2;
+        k = l2;
+        end += 1 + l2;
+    }
+    let t = s[end & 31];
+    if t | 0x20 == b'e' || t == b'.' {
+        return None;
+    }
+    // m < 10^14 < 2^53: exact in binary, as is 10^k
+    let v = (m as i64) as f64 / POW10[k];
+    Some((f64::from_bits(v.to_bits() | neg << 63), end))
+}
+
+/// The most common data line, read with the least work: `out.len()` (2 or 3) short
+/// decimals ([`short_decimal`]) from byte `i` of `block` (a line start), one separator
+/// byte (space, tab, comma or semicolon) between them, and the line break (`\n` or
+/// `\r\n`) right after the last: the index of the `\n`. The caller ensures 80 bytes from
+/// `i`. `None` for any other line (leading blanks, a comment, more columns, a long
+/// number...), which [`fast_line`] then reads from its start: the same values, as every
+/// token taken here is exactly a field of [`fields`] and [`short_decimal`] reads it as
+/// [`parse_number`] does.
+#[inline(always)]
+fn plain_line(block: &[u8], mut i: usize, out: &mut [f64]) -> Option<usize> {
+    let last = out.len() - 1;
+    for (f, o) in out.iter_mut().enumerate() {
+        let (v, len) = short_decimal(&block[i..i + 32])?;
+        *o = v;
+        i += len;
+        let b = block[i];
+        if f == last {
+            return if b == b'\n' {
+                Some(i)
+            } else if b == b'\r' && block[i + 1] == b'\n' {
+                Some(i + 1)
+            } else {
+                None
+            };
+        }
+        if !matches!(b, b' ' | b'\t' | b',' | b';') {
+            return None;
+        }
+        i += 1;
+    }
+    None
+}
+
 /// Parse the lines of `block` (whole lines; the first has 0-based index `line0`) into
 /// `out` (`dim` per data line, at most one slot per line); the number of points written.
 fn parse_block(block: &[u8], line0: usize, lay: &Layout, what: &str, out: &mut [f64]) -> Result<usize> {
@@ -559,8 +636,17 @@ fn parse_block(block: &[u8], line0: usize, lay: &Layout, what: &str, out: &mut [
     let mut w = 0;
     let mut pos = 0;
     let mut k = line0;
+    let plain = lay.style == Style::Standard && lay.need == dim && lay.slot.iter().enumerate().all(|(f, &a)| a == f);
     while pos < block.len() {
         let o = &mut out[w * dim..(w + 1) * dim];
+        if plain && pos + 80 <= block.len() {
+            if let Some(end) = plain_line(block, pos, o) {
+                w += 1;
+                pos = end + 1;
+                k += 1;
+                continue;
+            }
+        }
         let (data, end) = match fast_line(block, pos, lay, o) {
             Some(r) => r,
             None => {
@@ -971,6 +1057,30 @@ mod tests {
                 (a, b) => prop_assert!(false, "{:?} vs {:?}", a, b),
             }
         }
+
+        /// The same on texts of mostly plain lines, read as one chunk, so that the
+        /// shortest route ([`plain_line`], which needs 80 bytes ahead) reads most of them
+        /// and hands the others (any token, separator or line end it does not take) on.
+        #[test]
+        fn plain_lines_equal_line_by_line(lines in prop::collection::vec(prop_oneof![
+            6 => prop::collection::vec(((-1e7f64..1e7, 0usize..9).prop_map(|(v, d)| format!("{v:.d$}")),
+                 prop::sample::select(vec![" ", ",", "\t", ";", "  ", ", "])), 2..5)
+                .prop_map(|f| f.iter().enumerate().map(|(i, (t, sp))| if i > 0 { format!("{sp}{t}") } else { t.clone() }).collect::<String>()),
+            1 => line(),
+        ], 1..60), dim in 2usize..=3, crlf in any::<bool>(), last_nl in any::<bool>()) {
+            let nl = if crlf { "\r\n" } else { "\n" };
+            let mut text = lines.join(nl);
+            if last_nl {
+                text.push_str(nl);
+            }
+            let opts = AsciiOptions { dim, skip_lines: 0 };
+            let (want, got) = parse_reference(text.as_bytes(), &opts, "p", 1 << 20);
+            match (want, got) {
+                (Ok(a), Ok(b)) => prop_assert_eq!(a.coords.iter().map(|v| v.to_bits()).collect::<Vec<_>>(), b.coords.iter().map(|v| v.to_bits()).collect::<Vec<_>>()),
+                (Err(a), Err(b)) => prop_assert_eq!(a.message, b.message),
+                (a, b) => prop_assert!(false, "{:?} vs {:?}", a, b),
+            }
+        }
     }
 
     #[test]
@@ -1000,11 +1110,14 @@ mod number_tests {
         /// bytes, at any offset, with any bytes after it (non-ASCII ones too).
         #[test]
         fn plain_decimals_equal_fast_float(lead in "[ ]{0,3}", int in "[+-]?[0-9]{0,19}", frac in "(\\.[0-9]{0,19})?", tail in "[ ,;eE.x\n\r]?[0-9]?", pad in "(( |\u{e9}|\u{ff}|\u{10ffff})[0-9]{0,9}){0,2}") {
-            let s = format!("{lead}{int}{frac}{tail}{pad}");
-            let at = lead.len();
-            let a = parse_number(s.as_bytes(), at).map(|(v, n)| (v.to_bits(), n));
-            let b = fast_float2::parse_partial::<f64, _>(&s.as_bytes()[at..]).ok().map(|(v, n): (f64, usize)| (v.to_bits(), n));
-            prop_assert_eq!(a, b, "{:?}", s);
+            // as it is, and with 32 more bytes after it (the straight-line route of
+            // short_decimal needs 32 bytes ahead)
+            for s in [format!("{lead}{int}{frac}{tail}{pad}"), format!("{lead}{int}{frac}{tail}{pad}{}", " 1".repeat(16))] {
+                let at = lead.len();
+                let a = parse_number(s.as_bytes(), at).map(|(v, n)| (v.to_bits(), n));
+                let b = fast_float2::parse_partial::<f64, _>(&s.as_bytes()[at..]).ok().map(|(v, n): (f64, usize)| (v.to_bits(), n));
+                prop_assert_eq!(a, b, "{:?}", s);
+            }
         }
     }
 

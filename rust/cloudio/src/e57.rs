@@ -25,7 +25,7 @@ pub struct E57Points {
     pub invalid_dropped: usize,
 }
 
-fn unreadable(what: &str, e: impl std::fmt::Display) -> GkError {
+pub(crate) fn unreadable(what: &str, e: impl std::fmt::Display) -> GkError {
     let msg = e.to_string();
     // "... Detected invalid checksum (expected: [..], actual: [..]) for page N" -> short form
     let msg = match (msg.contains("invalid checksum"), msg.rsplit_once("for page ")) {

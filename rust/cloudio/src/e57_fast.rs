@@ -17,7 +17,7 @@ use e57::{PointCloud, RecordDataType, RecordName};
 use gagekit_core::{GkError, Result};
 use rayon::prelude::*;
 
-const CRC: usize = 4;
+pub(crate) const CRC: usize = 4;
 
 /// Reads the logical byte stream of an E57 file (page payloads, CRCs checked).
 struct Logical<'a> {
@@ -92,7 +92,7 @@ impl<'a> Logical<'a> {
 }
 
 /// Bits per value of a field (0: every value is `min`).
-fn bits(t: &RecordDataType) -> usize {
+pub(crate) fn bits(t: &RecordDataType) -> usize {
     match t {
         RecordDataType::Single { .. } => 32,
         RecordDataType::Double { .. } => 64,
@@ -109,8 +109,16 @@ fn bits(t: &RecordDataType) -> usize {
 
 /// Decode the first `n` values of a field's bit stream as f64.
 fn decode_field(stream: &[u8], t: &RecordDataType, n: usize) -> Option<Vec<f64>> {
+    decode_field_at(stream, 0, t, n)
+}
+
+/// Decode `n` values of a field's bit stream from bit `bit0` of `stream` (below 8: the
+/// streamed reader drops the bytes it has decoded) as f64: value i from bit
+/// `bit0 + i * bits`, so a value reads the same bits, hence the same number, as
+/// [`decode_field`] of the whole stream reads for it. Floats need `bit0 == 0`.
+pub(crate) fn decode_field_at(stream: &[u8], bit0: usize, t: &RecordDataType, n: usize) -> Option<Vec<f64>> {
     let b = bits(t);
-    if stream.len() * 8 < b * n {
+    if stream.len() * 8 < bit0 + b * n || (bit0 != 0 && b % 8 == 0) {
         return None;
     }
     let mut out = vec![0.0; n];
@@ -139,7 +147,7 @@ fn decode_field(stream: &[u8], t: &RecordDataType, n: usize) -> Option<Vec<f64>>
             let mask = (1u64 << b) - 1;
             out.par_chunks_mut(chunk).enumerate().for_each(|(c, o)| {
                 for (j, v) in o.iter_mut().enumerate() {
-                    let bit = (c * chunk + j) * b;
+                    let bit = bit0 + (c * chunk + j) * b;
                     let byte = bit / 8;
                     let mut w = [0u8; 8];
                     let end = (byte + 8).min(stream.len());
@@ -157,7 +165,7 @@ fn decode_field(stream: &[u8], t: &RecordDataType, n: usize) -> Option<Vec<f64>>
 /// The prototype fields of a scan's coordinates: the x, y, z fields (or range,
 /// azimuth, elevation), the invalid-state field if any, and whether they are spherical;
 /// `None` when the scan has neither a Cartesian nor a spherical triple.
-fn coordinate_fields(pc: &PointCloud) -> Option<([usize; 3], Option<usize>, bool)> {
+pub(crate) fn coordinate_fields(pc: &PointCloud) -> Option<([usize; 3], Option<usize>, bool)> {
     let find = |name: RecordName| pc.prototype.iter().position(|r| r.name == name);
     match (
         find(RecordName::CartesianX),
@@ -232,7 +240,7 @@ fn read_packet(rd: &mut Logical, lens: &mut [usize], streams: &mut [Vec<u8>]) ->
 
 /// The scan pose as a rotation matrix (from its unit quaternion (w, x, y, z), normalised
 /// here) and a translation; the identity without a pose.
-fn pose(pc: &PointCloud, what: &str) -> Result<([[f64; 3]; 3], [f64; 3])> {
+pub(crate) fn pose(pc: &PointCloud, what: &str) -> Result<([[f64; 3]; 3], [f64; 3])> {
     let Some(tr) = &pc.transform else {
         return Ok(([[1., 0., 0.], [0., 1., 0.], [0., 0., 1.]], [0.; 3]));
     };
@@ -256,7 +264,7 @@ fn pose(pc: &PointCloud, what: &str) -> Result<([[f64; 3]; 3], [f64; 3])> {
 /// fields `v` (x, y, z or range, azimuth, elevation when `spherical`), posed by `r` and
 /// `t`, flat: (coordinates, invalid count). Valid points are counted per block, then
 /// every block is written into its place in parallel.
-fn place_points(
+pub(crate) fn place_points(
     v: &[Vec<f64>],
     st: Option<&[f64]>,
     spherical: bool,

@@ -14,6 +14,7 @@ pub mod ascii;
 pub mod cut;
 pub mod e57;
 mod e57_fast;
+pub mod e57_stream;
 pub mod ply;
 pub mod scale;
 pub mod stream;
@@ -32,6 +33,7 @@ pub(crate) fn read_error(what: &str, e: std::io::Error) -> gagekit_core::GkError
 pub use ascii::{ascii_layout, data_columns, detect_style, parse_ascii, parse_body, read_ascii_file, write_ascii, AsciiFile, AsciiOptions, DataStart, Layout, Parsed, Style};
 pub use cut::{cut_chunk, Keep, RegionCut};
 pub use e57::{read_e57, E57Points};
+pub use e57_stream::E57Stream;
 pub use ply::{read_ply, read_ply_file, PlyAsciiStream, PlyFile, PlyPoints, VertexRecords};
 pub use stream::{AsciiStream, PlyStream};
 pub use scale::scale_in_place;

@@ -48,11 +48,25 @@ pub struct Child {
 
 /// An inner node: the boxes of its two children (per axis: child 0, child 1) and the children.
 #[derive(Debug, Clone, Copy)]
-#[repr(C, align(32))]
+#[repr(C, align(64))]
 pub struct Node {
-    pub lo: [[f64; 2]; 3],
-    pub hi: [[f64; 2]; 3],
+    pub lo: [[f32; 2]; 3],
+    pub hi: [[f32; 2]; 3],
     pub child: [Child; 2],
+}
+
+/// `x` rounded down (`up == false`) or up to an f32: the box stored in single precision
+/// still holds every corner exactly (a conservative box, so its distance is a lower bound).
+#[inline]
+fn f32_out(x: f64, up: bool) -> f32 {
+    let f = x as f32;
+    if up && (f as f64) < x {
+        f.next_up()
+    } else if !up && (f as f64) > x {
+        f.next_down()
+    } else {
+        f
+    }
 }
 
 /// The hierarchy: nodes, the root's box and reference, and per slot (leaf order) the
@@ -227,9 +241,10 @@ fn split(items: &mut [Item], depth: usize) -> usize {
 }
 
 fn node_of(lb: &Aabb, rb: &Aabb, lc: Child, rc: Child) -> Node {
+    let (d, u) = (|x| f32_out(x, false), |x| f32_out(x, true));
     Node {
-        lo: [[lb.lo[0], rb.lo[0]], [lb.lo[1], rb.lo[1]], [lb.lo[2], rb.lo[2]]],
-        hi: [[lb.hi[0], rb.hi[0]], [lb.hi[1], rb.hi[1]], [lb.hi[2], rb.hi[2]]],
+        lo: [[d(lb.lo[0]), d(rb.lo[0])], [d(lb.lo[1]), d(rb.lo[1])], [d(lb.lo[2]), d(rb.lo[2])]],
+        hi: [[u(lb.hi[0]), u(rb.hi[0])], [u(lb.hi[1]), u(rb.hi[1])], [u(lb.hi[2]), u(rb.hi[2])]],
         child: [lc, rc],
     }
 }
@@ -250,7 +265,7 @@ fn build_seq(items: &mut [Item], first: u32, depth: usize, out: &mut Vec<Node>) 
     let mid = split(items, depth);
     let (left, right) = items.split_at_mut(mid);
     let at = out.len();
-    out.push(Node { lo: [[0.0; 2]; 3], hi: [[0.0; 2]; 3], child: [Child { index: 0, count: 0 }; 2] });
+    out.push(Node { lo: [[0.0f32; 2]; 3], hi: [[0.0f32; 2]; 3], child: [Child { index: 0, count: 0 }; 2] });
     let (lb, lc) = build_seq(left, first, depth + 1, out);
     let (rb, rc) = build_seq(right, first + mid as u32, depth + 1, out);
     out[at] = node_of(&lb, &rb, lc, rc);
@@ -294,7 +309,7 @@ impl Part {
             Part::Split(_, l, r) => {
                 let (lb, rb) = (l.bounds(), r.bounds());
                 let at = out.len();
-                out.push(Node { lo: [[0.0; 2]; 3], hi: [[0.0; 2]; 3], child: [Child { index: 0, count: 0 }; 2] });
+                out.push(Node { lo: [[0.0f32; 2]; 3], hi: [[0.0f32; 2]; 3], child: [Child { index: 0, count: 0 }; 2] });
                 let lc = l.flatten(out);
                 let rc = r.flatten(out);
                 out[at] = node_of(&lb, &rb, lc, rc);
@@ -310,7 +325,7 @@ fn child_distances2(p: &V3, n: &Node) -> [f64; 2] {
     let mut d = [0.0; 2];
     for k in 0..3 {
         for c in 0..2 {
-            let v = (n.lo[k][c] - p[k]).max(p[k] - n.hi[k][c]).max(0.0);
+            let v = (n.lo[k][c] as f64 - p[k]).max(p[k] - n.hi[k][c] as f64).max(0.0);
             d[c] += v * v;
         }
     }
@@ -369,8 +384,9 @@ impl Bvh {
     }
 
     /// The nearest triangle to `p` not farther than `sqrt(bound2)` (None if there is
-    /// none); ties go to the hint, then to the first found. `hint`: a slot to try first
-    /// (its distance starts the bound).
+    /// none); of triangles at exactly the same squared distance, the lowest slot, so the
+    /// answer depends on `p` only, never on the hint or the order of the queries.
+    /// `hint`: a slot to try first (its distance starts the bound).
     #[inline]
     pub fn nearest(&self, p: V3, bound2: f64, hint: Option<u32>) -> Option<Nearest> {
         let start = hint.filter(|&h| (h as usize) < self.corners.len()).map(|h| self.to_slot(p, h));
@@ -410,10 +426,11 @@ impl Bvh {
                 pruned!(n.d2);
             }
         }
-        // open: a box (or triangle) at squared distance d may hold something better
+        // open: a box at squared distance d may hold something better (a triangle at
+        // the best distance with a lower slot wins the tie)
         macro_rules! open {
             ($d:expr) => {
-                $d < best_d2 || (best.is_none() && $d <= best_d2)
+                $d <= best_d2
             };
         }
         let d_root = box_distance2(&p, &self.root_lo, &self.root_hi);
@@ -434,7 +451,7 @@ impl Bvh {
                     let (foot, feature) = closest_point(p, c[0], c[1], c[2]);
                     let v = sub(p, foot);
                     let d2 = dot(v, v);
-                    if open!(d2) {
+                    if better(d2, slot, best_d2, best.as_ref().map(|b| b.slot)) {
                         if let Some(b) = &best {
                             pruned!(b.d2);
                         }
@@ -474,5 +491,132 @@ impl Bvh {
                 pruned!(d);
             }
         }
+    }
+
+    /// [`Bvh::nearest`] of up to [`GROUP`] points at once: the points walk the tree
+    /// together (a node is read once for the group and opened for the points its
+    /// boxes may improve), so coherent points (neighbours along a scan line or a Morton
+    /// curve) share the path from the root. `best[i]` holds point i's start on entry (a
+    /// triangle measured with [`Bvh::to_slot`]; None: no start) and its nearest triangle
+    /// within `sqrt(bound2)` on return. Each answer is [`Bvh::nearest`]'s, to the bit.
+    pub fn nearest_group(&self, ps: &[V3], bound2: f64, best: &mut [Option<Nearest>]) {
+        let g = ps.len();
+        assert!(g <= GROUP && best.len() == g);
+        // per lane: coordinates (SoA), the best squared distance, the start's slot
+        let (mut px, mut py, mut pz) = ([0.0f64; GROUP], [0.0f64; GROUP], [0.0f64; GROUP]);
+        let mut bd = [f64::NEG_INFINITY; GROUP];
+        let mut skip = [u32::MAX; GROUP];
+        let mut all = 0u32;
+        for i in 0..g {
+            (px[i], py[i], pz[i]) = (ps[i][0], ps[i][1], ps[i][2]);
+            bd[i] = bound2;
+            match best[i] {
+                Some(n) if n.d2 <= bound2 => {
+                    bd[i] = n.d2;
+                    skip[i] = n.slot;
+                }
+                _ => best[i] = None,
+            }
+            all |= 1 << i;
+        }
+        // lanes of `m` whose squared box distance in `d` may hold something better
+        let open = |d: &[f64; GROUP], bd: &[f64; GROUP], m: u32| -> u32 {
+            let mut o = 0u32;
+            for i in 0..GROUP {
+                o |= ((d[i] <= bd[i]) as u32) << i;
+            }
+            o & m
+        };
+        let mut d = [0.0f64; GROUP];
+        for i in 0..g {
+            d[i] = box_distance2(&ps[i], &self.root_lo, &self.root_hi);
+        }
+        let mut mask = open(&d, &bd, all);
+        if mask == 0 {
+            return;
+        }
+        let mut stack = [(Child { index: 0, count: 0 }, 0u32, [0.0f64; GROUP]); MAX_DEPTH + 2];
+        let mut sp = 0usize;
+        let mut cur = self.root;
+        loop {
+            if cur.count > 0 {
+                for slot in cur.index..cur.index + cur.count {
+                    let c = &self.corners[slot as usize];
+                    let mut m = mask;
+                    while m != 0 {
+                        let i = m.trailing_zeros() as usize;
+                        m &= m - 1;
+                        if slot == skip[i] {
+                            continue;
+                        }
+                        let (foot, feature) = closest_point(ps[i], c[0], c[1], c[2]);
+                        let v = sub(ps[i], foot);
+                        let d2 = dot(v, v);
+                        if better(d2, slot, bd[i], best[i].as_ref().map(|b| b.slot)) {
+                            bd[i] = d2;
+                            best[i] = Some(Nearest { slot, d2, foot, feature });
+                        }
+                    }
+                }
+            } else {
+                let n = &self.nodes[cur.index as usize];
+                let (mut d0, mut d1) = ([0.0f64; GROUP], [0.0f64; GROUP]);
+                for i in 0..GROUP {
+                    let q = [px[i], py[i], pz[i]];
+                    let (mut a, mut b) = (0.0, 0.0);
+                    for k in 0..3 {
+                        let u = (n.lo[k][0] as f64 - q[k]).max(q[k] - n.hi[k][0] as f64).max(0.0);
+                        let w = (n.lo[k][1] as f64 - q[k]).max(q[k] - n.hi[k][1] as f64).max(0.0);
+                        a += u * u;
+                        b += w * w;
+                    }
+                    d0[i] = a;
+                    d1[i] = b;
+                }
+                let (m0, m1) = (open(&d0, &bd, mask), open(&d1, &bd, mask));
+                if m0 != 0 || m1 != 0 {
+                    // the nearer child first: the one nearer to the group's first open lane
+                    let i = (m0 | m1).trailing_zeros() as usize;
+                    let first = if m0 == 0 || (m1 != 0 && d1[i] < d0[i]) { 1 } else { 0 };
+                    let (mf, ms, ds) = if first == 0 { (m0, m1, d1) } else { (m1, m0, d0) };
+                    if ms != 0 {
+                        stack[sp] = (n.child[1 - first], ms, ds);
+                        sp += 1;
+                    }
+                    if mf != 0 {
+                        cur = n.child[first];
+                        mask = mf;
+                        continue;
+                    }
+                }
+            }
+            // pop the next subtree still worth visiting for some lane
+            loop {
+                if sp == 0 {
+                    return;
+                }
+                sp -= 1;
+                let (c, m, ds) = stack[sp];
+                let o = open(&ds, &bd, m);
+                if o != 0 {
+                    cur = c;
+                    mask = o;
+                    break;
+                }
+            }
+        }
+    }
+}
+
+/// Points per group of [`Bvh::nearest_group`].
+pub const GROUP: usize = 8;
+
+/// Does a triangle (`slot`, squared distance `d2`) beat the best so far (`best_d2`, the
+/// bound when there is none yet; `best` its slot)? Nearer, or as near with a lower slot.
+#[inline(always)]
+fn better(d2: f64, slot: u32, best_d2: f64, best: Option<u32>) -> bool {
+    match best {
+        None => d2 <= best_d2,
+        Some(b) => d2 < best_d2 || (d2 == best_d2 && slot < b),
     }
 }

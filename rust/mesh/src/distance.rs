@@ -1,21 +1,22 @@
 //! Signed distances of many points to a mesh, in parallel (rayon), deterministic.
 //!
 //! The points are taken in their own order when it is coherent (scan lines), else
-//! sorted along a Morton curve ([`query_order`]), and cut into fixed
-//! chunks of [`CHUNK`]; inside a chunk they are queried in that order, each starting from
-//! the previous point's nearest triangle (its distance bounds the search: neighbours on
-//! the curve are neighbours in space, so most of the tree is pruned at once, whatever the
-//! order of the file); when the previous point's triangle is nearer than that point's
-//! margin less the step between them, it is the answer without a search
-//! ([`TriMesh::hit_cached`]). The order and the chunks depend on the points only, never on
-//! the thread count, so neither does any result.
+//! sorted along a Morton curve ([`query_order`]), and cut into fixed chunks of [`CHUNK`];
+//! inside a chunk, groups of [`GROUP`] consecutive points walk the tree together
+//! ([`crate::bvh::Bvh::nearest_group`]: one read of a node for the group; neighbours on
+//! the curve share the path from the root), each point's search bounded from the start
+//! by the previous group's nearest triangles (neighbours in the order are neighbours in
+//! space, so most of the tree is pruned at once, whatever the order of the file). Each
+//! answer is the nearest triangle, the lowest slot among exact ties: a function of the
+//! point alone, so the order, the groups, the chunks and the thread count change the
+//! speed only, never a bit of a result (results are scattered back into input order).
 //!
 //! The distance is exact for the mesh: the closest point of the nearest triangle
 //! ([`crate::closest`]); inside a face it is the plane distance n . (p - a). Its sign
 //! (closed meshes) is that of the pseudonormal of the closest feature (see [`crate::mesh`]):
 //! positive outside the material.
 
-use crate::bvh::Nearest;
+use crate::bvh::{Nearest, GROUP};
 use crate::closest::Feature;
 use crate::mesh::TriMesh;
 use gagekit_core::{check_finite, interrupt, GkError, Result};
@@ -154,7 +155,7 @@ impl TriMesh {
 
     /// Distances of every point (flat (n, 3), finite) to the surface; see [`Query`].
     /// The points are queried in a coherent order ([`query_order`]), in fixed chunks of
-    /// [`CHUNK`], each point's search bounded from the start by its predecessor's triangle.
+    /// [`CHUNK`], in groups of [`GROUP`] (module docs).
     pub fn distances(&self, points: &[f64], q: &Query) -> Result<Distances> {
         check_finite(points, 3, "points")?;
         let bound2 = match q.max_distance {
@@ -179,19 +180,45 @@ impl TriMesh {
             if c % 64 == 0 {
                 interrupt::check()?;
             }
-            // the previous point's triangle and margin: its search bound, or its answer
-            let mut cache = Cache::EMPTY;
-            for k in 0..d.len() {
-                let i = order[c * CHUNK + k] as usize;
-                let p = [points[3 * i], points[3 * i + 1], points[3 * i + 2]];
-                let (dk, tk, fk) = match self.hit_cached(p, bound2, &mut cache, signed) {
-                    Some(h) => (h.distance, h.triangle as i64, h.foot),
-                    None => (f64::NAN, -1, [f64::NAN; 3]),
-                };
-                d[k] = dk;
-                t[k] = tk;
-                if let Some(f) = f.as_deref_mut() {
-                    f[3 * k..3 * k + 3].copy_from_slice(&fk);
+            // the previous group's nearest triangles start each point's search (their
+            // distance bounds it: neighbours in the order are neighbours in space)
+            let mut hints = [u32::MAX; 2];
+            for k0 in (0..d.len()).step_by(GROUP) {
+                let ks = k0..(k0 + GROUP).min(d.len());
+                let mut ps = [[0.0; 3]; GROUP];
+                let mut best: [Option<Nearest>; GROUP] = [None; GROUP];
+                for (j, k) in ks.clone().enumerate() {
+                    let i = order[c * CHUNK + k] as usize;
+                    ps[j] = [points[3 * i], points[3 * i + 1], points[3 * i + 2]];
+                    for &h in &hints {
+                        if h != u32::MAX {
+                            let n = self.bvh.to_slot(ps[j], h);
+                            if best[j].map_or(true, |b| n.d2 < b.d2 || (n.d2 == b.d2 && n.slot < b.slot)) {
+                                best[j] = Some(n);
+                            }
+                        }
+                    }
+                }
+                let g = ks.len();
+                self.bvh.nearest_group(&ps[..g], bound2, &mut best[..g]);
+                for (j, k) in ks.clone().enumerate() {
+                    let (dk, tk, fk) = match &best[j] {
+                        Some(n) => {
+                            let h = self.hit_of(ps[j], n, signed);
+                            (h.distance, h.triangle as i64, h.foot)
+                        }
+                        None => (f64::NAN, -1, [f64::NAN; 3]),
+                    };
+                    d[k] = dk;
+                    t[k] = tk;
+                    if let Some(f) = f.as_deref_mut() {
+                        f[3 * k..3 * k + 3].copy_from_slice(&fk);
+                    }
+                }
+                let found = |j: usize| best[j].map_or(u32::MAX, |n| n.slot);
+                let (a, b) = (found(0), found(g - 1));
+                if a != u32::MAX || b != u32::MAX {
+                    hints = if a == b || a == u32::MAX { [b, u32::MAX] } else if b == u32::MAX { [a, u32::MAX] } else { [b, a] };
                 }
             }
             Ok(())
@@ -227,7 +254,7 @@ impl TriMesh {
 /// The order to query the points in: their own when the file's order is already
 /// coherent (the median step between consecutive points, on 4096 evenly spaced pairs, is
 /// below 1/100 of the cloud's extent: scan lines), else [`morton_order`]. Only the speed
-/// depends on it (and, between triangles at exactly the same distance, which one is named).
+/// depends on it.
 pub fn query_order(points: &[f64]) -> Vec<u32> {
     let n = points.len() / 3;
     if n < 2 {

@@ -419,7 +419,8 @@ fn coarse_to_fine_equals_the_full_robust_fit() {
 }
 
 /// The query order (input order for scan lines, a Morton sort otherwise) changes no
-/// distance: a scan-line cloud and the same points shuffled give the same values per point.
+/// result: a scan-line cloud and the same points shuffled give the same distance, to the
+/// bit, and the same triangle per point.
 #[test]
 fn shuffled_points_give_the_same_distances() {
     let (v, t) = sphere_mesh(50, 10.0);
@@ -447,7 +448,63 @@ fn shuffled_points_give_the_same_distances() {
     let a = mesh.distances(&pts, &Query::default()).unwrap();
     let b = mesh.distances(&shuffled, &Query::default()).unwrap();
     for (k, &i) in perm.iter().enumerate() {
-        assert!((a.distance[i] - b.distance[k]).abs() <= 1e-12, "point {i}: {} vs {}", a.distance[i], b.distance[k]);
+        assert!(a.distance[i].to_bits() == b.distance[k].to_bits() && a.triangle[i] == b.triangle[k], "point {i}: {} vs {}", a.distance[i], b.distance[k]);
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(64))]
+    /// Points walking the tree in groups get, each, the single search's answer to the
+    /// bit (triangle, squared distance, closest point, feature) and the brute force's
+    /// least squared distance, the lowest slot among exact ties; whatever their starts
+    /// (none, the previous group's triangles, a random one) and bound. Points are
+    /// coherent (a walk) or scattered, on soups with shared edges (exact ties).
+    #[test]
+    fn group_queries_equal_the_single_search(seed in 0u64..1_000_000, n in 1usize..300, step in 1e-4f64..3.0) {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let corners = soup(&mut rng, n);
+        let bvh = crate::bvh::Bvh::new(&corners);
+        let mut p = [rng.random_range(-12.0..12.0), rng.random_range(-12.0..12.0), rng.random_range(-12.0..12.0)];
+        for round in 0..30 {
+            let g = rng.random_range(1..=crate::bvh::GROUP);
+            let mut ps = Vec::new();
+            for _ in 0..g {
+                for k in 0..3 {
+                    p[k] += rng.random_range(-step..step);
+                }
+                ps.push(if rng.random_range(0.0..1.0) < 0.1 { [rng.random_range(-20.0..20.0), 0.5, 0.5] } else { p });
+            }
+            let bound2 = [f64::INFINITY, 0.25, 4.0][round % 3];
+            let mut best: Vec<Option<crate::bvh::Nearest>> = ps
+                .iter()
+                .map(|&q| match round % 4 {
+                    0 => None,
+                    _ => Some(bvh.to_slot(q, rng.random_range(0..bvh.corners.len() as u32))),
+                })
+                .collect();
+            bvh.nearest_group(&ps, bound2, &mut best);
+            for (q, got) in ps.iter().zip(&best) {
+                let single = bvh.nearest(*q, bound2, None);
+                // brute force: the least squared distance, then the lowest slot
+                let mut want: Option<(f64, u32)> = None;
+                for (slot, c) in bvh.corners.iter().enumerate() {
+                    let d2 = brute_force(&[*c], *q);
+                    if d2 <= bound2 && want.map_or(true, |(w, _)| d2 < w) {
+                        want = Some((d2, slot as u32));
+                    }
+                }
+                match (got, single, want) {
+                    (Some(a), Some(b), Some((d2, slot))) => {
+                        prop_assert_eq!((a.slot, a.d2.to_bits()), (b.slot, b.d2.to_bits()));
+                        prop_assert_eq!(a.foot.map(f64::to_bits), b.foot.map(f64::to_bits));
+                        prop_assert_eq!(a.feature, b.feature);
+                        prop_assert_eq!((a.slot, a.d2.to_bits()), (slot, d2.to_bits()));
+                    }
+                    (None, None, None) => {}
+                    (a, b, w) => prop_assert!(false, "group {:?}, single {:?}, brute force {:?}", a.map(|x| x.slot), b.map(|x| x.slot), w),
+                }
+            }
+        }
     }
 }
 

@@ -2,7 +2,7 @@
 
 use crate::arrays::{indices, matrix, rows};
 use crate::errors::{invalid, run};
-use gagekit_cloudio::{cut_chunk, data_columns, read_ascii_file, scale_in_place, Keep, PlyAsciiStream, read_e57, write_ascii, AsciiOptions, AsciiStream, PlyFile, PlyStream};
+use gagekit_cloudio::{cut_chunk, data_columns, read_ascii_file, scale_in_place, Keep, PlyAsciiStream, read_e57, write_ascii, AsciiOptions, AsciiStream, E57Stream, PlyFile, PlyStream};
 use gagekit_core::GkError;
 use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray2, PyReadwriteArray2};
 use pyo3::prelude::*;
@@ -273,6 +273,53 @@ fn cloud_ply_ascii_chunks(py: Python<'_>, path: String) -> PyResult<Option<PlyAs
     Ok(s.map(|inner| PlyAsciiChunks { inner }))
 }
 
+/// The points of an E57 file read data packet by data packet (`gagekit-cloudio`'s `E57Stream`).
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyclass)]
+#[pyclass(module = "gagekit._core.cloud")]
+pub struct E57Chunks {
+    inner: E57Stream,
+}
+
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pymethods)]
+#[pymethods]
+impl E57Chunks {
+    /// Number of scans.
+    #[getter]
+    fn scans(&self) -> usize {
+        self.inner.scans()
+    }
+
+    /// Records of every scan (valid and invalid points).
+    #[getter]
+    fn records(&self) -> usize {
+        self.inner.records()
+    }
+
+    /// Points dropped so far because their invalid state was not 0.
+    #[getter]
+    fn invalid_dropped(&self) -> usize {
+        self.inner.invalid_dropped()
+    }
+
+    /// The valid points of the next at most `max_points` records as an (m, 3) array in
+    /// metres (m may be 0), None at the end.
+    fn next_chunk(&mut self, py: Python<'_>, max_points: usize) -> PyResult<Option<Py<PyAny>>> {
+        let inner = &mut self.inner;
+        let chunk = run(py, || inner.next_chunk(max_points))?;
+        chunk.map(|c| Ok(matrix(py, c, 3)?.into_any().unbind())).transpose()
+    }
+}
+
+/// Open an E57 file for reading its points in chunks, data packet by data packet; None
+/// when a scan is not one the stream reads (the file is then read whole).
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyfunction(module = "gagekit._core.cloud"))]
+#[pyfunction]
+#[pyo3(name = "e57_chunks")]
+fn cloud_e57_chunks(py: Python<'_>, path: String) -> PyResult<Option<E57Chunks>> {
+    let s = run(py, || E57Stream::open(std::path::Path::new(&path), &path))?;
+    Ok(s.map(|inner| E57Chunks { inner }))
+}
+
 /// One region's share of a streamed chunk: (points inside, every inside index or None,
 /// kept indices, kept points (m, 3)); indices are rows of the chunk.
 type CutRow<'py> = (usize, Option<Bound<'py, PyArray1<i64>>>, Bound<'py, PyArray1<i64>>, Bound<'py, PyArray2<f64>>);
@@ -323,5 +370,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(cloud_read_ply, m)?)?;
     m.add_function(wrap_pyfunction!(cloud_ply_layout, m)?)?;
     m.add_function(wrap_pyfunction!(cloud_read_e57, m)?)?;
+    m.add_class::<E57Chunks>()?;
+    m.add_function(wrap_pyfunction!(cloud_e57_chunks, m)?)?;
     Ok(())
 }

@@ -8,6 +8,7 @@ import typing
 __all__ = [
     "AsciiChunks",
     "AsciiCloud",
+    "E57Chunks",
     "E57Cloud",
     "PlyAsciiChunks",
     "PlyChunks",
@@ -16,6 +17,7 @@ __all__ = [
     "ascii_chunks",
     "ascii_columns",
     "cut_chunk",
+    "e57_chunks",
     "ply_ascii_chunks",
     "ply_chunks",
     "ply_layout",
@@ -60,6 +62,32 @@ class AsciiCloud:
     def columns(self) -> builtins.list[builtins.int]:
         r"""
         Number of columns of each data line.
+        """
+
+@typing.final
+class E57Chunks:
+    r"""
+    The points of an E57 file read data packet by data packet (`gagekit-cloudio`'s `E57Stream`).
+    """
+    @property
+    def scans(self) -> builtins.int:
+        r"""
+        Number of scans.
+        """
+    @property
+    def records(self) -> builtins.int:
+        r"""
+        Records of every scan (valid and invalid points).
+        """
+    @property
+    def invalid_dropped(self) -> builtins.int:
+        r"""
+        Points dropped so far because their invalid state was not 0.
+        """
+    def next_chunk(self, max_points: builtins.int) -> typing.Optional[typing.Any]:
+        r"""
+        The valid points of the next at most `max_points` records as an (m, 3) array in
+        metres (m may be 0), None at the end.
         """
 
 @typing.final
@@ -168,6 +196,12 @@ def cut_chunk(points: numpy.typing.NDArray[numpy.float64], boxes: numpy.typing.N
     and keep, per box, every inside point or (`hull[i]`) the hull vertices of them;
     `inside` also returns every inside index of the hull boxes (`gagekit-cloudio`'s
     `cut_chunk`: one call a chunk, parallel inside).
+    """
+
+def e57_chunks(path: builtins.str) -> typing.Optional[E57Chunks]:
+    r"""
+    Open an E57 file for reading its points in chunks, data packet by data packet; None
+    when a scan is not one the stream reads (the file is then read whole).
     """
 
 def ply_ascii_chunks(path: builtins.str) -> typing.Optional[PlyAsciiChunks]:

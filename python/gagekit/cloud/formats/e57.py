@@ -20,12 +20,17 @@ from ...errors import FileFormatError
 from . import Raw
 
 
+def at_one_place(p: Path, n: int, point) -> FileFormatError:
+    """The error for a file whose ``n`` points are all at ``point`` (metres)."""
+    x, y, z = (float(v) for v in point)
+    return FileFormatError(f"{p}: all {n} points are at one place ({x:g}, {y:g}, {z:g} m; every range 0?): "
+                           "an invalid acquisition, not a scan")
+
+
 def _check_spread(p: Path, pts: np.ndarray) -> None:
     # a scan almost always differs within its first points: the full pass only when it does not
     if len(pts) > 1 and not (pts[:4096] != pts[0]).any() and np.array_equal(pts.min(axis=0), pts.max(axis=0)):
-        x, y, z = (float(v) for v in pts[0])
-        raise FileFormatError(f"{p}: all {len(pts)} points are at one place ({x:g}, {y:g}, {z:g} m; every range 0?): "
-                              "an invalid acquisition, not a scan")
+        raise at_one_place(p, len(pts), pts[0])
 
 
 def read(p: Path, dim: int) -> Raw:
