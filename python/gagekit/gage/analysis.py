@@ -388,27 +388,18 @@ def check_gages_stream(stream, spec: SpecLike, *, groups: bool = True) -> GageCh
     return solve_problem(build_problem_stream(stream, spec), groups=groups)
 
 
+#: the fields of a GageCheckResult that are the kernel's result (``_core.gage.GageCheck``)
+_KERNEL_FIELDS = ("status", "objective", "transform", "limited_by_motion_bounds", "bound_limits", "gages",
+                  "infeasible_groups", "largest_release", "iterations", "last_step", "lp_status")
+
+
 def solve_problem(problem: GageProblem, *, groups: bool = True) -> GageCheckResult:
     """Solve Eq. 5.11 for a prepared problem (Rust, clarabel, exact re-linearisation)."""
     spec = problem.spec
     labels = [(g.name, g.region, *problem.region_counts[g.region]) for g in spec.gages]
     r = _core.gage.check(*problem.args(), labels, groups=groups)
-    return GageCheckResult(
-        status=r.status,
-        objective=r.objective,
-        transform=r.transform,
-        limited_by_motion_bounds=r.limited_by_motion_bounds,
-        bound_limits=r.bound_limits,
-        gages=r.gages,
-        infeasible_groups=r.infeasible_groups,
-        largest_release=r.largest_release,
-        alignment=problem.alignment,
-        iterations=r.iterations,
-        last_step=r.last_step,
-        lp_status=r.lp_status,
-        motion=spec.motion.to_dict(),
-        plot_data={"regions": problem.plot_points, "spec": spec},
-    )
+    return GageCheckResult(**{k: getattr(r, k) for k in _KERNEL_FIELDS}, alignment=problem.alignment,
+                           motion=spec.motion.to_dict(), plot_data={"regions": problem.plot_points, "spec": spec})
 
 
 def check_gages(points, spec: SpecLike, *, groups: bool = True) -> GageCheckResult:
