@@ -8,8 +8,9 @@ case, gagekit time, peer time, ratio (peer / gagekit; above 1 gagekit is faster)
 Goals (issues 13, 29): binary PLY within 1.2x of numpy.fromfile on the same file (ratio >=
 0.83); ASCII XYZ at least 4x numpy.loadtxt (ratio >= 4) and within 2x of reading the
 file's bytes alone (Python's ``open(...).read()``: ratio >= 0.5); E57 no slower than
-pye57's read_scan_raw (ratio >= 1; pye57 is in the ``test`` extra). Every read is checked
-against the written points.
+pye57's read_scan_raw (ratio >= 1; pye57 is in the ``test`` extra: ``pip install
+'gagekit[test]'``), whole and streamed data packet by data packet (``open_cloud``, the path
+of ``gage check --memory``). Every read is checked against the written points.
 
 What the peers do: for the float64 PLY, numpy.fromfile alone gives the (n, 3) float64
 array gagekit returns. For the float32 + intensity PLY it gives records of float32
@@ -108,7 +109,7 @@ def main() -> None:
         try:
             import pye57
         except ImportError:
-            print("# E57: pye57 not installed, skipped")
+            print("# E57: pye57 not installed, skipped (pip install 'gagekit[test]')")
             return
         w = pye57.E57(str(e57), mode="w")
         w.write_scan_raw({"cartesianX": pts[:, 0] / 1000, "cartesianY": pts[:, 1] / 1000, "cartesianZ": pts[:, 2] / 1000})
@@ -118,6 +119,14 @@ def main() -> None:
         # pye57 stores scaled integers (0.1 um): compare with what it reads back, in mm
         assert np.array_equal(got, np.column_stack([raw["cartesianX"], raw["cartesianY"], raw["cartesianZ"]]) * 1000.0)
         print(row.format("e57 read (double cartesian)", t_g, t_p, t_p / t_g, "pye57 read_scan_raw"))
+        from gagekit.cloud.stream import open_cloud
+
+        def streamed():  # what gage check does with the chunks: use each, keep none
+            return sum(len(c) for c in open_cloud(e57, chunk=1 << 20))
+
+        t_s, count = timed(streamed, repeat=args.repeat)
+        assert count == len(got) and np.array_equal(np.vstack(list(open_cloud(e57, chunk=1 << 20))), got)
+        print(row.format("e57 streamed (1 M chunks)", t_s, t_p, t_p / t_s, "pye57 read_scan_raw (whole)"))
 
 
 if __name__ == "__main__":

@@ -125,6 +125,15 @@ def test_memory_budget():
     assert should_stream(DATA / "casting_ok.ply", 64 << 20) is False  # 3 MB of points
 
 
+def test_an_e57_is_sized_by_its_records():
+    """A scaled-integer E57 holds a point in fewer bytes than the float64 point it reads
+    as: the whole read's size comes from the record counts, not the file's size."""
+    from gagekit.cloud.stream import whole_read_bytes
+
+    f = TESTS / "e57" / "bunnyInt19.e57"
+    assert whole_read_bytes(f) == 24 * len(read_cloud(f).points) > f.stat().st_size
+
+
 def cli(*args):
     return subprocess.run([sys.executable, "-m", "gagekit", *map(str, args), "--json"], capture_output=True,
                           text=True, timeout=300)
