@@ -32,22 +32,18 @@ __all__ = ["minimum_zone_sphere_near", "minimum_zone_circle_near", "thinnest_sla
 def minimum_zone_sphere_near(points: np.ndarray, near_center: Any) -> Any:
     """:func:`gagekit.form.fit_sphere` ``(points, "minimum-zone")`` on an active set started
     from the centre of a nearby minimum zone (module docstring)."""
-    from .fits import chebyshev_sphere
-
     p = np.ascontiguousarray(points, dtype=float)
     c = tuple(float(x) for x in np.asarray(near_center, dtype=float).reshape(3))
-    return chebyshev_sphere(_core.form.sphere_fit_near(p, c), "minimum-zone", len(p))
+    return _core.form.fit_sphere_near(p, c)
 
 
 def minimum_zone_circle_near(xy: np.ndarray, near_center: Any) -> Any:
     """:func:`gagekit.form.fit_circle` ``(xy, "mz")`` of (n, 2) points on an active set
     started from a nearby centre (e.g. the least-squares centre): exact by verification
     (module docstring)."""
-    from .circle import _result
-
     p = np.ascontiguousarray(xy, dtype=float)
     c = tuple(float(x) for x in np.asarray(near_center, dtype=float).reshape(2))
-    return _result(_core.form.circle_fit_near(p, c), "exact", len(p))
+    return _core.form.fit_circle_near(p, c)
 
 
 def thinnest_slab_near(points: np.ndarray, near_normal: Any) -> tuple[float, np.ndarray]:

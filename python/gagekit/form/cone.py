@@ -8,86 +8,20 @@ d = rho cos(psi) - z sin(psi) - D for the cone of half angle psi passing at norm
 D from the axis point (positive away from the axis). The minimum zone is two coaxial cones
 of the same half angle enclosing the points with the least normal separation -- the ISO
 1101 profile of a conical surface without datums; its width is the conicity.
+
+The result, :class:`ConeFit`, is the Rust object (``gagekit_form::result::ConeResult``).
 """
 
 from __future__ import annotations
 
-import math
-from dataclasses import dataclass, field
 from typing import Any, Optional
 
 from .. import _core
+from .._core.form import ConeFit
 from ..errors import ConfigError
-from .criteria import SHAPE_CRITERIA, criterion_name
-from .fits import Certificate, _cert, _fit_dict, _points, _radii, _vec
+from .fits import _points
 
 __all__ = ["ConeFit", "fit_cone"]
-
-
-@dataclass(frozen=True)
-class ConeFit:
-    """A fitted cone.
-
-    ``point`` is the axis point of the **reference section** (the plane normal to the axis
-    through the foot of the points' centroid), ``direction`` the unit axis along which the
-    radius grows, ``apex`` the cone's apex, ``half_angle`` the half apex angle (rad; JSON
-    also ``half_angle_deg`` and the full ``apex_angle``), ``radius`` the radius at the
-    reference section (least squares, circumscribed, inscribed; for the minimum zone the
-    mean of ``inner_radius`` and ``outer_radius``, the zone's two cones there) and
-    ``distance`` = radius cos(half_angle), the normal distance from ``point`` to the cone.
-    ``form_error``: the normal width of the points about this cone (the zone width for the
-    minimum zone). ``certificate``: min / max signed normal deviation, recomputed from the
-    reported cone. ``gap`` (Chebyshev cones): the decrease a linear step of the local
-    search predicts within 1e-7 of the part's size about the result -- 0 certifies a local
-    optimum to first order (mm).
-    """
-
-    criterion: str
-    n_points: int
-    point: tuple[float, float, float]
-    direction: tuple[float, float, float]
-    apex: tuple[float, float, float]
-    half_angle: float
-    radius: float
-    distance: float
-    form_error: float
-    certificate: Certificate
-    fixed_angle: bool = False
-    inner_radius: Optional[float] = None
-    outer_radius: Optional[float] = None
-    control_points: tuple[int, ...] = ()
-    gap: float = 0.0
-    evaluations: int = 0
-    shape: str = field(default="cone", init=False)
-
-    @property
-    def apex_angle(self) -> float:
-        """The full apex angle (rad)."""
-        return 2.0 * self.half_angle
-
-    def radius_at(self, z: float) -> float:
-        """Radius of the cone at axial coordinate ``z`` (mm, along ``direction``) from the
-        reference section."""
-        return self.radius + z * math.tan(self.half_angle)
-
-    def to_dict(self) -> dict[str, Any]:
-        d = _fit_dict(
-            self,
-            **_radii(self),
-            axis_point=list(self.point),
-            axis_direction=list(self.direction),
-            apex=list(self.apex),
-            half_angle=self.half_angle,
-            half_angle_deg=math.degrees(self.half_angle),
-            apex_angle=self.apex_angle,
-            distance=self.distance,
-            fixed_angle=self.fixed_angle,
-        )
-        if self.criterion != "least-squares":
-            d["control_points"] = list(self.control_points)
-            d["gap"] = self.gap
-            d["evaluations"] = self.evaluations
-        return d
 
 
 def fit_cone(points: Any, criterion: str = "least-squares", *, angle: Optional[float] = None) -> ConeFit:
@@ -124,23 +58,11 @@ def fit_cone(points: Any, criterion: str = "least-squares", *, angle: Optional[f
     ConfigError
         an unknown criterion, a half angle outside (0, 90) degrees.
     """
-    crit = criterion_name(criterion, SHAPE_CRITERIA["cone"], "cone")
     pts = _points(points, (3,), "cone")
     half = None
     if angle is not None:
         try:
-            deg = float(angle)
+            half = float(angle)
         except (TypeError, ValueError):
             raise ConfigError(f"cone: the half angle must be a number of degrees in (0, 90), got {angle!r}") from None
-        if not (0.0 < deg < 90.0):
-            raise ConfigError(f"cone: the half angle must lie strictly between 0 and 90 degrees, got {angle!r}")
-        half = math.radians(deg)
-    c = _core.form.cone_fit(pts, crit, half)
-    zone = crit == "minimum-zone"
-    control = list(c.control_in) + [i for i in c.control_out if i not in c.control_in]
-    return ConeFit(
-        crit, len(pts), _vec(c.point), _vec(c.direction), _vec(c.apex), float(c.half_angle), float(c.radius),
-        float(c.distance), float(c.form_error), _cert(c), fixed_angle=bool(c.fixed_angle),
-        inner_radius=float(c.r_in) if zone else None, outer_radius=float(c.r_out) if zone else None,
-        control_points=tuple(int(i) for i in control), gap=float(c.gap), evaluations=int(c.evaluations),
-    )
+    return _core.form.fit_cone(pts, str(criterion), half)

@@ -5,105 +5,34 @@ The axis direction is a = (sin t cos f, sin t sin f, cos t) with the polar angle
 t in [0, pi/2] and the azimuth f in [-pi, pi] (the half sphere, Tables 6.2/6.4);
 the points are projected along it by q = [I2 0] Ry(-t) Rz(-f) p (Eq. 6.12 as
 corrected in ERRATA item 1), and the projected 2-D set is fitted exactly
-(Eqs. 6.13-6.15).
+(Eqs. 6.13-6.15). The result, :class:`CylinderFit`, is the Rust object
+(``gagekit_form::result::CylinderResult``: radius, zone, control points, arc, the
+search cone and their warnings, assembled once there).
 """
 
 from __future__ import annotations
 
-import math
-import warnings as _warnings
-from dataclasses import dataclass, field
 from typing import Any, Optional
 
 import numpy as np
 
 from .. import _core
+from .._core.form import CylinderFit
 from ..errors import ConfigError
-from .criteria import SHAPE_CRITERIA, criterion_name
-from .fits import Certificate, _cert, _fit_dict, _points, _radii, _vec
-from .search import DEFAULT_MAX_TILT, outside_warning, search_settings
+from .fits import _points
+from .search import DEFAULT_MAX_TILT, search_settings
 
 __all__ = ["CylinderFit", "fit_cylinder", "axis_angles", "DEFAULT_MAX_TILT"]
 
-_ALLOWED = SHAPE_CRITERIA["cylinder"]
 
 
 def axis_angles(direction: Any) -> tuple[float, float]:
     """(theta, phi) of a direction, flipped into the upper half sphere (theta <= pi/2)."""
-    a = np.asarray(direction, dtype=float)
-    a = a / np.linalg.norm(a)
-    if a[2] < 0 or (a[2] == 0 and (a[1] < 0 or (a[1] == 0 and a[0] < 0))):
-        a = -a
-    return float(math.acos(min(1.0, max(-1.0, a[2])))), float(math.atan2(a[1], a[0]))
-
-
-@dataclass(frozen=True)
-class CylinderFit:
-    """A fitted cylinder.
-
-    ``arc_deg`` is the angle the points cover around the axis; ``warnings`` says when the
-    fit is poorly determined (``ill_posed`` for a maximum inscribed cylinder of an arc
-    below 90 degrees, Sec. 6.2.2).
-
-    ``radius`` is the fitted radius (least squares, circumscribed, inscribed); for the
-    minimum zone ``inner_radius`` / ``outer_radius`` bound the zone and ``radius`` is their
-    mean. ``form_error`` is the cylindricity about this axis (max - min distance to the
-    axis; the zone width for the minimum zone). ``certificate``: min and max distance of
-    the input points to the reported axis, recomputed in 3-D.
-    """
-
-    criterion: str
-    n_points: int
-    point: tuple[float, float, float]
-    direction: tuple[float, float, float]
-    theta: float
-    phi: float
-    radius: float
-    form_error: float
-    certificate: Certificate
-    inner_radius: Optional[float] = None
-    outer_radius: Optional[float] = None
-    control_points: tuple[int, ...] = ()
-    iterations: int = 0
-    evaluations: int = 0
-    arc_deg: float = 360.0
-    ill_posed: bool = False
-    warnings: tuple[str, ...] = ()
-    tilt_deg: Optional[float] = None
-    reference_axis: Optional[tuple[float, float, float]] = None
-    warm_fallback: Optional[bool] = None
-    shape: str = field(default="cylinder", init=False)
-
-    @property
-    def axis_point(self) -> tuple[float, float, float]:
-        """Deprecated alias of :attr:`point` (the JSON key stays ``axis_point``)."""
-        _warnings.warn("CylinderFit.axis_point is deprecated; use point", DeprecationWarning, stacklevel=2)
-        return self.point
-
-    @property
-    def axis_direction(self) -> tuple[float, float, float]:
-        """Deprecated alias of :attr:`direction` (the JSON key stays ``axis_direction``)."""
-        _warnings.warn("CylinderFit.axis_direction is deprecated; use direction", DeprecationWarning, stacklevel=2)
-        return self.direction
-
-    def to_dict(self) -> dict[str, Any]:
-        d = _fit_dict(
-            self,
-            **_radii(self),
-            axis_point=list(self.point),
-            axis_direction=list(self.direction),
-            theta=self.theta,
-            phi=self.phi,
-            control_points=list(self.control_points),
-        )
-        if self.criterion != "least-squares":
-            d["iterations"] = self.iterations
-            d["evaluations"] = self.evaluations
-            d["tilt_deg"] = self.tilt_deg
-        d["arc_deg"] = self.arc_deg
-        d["ill_posed"] = self.ill_posed
-        d["warnings"] = list(self.warnings)
-        return d
+    try:
+        d = np.asarray(direction, dtype=float).reshape(3)
+    except (TypeError, ValueError):
+        raise ConfigError(f"axis_angles: a direction is three numbers (x, y, z), got {direction!r}") from None
+    return _core.form.axis_angles((float(d[0]), float(d[1]), float(d[2])))
 
 
 def fit_cylinder(
@@ -180,9 +109,8 @@ def fit_cylinder(
     ------
     InvalidInputError, DegenerateGeometryError, ConfigError
     """
-    crit = criterion_name(criterion, _ALLOWED, "cylinder")
     pts = _points(points, (3,), "cylinder")
-    nominal, tilt_rad = search_settings(axis, max_tilt, "cylinder")
+    nominal, tilt = search_settings(axis, max_tilt, "cylinder")
     start = None
     if warm is not None:
         try:
@@ -190,77 +118,7 @@ def fit_cylinder(
         except (TypeError, ValueError):
             raise ConfigError(f"cylinder: warm must be (point, direction), two 3-vectors, got {warm!r}") from None
         start = (wp, wd)
-    if crit == "least-squares":
-        ls = _core.form.cylinder_lsq(pts, None, None if start is None else start[1])
-        arc = math.degrees(ls.arc)
-        # the angles of the least-squares axis as numpy computed them before the kernel
-        # returned complete fits (its BLAS norm can differ from nalgebra's by an ulp, and
-        # the JSON stays byte-identical); the minimax cylinders report the kernel's
-        theta, phi = axis_angles(ls.direction)
-        return CylinderFit(
-            crit, len(pts), _vec(ls.point), _vec(ls.direction), theta, phi, float(ls.radius),
-            float(ls.form_error), _cert(ls),
-            arc_deg=float(arc), warnings=tuple(_arc_warnings(crit, arc)),
-        )
-    for name, v in (("particles", particles), ("iterations", iterations), ("stall_iterations", stall_iterations), ("refine_starts", refine_starts), ("hop_rounds", hop_rounds)):
-        if int(v) < (1 if name == "particles" else 0):
-            raise ConfigError(f"cylinder: {name} must be a positive integer, got {v}")
-    if seed < 0:
-        raise ConfigError(f"cylinder: seed must be a non-negative integer, got {seed}")
-    r = _core.form.cylinder_fit(
-        pts, crit, int(seed), int(particles), int(iterations), int(stall_iterations),
-        nominal, tilt_rad, int(refine_starts), int(hop_rounds), start,
+    return _core.form.fit_cylinder(
+        pts, str(criterion), int(seed), int(particles), int(iterations), int(stall_iterations),
+        nominal, tilt, int(refine_starts), int(hop_rounds), start,
     )
-    cert = _cert(r)
-    if crit == "min-circumscribed":
-        radius, form_error, control = r.r_out, cert.max_distance - cert.min_distance, r.control_out
-        inner = outer = None
-    elif crit == "max-inscribed":
-        radius, form_error, control = r.r_in, cert.max_distance - cert.min_distance, r.control_in
-        inner = outer = None
-    else:
-        radius, inner, outer = r.radius, r.r_in, r.r_out
-        form_error = outer - inner
-        control = list(r.control_in) + [i for i in r.control_out if i not in r.control_in]
-    arc = math.degrees(r.arc)
-    warnings = _arc_warnings(crit, arc)
-    if r.at_limit:
-        warnings.append(
-            f"the axis lies on the boundary of the search cone (max_tilt = {float(max_tilt):g} degrees from the "
-            "reference axis): the points alone would tilt it further; give the nominal axis (axis=...) or check the data"
-        )
-    if r.outside is not None:
-        warnings.append(outside_warning(crit, r.outside, max_tilt))
-    return CylinderFit(
-        crit, len(pts), _vec(r.point), _vec(r.direction), float(r.theta), float(r.phi),
-        float(radius), float(form_error), cert,
-        inner_radius=None if inner is None else float(inner),
-        outer_radius=None if outer is None else float(outer),
-        control_points=tuple(int(i) for i in control),
-        iterations=int(r.iterations),
-        evaluations=int(r.evaluations),
-        arc_deg=float(arc),
-        ill_posed=bool(r.ill_posed),
-        warnings=tuple(warnings),
-        tilt_deg=math.degrees(r.tilt),
-        reference_axis=_vec(r.reference),
-        warm_fallback=r.warm_fallback,
-    )
-
-
-#: Below this arc (degrees) around the axis a maximum inscribed cylinder is ill-posed
-#: (the kernel's constant, gagekit-form ``cylinder::MIN_ARC``).
-MIN_ARC_DEG = _core.form.CYLINDER_MIN_ARC_DEG
-
-
-def _arc_warnings(crit: str, arc: float) -> list[str]:
-    warnings: list[str] = []
-    if arc < MIN_ARC_DEG:
-        if crit == "max-inscribed":
-            warnings.append(
-                f"the points cover only {arc:.1f} degrees around the axis (< {MIN_ARC_DEG:.0f}): the "
-                "maximum inscribed cylinder is ill-posed and its radius is not a meaningful size"
-            )
-        else:
-            warnings.append(f"the points cover only {arc:.1f} degrees around the axis: axis and radius are poorly determined")
-    return warnings

@@ -22,18 +22,19 @@ not bridged, and a profile with fewer than ``7 UPR`` points is refused. The clos
 is exact: harmonic ``k`` is multiplied by ``exp(-pi (alpha k / UPR)^2)``, ``alpha =
 sqrt(ln 2 / pi)``, in the discrete Fourier transform. Unfiltered parameters are taken on
 the measured points themselves; filtered ones on the filtered resampled profile. The
-kernels are Rust (``gagekit_profile``); this module converts and words the results.
+kernels are Rust (``gagekit_profile``), and the results are their Rust objects (getters and
+``to_dict()`` in the binding); this module reads the arguments in.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
 from typing import Any, Optional
 
 import numpy as np
 
 from .. import _core
+from .._core.form import FlatnessParameters, RoundnessParameters, StraightnessParameters
 from ..errors import ConfigError, InvalidInputError
 from .fits import _points
 
@@ -86,66 +87,6 @@ def _filter_spec(filter: str, upr: Optional[float]) -> Optional[float]:
     return value
 
 
-def _params(prefix: str, p: Any) -> dict[str, float]:
-    return {f"{prefix}t": float(p.t), f"{prefix}p": float(p.p), f"{prefix}v": float(p.v), f"{prefix}q": float(p.q)}
-
-
-@dataclass(frozen=True)
-class RoundnessParameters:
-    """Roundness of a closed profile (see the module docstring). ``parameters`` holds RONt,
-    RONp, RONv, RONq (mm); ``center``/``radius`` the reference circle (MZCI: the mean of
-    the zone circles ``r_in``/``r_out``); ``eccentricity`` the reference centre relative
-    to the coordinate origin (the spindle axis of a roundness instrument); ``amplitude``
-    the spectrum, harmonic 1 first (mm). ``profile`` (evaluated points), ``points`` (the
-    measured ones) and ``resampled`` (unfiltered radii at ``samples`` equal angles about
-    ``ls_center``) are for plots; not in :meth:`to_dict`."""
-
-    parameters: dict[str, float]
-    reference: str
-    filter: dict[str, Any]
-    center: tuple[float, float]
-    radius: float
-    r_in: float
-    r_out: float
-    ls_center: tuple[float, float]
-    samples: int
-    n_points: int
-    max_gap_deg: float
-    amplitude: np.ndarray
-    phase: np.ndarray
-    profile: np.ndarray = field(repr=False)
-    points: np.ndarray = field(repr=False)
-    resampled: np.ndarray = field(repr=False)
-
-    @property
-    def eccentricity(self) -> dict[str, float]:
-        x, y = self.center
-        return {"x": x, "y": y, "magnitude": math.hypot(x, y), "angle_deg": math.degrees(math.atan2(y, x)) % 360.0}
-
-    def to_dict(self) -> dict[str, Any]:
-        return {
-            "shape": "roundness",
-            "n_points": self.n_points,
-            "filter": dict(self.filter),
-            "reference": self.reference,
-            "parameters": dict(self.parameters),
-            "reference_circle": {"center": list(self.center), "radius": self.radius},
-            "zone": {"inner_radius": self.r_in, "outer_radius": self.r_out},
-            "eccentricity": self.eccentricity,
-            "resampling": {
-                "samples": self.samples,
-                "center": list(self.ls_center),
-                "largest_gap_deg": self.max_gap_deg,
-                "method": "linear interpolation in angle about the least-squares centre",
-            },
-            "spectrum": {
-                "upr": list(range(1, len(self.amplitude) + 1)),
-                "amplitude": [float(a) for a in self.amplitude],
-            },
-            "units": "mm",
-        }
-
-
 def _profile_points(points: Any) -> np.ndarray:
     pts = _points(points, (2, 3), "roundness")
     if pts.shape[1] == 3:
@@ -170,58 +111,7 @@ def roundness_parameters(points: Any, filter: str = "gaussian", upr: Optional[fl
     for name, value in (("samples", samples), ("harmonics", harmonics)):
         if value is not None and (not isinstance(value, (int, np.integer)) or value < 1):
             raise InvalidInputError(f"{name} must be a positive integer, got {value!r}")
-    r = _core.form.roundness(pts, u, str(reference), samples, max_gap_deg, harmonics)
-    filt: dict[str, Any] = {"type": "none"} if u is None else {"type": "gaussian", "upr": u, "standard": "ISO 16610-21"}
-    return RoundnessParameters(
-        parameters=_params("RON", r.params),
-        reference=r.reference,
-        filter=filt,
-        center=(float(r.center[0]), float(r.center[1])),
-        radius=float(r.radius),
-        r_in=float(r.r_in),
-        r_out=float(r.r_out),
-        ls_center=(float(r.ls_center[0]), float(r.ls_center[1])),
-        samples=int(r.samples),
-        n_points=int(r.n_points),
-        max_gap_deg=math.degrees(r.max_gap),
-        amplitude=np.asarray(r.amplitude),
-        phase=np.asarray(r.phase),
-        profile=np.asarray(r.profile),
-        points=pts,
-        resampled=np.asarray(r.resampled),
-    )
-
-
-@dataclass(frozen=True)
-class StraightnessParameters:
-    """Straightness of a 2-D profile: STRt, STRp, STRv, STRq (mm) against LSLI or MZLI
-    (deviations positive to the left of the direction from the profile's first point to
-    its last)."""
-
-    parameters: dict[str, float]
-    reference: str
-    filter: dict[str, Any]
-    point: tuple[float, float]
-    direction: tuple[float, float]
-    n_points: int
-    length: float
-    step: Optional[float]
-    profile: np.ndarray = field(repr=False)
-
-    def to_dict(self) -> dict[str, Any]:
-        d = {
-            "shape": "straightness",
-            "n_points": self.n_points,
-            "filter": dict(self.filter),
-            "reference": self.reference,
-            "parameters": dict(self.parameters),
-            "reference_line": {"point": list(self.point), "direction": list(self.direction)},
-            "length_mm": self.length,
-            "units": "mm",
-        }
-        if self.step is not None:
-            d["step_mm"] = self.step
-        return d
+    return _core.form.roundness(pts, u, str(reference), samples, max_gap_deg, harmonics)
 
 
 def straightness_parameters(points: Any, filter: str = "none", cutoff: Optional[float] = None, reference: str = "LSLI",
@@ -240,56 +130,14 @@ def straightness_parameters(points: Any, filter: str = "none", cutoff: Optional[
     else:
         raise ConfigError(f"unknown filter {filter!r}; choose gaussian, spline or none")
     pts = _points(points, (2,), "straightness")
-    spline = kind == "spline"
-    r = _core.form.straightness(pts, lc, str(reference), step, max_gap, spline)
-    filt: dict[str, Any]
-    if lc is None:
-        filt = {"type": "none"}
-    elif spline:
-        filt = {"type": "spline", "cutoff_mm": lc, "standard": "ISO 16610-22", "ends": "none dropped"}
-    else:
-        filt = {"type": "gaussian", "cutoff_mm": lc, "standard": "ISO 16610-21", "ends": "one cut-off dropped at each end"}
-    return StraightnessParameters(
-        parameters=_params("STR", r.params), reference=r.reference, filter=filt,
-        point=(float(r.point[0]), float(r.point[1])), direction=(float(r.direction[0]), float(r.direction[1])),
-        n_points=int(r.n_points), length=float(r.length), step=None if r.step is None else float(r.step),
-        profile=np.asarray(r.profile),
-    )
-
-
-@dataclass(frozen=True)
-class FlatnessParameters:
-    """Flatness: FLTt, FLTp, FLTv, FLTq (mm) against LSPL or MZPL (deviations positive
-    along ``normal``, oriented towards ``up``, default +z). Unfiltered."""
-
-    parameters: dict[str, float]
-    reference: str
-    point: tuple[float, float, float]
-    normal: tuple[float, float, float]
-    n_points: int
-
-    def to_dict(self) -> dict[str, Any]:
-        return {
-            "shape": "flatness",
-            "n_points": self.n_points,
-            "filter": {"type": "none"},
-            "reference": self.reference,
-            "parameters": dict(self.parameters),
-            "reference_plane": {"point": list(self.point), "normal": list(self.normal)},
-            "units": "mm",
-        }
+    return _core.form.straightness(pts, lc, str(reference), step, max_gap, kind == "spline")
 
 
 def flatness_parameters(points: Any, reference: str = "LSPL", up: Optional[Any] = None) -> FlatnessParameters:
     """FLTt, FLTp, FLTv, FLTq (ISO 12781-1) of (n, 3) points, unfiltered."""
     pts = _points(points, (3,), "flatness")
     u = None if up is None else tuple(float(v) for v in up)
-    r = _core.form.flatness(pts, str(reference), u)
-    return FlatnessParameters(
-        parameters=_params("FLT", r.params), reference=r.reference,
-        point=tuple(float(v) for v in r.point), normal=tuple(float(v) for v in r.normal),  # type: ignore[arg-type]
-        n_points=int(r.n_points),
-    )
+    return _core.form.flatness(pts, str(reference), u)
 
 
 def cylindricity_parameters(points: Any, reference: str = "MZCY", seed: int = 0, **options: Any) -> dict[str, Any]:

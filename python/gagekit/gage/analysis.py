@@ -28,6 +28,7 @@ from typing import Any, Mapping, Optional, Union
 import numpy as np
 
 from .. import _core
+from .._core.gage import BoundLimit, GageOutcome, Transform
 from .._rotation import rotation_from_vector, rotation_vector
 from .._util import LENGTH_RESOLUTION_MM, as_points, check_finite
 from ..cloud.regions import Box
@@ -43,73 +44,12 @@ PLOT_POINTS = 4000
 
 
 @dataclass(frozen=True)
-class GageOutcome:
-    """One gage at T* (mm): allowances before/after are the smallest signed distances
-    of its points from the gage plane (negative: short of material), ``q`` the largest
-    (Eq. 5.4) and ``slack`` the release s_i of Eq. 5.11 (0 when the gage is met)."""
-
-    name: str
-    region: str
-    points: int
-    filtered_points: int
-    allowance_before: float
-    allowance_after: float
-    q: float
-    slack: float
-    #: with an uncertainty (:mod:`gagekit.gage.uncertainty`): the allowance after T*'s
-    #: JCGM 101 uncertainty {u, U, k, coverage, interval, bias, method, trials}
-    uncertainty: Optional[dict] = None
-    #: with an uncertainty or a decision rule: conforming / not-proven / nonconforming (ISO 14253-1)
-    decision: Optional[str] = None
-
-    def to_dict(self) -> dict:
-        d = {k: getattr(self, k) for k in ("name", "region", "points", "filtered_points", "allowance_before",
-                                           "allowance_after", "q", "slack")}
-        if self.uncertainty is not None:
-            d["uncertainty"] = self.uncertainty
-        if self.decision is not None:
-            d["decision"] = self.decision
-        return d
-
-
-@dataclass(frozen=True)
-class Transform:
-    """T* = [Rz(alpha) Ry(beta) Rx(gamma) | (dx, dy, dz)] (rad, mm), applied to points of the part frame."""
-
-    alpha: float
-    beta: float
-    gamma: float
-    dx: float
-    dy: float
-    dz: float
-    matrix: tuple[tuple[float, ...], ...]
-
-    def as_array(self) -> np.ndarray:
-        return np.array(self.matrix, dtype=np.float64)
-
-    def apply(self, points) -> np.ndarray:
-        return apply(self.as_array(), points)
-
-    def to_dict(self) -> dict:
-        return {"alpha": self.alpha, "beta": self.beta, "gamma": self.gamma, "dx": self.dx, "dy": self.dy,
-                "dz": self.dz, "matrix": [list(r) for r in self.matrix]}
-
-
-@dataclass(frozen=True)
-class BoundLimit:
-    """A bound of Omega with a non-zero Lagrange multiplier at T* (Sec. 5.2.2)."""
-
-    motion: str
-    side: str
-    dual: float
-
-    def to_dict(self) -> dict:
-        return {"motion": self.motion, "side": self.side, "dual": self.dual}
-
-
-@dataclass(frozen=True)
 class GageCheckResult:
-    """The outcome of a virtual-gage analysis (Eq. 5.11 at T*)."""
+    """The outcome of a virtual-gage analysis (Eq. 5.11 at T*): the kernel's result
+    (``_core.gage.check``: status, objective, T*, the limiting bounds, each gage's
+    :class:`GageOutcome`, the infeasible groups, u, the solver's figures, assembled once
+    in ``gagekit_gage::result``) with what the analysis adds: the alignment, the motion
+    set, the plot data and, with an uncertainty, the decision and the Monte Carlo."""
 
     status: str
     """``conforming`` when every slack is zero, else ``nonconforming``"""
@@ -448,35 +388,18 @@ def check_gages_stream(stream, spec: SpecLike, *, groups: bool = True) -> GageCh
     return solve_problem(build_problem_stream(stream, spec), groups=groups)
 
 
+#: the fields of a GageCheckResult that are the kernel's result (``_core.gage.GageCheck``)
+_KERNEL_FIELDS = ("status", "objective", "transform", "limited_by_motion_bounds", "bound_limits", "gages",
+                  "infeasible_groups", "largest_release", "iterations", "last_step", "lp_status")
+
+
 def solve_problem(problem: GageProblem, *, groups: bool = True) -> GageCheckResult:
     """Solve Eq. 5.11 for a prepared problem (Rust, clarabel, exact re-linearisation)."""
     spec = problem.spec
-    sol = _core.gage.solve(*problem.args(), groups=groups)
-    p = sol.params
-    transform = Transform(*[float(v) for v in p], tuple(tuple(float(v) for v in r) for r in sol.matrix))
-    outcomes = tuple(
-        GageOutcome(g.name, g.region, *problem.region_counts[g.region],
-                    float(sol.allowance_before[i]), float(sol.allowance_after[i]), float(sol.q[i]),
-                    float(sol.s[i]))
-        for i, g in enumerate(spec.gages))
-    names = [g.name for g in spec.gages]
-    limits = tuple(BoundLimit(mo, side, float(dual)) for mo, side, dual in sol.active_bounds)
-    return GageCheckResult(
-        status="conforming" if all(o.slack == 0.0 for o in outcomes) else "nonconforming",
-        objective=float(sol.objective),
-        transform=transform,
-        limited_by_motion_bounds=bool(limits),
-        bound_limits=limits,
-        gages=outcomes,
-        infeasible_groups=tuple(tuple(names[i] for i in grp) for grp in sol.groups),
-        largest_release=float(sol.u),
-        alignment=problem.alignment,
-        iterations=int(sol.iterations),
-        last_step=float(sol.last_step),
-        lp_status=str(sol.lp_status),
-        motion=spec.motion.to_dict(),
-        plot_data={"regions": problem.plot_points, "spec": spec},
-    )
+    labels = [(g.name, g.region, *problem.region_counts[g.region]) for g in spec.gages]
+    r = _core.gage.check(*problem.args(), labels, groups=groups)
+    return GageCheckResult(**{k: getattr(r, k) for k in _KERNEL_FIELDS}, alignment=problem.alignment,
+                           motion=spec.motion.to_dict(), plot_data={"regions": problem.plot_points, "spec": spec})
 
 
 def check_gages(points, spec: SpecLike, *, groups: bool = True) -> GageCheckResult:

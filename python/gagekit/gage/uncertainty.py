@@ -167,7 +167,7 @@ def check_gages_uncertainty(points: Any, spec: Any, model: MeasurementModel, tri
     mc = monte_carlo(evaluate, active, model, trials, seed=seed, threads=threads, values=base, digits=digits)
     U = [mc[n].U for n in names]
     decisions, part, band = gage_decisions(problem, result, U, rule)
-    gages = tuple(replace(g, uncertainty=mc[n].to_dict(), decision=d) for g, n, d in zip(result.gages, names, decisions))
+    gages = tuple(g.replace(uncertainty=mc[n].to_dict(), decision=d) for g, n, d in zip(result.gages, names, decisions))
     settings = mc.settings()
     settings["active_points"] = int(len(active))
     settings["seconds"] = time.perf_counter() - t0
@@ -180,5 +180,5 @@ def decide_gages(result: GageCheckResult, rule: Union[None, str, DecisionRule] =
     reduces to the status of Eq. 5.11 per face)."""
     rule = rule if isinstance(rule, DecisionRule) else parse_decision_rule(rule, False)
     d = ["conforming" if g.slack == 0.0 else "nonconforming" for g in result.gages]
-    return replace(result, gages=tuple(replace(g, decision=x) for g, x in zip(result.gages, d)),
+    return replace(result, gages=tuple(g.replace(decision=x) for g, x in zip(result.gages, d)),
                    decision=worst_decision(d), decision_rule=rule.to_dict())

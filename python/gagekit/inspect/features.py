@@ -215,7 +215,7 @@ class FeatureData:
                 continue
             q = self.points[idx] - p0
             xy = np.ascontiguousarray(np.column_stack([q @ u, q @ v]))
-            c = _core.form.circle_fit(xy, "least-squares").center
+            c = _core.form.fit_circle(xy, "least-squares").center
             h = float((q @ d).mean())
             out.append((p0 + c[0] * u + c[1] * v + h * d, xy))
         if len(out) < 2:

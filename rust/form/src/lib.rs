@@ -8,6 +8,8 @@
 //! - [`minzone`]: minimum-zone planes (flatness) and 2-D lines (straightness) by LP.
 //! - [`sphere`]: minimum circumscribed (Welzl), maximum inscribed and minimum-zone spheres.
 //! - [`straightness`]: minimum-zone lines in space (the thinnest enclosing cylinder).
+//! - [`result`]: the public results of the fits (radius, form error, control points,
+//!   certificate, warnings), assembled once from the kernels' solutions.
 //! - [`criterion`]: the fit criteria and their names (one table for the package).
 
 pub mod circle;
@@ -17,6 +19,7 @@ pub mod cylinder;
 mod lp;
 pub mod lsq;
 pub mod minzone;
+pub mod result;
 pub mod sphere;
 pub mod straightness;
 pub mod criterion;

@@ -4,10 +4,12 @@
 //! * [`lp`]: the linearised Eq. 5.11 assembled in CSC form and solved with clarabel;
 //! * [`solve`]: re-linearisation about the exact transform until it stops moving,
 //!   slacks, infeasible groups (Eq. 5.10) and limiting motion bounds (Sec. 5.2.2);
+//! * [`result`]: the public result (gage outcomes by name, T*, limiting bounds, status);
 //! * [`transform`]: T = [Rz(alpha) Ry(beta) Rx(gamma) | t] and its derivatives.
 
 pub mod lp;
 pub mod problem;
+pub mod result;
 pub mod solve;
 pub mod transform;
 

@@ -1,10 +1,12 @@
 //! Bindings of gagekit-gage: the virtual-gage LP of Eq. 5.11 (array conversion only).
 
-use crate::arrays::{rows, values};
+use crate::arrays::{matrix, rows, values};
 use crate::errors::{invalid, run};
-use gagekit_gage::{GageSet, Motion, Options, MOTION_NAMES};
-use numpy::{PyArray1, PyReadonlyArray1, PyReadonlyArray2};
+use gagekit_gage::{result, GageSet, Motion, Options, MOTION_NAMES};
+use numpy::{PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
+use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyTuple};
 
 /// Borrowed gage data checked for consistent lengths.
 struct Args<'a> {
@@ -123,6 +125,312 @@ fn gage_solve<'py>(
     })
 }
 
+/// T* = [Rz(alpha) Ry(beta) Rx(gamma) | (dx, dy, dz)] (rad, mm), applied to points of the
+/// part frame (`gagekit_gage::result::Transform`).
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyclass)]
+#[pyclass(frozen, module = "gagekit._core.gage")]
+pub struct Transform(result::Transform);
+
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pymethods)]
+#[pymethods]
+impl Transform {
+    #[getter]
+    fn alpha(&self) -> f64 {
+        self.0.params[0]
+    }
+    #[getter]
+    fn beta(&self) -> f64 {
+        self.0.params[1]
+    }
+    #[getter]
+    fn gamma(&self) -> f64 {
+        self.0.params[2]
+    }
+    #[getter]
+    fn dx(&self) -> f64 {
+        self.0.params[3]
+    }
+    #[getter]
+    fn dy(&self) -> f64 {
+        self.0.params[4]
+    }
+    #[getter]
+    fn dz(&self) -> f64 {
+        self.0.params[5]
+    }
+    /// The 4x4 homogeneous matrix, row by row.
+    #[getter]
+    fn matrix<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyTuple>> {
+        PyTuple::new(py, self.0.matrix.iter().map(|r| PyTuple::new(py, r)).collect::<PyResult<Vec<_>>>()?)
+    }
+    /// The 4x4 matrix as a numpy array.
+    fn as_array<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        matrix(py, self.0.matrix.iter().flatten().copied().collect(), 4)
+    }
+    /// The transform applied to (n, 3) points: R p + t, by the package's one point
+    /// transform (`gagekit.gage.align.apply`, numpy), as for the alignment H.
+    fn apply<'py>(&self, py: Python<'py>, points: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyAny>> {
+        py.import("gagekit.gage.align")?.getattr("apply")?.call1((self.as_array(py)?, points))
+    }
+    fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let d = PyDict::new(py);
+        for (k, v) in MOTION_NAMES.iter().zip(self.0.params) {
+            d.set_item(*k, v)?;
+        }
+        d.set_item("matrix", self.0.matrix.iter().map(|r| r.to_vec()).collect::<Vec<_>>())?;
+        Ok(d)
+    }
+    fn __eq__(&self, other: &Bound<'_, PyAny>) -> bool {
+        other.extract::<PyRef<'_, Transform>>().is_ok_and(|o| o.0 == self.0)
+    }
+    fn __repr__(&self) -> String {
+        let p = self.0.params;
+        format!("Transform(alpha={:?}, beta={:?}, gamma={:?}, dx={:?}, dy={:?}, dz={:?})", p[0], p[1], p[2], p[3], p[4], p[5])
+    }
+}
+
+/// A bound of Omega (Eq. 5.2) with a non-zero Lagrange multiplier at T* (Sec. 5.2.2).
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyclass)]
+#[pyclass(frozen, module = "gagekit._core.gage")]
+pub struct BoundLimit(result::BoundLimit);
+
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pymethods)]
+#[pymethods]
+impl BoundLimit {
+    #[getter]
+    fn motion(&self) -> &'static str {
+        self.0.motion
+    }
+    /// "upper" or "lower".
+    #[getter]
+    fn side(&self) -> &'static str {
+        self.0.side
+    }
+    #[getter]
+    fn dual(&self) -> f64 {
+        self.0.dual
+    }
+    fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let d = PyDict::new(py);
+        d.set_item("motion", self.0.motion)?;
+        d.set_item("side", self.0.side)?;
+        d.set_item("dual", self.0.dual)?;
+        Ok(d)
+    }
+    fn __eq__(&self, other: &Bound<'_, PyAny>) -> bool {
+        other.extract::<PyRef<'_, BoundLimit>>().is_ok_and(|o| o.0 == self.0)
+    }
+    fn __repr__(&self) -> String {
+        format!("BoundLimit(motion='{}', side='{}', dual={:?})", self.0.motion, self.0.side, self.0.dual)
+    }
+}
+
+/// One gage at T* (mm): the allowances before / after (the smallest signed distances of
+/// its points from the gage plane; negative: short of material), `q` the largest (Eq.
+/// 5.4) and `slack` the release s_i of Eq. 5.11 (0 when the gage is met). With an
+/// uncertainty (`gagekit.gage.uncertainty`): `uncertainty` (the allowance after T*'s JCGM
+/// 101 uncertainty) and `decision` (ISO 14253-1), set by `replace`.
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyclass)]
+#[pyclass(frozen, module = "gagekit._core.gage")]
+pub struct GageOutcome {
+    outcome: result::GageOutcome,
+    uncertainty: Option<Py<PyAny>>,
+    decision: Option<String>,
+}
+
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pymethods)]
+#[pymethods]
+impl GageOutcome {
+    #[getter]
+    fn name(&self) -> &str {
+        &self.outcome.label.name
+    }
+    #[getter]
+    fn region(&self) -> &str {
+        &self.outcome.label.region
+    }
+    #[getter]
+    fn points(&self) -> usize {
+        self.outcome.label.points
+    }
+    #[getter]
+    fn filtered_points(&self) -> usize {
+        self.outcome.label.filtered_points
+    }
+    #[getter]
+    fn allowance_before(&self) -> f64 {
+        self.outcome.allowance_before
+    }
+    #[getter]
+    fn allowance_after(&self) -> f64 {
+        self.outcome.allowance_after
+    }
+    #[getter]
+    fn q(&self) -> f64 {
+        self.outcome.q
+    }
+    #[getter]
+    fn slack(&self) -> f64 {
+        self.outcome.slack
+    }
+    #[getter]
+    fn uncertainty(&self, py: Python<'_>) -> Option<Py<PyAny>> {
+        self.uncertainty.as_ref().map(|u| u.clone_ref(py))
+    }
+    #[getter]
+    fn decision(&self) -> Option<&str> {
+        self.decision.as_deref()
+    }
+    /// A copy with `uncertainty` and / or `decision` replaced (the keywords given).
+    #[pyo3(signature = (**changes))]
+    fn replace(&self, py: Python<'_>, changes: Option<&Bound<'_, PyDict>>) -> PyResult<Self> {
+        let mut out = Self {
+            outcome: self.outcome.clone(),
+            uncertainty: self.uncertainty.as_ref().map(|u| u.clone_ref(py)),
+            decision: self.decision.clone(),
+        };
+        for (k, v) in changes.into_iter().flatten() {
+            match k.extract::<String>()?.as_str() {
+                "uncertainty" => out.uncertainty = (!v.is_none()).then(|| v.unbind()),
+                "decision" => out.decision = v.extract()?,
+                other => return Err(PyTypeError::new_err(format!("GageOutcome.replace: no field {other:?}"))),
+            }
+        }
+        Ok(out)
+    }
+    fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let (o, l) = (&self.outcome, &self.outcome.label);
+        let d = PyDict::new(py);
+        d.set_item("name", &l.name)?;
+        d.set_item("region", &l.region)?;
+        d.set_item("points", l.points)?;
+        d.set_item("filtered_points", l.filtered_points)?;
+        d.set_item("allowance_before", o.allowance_before)?;
+        d.set_item("allowance_after", o.allowance_after)?;
+        d.set_item("q", o.q)?;
+        d.set_item("slack", o.slack)?;
+        if let Some(u) = &self.uncertainty {
+            d.set_item("uncertainty", u)?;
+        }
+        if let Some(x) = &self.decision {
+            d.set_item("decision", x)?;
+        }
+        Ok(d)
+    }
+    fn __eq__(&self, py: Python<'_>, other: &Bound<'_, PyAny>) -> PyResult<bool> {
+        let Ok(o) = other.extract::<PyRef<'_, GageOutcome>>() else { return Ok(false) };
+        let same_u = match (&self.uncertainty, &o.uncertainty) {
+            (None, None) => true,
+            (Some(a), Some(b)) => a.bind(py).eq(b)?,
+            _ => false,
+        };
+        Ok(o.outcome == self.outcome && o.decision == self.decision && same_u)
+    }
+    fn __repr__(&self) -> String {
+        let (o, l) = (&self.outcome, &self.outcome.label);
+        format!(
+            "GageOutcome(name='{}', region='{}', allowance_before={:?}, allowance_after={:?}, q={:?}, slack={:?})",
+            l.name, l.region, o.allowance_before, o.allowance_after, o.q, o.slack
+        )
+    }
+}
+
+/// The outcome of a virtual-gage check (Eq. 5.11 at T*; `gagekit_gage::result`): the
+/// status ("conforming" when every slack is zero), the objective, T*, the limiting
+/// motion bounds, each gage's outcome, the infeasible groups by gage name, u, and the
+/// solver's re-linearisations, last step (mm) and LP status.
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyclass)]
+#[pyclass(frozen, module = "gagekit._core.gage")]
+pub struct GageCheck(result::CheckResult);
+
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pymethods)]
+#[pymethods]
+impl GageCheck {
+    #[getter]
+    fn status(&self) -> &'static str {
+        self.0.status
+    }
+    #[getter]
+    fn objective(&self) -> f64 {
+        self.0.objective
+    }
+    #[getter]
+    fn transform(&self, py: Python<'_>) -> PyResult<Py<Transform>> {
+        Py::new(py, Transform(self.0.transform))
+    }
+    #[getter]
+    fn limited_by_motion_bounds(&self) -> bool {
+        !self.0.bound_limits.is_empty()
+    }
+    #[getter]
+    fn bound_limits<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyTuple>> {
+        PyTuple::new(py, self.0.bound_limits.iter().map(|b| BoundLimit(b.clone())))
+    }
+    #[getter]
+    fn gages<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyTuple>> {
+        PyTuple::new(
+            py,
+            self.0.gages.iter().map(|g| GageOutcome { outcome: g.clone(), uncertainty: None, decision: None }),
+        )
+    }
+    #[getter]
+    fn infeasible_groups<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyTuple>> {
+        PyTuple::new(py, self.0.infeasible_groups.iter().map(|g| PyTuple::new(py, g)).collect::<PyResult<Vec<_>>>()?)
+    }
+    #[getter]
+    fn largest_release(&self) -> f64 {
+        self.0.largest_release
+    }
+    #[getter]
+    fn iterations(&self) -> usize {
+        self.0.iterations
+    }
+    #[getter]
+    fn last_step(&self) -> f64 {
+        self.0.last_step
+    }
+    #[getter]
+    fn lp_status(&self) -> &'static str {
+        self.0.lp_status
+    }
+}
+
+/// The virtual-gage check of Eq. 5.11 (the solve of `solve`, then the public result):
+/// `gages` names each gage of the set in order, (name, region, points, filtered points).
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyfunction(module = "gagekit._core.gage"))]
+#[pyfunction]
+#[pyo3(signature = (points, offsets, planes, f, g, free, max_angle, max_shift, gages, tol=1e-10, slack_tol=1e-7, groups=true))]
+#[allow(clippy::too_many_arguments)]
+fn check<'py>(
+    py: Python<'py>,
+    points: PyReadonlyArray2<'py, f64>,
+    offsets: Vec<usize>,
+    planes: PyReadonlyArray2<'py, f64>,
+    f: PyReadonlyArray1<'py, f64>,
+    g: PyReadonlyArray1<'py, f64>,
+    free: Vec<bool>,
+    max_angle: f64,
+    max_shift: f64,
+    gages: Vec<(String, String, usize, usize)>,
+    tol: f64,
+    slack_tol: f64,
+    groups: bool,
+) -> PyResult<GageCheck> {
+    let a = args(py, &points, offsets, &planes, &f, &g, free, max_angle, max_shift)?;
+    let opts = Options { tol, slack_tol, ..Options::default() };
+    let labels: Vec<result::GageLabel> = gages
+        .into_iter()
+        .map(|(name, region, points, filtered_points)| result::GageLabel { name, region, points, filtered_points })
+        .collect();
+    run(py, || {
+        let set = a.set();
+        let sol = gagekit_gage::solve(&set, &a.motion, &opts)?;
+        let grp = if groups { gagekit_gage::infeasible_groups(&set, &a.motion, &opts, &sol)? } else { vec![] };
+        result::CheckResult::new(sol, grp, labels.clone())
+    })
+    .map(GageCheck)
+}
+
 /// The LP of Eq. 5.11 linearised about given motions: minimise c.x subject to A x <= b,
 /// x free, A in compressed-column form (colptr, rowval, nzval) with `nrows` rows.
 #[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyclass)]
@@ -209,6 +517,11 @@ fn gage_lp_solve<'py>(
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<GageSolution>()?;
     m.add_function(wrap_pyfunction!(gage_solve, m)?)?;
+    m.add_class::<GageCheck>()?;
+    m.add_class::<GageOutcome>()?;
+    m.add_class::<BoundLimit>()?;
+    m.add_class::<Transform>()?;
+    m.add_function(wrap_pyfunction!(check, m)?)?;
     Ok(())
 }
 

@@ -6,57 +6,103 @@ import numpy
 import numpy.typing
 import typing
 __all__ = [
-    "Circle3Result",
-    "CircleResult",
-    "ConeResult",
-    "CylinderResult",
-    "FlatnessResult",
-    "FormParams",
-    "LeastSquaresCircle3Result",
-    "LeastSquaresCylinderResult",
-    "LeastSquaresSphereResult",
-    "Line3Result",
-    "LineResult",
-    "MinZoneFlatResult",
-    "OutsideResult",
-    "PlaneResult",
-    "RoundnessResult",
-    "SphereResult",
-    "StraightnessResult",
-    "circle3d_lsq",
-    "circle_fit",
-    "circle_fit_near",
-    "circle_in_plane",
-    "circle_pso",
-    "cone_fit",
+    "Certificate",
+    "Circle3DFit",
+    "CircleFit",
+    "ConeFit",
+    "CylinderFit",
+    "FlatnessParameters",
+    "LineFit",
+    "PlaneFit",
+    "RoundnessParameters",
+    "SphereFit",
+    "StraightnessParameters",
+    "axis_angles",
     "criteria",
     "criterion",
-    "cylinder_fit",
-    "cylinder_lsq",
+    "fit_circle",
+    "fit_circle_3d",
+    "fit_circle_near",
+    "fit_cone",
+    "fit_cylinder",
+    "fit_line",
+    "fit_plane",
+    "fit_sphere",
+    "fit_sphere_near",
     "flatness",
-    "line3_min_zone",
-    "line_lsq",
-    "min_zone_flat",
-    "plane_lsq",
     "profile_gaussian_closed",
     "profile_gaussian_open",
     "profile_spline_open",
     "roundness",
-    "sphere_fit",
-    "sphere_fit_near",
-    "sphere_lsq",
     "straightness",
 ]
 
 @typing.final
-class Circle3Result:
+class Certificate:
     r"""
-    A circle in space (any pose): the 2-D fit of a criterion in the least-squares plane.
+    Minimum and maximum distance of the input points to the reported feature, recomputed
+    from the reported parameters (mm).
     """
     @property
-    def center(self) -> builtins.list[builtins.float]: ...
+    def min_distance(self) -> builtins.float: ...
     @property
-    def normal(self) -> builtins.list[builtins.float]: ...
+    def max_distance(self) -> builtins.float: ...
+    def to_dict(self) -> dict: ...
+    def __eq__(self, other: typing.Any) -> builtins.bool: ...
+    def __repr__(self) -> builtins.str: ...
+
+@typing.final
+class Circle3DFit:
+    r"""
+    A least-squares circle in space (NIST's convention: least-squares plane, projection,
+    least-squares circle in that plane). `certificate`: radial distances of the projected
+    points to its centre; `form_error` = max - min (roundness about the fit).
+    """
+    @property
+    def shape(self) -> builtins.str: ...
+    @property
+    def criterion(self) -> builtins.str: ...
+    @property
+    def n_points(self) -> builtins.int: ...
+    @property
+    def center(self) -> tuple[builtins.float, builtins.float, builtins.float]: ...
+    @property
+    def normal(self) -> tuple[builtins.float, builtins.float, builtins.float]: ...
+    @property
+    def radius(self) -> builtins.float: ...
+    @property
+    def form_error(self) -> builtins.float: ...
+    @property
+    def certificate(self) -> Certificate: ...
+    def to_dict(self) -> dict:
+        r"""
+        The JSON of `gagekit form fit circle3d`.
+        """
+    def __eq__(self, other: typing.Any) -> builtins.bool: ...
+    def __repr__(self) -> builtins.str: ...
+
+@typing.final
+class CircleFit:
+    r"""
+    A fitted 2-D circle, or a circle in space fitted in its least-squares plane (Sec. 6.2).
+    
+    `criterion`: the canonical name; `radius`: the fitted radius (minimum zone: the mean
+    of `r_in` and `r_out`); `r_in` / `r_out`: the smallest / largest distance of the
+    points from `center` (minimum zone: the zone circles); `form_error = r_out - r_in`
+    (roundness); `control_points`: input indices of the points that fix the fit (minimum
+    zone: `control_in`, then the rest of `control_out`); `arc_deg`: the arc the points
+    cover seen from the centre; `warnings`: why a result is ill-posed (a maximum inscribed
+    circle of an arc below 90 degrees). In space `center` is 3-D, `normal` the unit normal
+    of the plane and `out_of_plane` the largest distance of a point from it.
+    """
+    @property
+    def criterion(self) -> builtins.str: ...
+    @property
+    def method(self) -> builtins.str: ...
+    @property
+    def n_points(self) -> builtins.int: ...
+    @property
+    def center(self) -> tuple: ...
     @property
     def radius(self) -> builtins.float: ...
     @property
@@ -64,177 +110,181 @@ class Circle3Result:
     @property
     def r_out(self) -> builtins.float: ...
     @property
-    def control_in(self) -> builtins.list[builtins.int]: ...
+    def form_error(self) -> builtins.float: ...
     @property
-    def control_out(self) -> builtins.list[builtins.int]: ...
-    @property
-    def min_distance(self) -> builtins.float:
+    def width(self) -> builtins.float:
         r"""
-        Certificate: min and max in-plane distance of the points to the centre.
+        Deprecated alias of `form_error`.
         """
     @property
-    def max_distance(self) -> builtins.float: ...
+    def control_points(self) -> tuple: ...
     @property
-    def out_of_plane(self) -> builtins.float:
-        r"""
-        Largest distance of a point from the circle's plane.
-        """
+    def control_in(self) -> tuple: ...
     @property
-    def control(self) -> builtins.list[builtins.int]:
-        r"""
-        Points that fix the fit (minimum zone: `control_in`, then the rest of `control_out`).
-        """
+    def control_out(self) -> tuple: ...
     @property
-    def arc(self) -> builtins.float:
-        r"""
-        Arc (rad) covered seen from the centre (the least-squares centre for an MI of a
-        short arc), and whether the fit is ill-posed (MI of an arc below 90 degrees).
-        """
+    def arc_deg(self) -> builtins.float: ...
     @property
     def ill_posed(self) -> builtins.bool: ...
+    @property
+    def warnings(self) -> tuple: ...
+    @property
+    def normal(self) -> typing.Optional[tuple[builtins.float, builtins.float, builtins.float]]: ...
+    @property
+    def out_of_plane(self) -> typing.Optional[builtins.float]: ...
+    def to_dict(self) -> dict:
+        r"""
+        The JSON of `gagekit form circle`.
+        """
+    def __eq__(self, other: typing.Any) -> builtins.bool: ...
+    def __repr__(self) -> builtins.str: ...
 
 @typing.final
-class CircleResult:
+class ConeFit:
     r"""
-    A 2-D circle fit, complete (Sec. 6.2): the fields of the kernel's
-    [`circle::CircleFit`] (centre, radius, `r_in` / `r_out`: the zone for the minimum zone,
-    else the certificate; control points; arc in rad, its centre, the ill-posed flag), read
-    through [`mirror!`], plus the criterion's canonical name and `form_error`.
+    A fitted cone (issue 25 §3). `point`: the axis point of the reference section (the
+    plane normal to the axis through the foot of the points' centroid); `direction`: the
+    unit axis along which the radius grows; `half_angle` (rad); `radius` at the reference
+    section (minimum zone: the mean of `inner_radius` and `outer_radius`); `distance` =
+    radius cos(half_angle); `form_error`: the normal width of the points about this cone;
+    `certificate`: min / max signed normal deviation; `gap` (Chebyshev cones): the decrease
+    a linear step of the local search predicts (0 certifies a local optimum to first order).
     """
     @property
-    def center(self) -> typing.Any: ...
-    @property
-    def radius(self) -> typing.Any: ...
-    @property
-    def r_in(self) -> typing.Any: ...
-    @property
-    def r_out(self) -> typing.Any: ...
-    @property
-    def control(self) -> typing.Any: ...
-    @property
-    def control_in(self) -> typing.Any: ...
-    @property
-    def control_out(self) -> typing.Any: ...
-    @property
-    def arc(self) -> typing.Any: ...
-    @property
-    def arc_center(self) -> typing.Any: ...
-    @property
-    def ill_posed(self) -> typing.Any: ...
+    def shape(self) -> builtins.str: ...
     @property
     def criterion(self) -> builtins.str: ...
+    @property
+    def n_points(self) -> builtins.int: ...
+    @property
+    def point(self) -> tuple[builtins.float, builtins.float, builtins.float]: ...
+    @property
+    def direction(self) -> tuple[builtins.float, builtins.float, builtins.float]: ...
+    @property
+    def apex(self) -> tuple[builtins.float, builtins.float, builtins.float]: ...
+    @property
+    def half_angle(self) -> builtins.float: ...
+    @property
+    def apex_angle(self) -> builtins.float:
+        r"""
+        The full apex angle (rad).
+        """
+    @property
+    def radius(self) -> builtins.float: ...
+    @property
+    def distance(self) -> builtins.float: ...
     @property
     def form_error(self) -> builtins.float: ...
+    @property
+    def certificate(self) -> Certificate: ...
+    @property
+    def fixed_angle(self) -> builtins.bool: ...
+    @property
+    def inner_radius(self) -> typing.Optional[builtins.float]: ...
+    @property
+    def outer_radius(self) -> typing.Optional[builtins.float]: ...
+    @property
+    def control_points(self) -> tuple: ...
+    @property
+    def gap(self) -> builtins.float: ...
+    @property
+    def evaluations(self) -> builtins.int: ...
+    def radius_at(self, z: builtins.float) -> builtins.float:
+        r"""
+        Radius of the cone at axial coordinate `z` (mm, along `direction`) from the
+        reference section.
+        """
+    def to_dict(self) -> dict:
+        r"""
+        The JSON of `gagekit form fit cone`.
+        """
+    def __eq__(self, other: typing.Any) -> builtins.bool: ...
+    def __repr__(self) -> builtins.str: ...
 
 @typing.final
-class ConeResult:
+class CylinderFit:
     r"""
-    A cone (issue 25 §3): the fields of the kernel's [`gagekit_form::cone::ConeFit`] (axis
-    point of the reference section, direction along which the radius grows, apex, half
-    angle rad, radii at the reference section, zone radii, control points, optimality gap),
-    read through [`mirror!`], plus the criterion's canonical name, the certificate (signed
-    normal deviations, positive away from the axis) and `form_error`.
+    A fitted cylinder (Sec. 6.3). `radius`: least squares, circumscribed, inscribed (the
+    minimum zone: the mean of `inner_radius` and `outer_radius`); `form_error`: the
+    cylindricity about this axis (the zone width for the minimum zone); `certificate`: min
+    and max distance of the points to the reported axis, recomputed in 3-D; `arc_deg`: the
+    angle the points cover around the axis; `warnings`: a short arc (`ill_posed` for a
+    maximum inscribed cylinder of an arc below 90 degrees, Sec. 6.2.2), an axis on the
+    search cone's boundary, a better optimum outside it; `tilt_deg`: the angle between the
+    fitted and the reference axis (Chebyshev fits).
     """
     @property
-    def point(self) -> typing.Any: ...
-    @property
-    def direction(self) -> typing.Any: ...
-    @property
-    def apex(self) -> typing.Any: ...
-    @property
-    def half_angle(self) -> typing.Any: ...
-    @property
-    def fixed_angle(self) -> typing.Any: ...
-    @property
-    def radius(self) -> typing.Any: ...
-    @property
-    def distance(self) -> typing.Any: ...
-    @property
-    def r_in(self) -> typing.Any: ...
-    @property
-    def r_out(self) -> typing.Any: ...
-    @property
-    def control_in(self) -> typing.Any: ...
-    @property
-    def control_out(self) -> typing.Any: ...
-    @property
-    def gap(self) -> typing.Any: ...
-    @property
-    def evaluations(self) -> typing.Any: ...
+    def shape(self) -> builtins.str: ...
     @property
     def criterion(self) -> builtins.str: ...
     @property
-    def min_distance(self) -> builtins.float: ...
+    def n_points(self) -> builtins.int: ...
     @property
-    def max_distance(self) -> builtins.float: ...
+    def point(self) -> tuple[builtins.float, builtins.float, builtins.float]: ...
+    @property
+    def direction(self) -> tuple[builtins.float, builtins.float, builtins.float]: ...
+    @property
+    def axis_point(self) -> tuple[builtins.float, builtins.float, builtins.float]:
+        r"""
+        Deprecated alias of `point` (the JSON key stays `axis_point`).
+        """
+    @property
+    def axis_direction(self) -> tuple[builtins.float, builtins.float, builtins.float]:
+        r"""
+        Deprecated alias of `direction` (the JSON key stays `axis_direction`).
+        """
+    @property
+    def theta(self) -> builtins.float: ...
+    @property
+    def phi(self) -> builtins.float: ...
+    @property
+    def radius(self) -> builtins.float: ...
     @property
     def form_error(self) -> builtins.float: ...
-
-@typing.final
-class CylinderResult:
-    r"""
-    A minimax cylinder (Sec. 6.3): axis, radii, control points, certificate, search
-    diagnostics (angles rad, lengths mm). Its attributes are the kernel's
-    [`gagekit_form::cylinder::CylinderFit`] fields, read through [`mirror!`], plus the
-    criterion's canonical name, the certificate (`min_distance`, `max_distance`) and the
-    optimum outside the cone as an [`OutsideResult`].
-    """
     @property
-    def point(self) -> typing.Any: ...
+    def certificate(self) -> Certificate: ...
     @property
-    def direction(self) -> typing.Any: ...
+    def inner_radius(self) -> typing.Optional[builtins.float]: ...
     @property
-    def theta(self) -> typing.Any: ...
+    def outer_radius(self) -> typing.Optional[builtins.float]: ...
     @property
-    def phi(self) -> typing.Any: ...
+    def control_points(self) -> tuple: ...
     @property
-    def radius(self) -> typing.Any: ...
+    def iterations(self) -> builtins.int: ...
     @property
-    def r_in(self) -> typing.Any: ...
+    def evaluations(self) -> builtins.int: ...
     @property
-    def r_out(self) -> typing.Any: ...
+    def arc_deg(self) -> builtins.float: ...
     @property
-    def control_in(self) -> typing.Any: ...
+    def ill_posed(self) -> builtins.bool: ...
     @property
-    def control_out(self) -> typing.Any: ...
+    def warnings(self) -> tuple: ...
     @property
-    def iterations(self) -> typing.Any: ...
+    def tilt_deg(self) -> typing.Optional[builtins.float]: ...
     @property
-    def evaluations(self) -> typing.Any: ...
-    @property
-    def reference(self) -> typing.Any: ...
-    @property
-    def tilt(self) -> typing.Any: ...
-    @property
-    def at_limit(self) -> typing.Any: ...
-    @property
-    def arc(self) -> typing.Any: ...
-    @property
-    def ill_posed(self) -> typing.Any: ...
-    @property
-    def lsq_axis(self) -> typing.Any: ...
-    @property
-    def criterion(self) -> builtins.str: ...
-    @property
-    def min_distance(self) -> builtins.float: ...
-    @property
-    def max_distance(self) -> builtins.float: ...
-    @property
-    def outside(self) -> typing.Optional[OutsideResult]: ...
+    def reference_axis(self) -> typing.Optional[tuple[builtins.float, builtins.float, builtins.float]]: ...
     @property
     def warm_fallback(self) -> typing.Optional[builtins.bool]:
         r"""
         With a warm start: `True` when the local method could not decide and the global
         search ran; `None` without a warm start.
         """
+    def to_dict(self) -> dict:
+        r"""
+        The JSON of `gagekit form fit cylinder`.
+        """
+    def __eq__(self, other: typing.Any) -> builtins.bool: ...
+    def __repr__(self) -> builtins.str: ...
 
 @typing.final
-class FlatnessResult:
+class FlatnessParameters:
     r"""
-    Flatness of a surface; see `gagekit_profile::flatness`.
+    Flatness (ISO 12781-1; `gagekit.flatness_parameters`): FLTt, FLTp, FLTv, FLTq (mm)
+    against LSPL or MZPL (deviations positive along `normal`, oriented towards `up`,
+    default +z). Unfiltered.
     """
     @property
-    def params(self) -> FormParams: ...
+    def parameters(self) -> dict: ...
     @property
     def reference(self) -> builtins.str: ...
     @property
@@ -243,207 +293,93 @@ class FlatnessResult:
     def normal(self) -> tuple[builtins.float, builtins.float, builtins.float]: ...
     @property
     def n_points(self) -> builtins.int: ...
-
-@typing.final
-class FormParams:
-    r"""
-    Peak-to-valley `t`, peak `p`, valley `v`, RMS `q` of the local deviations (mm).
-    """
-    @property
-    def t(self) -> builtins.float: ...
-    @property
-    def p(self) -> builtins.float: ...
-    @property
-    def v(self) -> builtins.float: ...
-    @property
-    def q(self) -> builtins.float: ...
-
-@typing.final
-class LeastSquaresCircle3Result:
-    r"""
-    A least-squares circle in space with its certificate (in-plane radial distances).
-    """
-    @property
-    def center(self) -> builtins.list[builtins.float]: ...
-    @property
-    def normal(self) -> builtins.list[builtins.float]: ...
-    @property
-    def radius(self) -> builtins.float: ...
-    @property
-    def min_distance(self) -> builtins.float: ...
-    @property
-    def max_distance(self) -> builtins.float: ...
-    @property
-    def form_error(self) -> builtins.float: ...
-
-@typing.final
-class LeastSquaresCylinderResult:
-    r"""
-    A least-squares cylinder, complete: axis, angles, radius, certificate, arc covered.
-    """
-    @property
-    def point(self) -> builtins.list[builtins.float]: ...
-    @property
-    def direction(self) -> builtins.list[builtins.float]: ...
-    @property
-    def radius(self) -> builtins.float: ...
-    @property
-    def min_distance(self) -> builtins.float:
+    def to_dict(self) -> dict:
         r"""
-        Certificate: min and max 3-D distance of the points to the axis.
+        The JSON of `gagekit form flatness`.
         """
+
+@typing.final
+class LineFit:
+    r"""
+    A fitted line. `certificate`: signed distances (2-D) or distances (3-D) to the line;
+    `form_error`: max - min of the signed distances (2-D), twice the largest distance
+    (3-D); `tilt_deg` and `warnings`: the minimum-zone line in space (as for cylinders).
+    """
     @property
-    def max_distance(self) -> builtins.float: ...
+    def shape(self) -> builtins.str: ...
+    @property
+    def criterion(self) -> builtins.str: ...
+    @property
+    def n_points(self) -> builtins.int: ...
+    @property
+    def point(self) -> tuple: ...
+    @property
+    def direction(self) -> tuple: ...
     @property
     def form_error(self) -> builtins.float: ...
     @property
-    def arc(self) -> builtins.float:
+    def certificate(self) -> Certificate: ...
+    @property
+    def control_points(self) -> tuple: ...
+    @property
+    def tilt_deg(self) -> typing.Optional[builtins.float]: ...
+    @property
+    def warnings(self) -> tuple: ...
+    def to_dict(self) -> dict:
         r"""
-        Arc (rad) the points cover around the axis.
+        The JSON of `gagekit form fit line`.
         """
+    def __eq__(self, other: typing.Any) -> builtins.bool: ...
+    def __repr__(self) -> builtins.str: ...
 
 @typing.final
-class LeastSquaresSphereResult:
+class PlaneFit:
     r"""
-    A least-squares circle (2-D) or sphere (3-D) with its certificate (distances to the
-    centre) and form error about it.
+    A fitted plane. `certificate`: signed distances to it; `form_error` = max - min.
     """
     @property
-    def center(self) -> builtins.list[builtins.float]: ...
+    def shape(self) -> builtins.str: ...
     @property
-    def radius(self) -> builtins.float: ...
+    def criterion(self) -> builtins.str: ...
     @property
-    def min_distance(self) -> builtins.float: ...
+    def n_points(self) -> builtins.int: ...
     @property
-    def max_distance(self) -> builtins.float: ...
+    def point(self) -> tuple[builtins.float, builtins.float, builtins.float]: ...
     @property
-    def form_error(self) -> builtins.float: ...
-
-@typing.final
-class Line3Result:
-    r"""
-    A minimum-zone line in space (straightness): the thinnest enclosing cylinder.
-    """
-    @property
-    def point(self) -> builtins.list[builtins.float]: ...
-    @property
-    def direction(self) -> builtins.list[builtins.float]: ...
-    @property
-    def min_distance(self) -> builtins.float:
-        r"""
-        Certificate: min and max distance of the points to the line.
-        """
-    @property
-    def max_distance(self) -> builtins.float: ...
+    def normal(self) -> tuple[builtins.float, builtins.float, builtins.float]: ...
     @property
     def form_error(self) -> builtins.float: ...
     @property
-    def control(self) -> builtins.list[builtins.int]: ...
+    def certificate(self) -> Certificate: ...
     @property
-    def reference(self) -> builtins.list[builtins.float]: ...
-    @property
-    def tilt(self) -> builtins.float: ...
-    @property
-    def outside(self) -> typing.Optional[OutsideResult]: ...
+    def control_points(self) -> tuple: ...
+    def to_dict(self) -> dict:
+        r"""
+        The JSON of `gagekit form fit plane`.
+        """
+    def __eq__(self, other: typing.Any) -> builtins.bool: ...
+    def __repr__(self) -> builtins.str: ...
 
 @typing.final
-class LineResult:
+class RoundnessParameters:
     r"""
-    A least-squares line (2-D or 3-D) with its certificate: signed distances (2-D) or
-    distances (3-D) to the line; `form_error` the spread (2-D) or twice the largest (3-D).
+    Roundness of a closed profile (ISO 12181-1; `gagekit.roundness_parameters`).
+    `parameters`: RONt, RONp, RONv, RONq (mm); `center` / `radius`: the reference circle
+    (MZCI: the mean of the zone circles `r_in` / `r_out`); `eccentricity`: the reference
+    centre relative to the coordinate origin (the spindle axis of a roundness instrument);
+    `amplitude` / `phase`: the spectrum, harmonic 1 first. `profile` (evaluated points),
+    `points` (the measured ones) and `resampled` (unfiltered radii at `samples` equal
+    angles about `ls_center`) are for plots; not in `to_dict()`.
     """
     @property
-    def point(self) -> builtins.list[builtins.float]: ...
-    @property
-    def direction(self) -> builtins.list[builtins.float]: ...
-    @property
-    def min_distance(self) -> builtins.float: ...
-    @property
-    def max_distance(self) -> builtins.float: ...
-    @property
-    def form_error(self) -> builtins.float: ...
-
-@typing.final
-class MinZoneFlatResult:
-    r"""
-    A minimum-zone plane (flatness) or 2-D line (straightness), with its certificate.
-    """
-    @property
-    def point(self) -> builtins.list[builtins.float]:
-        r"""
-        A point on the mid-plane (mid-line), its unit normal, and a 2-D line's direction
-        (empty for planes).
-        """
-    @property
-    def normal(self) -> builtins.list[builtins.float]: ...
-    @property
-    def direction(self) -> builtins.list[builtins.float]: ...
-    @property
-    def form_error(self) -> builtins.float:
-        r"""
-        Separation of the two bounding planes (lines).
-        """
-    @property
-    def control(self) -> builtins.list[builtins.int]:
-        r"""
-        Points on the upper and lower bound, sorted and merged.
-        """
-    @property
-    def min_distance(self) -> builtins.float:
-        r"""
-        Certificate: min and max signed distance of the points to the mid-plane (mid-line).
-        """
-    @property
-    def max_distance(self) -> builtins.float: ...
-    @property
-    def iterations(self) -> builtins.int:
-        r"""
-        Linear programs solved.
-        """
-
-@typing.final
-class OutsideResult:
-    r"""
-    A better optimum of the free search outside the search cone.
-    """
-    @property
-    def value(self) -> builtins.float:
-        r"""
-        Its radius (MCC, MIC) or zone width (MZC), mm.
-        """
-    @property
-    def direction(self) -> builtins.list[builtins.float]: ...
-    @property
-    def tilt(self) -> builtins.float:
-        r"""
-        Tilt (rad) of its axis from the reference axis.
-        """
-
-@typing.final
-class PlaneResult:
-    r"""
-    A least-squares plane with its certificate (signed distances) and flatness about it.
-    """
-    @property
-    def point(self) -> builtins.list[builtins.float]: ...
-    @property
-    def normal(self) -> builtins.list[builtins.float]: ...
-    @property
-    def min_distance(self) -> builtins.float: ...
-    @property
-    def max_distance(self) -> builtins.float: ...
-    @property
-    def form_error(self) -> builtins.float: ...
-
-@typing.final
-class RoundnessResult:
-    r"""
-    Roundness of a closed profile; see `gagekit_profile::roundness`.
-    """
-    @property
-    def params(self) -> FormParams: ...
+    def parameters(self) -> dict: ...
     @property
     def reference(self) -> builtins.str: ...
+    @property
+    def filter(self) -> dict:
+        r"""
+        `{"type": "none"}`, or the Gaussian filter's cut-off (UPR) and standard.
+        """
     @property
     def center(self) -> tuple[builtins.float, builtins.float]: ...
     @property
@@ -453,117 +389,120 @@ class RoundnessResult:
     @property
     def r_out(self) -> builtins.float: ...
     @property
-    def control(self) -> numpy.typing.NDArray[numpy.int64]: ...
-    @property
     def ls_center(self) -> tuple[builtins.float, builtins.float]: ...
-    @property
-    def profile(self) -> numpy.typing.NDArray[numpy.float64]: ...
-    @property
-    def resampled(self) -> numpy.typing.NDArray[numpy.float64]: ...
     @property
     def samples(self) -> builtins.int: ...
     @property
     def n_points(self) -> builtins.int: ...
     @property
-    def upr(self) -> typing.Optional[builtins.float]: ...
-    @property
-    def max_gap(self) -> builtins.float: ...
+    def max_gap_deg(self) -> builtins.float:
+        r"""
+        The largest angular gap of the measured points about `ls_center` (degrees).
+        """
     @property
     def amplitude(self) -> numpy.typing.NDArray[numpy.float64]: ...
     @property
     def phase(self) -> numpy.typing.NDArray[numpy.float64]: ...
+    @property
+    def control(self) -> numpy.typing.NDArray[numpy.int64]: ...
+    @property
+    def profile(self) -> numpy.typing.NDArray[numpy.float64]: ...
+    @property
+    def points(self) -> numpy.typing.NDArray[numpy.float64]: ...
+    @property
+    def resampled(self) -> numpy.typing.NDArray[numpy.float64]: ...
+    @property
+    def eccentricity(self) -> dict:
+        r"""
+        The reference centre relative to the origin: x, y, magnitude, angle_deg in [0, 360).
+        """
+    def to_dict(self) -> dict:
+        r"""
+        The JSON of `gagekit form roundness`.
+        """
 
 @typing.final
-class SphereResult:
+class SphereFit:
     r"""
-    A Chebyshev sphere: centre, radii, control points and certificate.
+    A fitted sphere (3-D) or least-squares circle (2-D). `certificate`: distances to the
+    centre; `form_error` = max - min (sphericity about this centre; the zone width for the
+    minimum zone). Chebyshev spheres also give `inner_radius` / `outer_radius` (the zone,
+    minimum zone only), `control_points` and `global_bound`: the certificate of the global
+    search (minimum zone: no centre gives a narrower zone; maximum inscribed: no larger
+    sphere; within 1e-9 mm of the value).
     """
+    @property
+    def shape(self) -> builtins.str: ...
     @property
     def criterion(self) -> builtins.str: ...
     @property
-    def center(self) -> builtins.list[builtins.float]: ...
+    def n_points(self) -> builtins.int: ...
     @property
-    def r_in(self) -> builtins.float: ...
+    def center(self) -> tuple: ...
     @property
-    def r_out(self) -> builtins.float: ...
+    def radius(self) -> builtins.float: ...
     @property
-    def control_in(self) -> builtins.list[builtins.int]: ...
+    def form_error(self) -> builtins.float: ...
     @property
-    def control_out(self) -> builtins.list[builtins.int]: ...
+    def certificate(self) -> Certificate: ...
     @property
-    def min_distance(self) -> builtins.float:
+    def inner_radius(self) -> typing.Optional[builtins.float]: ...
+    @property
+    def outer_radius(self) -> typing.Optional[builtins.float]: ...
+    @property
+    def control_points(self) -> typing.Optional[tuple]: ...
+    @property
+    def global_bound(self) -> typing.Optional[builtins.float]: ...
+    def to_dict(self) -> dict:
         r"""
-        Certificate: min and max distance of the points to the centre.
+        The JSON of `gagekit form fit sphere`.
         """
-    @property
-    def max_distance(self) -> builtins.float: ...
-    @property
-    def iterations(self) -> builtins.int:
-        r"""
-        Linear programs of the MI / MZ searches (0 for MC).
-        """
-    @property
-    def bound(self) -> builtins.float:
-        r"""
-        The certified global bound (MZ: no narrower zone; MI: no larger sphere; MC: the
-        radius), within 1e-9 mm of the value.
-        """
+    def __eq__(self, other: typing.Any) -> builtins.bool: ...
+    def __repr__(self) -> builtins.str: ...
 
 @typing.final
-class StraightnessResult:
+class StraightnessParameters:
     r"""
-    Straightness of a 2-D profile; see `gagekit_profile::straightness`.
+    Straightness of a 2-D profile (ISO 12780-1; `gagekit.straightness_parameters`):
+    STRt, STRp, STRv, STRq (mm) against LSLI or MZLI (deviations positive to the left of
+    the direction from the profile's first point to its last).
     """
     @property
-    def params(self) -> FormParams: ...
+    def parameters(self) -> dict: ...
     @property
     def reference(self) -> builtins.str: ...
+    @property
+    def filter(self) -> dict:
+        r"""
+        `{"type": "none"}`, or the filter's type, cut-off (mm), standard and end handling.
+        """
     @property
     def point(self) -> tuple[builtins.float, builtins.float]: ...
     @property
     def direction(self) -> tuple[builtins.float, builtins.float]: ...
     @property
-    def profile(self) -> numpy.typing.NDArray[numpy.float64]: ...
-    @property
     def n_points(self) -> builtins.int: ...
     @property
-    def step(self) -> typing.Optional[builtins.float]: ...
+    def length(self) -> builtins.float:
+        r"""
+        The length of profile evaluated (mm).
+        """
     @property
-    def length(self) -> builtins.float: ...
+    def step(self) -> typing.Optional[builtins.float]:
+        r"""
+        The resampling step (filtered profiles; mm).
+        """
+    @property
+    def profile(self) -> numpy.typing.NDArray[numpy.float64]: ...
+    def to_dict(self) -> dict:
+        r"""
+        The JSON of `gagekit form straightness`.
+        """
 
-def circle3d_lsq(points: numpy.typing.NDArray[numpy.float64]) -> LeastSquaresCircle3Result:
+def axis_angles(direction: typing.Sequence[builtins.float]) -> tuple[builtins.float, builtins.float]:
     r"""
-    Least-squares circle of (n, 3) points (NIST: plane, projection, circle in the plane).
-    """
-
-def circle_fit(points: numpy.typing.NDArray[numpy.float64], criterion: builtins.str) -> CircleResult:
-    r"""
-    Circle of (n, 2) points by the exact kernels: `criterion` is any name of the
-    criterion table (least squares, MC Eq. 6.1, MI Eq. 6.2, MZ Eqs. 6.5-6.8).
-    """
-
-def circle_fit_near(points: numpy.typing.NDArray[numpy.float64], center: typing.Sequence[builtins.float]) -> CircleResult:
-    r"""
-    Minimum-zone circle of (n, 2) points on an active set started near `center`, exact by
-    verification on every point (`gagekit_gdt::plan::active`).
-    """
-
-def circle_in_plane(points: numpy.typing.NDArray[numpy.float64], criterion: builtins.str) -> Circle3Result:
-    r"""
-    Circle of (n, 3) points in any pose: least-squares plane, projection, 2-D fit of
-    `criterion` (any name of the criterion table).
-    """
-
-def circle_pso(points: numpy.typing.NDArray[numpy.float64], criterion: builtins.str, seed: builtins.int = ..., particles: builtins.int = ..., max_iterations: builtins.int = ..., stall_iterations: builtins.int = ...) -> CircleResult:
-    r"""
-    2-D circle by the PSO over the centre (Eqs. 6.1, 6.4, 6.5; a cross-check of the
-    exact kernels) for MC, MI or MZ.
-    """
-
-def cone_fit(points: numpy.typing.NDArray[numpy.float64], criterion: builtins.str, half_angle: typing.Optional[builtins.float] = None) -> ConeResult:
-    r"""
-    Cone of (n, 3) points: `criterion` any name of the criterion table; `half_angle` (rad)
-    fixes the half angle.
+    (theta, phi) of an axis direction, flipped into the upper half sphere (theta <= pi/2;
+    Tables 6.2, 6.4).
     """
 
 def criteria() -> builtins.list[tuple[builtins.str, builtins.str, builtins.str]]:
@@ -577,47 +516,76 @@ def criterion(name: builtins.str, allowed: typing.Sequence[builtins.str] = ..., 
     ConfigError listing the names `allowed` (all when empty) for `shape`.
     """
 
-def cylinder_fit(points: numpy.typing.NDArray[numpy.float64], criterion: builtins.str, seed: builtins.int = ..., particles: builtins.int = ..., max_iterations: builtins.int = ..., stall_iterations: builtins.int = ..., axis: typing.Optional[typing.Sequence[builtins.float]] = None, max_tilt: builtins.float = ..., refine_starts: builtins.int = ..., hop_rounds: builtins.int = ..., warm: typing.Optional[tuple[typing.Sequence[builtins.float], typing.Sequence[builtins.float]]] = None) -> CylinderResult:
+def fit_circle(points: numpy.typing.NDArray[numpy.float64], criterion: builtins.str, method: builtins.str = ..., seed: builtins.int = ..., particles: builtins.int = ..., iterations: builtins.int = ..., stall_iterations: builtins.int = ...) -> CircleFit:
     r"""
-    Minimax cylinder by the projection model + PSO (Sec. 6.3). `criterion`: any name of
-    the criterion table but least squares; the axis is searched within `max_tilt` (rad,
-    [0, pi/2]) of `axis` (default: the least-squares axis). `warm`: (point, direction) of a
-    nearby fit's axis to start the exact local method from
-    ([`gagekit_form::cylinder::fit_near`]; the global search when it cannot decide).
+    Circle of (n, 2) points, or of (n, 3) points in any pose (fitted in their least-squares
+    plane): `criterion` any name of the criterion table (least squares, MC Eq. 6.1, MI
+    Eq. 6.2, MZ Eqs. 6.5-6.8); `method` "exact" (the computational-geometry kernels) or
+    "pso" (2-D, MC / MI / MZ: the seeded swarm over the centre, Eqs. 6.1, 6.4, 6.5, a
+    cross-check).
     """
 
-def cylinder_lsq(points: numpy.typing.NDArray[numpy.float64], start_axis: typing.Optional[typing.Sequence[builtins.float]] = None, warm: typing.Optional[typing.Sequence[builtins.float]] = None) -> LeastSquaresCylinderResult:
+def fit_circle_3d(points: numpy.typing.NDArray[numpy.float64], criterion: builtins.str = ...) -> Circle3DFit:
     r"""
-    Least-squares cylinder of (n, 3) points (from the principal axes and `start_axis`;
-    `warm`: from the axis `warm` of a nearby fit alone).
+    Least-squares circle of (n, 3) points in space (NIST: plane, projection, circle in the
+    plane).
     """
 
-def flatness(points: numpy.typing.NDArray[numpy.float64], reference: builtins.str = ..., up: typing.Optional[tuple[builtins.float, builtins.float, builtins.float]] = None) -> FlatnessResult:
+def fit_circle_near(points: numpy.typing.NDArray[numpy.float64], center: typing.Sequence[builtins.float]) -> CircleFit:
+    r"""
+    Minimum-zone circle of (n, 2) points on an active set started near `center`, exact by
+    verification on every point (`gagekit_gdt::plan::active`; a roundness section of a
+    Monte Carlo trial).
+    """
+
+def fit_cone(points: numpy.typing.NDArray[numpy.float64], criterion: builtins.str, angle: typing.Optional[builtins.float] = None) -> ConeFit:
+    r"""
+    Cone of (n, 3) points: `criterion` any name of the criterion table; `angle` fixes the
+    half angle (degrees, strictly between 0 and 90).
+    """
+
+def fit_cylinder(points: numpy.typing.NDArray[numpy.float64], criterion: builtins.str, seed: builtins.int = ..., particles: builtins.int = ..., iterations: builtins.int = ..., stall_iterations: builtins.int = ..., axis: typing.Optional[typing.Sequence[builtins.float]] = None, max_tilt: builtins.float = ..., refine_starts: builtins.int = ..., hop_rounds: builtins.int = ..., warm: typing.Optional[tuple[typing.Sequence[builtins.float], typing.Sequence[builtins.float]]] = None) -> CylinderFit:
+    r"""
+    Cylinder of (n, 3) points (Sec. 6.3): least squares (Levenberg-Marquardt; `warm`: from
+    the direction of a nearby fit alone) or a Chebyshev cylinder (MCC Eq. 6.13, MIC Eq.
+    6.15, MZC Eq. 6.14) by the projection model + seeded PSO, its axis searched within
+    `max_tilt` degrees ([0, 90]) of `axis` (default: the least-squares axis); `warm`:
+    (point, direction) of a nearby fit's axis to start the exact local method from
+    ([`gagekit_form::cylinder::fit_near`]).
+    """
+
+def fit_line(points: numpy.typing.NDArray[numpy.float64], criterion: builtins.str, seed: builtins.int = ..., axis: typing.Optional[typing.Sequence[builtins.float]] = None, max_tilt: builtins.float = ...) -> LineFit:
+    r"""
+    Line of (n, 2) or (n, 3) points: least squares (the principal axis through the
+    centroid) or minimum zone (2-D: two parallel lines of least separation, LP then the
+    exact active-set solve; 3-D: the thinnest enclosing cylinder, Eq. 6.13, searched
+    within `max_tilt` degrees of `axis`, default the least-squares direction).
+    """
+
+def fit_plane(points: numpy.typing.NDArray[numpy.float64], criterion: builtins.str) -> PlaneFit:
+    r"""
+    Plane of (n, 3) points: least squares (the centroid and the direction of least spread)
+    or minimum zone (flatness: LP in the least-squares frame, the exact solve of the
+    active constraints, re-linearised until the tilt vanishes).
+    """
+
+def fit_sphere(points: numpy.typing.NDArray[numpy.float64], criterion: builtins.str) -> SphereFit:
+    r"""
+    Sphere of (n, 3) points (least squares also circle of (n, 2) points): least squares
+    (Levenberg-Marquardt), minimum circumscribed (Welzl), maximum inscribed or minimum zone
+    (certified branch and bound, then the exact local step).
+    """
+
+def fit_sphere_near(points: numpy.typing.NDArray[numpy.float64], center: typing.Sequence[builtins.float]) -> SphereFit:
+    r"""
+    Minimum-zone sphere of (n, 3) points on an active set started near `center`, exact by
+    verification on every point (`gagekit_gdt::plan::active`; a Monte Carlo trial).
+    """
+
+def flatness(points: numpy.typing.NDArray[numpy.float64], reference: builtins.str = ..., up: typing.Optional[tuple[builtins.float, builtins.float, builtins.float]] = None) -> FlatnessParameters:
     r"""
     FLTt, FLTp, FLTv, FLTq of (n, 3) points against LSPL or MZPL (deviations positive
     along the normal oriented towards `up`, default +z).
-    """
-
-def line3_min_zone(points: numpy.typing.NDArray[numpy.float64], seed: builtins.int = ..., axis: typing.Optional[typing.Sequence[builtins.float]] = None, max_tilt: builtins.float = ...) -> Line3Result:
-    r"""
-    Minimum-zone 3-D line, searched within `max_tilt` (rad) of `axis` (default: the
-    least-squares direction).
-    """
-
-def line_lsq(points: numpy.typing.NDArray[numpy.float64]) -> LineResult:
-    r"""
-    Least-squares line of (n, 2) or (n, 3) points (the principal axis through the centroid).
-    """
-
-def min_zone_flat(points: numpy.typing.NDArray[numpy.float64]) -> MinZoneFlatResult:
-    r"""
-    Minimum-zone plane of (n, 3) points or line of (n, 2) points (LP, then the exact
-    solve of the active constraints).
-    """
-
-def plane_lsq(points: numpy.typing.NDArray[numpy.float64]) -> PlaneResult:
-    r"""
-    Least-squares plane of (n, 3) points: the centroid and the direction of least spread.
     """
 
 def profile_gaussian_closed(radii: numpy.typing.NDArray[numpy.float64], upr: builtins.float) -> numpy.typing.NDArray[numpy.float64]:
@@ -636,29 +604,13 @@ def profile_spline_open(values_: numpy.typing.NDArray[numpy.float64], step: buil
     ISO 16610-22 cubic spline filter (mean line) of an open profile at spacing `step`.
     """
 
-def roundness(points: numpy.typing.NDArray[numpy.float64], upr: typing.Optional[builtins.float] = None, reference: builtins.str = ..., samples: typing.Optional[builtins.int] = None, max_gap_deg: typing.Optional[builtins.float] = None, harmonics: typing.Optional[builtins.int] = None) -> RoundnessResult:
+def roundness(points: numpy.typing.NDArray[numpy.float64], upr: typing.Optional[builtins.float] = None, reference: builtins.str = ..., samples: typing.Optional[builtins.int] = None, max_gap_deg: typing.Optional[builtins.float] = None, harmonics: typing.Optional[builtins.int] = None) -> RoundnessParameters:
     r"""
     RONt, RONp, RONv, RONq of (n, 2) points: Gaussian filter of `upr` undulations per
     revolution (None: unfiltered), reference LSCI / MZCI / MCCI / MICI.
     """
 
-def sphere_fit(points: numpy.typing.NDArray[numpy.float64], criterion: builtins.str) -> SphereResult:
-    r"""
-    Minimum circumscribed, maximum inscribed or minimum-zone sphere of (n, 3) points.
-    """
-
-def sphere_fit_near(points: numpy.typing.NDArray[numpy.float64], center: typing.Sequence[builtins.float]) -> SphereResult:
-    r"""
-    Minimum-zone sphere of (n, 3) points on an active set started near `center`, exact by
-    verification on every point (`gagekit_gdt::plan::active`).
-    """
-
-def sphere_lsq(points: numpy.typing.NDArray[numpy.float64]) -> LeastSquaresSphereResult:
-    r"""
-    Least-squares circle of (n, 2) points or sphere of (n, 3) points.
-    """
-
-def straightness(points: numpy.typing.NDArray[numpy.float64], cutoff: typing.Optional[builtins.float] = None, reference: builtins.str = ..., step: typing.Optional[builtins.float] = None, max_gap: typing.Optional[builtins.float] = None, spline: builtins.bool = ...) -> StraightnessResult:
+def straightness(points: numpy.typing.NDArray[numpy.float64], cutoff: typing.Optional[builtins.float] = None, reference: builtins.str = ..., step: typing.Optional[builtins.float] = None, max_gap: typing.Optional[builtins.float] = None, spline: builtins.bool = ...) -> StraightnessParameters:
     r"""
     STRt, STRp, STRv, STRq of (n, 2) points: Gaussian (or, `spline`, ISO 16610-22 cubic
     spline) filter of cut-off `cutoff` mm (None: unfiltered), reference LSLI or MZLI.

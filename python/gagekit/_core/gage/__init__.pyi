@@ -6,9 +6,100 @@ import numpy
 import numpy.typing
 import typing
 __all__ = [
+    "BoundLimit",
+    "GageCheck",
+    "GageOutcome",
     "GageSolution",
+    "Transform",
+    "check",
     "solve",
 ]
+
+@typing.final
+class BoundLimit:
+    r"""
+    A bound of Omega (Eq. 5.2) with a non-zero Lagrange multiplier at T* (Sec. 5.2.2).
+    """
+    @property
+    def motion(self) -> builtins.str: ...
+    @property
+    def side(self) -> builtins.str:
+        r"""
+        "upper" or "lower".
+        """
+    @property
+    def dual(self) -> builtins.float: ...
+    def to_dict(self) -> dict: ...
+    def __eq__(self, other: typing.Any) -> builtins.bool: ...
+    def __repr__(self) -> builtins.str: ...
+
+@typing.final
+class GageCheck:
+    r"""
+    The outcome of a virtual-gage check (Eq. 5.11 at T*; `gagekit_gage::result`): the
+    status ("conforming" when every slack is zero), the objective, T*, the limiting
+    motion bounds, each gage's outcome, the infeasible groups by gage name, u, and the
+    solver's re-linearisations, last step (mm) and LP status.
+    """
+    @property
+    def status(self) -> builtins.str: ...
+    @property
+    def objective(self) -> builtins.float: ...
+    @property
+    def transform(self) -> Transform: ...
+    @property
+    def limited_by_motion_bounds(self) -> builtins.bool: ...
+    @property
+    def bound_limits(self) -> tuple: ...
+    @property
+    def gages(self) -> tuple: ...
+    @property
+    def infeasible_groups(self) -> tuple: ...
+    @property
+    def largest_release(self) -> builtins.float: ...
+    @property
+    def iterations(self) -> builtins.int: ...
+    @property
+    def last_step(self) -> builtins.float: ...
+    @property
+    def lp_status(self) -> builtins.str: ...
+
+@typing.final
+class GageOutcome:
+    r"""
+    One gage at T* (mm): the allowances before / after (the smallest signed distances of
+    its points from the gage plane; negative: short of material), `q` the largest (Eq.
+    5.4) and `slack` the release s_i of Eq. 5.11 (0 when the gage is met). With an
+    uncertainty (`gagekit.gage.uncertainty`): `uncertainty` (the allowance after T*'s JCGM
+    101 uncertainty) and `decision` (ISO 14253-1), set by `replace`.
+    """
+    @property
+    def name(self) -> builtins.str: ...
+    @property
+    def region(self) -> builtins.str: ...
+    @property
+    def points(self) -> builtins.int: ...
+    @property
+    def filtered_points(self) -> builtins.int: ...
+    @property
+    def allowance_before(self) -> builtins.float: ...
+    @property
+    def allowance_after(self) -> builtins.float: ...
+    @property
+    def q(self) -> builtins.float: ...
+    @property
+    def slack(self) -> builtins.float: ...
+    @property
+    def uncertainty(self) -> typing.Optional[typing.Any]: ...
+    @property
+    def decision(self) -> typing.Optional[builtins.str]: ...
+    def replace(self, **changes: typing.Any) -> GageOutcome:
+        r"""
+        A copy with `uncertainty` and / or `decision` replaced (the keywords given).
+        """
+    def to_dict(self) -> dict: ...
+    def __eq__(self, other: typing.Any) -> builtins.bool: ...
+    def __repr__(self) -> builtins.str: ...
 
 @typing.final
 class GageSolution:
@@ -64,6 +155,48 @@ class GageSolution:
         r"""
         Infeasible groups of gages (Eq. 5.10), as gage indices.
         """
+
+@typing.final
+class Transform:
+    r"""
+    T* = [Rz(alpha) Ry(beta) Rx(gamma) | (dx, dy, dz)] (rad, mm), applied to points of the
+    part frame (`gagekit_gage::result::Transform`).
+    """
+    @property
+    def alpha(self) -> builtins.float: ...
+    @property
+    def beta(self) -> builtins.float: ...
+    @property
+    def gamma(self) -> builtins.float: ...
+    @property
+    def dx(self) -> builtins.float: ...
+    @property
+    def dy(self) -> builtins.float: ...
+    @property
+    def dz(self) -> builtins.float: ...
+    @property
+    def matrix(self) -> tuple:
+        r"""
+        The 4x4 homogeneous matrix, row by row.
+        """
+    def as_array(self) -> numpy.typing.NDArray[numpy.float64]:
+        r"""
+        The 4x4 matrix as a numpy array.
+        """
+    def apply(self, points: typing.Any) -> typing.Any:
+        r"""
+        The transform applied to (n, 3) points: R p + t, by the package's one point
+        transform (`gagekit.gage.align.apply`, numpy), as for the alignment H.
+        """
+    def to_dict(self) -> dict: ...
+    def __eq__(self, other: typing.Any) -> builtins.bool: ...
+    def __repr__(self) -> builtins.str: ...
+
+def check(points: numpy.typing.NDArray[numpy.float64], offsets: typing.Sequence[builtins.int], planes: numpy.typing.NDArray[numpy.float64], f: numpy.typing.NDArray[numpy.float64], g: numpy.typing.NDArray[numpy.float64], free: typing.Sequence[builtins.bool], max_angle: builtins.float, max_shift: builtins.float, gages: typing.Sequence[tuple[builtins.str, builtins.str, builtins.int, builtins.int]], tol: builtins.float = ..., slack_tol: builtins.float = ..., groups: builtins.bool = ...) -> GageCheck:
+    r"""
+    The virtual-gage check of Eq. 5.11 (the solve of `solve`, then the public result):
+    `gages` names each gage of the set in order, (name, region, points, filtered points).
+    """
 
 def solve(points: numpy.typing.NDArray[numpy.float64], offsets: typing.Sequence[builtins.int], planes: numpy.typing.NDArray[numpy.float64], f: numpy.typing.NDArray[numpy.float64], g: numpy.typing.NDArray[numpy.float64], free: typing.Sequence[builtins.bool], max_angle: builtins.float, max_shift: builtins.float, tol: builtins.float = ..., slack_tol: builtins.float = ..., groups: builtins.bool = ...) -> GageSolution:
     r"""

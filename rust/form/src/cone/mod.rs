@@ -117,6 +117,16 @@ impl ConeFit {
     }
 }
 
+/// A fixed half angle a user gives in degrees, checked (strictly between 0 and 90) and in
+/// radians.
+pub fn half_angle_from_degrees(deg: f64) -> Result<f64> {
+    if deg > 0.0 && deg < 90.0 {
+        Ok(deg.to_radians())
+    } else {
+        Err(GkError::config(format!("cone: the half angle must lie strictly between 0 and 90 degrees, got {deg:?}")))
+    }
+}
+
 /// Checks a fixed half angle: finite, strictly between 0 and 90 degrees.
 pub fn check_half_angle(h: f64) -> Result<f64> {
     if h.is_finite() && h > 0.0 && h < FRAC_PI_2 {

@@ -133,6 +133,32 @@ impl Search {
         Self { axis: None, max_tilt: FRAC_PI_2 }
     }
 
+    /// The search a user asks for: `max_tilt_deg` degrees (in [0, 90]; 90 is exactly the
+    /// half sphere) about the nominal `axis`, checked; errors name `shape`.
+    pub fn from_degrees(axis: Option<[f64; 3]>, max_tilt_deg: f64, shape: &str) -> Result<Self> {
+        if !(0.0..=90.0).contains(&max_tilt_deg) {
+            return Err(GkError::config(format!(
+                "{shape}: max_tilt must be between 0 and 90 degrees, got {max_tilt_deg:?}"
+            )));
+        }
+        if let Some(a) = axis {
+            if !a.iter().all(|x| x.is_finite()) {
+                return Err(GkError::config(format!(
+                    "{shape}: axis must be three finite numbers (x, y, z), got ({:?}, {:?}, {:?})",
+                    a[0], a[1], a[2]
+                )));
+            }
+            if a.iter().all(|x| *x == 0.0) {
+                return Err(GkError::config(format!(
+                    "{shape}: the axis ({:?}, {:?}, {:?}) has zero length; give a direction such as (0, 0, 1)",
+                    a[0], a[1], a[2]
+                )));
+            }
+        }
+        let max_tilt = if max_tilt_deg == 90.0 { FRAC_PI_2 } else { max_tilt_deg.to_radians() };
+        Ok(Self { axis, max_tilt })
+    }
+
     /// Checks the settings: `max_tilt` in [0, pi/2], `axis` finite and non-zero.
     pub fn validate(&self) -> Result<Option<Vector3<f64>>> {
         if !(0.0..=FRAC_PI_2 * (1.0 + 1e-15)).contains(&self.max_tilt) {
