@@ -26,8 +26,9 @@ from gagekit.cloud import load_regions
 from gagekit.errors import ConfigError
 from gagekit.gage.spec import parse_gage_spec
 from gagekit.inspect import part_spec_from_dict
-from gagekit.machine.observer import ObserverSpace, read_zones
+from gagekit.machine.observer import ObserverSpace, read_exclusions, read_zones
 from gagekit.schema import SCHEMA_KINDS, json_schema, validate_document
+from gagekit.schema.exclusions import ExclusionsFile
 from gagekit.schema.gages import GageFile, RegionsFile
 from gagekit.schema.machine import MachineFile
 from gagekit.schema.measurement import MeasurementTable
@@ -48,7 +49,16 @@ count = 20
 X = [0.0, 1250.0]
 Y = [350.0, 1400.0]
 """
-MODELS = {"gages": GageFile, "part": PartFile, "machine": MachineFile, "regions": RegionsFile, "zones": ZonesFile}
+EXCLUSIONS = """
+tolerance = 0.02
+commands = [[0.0, -1000.0, 1000.0, 400.0, -500.0]]
+
+[[box]]
+X = [-1250.0, -1000.0]
+"Z+W" = [300.0, 600.0]
+"""
+MODELS = {"gages": GageFile, "part": PartFile, "machine": MachineFile, "regions": RegionsFile, "zones": ZonesFile,
+          "exclusions": ExclusionsFile}
 
 
 def _kind(doc: dict) -> str:
@@ -83,6 +93,8 @@ def _read(kind: str, path: Path, text: str = None):
         return gagekit.parse_machine(path.read_text(), str(path))
     if kind == "regions":
         return load_regions(path)
+    if kind == "exclusions":
+        return read_exclusions(path, _space())
     return read_zones(path, _space())
 
 
@@ -125,6 +137,32 @@ def test_every_bundled_file_validates_both_ways(kind, path):
 def test_the_zones_example_validates_both_ways(tmp_path):
     assert not list(_validator("zones").iter_errors(tomllib.loads(ZONES)))
     assert len(_read("zones", tmp_path / "z.toml", ZONES)) == 2
+
+
+def test_the_exclusions_example_validates_both_ways(tmp_path):
+    assert not list(_validator("exclusions").iter_errors(tomllib.loads(EXCLUSIONS)))
+    ex = _read("exclusions", tmp_path / "e.toml", EXCLUSIONS)
+    assert ex.tolerance == 0.02 and ex.commands.shape == (1, 5) and ex.boxes == ({"X": (-1250.0, -1000.0), "Z+W": (300.0, 600.0)},)
+
+
+@pytest.mark.parametrize("text, message", [
+    ("tolerence = 0.1\ncommands = [[0, 0, 0, 0, 0]]\n", "e.toml: unknown key(s) 'tolerence'; allowed: box, commands, description, tolerance"),
+    ("tolerance = 0.7\ncommands = [[0, 0, 0, 0, 0]]\n", "e.toml: 'tolerance' must be a fraction of the joint ranges in [0, 0.5), got 0.7"),
+    ("commands = [[0, 0]]\n", "e.toml: commands must be a list of [B, X, Z, Y, W] rows"),
+    ("commands = [['a', 0, 0, 0, 0]]\n", "e.toml: 'commands' must be a list of rows of numbers, got [['a', 0, 0, 0, 0]]"),
+    ("commands = [[nan, 0, 0, 0, 0]]\n", "e.toml: 'commands' must be a list of rows of numbers, got [[nan, 0, 0, 0, 0]]"),
+    ("[[box]]\nX = [0]\n", "e.toml: box 1: 'X' must be [lower, upper], got [0]"),
+    ("[[box]]\nX = [2, 1]\n", "e.toml: box 1: 'X' = [2, 1] is reversed: give [lower, upper]"),
+    ("[[box]]\nQ = [0, 1]\n", "e.toml: box 1: unknown variable 'Q' (use B, W, X, Y, Z, Z+W)"),
+    ("box = 3\n", "e.toml: box must be given as [[box]] tables, got 3"),
+    ("[[box]]\n", "e.toml: box 1 is empty"),
+    ("description = 'nothing'\n", "e.toml: no [[box]] tables and no commands to exclude"),
+])
+def test_exclusions_mistakes_are_one_line_naming_file_table_and_key(tmp_path, monkeypatch, text, message):
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(ConfigError) as err:
+        read_exclusions(Path("e.toml"), _space()) if Path("e.toml").write_text(text) else None
+    assert str(err.value) == message
 
 
 def _doc_fragments() -> list[tuple[str, dict]]:

@@ -10,7 +10,7 @@ import typer
 
 
 def schema(
-    kind: str = typer.Argument(..., help="The file type: gages, part, machine, regions or zones."),
+    kind: str = typer.Argument(..., help="The file type: gages, part, machine, regions, zones or exclusions."),
     out: Optional[Path] = typer.Option(None, "--out", help="Write the schema to this file (atomically) instead of stdout."),
 ) -> None:
     """Print the JSON Schema (draft 2020-12, unknown keys refused) of a gagekit TOML file type,

@@ -8,6 +8,7 @@ part       PART.toml (``inspect``)                 :func:`gagekit.inspect.spec.p
 machine    machine file (``machine ...``)          :func:`gagekit.machine.model.parse_machine`
 regions    regions file (``cloud regions``)        :func:`gagekit.cloud.regions.load_regions`
 zones      observer zones (``machine observer``)   :func:`gagekit.machine.observer.zones.read_zones`
+exclusions observer exclusions (``--exclude``)   :func:`gagekit.machine.observer.zones.read_exclusions`
 =========  ======================================  ===========================================
 
 :func:`json_schema` gives a kind's JSON Schema (draft 2020-12, unknown keys refused), generated
@@ -27,6 +28,7 @@ from ._engine import Style, Table, validate
 from .gages import GageFile, GageStyle, RegionsFile
 from .machine import MachineFile, MachineStyle
 from .part import PartFile, PartStyle
+from .exclusions import ExclusionsFile, ExclusionsStyle
 from .zones import ZonesFile, ZonesStyle
 
 __all__ = ["SCHEMA_KINDS", "json_schema", "validate_document", "Table", "Style"]
@@ -38,10 +40,11 @@ _KINDS: dict[str, tuple[type[BaseModel], type[Style]]] = {
     "machine": (MachineFile, MachineStyle),
     "regions": (RegionsFile, GageStyle),
     "zones": (ZonesFile, ZonesStyle),
+    "exclusions": (ExclusionsFile, ExclusionsStyle),
 }
 
 SCHEMA_KINDS = tuple(_KINDS)
-"""The file types with a schema: gages, part, machine, regions, zones."""
+"""The file types with a schema: gages, part, machine, regions, zones, exclusions."""
 
 
 def _kind(kind: str) -> tuple[type[BaseModel], type[Style]]:

@@ -12,12 +12,13 @@ from typing import Annotated, Any, Literal
 
 from pydantic import Field
 
+from .._core import kinematics as _kinematics
 from ._engine import Style, Table
 from ._types import Vec3
 
 __all__ = ["MachineFile", "MachineStyle", "MAX_TERMS"]
 
-MAX_TERMS = 64
+MAX_TERMS: int = _kinematics.MAX_FOURIER_TERMS  #: the kernel's limit (rust/kinematics chain.rs), defined once
 
 
 class JointTable(Table):

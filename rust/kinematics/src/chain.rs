@@ -63,7 +63,8 @@ const SHAPE_NAMES: [&str; 6] = ["alpha", "beta", "gamma", "dx", "dy", "dz"];
 const PRISMATIC_NAMES: [&str; 4] = ["dalpha", "dbeta", "dgamma", "delta"];
 /// Fixed-frame axis index (x = 0, y = 1, z = 2) of the rotations alpha, beta, gamma.
 const ROT_AXIS: [usize; 3] = [2, 1, 0];
-const MAX_TERMS: usize = 64;
+/// The most Fourier terms a rotary joint's error series may have (Eq. 3.6).
+pub const MAX_TERMS: usize = 64;
 
 impl Element {
     pub fn n_params(&self) -> usize {

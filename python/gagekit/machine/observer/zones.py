@@ -128,37 +128,27 @@ def read_exclusions(path: Union[str, Path], space: ObserverSpace) -> Exclusions:
     """Exclusions file: ``[[box]]`` tables of ``NAME = [lower, upper]``; and/or
     ``commands = [[...], ...]`` (joint order of the machine file) to avoid, each with a
     margin of ``tolerance`` (fraction of every joint range, default 0.01)."""
+    from ...schema import validate_document
+
     doc = load_toml(path, "exclusions")
+    if isinstance(doc.get("box"), dict):  # a single [box] table
+        doc["box"] = [doc["box"]]
+    validate_document("exclusions", doc, str(path))  # intervals, rows of numbers, tolerance, unknown keys
+    valid = set(space.names) | set(space.machine.joint_names)
     boxes = []
-    items = doc.get("box", [])
-    if isinstance(items, dict):  # a single [box] table
-        items = [items]
-    if not isinstance(items, list):
-        raise ConfigError(f"{path}: box must be given as [[box]] tables, got {items!r}")
-    for k, bx in enumerate(items):
-        if not isinstance(bx, dict) or not bx:
+    for k, bx in enumerate(doc.get("box", [])):
+        if not bx:
             raise ConfigError(f"{path}: box {k + 1} is empty")
-        spec = {}
-        valid = set(space.names) | set(space.machine.joint_names)
-        for key, val in bx.items():
+        for key in bx:
             if key not in valid:
                 raise ConfigError(f"{path}: box {k + 1}: unknown variable '{key}' (use {', '.join(sorted(valid))})")
-            spec[key] = _interval(val, f"{path}: box {k + 1}: '{key}'")
-        boxes.append(spec)
+        boxes.append({key: _interval(val, f"{path}: box {k + 1}: '{key}'") for key, val in bx.items()})
     cmds = doc.get("commands", [])
     nj = len(space.machine.joint_names)
-    rows_msg = f"{path}: commands must be a list of [{', '.join(space.machine.joint_names)}] rows"
-    if not isinstance(cmds, list) or not all(isinstance(r, list) and len(r) == nj for r in cmds):
-        raise ConfigError(rows_msg)
-    try:
-        cmd_arr = np.asarray(cmds, dtype=np.float64).reshape(-1, nj) if cmds else np.empty((0, nj))
-    except (TypeError, ValueError):
-        raise ConfigError(rows_msg) from None
-    if not np.isfinite(cmd_arr).all():
-        raise ConfigError(f"{path}: commands must be finite numbers")
+    if any(len(r) != nj for r in cmds):
+        raise ConfigError(f"{path}: commands must be a list of [{', '.join(space.machine.joint_names)}] rows")
+    cmd_arr = np.asarray(cmds, dtype=np.float64).reshape(-1, nj) if cmds else np.empty((0, nj))
     tol = doc.get("tolerance", 0.01)
-    if isinstance(tol, bool) or not isinstance(tol, (int, float)) or not (0 <= tol < 0.5):
-        raise ConfigError(f"{path}: tolerance must be a fraction of the joint ranges in [0, 0.5)")
     if not boxes and not len(cmd_arr):
         raise ConfigError(f"{path}: no [[box]] tables and no commands to exclude")
     return Exclusions(tuple(boxes), cmd_arr, float(tol))

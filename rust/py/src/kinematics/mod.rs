@@ -213,6 +213,7 @@ mod ballbar;
 
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     ballbar::register(m)?;
+    m.add("MAX_FOURIER_TERMS", gagekit_kinematics::chain::MAX_TERMS)?;
     m.add_class::<KinematicChain>()?;
     m.add_class::<Identifiability>()?;
     m.add_class::<LeastSquares>()?;
