@@ -6,6 +6,7 @@ sets and the example machine inside the package (runtime data the demo uses too)
 """
 
 import os
+import signal
 from pathlib import Path
 
 import pytest
@@ -20,6 +21,16 @@ from gagekit.samples import data_path
 settings.register_profile("ci", derandomize=True, print_blob=True)
 settings.register_profile("dev", print_blob=True)
 settings.load_profile("ci" if os.environ.get("CI", "").lower() in ("1", "true", "yes") else "dev")
+
+# pytest-xdist's workers ignore SIGINT (the controller takes Ctrl-C), and a child process
+# inherits an ignored signal: `gagekit` started by a test would then never see the Ctrl-C the
+# interrupt tests send (Python installs its handler only where SIGINT is not ignored). Restore
+# the defaults, so children start as they do from a shell.
+if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+for _sig in (signal.SIGTERM, signal.SIGHUP):
+    if signal.getsignal(_sig) is signal.SIG_IGN:
+        signal.signal(_sig, signal.SIG_DFL)
 
 ROOT = Path(__file__).resolve().parents[1]
 TEST_DATA = ROOT / "tests" / "data"
