@@ -1,15 +1,15 @@
 """One declarative schema per TOML file type, one validation engine (pydantic v2).
 
-=========  ======================================  ===========================================
-kind       file                                    reader (schema pass, then cross-field rules)
-=========  ======================================  ===========================================
-gages      gage file (``gage check``)              :func:`gagekit.gage.spec.parse_gage_spec`
-part       PART.toml (``inspect``)                 :func:`gagekit.inspect.spec.part_spec_from_dict`
-machine    machine file (``machine ...``)          :func:`gagekit.machine.model.parse_machine`
-regions    regions file (``cloud regions``)        :func:`gagekit.cloud.regions.load_regions`
-zones      observer zones (``machine observer``)   :func:`gagekit.machine.observer.zones.read_zones`
-exclusions observer exclusions (``--exclude``)   :func:`gagekit.machine.observer.zones.read_exclusions`
-=========  ======================================  ===========================================
+==========  ========================================  ======================================================
+kind        file                                      reader (schema pass, then cross-field rules)
+==========  ========================================  ======================================================
+gages       gage file (``gage check``)                :func:`gagekit.gage.spec.parse_gage_spec`
+part        PART.toml (``inspect``)                   :func:`gagekit.inspect.spec.part_spec_from_dict`
+machine     machine file (``machine ...``)            :func:`gagekit.machine.model.parse_machine`
+regions     regions file (``cloud regions``)          :func:`gagekit.cloud.regions.load_regions`
+zones       observer zones (``machine design``)       :func:`gagekit.machine.observer.zones.read_zones`
+exclusions  observer exclusions (``machine design``)  :func:`gagekit.machine.observer.zones.read_exclusions`
+==========  ========================================  ======================================================
 
 :func:`json_schema` gives a kind's JSON Schema (draft 2020-12, unknown keys refused), generated
 from the same models the readers validate with; ``gagekit schema KIND`` prints it, and a

@@ -1,4 +1,4 @@
-"""The schema of an observer exclusions file (``gagekit machine observer --exclude``, Sec. 4.2).
+"""The schema of an observer exclusions file (``gagekit machine design --exclude``, Sec. 4.2).
 
 ``[[box]]`` tables of ``NAME = [lower, upper]`` per variable (a joint of the machine file or the
 redundant sum, e.g. ``"Z+W"``) and/or ``commands = [[...], ...]`` (rows in the machine file's
@@ -43,7 +43,7 @@ class ExclusionsFile(Table):
 
 class ExclusionsStyle(Style):
     """The wording of the exclusions reader: ``excl.toml: box 2: 'X' must be [lower, upper], got
-    [0]``, ``excl.toml: 'tolerance' must be less than 0.5, got 0.7``."""
+    [0]``, ``excl.toml: 'tolerance' must be a fraction of the joint ranges in [0, 0.5), got 0.7``."""
 
     tables = ((), ("box", int))
     phrases = {"commands": "a list of rows of numbers", "tolerance": "a fraction of the joint ranges in [0, 0.5)"}

@@ -1,4 +1,4 @@
-"""The schema of an observer zones file (``gagekit machine observer --zones``, Sec. 4.2).
+"""The schema of an observer zones file (``gagekit machine design --zones``, Sec. 4.2).
 
 ``[[zone]]`` tables: ``count`` observations inside the box given by ``NAME = [lower, upper]``
 per variable (a joint of the machine file or the redundant sum, e.g. ``"Z+W"``); variables not
