@@ -139,8 +139,8 @@ pub(super) fn fit_direct(
 }
 
 /// The warm-started fit of all given points within `region` (see [`super::fit_near`]):
-/// the exact 2-D fit along the warm axis's direction, the SLP local search from it and
-/// basin hopping around the best, all on these points. `None` when the local method
+/// the exact 2-D fit along the warm axis's direction and the SLP local search from it,
+/// on these points (no basin hopping: see [`super::fit_near`]). `None` when the local method
 /// cannot decide the result alone: its axis on the region's boundary (the global search
 /// walks the boundary ring), a search that hit its step limit, a maximum inscribed
 /// cylinder held by fewer than 3 points (a partial arc: the exact values need the
@@ -148,7 +148,6 @@ pub(super) fn fit_direct(
 pub(super) fn fit_warm(
     pts: &[f64],
     crit: Criterion,
-    opts: &Options,
     warm: &slp::Axis,
     region: &Region,
 ) -> Result<Option<CylinderFit>> {
@@ -173,7 +172,6 @@ pub(super) fn fit_warm(
     if value < best.0 {
         best = (value, ax);
     }
-    evaluations += hop(&pb, opts.hop_rounds, &mut best);
     let on_boundary = region.s_max < FRAC_PI_2 && tilt_from(&best.1.dir, &region.basis.2) >= region.s_max - 1e-9;
     if !best.0.is_finite() || on_boundary {
         return Ok(None);
