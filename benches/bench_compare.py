@@ -79,6 +79,17 @@ def write_stl(path: Path, v: np.ndarray, t: np.ndarray) -> None:
         rec.tofile(fh)
 
 
+def timed_cpu(fn):
+    """(wall s, CPU s of the process in all threads, the result) of one run of ``fn``."""
+    c0 = time.process_time()
+    t, out = timed(fn)
+    return t, time.process_time() - c0, out
+
+
+def cpu_line(cpu: float) -> None:
+    print(f"#   gagekit CPU {cpu:.3f} s in all threads, load average {os.getloadavg()[0]:.1f}")
+
+
 def line(case: str, ours: float, peer: float | None) -> None:
     if peer is None:
         print(f"{case:58s} gagekit {ours:8.3f} s   peer      n/a")
@@ -109,7 +120,7 @@ def main() -> None:
 
         only = next((a.split("=", 1)[1].split(",") for a in sys.argv if a.startswith("--cases=")), ["distances", "c2m", "best-fit"])
         if "distances" in only:
-            t_ours, d_ours = timed(ours)
+            t_ours, c_ours, d_ours = timed_cpu(ours)
             try:
                 import open3d as o3d
 
@@ -121,12 +132,14 @@ def main() -> None:
                 t_o3d, d_o3d = timed(peer)
                 # Open3D's sign: negative inside, as gagekit; it computes in float32
                 line(f"signed distances {len(pts) / 1e6:.1f} M pts / {len(t) / 1e6:.1f} M tri (Open3D)", t_ours, t_o3d)
+                cpu_line(c_ours)
                 diff = np.abs(d_ours - d_o3d.astype(np.float64))
                 dabs = np.abs(np.abs(d_ours) - np.abs(d_o3d.astype(np.float64)))
                 print(f"#   largest |gagekit - Open3D| = {diff.max():.3e} mm, of the absolute values {dabs.max():.3e} mm, "
                       f"sign differs at {(np.sign(d_ours) != np.sign(d_o3d)).sum()} points (Open3D: float32, sign by ray parity)")
             except ImportError:
                 line(f"signed distances {len(pts) / 1e6:.1f} M pts / {len(t) / 1e6:.1f} M tri (Open3D not installed)", t_ours, None)
+                cpu_line(c_ours)
 
         if "c2m" in only:
             ply = work / "scan.ply"
@@ -172,12 +185,13 @@ def main() -> None:
         p2 = scan(1_000_000, 1, bumpy=True)  # the tube radius varies with u and v: one pose fits
         rot = Rotation.random(random_state=7).as_matrix()
         moved = np.ascontiguousarray(p2 @ rot.T + [300.0, -200.0, 150.0])
-        t_fit, fit = timed(lambda: m2.best_fit(moved))
+        t_fit, c_fit, fit = timed_cpu(lambda: m2.best_fit(moved))
         M = np.array(fit.matrix)
         back = moved @ M[:3, :3].T + M[:3, 3]
         line(f"best-fit {len(moved) / 1e6:.1f} M pts / {len(t2) / 1e3:.0f} k tri, random pose", t_fit, None)
         print(f"#   largest point displacement from the truth {np.abs(back - p2).max():.2e} mm, rms {fit.rms_before:.1f} -> "
               f"{fit.rms_after:.4f} mm, {fit.iterations} iterations")
+        cpu_line(c_fit)
     finally:
         shutil.rmtree(work, ignore_errors=True)
 

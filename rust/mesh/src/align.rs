@@ -4,9 +4,10 @@
 //!
 //! Start: the given pose and, unless degrees of freedom are locked, the 24 rotations that
 //! put the scan's principal axes on the surface's (area-weighted, exact per triangle) in
-//! every order and sign (the cube group), centroid on centroid. Each start is screened by
-//! 10 iterations on 256 points (the starts in parallel), the 3 best by their median |distance| are iterated (30) on
-//! 2000; the smallest median |distance| wins (ties: the first). Then coarse to fine:
+//! every order and sign (the cube group), centroid on centroid. Each start is screened on
+//! 256 points (the starts in parallel): 5 iterations, then the 8 best by their median
+//! |distance| 5 more (a start in the right basin is near after 5, a wrong one stays far);
+//! the 3 best are iterated (30) on 2000; the smallest median |distance| wins (ties: the first). Then coarse to fine:
 //! evenly spaced subsamples of 30 000, 100 000 and 300 000 points, each iterated until its
 //! step is below 1e-7 rad and 1e-5 mm (a subsample's optimum differs from the whole
 //! cloud's by more), and last every point, until the step is below 1e-8 rad and 1e-6 mm
@@ -28,7 +29,7 @@
 //! equations by SVD (minimum-norm: motions the surface does not constrain, e.g. sliding
 //! along a plane, stay put).
 
-use crate::distance::{Cache, Hit};
+use crate::distance::Cache;
 use crate::mesh::TriMesh;
 use crate::rigid::{apply, rotation_and_derivatives, Pose, M3};
 use gagekit_core::{check_finite, interrupt, GkError, Result};
@@ -41,6 +42,9 @@ const CHUNK: usize = 256;
 /// Sample sizes of the start search and of the refinement stages.
 const SCREEN_SAMPLE: usize = 256;
 const START_SAMPLE: usize = 2000;
+/// The screening's rounds on [`SCREEN_SAMPLE`] points: (steps, starts kept after it):
+/// every start a few steps, the best few more steps.
+const SCREEN_ROUNDS: [(usize, usize); 2] = [(5, 8), (5, KEEP_STARTS)];
 /// Starts iterated further after the screening.
 const KEEP_STARTS: usize = 3;
 const STAGES: [usize; 4] = [30_000, 100_000, 300_000, usize::MAX];
@@ -96,9 +100,17 @@ impl<'a> Frame<'a> {
     /// answered from its cache in `hints` (updated; [`TriMesh::hit_cached`]) or started
     /// from the chunk's previous point's; points beyond the bound are left out.
     pub fn eval(&self, idx: &[u32], p: &[f64; 6], hints: &mut [Cache]) -> Result<Vec<Option<Eval>>> {
+        let mut out = empty_evals(idx.len());
+        self.eval_into(idx, p, hints, &mut out)?;
+        Ok(out)
+    }
+
+    /// [`Frame::eval`] into `out` (one entry per point of `idx`, each overwritten): the
+    /// iterations reuse one buffer instead of allocating and clearing one per pass.
+    pub fn eval_into(&self, idx: &[u32], p: &[f64; 6], hints: &mut [Cache], out: &mut [Option<Eval>]) -> Result<()> {
         let pose = Pose::from_params(p);
         let signed = self.mesh.signed();
-        let mut out: Vec<Option<Eval>> = vec![None; idx.len()];
+        assert_eq!(out.len(), idx.len());
         out.par_chunks_mut(CHUNK).zip(hints.par_chunks_mut(CHUNK)).enumerate().try_for_each(|(c, (o, h))| -> Result<()> {
             if c % 64 == 0 {
                 interrupt::check()?;
@@ -114,18 +126,20 @@ impl<'a> Frame<'a> {
                 if cache.slot == u32::MAX {
                     cache = prev;
                 }
-                let hit: Option<Hit> = self.mesh.hit_cached(q, self.bound2, &mut cache, signed);
+                let hit = self.mesh.hit_cached(q, self.bound2, &mut cache, signed);
                 if hit.is_some() {
                     h[k] = cache;
                     prev = cache;
                 }
-                if let Some(hit) = hit {
-                    o[k] = Some(Eval { index: i, d: hit.distance - self.offset, g: hit.gradient, x });
-                }
+                o[k] = hit.map(|hit| Eval { index: i, d: hit.distance - self.offset, g: hit.gradient, x });
             }
             Ok(())
-        })?;
-        Ok(out)
+        })
+    }
+
+    /// The same points and bound from another initial pose (the points already checked).
+    pub fn from_base(&self, base: Pose) -> Frame<'a> {
+        Frame { mesh: self.mesh, points: self.points, base, bound2: self.bound2, free: self.free.clone(), offset: self.offset }
     }
 
     /// The row of the Jacobian of a point's distance over the six parameters at `p`.
@@ -152,6 +166,11 @@ pub struct BestFit {
     pub n_used: usize,
     /// which start won (0: the given pose; 1-4: principal axes and flips)
     pub start: usize,
+}
+
+/// `n` empty evaluations, filled in parallel (no serial pass over a large buffer).
+pub fn empty_evals(n: usize) -> Vec<Option<Eval>> {
+    (0..n).into_par_iter().map(|_| None).collect()
 }
 
 fn median_abs(v: &mut [f64]) -> f64 {
@@ -211,9 +230,13 @@ pub fn iterate(frame: &Frame, idx: &[u32], p: &mut [f64; 6], hints: &mut [Cache]
         Iterated { iterations: it, median: median_abs(&mut ad), rms, used }
     };
     let mut prev: Option<[f64; 6]> = None;
+    let mut ev = empty_evals(idx.len());
+    let mut ad: Vec<f64> = Vec::new();
     loop {
-        let ev = frame.eval(idx, p, hints)?;
-        let within = ev.iter().flatten().count();
+        frame.eval_into(idx, p, hints, &mut ev)?;
+        ad.clear();
+        ad.extend(ev.iter().flatten().map(|e| e.d.abs()));
+        let within = ad.len();
         if within < nf.max(3) {
             return Err(GkError::degenerate(format!(
                 "best-fit: only {within} point(s) within reach of the model; check the units, --max-distance and the initial pose"
@@ -222,17 +245,18 @@ pub fn iterate(frame: &Frame, idx: &[u32], p: &mut [f64; 6], hints: &mut [Cache]
         if it >= max_iter || nf == 0 {
             return Ok(summary(&ev, it));
         }
-        let mut ad: Vec<f64> = ev.iter().flatten().map(|e| e.d.abs()).collect();
         let med = median_abs(&mut ad);
         let sigma = (1.4826 * med).max(1e-12);
         let c = 4.685 * sigma;
         let (_, dr) = rotation_and_derivatives(p);
         // normal equations, summed per fixed chunk then in chunk order (deterministic)
-        let parts: Vec<(Matrix6<f64>, Vector6<f64>)> = ev
+        // (plain arrays: the same sums in the same order as nalgebra's, without its
+        // bounds checks in the inner loop)
+        let parts: Vec<([[f64; 6]; 6], [f64; 6])> = ev
             .par_chunks(CHUNK)
             .map(|chunk| {
-                let mut a = Matrix6::<f64>::zeros();
-                let mut b = Vector6::<f64>::zeros();
+                let mut a = [[0.0f64; 6]; 6];
+                let mut b = [0.0f64; 6];
                 for e in chunk.iter().flatten() {
                     let u = e.d / c;
                     if u.abs() >= 1.0 {
@@ -241,9 +265,10 @@ pub fn iterate(frame: &Frame, idx: &[u32], p: &mut [f64; 6], hints: &mut [Cache]
                     let w = (1.0 - u * u) * (1.0 - u * u);
                     let j = Frame::jacobian(e, &dr);
                     for r in 0..6 {
-                        b[r] += w * j[r] * e.d;
+                        let wj = w * j[r];
+                        b[r] += wj * e.d;
                         for s in 0..6 {
-                            a[(r, s)] += w * j[r] * j[s];
+                            a[r][s] += wj * j[s];
                         }
                     }
                 }
@@ -253,8 +278,8 @@ pub fn iterate(frame: &Frame, idx: &[u32], p: &mut [f64; 6], hints: &mut [Cache]
         let mut a = Matrix6::<f64>::zeros();
         let mut b = Vector6::<f64>::zeros();
         for (pa, pb) in parts {
-            a += pa;
-            b += pb;
+            a += Matrix6::from_fn(|r, s| pa[r][s]);
+            b += Vector6::from_fn(|r, _| pb[r]);
         }
         let af = a.select_rows(&frame.free).select_columns(&frame.free);
         let bf = b.select_rows(&frame.free);
@@ -297,7 +322,7 @@ pub fn iterate(frame: &Frame, idx: &[u32], p: &mut [f64; 6], hints: &mut [Cache]
             if !last {
                 return Ok(Iterated { iterations: it, median: f64::NAN, rms: f64::NAN, used: 0 });
             }
-            let ev = frame.eval(idx, p, hints)?;
+            frame.eval_into(idx, p, hints, &mut ev)?;
             return Ok(summary(&ev, it));
         }
     }
@@ -478,34 +503,45 @@ pub fn best_fit(mesh: &TriMesh, points: &[f64], opt: &FitOptions) -> Result<Best
     }
     // screen every start briefly on a small sample, then iterate the best few further
     let screen = sample(n, SCREEN_SAMPLE);
-    let mut scored: Vec<(f64, usize, [f64; 6])> = Vec::new();
     let mut iterations = 0;
-    // the starts in parallel (each on one chunk of points), their results taken in order
-    let screened: Vec<Result<(Iterated, [f64; 6])>> = starts
-        .par_iter()
-        .map(|s| {
-            let frame = Frame::new(mesh, points, *s, opt.max_distance, opt.free)?;
-            let mut p = [0.0; 6];
-            let mut hints = vec![Cache::EMPTY; screen.len()];
-            let r = iterate(&frame, &screen, &mut p, &mut hints, if starts.len() > 1 { 10 } else { 0 }, FINE, true)?;
-            Ok((r, p))
-        })
-        .collect();
-    for (k, res) in screened.into_iter().enumerate() {
-        match res {
-            Ok((r, p)) => {
-                iterations += r.iterations;
-                scored.push((r.median, k, p));
+    // the starts in parallel (each on one chunk of points), their results taken in order;
+    // two rounds: every start, then the best few of them further
+    let many = starts.len() > 1;
+    let mut round: Vec<(usize, [f64; 6], Vec<Cache>)> = (0..starts.len()).map(|k| (k, [0.0; 6], vec![Cache::EMPTY; screen.len()])).collect();
+    let mut scored: Vec<(f64, usize, [f64; 6])> = Vec::new();
+    for (steps, keep) in SCREEN_ROUNDS {
+        let done: Vec<Result<(Iterated, usize, [f64; 6], Vec<Cache>)>> = round
+            .into_par_iter()
+            .map(|(k, mut p, mut hints)| {
+                let frame = before.from_base(starts[k]);
+                let r = iterate(&frame, &screen, &mut p, &mut hints, if many { steps } else { 0 }, FINE, true)?;
+                Ok((r, k, p, hints))
+            })
+            .collect();
+        let mut ok = Vec::new();
+        for res in done {
+            match res {
+                Ok(v) => {
+                    iterations += v.0.iterations;
+                    ok.push(v);
+                }
+                Err(e) if e.kind == gagekit_core::ErrorKind::DegenerateGeometry && many => continue,
+                Err(e) => return Err(e),
             }
-            Err(e) if e.kind == gagekit_core::ErrorKind::DegenerateGeometry && starts.len() > 1 => continue,
-            Err(e) => return Err(e),
+        }
+        ok.sort_by(|a, b| a.0.median.total_cmp(&b.0.median).then(a.1.cmp(&b.1)));
+        ok.truncate(keep);
+        scored = ok.iter().map(|(r, k, p, _)| (r.median, *k, *p)).collect();
+        round = ok.into_iter().map(|(_, k, p, h)| (k, p, h)).collect();
+        if !many {
+            break;
         }
     }
     scored.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
     let idx0 = sample(n, START_SAMPLE);
     let mut best: Option<(f64, usize, Pose, [f64; 6])> = None;
     for &(_, k, p0) in scored.iter().take(KEEP_STARTS) {
-        let frame = Frame::new(mesh, points, starts[k], opt.max_distance, opt.free)?;
+        let frame = before.from_base(starts[k]);
         let mut p = p0;
         let mut hints = vec![Cache::EMPTY; idx0.len()];
         let r = match iterate(&frame, &idx0, &mut p, &mut hints, 30, FINE, true) {
@@ -521,7 +557,7 @@ pub fn best_fit(mesh: &TriMesh, points: &[f64], opt: &FitOptions) -> Result<Best
     let (_, start, base, mut p) =
         best.ok_or_else(|| GkError::degenerate("best-fit: no start brings the points within reach of the model"))?;
     // the parameters keep accumulating on the winning start: a locked one stays exactly 0
-    let frame = Frame::new(mesh, points, base, opt.max_distance, opt.free)?;
+    let frame = before.from_base(base);
     let (last, it) = refine(&frame, &mut p, &STAGES)?;
     iterations += it;
     Ok(BestFit { pose: frame.pose(&p), iterations, rms_before, rms_after: last.rms, n_used: last.used, start })
