@@ -208,3 +208,31 @@ def test_e57_stream_errors_are_the_whole_reads(tmp_path):
     with pytest.raises(FileFormatError) as part:
         streamed(f, 100)
     assert str(part.value) == str(whole.value) and f"all {n} points are at one place" in str(part.value)
+
+
+@pytest.mark.parametrize("chunk", [1, 13, 997, 10**6])
+def test_datum_moments_stream_to_the_whole_reads_bits(chunk):
+    """The 3-2-1 datums keep their regions' hull vertices and moments, not their points:
+    the moments summed chunk by chunk are the whole region's bits, and the centroid,
+    scatter and axes they give match numpy's of all the points."""
+    from gagekit import _core
+    from gagekit.cloud.regions import Box
+    from gagekit.cloud.streamed import cut_stream
+    from gagekit.gage.align import DatumStats
+
+    rng = np.random.default_rng(3)
+    pts = rng.normal([500.0, -200.0, 70.0], [3.0, 1.0, 0.01], (5000, 3))
+    box = Box((500.0, -200.0, 70.0), (8.0, 4.0, 1.0), name="d")
+    inside = pts[np.all(np.abs(pts - [500.0, -200.0, 70.0]) <= [4.0, 2.0, 0.5], axis=1)]
+    whole = _core.cloud.point_moments(inside)
+    p = cut_stream([pts[i:i + chunk] for i in range(0, len(pts), chunk)], [box], ["hull"], moments=[True])
+    assert p["d"].moments.tobytes() == whole.tobytes()
+    st = DatumStats.of_moments([whole])
+    assert st.n == len(inside)
+    assert np.allclose(st.mean, inside.mean(axis=0), rtol=0, atol=1e-11)
+    q = inside - inside.mean(axis=0)
+    assert np.allclose(st.scatter, q.T @ q, rtol=1e-10, atol=1e-9)
+    sv, vt = st.axes()
+    _, sv_np, vt_np = np.linalg.svd(q, full_matrices=False)
+    assert np.allclose(sv, sv_np, rtol=1e-9)
+    assert np.allclose(np.abs(vt @ vt_np.T), np.eye(3), atol=1e-9)

@@ -261,9 +261,13 @@ def _open_format(p: Path, suffix: str, m: int):
 
             def ply_chunks_reused() -> Iterator[np.ndarray]:
                 s = _core.cloud.ply_chunks(str(p))
-                buf = np.empty((min(m, max(1, int(s0.count))), 3))
-                while s is not None and (k := s.next_into(buf)):
-                    yield buf[:k]
+                size = min(m, max(1, int(s0.count)))
+                bufs = (np.empty((size, 3)), np.empty((size, 3)))
+                # two buffers in turn: the next chunk is read (in a thread, no GIL held)
+                # while the consumer uses this one, which stays valid until it asks for
+                # the next
+                for i, k in _read_ahead(lambda i: s.next_into(bufs[i % 2])):
+                    yield bufs[i % 2][:k]
 
             ply_chunks.reusing = ply_chunks_reused  # type: ignore[attr-defined]
             return Raw(empty, f"ply {_ply_head(p)[1]}"), ply_chunks, int(s0.count), True, None
@@ -284,6 +288,20 @@ def _open_format(p: Path, suffix: str, m: int):
     if suffix == ".e57":
         return _e57(p, m)
     raise FileFormatError(f"{p}: cannot stream '{suffix}' files")  # pragma: no cover - suffixes above are all
+
+
+def _read_ahead(read: Callable[[int], int]) -> Iterator[tuple[int, int]]:
+    """(i, read(i)) for i = 0, 1, ... until read(i) is 0, with read(i + 1) running in a
+    thread while the consumer holds (i, read(i)): the file's reading overlaps the work on
+    the chunk before (the disk and the page-cache copies run while the cores classify)."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    with ThreadPoolExecutor(1, thread_name_prefix="gagekit-read-ahead") as ex:
+        i, fut = 0, ex.submit(read, 0)
+        while k := fut.result():
+            fut = ex.submit(read, i + 1)
+            yield i, k
+            i += 1
 
 
 def _whole(raw: Raw, m: int):

@@ -43,6 +43,8 @@ class StreamedRegion:
     sample_keys: Optional[np.ndarray] = None
     sample_idx: Optional[np.ndarray] = None
     sample_pts: Optional[np.ndarray] = None
+    moments: Optional[np.ndarray] = None
+    """the flat moments of every point inside (``_core.cloud.point_moments``), when asked for"""
     _pending: int = 0
 
     def add(self, ids: np.ndarray, pts: np.ndarray) -> None:
@@ -133,12 +135,17 @@ def _reused(chunks: Iterable[np.ndarray]) -> Iterable[np.ndarray]:
 
 
 def cut_stream(chunks: Iterable[np.ndarray], boxes: Sequence[Box], keep: Sequence[str], *,
-               all_indices: bool = False, sample: int = 0, seed: int = 0) -> Pass:
+               all_indices: bool = False, sample: int = 0, seed: int = 0,
+               moments: Optional[Sequence[bool]] = None) -> Pass:
     """One pass over ``chunks`` ((m, 3) arrays in file order): every chunk classified into
     ``boxes``; per box ``keep`` is ``"all"`` (every point inside) or ``"hull"`` (hull
     vertices). ``all_indices`` also keeps every inside point's number (int64, 8 bytes a
-    point); ``sample`` > 0 draws that many points per box (seeded) for pictures."""
+    point); ``sample`` > 0 draws that many points per box (seeded) for pictures;
+    ``moments`` flags the boxes whose points' moments are summed (``StreamedRegion.moments``,
+    the bits of ``_core.cloud.point_moments`` of all of them)."""
     regions = [StreamedRegion(b.name, k, all_indices=[] if all_indices else None) for b, k in zip(boxes, keep)]
+    flags = list(moments) if moments is not None and any(moments) else []
+    state = np.zeros((len(boxes), 22)) if flags else None
     rows = np.array([b.row() for b in boxes], dtype=np.float64).reshape(-1, 9)
     hull = [k == "hull" for k in keep]
     want_inside = bool(all_indices or sample)
@@ -148,13 +155,16 @@ def cut_stream(chunks: Iterable[np.ndarray], boxes: Sequence[Box], keep: Sequenc
         m = len(pts)
         if boxes:
             # one Rust call: classify, gather, hull-filter (Sec. 5.4.1), parallel inside
-            cuts = _core.cloud.cut_chunk(as_points(pts), rows, hull, want_inside)
+            cuts = _core.cloud.cut_chunk(as_points(pts), rows, hull, want_inside, state, flags)
             for r, (count, inside, kept, kpts) in zip(regions, cuts):
                 inside = (kept if inside is None else inside) + n
                 r.add_kept(count, inside, kept + n, kpts)
                 if sample and count:
                     r.sample(rng, inside, pts, n, sample)
         n += m
+    for k, r in enumerate(regions):
+        if flags and flags[k]:
+            r.moments = state[k].copy()
     return Pass(n, [r.finish() for r in regions])
 
 

@@ -21,6 +21,13 @@ table, a second part). The origin solves the three
 plane equations (Eq. 5.16); C_L^S has the normals as columns and the origin as
 translation (Eq. 5.17), and H = (C_L^S)^-1 brings the cloud into the part frame
 (Eqs. 5.18-5.19).
+
+Of each datum's points the fit needs only their convex-hull vertices (the support LPs:
+a linear constraint that holds at the hull vertices holds everywhere) and their first and
+second moments (the least-squares start directions and the part side): :class:`DatumStats`,
+from the compensated sums of ``_core.cloud.point_moments``, which a streamed read
+continues chunk by chunk to the same bits. So a datum region costs the same memory
+whether it holds a thousand points or a hundred million.
 """
 
 from __future__ import annotations
@@ -75,6 +82,48 @@ class Alignment:
                 "C_LS": self.frame.tolist(), "H": self.H.tolist()}
 
 
+@dataclass(frozen=True)
+class DatumStats:
+    """The count, centroid and scatter matrix sum (p - mean)(p - mean)^T of a datum's
+    points, from the flat moments of its regions (``_core.cloud.point_moments`` or
+    ``cut_chunk``'s ``moments``: n, origin, sums of d and d d^T about the origin, their
+    compensations), merged region by region (parallel-axis rule)."""
+
+    n: int
+    mean: np.ndarray
+    scatter: np.ndarray
+
+    @staticmethod
+    def of_moments(moments) -> "DatumStats":
+        parts = []
+        for a in moments:
+            a = np.asarray(a, dtype=np.float64)
+            k = float(a[0])
+            if k == 0:
+                continue
+            s = a[4:13] + a[13:22]
+            s1 = s[:3]
+            s2 = np.array([[s[3], s[4], s[5]], [s[4], s[6], s[7]], [s[5], s[7], s[8]]])
+            parts.append((k, a[1:4] + s1 / k, s2 - np.outer(s1, s1) / k))
+        if not parts:
+            return DatumStats(0, np.zeros(3), np.zeros((3, 3)))
+        n = sum(k for k, _, _ in parts)
+        mean = sum(k * m for k, m, _ in parts) / n
+        scatter = sum(c + k * np.outer(m - mean, m - mean) for k, m, c in parts)
+        return DatumStats(int(n), mean, scatter)
+
+    @staticmethod
+    def of_points(points: np.ndarray) -> "DatumStats":
+        """Of (n, 3) points in order (one region)."""
+        return DatumStats.of_moments([_core.cloud.point_moments(np.ascontiguousarray(points, dtype=np.float64))])
+
+    def axes(self, scatter: "np.ndarray | None" = None) -> tuple[np.ndarray, np.ndarray]:
+        """(singular values, right singular vectors as rows) of the centred points, largest
+        first, from the eigen-decomposition of the scatter matrix (or of ``scatter``)."""
+        w, v = np.linalg.eigh(self.scatter if scatter is None else scatter)
+        return np.sqrt(np.maximum(w[::-1], 0.0)), v[:, ::-1].T
+
+
 def apply(T: np.ndarray, points: np.ndarray) -> np.ndarray:
     """A 4x4 homogeneous transform applied to (n, 3) points."""
     pts = np.asarray(points, dtype=np.float64)
@@ -113,18 +162,19 @@ def _oriented(n: np.ndarray, towards: np.ndarray) -> np.ndarray:
 def _material_side(groups: dict, key: str) -> np.ndarray:
     """A point on the material side of datum ``key``: the mean of the centroids of the
     other two datums' points (see the module docstring)."""
-    return np.mean([groups[k][1].mean(axis=0) for k in ("primary", "secondary", "tertiary") if k != key], axis=0)
+    return np.mean([groups[k][1].mean for k in ("primary", "secondary", "tertiary") if k != key], axis=0)
 
 
 def fit_321(groups: dict) -> Alignment:
     """Fit the 3-2-1 frame.
 
     ``groups`` maps ``"primary"``, ``"secondary"``, ``"tertiary"`` to
-    ``(region names, all points, hull-vertex points)`` in the scanner frame; the part
-    side of each datum comes from the other datums' points (:func:`_material_side`).
+    ``(region names, DatumStats of all their points, hull-vertex points)`` in the scanner
+    frame; the part side of each datum comes from the other datums' points
+    (:func:`_material_side`).
     """
     for key in ("primary", "secondary", "tertiary"):
-        if len(groups[key][1]) == 0:
+        if groups[key][1].n == 0:
             raise DegenerateGeometryError(f"alignment: the {key} datum ({', '.join(groups[key][0])}) has no points")
     fitted = {}
     # primary: least-squares normal as the start, then Eq. 5.13
@@ -133,8 +183,10 @@ def fit_321(groups: dict) -> Alignment:
         raise DegenerateGeometryError(f"alignment: the primary datum ({', '.join(names)}) has {len(pts)} "
                                       "points; a plane needs at least 3")
     c = pts.mean(axis=0)
-    _, sv, vt = np.linalg.svd(allp - allp.mean(axis=0), full_matrices=False)
-    if len(sv) < 2 or sv[1] <= 1e-9 * max(sv[0], 1e-300):
+    sv, vt = allp.axes()
+    # from the scatter matrix: exactly collinear points leave rounding of about 1e-8 of
+    # the largest singular value
+    if allp.n < 2 or sv[1] <= 1e-6 * max(sv[0], 1e-300):
         raise DegenerateGeometryError(f"alignment: the primary datum points ({', '.join(names)}) are collinear; "
                                       "they do not determine a plane")
     extent = float(np.ptp(np.vstack([g[2] for g in groups.values() if len(g[2])]), axis=0).max())
@@ -154,9 +206,8 @@ def fit_321(groups: dict) -> Alignment:
         raise DegenerateGeometryError(f"alignment: the secondary datum ({', '.join(names)}) has {len(pts)} "
                                       "points; it needs at least 2")
     c = pts.mean(axis=0)
-    q = allp - allp.mean(axis=0)
-    _, sv3, vt3 = np.linalg.svd(q, full_matrices=False)
-    if len(sv3) == 3 and sv3[1] > 1e-6 * max(1.0, extent):
+    sv3, vt3 = allp.axes()
+    if allp.n >= 3 and sv3[1] > 1e-6 * max(1.0, extent):
         # the points span a plane: it must stand across the primary
         cosang = abs(vt3[2] @ nz)
         if cosang > math.cos(math.radians(45.0)):
@@ -166,8 +217,8 @@ def fit_321(groups: dict) -> Alignment:
         ny0 = vt3[2] - (vt3[2] @ nz) * nz
     else:
         # collinear points: the plane through their line perpendicular to the primary
-        qp = q - np.outer(q @ nz, nz)
-        _, sv, vt = np.linalg.svd(qp, full_matrices=False)
+        P = np.eye(3) - np.outer(nz, nz)
+        sv, vt = allp.axes(P @ allp.scatter @ P)
         if sv[0] <= 1e-9 * max(1.0, extent):
             raise DegenerateGeometryError(f"alignment: the secondary datum points ({', '.join(names)}) lie on a line "
                                           "parallel to the primary normal; they do not determine a plane")
@@ -212,6 +263,6 @@ def fit_321(groups: dict) -> Alignment:
     for key, label in (("primary", "z"), ("secondary", "y"), ("tertiary", "x")):
         n, d, zone = fitted[key]
         planes[key] = DatumPlane(label, tuple(groups[key][0]), tuple(float(v) for v in n), float(d),
-                                 len(groups[key][1]), len(groups[key][2]), zone)
+                                 groups[key][1].n, len(groups[key][2]), zone)
     return Alignment(planes["primary"], planes["secondary"], planes["tertiary"],
                      tuple(float(v) for v in origin), C, H)

@@ -33,7 +33,7 @@ from .._rotation import rotation_from_vector, rotation_vector
 from .._util import LENGTH_RESOLUTION_MM, as_points, check_finite
 from ..cloud.regions import Box
 from ..errors import ConfigError, InvalidInputError
-from .align import Alignment, apply, fit_321
+from .align import Alignment, DatumStats, apply, fit_321
 from .spec import GageSpec
 
 SpecLike = Union[GageSpec, str, Path, Mapping[str, Any]]
@@ -192,9 +192,9 @@ def _alignment(pts: np.ndarray, spec: GageSpec) -> Optional[Alignment]:
     cut = _cut(pts, [spec.region(n).box for n in names], ["scanner"] * len(names), spec.source)
     groups_in = {}
     for key, lst in (("primary", al.primary), ("secondary", al.secondary), ("tertiary", al.tertiary)):
-        allp = np.vstack([pts[cut[n].indices] for n in lst])
+        stats = DatumStats.of_moments([_core.cloud.point_moments(pts[cut[n].indices]) for n in lst])
         hull = np.vstack([pts[cut[n].hull] for n in lst])
-        groups_in[key] = (lst, allp, hull)
+        groups_in[key] = (lst, stats, hull)
     return fit_321(groups_in)  # the datums' own points, never the whole cloud
 
 
@@ -304,9 +304,9 @@ def build_problem_stream(stream, spec: SpecLike) -> GageProblem:
     or any re-iterable of (m, 3) chunks in file order), keeping only region points.
 
     With an ``[alignment]`` whose gage regions are in the part frame the file is read
-    twice: the first pass keeps every point of the datum regions (the 3-2-1 fit needs them
-    all: least-squares start, Eqs. 5.13-5.15, and the part side of each datum from the
-    other datums' points); the second cuts the
+    twice: the first pass keeps the hull vertices and the moments of the datum regions
+    (what the 3-2-1 fit needs: :class:`~gagekit.gage.align.DatumStats`; memory does not
+    grow with the datum regions' points); the second cuts the
     gage regions, carried into the scanner frame by the fitted C_L^S. Scanner-frame gage
     regions are cut in the first pass. Gage regions keep only their hull vertices, chunk
     by chunk (:mod:`gagekit.cloud.streamed`): the same vertices, in the same order, as a
@@ -344,19 +344,21 @@ def build_problem_stream(stream, spec: SpecLike) -> GageProblem:
 
 
 def _datum_pass(stream, spec: GageSpec, extra: list):
-    """One pass: every point of the datum regions (scanner frame) and the hull vertices
-    of the ``extra`` boxes; the 3-2-1 frame fitted to the datums as :func:`_alignment` fits it."""
+    """One pass: the hull vertices and moments of the datum regions (scanner frame) and
+    the hull vertices of the ``extra`` boxes; the 3-2-1 frame fitted to the datums as
+    :func:`_alignment` fits it (the same hulls, the same moments bit for bit)."""
     from ..cloud.streamed import cut_stream
 
     al = spec.alignment
     names = list(dict.fromkeys([*al.primary, *al.secondary, *al.tertiary]))
     boxes = [spec.region(n).box for n in names] + list(extra)
-    first = cut_stream(stream, boxes, ["all"] * len(names) + ["hull"] * len(extra), sample=PLOT_POINTS)
+    first = cut_stream(stream, boxes, ["hull"] * (len(names) + len(extra)), sample=PLOT_POINTS,
+                       moments=[True] * len(names) + [False] * len(extra))
     _check_caught(first, names, ["scanner"] * len(names), spec.source)
     groups_in = {}
     for key, lst in (("primary", al.primary), ("secondary", al.secondary), ("tertiary", al.tertiary)):
-        parts = [first[n].point_array() for n in lst]
-        groups_in[key] = (lst, np.vstack(parts), np.vstack([q[_hull_of(q)] for q in parts]))
+        stats = DatumStats.of_moments([first[n].moments for n in lst])
+        groups_in[key] = (lst, stats, np.vstack([first[n].point_array() for n in lst]))
     return fit_321(groups_in), first  # the datums' own points, as the whole read
 
 
@@ -366,12 +368,6 @@ def region_boxes_stream(stream, spec: SpecLike) -> list[Box]:
     spec = _as_spec(spec)
     alignment = _datum_pass(stream, spec, [])[0] if spec.alignment is not None else None
     return [region_in_scanner(r, alignment) for r in spec.regions]
-
-
-def _hull_of(pts: np.ndarray) -> np.ndarray:
-    from ..cloud.hull import convex_hull_indices
-
-    return convex_hull_indices(pts) if len(pts) else np.zeros(0, dtype=np.int64)
 
 
 def _check_caught(p, names: list, frames: list, source: str, offset: int = 0) -> None:

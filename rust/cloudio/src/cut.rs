@@ -20,6 +20,73 @@ pub enum Keep {
     Hull,
 }
 
+/// Number of `f64` in the flat form of [`Moments`] ([`Moments::to_array`]).
+pub const MOMENTS_LEN: usize = 22;
+
+/// First and second moments of a point sequence about its first point, by compensated
+/// (Neumaier) sums added point by point in order: what the least-squares start of the
+/// 3-2-1 datum fits needs of a datum region (centroid and scatter matrix, Eqs. 5.13-5.14)
+/// without keeping its points. The sums depend only on the sequence, so a region streamed
+/// chunk by chunk (the state carried from one chunk to the next) gets exactly the bits of
+/// the whole region added at once.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Moments {
+    /// Number of points added.
+    pub n: u64,
+    /// The first point: the sums are of `p - origin`.
+    pub origin: [f64; 3],
+    /// Sums of d_x, d_y, d_z, d_x d_x, d_x d_y, d_x d_z, d_y d_y, d_y d_z, d_z d_z
+    /// (d = p - origin), and their running compensations.
+    pub sum: [f64; 9],
+    pub comp: [f64; 9],
+}
+
+impl Default for Moments {
+    fn default() -> Self {
+        Self { n: 0, origin: [0.0; 3], sum: [0.0; 9], comp: [0.0; 9] }
+    }
+}
+
+impl Moments {
+    /// Add the row-major (n, 3) `points`, in order.
+    pub fn add(&mut self, points: &[f64]) {
+        for p in points.chunks_exact(3) {
+            if self.n == 0 {
+                self.origin = [p[0], p[1], p[2]];
+            }
+            self.n += 1;
+            let d = [p[0] - self.origin[0], p[1] - self.origin[1], p[2] - self.origin[2]];
+            let t = [d[0], d[1], d[2], d[0] * d[0], d[0] * d[1], d[0] * d[2], d[1] * d[1], d[1] * d[2], d[2] * d[2]];
+            for k in 0..9 {
+                // Neumaier: the low-order bits lost by each addition kept in comp
+                let s = self.sum[k] + t[k];
+                self.comp[k] += if self.sum[k].abs() >= t[k].abs() { (self.sum[k] - s) + t[k] } else { (t[k] - s) + self.sum[k] };
+                self.sum[k] = s;
+            }
+        }
+    }
+
+    /// The flat form: n, origin (3), sums (9), compensations (9).
+    pub fn to_array(&self) -> [f64; MOMENTS_LEN] {
+        let mut a = [0.0; MOMENTS_LEN];
+        a[0] = self.n as f64;
+        a[1..4].copy_from_slice(&self.origin);
+        a[4..13].copy_from_slice(&self.sum);
+        a[13..22].copy_from_slice(&self.comp);
+        a
+    }
+
+    /// From the flat form of [`Moments::to_array`].
+    pub fn from_array(a: &[f64]) -> Self {
+        assert_eq!(a.len(), MOMENTS_LEN, "moments: {MOMENTS_LEN} values");
+        let mut m = Self { n: a[0] as u64, ..Self::default() };
+        m.origin.copy_from_slice(&a[1..4]);
+        m.sum.copy_from_slice(&a[4..13]);
+        m.comp.copy_from_slice(&a[13..22]);
+        m
+    }
+}
+
 /// What [`cut_chunk`] kept of one box.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RegionCut {
@@ -44,16 +111,24 @@ fn gather(points: &[f64], idx: &[usize]) -> Vec<f64> {
 
 /// Classify the row-major (n, 3) `points` into `boxes` and keep, per box, what `keep`
 /// says; `want_inside` also returns every inside index of the [`Keep::Hull`] boxes (for
-/// a sample of each region, or the numbers of all its points). The errors of
-/// [`classify`] (a non-finite point, a bad box).
-pub fn cut_chunk(points: &[f64], boxes: &[OrientedBox], keep: &[Keep], want_inside: bool) -> Result<Vec<RegionCut>> {
+/// a sample of each region, or the numbers of all its points). `moments` (empty, or one
+/// per box) receive the points inside their box, in order ([`Moments::add`]). The errors
+/// of [`classify`] (a non-finite point, a bad box).
+pub fn cut_chunk(points: &[f64], boxes: &[OrientedBox], keep: &[Keep], want_inside: bool, moments: &mut [Option<Moments>]) -> Result<Vec<RegionCut>> {
     assert_eq!(boxes.len(), keep.len(), "one keep mode per box");
+    assert!(moments.is_empty() || moments.len() == boxes.len(), "no moments, or one per box");
     let inside = classify(points, boxes)?;
+    let mut none = vec![None; if moments.is_empty() { boxes.len() } else { 0 }];
+    let moments = if moments.is_empty() { &mut none[..] } else { moments };
     inside
         .into_par_iter()
         .zip(keep.par_iter())
-        .map(|(idx, &k)| {
+        .zip(moments.par_iter_mut())
+        .map(|((idx, &k), mom)| {
             let sel = gather(points, &idx);
+            if let Some(m) = mom {
+                m.add(&sel);
+            }
             let count = idx.len();
             if k == Keep::All || idx.is_empty() {
                 let inside = (k == Keep::Hull && want_inside).then(|| idx.clone());
@@ -80,7 +155,7 @@ mod tests {
             OrientedBox { center: [1.0, -1.0, 0.5], size: [3.0, 4.0, 5.0], rotation: [0.1, 0.2, 0.3] },
             OrientedBox { center: [100.0; 3], size: [1.0; 3], rotation: [0.0; 3] },
         ];
-        let cuts = cut_chunk(&pts, &boxes, &[Keep::All, Keep::Hull, Keep::Hull], true).unwrap();
+        let cuts = cut_chunk(&pts, &boxes, &[Keep::All, Keep::Hull, Keep::Hull], true, &mut []).unwrap();
         for (b, c) in boxes.iter().zip(&cuts) {
             let idx = select(&pts, b).unwrap();
             assert_eq!(c.count, idx.len());
@@ -92,7 +167,32 @@ mod tests {
         assert_eq!(cuts[1].kept, h.iter().map(|&j| idx[j]).collect::<Vec<_>>());
         assert_eq!(cuts[1].points, gather(&pts, &cuts[1].kept));
         assert_eq!((cuts[2].count, cuts[2].kept.len()), (0, 0));
-        let no = cut_chunk(&pts, &boxes[1..2], &[Keep::Hull], false).unwrap();
+        let no = cut_chunk(&pts, &boxes[1..2], &[Keep::Hull], false, &mut []).unwrap();
         assert!(no[0].inside.is_none());
+    }
+
+    /// A region's moments are the same bits whether its points come at once or chunk by
+    /// chunk, at any chunk size, and the flat form round-trips.
+    #[test]
+    fn streamed_moments_equal_whole() {
+        let pts: Vec<f64> = (0..3 * 5000).map(|i| ((i * 7919) % 1000) as f64 * 0.013 - 6.0 + 1e3).collect();
+        let b = [OrientedBox { center: [1000.0; 3], size: [6.0, 6.0, 6.0], rotation: [0.1, 0.2, 0.3] }];
+        let idx = select(&pts, &b[0]).unwrap();
+        let mut whole = Moments::default();
+        whole.add(&gather(&pts, &idx));
+        assert_eq!(whole.n as usize, idx.len());
+        for chunk in [1usize, 7, 997, 5000] {
+            let mut m = [Some(Moments::default())];
+            for c in pts.chunks(3 * chunk) {
+                cut_chunk(c, &b, &[Keep::Hull], false, &mut m).unwrap();
+            }
+            assert_eq!(m[0].unwrap(), whole, "chunk {chunk}");
+        }
+        assert_eq!(Moments::from_array(&whole.to_array()), whole);
+        // the compensated sums: the centroid to the last bits of a plain f64 sum
+        let sel = gather(&pts, &idx);
+        let mean_x: f64 = sel.chunks_exact(3).map(|p| p[0]).sum::<f64>() / idx.len() as f64;
+        let got = whole.origin[0] + (whole.sum[0] + whole.comp[0]) / whole.n as f64;
+        assert!((got - mean_x).abs() < 1e-9, "{got} {mean_x}");
     }
 }

@@ -177,14 +177,17 @@ impl BoxBins {
         }
     }
 
-    /// The boxes (ascending) whose bounding boxes may hold `p`.
+    /// Whether `p` is inside the union's bounding box (no box outside it can hold `p`).
+    #[inline(always)]
+    fn in_union(&self, p: &[f64]) -> bool {
+        (p[0] >= self.lo[0]) & (p[0] <= self.hi[0]) & (p[1] >= self.lo[1]) & (p[1] <= self.hi[1])
+            & (p[2] >= self.lo[2]) & (p[2] <= self.hi[2])
+    }
+
+    /// The boxes (ascending) whose bounding boxes may hold `p`, a point inside the union's
+    /// bounding box ([`BoxBins::in_union`]).
     #[inline]
-    fn candidates(&self, p: &[f64]) -> &[usize] {
-        let outside = (p[0] < self.lo[0]) | (p[0] > self.hi[0]) | (p[1] < self.lo[1]) | (p[1] > self.hi[1])
-            | (p[2] < self.lo[2]) | (p[2] > self.hi[2]);
-        if outside {
-            return &[];
-        }
+    fn candidates_in_union(&self, p: &[f64]) -> &[usize] {
         let b = self.bin(0, p[0]) * self.n[1] + self.bin(1, p[1]);
         &self.items[self.start[b]..self.start[b + 1]]
     }
@@ -206,12 +209,29 @@ pub fn classify(points: &[f64], boxes: &[OrientedBox]) -> Result<Vec<Vec<usize>>
     let parts: Vec<Vec<Vec<usize>>> = points
         .par_chunks(3 * CHUNK)
         .enumerate()
-        .map(|(ci, chunk)| {
+        .map_init(Vec::new, |near: &mut Vec<u8>, (ci, chunk)| {
             let mut out = vec![Vec::new(); nb];
-            for (i, p) in chunk.chunks_exact(3).enumerate() {
-                for &k in bins.candidates(p) {
-                    if testers[k](p) {
-                        out[k].push(ci * CHUNK + i);
+            // first whether each point is inside the boxes' union (six comparisons, no
+            // branch: most points of a scan are outside), then eight points at a time
+            // skipped where none is, the others binned and tested
+            let npts = chunk.len() / 3;
+            near.clear();
+            near.extend(chunk.chunks_exact(3).map(|p| u8::from(bins.in_union(p))));
+            near.resize(npts.div_ceil(8) * 8, 0);
+            for (w, word) in near.chunks_exact(8).enumerate() {
+                if u64::from_ne_bytes(word.try_into().unwrap()) == 0 {
+                    continue;
+                }
+                for (j, &b) in word.iter().enumerate() {
+                    if b == 0 {
+                        continue;
+                    }
+                    let i = 8 * w + j;
+                    let p = &chunk[3 * i..3 * i + 3];
+                    for &k in bins.candidates_in_union(p) {
+                        if testers[k](p) {
+                            out[k].push(ci * CHUNK + i);
+                        }
                     }
                 }
             }

@@ -2,7 +2,7 @@
 
 use crate::arrays::{indices, matrix, rows};
 use crate::errors::{invalid, run};
-use gagekit_cloudio::{cut_chunk, data_columns, read_ascii_file, scale_in_place, Keep, PlyAsciiStream, read_e57, write_ascii, AsciiOptions, AsciiStream, E57Stream, PlyFile, PlyStream};
+use gagekit_cloudio::{cut_chunk, data_columns, Moments, MOMENTS_LEN, read_ascii_file, scale_in_place, Keep, PlyAsciiStream, read_e57, write_ascii, AsciiOptions, AsciiStream, E57Stream, PlyFile, PlyStream};
 use gagekit_core::GkError;
 use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray2, PyReadwriteArray2};
 use pyo3::prelude::*;
@@ -326,18 +326,22 @@ type CutRow<'py> = (usize, Option<Bound<'py, PyArray1<i64>>>, Bound<'py, PyArray
 
 /// Classify a chunk of points into region boxes ((k, 9): centre, size, rotation vector)
 /// and keep, per box, every inside point or (`hull[i]`) the hull vertices of them;
-/// `inside` also returns every inside index of the hull boxes (`gagekit-cloudio`'s
-/// `cut_chunk`: one call a chunk, parallel inside).
+/// `inside` also returns every inside index of the hull boxes; `moments` ((k, 22), the
+/// flat moments of each box, see `point_moments`) gets the inside points of the boxes
+/// flagged in `moments_of` added, in place (`gagekit-cloudio`'s `cut_chunk`: one call a
+/// chunk, parallel inside).
 #[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyfunction(module = "gagekit._core.cloud"))]
 #[pyfunction]
 #[pyo3(name = "cut_chunk")]
-#[pyo3(signature = (points, boxes, hull, inside=false))]
+#[pyo3(signature = (points, boxes, hull, inside=false, moments=None, moments_of=Vec::new()))]
 fn cloud_cut_chunk<'py>(
     py: Python<'py>,
     points: PyReadonlyArray2<'py, f64>,
     boxes: PyReadonlyArray2<'py, f64>,
     hull: Vec<bool>,
     inside: bool,
+    moments: Option<PyReadwriteArray2<'py, f64>>,
+    moments_of: Vec<bool>,
 ) -> PyResult<Vec<CutRow<'py>>> {
     let pts = rows(py, &points, 3, "points")?;
     let bx = crate::geometry::boxes_from(py, &boxes)?;
@@ -345,16 +349,48 @@ fn cloud_cut_chunk<'py>(
         return Err(invalid(format!("hull: expected {} flags (one per box), got {}", bx.len(), hull.len())));
     }
     let keep: Vec<Keep> = hull.iter().map(|&h| if h { Keep::Hull } else { Keep::All }).collect();
-    let cuts = run(py, || cut_chunk(pts, &bx, &keep, inside))?;
+    let mut moments = moments;
+    let mut state: Vec<Option<Moments>> = Vec::new();
+    if let Some(m) = moments.as_mut() {
+        let flat = m.as_slice_mut().map_err(|_| invalid("moments: expected a C-contiguous array".to_string()))?;
+        if flat.len() != bx.len() * MOMENTS_LEN || moments_of.len() != bx.len() {
+            return Err(invalid(format!("moments: expected a ({}, {MOMENTS_LEN}) array and {} flags", bx.len(), bx.len())));
+        }
+        state = flat.chunks_exact(MOMENTS_LEN).zip(&moments_of).map(|(r, &f)| f.then(|| Moments::from_array(r))).collect();
+    }
+    let cuts = run(py, || cut_chunk(pts, &bx, &keep, inside, &mut state))?;
+    if let Some(m) = moments.as_mut() {
+        let flat = m.as_slice_mut().map_err(|_| invalid("moments: expected a C-contiguous array".to_string()))?;
+        for (r, s) in flat.chunks_exact_mut(MOMENTS_LEN).zip(&state) {
+            if let Some(s) = s {
+                r.copy_from_slice(&s.to_array());
+            }
+        }
+    }
     cuts.into_iter()
         .map(|c| Ok((c.count, c.inside.map(|v| indices(py, v)), indices(py, c.kept), matrix(py, c.points, 3)?)))
         .collect()
+}
+
+/// The first and second moments of (n, 3) points about the first, by compensated sums in
+/// order (`gagekit-cloudio`'s `Moments`): n, origin (3), sums of d, d d^T (upper
+/// triangle, row by row), their compensations (9); `cut_chunk` continues them chunk by
+/// chunk to the same bits.
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyfunction(module = "gagekit._core.cloud"))]
+#[pyfunction]
+#[pyo3(name = "point_moments")]
+fn cloud_point_moments<'py>(py: Python<'py>, points: PyReadonlyArray2<'py, f64>) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    let pts = rows(py, &points, 3, "points")?;
+    let mut m = Moments::default();
+    m.add(pts);
+    Ok(PyArray1::from_vec(py, m.to_array().to_vec()))
 }
 
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<AsciiChunks>()?;
     m.add_class::<PlyChunks>()?;
     m.add_function(wrap_pyfunction!(cloud_ascii_chunks, m)?)?;
+    m.add_function(wrap_pyfunction!(cloud_point_moments, m)?)?;
     m.add_function(wrap_pyfunction!(cloud_ply_chunks, m)?)?;
     m.add_function(wrap_pyfunction!(cloud_cut_chunk, m)?)?;
     m.add_class::<PlyAsciiChunks>()?;

@@ -21,6 +21,7 @@ __all__ = [
     "ply_ascii_chunks",
     "ply_chunks",
     "ply_layout",
+    "point_moments",
     "read_ascii",
     "read_e57",
     "read_ply",
@@ -190,12 +191,14 @@ def ascii_columns(head: bytes) -> builtins.int:
     1000 lines), read as `cloud_read_ascii` reads it (decimal commas included); 0 if none.
     """
 
-def cut_chunk(points: numpy.typing.NDArray[numpy.float64], boxes: numpy.typing.NDArray[numpy.float64], hull: typing.Sequence[builtins.bool], inside: builtins.bool = ...) -> builtins.list[tuple[builtins.int, typing.Optional[numpy.typing.NDArray[numpy.int64]], numpy.typing.NDArray[numpy.int64], numpy.typing.NDArray[numpy.float64]]]:
+def cut_chunk(points: numpy.typing.NDArray[numpy.float64], boxes: numpy.typing.NDArray[numpy.float64], hull: typing.Sequence[builtins.bool], inside: builtins.bool = ..., moments: typing.Optional[numpy.typing.NDArray[numpy.float64]] = None, moments_of: typing.Sequence[builtins.bool] = ...) -> builtins.list[tuple[builtins.int, typing.Optional[numpy.typing.NDArray[numpy.int64]], numpy.typing.NDArray[numpy.int64], numpy.typing.NDArray[numpy.float64]]]:
     r"""
     Classify a chunk of points into region boxes ((k, 9): centre, size, rotation vector)
     and keep, per box, every inside point or (`hull[i]`) the hull vertices of them;
-    `inside` also returns every inside index of the hull boxes (`gagekit-cloudio`'s
-    `cut_chunk`: one call a chunk, parallel inside).
+    `inside` also returns every inside index of the hull boxes; `moments` ((k, 22), the
+    flat moments of each box, see `point_moments`) gets the inside points of the boxes
+    flagged in `moments_of` added, in place (`gagekit-cloudio`'s `cut_chunk`: one call a
+    chunk, parallel inside).
     """
 
 def e57_chunks(path: builtins.str) -> typing.Optional[E57Chunks]:
@@ -220,6 +223,14 @@ def ply_layout(path: builtins.str) -> PlyLayout:
     r"""
     Open and check a PLY file; see [`PlyLayout`]. Python then maps the file
     (copy-on-write) as the array: no copy at all.
+    """
+
+def point_moments(points: numpy.typing.NDArray[numpy.float64]) -> numpy.typing.NDArray[numpy.float64]:
+    r"""
+    The first and second moments of (n, 3) points about the first, by compensated sums in
+    order (`gagekit-cloudio`'s `Moments`): n, origin (3), sums of d, d d^T (upper
+    triangle, row by row), their compensations (9); `cut_chunk` continues them chunk by
+    chunk to the same bits.
     """
 
 def read_ascii(path: builtins.str, dim: builtins.int = ..., skip_lines: builtins.int = ...) -> AsciiCloud:
