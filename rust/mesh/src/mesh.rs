@@ -81,25 +81,42 @@ impl TriMesh {
         }
         let verts: Vec<V3> = (0..nv).map(|i| vertex(vertices, i)).collect();
         let tris: Vec<[u32; 3]> = triangles.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect();
+        if let Some((i, &bad)) = tris.iter().enumerate().find_map(|(i, t)| t.iter().find(|&&k| k as usize >= nv).map(|b| (i, b))) {
+            return Err(GkError::invalid(format!("mesh: triangle {i} names vertex {bad}, but there are {nv} vertices")));
+        }
+        // per triangle (in parallel): the unit normal and twice the area, or None when degenerate
+        let faces: Vec<Option<(V3, f64)>> = {
+            use rayon::prelude::*;
+            tris.par_iter()
+                .map(|t| {
+                    let (a, b, c) = (verts[t[0] as usize], verts[t[1] as usize], verts[t[2] as usize]);
+                    let n = cross(sub(b, a), sub(c, a));
+                    let n2 = norm(n);
+                    let longest = [sub(b, a), sub(c, b), sub(a, c)].iter().map(|e| dot(*e, *e)).fold(0.0, f64::max);
+                    if t[0] == t[1] || t[1] == t[2] || t[0] == t[2] || !(n2 > 1e-12 * longest) {
+                        None
+                    } else {
+                        Some((scale(n, 1.0 / n2), n2))
+                    }
+                })
+                .collect()
+        };
         let mut normals = Vec::with_capacity(nt);
         let mut area = 0.0;
         let mut degenerate = Vec::new();
-        for (i, t) in tris.iter().enumerate() {
-            if let Some(&bad) = t.iter().find(|&&k| k as usize >= nv) {
-                return Err(GkError::invalid(format!("mesh: triangle {i} names vertex {bad}, but there are {nv} vertices")));
+        for (i, f) in faces.iter().enumerate() {
+            match f {
+                None => {
+                    degenerate.push(i);
+                    normals.push([0.0; 3]);
+                }
+                Some((n, n2)) => {
+                    area += 0.5 * n2;
+                    normals.push(*n);
+                }
             }
-            let (a, b, c) = (verts[t[0] as usize], verts[t[1] as usize], verts[t[2] as usize]);
-            let n = cross(sub(b, a), sub(c, a));
-            let n2 = norm(n);
-            let longest = [sub(b, a), sub(c, b), sub(a, c)].iter().map(|e| dot(*e, *e)).fold(0.0, f64::max);
-            if t[0] == t[1] || t[1] == t[2] || t[0] == t[2] || !(n2 > 1e-12 * longest) {
-                degenerate.push(i);
-                normals.push([0.0; 3]);
-                continue;
-            }
-            area += 0.5 * n2;
-            normals.push(scale(n, 1.0 / n2));
         }
+        drop(faces);
         if !degenerate.is_empty() {
             let first: Vec<String> = degenerate.iter().take(5).map(|i| i.to_string()).collect();
             return Err(GkError::degenerate(format!(
@@ -116,8 +133,10 @@ impl TriMesh {
             }
         }
         let (vertex_normals, edge_normals) = pseudonormals(&verts, &tris, &normals, &edges);
-        let corners: Vec<[V3; 3]> =
-            tris.iter().map(|t| [verts[t[0] as usize], verts[t[1] as usize], verts[t[2] as usize]]).collect();
+        let corners: Vec<[V3; 3]> = {
+            use rayon::prelude::*;
+            tris.par_iter().map(|t| [verts[t[0] as usize], verts[t[1] as usize], verts[t[2] as usize]]).collect()
+        };
         let bvh = Bvh::new(&corners);
         Ok(Self { vertices: verts, triangles: tris, face_normals: normals, vertex_normals, edge_normals, area, topology, bvh })
     }
