@@ -137,8 +137,8 @@ class FeatureData:
         (seed 0), computed once: cylindricity, a datum axis and a size share it. A Monte
         Carlo trial's feature holds the measured fits' axes in ``_cache["warm"]``
         ({criterion: (point, direction)}): the fit then starts from there
-        (:func:`gagekit.form.fit_cylinder` ``warm=``; exact local method, the global
-        search where it cannot decide). (A trial's plane holds the measured flatness
+        (:func:`gagekit.form.fit_cylinder` ``warm=``; exact local method without basin
+        hopping, the global search where it cannot decide). (A trial's plane holds the measured flatness
         zone's normal as ``"slab"``: :meth:`min_zone`.)"""
         key = ("cylinder", criterion)
         if key not in self._cache:

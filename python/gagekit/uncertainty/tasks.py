@@ -52,7 +52,7 @@ def _active_set(feats: Mapping[str, Any]) -> tuple[np.ndarray, dict[str, np.ndar
 
 
 #: How a trial's minimax cylinders start (the JSON ``monte_carlo.warm_starts.method``).
-WARM_METHOD = ("the exact local method (2-D fit, SLP, basin hopping) from the measured fit's axis, verified on "
+WARM_METHOD = ("the exact local method (2-D fit, SLP; no basin hopping) from the measured fit's axis, verified on "
                "every point; the global search where it cannot decide (a fallback)")
 
 

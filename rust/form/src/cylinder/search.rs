@@ -139,8 +139,8 @@ pub(super) fn fit_direct(
 }
 
 /// The warm-started fit of all given points within `region` (see [`super::fit_near`]):
-/// the exact 2-D fit along the warm axis's direction, the SLP local search from it and
-/// basin hopping around the best, all on these points. `None` when the local method
+/// the exact 2-D fit along the warm axis's direction and the SLP local search from it,
+/// on these points (no basin hopping: see [`super::fit_near`]). `None` when the local method
 /// cannot decide the result alone: its axis on the region's boundary (the global search
 /// walks the boundary ring), a search that hit its step limit, a maximum inscribed
 /// cylinder held by fewer than 3 points (a partial arc: the exact values need the
@@ -148,7 +148,6 @@ pub(super) fn fit_direct(
 pub(super) fn fit_warm(
     pts: &[f64],
     crit: Criterion,
-    opts: &Options,
     warm: &slp::Axis,
     region: &Region,
 ) -> Result<Option<CylinderFit>> {
@@ -173,8 +172,7 @@ pub(super) fn fit_warm(
     if value < best.0 {
         best = (value, ax);
     }
-    evaluations += hop(&pb, opts.hop_rounds, &mut best);
-    let on_boundary = region.s_max < FRAC_PI_2 && best.1.dir.dot(&region.basis.2).abs().acos() >= region.s_max - 1e-9;
+    let on_boundary = region.s_max < FRAC_PI_2 && tilt_from(&best.1.dir, &region.basis.2) >= region.s_max - 1e-9;
     if !best.0.is_finite() || on_boundary {
         return Ok(None);
     }
@@ -281,7 +279,7 @@ fn grid_starts(region: &Region) -> Vec<Vector3<f64>> {
 fn along_boundary(pb: &Problem<'_>, best: &mut (f64, slp::Axis)) -> usize {
     let region = pb.region;
     let (basis, s_max) = (&region.basis, region.s_max);
-    if s_max >= FRAC_PI_2 || s_max == 0.0 || best.1.dir.dot(&basis.2).abs().acos() < s_max - 1e-9 {
+    if s_max >= FRAC_PI_2 || s_max == 0.0 || tilt_from(&best.1.dir, &basis.2) < s_max - 1e-9 {
         return 0;
     }
     let d = if best.1.dir.dot(&basis.2) < 0.0 { -best.1.dir } else { best.1.dir };
@@ -306,6 +304,14 @@ fn along_boundary(pb: &Problem<'_>, best: &mut (f64, slp::Axis)) -> usize {
         }
     }
     evaluations
+}
+
+/// The angle (rad, [0, pi/2]) between the axes of unit vectors `a` and `w` (a and -a
+/// alike). Clamped: an axis on the cone's own axis can give |a . w| = 1 + 1 ulp, whose
+/// acos is NaN, and a NaN tilt counted as "on the boundary" (the boundary walk then ran
+/// for seconds on the bracket's bore, whose least-squares axis is its exact axis).
+pub(super) fn tilt_from(a: &Vector3<f64>, w: &Vector3<f64>) -> f64 {
+    a.dot(w).abs().min(1.0).acos()
 }
 
 /// Rings of the exhaustive grid over the half sphere ([`half_sphere_search`]).

@@ -59,21 +59,20 @@ pub(super) fn fit_in(
 pub(super) fn fit_near_in(
     pts: &[f64],
     crit: Criterion,
-    opts: &Options,
     warm: &slp::Axis,
     region: &Region,
     spread: f64,
 ) -> Result<Option<CylinderFit>> {
     let n = pts.len() / 3;
     if n <= SUBSET_ABOVE {
-        return fit_warm(pts, crit, opts, warm, region);
+        return fit_warm(pts, crit, warm, region);
     }
     let (p, d) = ([warm.point[0], warm.point[1], warm.point[2]], [warm.dir[0], warm.dir[1], warm.dir[2]]);
     let dist: Vec<f64> = lsq::axis_distances(pts, &p, &d).collect();
     let subset = first_subset(&dist, crit);
     let (mut iterations, mut evaluations, mut undecided) = (0, 0, false);
     let fit_sub = |sub: &[f64]| -> Result<Option<CylinderFit>> {
-        let r = fit_warm(sub, crit, opts, warm, region)?;
+        let r = fit_warm(sub, crit, warm, region)?;
         if let Some(r) = &r {
             iterations += r.iterations;
             evaluations += r.evaluations;

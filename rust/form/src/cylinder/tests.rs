@@ -159,3 +159,16 @@ fn warm_start_on_the_cone_boundary_falls_back() {
     let bad = Warm { point: [0.0; 3], direction: [0.0; 3] };
     assert!(fit_near(&pts, Criterion::MinZone, &Options::default(), &bad).is_err());
 }
+
+/// An axis on the search cone's own axis is not on its boundary, even when |a . w|
+/// rounds to 1 + 1 ulp (its acos would be NaN): the tilt is clamped to 0.
+#[test]
+fn an_axis_on_the_cone_axis_has_tilt_zero() {
+    use super::search::tilt_from;
+    let w = Vector3::new(0.0004999999791666616, 3.531584452478655e-18, 0.9999998750000026);
+    let a = Vector3::new(0.0004999999790808742, 3.5315844518727244e-18, 0.9999998750000026);
+    assert!(a.dot(&w) > 1.0 || a.dot(&w) <= 1.0); // whichever way it rounds ...
+    assert_eq!(tilt_from(&(w * (1.0 + f64::EPSILON)), &w), 0.0); // ... a dot above 1 gives 0, not NaN
+    assert!(tilt_from(&a, &w) < 1e-9);
+    assert!((tilt_from(&Vector3::x(), &Vector3::z()) - FRAC_PI_2).abs() < 1e-15);
+}

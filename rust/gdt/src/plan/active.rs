@@ -29,9 +29,15 @@ pub fn band(r: &[f64]) -> Vec<bool> {
     let hi = r.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
     let w = BAND * (hi - lo);
     let mut sel: Vec<bool> = r.iter().map(|&x| x <= lo + w || x >= hi - w).collect();
+    // the MIN_EXTREMES smallest and largest (ties by index): two partial selections
     let mut order: Vec<usize> = (0..n).collect();
-    order.sort_by(|&a, &b| r[a].total_cmp(&r[b]).then(a.cmp(&b)));
-    for &i in order[..MIN_EXTREMES].iter().chain(&order[n - MIN_EXTREMES..]) {
+    let cmp = |a: &usize, b: &usize| r[*a].total_cmp(&r[*b]).then(a.cmp(b));
+    order.select_nth_unstable_by(MIN_EXTREMES, cmp);
+    for &i in &order[..MIN_EXTREMES] {
+        sel[i] = true;
+    }
+    order.select_nth_unstable_by(n - MIN_EXTREMES - 1, cmp);
+    for &i in &order[n - MIN_EXTREMES..] {
         sel[i] = true;
     }
     sel

@@ -235,9 +235,10 @@ impl<'a> Feat<'a> {
                 }
                 Shape::Sphere => Lsq::Sphere { center: v3(&lsq::sphere(p, 3)?.center) },
                 Shape::Cylinder => {
+                    // the axis alone (the complete fit's extent and arc are not needed)
                     let c = match self.spec.warm_lsq {
-                        Some(a) => cylinder::least_squares_near(p, a)?,
-                        None => cylinder::least_squares(p, None)?,
+                        Some(a) => lsq::cylinder_near(p, a)?,
+                        None => lsq::cylinder(p, None)?,
                     };
                     Lsq::Cylinder { point: c.point, direction: c.direction }
                 }
@@ -304,7 +305,7 @@ impl<'a> Feat<'a> {
             let opts = Options { search: Search { axis: Some(d), max_tilt: 10f64.to_radians() }, ..Options::default() };
             let fit = match self.spec.warm_cylinder[k] {
                 Some((point, direction)) => {
-                    let (f, fell) = cylinder::fit_near(&self.pts, crit, &opts, &Warm { point, direction })?;
+                    let (f, fell) = cylinder::fit_near_zone(&self.pts, crit, &opts, &Warm { point, direction })?;
                     counts.0 += 1;
                     counts.1 += fell as usize;
                     f
@@ -480,7 +481,7 @@ impl<'a> Trial<'a> {
                         continue;
                     }
                     let xy = plane_2d(&f.pts, &idx, p0, u, v);
-                    let centre = circle::fit(&xy, FitCriterion::LeastSquares)?.center;
+                    let centre = circle::least_squares(&xy)?.center;
                     worst = worst.max(active::circle_near(&xy, centre)?.form_error());
                     used += 1;
                 }
