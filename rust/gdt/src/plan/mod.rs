@@ -482,7 +482,7 @@ impl<'a> Trial<'a> {
                     }
                     let xy = plane_2d(&f.pts, &idx, p0, u, v);
                     let centre = circle::least_squares(&xy)?.center;
-                    worst = worst.max(active::circle_near(&xy, centre)?.form_error());
+                    worst = worst.max(active::circle_zone_near(&xy, centre)?.form_error());
                     used += 1;
                 }
                 if used < 2 {
