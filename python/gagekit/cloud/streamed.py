@@ -1,14 +1,15 @@
 """Region-first evaluation of a streamed cloud (issue 29, Sec. 5.4.1): each chunk is
 classified into the regions (one Rust pass over the chunk), and only the points inside
 regions are kept; where the evaluation needs only the convex-hull vertices (the LP of
-Eq. 5.11: a linear constraint that holds at the hull vertices holds everywhere), each
-chunk's region points are hull-filtered at once and the hull of the kept vertices is taken
-at the end. The hull of the union is the hull of the union of the hulls, and the exact
-predicates keep the same extreme points (the lowest index among duplicates), so the
-vertices kept, and their order (ascending point number), are those of a whole read.
+Eq. 5.11: a linear constraint that holds at the hull vertices holds everywhere), a
+region's points are hull-filtered whenever :data:`REHULL` of them have piled up (with the
+vertices kept so far) and at the end. The hull of the union is the hull of the union of
+the hulls, and the exact predicates keep the same extreme points (the lowest index among
+duplicates), so the vertices kept, and their order (ascending point number), are those of
+a whole read.
 
 Memory: a chunk, plus the kept points of each region (every point for ``keep="all"``,
-hull vertices only for ``keep="hull"``: re-hulled whenever they pile up).
+hull vertices and at most :data:`REHULL` pending points for ``keep="hull"``).
 """
 
 from __future__ import annotations
@@ -24,7 +25,7 @@ from .hull import convex_hull_indices
 from .regions import Box
 
 REHULL = 1 << 20
-"""Kept hull vertices of a region above which they are re-hulled during the pass."""
+"""Kept points of a ``keep="hull"`` region above which they are hulled during the pass."""
 
 
 @dataclass
@@ -147,14 +148,19 @@ def cut_stream(chunks: Iterable[np.ndarray], boxes: Sequence[Box], keep: Sequenc
     flags = list(moments) if moments is not None and any(moments) else []
     state = np.zeros((len(boxes), 22)) if flags else None
     rows = np.array([b.row() for b in boxes], dtype=np.float64).reshape(-1, 9)
-    hull = [k == "hull" for k in keep]
+    # the hull boxes' points are gathered, not hulled chunk by chunk: they pile up to
+    # REHULL points and are hulled then, with the vertices kept so far (the hull of the
+    # union is the hull of the union of the hulls, at any batching). A hull of a million
+    # points costs far less a point than many hulls of a chunk's few (the prefilter's
+    # fixed cost), and memory stays bounded by REHULL points a region.
+    hull = [False] * len(boxes)
     want_inside = bool(all_indices or sample)
     rng = np.random.default_rng(seed)
     n = 0
     for pts in _reused(chunks):
         m = len(pts)
         if boxes:
-            # one Rust call: classify, gather, hull-filter (Sec. 5.4.1), parallel inside
+            # one Rust call: classify, gather (and moments), parallel inside
             cuts = _core.cloud.cut_chunk(as_points(pts), rows, hull, want_inside, state, flags)
             for r, (count, inside, kept, kpts) in zip(regions, cuts):
                 inside = (kept if inside is None else inside) + n

@@ -234,9 +234,10 @@ pub fn iterate(frame: &Frame, idx: &[u32], p: &mut [f64; 6], hints: &mut [Cache]
     let mut ad: Vec<f64> = Vec::new();
     loop {
         frame.eval_into(idx, p, hints, &mut ev)?;
-        ad.clear();
-        ad.extend(ev.iter().flatten().map(|e| e.d.abs()));
-        let within = ad.len();
+        // |d| per point (in parallel, into one buffer; +inf beyond the bound: the
+        // median of the `within` finite values is then the (within / 2)-th smallest)
+        ev.par_iter().map(|e| e.as_ref().map_or(f64::INFINITY, |e| e.d.abs())).collect_into_vec(&mut ad);
+        let within = ev.par_iter().filter(|e| e.is_some()).count();
         if within < nf.max(3) {
             return Err(GkError::degenerate(format!(
                 "best-fit: only {within} point(s) within reach of the model; check the units, --max-distance and the initial pose"
@@ -245,7 +246,7 @@ pub fn iterate(frame: &Frame, idx: &[u32], p: &mut [f64; 6], hints: &mut [Cache]
         if it >= max_iter || nf == 0 {
             return Ok(summary(&ev, it));
         }
-        let med = median_abs(&mut ad);
+        let med = *ad.select_nth_unstable_by(within / 2, |a, b| a.total_cmp(b)).1;
         let sigma = (1.4826 * med).max(1e-12);
         let c = 4.685 * sigma;
         let (_, dr) = rotation_and_derivatives(p);
