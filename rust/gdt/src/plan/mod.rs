@@ -8,7 +8,7 @@
 //! gives the same values. Each step is the kernel the Python evaluation
 //! (`gagekit.inspect.zones`, `gagekit.inspect.datums`) calls, with the same inputs, started
 //! from the measured evaluation as there: minimax cylinders by the exact local method from
-//! the measured axis (`gagekit_form::cylinder::fit_near`), least-squares cylinders from
+//! the measured axis (`gagekit_form::cylinder::fit_near_zone`), least-squares cylinders from
 //! the measured direction, the flatness slab, the minimum-zone sphere and each roundness
 //! section's zone on active sets verified on every point ([`active`]).
 //!
