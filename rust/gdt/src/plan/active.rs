@@ -12,8 +12,10 @@ use gagekit_form::circle;
 use gagekit_form::criterion::FitCriterion;
 use gagekit_form::sphere;
 
-/// Points within this fraction of the zone width of either boundary start the subset.
-pub const BAND: f64 = 0.2;
+/// Points within this fraction of the zone width of either boundary start the subset
+/// (0.1: on the bracket's sphere and roundness sections a trial costs 13.5 ms of CPU
+/// against 19 ms with 0.2, and 0.05 gains nothing more; any value gives the same zone).
+pub const BAND: f64 = 0.1;
 /// ... and at least this many points of each extreme.
 pub const MIN_EXTREMES: usize = 16;
 /// The containment test's tolerance, mm (`gagekit._util.LENGTH_RESOLUTION_MM`).
@@ -82,6 +84,14 @@ fn radii(pts: &[f64], dim: usize, c: &[f64]) -> Vec<f64> {
 pub fn circle_near(xy: &[f64], center: [f64; 2]) -> Result<circle::CircleFit> {
     let start = band(&radii(xy, 2, &center));
     active_fit(xy, 2, start, |p| circle::fit(p, FitCriterion::MinZone), |f, p| (radii(p, 2, &f.center), f.r_in, f.r_out))
+}
+
+/// The minimum-zone circle's zone alone (centre and radii: what a Monte Carlo trial's
+/// roundness reads) of flat (n, 2) points started near `center`: [`circle_near`] without
+/// the complete fit's arc of every round.
+pub fn circle_zone_near(xy: &[f64], center: [f64; 2]) -> Result<circle::Zone> {
+    let start = band(&radii(xy, 2, &center));
+    active_fit(xy, 2, start, circle::min_zone, |z, p| (radii(p, 2, &z.center), z.r_in, z.r_out))
 }
 
 /// The minimum-zone sphere of flat (n, 3) points started near `center`.

@@ -8,7 +8,7 @@
 //! gives the same values. Each step is the kernel the Python evaluation
 //! (`gagekit.inspect.zones`, `gagekit.inspect.datums`) calls, with the same inputs, started
 //! from the measured evaluation as there: minimax cylinders by the exact local method from
-//! the measured axis (`gagekit_form::cylinder::fit_near`), least-squares cylinders from
+//! the measured axis (`gagekit_form::cylinder::fit_near_zone`), least-squares cylinders from
 //! the measured direction, the flatness slab, the minimum-zone sphere and each roundness
 //! section's zone on active sets verified on every point ([`active`]).
 //!
@@ -482,7 +482,7 @@ impl<'a> Trial<'a> {
                     }
                     let xy = plane_2d(&f.pts, &idx, p0, u, v);
                     let centre = circle::least_squares(&xy)?.center;
-                    worst = worst.max(active::circle_near(&xy, centre)?.form_error());
+                    worst = worst.max(active::circle_zone_near(&xy, centre)?.form_error());
                     used += 1;
                 }
                 if used < 2 {

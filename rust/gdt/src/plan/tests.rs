@@ -129,3 +129,32 @@ fn a_bad_plan_is_refused() {
     let bad = Model { sigma: -1.0, ..noise(0.0) };
     assert!(bad.checked().is_err());
 }
+
+/// The active-set zones (a roundness section's circle, a sphere) equal the exact kernel's
+/// zone of every point, whatever nearby start they are given.
+#[test]
+fn active_zones_equal_the_zones_of_all_points() {
+    let model = Model { sigma: 1e-3, origin: None, sigma_per_m: 0.0, probing: 0.0, relative_scale: 0.0, offset: 0.0 };
+    let circle: Vec<f64> = (0..600)
+        .flat_map(|i| {
+            let a = i as f64 * 0.6f64.to_radians();
+            [4.0 + 7.0 * a.cos(), -1.0 + 7.0 * a.sin()]
+        })
+        .collect();
+    let sphere: Vec<f64> = (0..900)
+        .flat_map(|i| {
+            let (t, p) = (0.2 + 1.2 * (i / 30) as f64 / 30.0, (i % 30) as f64 * 12f64.to_radians());
+            [1.0 + 8.0 * t.sin() * p.cos(), 2.0 + 8.0 * t.sin() * p.sin(), 3.0 + 8.0 * t.cos()]
+        })
+        .collect();
+    for trial in 0..5 {
+        let xy = perturb(&circle, 2, &model, 7, trial).unwrap();
+        let all = gagekit_form::circle::min_zone(&xy).unwrap();
+        let near = active::circle_zone_near(&xy, [4.0 + 1e-3, -1.0]).unwrap();
+        assert!((near.form_error() - all.form_error()).abs() < 1e-12, "circle trial {trial}");
+        let p = perturb(&sphere, 3, &model, 7, trial).unwrap();
+        let all = gagekit_form::sphere::min_zone(&p).unwrap();
+        let near = active::sphere_near(&p, [1.0, 2.0 + 1e-3, 3.0]).unwrap();
+        assert!(((near.r_out - near.r_in) - (all.r_out - all.r_in)).abs() < 2e-9, "sphere trial {trial}");
+    }
+}
