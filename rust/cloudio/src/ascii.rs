@@ -703,6 +703,25 @@ fn default_target(len: usize) -> usize {
     (len / (rayon::current_num_threads() * 8)).clamp(1 << 20, 32 << 20)
 }
 
+/// Map the pages of `out` writable in one call (`madvise(MADV_POPULATE_WRITE)`, Linux
+/// 5.14+; an older kernel refuses it and the pages fault one by one as before), from the
+/// thread that then fills it: a fresh result array otherwise takes a page fault at the
+/// first write to each 4 KB page, whose entry and exit cost about a fifth of the faults'
+/// CPU (336 MB: 0.26 s of CPU against 0.33 s, measured). The contents are unchanged.
+fn prefault(out: &mut [f64]) {
+    #[cfg(target_os = "linux")]
+    {
+        const PAGE: usize = 4096;
+        let (lo, bytes) = (out.as_mut_ptr() as usize, std::mem::size_of_val(out));
+        let (start, end) = (lo.next_multiple_of(PAGE), (lo + bytes) / PAGE * PAGE);
+        if end >= start + 64 * PAGE {
+            // SAFETY: whole pages inside `out`, which this thread borrows mutably; the call
+            // only maps them (writable, contents kept), it writes nothing.
+            unsafe { libc::madvise(start as *mut libc::c_void, end - start, libc::MADV_POPULATE_WRITE) };
+        }
+    }
+}
+
 /// Parse `body` by its `plan` into `out` (at least `plan.lines * dim` values): each chunk
 /// in parallel into its own slots, then the chunks after a skipped line (blank, comment)
 /// moved down once, in place. The number of points; the error is the first failing line's.
@@ -718,7 +737,10 @@ pub fn parse_planned(body: &[u8], plan: &BodyPlan, line0: usize, lay: &Layout, w
     }
     let written: Vec<Result<usize>> = parts
         .into_par_iter()
-        .map(|(r, l0, o)| parse_block(&body[r], l0, lay, what, o))
+        .map(|(r, l0, o)| {
+            prefault(o);
+            parse_block(&body[r], l0, lay, what, o)
+        })
         .collect();
     let (mut pos, mut slot) = (0, 0);
     for (w, &c) in written.into_iter().zip(&plan.counts) {
@@ -1081,6 +1103,19 @@ mod tests {
                 (a, b) => prop_assert!(false, "{:?} vs {:?}", a, b),
             }
         }
+    }
+
+    #[test]
+    fn prefault_keeps_the_contents() {
+        // fresh (untouched) and written pages, an unaligned slice, one too short to advise
+        let mut v = vec![0.0; 1 << 20];
+        for (i, x) in v.iter_mut().enumerate().skip(300_000) {
+            *x = i as f64 * 0.5 - 7.25;
+        }
+        let want = v.clone();
+        prefault(&mut v[3..]);
+        prefault(&mut v[5..9]);
+        assert!(v.iter().zip(&want).all(|(a, b)| a.to_bits() == b.to_bits()));
     }
 
     #[test]
