@@ -9,8 +9,9 @@ point: 200 M points = 4.8 GB). The gage file is the case's own.
 
 Each case runs ``gagekit gage check SCAN GAGES --json --memory M`` in a child process,
 in three reading modes: ``whole`` (--memory 64G: the file read whole, a no-copy map of
-gagekit's own PLY layout), ``stream`` (--memory 2G: chunks of 5.6 M points) and
-``stream-256M`` (chunks of 0.7 M points). Printed per case and mode: wall time, the
+gagekit's own PLY layout), ``stream`` (--memory 2G: chunks of 5.6 M points, two buffers
+of them: the next is read while the last is classified) and ``stream-256M`` (chunks of
+0.7 M points). Printed per case and mode: wall time, the
 child's peak RSS (max resident set, from wait4), the objective of Eq. 5.11, and whether
 the whole JSON result equals the whole read's (bit for bit). The file is written just
 before, so it is read from a warm page cache (the "warm" figures); --cold drops the page
@@ -271,7 +272,8 @@ def main() -> None:
                 same = "yes" if res == ref else "NO"
                 print(f"{millions:>4} M points{'':<10}{mode:<13}{seconds:>9.1f}{cpu:>9.1f}{rss:>13.0f}"
                       f"{res['objective']:>22.15g}  {same}   load {os.getloadavg()[0]:.1f}, "
-                      f"{scan.stat().st_size / 1e6 / seconds:.0f} MB/s of file", flush=True)
+                      f"{scan.stat().st_size / 1e6 / seconds:.0f} MB/s of file, {cpu / n * 1e9:.0f} ns CPU a point",
+                      flush=True)
             if args.cold:
                 print(f"# disk: sequential read of the file after dropping the cache: {disk_speed(scan):.0f} MB/s")
             else:

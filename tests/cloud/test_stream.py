@@ -236,3 +236,16 @@ def test_datum_moments_stream_to_the_whole_reads_bits(chunk):
     _, sv_np, vt_np = np.linalg.svd(q, full_matrices=False)
     assert np.allclose(sv, sv_np, rtol=1e-9)
     assert np.allclose(np.abs(vt @ vt_np.T), np.eye(3), atol=1e-9)
+
+
+def test_hull_regions_rehulled_midway_equal_the_whole_read(monkeypatch):
+    """A hull region's points are hulled whenever REHULL of them pile up (with the vertices
+    kept so far): with REHULL at 64 points, many such rounds in each pass, the streamed
+    gage check is still the whole read's, bit for bit."""
+    from gagekit.cloud import streamed
+    from gagekit.gage.analysis import check_gages, check_gages_stream
+
+    monkeypatch.setattr(streamed, "REHULL", 64)
+    path, spec = DATA / "casting_ok.ply", DATA / "casting_ok.toml"
+    whole = check_gages(read_cloud(path).points, spec).to_dict()
+    assert check_gages_stream(open_cloud(path, chunk=4999), spec).to_dict() == whole
