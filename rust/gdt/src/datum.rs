@@ -65,12 +65,7 @@ pub struct DatumPlane {
 
 /// The simulated datum plane of the points (flat (n, 3)); `outward` roughly points
 /// from the material into the air and fixes the side.
-pub fn plane(
-    pts: &[f64],
-    outward: V3,
-    orientation: Orientation,
-    fit: PlaneFit,
-) -> Result<DatumPlane> {
+pub fn plane(pts: &[f64], outward: V3, orientation: Orientation, fit: PlaneFit) -> Result<DatumPlane> {
     const WHAT: &str = "datum plane";
     check_points(pts, 3, WHAT)?;
     let out = vec3::unit(outward, "datum plane: outward")?;
@@ -95,11 +90,7 @@ pub fn plane(
             return Err(GkError::config("datum plane: a least-squares datum at a basic angle is not supported; use the default (Chebyshev) fit"))
         }
     };
-    let normal = if dot(normal, out) < 0.0 {
-        vec3::scale(normal, -1.0)
-    } else {
-        normal
-    };
+    let normal = if dot(normal, out) < 0.0 { vec3::scale(normal, -1.0) } else { normal };
     let c = vec3::centroid(pts);
     let (lo, hi) = width3::extent(pts, normal);
     let offset = match fit {
@@ -111,12 +102,7 @@ pub fn plane(
         PlaneFit::LeastSquares => (hi - offset).max(offset - lo),
     };
     let point = vec3::add(c, vec3::scale(normal, offset - dot(c, normal)));
-    Ok(DatumPlane {
-        point,
-        normal,
-        offset,
-        deviation,
-    })
+    Ok(DatumPlane { point, normal, offset, deviation })
 }
 
 /// Which cylinder of a fixed axis direction.
@@ -154,13 +140,7 @@ pub fn axis_along(pts: &[f64], direction: V3, fit: AxisFit) -> Result<Axis> {
         AxisFit::Inscribed => gagekit_form::circle::max_inscribed(&q)?,
         AxisFit::LeastSquares => gagekit_form::circle::least_squares(&q)?,
     };
-    let point = vec3::add(
-        c,
-        vec3::add(
-            vec3::scale(u, circ.center[0]),
-            vec3::scale(v, circ.center[1]),
-        ),
-    );
+    let point = vec3::add(c, vec3::add(vec3::scale(u, circ.center[0]), vec3::scale(v, circ.center[1])));
     let (mut r_min, mut r_max) = (f64::INFINITY, 0.0f64);
     for p in pts.chunks_exact(3) {
         let e = vec3::sub([p[0], p[1], p[2]], point);
@@ -168,13 +148,7 @@ pub fn axis_along(pts: &[f64], direction: V3, fit: AxisFit) -> Result<Axis> {
         r_min = r_min.min(r);
         r_max = r_max.max(r);
     }
-    Ok(Axis {
-        point,
-        direction: d,
-        radius: circ.radius,
-        r_min,
-        r_max,
-    })
+    Ok(Axis { point, direction: d, radius: circ.radius, r_min, r_max })
 }
 
 /// The thinnest slab of the points with its orientation constrained (see [`width3`]).

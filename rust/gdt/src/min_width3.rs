@@ -99,9 +99,7 @@ fn hull_edges(mesh: &HullMesh, normals: &[Option<V3>], pts: &[f64], c: V3) -> Ve
             if g <= f {
                 continue;
             }
-            let (Some(n1), Some(n2)) = (normals[f], normals[g]) else {
-                continue;
-            };
+            let (Some(n1), Some(n2)) = (normals[f], normals[g]) else { continue };
             if norm(cross(n1, n2)) <= 1e-12 && dot(n1, n2) > 0.0 {
                 continue; // inside a flat facet: its face candidate covers it
             }
@@ -109,12 +107,7 @@ fn hull_edges(mesh: &HullMesh, normals: &[Option<V3>], pts: &[f64], c: V3) -> Ve
             let e = sub(rel(pts, c, t[(i + 1) % 3]), a);
             let l = norm(e);
             if l > 0.0 {
-                edges.push(Edge {
-                    a,
-                    dir: vec3::scale(e, 1.0 / l),
-                    n1,
-                    n2,
-                });
+                edges.push(Edge { a, dir: vec3::scale(e, 1.0 / l), n1, n2 });
             }
         }
     }
@@ -138,11 +131,7 @@ fn best_edge_pair(edges: &[Edge], vp: &[V3]) -> Option<(f64, V3)> {
                 }
                 let m = vec3::scale(d, 1.0 / l);
                 // m points out of the set at e1 and into it at e2, or the reverse
-                let m = if dot(m, sub(e1.a, e2.a)) >= 0.0 {
-                    m
-                } else {
-                    vec3::scale(m, -1.0)
-                };
+                let m = if dot(m, sub(e1.a, e2.a)) >= 0.0 { m } else { vec3::scale(m, -1.0) };
                 if !(in_cone(e1, m) && in_cone(e2, vec3::scale(m, -1.0))) {
                     continue;
                 }

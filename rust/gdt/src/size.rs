@@ -91,13 +91,7 @@ fn profile_size(mut prof: Vec<(f64, f64)>, angles: usize) -> Vec<(f64, f64)> {
         return Vec::new();
     }
     let mut gaps: Vec<f64> = (0..n)
-        .map(|i| {
-            if i + 1 < n {
-                merged[i + 1].0 - merged[i].0
-            } else {
-                merged[0].0 + tau - merged[n - 1].0
-            }
-        })
+        .map(|i| if i + 1 < n { merged[i + 1].0 - merged[i].0 } else { merged[0].0 + tau - merged[n - 1].0 })
         .collect();
     let max_gap = {
         let m = n / 2;
@@ -165,9 +159,7 @@ pub fn two_point_sizes(
     gagekit_core::check_finite(&origin, 3, "two-point sizes: the axis point")?;
     let a = vec3::unit(axis, "two-point sizes: the axis")?;
     if sections == 0 || angles == 0 {
-        return Err(GkError::invalid(
-            "two-point sizes: 'sections' and 'angles' must be positive",
-        ));
+        return Err(GkError::invalid("two-point sizes: 'sections' and 'angles' must be positive"));
     }
     gagekit_core::check_finite(&reference, 3, "two-point sizes: the reference direction")?;
     let (u, v) = section_basis(a, reference);
@@ -185,20 +177,10 @@ pub fn two_point_sizes(
         .collect();
     let keys: Vec<usize> = match kind {
         Sections::Axial => {
-            let (lo, hi) = coords
-                .iter()
-                .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), c| {
-                    (l.min(c.0), h.max(c.0))
-                });
+            let (lo, hi) = coords.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), c| (l.min(c.0), h.max(c.0)));
             coords
                 .iter()
-                .map(|c| {
-                    if hi > lo {
-                        (((c.0 - lo) / (hi - lo) * sections as f64) as usize).min(sections - 1)
-                    } else {
-                        0
-                    }
-                })
+                .map(|c| if hi > lo { (((c.0 - lo) / (hi - lo) * sections as f64) as usize).min(sections - 1) } else { 0 })
                 .collect()
         }
         Sections::GreatCircles => coords
@@ -221,11 +203,7 @@ pub fn two_point_sizes(
                 Sections::Axial => idx.iter().map(|&i| (coords[i].1, coords[i].2)).collect(),
                 Sections::GreatCircles => {
                     let psi = PI * k as f64 / sections as f64;
-                    let e = [
-                        psi.cos() * u[0] + psi.sin() * v[0],
-                        psi.cos() * u[1] + psi.sin() * v[1],
-                        psi.cos() * u[2] + psi.sin() * v[2],
-                    ];
+                    let e = [psi.cos() * u[0] + psi.sin() * v[0], psi.cos() * u[1] + psi.sin() * v[1], psi.cos() * u[2] + psi.sin() * v[2]];
                     idx.iter()
                         .map(|&i| {
                             let q = sub(vec3::at(pts, i), origin);
@@ -237,12 +215,7 @@ pub fn two_point_sizes(
             profile_size(prof, angles)
         })
         .collect();
-    let mut out = TwoPoint {
-        sizes: Vec::new(),
-        section: Vec::new(),
-        angle: Vec::new(),
-        sections_used: 0,
-    };
+    let mut out = TwoPoint { sizes: Vec::new(), section: Vec::new(), angle: Vec::new(), sections_used: 0 };
     for (k, s) in per.into_iter().enumerate() {
         if members[k].len() >= 3 {
             out.sections_used += 1;
@@ -282,21 +255,13 @@ pub fn width_sizes(face_a: &[f64], face_b: &[f64], normal: V3) -> Result<Vec<f64
         .chunks_exact(3)
         .map(|p| {
             let p = [p[0], p[1], p[2]];
-            Vert {
-                pos: Point2::new(dot(p, u), dot(p, v)),
-                h: dot(p, nrm),
-            }
+            Vert { pos: Point2::new(dot(p, u), dot(p, v)), h: dot(p, nrm) }
         })
         .collect();
-    let dt = DelaunayTriangulation::<Vert>::bulk_load(verts).map_err(|e| {
-        GkError::invalid(format!(
-            "width sizes: cannot triangulate the second face ({e:?})"
-        ))
-    })?;
+    let dt = DelaunayTriangulation::<Vert>::bulk_load(verts)
+        .map_err(|e| GkError::invalid(format!("width sizes: cannot triangulate the second face ({e:?})")))?;
     if dt.num_inner_faces() == 0 {
-        return Err(GkError::degenerate(
-            "width sizes: the second face's points are collinear",
-        ));
+        return Err(GkError::degenerate("width sizes: the second face's points are collinear"));
     }
     let sizes: Vec<Option<f64>> = face_a
         .par_chunks(3 * 4096)
@@ -306,8 +271,7 @@ pub fn width_sizes(face_a: &[f64], face_b: &[f64], normal: V3) -> Result<Vec<f64
                 .chunks_exact(3)
                 .map(|p| {
                     let p = [p[0], p[1], p[2]];
-                    bary.interpolate(|w| w.data().h, Point2::new(dot(p, u), dot(p, v)))
-                        .map(|h| h - dot(p, nrm))
+                    bary.interpolate(|w| w.data().h, Point2::new(dot(p, u), dot(p, v))).map(|h| h - dot(p, nrm))
                 })
                 .collect::<Vec<_>>()
         })
@@ -328,10 +292,7 @@ fn support(pts: &[f64], d: V3) -> V3 {
             }
             best
         })
-        .reduce(
-            || (f64::NEG_INFINITY, [0.0; 3]),
-            |a, b| if b.0 > a.0 { b } else { a },
-        )
+        .reduce(|| (f64::NEG_INFINITY, [0.0; 3]), |a, b| if b.0 > a.0 { b } else { a })
         .1
 }
 
@@ -386,10 +347,7 @@ fn closest_on_simplex(s: &[V3]) -> (V3, Vec<V3>) {
     let m = s.len();
     let mut best: Option<(f64, V3, Vec<V3>)> = None;
     for mask in 1u32..(1 << m) {
-        let sub_s: Vec<V3> = (0..m)
-            .filter(|i| mask & (1 << i) != 0)
-            .map(|i| s[i])
-            .collect();
+        let sub_s: Vec<V3> = (0..m).filter(|i| mask & (1 << i) != 0).map(|i| s[i]).collect();
         if let Some(w) = affine_closest(&sub_s) {
             let mut p = [0.0; 3];
             for (x, q) in w.iter().zip(&sub_s) {
@@ -463,16 +421,7 @@ mod tests {
     #[test]
     fn three_lobes_have_constant_two_point_size() {
         let pts = lobed(10.0, 0.05, 3.0, 360, &[0.0, 1.0, 2.0, 3.0]);
-        let tp = two_point_sizes(
-            &pts,
-            [0.0; 3],
-            [0.0, 0.0, 1.0],
-            [1.0, 0.0, 0.0],
-            Sections::Axial,
-            4,
-            90,
-        )
-        .unwrap();
+        let tp = two_point_sizes(&pts, [0.0; 3], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0], Sections::Axial, 4, 90).unwrap();
         assert_eq!(tp.sizes.len(), 4 * 90);
         for s in &tp.sizes {
             assert!((s - 20.0).abs() < 1e-12, "{s}");
@@ -482,22 +431,10 @@ mod tests {
     #[test]
     fn oval_two_point_range() {
         let pts = lobed(10.0, 0.05, 2.0, 720, &[0.0]);
-        let tp = two_point_sizes(
-            &pts,
-            [0.0; 3],
-            [0.0, 0.0, 1.0],
-            [1.0, 0.0, 0.0],
-            Sections::Axial,
-            1,
-            180,
-        )
-        .unwrap();
+        let tp = two_point_sizes(&pts, [0.0; 3], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0], Sections::Axial, 1, 180).unwrap();
         let lo = tp.sizes.iter().cloned().fold(f64::INFINITY, f64::min);
         let hi = tp.sizes.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
-        assert!(
-            (lo - 19.9).abs() < 1e-12 && (hi - 20.1).abs() < 1e-12,
-            "{lo} {hi}"
-        );
+        assert!((lo - 19.9).abs() < 1e-12 && (hi - 20.1).abs() < 1e-12, "{lo} {hi}");
     }
 
     #[test]
@@ -508,16 +445,7 @@ mod tests {
             let t = PI * i as f64 / 180.0;
             pts.extend([5.0 * t.cos(), 5.0 * t.sin(), 0.0]);
         }
-        let tp = two_point_sizes(
-            &pts,
-            [0.0; 3],
-            [0.0, 0.0, 1.0],
-            [1.0, 0.0, 0.0],
-            Sections::Axial,
-            1,
-            36,
-        )
-        .unwrap();
+        let tp = two_point_sizes(&pts, [0.0; 3], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0], Sections::Axial, 1, 36).unwrap();
         assert!(tp.sizes.len() <= 1, "{:?}", tp.sizes);
     }
 
@@ -528,23 +456,10 @@ mod tests {
             let lat = -PI / 2.0 + PI * i as f64 / 60.0;
             for j in 0..120 {
                 let lon = 2.0 * PI * j as f64 / 120.0;
-                pts.extend([
-                    4.0 * lat.cos() * lon.cos() + 1.0,
-                    4.0 * lat.cos() * lon.sin(),
-                    4.0 * lat.sin() - 2.0,
-                ]);
+                pts.extend([4.0 * lat.cos() * lon.cos() + 1.0, 4.0 * lat.cos() * lon.sin(), 4.0 * lat.sin() - 2.0]);
             }
         }
-        let tp = two_point_sizes(
-            &pts,
-            [1.0, 0.0, -2.0],
-            [0.0, 0.0, 1.0],
-            [1.0, 0.0, 0.0],
-            Sections::GreatCircles,
-            6,
-            36,
-        )
-        .unwrap();
+        let tp = two_point_sizes(&pts, [1.0, 0.0, -2.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0], Sections::GreatCircles, 6, 36).unwrap();
         assert!(!tp.sizes.is_empty());
         for s in &tp.sizes {
             assert!((s - 8.0).abs() < 1e-9, "{s}");
@@ -584,11 +499,7 @@ mod tests {
         let mut b = Vec::new();
         for i in 0..10 {
             for j in 0..10 {
-                a.extend([
-                    i as f64,
-                    j as f64,
-                    0.0 + 0.001 * ((i * 7 + j * 3) % 5) as f64,
-                ]);
+                a.extend([i as f64, j as f64, 0.0 + 0.001 * ((i * 7 + j * 3) % 5) as f64]);
                 b.extend([i as f64, j as f64, 5.0 + 0.001 * ((i * 3 + j) % 4) as f64]);
             }
         }

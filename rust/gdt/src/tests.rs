@@ -44,9 +44,7 @@ fn large_sets_are_prefiltered_without_changing_the_width() {
     let mut pts = Vec::new();
     let mut s: u64 = 7;
     let mut rnd = || {
-        s = s
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
+        s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
         (s >> 11) as f64 / (1u64 << 53) as f64
     };
     for _ in 0..20000 {
@@ -76,12 +74,7 @@ fn chamfer_angularity_is_length_times_sin_of_the_error() {
     }
     // zone planes whose normal makes 45 degrees with z, free to turn about z
     let slab = width3::on_cone(&pts, [0.0, 0.0, 1.0], std::f64::consts::FRAC_PI_4).unwrap();
-    assert!(
-        (slab.width - 10.0 * d.sin()).abs() < 1e-12,
-        "{} vs {}",
-        slab.width,
-        10.0 * d.sin()
-    );
+    assert!((slab.width - 10.0 * d.sin()).abs() < 1e-12, "{} vs {}", slab.width, 10.0 * d.sin());
 }
 
 #[test]
@@ -91,38 +84,17 @@ fn tangent_plane_sits_on_the_air_side() {
     for i in 0..=10 {
         for j in 0..=10 {
             let corner = (i == 0 || i == 10) && (j == 0 || j == 10);
-            let z = if (i, j) == (5, 5) {
-                0.02
-            } else if corner {
-                -0.01
-            } else {
-                0.0
-            };
+            let z = if (i, j) == (5, 5) { 0.02 } else if corner { -0.01 } else { 0.0 };
             pts.extend([10.0 * i as f64, 8.0 * j as f64, z]);
         }
     }
-    let a = datum::plane(
-        &pts,
-        [0.0, 0.0, -1.0],
-        Orientation::Free,
-        PlaneFit::Chebyshev,
-    )
-    .unwrap();
+    let a = datum::plane(&pts, [0.0, 0.0, -1.0], Orientation::Free, PlaneFit::Chebyshev).unwrap();
     assert!((a.normal[2] + 1.0).abs() < 1e-12, "{:?}", a.normal);
     // every point on the material side, the farthest 0.03 away
-    let worst = pts
-        .chunks(3)
-        .map(|p| dot([p[0], p[1], p[2]], a.normal) - a.offset)
-        .fold(f64::MIN, f64::max);
+    let worst = pts.chunks(3).map(|p| dot([p[0], p[1], p[2]], a.normal) - a.offset).fold(f64::MIN, f64::max);
     assert!(worst <= 1e-12);
     assert!((a.deviation - 0.03).abs() < 1e-12);
-    let ls = datum::plane(
-        &pts,
-        [0.0, 0.0, -1.0],
-        Orientation::Free,
-        PlaneFit::LeastSquares,
-    )
-    .unwrap();
+    let ls = datum::plane(&pts, [0.0, 0.0, -1.0], Orientation::Free, PlaneFit::LeastSquares).unwrap();
     assert!(ls.point[2].abs() < 1e-3);
 }
 
@@ -138,18 +110,8 @@ fn secondary_datum_of_a_leaning_face() {
             pts.extend([5.0 * i as f64, s * z, z]);
         }
     }
-    let b = datum::plane(
-        &pts,
-        [0.0, -1.0, 0.0],
-        Orientation::PerpendicularTo([0.0, 0.0, 1.0]),
-        PlaneFit::Chebyshev,
-    )
-    .unwrap();
-    assert!(
-        (b.normal[1] + 1.0).abs() < 1e-12 && b.offset.abs() < 1e-12,
-        "{:?}",
-        b
-    );
+    let b = datum::plane(&pts, [0.0, -1.0, 0.0], Orientation::PerpendicularTo([0.0, 0.0, 1.0]), PlaneFit::Chebyshev).unwrap();
+    assert!((b.normal[1] + 1.0).abs() < 1e-12 && b.offset.abs() < 1e-12, "{:?}", b);
     assert!((b.deviation - 40.0 * s).abs() < 1e-12);
 }
 
@@ -167,11 +129,7 @@ fn hole_and_shaft_axes_of_a_fixed_direction() {
     let mi = datum::axis_along(&pts, [0.0, 0.0, 1.0], AxisFit::Inscribed).unwrap();
     let mc = datum::axis_along(&pts, [0.0, 0.0, 1.0], AxisFit::Circumscribed).unwrap();
     for ax in [&mi, &mc] {
-        assert!(
-            (ax.point[0] - 40.0).abs() < 1e-9 && (ax.point[1] - 30.0).abs() < 1e-9,
-            "{:?}",
-            ax.point
-        );
+        assert!((ax.point[0] - 40.0).abs() < 1e-9 && (ax.point[1] - 30.0).abs() < 1e-9, "{:?}", ax.point);
     }
     assert!((mi.radius - 9.995).abs() < 1e-9 && (mc.radius - 10.005).abs() < 1e-9);
     assert!((mc.r_max - mc.r_min - 0.01).abs() < 1e-9);
@@ -179,11 +137,8 @@ fn hole_and_shaft_axes_of_a_fixed_direction() {
 
 /// Nominally flat features (as the zones are meant for): 50 mm across, 1 mm thick.
 fn cloud(n: usize) -> impl Strategy<Value = Vec<f64>> {
-    prop::collection::vec((-50.0f64..50.0, -50.0f64..50.0, -0.5f64..0.5), n..=n).prop_map(|v| {
-        v.into_iter()
-            .flat_map(|(x, y, z)| [x, y, z + 0.002 * x])
-            .collect()
-    })
+    prop::collection::vec((-50.0f64..50.0, -50.0f64..50.0, -0.5f64..0.5), n..=n)
+        .prop_map(|v| v.into_iter().flat_map(|(x, y, z)| [x, y, z + 0.002 * x]).collect())
 }
 
 proptest! {
@@ -279,9 +234,7 @@ fn brute_width3(pts: &[f64]) -> f64 {
             }
         }
     }
-    let segs: Vec<(usize, usize)> = (0..n)
-        .flat_map(|a| (a + 1..n).map(move |b| (a, b)))
-        .collect();
+    let segs: Vec<(usize, usize)> = (0..n).flat_map(|a| (a + 1..n).map(move |b| (a, b))).collect();
     for (k, &(a, b)) in segs.iter().enumerate() {
         for &(c, d) in &segs[k + 1..] {
             try_dir(vec3::cross(vec3::sub(p(b), p(a)), vec3::sub(p(d), p(c))));
@@ -293,13 +246,7 @@ fn brute_width3(pts: &[f64]) -> f64 {
 #[test]
 fn min_width3_of_a_box_and_a_tetrahedron() {
     // a 10 x 6 x 2 box, turned: width 2 along the turned z
-    let r = |p: [f64; 3]| {
-        [
-            0.6 * p[0] - 0.8 * p[2] + 5.0,
-            p[1] - 3.0,
-            0.8 * p[0] + 0.6 * p[2] + 1.0,
-        ]
-    };
+    let r = |p: [f64; 3]| [0.6 * p[0] - 0.8 * p[2] + 5.0, p[1] - 3.0, 0.8 * p[0] + 0.6 * p[2] + 1.0];
     let mut pts = Vec::new();
     for x in [0.0, 10.0] {
         for y in [0.0, 6.0] {
@@ -311,15 +258,9 @@ fn min_width3_of_a_box_and_a_tetrahedron() {
     let s = min_width3::min_width(&pts).unwrap();
     assert!((s.width - 2.0).abs() < 1e-12, "{}", s.width);
     // regular tetrahedron of edge sqrt(2) * 2: its width is between opposite edges, 2
-    let tet = [
-        1.0, 1.0, 1.0, 1.0, -1.0, -1.0, -1.0, 1.0, -1.0, -1.0, -1.0, 1.0,
-    ];
+    let tet = [1.0, 1.0, 1.0, 1.0, -1.0, -1.0, -1.0, 1.0, -1.0, -1.0, -1.0, 1.0];
     let t = min_width3::min_width(&tet).unwrap();
-    assert!(
-        (t.width - 2.0).abs() < 1e-12 && t.width < 4.0 / 3f64.sqrt(),
-        "{}",
-        t.width
-    );
+    assert!((t.width - 2.0).abs() < 1e-12 && t.width < 4.0 / 3f64.sqrt(), "{}", t.width);
 }
 
 proptest! {

@@ -83,40 +83,15 @@ pub fn golden<F: Fn(f64) -> f64>(f: &F, mut lo: f64, mut hi: f64) -> (f64, f64) 
 /// of a full turn), then golden-section search in the two cells around each of the best
 /// `cells` local minima of the grid; a refined value is kept only when it is no worse
 /// than the grid's best. Returns (value, x). Grid values in parallel, deterministic.
-pub fn min_on_grid<F: Fn(f64) -> f64 + Sync>(
-    f: &F,
-    lo: f64,
-    hi: f64,
-    n: usize,
-    cyclic: bool,
-    cells: usize,
-) -> (f64, f64) {
+pub fn min_on_grid<F: Fn(f64) -> f64 + Sync>(f: &F, lo: f64, hi: f64, n: usize, cyclic: bool, cells: usize) -> (f64, f64) {
     let step = (hi - lo) / n as f64;
     let m = if cyclic { n } else { n + 1 };
-    let vals: Vec<f64> = (0..m)
-        .into_par_iter()
-        .map(|k| f(lo + k as f64 * step))
-        .collect();
-    let left = |k: usize| {
-        if cyclic {
-            Some((k + m - 1) % m)
-        } else {
-            k.checked_sub(1)
-        }
-    };
-    let right = |k: usize| {
-        if cyclic {
-            Some((k + 1) % m)
-        } else {
-            (k + 1 < m).then_some(k + 1)
-        }
-    };
+    let vals: Vec<f64> = (0..m).into_par_iter().map(|k| f(lo + k as f64 * step)).collect();
+    let left = |k: usize| if cyclic { Some((k + m - 1) % m) } else { k.checked_sub(1) };
+    let right = |k: usize| if cyclic { Some((k + 1) % m) } else { (k + 1 < m).then_some(k + 1) };
     let want = cells.max(1);
     let mut cells: Vec<usize> = (0..m)
-        .filter(|&k| {
-            left(k).is_none_or(|j| vals[k] <= vals[j])
-                && right(k).is_none_or(|j| vals[k] <= vals[j])
-        })
+        .filter(|&k| left(k).is_none_or(|j| vals[k] <= vals[j]) && right(k).is_none_or(|j| vals[k] <= vals[j]))
         .collect();
     cells.sort_by(|&i, &j| vals[i].total_cmp(&vals[j]).then(i.cmp(&j)));
     cells.truncate(want);
@@ -126,16 +101,8 @@ pub fn min_on_grid<F: Fn(f64) -> f64 + Sync>(
     let refined: Vec<(f64, f64)> = cells
         .par_iter()
         .map(|&k| {
-            let a = if cyclic || k > 0 {
-                lo + (k as f64 - 1.0) * step
-            } else {
-                lo
-            };
-            let b = if cyclic || k + 1 < m {
-                lo + (k as f64 + 1.0) * step
-            } else {
-                hi
-            };
+            let a = if cyclic || k > 0 { lo + (k as f64 - 1.0) * step } else { lo };
+            let b = if cyclic || k + 1 < m { lo + (k as f64 + 1.0) * step } else { hi };
             golden(f, a, b)
         })
         .collect();
@@ -169,11 +136,7 @@ pub fn min_max_sinusoids(a: &[f64], b: &[f64], phi: &[f64]) -> (f64, f64) {
     }
     cand.extend(plus);
     cand.extend(minus);
-    let env = |psi: f64| {
-        (0..n)
-            .map(|i| a[i] - b[i] * (psi - phi[i]).cos())
-            .fold(f64::NEG_INFINITY, f64::max)
-    };
+    let env = |psi: f64| (0..n).map(|i| a[i] - b[i] * (psi - phi[i]).cos()).fold(f64::NEG_INFINITY, f64::max);
     let vals: Vec<f64> = cand.par_iter().map(|&p| env(p)).collect();
     let mut k = 0;
     for (i, v) in vals.iter().enumerate() {
@@ -210,20 +173,14 @@ pub fn mec(xy: &[[f64; 2]]) -> Result<(f64, [f64; 2])> {
     match xy.len() {
         0 => Err(GkError::invalid("minimum enclosing circle: no points")),
         1 => Ok((0.0, xy[0])),
-        2 => Ok((
-            0.5 * (xy[1][0] - xy[0][0]).hypot(xy[1][1] - xy[0][1]),
-            [0.5 * (xy[0][0] + xy[1][0]), 0.5 * (xy[0][1] + xy[1][1])],
-        )),
+        2 => Ok((0.5 * (xy[1][0] - xy[0][0]).hypot(xy[1][1] - xy[0][1]), [0.5 * (xy[0][0] + xy[1][0]), 0.5 * (xy[0][1] + xy[1][1])])),
         _ => {
             if xy.iter().all(|p| *p == xy[0]) {
                 return Ok((0.0, xy[0]));
             }
             let flat: Vec<f64> = xy.iter().flatten().copied().collect();
             let c = gagekit_form::circle::min_circumscribed(&flat)?.center;
-            let r = xy
-                .iter()
-                .map(|p| (p[0] - c[0]).hypot(p[1] - c[1]))
-                .fold(0.0, f64::max);
+            let r = xy.iter().map(|p| (p[0] - c[0]).hypot(p[1] - c[1])).fold(0.0, f64::max);
             Ok((r, c))
         }
     }
@@ -239,25 +196,14 @@ pub fn min_in_disk(w: &[[f64; 2]], rho: f64) -> Result<(f64, [f64; 2])> {
         return Ok((r, c));
     }
     if rho <= 0.0 {
-        return Ok((
-            w.iter().map(|p| p[0].hypot(p[1])).fold(0.0, f64::max),
-            [0.0, 0.0],
-        ));
+        return Ok((w.iter().map(|p| p[0].hypot(p[1])).fold(0.0, f64::max), [0.0, 0.0]));
     }
-    let a: Vec<f64> = w
-        .iter()
-        .map(|p| p[0] * p[0] + p[1] * p[1] + rho * rho)
-        .collect();
+    let a: Vec<f64> = w.iter().map(|p| p[0] * p[0] + p[1] * p[1] + rho * rho).collect();
     let b: Vec<f64> = w.iter().map(|p| 2.0 * rho * p[0].hypot(p[1])).collect();
     let phi: Vec<f64> = w.iter().map(|p| p[1].atan2(p[0])).collect();
     let (_, psi) = min_max_sinusoids(&a, &b, &phi);
     let s = [rho * psi.cos(), rho * psi.sin()];
-    Ok((
-        w.iter()
-            .map(|p| (p[0] - s[0]).hypot(p[1] - s[1]))
-            .fold(0.0, f64::max),
-        s,
-    ))
+    Ok((w.iter().map(|p| (p[0] - s[0]).hypot(p[1] - s[1])).fold(0.0, f64::max), s))
 }
 
 /// min over s in span(F) of max_i |w_i - s| for 3-D `w` (the free translations of a
@@ -273,22 +219,9 @@ pub fn radius_free(w: &[V3], f: &[V3]) -> Result<f64> {
         return Ok(mec(&xy)?.0);
     }
     let a: Vec<f64> = w.iter().map(|p| dot(*p, f[0])).collect();
-    let b2: Vec<f64> = w
-        .iter()
-        .zip(&a)
-        .map(|(p, ai)| (dot(*p, *p) - ai * ai).max(0.0))
-        .collect();
-    let (lo, hi) = a
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| {
-            (l.min(*v), h.max(*v))
-        });
-    let g = |s: f64| {
-        a.iter()
-            .zip(&b2)
-            .map(|(ai, bi)| ((ai - s) * (ai - s) + bi).sqrt())
-            .fold(0.0, f64::max)
-    };
+    let b2: Vec<f64> = w.iter().zip(&a).map(|(p, ai)| (dot(*p, *p) - ai * ai).max(0.0)).collect();
+    let (lo, hi) = a.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| (l.min(*v), h.max(*v)));
+    let g = |s: f64| a.iter().zip(&b2).map(|(ai, bi)| ((ai - s) * (ai - s) + bi).sqrt()).fold(0.0, f64::max);
     Ok(golden(&g, lo, hi).0)
 }
 
@@ -308,31 +241,18 @@ impl Frame {
     /// Check the frame: finite, unit orthogonal axes, at most 3 free translations.
     pub fn checked(origin: V3, axes: [V3; 3], free: Vec<V3>, free_rotation: bool) -> Result<Self> {
         let finite = |v: &V3| v.iter().all(|x| x.is_finite());
-        if !finite(&origin)
-            || !axes.iter().all(finite)
-            || !free.iter().all(finite)
-            || free.len() > 3
-        {
-            return Err(GkError::invalid(
-                "datum frame: needs a finite origin, axes and at most 3 free translations",
-            ));
+        if !finite(&origin) || !axes.iter().all(finite) || !free.iter().all(finite) || free.len() > 3 {
+            return Err(GkError::invalid("datum frame: needs a finite origin, axes and at most 3 free translations"));
         }
         for i in 0..3 {
             for j in 0..3 {
                 let want = if i == j { 1.0 } else { 0.0 };
                 if (dot(axes[i], axes[j]) - want).abs() > 1e-9 {
-                    return Err(GkError::invalid(
-                        "datum frame: the axes must be unit and orthogonal",
-                    ));
+                    return Err(GkError::invalid("datum frame: the axes must be unit and orthogonal"));
                 }
             }
         }
-        Ok(Self {
-            origin,
-            axes,
-            free,
-            free_rotation,
-        })
+        Ok(Self { origin, axes, free, free_rotation })
     }
 
     /// The rotation by `psi` about z (Rodrigues), as a 3x3 matrix (rows).
@@ -390,9 +310,7 @@ fn points(pts: &[f64]) -> Vec<V3> {
 /// Returns (radius, turn).
 pub fn position(pts: &[f64], frame: &Frame, p0: V3, d0: Option<V3>) -> Result<(f64, f64)> {
     check_points(pts, 1, "position zone")?;
-    let d0 = d0
-        .map(|d| vec3::unit(d, "position zone: nominal direction"))
-        .transpose()?;
+    let d0 = d0.map(|d| vec3::unit(d, "position zone: nominal direction")).transpose()?;
     let q = points(pts);
     if frame.free_rotation {
         if let Some(e) = exact_turn(&q, frame, p0, d0) {
@@ -419,18 +337,7 @@ pub fn position(pts: &[f64], frame: &Frame, p0: V3, d0: Option<V3>) -> Result<(f
             f64::INFINITY
         })
     };
-    let out = if frame.free_rotation {
-        min_on_grid(
-            &value,
-            0.0,
-            std::f64::consts::TAU,
-            TURN_GRID,
-            true,
-            TURN_CELLS,
-        )
-    } else {
-        (value(0.0), 0.0)
-    };
+    let out = if frame.free_rotation { min_on_grid(&value, 0.0, std::f64::consts::TAU, TURN_GRID, true, TURN_CELLS) } else { (value(0.0), 0.0) };
     match fail.into_inner().unwrap() {
         Some(e) => Err(e),
         None => Ok(out),
@@ -454,13 +361,7 @@ fn exact_turn(q: &[V3], frame: &Frame, p0: V3, d0: Option<V3>) -> Option<(f64, f
         }
     }
     let o = frame.origin;
-    let perp = |x: V3| {
-        if d0.is_some() {
-            sub(x, vec3::scale(z, dot(x, z)))
-        } else {
-            x
-        }
-    };
+    let perp = |x: V3| if d0.is_some() { sub(x, vec3::scale(z, dot(x, z))) } else { x };
     let b0 = perp(sub(p0, o));
     let (bz, bu, bv) = (dot(b0, z), dot(b0, u), dot(b0, v));
     let (mut a, mut b, mut phi) = (Vec::new(), Vec::new(), Vec::new());
@@ -486,7 +387,7 @@ pub fn plane_location(pts: &[f64], frame: &Frame, p0: V3, n0: V3) -> Result<(f64
     let n0 = vec3::unit(n0, "plane location zone: nominal normal")?;
     let (u, z) = (frame.axes[0], frame.axes[2]);
     let v = vec3::cross(z, u); // the turn is counter-clockwise about z: R u = cos u + sin v
-                               // h_i(psi) = (q_i - R b0) . R n0 = R^T q_i . n0 - b0 . n0 = k_i + c_i cos psi + s_i sin psi
+    // h_i(psi) = (q_i - R b0) . R n0 = R^T q_i . n0 - b0 . n0 = k_i + c_i cos psi + s_i sin psi
     let b0 = sub(p0, frame.origin);
     let (nz, nu, nv) = (dot(n0, z), dot(n0, u), dot(n0, v));
     let k0 = dot(b0, n0);
@@ -523,23 +424,10 @@ pub fn plane_location(pts: &[f64], frame: &Frame, p0: V3, n0: V3) -> Result<(f64
     if !search {
         return Ok((eval(0.0).0, 0.0));
     }
-    let (mut w, mut f) = min_on_grid(
-        &|x| eval(x).0,
-        0.0,
-        std::f64::consts::TAU,
-        TURN_GRID,
-        true,
-        TURN_CELLS,
-    );
+    let (mut w, mut f) = min_on_grid(&|x| eval(x).0, 0.0, std::f64::consts::TAU, TURN_GRID, true, TURN_CELLS);
     // exact polish: with the active extremes fixed the width is one sinusoid
     let (_, i, j) = eval(f);
-    let pick = |k: usize, s: f64| {
-        if k == usize::MAX {
-            [0.0; 3]
-        } else {
-            [s * coef[k][0], s * coef[k][1], s * coef[k][2]]
-        }
-    };
+    let pick = |k: usize, s: f64| if k == usize::MAX { [0.0; 3] } else { [s * coef[k][0], s * coef[k][1], s * coef[k][2]] };
     let g = if floating {
         let (a, b) = (pick(i, 1.0), pick(j, 1.0));
         [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
@@ -562,29 +450,17 @@ pub fn plane_location(pts: &[f64], frame: &Frame, p0: V3, n0: V3) -> Result<(f64
 /// normal to it (ISO 2692 MMB / LMB), the nominal line through `p0`, parallel to the
 /// datum axis (plane `u`, `v` normal to it), no free translations: (radius, shift used,
 /// turn); the turn about z optimised when the frame leaves it free.
-pub fn position_with_shift(
-    pts: &[f64],
-    frame: &Frame,
-    p0: V3,
-    u: V3,
-    v: V3,
-    rho: f64,
-) -> Result<(f64, f64, f64)> {
+pub fn position_with_shift(pts: &[f64], frame: &Frame, p0: V3, u: V3, v: V3, rho: f64) -> Result<(f64, f64, f64)> {
     check_points(pts, 1, "position with a datum shift")?;
     if !(rho.is_finite() && rho >= 0.0) {
-        return Err(GkError::invalid(format!(
-            "position with a datum shift: the shift radius must be finite and >= 0, got {rho}"
-        )));
+        return Err(GkError::invalid(format!("position with a datum shift: the shift radius must be finite and >= 0, got {rho}")));
     }
     let q = points(pts);
     let fail = std::sync::Mutex::new(None);
     let value = |psi: f64| -> (f64, f64) {
         let r = frame.rot(psi);
         let p = frame.point(&r, p0);
-        let w: Vec<[f64; 2]> = q
-            .iter()
-            .map(|x| [dot(sub(*x, p), u), dot(sub(*x, p), v)])
-            .collect();
+        let w: Vec<[f64; 2]> = q.iter().map(|x| [dot(sub(*x, p), u), dot(sub(*x, p), v)]).collect();
         match min_in_disk(&w, rho) {
             Ok((r, s)) => (r, s[0].hypot(s[1])),
             Err(e) => {
@@ -593,19 +469,7 @@ pub fn position_with_shift(
             }
         }
     };
-    let psi = if frame.free_rotation {
-        min_on_grid(
-            &|x| value(x).0,
-            0.0,
-            std::f64::consts::TAU,
-            TURN_GRID,
-            true,
-            TURN_CELLS,
-        )
-        .1
-    } else {
-        0.0
-    };
+    let psi = if frame.free_rotation { min_on_grid(&|x| value(x).0, 0.0, std::f64::consts::TAU, TURN_GRID, true, TURN_CELLS).1 } else { 0.0 };
     let (r, used) = value(psi);
     match fail.into_inner().unwrap() {
         Some(e) => Err(e),
@@ -619,13 +483,7 @@ pub fn position_with_shift(
 pub fn cone_dir(a: V3, angle: f64, phi: f64) -> V3 {
     let (u, v) = vec3::basis(a);
     let (ca, sa) = (angle.cos(), angle.sin());
-    vec3::add(
-        vec3::scale(a, ca),
-        vec3::add(
-            vec3::scale(u, sa * phi.cos()),
-            vec3::scale(v, sa * phi.sin()),
-        ),
-    )
+    vec3::add(vec3::scale(a, ca), vec3::add(vec3::scale(u, sa * phi.cos()), vec3::scale(v, sa * phi.sin())))
 }
 
 /// The smallest cylinder containing the points whose axis is at `angle` (rad) from the
@@ -642,14 +500,7 @@ pub fn cylinder_on_cone(pts: &[f64], a: V3, angle: f64) -> Result<(f64, V3)> {
         let xy: Vec<[f64; 2]> = q.iter().map(|p| [dot(*p, u), dot(*p, v)]).collect();
         2.0 * mec(&xy).map(|m| m.0).unwrap_or(f64::INFINITY)
     };
-    let (w, phi) = min_on_grid(
-        &value,
-        0.0,
-        std::f64::consts::TAU,
-        TURN_GRID,
-        true,
-        TURN_CELLS,
-    );
+    let (w, phi) = min_on_grid(&value, 0.0, std::f64::consts::TAU, TURN_GRID, true, TURN_CELLS);
     Ok((w, cone_dir(a, angle, phi)))
 }
 
@@ -663,9 +514,7 @@ pub fn axis_on_cone(pts: &[f64], a: V3, tilt: f64, d_ls: V3, fit: AxisFit) -> Re
     let n = check_points(pts, if fit == AxisFit::Circumscribed { 1 } else { 3 }, WHAT)?;
     let a = vec3::unit(a, WHAT)?;
     if !tilt.is_finite() {
-        return Err(GkError::invalid(format!(
-            "{WHAT}: the angle must be finite"
-        )));
+        return Err(GkError::invalid(format!("{WHAT}: the angle must be finite")));
     }
     let (u, v) = vec3::basis(a);
     let phi0 = dot(d_ls, v).atan2(dot(d_ls, u));
@@ -692,14 +541,7 @@ pub fn axis_on_cone(pts: &[f64], a: V3, tilt: f64, d_ls: V3, fit: AxisFit) -> Re
             }
         }
     };
-    let (_, phi) = min_on_grid(
-        &value,
-        phi0 - CONE_TURN,
-        phi0 + CONE_TURN,
-        CONE_GRID,
-        false,
-        1,
-    );
+    let (_, phi) = min_on_grid(&value, phi0 - CONE_TURN, phi0 + CONE_TURN, CONE_GRID, false, 1);
     if let Some(e) = fail.into_inner().unwrap() {
         return Err(e);
     }

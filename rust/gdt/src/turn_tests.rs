@@ -36,30 +36,19 @@ fn moved(r: &[V3; 3], t: V3, p: V3) -> V3 {
 fn move_frame(r: &[V3; 3], t: V3, f: &Frame) -> Frame {
     Frame {
         origin: moved(r, t, f.origin),
-        axes: [
-            apply(r, f.axes[0]),
-            apply(r, f.axes[1]),
-            apply(r, f.axes[2]),
-        ],
+        axes: [apply(r, f.axes[0]), apply(r, f.axes[1]), apply(r, f.axes[2])],
         free: f.free.iter().map(|d| apply(r, *d)).collect(),
         free_rotation: f.free_rotation,
     }
 }
 
 fn move_points(r: &[V3; 3], t: V3, pts: &[f64]) -> Vec<f64> {
-    pts.chunks_exact(3)
-        .flat_map(|p| moved(r, t, [p[0], p[1], p[2]]))
-        .collect()
+    pts.chunks_exact(3).flat_map(|p| moved(r, t, [p[0], p[1], p[2]])).collect()
 }
 
 fn world(free: usize, free_rotation: bool) -> Frame {
     let e = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
-    Frame {
-        origin: [0.0; 3],
-        axes: e,
-        free: e[..free].to_vec(),
-        free_rotation,
-    }
+    Frame { origin: [0.0; 3], axes: e, free: e[..free].to_vec(), free_rotation }
 }
 
 /// The same value as the kernel's, at a turn psi, written out directly for the tests.
@@ -95,9 +84,7 @@ fn position_at(pts: &[f64], f: &Frame, p0: V3, d0: Option<V3>, psi: f64) -> f64 
 }
 
 fn dense_min<F: Fn(f64) -> f64>(f: F, n: usize) -> f64 {
-    (0..n)
-        .map(|k| f(TAU * k as f64 / n as f64))
-        .fold(f64::INFINITY, f64::min)
+    (0..n).map(|k| f(TAU * k as f64 / n as f64)).fold(f64::INFINITY, f64::min)
 }
 
 #[test]
@@ -129,11 +116,7 @@ fn min_max_sinusoids_is_exact_and_attained() {
     let b = [3.0, 1.0, 4.5, 0.5];
     let phi = [0.3, -2.0, 2.5, 1.0];
     let (v, psi) = turn::min_max_sinusoids(&a, &b, &phi);
-    let env = |p: f64| {
-        (0..4)
-            .map(|i| a[i] - b[i] * (p - phi[i]).cos())
-            .fold(f64::NEG_INFINITY, f64::max)
-    };
+    let env = |p: f64| (0..4).map(|i| a[i] - b[i] * (p - phi[i]).cos()).fold(f64::NEG_INFINITY, f64::max);
     let dense = dense_min(env, 400_000);
     assert!(v <= dense + 1e-12, "{v} {dense}");
     assert!(v >= dense - 4.5 * TAU / 400_000.0 - 1e-12);
@@ -155,14 +138,8 @@ fn radius_free_along_a_line_is_the_constrained_enclosing_circle() {
     // points (x, y): centre free along x: the answer is max over the best x
     let w: Vec<V3> = vec![[0.0, 1.0, 0.0], [4.0, 2.0, 0.0], [1.0, -3.0, 0.0]];
     let r = turn::radius_free(&w, &[[1.0, 0.0, 0.0]]).unwrap();
-    let f = |s: f64| {
-        w.iter()
-            .map(|p| ((p[0] - s).powi(2) + p[1] * p[1]).sqrt())
-            .fold(0.0, f64::max)
-    };
-    let dense = (0..=400_000)
-        .map(|k| f(-1.0 + 6.0 * k as f64 / 400_000.0))
-        .fold(f64::INFINITY, f64::min);
+    let f = |s: f64| w.iter().map(|p| ((p[0] - s).powi(2) + p[1] * p[1]).sqrt()).fold(0.0, f64::max);
+    let dense = (0..=400_000).map(|k| f(-1.0 + 6.0 * k as f64 / 400_000.0)).fold(f64::INFINITY, f64::min);
     assert!(r <= dense + 1e-12 && r >= dense - 1e-4, "{r} {dense}");
 }
 
@@ -190,10 +167,7 @@ fn plane_location_with_a_free_turn_finds_the_leaning_face() {
     for i in 0..20 {
         for j in 0..5 {
             let h = 0.01 * ((i * 7 + j * 3) % 5) as f64 - 0.02;
-            let p = vec3::add(
-                vec3::add(vec3::scale(n, 20.0 + h), vec3::scale(t, i as f64 - 10.0)),
-                [0.0, 0.0, j as f64],
-            );
+            let p = vec3::add(vec3::add(vec3::scale(n, 20.0 + h), vec3::scale(t, i as f64 - 10.0)), [0.0, 0.0, j as f64]);
             pts.extend(p);
         }
     }
@@ -205,8 +179,7 @@ fn plane_location_with_a_free_turn_finds_the_leaning_face() {
     let (w2, _) = turn::plane_location(&pts, &world(1, true), [0.0; 3], [1.0, 0.0, 0.0]).unwrap();
     assert!((w2 - 0.04).abs() < 1e-9, "{w2}");
     // no free turn: about the nominal x = 20 plane
-    let (w3, _) =
-        turn::plane_location(&pts, &world(0, false), [20.0, 0.0, 0.0], [1.0, 0.0, 0.0]).unwrap();
+    let (w3, _) = turn::plane_location(&pts, &world(0, false), [20.0, 0.0, 0.0], [1.0, 0.0, 0.0]).unwrap();
     let h: Vec<f64> = pts.chunks(3).map(|p| (p[0] - 20.0).abs()).collect();
     assert!((w3 - 2.0 * h.iter().cloned().fold(0.0, f64::max)).abs() < 1e-12);
 }
@@ -215,9 +188,7 @@ fn plane_location_with_a_free_turn_finds_the_leaning_face() {
 fn cylinder_on_cone_of_a_straight_leaning_axis_is_thin() {
     // axis points along a direction 30 degrees from z, turned by 1.1 rad
     let d = turn::cone_dir([0.0, 0.0, 1.0], 30f64.to_radians(), 1.1);
-    let pts: Vec<f64> = (0..30)
-        .flat_map(|k| vec3::add([5.0, -2.0, 1.0], vec3::scale(d, k as f64)))
-        .collect();
+    let pts: Vec<f64> = (0..30).flat_map(|k| vec3::add([5.0, -2.0, 1.0], vec3::scale(d, k as f64))).collect();
     let (w, axis) = turn::cylinder_on_cone(&pts, [0.0, 0.0, 1.0], 30f64.to_radians()).unwrap();
     assert!(w < 1e-6, "{w}");
     assert!(dot(axis, d) > 1.0 - 1e-12);
@@ -230,10 +201,7 @@ fn cylinder_points(axis: V3, r: f64, n: usize, bump: f64) -> Vec<f64> {
         let t = TAU * k as f64 / 37.0;
         let h = (k % 11) as f64 * 2.0;
         let rr = r + bump * (3.0 * t).cos();
-        pts.extend(vec3::add(
-            vec3::scale(axis, h),
-            vec3::add(vec3::scale(u, rr * t.cos()), vec3::scale(v, rr * t.sin())),
-        ));
+        pts.extend(vec3::add(vec3::scale(axis, h), vec3::add(vec3::scale(u, rr * t.cos()), vec3::scale(v, rr * t.sin()))));
     }
     pts
 }
@@ -271,54 +239,22 @@ fn axis_on_cone_is_no_worse_than_a_dense_turn() {
     for k in 0..=400 {
         let phi = phi0 - turn::CONE_TURN + 2.0 * turn::CONE_TURN * k as f64 / 400.0;
         let dir = turn::cone_dir(a, tilt, phi);
-        assert!(
-            mc.radius
-                <= datum::axis_along(&pts, dir, AxisFit::Circumscribed)
-                    .unwrap()
-                    .radius
-                    + 1e-12
-        );
-        assert!(
-            mi.radius
-                >= datum::axis_along(&pts, dir, AxisFit::Inscribed)
-                    .unwrap()
-                    .radius
-                    - 1e-12
-        );
+        assert!(mc.radius <= datum::axis_along(&pts, dir, AxisFit::Circumscribed).unwrap().radius + 1e-12);
+        assert!(mi.radius >= datum::axis_along(&pts, dir, AxisFit::Inscribed).unwrap().radius - 1e-12);
     }
 }
 
 #[test]
 fn bad_frames_and_inputs_are_errors() {
     let nan = [f64::NAN, 0.0, 0.0];
-    assert!(Frame::checked(
-        [0.0; 3],
-        [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 2.0]],
-        vec![],
-        true
-    )
-    .is_err());
-    assert!(Frame::checked(
-        nan,
-        [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
-        vec![],
-        true
-    )
-    .is_err());
+    assert!(Frame::checked([0.0; 3], [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 2.0]], vec![], true).is_err());
+    assert!(Frame::checked(nan, [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]], vec![], true).is_err());
     let f = world(0, true);
     assert!(turn::position(&[], &f, [0.0; 3], None).is_err());
     assert!(turn::position(&[1.0, 2.0, f64::NAN], &f, [0.0; 3], None).is_err());
     assert!(turn::position(&[1.0, 2.0, 3.0], &f, [0.0; 3], Some([0.0; 3])).is_err());
     assert!(turn::plane_location(&[1.0, 2.0, 3.0], &f, [0.0; 3], [0.0; 3]).is_err());
-    assert!(turn::position_with_shift(
-        &[1.0, 2.0, 3.0],
-        &f,
-        [0.0; 3],
-        [1.0, 0.0, 0.0],
-        [0.0, 1.0, 0.0],
-        -1.0
-    )
-    .is_err());
+    assert!(turn::position_with_shift(&[1.0, 2.0, 3.0], &f, [0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], -1.0).is_err());
     assert!(turn::cylinder_on_cone(&[1.0, 2.0, 3.0], [0.0; 3], 0.3).is_err());
 }
 

@@ -11,11 +11,7 @@ pub fn dot(a: V3, b: V3) -> f64 {
 
 #[inline]
 pub fn cross(a: V3, b: V3) -> V3 {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
+    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
 }
 
 #[inline]
@@ -42,9 +38,7 @@ pub fn norm(a: V3) -> f64 {
 pub fn unit(a: V3, what: &str) -> Result<V3> {
     let n = norm(a);
     if !(n.is_finite() && n > 0.0) {
-        return Err(GkError::invalid(format!(
-            "{what}: needs a non-zero finite direction, got {a:?}"
-        )));
+        return Err(GkError::invalid(format!("{what}: needs a non-zero finite direction, got {a:?}")));
     }
     Ok(scale(a, 1.0 / n))
 }
@@ -95,9 +89,7 @@ pub fn check_points(pts: &[f64], min_points: usize, what: &str) -> Result<usize>
     gagekit_core::check_finite(pts, 3, what)?;
     let n = pts.len() / 3;
     if n < min_points {
-        return Err(GkError::invalid(format!(
-            "{what}: need at least {min_points} points, got {n}"
-        )));
+        return Err(GkError::invalid(format!("{what}: need at least {min_points} points, got {n}")));
     }
     Ok(n)
 }

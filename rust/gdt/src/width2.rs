@@ -20,6 +20,7 @@ pub struct Width2 {
     pub width: f64,
 }
 
+
 /// Indices of the convex hull vertices of `p`, counter-clockwise, no collinear
 /// vertices. Fewer than 3 when the set is collinear (the two extremes) or a point.
 pub use gagekit_geometry::hull_2d as hull;
@@ -33,9 +34,7 @@ pub fn min_width(pts: &[f64]) -> Result<Width2> {
     check_finite(pts, 2, WHAT)?;
     let n = pts.len() / 2;
     if n < 2 {
-        return Err(GkError::invalid(format!(
-            "{WHAT}: need at least 2 points, got {n}"
-        )));
+        return Err(GkError::invalid(format!("{WHAT}: need at least 2 points, got {n}")));
     }
     // centre on the bounding box: the predicates are exact, the distances then lose nothing
     let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
@@ -46,15 +45,10 @@ pub fn min_width(pts: &[f64]) -> Result<Width2> {
         }
     }
     let c = [0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1])];
-    let p: Vec<[f64; 2]> = pts
-        .chunks_exact(2)
-        .map(|q| [q[0] - c[0], q[1] - c[1]])
-        .collect();
+    let p: Vec<[f64; 2]> = pts.chunks_exact(2).map(|q| [q[0] - c[0], q[1] - c[1]]).collect();
     let h = hull(&p);
     let normal = if h.len() < 2 {
-        return Err(GkError::degenerate(format!(
-            "{WHAT}: all {n} points coincide"
-        )));
+        return Err(GkError::degenerate(format!("{WHAT}: all {n} points coincide")));
     } else if h.len() == 2 {
         let e = [p[h[1]][0] - p[h[0]][0], p[h[1]][1] - p[h[0]][1]];
         let l = e[0].hypot(e[1]);
@@ -74,12 +68,7 @@ fn along(p: &[[f64; 2]], h: &[usize], normal: [f64; 2], c: [f64; 2]) -> Width2 {
         hi = hi.max(d);
     }
     let off = normal[0] * c[0] + normal[1] * c[1];
-    Width2 {
-        normal,
-        lo: lo + off,
-        hi: hi + off,
-        width: hi - lo,
-    }
+    Width2 { normal, lo: lo + off, hi: hi + off, width: hi - lo }
 }
 
 /// Rotating calipers over a counter-clockwise hull: the unit inward normal of the edge

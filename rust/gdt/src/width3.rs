@@ -31,10 +31,7 @@ pub fn extent(pts: &[f64], normal: V3) -> (f64, f64) {
             let d = normal[0] * p[0] + normal[1] * p[1] + normal[2] * p[2];
             (d, d)
         })
-        .reduce(
-            || (f64::INFINITY, f64::NEG_INFINITY),
-            |a, b| (a.0.min(b.0), a.1.max(b.1)),
-        )
+        .reduce(|| (f64::INFINITY, f64::NEG_INFINITY), |a, b| (a.0.min(b.0), a.1.max(b.1)))
 }
 
 /// The slab of fixed unit normal (the normalised `normal`) that encloses the points.
@@ -42,12 +39,7 @@ pub fn along(pts: &[f64], normal: V3) -> Result<Slab> {
     check_points(pts, 1, "width along a direction")?;
     let n = vec3::unit(normal, "width along a direction")?;
     let (lo, hi) = extent(pts, n);
-    Ok(Slab {
-        normal: n,
-        lo,
-        hi,
-        width: hi - lo,
-    })
+    Ok(Slab { normal: n, lo, hi, width: hi - lo })
 }
 
 /// The thinnest slab whose normal is perpendicular to `axis` (exact).
@@ -59,12 +51,7 @@ pub fn perpendicular_to(pts: &[f64], axis: V3) -> Result<Slab> {
     let normal = vec3::add(vec3::scale(u, w.normal[0]), vec3::scale(v, w.normal[1]));
     // recompute in 3-D from the reported normal
     let (lo, hi) = extent(pts, normal);
-    Ok(Slab {
-        normal,
-        lo,
-        hi,
-        width: hi - lo,
-    })
+    Ok(Slab { normal, lo, hi, width: hi - lo })
 }
 
 /// Grid of the first search over the turn about the axis in [`on_cone`].
@@ -84,10 +71,7 @@ pub fn on_cone(pts: &[f64], axis: V3, angle: f64) -> Result<Slab> {
     let n = check_points(pts, 2, WHAT)?;
     let a = vec3::unit(axis, WHAT)?;
     if !(angle.is_finite() && (0.0..=std::f64::consts::FRAC_PI_2 + 1e-12).contains(&angle)) {
-        return Err(GkError::invalid(format!(
-            "{WHAT}: the angle must be in [0, 90] degrees, got {} rad",
-            angle
-        )));
+        return Err(GkError::invalid(format!("{WHAT}: the angle must be in [0, 90] degrees, got {} rad", angle)));
     }
     let (ca, sa) = (angle.cos(), angle.sin());
     if sa < 1e-15 {
@@ -114,15 +98,10 @@ pub fn on_cone(pts: &[f64], axis: V3, angle: f64) -> Result<Slab> {
         (hi.0 - lo.0, hi.1, lo.1)
     };
     let step = std::f64::consts::TAU / CONE_GRID as f64;
-    let grid: Vec<f64> = (0..CONE_GRID)
-        .into_par_iter()
-        .map(|k| eval(k as f64 * step).0)
-        .collect();
+    let grid: Vec<f64> = (0..CONE_GRID).into_par_iter().map(|k| eval(k as f64 * step).0).collect();
     // local minima of the grid (cyclic), best first, at most 4
     let mut cells: Vec<usize> = (0..CONE_GRID)
-        .filter(|&k| {
-            grid[k] <= grid[(k + CONE_GRID - 1) % CONE_GRID] && grid[k] <= grid[(k + 1) % CONE_GRID]
-        })
+        .filter(|&k| grid[k] <= grid[(k + CONE_GRID - 1) % CONE_GRID] && grid[k] <= grid[(k + 1) % CONE_GRID])
         .collect();
     cells.sort_by(|&i, &j| grid[i].total_cmp(&grid[j]).then(i.cmp(&j)));
     cells.truncate(4);
@@ -150,11 +129,7 @@ pub fn on_cone(pts: &[f64], axis: V3, angle: f64) -> Result<Slab> {
         let mut f = 0.5 * (lo + hi);
         let (mut w, i, j) = eval(f);
         // exact polish with the extreme pair fixed
-        let d = [
-            coef[i][0] - coef[j][0],
-            coef[i][1] - coef[j][1],
-            coef[i][2] - coef[j][2],
-        ];
+        let d = [coef[i][0] - coef[j][0], coef[i][1] - coef[j][1], coef[i][2] - coef[j][2]];
         if d[1] != 0.0 || d[2] != 0.0 {
             let fs = (-d[2]).atan2(-d[1]);
             let ws = eval(fs).0;
@@ -168,15 +143,7 @@ pub fn on_cone(pts: &[f64], axis: V3, angle: f64) -> Result<Slab> {
         }
     }
     let f = best.1;
-    let normal = vec3::add(
-        vec3::scale(a, ca),
-        vec3::add(vec3::scale(u, sa * f.cos()), vec3::scale(v, sa * f.sin())),
-    );
+    let normal = vec3::add(vec3::scale(a, ca), vec3::add(vec3::scale(u, sa * f.cos()), vec3::scale(v, sa * f.sin())));
     let (lo, hi) = extent(pts, normal);
-    Ok(Slab {
-        normal,
-        lo,
-        hi,
-        width: hi - lo,
-    })
+    Ok(Slab { normal, lo, hi, width: hi - lo })
 }

@@ -50,13 +50,7 @@ pub fn band(r: &[f64]) -> Vec<bool> {
 /// the zone's (inner, outer) bound. Returns the fit and, when it was made on a proper
 /// subset, the subset's point numbers in `pts` (its `k`-th point is `pts`' `map[k]`-th):
 /// the indices a fit names count within the subset until [`remap`] translates them.
-pub fn active_fit<F, B, T>(
-    pts: &[f64],
-    dim: usize,
-    mut sel: Vec<bool>,
-    fit: F,
-    bounds: B,
-) -> Result<(T, Option<Vec<usize>>)>
+pub fn active_fit<F, B, T>(pts: &[f64], dim: usize, mut sel: Vec<bool>, fit: F, bounds: B) -> Result<(T, Option<Vec<usize>>)>
 where
     F: Fn(&[f64]) -> Result<T>,
     B: Fn(&T, &[f64]) -> (Vec<f64>, f64, f64),
@@ -65,12 +59,7 @@ where
         if sel.iter().all(|&s| s) {
             return Ok((fit(pts)?, None));
         }
-        let sub: Vec<f64> = pts
-            .chunks_exact(dim)
-            .zip(&sel)
-            .filter(|(_, &s)| s)
-            .flat_map(|(p, _)| p.iter().copied())
-            .collect();
+        let sub: Vec<f64> = pts.chunks_exact(dim).zip(&sel).filter(|(_, &s)| s).flat_map(|(p, _)| p.iter().copied()).collect();
         let f = match fit(&sub) {
             Ok(f) => f,
             Err(_) => return Ok((fit(pts)?, None)), // a subset too small or degenerate for the kernel
@@ -84,12 +73,7 @@ where
             }
         }
         if !grew {
-            let map = sel
-                .iter()
-                .enumerate()
-                .filter(|(_, &s)| s)
-                .map(|(i, _)| i)
-                .collect();
+            let map = sel.iter().enumerate().filter(|(_, &s)| s).map(|(i, _)| i).collect();
             return Ok((f, Some(map)));
         }
     }
@@ -105,15 +89,7 @@ pub fn remap(indices: &mut [usize], map: &Option<Vec<usize>>) {
 }
 
 fn radii(pts: &[f64], dim: usize, c: &[f64]) -> Vec<f64> {
-    pts.chunks_exact(dim)
-        .map(|p| {
-            p.iter()
-                .zip(c)
-                .map(|(a, b)| (a - b) * (a - b))
-                .sum::<f64>()
-                .sqrt()
-        })
-        .collect()
+    pts.chunks_exact(dim).map(|p| p.iter().zip(c).map(|(a, b)| (a - b) * (a - b)).sum::<f64>().sqrt()).collect()
 }
 
 /// The minimum-zone circle of flat (n, 2) points started near `center`: the complete fit
@@ -127,9 +103,7 @@ pub fn circle_near(xy: &[f64], center: [f64; 2]) -> Result<circle::CircleFit> {
 /// the complete fit's arc of every round.
 pub fn circle_zone_near(xy: &[f64], center: [f64; 2]) -> Result<circle::Zone> {
     let start = band(&radii(xy, 2, &center));
-    let (mut z, map) = active_fit(xy, 2, start, circle::min_zone, |z, p| {
-        (radii(p, 2, &z.center), z.r_in, z.r_out)
-    })?;
+    let (mut z, map) = active_fit(xy, 2, start, circle::min_zone, |z, p| (radii(p, 2, &z.center), z.r_in, z.r_out))?;
     remap(&mut z.control_in, &map);
     remap(&mut z.control_out, &map);
     Ok(z)
@@ -138,9 +112,7 @@ pub fn circle_zone_near(xy: &[f64], center: [f64; 2]) -> Result<circle::Zone> {
 /// The minimum-zone sphere of flat (n, 3) points started near `center`.
 pub fn sphere_near(pts: &[f64], center: V3) -> Result<sphere::SphereZone> {
     let start = band(&radii(pts, 3, &center));
-    let (mut z, map) = active_fit(pts, 3, start, sphere::min_zone, |f, p| {
-        (radii(p, 3, &f.center), f.r_in, f.r_out)
-    })?;
+    let (mut z, map) = active_fit(pts, 3, start, sphere::min_zone, |f, p| (radii(p, 3, &f.center), f.r_in, f.r_out))?;
     remap(&mut z.control_in, &map);
     remap(&mut z.control_out, &map);
     Ok(z)
@@ -148,24 +120,9 @@ pub fn sphere_near(pts: &[f64], center: V3) -> Result<sphere::SphereZone> {
 
 /// The thinnest slab (free orientation) of flat (n, 3) points started near `normal`.
 pub fn slab_near(pts: &[f64], normal: V3) -> Result<crate::width3::Slab> {
-    let h: Vec<f64> = pts
-        .chunks_exact(3)
-        .map(|p| dot([p[0], p[1], p[2]], normal))
-        .collect();
-    let (slab, _) = active_fit(
-        pts,
-        3,
-        band(&h),
-        |p| datum::slab(p, Orientation::Free),
-        |f, p| {
-            (
-                p.chunks_exact(3)
-                    .map(|q| dot([q[0], q[1], q[2]], f.normal))
-                    .collect(),
-                f.lo,
-                f.hi,
-            )
-        },
-    )?;
+    let h: Vec<f64> = pts.chunks_exact(3).map(|p| dot([p[0], p[1], p[2]], normal)).collect();
+    let (slab, _) = active_fit(pts, 3, band(&h), |p| datum::slab(p, Orientation::Free), |f, p| {
+        (p.chunks_exact(3).map(|q| dot([q[0], q[1], q[2]], f.normal)).collect(), f.lo, f.hi)
+    })?;
     Ok(slab) // a slab names no points
 }

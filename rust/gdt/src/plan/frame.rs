@@ -39,9 +39,7 @@ impl Constraints {
     /// (o = ref + A^T (A A^T)^-1 (b - A ref), A of independent rows).
     fn origin(&self, reference: V3) -> Result<V3> {
         let k = self.rows.len();
-        let r: Vec<f64> = (0..k)
-            .map(|i| self.vals[i] - dot(self.rows[i], reference))
-            .collect();
+        let r: Vec<f64> = (0..k).map(|i| self.vals[i] - dot(self.rows[i], reference)).collect();
         let mut g = vec![vec![0.0; k]; k];
         for i in 0..k {
             for j in 0..k {
@@ -51,11 +49,7 @@ impl Constraints {
         let y = solve(g, r)?;
         let mut o = reference;
         for i in 0..k {
-            o = [
-                o[0] + self.rows[i][0] * y[i],
-                o[1] + self.rows[i][1] * y[i],
-                o[2] + self.rows[i][2] * y[i],
-            ];
+            o = [o[0] + self.rows[i][0] * y[i], o[1] + self.rows[i][1] * y[i], o[2] + self.rows[i][2] * y[i]];
         }
         Ok(o)
     }
@@ -78,13 +72,9 @@ impl Constraints {
 fn solve(mut a: Vec<Vec<f64>>, mut b: Vec<f64>) -> Result<Vec<f64>> {
     let n = b.len();
     for c in 0..n {
-        let p = (c..n)
-            .max_by(|&i, &j| a[i][c].abs().total_cmp(&a[j][c].abs()))
-            .unwrap();
+        let p = (c..n).max_by(|&i, &j| a[i][c].abs().total_cmp(&a[j][c].abs())).unwrap();
         if a[p][c].abs() < 1e-300 {
-            return Err(GkError::degenerate(
-                "datum frame: dependent datum constraints",
-            ));
+            return Err(GkError::degenerate("datum frame: dependent datum constraints"));
         }
         a.swap(c, p);
         b.swap(c, p);
@@ -113,11 +103,7 @@ pub fn build_frame(sims: &[Simulated], box_axes: [V3; 3]) -> Result<Frame> {
         let (u, v) = basis(d);
         [u, v]
     };
-    let mut z = if first.plane {
-        scale(first.vector, -1.0)
-    } else {
-        first.vector
-    };
+    let mut z = if first.plane { scale(first.vector, -1.0) } else { first.vector };
     let (mut x, mut y): (Option<V3>, Option<V3>) = (None, None);
     if first.plane {
         c.add(first.vector, first.point);

@@ -129,19 +129,13 @@ impl Plan {
     pub fn check(&self, pts: &[f64]) -> Result<()> {
         gagekit_core::check_finite(pts, 3, "active points")?;
         let n = pts.len() / 3;
-        let bad = |what: &str| {
-            Err(GkError::invalid(format!(
-                "inspection plan: {what} out of range"
-            )))
-        };
+        let bad = |what: &str| Err(GkError::invalid(format!("inspection plan: {what} out of range")));
         for f in &self.features {
             if f.rows.iter().any(|&i| i >= n) {
                 return bad("a feature's point row");
             }
             if f.rows.is_empty() {
-                return Err(GkError::degenerate(
-                    "inspection plan: a feature without points",
-                ));
+                return Err(GkError::degenerate("inspection plan: a feature without points"));
             }
         }
         for (k, d) in self.datums.iter().enumerate() {
@@ -149,11 +143,7 @@ impl Plan {
                 return bad("a datum's feature or prior datum");
             }
         }
-        if self
-            .frames
-            .iter()
-            .any(|f| f.is_empty() || f.iter().any(|&k| k >= self.datums.len()))
-        {
+        if self.frames.iter().any(|f| f.is_empty() || f.iter().any(|&k| k >= self.datums.len())) {
             return bad("a frame's datum");
         }
         for c in &self.callouts {
@@ -167,19 +157,10 @@ impl Plan {
             use Characteristic as C;
             let needs_datum = matches!(
                 c.characteristic,
-                C::Parallelism
-                    | C::Perpendicularity
-                    | C::Angularity
-                    | C::Coaxiality
-                    | C::CircularRunout
-                    | C::TotalRunout
+                C::Parallelism | C::Perpendicularity | C::Angularity | C::Coaxiality | C::CircularRunout | C::TotalRunout
             );
-            if (needs_datum && c.datums.is_empty())
-                || (c.characteristic == C::Position && c.frame.is_none())
-            {
-                return Err(GkError::config(
-                    "inspection plan: an orientation, location or run-out callout needs its datums",
-                ));
+            if (needs_datum && c.datums.is_empty()) || (c.characteristic == C::Position && c.frame.is_none()) {
+                return Err(GkError::config("inspection plan: an orientation, location or run-out callout needs its datums"));
             }
         }
         Ok(())
@@ -243,36 +224,23 @@ impl<'a> Feat<'a> {
         if self.lsq.is_none() {
             let p = &self.pts;
             self.lsq = Some(match self.spec.shape {
-                Shape::Plane => Lsq::Plane {
-                    normal: lsq::plane(p)?.normal,
-                },
+                Shape::Plane => Lsq::Plane { normal: lsq::plane(p)?.normal },
                 Shape::Line => {
                     let l = lsq::line(p, 3)?;
-                    Lsq::Line {
-                        point: v3(&l.point),
-                        direction: v3(&l.direction),
-                    }
+                    Lsq::Line { point: v3(&l.point), direction: v3(&l.direction) }
                 }
                 Shape::Circle => {
                     let c = lsq::circle3(p)?;
-                    Lsq::Circle {
-                        center: c.center,
-                        normal: c.normal,
-                    }
+                    Lsq::Circle { center: c.center, normal: c.normal }
                 }
-                Shape::Sphere => Lsq::Sphere {
-                    center: v3(&lsq::sphere(p, 3)?.center),
-                },
+                Shape::Sphere => Lsq::Sphere { center: v3(&lsq::sphere(p, 3)?.center) },
                 Shape::Cylinder => {
                     // the axis alone (the complete fit's extent and arc are not needed)
                     let c = match self.spec.warm_lsq {
                         Some(a) => lsq::cylinder_near(p, a)?,
                         None => lsq::cylinder(p, None)?,
                     };
-                    Lsq::Cylinder {
-                        point: c.point,
-                        direction: c.direction,
-                    }
+                    Lsq::Cylinder { point: c.point, direction: c.direction }
                 }
             });
         }
@@ -283,17 +251,11 @@ impl<'a> Feat<'a> {
     fn axis_line(&mut self) -> Result<(V3, V3)> {
         let hint = self.spec.sign_hint;
         let (p, d) = match self.lsq()? {
-            Lsq::Cylinder { point, direction } | Lsq::Line { point, direction } => {
-                (*point, unit(*direction))
-            }
+            Lsq::Cylinder { point, direction } | Lsq::Line { point, direction } => (*point, unit(*direction)),
             Lsq::Circle { center, normal } => (*center, unit(*normal)),
             _ => return Err(GkError::degenerate("the feature has no axis")),
         };
-        Ok(if dot(d, hint) < 0.0 {
-            (p, scale(d, -1.0))
-        } else {
-            (p, d)
-        })
+        Ok(if dot(d, hint) < 0.0 { (p, scale(d, -1.0)) } else { (p, d) })
     }
 
     fn center(&mut self) -> Result<V3> {
@@ -308,11 +270,7 @@ impl<'a> Feat<'a> {
         match self.lsq()? {
             Lsq::Plane { normal } => {
                 let n = unit(*normal);
-                Ok(if dot(n, out) >= 0.0 {
-                    n
-                } else {
-                    scale(n, -1.0)
-                })
+                Ok(if dot(n, out) >= 0.0 { n } else { scale(n, -1.0) })
             }
             _ => Err(GkError::degenerate("the feature is no plane")),
         }
@@ -344,21 +302,10 @@ impl<'a> Feat<'a> {
         };
         if self.cyl[k].is_none() {
             let (_, d) = self.axis_line()?;
-            let opts = Options {
-                search: Search {
-                    axis: Some(d),
-                    max_tilt: 10f64.to_radians(),
-                },
-                ..Options::default()
-            };
+            let opts = Options { search: Search { axis: Some(d), max_tilt: 10f64.to_radians() }, ..Options::default() };
             let fit = match self.spec.warm_cylinder[k] {
                 Some((point, direction)) => {
-                    let (f, fell) = cylinder::fit_near_zone(
-                        &self.pts,
-                        crit,
-                        &opts,
-                        &Warm { point, direction },
-                    )?;
+                    let (f, fell) = cylinder::fit_near_zone(&self.pts, crit, &opts, &Warm { point, direction })?;
                     counts.0 += 1;
                     counts.1 += fell as usize;
                     f
@@ -458,11 +405,7 @@ impl<'a> Trial<'a> {
         let counts = &mut self.counts;
         let f = &mut self.feats[fi];
         if f.spec.shape == Shape::Plane {
-            let out = unit(
-                f.spec
-                    .outward
-                    .ok_or_else(|| GkError::config("a datum plane needs 'outward'"))?,
-            );
+            let out = unit(f.spec.outward.ok_or_else(|| GkError::config("a datum plane needs 'outward'"))?);
             let n_ls = f.plane_normal_out()?;
             let orient = match prior.as_slice() {
                 [] => Orientation::Fixed(f.min_zone()?.1),
@@ -470,80 +413,37 @@ impl<'a> Trial<'a> {
                     if spec.angle == 90.0 {
                         Orientation::PerpendicularTo(a.vector)
                     } else {
-                        Orientation::AtAngle(
-                            scale(a.vector, sign(dot(n_ls, a.vector))),
-                            spec.angle.to_radians(),
-                        )
+                        Orientation::AtAngle(scale(a.vector, sign(dot(n_ls, a.vector))), spec.angle.to_radians())
                     }
                 }
                 [a] => Orientation::Fixed(a.vector),
                 [a, b] if a.plane && b.plane => Orientation::Fixed(unit(cross(a.vector, b.vector))),
                 [a, b] if a.plane || b.plane => Orientation::PerpendicularTo(a.vector),
-                _ => {
-                    return Err(GkError::config(
-                        "a tertiary plane after two datum axes is not supported",
-                    ))
-                }
+                _ => return Err(GkError::config("a tertiary plane after two datum axes is not supported")),
             };
             let d = datum::plane(&f.pts, out, orient, PlaneFit::Chebyshev)?;
-            return Ok(Simulated {
-                plane: true,
-                point: d.point,
-                vector: d.normal,
-                feature: fi,
-            });
+            return Ok(Simulated { plane: true, point: d.point, vector: d.normal, feature: fi });
         }
-        let fit = if f.spec.hole {
-            AxisFit::Inscribed
-        } else {
-            AxisFit::Circumscribed
-        };
+        let fit = if f.spec.hole { AxisFit::Inscribed } else { AxisFit::Circumscribed };
         let (_, d_ls) = f.axis_line()?;
         if let Some(a) = prior.iter().find(|p| p.plane) {
-            let d0 = if dot(a.vector, d_ls) >= 0.0 {
-                a.vector
-            } else {
-                scale(a.vector, -1.0)
-            };
+            let d0 = if dot(a.vector, d_ls) >= 0.0 { a.vector } else { scale(a.vector, -1.0) };
             let ax = if spec.angle == 90.0 {
                 datum::axis_along(&f.pts, d0, fit)?
             } else {
                 turn::axis_on_cone(&f.pts, d0, (90.0 - spec.angle).to_radians(), d_ls, fit)?
             };
-            return Ok(Simulated {
-                plane: false,
-                point: ax.point,
-                vector: ax.direction,
-                feature: fi,
-            });
+            return Ok(Simulated { plane: false, point: ax.point, vector: ax.direction, feature: fi });
         }
         if f.spec.shape == Shape::Circle {
             let ax = datum::axis_along(&f.pts, d_ls, fit)?;
-            return Ok(Simulated {
-                plane: false,
-                point: ax.point,
-                vector: ax.direction,
-                feature: fi,
-            });
+            return Ok(Simulated { plane: false, point: ax.point, vector: ax.direction, feature: fi });
         }
-        let crit = if f.spec.hole {
-            Criterion::MaxInscribed
-        } else {
-            Criterion::MinCircumscribed
-        };
+        let crit = if f.spec.hole { Criterion::MaxInscribed } else { Criterion::MinCircumscribed };
         let cyl = f.chebyshev(crit, counts)?;
         let d = unit(cyl.direction);
-        let d = if dot(d, d_ls) >= 0.0 {
-            d
-        } else {
-            scale(d, -1.0)
-        };
-        Ok(Simulated {
-            plane: false,
-            point: cyl.point,
-            vector: d,
-            feature: fi,
-        })
+        let d = if dot(d, d_ls) >= 0.0 { d } else { scale(d, -1.0) };
+        Ok(Simulated { plane: false, point: cyl.point, vector: d, feature: fi })
     }
 
     fn callout(&mut self, c: &Callout) -> Result<f64> {
@@ -556,10 +456,7 @@ impl<'a> Trial<'a> {
             C::Profile if c.frame.is_none() => f.min_zone()?.0,
             C::Straightness => {
                 let (p0, d) = f.axis_line()?;
-                let o = f
-                    .spec
-                    .outward
-                    .ok_or_else(|| GkError::config("straightness: the line needs 'outward'"))?;
+                let o = f.spec.outward.ok_or_else(|| GkError::config("straightness: the line needs 'outward'"))?;
                 let w = unit(sub(o, scale(d, dot(o, d))));
                 let idx: Vec<usize> = (0..f.pts.len() / 3).collect();
                 width2::min_width(&plane_2d(&f.pts, &idx, p0, d, w))?.width
@@ -571,17 +468,12 @@ impl<'a> Trial<'a> {
                 };
                 let (u, v) = basis(normal);
                 let idx: Vec<usize> = (0..f.pts.len() / 3).collect();
-                circle::fit(&plane_2d(&f.pts, &idx, center, u, v), FitCriterion::MinZone)?
-                    .form_error()
+                circle::fit(&plane_2d(&f.pts, &idx, center, u, v), FitCriterion::MinZone)?.form_error()
             }
             C::Roundness => {
                 let (p0, d) = f.axis_line()?;
                 let (u, v) = basis(d);
-                let t: Vec<f64> = f
-                    .pts
-                    .chunks_exact(3)
-                    .map(|p| dot(sub(v3(p), p0), d))
-                    .collect();
+                let t: Vec<f64> = f.pts.chunks_exact(3).map(|p| dot(sub(v3(p), p0), d)).collect();
                 let mut worst = 0.0f64;
                 let mut used = 0;
                 for idx in slices(&t, c.sections) {
@@ -626,14 +518,7 @@ impl<'a> Trial<'a> {
                         _ => {
                             let s = sign(dot(f.plane_normal_out()?, a));
                             let th = c.angle.to_radians();
-                            Orientation::AtAngle(
-                                scale(a, s),
-                                if plane_datum {
-                                    th
-                                } else {
-                                    std::f64::consts::FRAC_PI_2 - th
-                                },
-                            )
+                            Orientation::AtAngle(scale(a, s), if plane_datum { th } else { std::f64::consts::FRAC_PI_2 - th })
                         }
                     };
                     slab_width(&pts, o)?
@@ -647,21 +532,14 @@ impl<'a> Trial<'a> {
                             let th = c.angle.to_radians();
                             let (_, d_ls) = f.axis_line()?;
                             let s = sign(dot(d_ls, a));
-                            let cone = if plane_datum {
-                                std::f64::consts::FRAC_PI_2 - th
-                            } else {
-                                th
-                            };
+                            let cone = if plane_datum { std::f64::consts::FRAC_PI_2 - th } else { th };
                             turn::cylinder_on_cone(&pts, scale(a, s), cone)?.0
                         }
                     }
                 }
             }
             C::Position | C::Profile => {
-                let frame = c
-                    .frame
-                    .map(|k| &self.frames[k])
-                    .ok_or_else(|| GkError::config("the callout needs a datum frame"))?;
+                let frame = c.frame.map(|k| &self.frames[k]).ok_or_else(|| GkError::config("the callout needs a datum frame"))?;
                 let to_scan = |p: V3| {
                     let mut o = frame.origin;
                     for k in 0..3 {
@@ -670,16 +548,11 @@ impl<'a> Trial<'a> {
                     o
                 };
                 let dir_scan = |d: V3| unit(sub(to_scan(d), frame.origin));
-                let p0 = to_scan(
-                    c.nominal_point
-                        .ok_or_else(|| GkError::config("the callout needs a nominal point"))?,
-                );
+                let p0 = to_scan(c.nominal_point.ok_or_else(|| GkError::config("the callout needs a nominal point"))?);
                 let nd = c.nominal_direction.map(dir_scan);
                 match f.spec.shape {
                     Shape::Plane => {
-                        let n0 = nd.ok_or_else(|| {
-                            GkError::config("the callout needs a nominal direction")
-                        })?;
+                        let n0 = nd.ok_or_else(|| GkError::config("the callout needs a nominal direction"))?;
                         turn::plane_location(&f.pts, frame, p0, n0)?.0
                     }
                     Shape::Sphere => 2.0 * turn::position(&f.center()?, frame, p0, None)?.0,
@@ -694,9 +567,7 @@ impl<'a> Trial<'a> {
                         2.0 * turn::position(&f.center()?, frame, p0, Some(d0))?.0
                     }
                     _ => {
-                        let d0 = nd.ok_or_else(|| {
-                            GkError::config("the callout needs a nominal direction")
-                        })?;
+                        let d0 = nd.ok_or_else(|| GkError::config("the callout needs a nominal direction"))?;
                         2.0 * turn::position(&f.axis_points()?, frame, p0, Some(d0))?.0
                     }
                 }
@@ -732,8 +603,7 @@ impl<'a> Trial<'a> {
                     }
                 }
                 let ptp = |v: &[f64]| {
-                    v.iter().cloned().fold(f64::NEG_INFINITY, f64::max)
-                        - v.iter().cloned().fold(f64::INFINITY, f64::min)
+                    v.iter().cloned().fold(f64::NEG_INFINITY, f64::max) - v.iter().cloned().fold(f64::INFINITY, f64::min)
                 };
                 if c.characteristic == C::TotalRunout || f.spec.shape == Shape::Circle {
                     ptp(&dist)
@@ -773,23 +643,10 @@ fn evaluate_checked(plan: &Plan, pts: &[f64]) -> Result<Values> {
             for &i in &spec.rows {
                 p.extend_from_slice(&pts[3 * i..3 * i + 3]);
             }
-            Feat {
-                spec,
-                pts: p,
-                lsq: None,
-                mz: None,
-                cyl: [None, None, None],
-                axis_pts: None,
-            }
+            Feat { spec, pts: p, lsq: None, mz: None, cyl: [None, None, None], axis_pts: None }
         })
         .collect();
-    let mut t = Trial {
-        plan,
-        feats,
-        sims: Vec::with_capacity(plan.datums.len()),
-        frames: Vec::new(),
-        counts: (0, 0),
-    };
+    let mut t = Trial { plan, feats, sims: Vec::with_capacity(plan.datums.len()), frames: Vec::new(), counts: (0, 0) };
     for k in 0..plan.datums.len() {
         let s = t.simulate(k)?;
         t.sims.push(s);
@@ -805,11 +662,7 @@ fn evaluate_checked(plan: &Plan, pts: &[f64]) -> Result<Values> {
         values.push(m);
         values.push(c.tolerance - m);
     }
-    Ok(Values {
-        values,
-        warm_fits: t.counts.0,
-        fallbacks: t.counts.1,
-    })
+    Ok(Values { values, warm_fits: t.counts.0, fallbacks: t.counts.1 })
 }
 
 /// Trials `first .. first + count` of the simulation: each perturbs the active points by
@@ -817,15 +670,7 @@ fn evaluate_checked(plan: &Plan, pts: &[f64]) -> Result<Values> {
 /// same values on any number of threads. Returns the values (row-major, trial by trial)
 /// and the warm-start counts summed. A failing trial's error names it.
 /// `threads` 0: rayon's global pool.
-pub fn run(
-    plan: &Plan,
-    pts: &[f64],
-    model: &perturb::Model,
-    seed: u64,
-    first: u64,
-    count: usize,
-    threads: usize,
-) -> Result<Values> {
+pub fn run(plan: &Plan, pts: &[f64], model: &perturb::Model, seed: u64, first: u64, count: usize, threads: usize) -> Result<Values> {
     plan.check(pts)?;
     let trials = || -> Vec<Result<Values>> {
         (0..count as u64)
@@ -834,15 +679,8 @@ pub fn run(
                 let trial = first + k;
                 gagekit_core::interrupt::check()?;
                 let p = perturb::perturb(pts, 3, model, seed, trial)?;
-                evaluate_checked(plan, &p).map_err(|e| {
-                    GkError::new(
-                        e.kind,
-                        format!(
-                            "Monte Carlo trial {trial} (a simulated measurement): {}",
-                            e.message
-                        ),
-                    )
-                })
+                evaluate_checked(plan, &p)
+                    .map_err(|e| GkError::new(e.kind, format!("Monte Carlo trial {trial} (a simulated measurement): {}", e.message)))
             })
             .collect()
     };
@@ -852,16 +690,10 @@ pub fn run(
         rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
             .build()
-            .map_err(|e| {
-                GkError::numerical(format!("Monte Carlo: cannot start {threads} threads: {e}"))
-            })?
+            .map_err(|e| GkError::numerical(format!("Monte Carlo: cannot start {threads} threads: {e}")))?
             .install(trials)
     };
-    let mut out = Values {
-        values: Vec::with_capacity(count * 2 * plan.callouts.len()),
-        warm_fits: 0,
-        fallbacks: 0,
-    };
+    let mut out = Values { values: Vec::with_capacity(count * 2 * plan.callouts.len()), warm_fits: 0, fallbacks: 0 };
     for r in rows {
         let v = r?;
         out.values.extend(v.values);

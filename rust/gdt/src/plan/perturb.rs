@@ -29,26 +29,12 @@ pub struct Model {
 impl Model {
     /// Check the model: finite non-negative numbers, range noise only with an origin.
     pub fn checked(self) -> Result<Self> {
-        let nums = [
-            self.sigma,
-            self.sigma_per_m,
-            self.probing,
-            self.relative_scale,
-            self.offset,
-        ];
-        if !nums.iter().all(|v| v.is_finite() && *v >= 0.0)
-            || self
-                .origin
-                .is_some_and(|o| !o.iter().all(|v| v.is_finite()))
-        {
-            return Err(GkError::invalid(
-                "measurement model: every term must be a finite number >= 0",
-            ));
+        let nums = [self.sigma, self.sigma_per_m, self.probing, self.relative_scale, self.offset];
+        if !nums.iter().all(|v| v.is_finite() && *v >= 0.0) || self.origin.is_some_and(|o| !o.iter().all(|v| v.is_finite())) {
+            return Err(GkError::invalid("measurement model: every term must be a finite number >= 0"));
         }
         if self.sigma_per_m > 0.0 && self.origin.is_none() {
-            return Err(GkError::config(
-                "measurement model: sigma_per_m (range-dependent noise) needs the scanner's origin",
-            ));
+            return Err(GkError::config("measurement model: sigma_per_m (range-dependent noise) needs the scanner's origin"));
         }
         Ok(self)
     }
@@ -95,14 +81,10 @@ fn uniform(rng: &mut ChaCha8Rng, lo: f64, hi: f64) -> f64 {
 /// offset, the scale error.
 pub fn perturb(pts: &[f64], dim: usize, model: &Model, seed: u64, trial: u64) -> Result<Vec<f64>> {
     if !(dim == 2 || dim == 3) || pts.len() % dim != 0 {
-        return Err(GkError::invalid(format!(
-            "measurement model: points must be (n, 2) or (n, 3), got dimension {dim}"
-        )));
+        return Err(GkError::invalid(format!("measurement model: points must be (n, 2) or (n, 3), got dimension {dim}")));
     }
     if model.origin.is_some() && dim != 3 {
-        return Err(GkError::invalid(format!(
-            "measurement model: a scanner origin needs 3-D points, got {dim}-D"
-        )));
+        return Err(GkError::invalid(format!("measurement model: a scanner origin needs 3-D points, got {dim}-D")));
     }
     let mut rng = trial_rng(seed, trial);
     let mut gauss = Normal { spare: None };
@@ -111,11 +93,7 @@ pub fn perturb(pts: &[f64], dim: usize, model: &Model, seed: u64, trial: u64) ->
     let n = pts.len() / dim;
     let centre = model.origin.unwrap_or([0.0; 3]);
     let los = |i: usize| -> (V3, f64) {
-        let q = [
-            pts[3 * i] - centre[0],
-            pts[3 * i + 1] - centre[1],
-            pts[3 * i + 2] - centre[2],
-        ];
+        let q = [pts[3 * i] - centre[0], pts[3 * i + 1] - centre[1], pts[3 * i + 2] - centre[2]];
         let r = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2]).sqrt();
         let s = if r > 0.0 { r } else { 1.0 };
         ([q[0] / s, q[1] / s, q[2] / s], r)

@@ -12,21 +12,13 @@ fn part() -> (Vec<f64>, Plan) {
     for i in 0..20 {
         for j in 0..20 {
             rows[0].push(pts.len() / 3);
-            pts.extend([
-                i as f64 * 3.0,
-                j as f64 * 2.0,
-                1e-4 * ((i * 7 + j * 3) % 5) as f64,
-            ]);
+            pts.extend([i as f64 * 3.0, j as f64 * 2.0, 1e-4 * ((i * 7 + j * 3) % 5) as f64]);
         }
     }
     for i in 0..20 {
         for j in 0..10 {
             rows[1].push(pts.len() / 3);
-            pts.extend([
-                i as f64 * 3.0,
-                1e-4 * ((i + j) % 3) as f64,
-                1.0 + j as f64 * 2.0,
-            ]);
+            pts.extend([i as f64 * 3.0, 1e-4 * ((i + j) % 3) as f64, 1.0 + j as f64 * 2.0]);
         }
     }
     for i in 0..72 {
@@ -55,80 +47,30 @@ fn part() -> (Vec<f64>, Plan) {
         feature(Shape::Plane, rows[1].clone(), Some([0.0, -1.0, 0.0])),
         feature(Shape::Cylinder, rows[2].clone(), None),
     ];
-    let datums = vec![
-        Datum {
-            feature: 0,
-            prior: vec![],
-            angle: 90.0,
-        },
-        Datum {
-            feature: 1,
-            prior: vec![0],
-            angle: 90.0,
-        },
-    ];
-    let callout =
-        |characteristic, feature, datums: Vec<usize>, frame, p: Option<V3>, d: Option<V3>| {
-            Callout {
-                characteristic,
-                feature,
-                tolerance: 0.05,
-                datums,
-                frame,
-                angle: 0.0,
-                sections: 4,
-                nominal_point: p,
-                nominal_direction: d,
-            }
-        };
+    let datums = vec![Datum { feature: 0, prior: vec![], angle: 90.0 }, Datum { feature: 1, prior: vec![0], angle: 90.0 }];
+    let callout = |characteristic, feature, datums: Vec<usize>, frame, p: Option<V3>, d: Option<V3>| Callout {
+        characteristic,
+        feature,
+        tolerance: 0.05,
+        datums,
+        frame,
+        angle: 0.0,
+        sections: 4,
+        nominal_point: p,
+        nominal_direction: d,
+    };
     let callouts = vec![
         callout(Characteristic::Flatness, 0, vec![], None, None, None),
-        callout(
-            Characteristic::Perpendicularity,
-            1,
-            vec![0],
-            None,
-            None,
-            None,
-        ),
-        callout(
-            Characteristic::Perpendicularity,
-            2,
-            vec![0],
-            None,
-            None,
-            None,
-        ),
+        callout(Characteristic::Perpendicularity, 1, vec![0], None, None, None),
+        callout(Characteristic::Perpendicularity, 2, vec![0], None, None, None),
         callout(Characteristic::Roundness, 2, vec![], None, None, None),
-        callout(
-            Characteristic::Position,
-            2,
-            vec![0, 1],
-            Some(0),
-            Some([30.0, 20.0, 0.0]),
-            Some([0.0, 0.0, 1.0]),
-        ),
+        callout(Characteristic::Position, 2, vec![0, 1], Some(0), Some([30.0, 20.0, 0.0]), Some([0.0, 0.0, 1.0])),
     ];
-    (
-        pts,
-        Plan {
-            features,
-            datums,
-            frames: vec![vec![0, 1]],
-            callouts,
-        },
-    )
+    (pts, Plan { features, datums, frames: vec![vec![0, 1]], callouts })
 }
 
 fn noise(sigma: f64) -> Model {
-    Model {
-        sigma,
-        origin: None,
-        sigma_per_m: 0.0,
-        probing: 0.0,
-        relative_scale: 0.0,
-        offset: 0.0,
-    }
+    Model { sigma, origin: None, sigma_per_m: 0.0, probing: 0.0, relative_scale: 0.0, offset: 0.0 }
 }
 
 #[test]
@@ -139,11 +81,7 @@ fn the_measured_part_gives_its_zones() {
     for pair in v.values.chunks_exact(2) {
         assert!(pair[0] >= 0.0 && (pair[0] + pair[1] - 0.05).abs() < 1e-15);
     }
-    assert!(
-        (v.values[0] - 4e-4).abs() < 1e-9,
-        "flatness {}",
-        v.values[0]
-    );
+    assert!((v.values[0] - 4e-4).abs() < 1e-9, "flatness {}", v.values[0]);
     assert!(v.values[6] <= 6e-4 + 1e-9, "roundness {}", v.values[6]);
     assert!(v.values[8] < 1e-3, "position {}", v.values[8]); // the bore sits at its nominal (30, 20)
 }
@@ -159,75 +97,36 @@ fn trials_are_the_same_on_any_thread_count_and_split() {
     assert_eq!(one, two);
     assert_eq!(one.values, split);
     let p = perturb(&pts, 3, &m, 5, 3).unwrap();
-    assert_eq!(
-        evaluate(&plan, &p).unwrap().values,
-        one.values[30..40].to_vec()
-    );
+    assert_eq!(evaluate(&plan, &p).unwrap().values, one.values[30..40].to_vec());
 }
 
 #[test]
 fn the_perturbation_depends_on_seed_and_trial_only() {
     let (pts, _) = part();
-    let m = Model {
-        probing: 0.002,
-        relative_scale: 1e-5,
-        offset: 0.001,
-        ..noise(0.01)
-    };
+    let m = Model { probing: 0.002, relative_scale: 1e-5, offset: 0.001, ..noise(0.01) };
     let a = perturb(&pts, 3, &m, 1, 2).unwrap();
     assert_eq!(a, perturb(&pts, 3, &m, 1, 2).unwrap());
     assert_ne!(a, perturb(&pts, 3, &m, 1, 3).unwrap());
     assert_ne!(a, perturb(&pts, 3, &m, 2, 2).unwrap());
-    let d: Vec<f64> = perturb(&pts, 3, &noise(0.01), 0, 0)
-        .unwrap()
-        .iter()
-        .zip(&pts)
-        .map(|(a, b)| a - b)
-        .collect();
+    let d: Vec<f64> = perturb(&pts, 3, &noise(0.01), 0, 0).unwrap().iter().zip(&pts).map(|(a, b)| a - b).collect();
     let n = d.len() as f64;
     let mean = d.iter().sum::<f64>() / n;
     let sd = (d.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / n).sqrt();
-    assert!(
-        mean.abs() < 5e-4 && (sd - 0.01).abs() < 5e-4,
-        "mean {mean} sd {sd}"
-    );
+    assert!(mean.abs() < 5e-4 && (sd - 0.01).abs() < 5e-4, "mean {mean} sd {sd}");
     assert_eq!(perturb(&pts[..6], 2, &noise(0.01), 0, 0).unwrap().len(), 6);
-    assert_eq!(
-        perturb(
-            &pts,
-            2,
-            &Model {
-                origin: Some([0.0; 3]),
-                ..noise(0.01)
-            },
-            0,
-            0
-        )
-        .unwrap_err()
-        .kind,
-        ErrorKind::InvalidInput
-    );
+    assert_eq!(perturb(&pts, 2, &Model { origin: Some([0.0; 3]), ..noise(0.01) }, 0, 0).unwrap_err().kind, ErrorKind::InvalidInput);
 }
 
 #[test]
 fn a_bad_plan_is_refused() {
     let (pts, mut plan) = part();
-    assert_eq!(
-        evaluate(&plan, &pts[..30]).unwrap_err().kind,
-        ErrorKind::InvalidInput
-    );
+    assert_eq!(evaluate(&plan, &pts[..30]).unwrap_err().kind, ErrorKind::InvalidInput);
     let mut nan = pts.clone();
     nan[4] = f64::NAN;
-    assert_eq!(
-        evaluate(&plan, &nan).unwrap_err().kind,
-        ErrorKind::InvalidInput
-    );
+    assert_eq!(evaluate(&plan, &nan).unwrap_err().kind, ErrorKind::InvalidInput);
     plan.callouts[1].datums.clear();
     assert_eq!(evaluate(&plan, &pts).unwrap_err().kind, ErrorKind::Config);
-    let bad = Model {
-        sigma: -1.0,
-        ..noise(0.0)
-    };
+    let bad = Model { sigma: -1.0, ..noise(0.0) };
     assert!(bad.checked().is_err());
 }
 
@@ -235,14 +134,7 @@ fn a_bad_plan_is_refused() {
 /// zone of every point, whatever nearby start they are given.
 #[test]
 fn active_zones_equal_the_zones_of_all_points() {
-    let model = Model {
-        sigma: 1e-3,
-        origin: None,
-        sigma_per_m: 0.0,
-        probing: 0.0,
-        relative_scale: 0.0,
-        offset: 0.0,
-    };
+    let model = Model { sigma: 1e-3, origin: None, sigma_per_m: 0.0, probing: 0.0, relative_scale: 0.0, offset: 0.0 };
     let circle: Vec<f64> = (0..600)
         .flat_map(|i| {
             let a = i as f64 * 0.6f64.to_radians();
@@ -251,73 +143,30 @@ fn active_zones_equal_the_zones_of_all_points() {
         .collect();
     let sphere: Vec<f64> = (0..900)
         .flat_map(|i| {
-            let (t, p) = (
-                0.2 + 1.2 * (i / 30) as f64 / 30.0,
-                (i % 30) as f64 * 12f64.to_radians(),
-            );
-            [
-                1.0 + 8.0 * t.sin() * p.cos(),
-                2.0 + 8.0 * t.sin() * p.sin(),
-                3.0 + 8.0 * t.cos(),
-            ]
+            let (t, p) = (0.2 + 1.2 * (i / 30) as f64 / 30.0, (i % 30) as f64 * 12f64.to_radians());
+            [1.0 + 8.0 * t.sin() * p.cos(), 2.0 + 8.0 * t.sin() * p.sin(), 3.0 + 8.0 * t.cos()]
         })
         .collect();
     for trial in 0..5 {
         let xy = perturb(&circle, 2, &model, 7, trial).unwrap();
         let all = gagekit_form::circle::min_zone(&xy).unwrap();
         let near = active::circle_zone_near(&xy, [4.0 + 1e-3, -1.0]).unwrap();
-        assert!(
-            (near.form_error() - all.form_error()).abs() < 1e-12,
-            "circle trial {trial}"
-        );
+        assert!((near.form_error() - all.form_error()).abs() < 1e-12, "circle trial {trial}");
         // the control points are numbered among every point (not the subset) and lie on the zone
         let on = |pts: &[f64], dim: usize, c: &[f64], i: usize, r: f64| {
-            let d: f64 = (0..dim)
-                .map(|k| (pts[dim * i + k] - c[k]).powi(2))
-                .sum::<f64>()
-                .sqrt();
+            let d: f64 = (0..dim).map(|k| (pts[dim * i + k] - c[k]).powi(2)).sum::<f64>().sqrt();
             (d - r).abs() < 1e-9
         };
-        assert!(
-            near.control_in
-                .iter()
-                .all(|&i| on(&xy, 2, &near.center, i, near.r_in)),
-            "circle trial {trial}"
-        );
-        assert!(
-            near.control_out
-                .iter()
-                .all(|&i| on(&xy, 2, &near.center, i, near.r_out)),
-            "circle trial {trial}"
-        );
+        assert!(near.control_in.iter().all(|&i| on(&xy, 2, &near.center, i, near.r_in)), "circle trial {trial}");
+        assert!(near.control_out.iter().all(|&i| on(&xy, 2, &near.center, i, near.r_out)), "circle trial {trial}");
         let complete = active::circle_near(&xy, [4.0 + 1e-3, -1.0]).unwrap();
         assert_eq!(complete.control_in, near.control_in);
-        assert!(
-            (complete.arc
-                - gagekit_form::circle::fit(&xy, FitCriterion::MinZone)
-                    .unwrap()
-                    .arc)
-                .abs()
-                < 1e-9
-        );
+        assert!((complete.arc - gagekit_form::circle::fit(&xy, FitCriterion::MinZone).unwrap().arc).abs() < 1e-9);
         let p = perturb(&sphere, 3, &model, 7, trial).unwrap();
         let all = gagekit_form::sphere::min_zone(&p).unwrap();
         let near = active::sphere_near(&p, [1.0, 2.0 + 1e-3, 3.0]).unwrap();
-        assert!(
-            ((near.r_out - near.r_in) - (all.r_out - all.r_in)).abs() < 2e-9,
-            "sphere trial {trial}"
-        );
-        assert!(
-            near.control_in
-                .iter()
-                .all(|&i| on(&p, 3, &near.center, i, near.r_in)),
-            "sphere trial {trial}"
-        );
-        assert!(
-            near.control_out
-                .iter()
-                .all(|&i| on(&p, 3, &near.center, i, near.r_out)),
-            "sphere trial {trial}"
-        );
+        assert!(((near.r_out - near.r_in) - (all.r_out - all.r_in)).abs() < 2e-9, "sphere trial {trial}");
+        assert!(near.control_in.iter().all(|&i| on(&p, 3, &near.center, i, near.r_in)), "sphere trial {trial}");
+        assert!(near.control_out.iter().all(|&i| on(&p, 3, &near.center, i, near.r_out)), "sphere trial {trial}");
     }
 }
