@@ -123,13 +123,14 @@ def test_invariant_under_a_rigid_motion(angles, shift, seed):
     # MC / MI with a free angle: the radius they optimise is invariant; their cone is not
     # always unique (a ridge of optima where fewer points than unknowns touch it: the
     # radius at the reference section varies there by ~1e-9 of the size while the half
-    # angle moves by 1e-4 degrees), so neither the angle nor the form about it is compared;
-    # the search along that ridge is local (its certificate too): the radius agrees to 1e-6 mm
-    # (seen: 1.5e-7 mm on a pure translation, seed 3377), far below any scan's noise
+    # angle moves), so neither the angle nor the form about it is compared (seen, seed
+    # 1070, a 1 rad turn about z: MI half angle 0.236857 -> 0.236875 rad, form 0.01935 ->
+    # 0.01969 mm, radius within 6e-9 mm); the search along that ridge is local (its
+    # certificate too): the radius agrees to 1e-6 mm (seen: 1.5e-7 mm on a pure
+    # translation, seed 3377), far below any scan's noise
     for crit in ("min-circumscribed", "max-inscribed"):
         f0, f1 = gagekit.fit_cone(p, crit), gagekit.fit_cone(moved, crit)
         assert f1.radius == pytest.approx(f0.radius, abs=1e-6), crit
-        assert f1.half_angle == pytest.approx(f0.half_angle, abs=1e-5), crit
 
 
 def test_bad_input_raises_typed_errors():

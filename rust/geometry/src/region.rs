@@ -193,6 +193,133 @@ impl BoxBins {
     }
 }
 
+
+/// The boxes on a uniform 3-D grid over their union's bounding box (up to [`GRID`] cells
+/// an axis, fewer for a small chunk): each cell holds two bit masks of the boxes, those
+/// that surely hold every point the cell can receive, and those that may hold some (the
+/// exact test decides). A point costs one cell lookup and the exact tests of the few
+/// boxes whose faces cross its cell; the many cells inside no box cost nothing more.
+/// Membership is the exact test's: a cell is "sure" for a box only when the cell, widened
+/// by far more than the rounding of a point's cell index, lies inside the box by a margin
+/// far above the rounding of the exact test; "maybe" is a conservative overlap (the
+/// separating axes of the box and of the cell), widened the same way.
+struct BoxGrid {
+    lo: [f64; 3],
+    hi: [f64; 3],
+    inv: [f64; 3],
+    n: [usize; 3],
+    /// (sure, maybe) masks, cell (x, y, z) at (x n_y + y) n_z + z.
+    cells: Vec<(u32, u32)>,
+}
+
+/// Most cells of the grid along an axis.
+const GRID: usize = 64;
+
+/// Most boxes a [`BoxGrid`] holds (the bits of its masks).
+const GRID_BOXES: usize = 32;
+
+impl BoxGrid {
+    fn new(boxes: &[OrientedBox], npts: usize) -> Self {
+        assert!(boxes.len() <= GRID_BOXES);
+        let mut lo = [f64::INFINITY; 3];
+        let mut hi = [f64::NEG_INFINITY; 3];
+        for b in boxes {
+            let (l, h) = b.aabb();
+            for i in 0..3 {
+                lo[i] = lo[i].min(l[i]);
+                hi[i] = hi[i].max(h[i]);
+            }
+        }
+        // about 8 points a cell at least: the grid's build stays below the chunk's cost
+        let per_axis = ((npts / 8) as f64).cbrt().floor().clamp(1.0, GRID as f64) as usize;
+        let mut n = [1usize; 3];
+        let mut inv = [0.0; 3];
+        let mut width = [0.0; 3];
+        for i in 0..3 {
+            let span = hi[i] - lo[i];
+            width[i] = span;
+            if span > 0.0 && span.is_finite() {
+                n[i] = per_axis;
+                inv[i] = per_axis as f64 / span;
+                width[i] = span / per_axis as f64;
+            }
+        }
+        let frames: Vec<_> = boxes
+            .iter()
+            .map(|b| (rotation_matrix(b.rotation), [b.size[0] / 2.0, b.size[1] / 2.0, b.size[2] / 2.0], b.center, b.aabb()))
+            .collect();
+        let mut cells = vec![(0u32, 0u32); n[0] * n[1] * n[2]];
+        for x in 0..n[0] {
+            for y in 0..n[1] {
+                for z in 0..n[2] {
+                    let ix = [x, y, z];
+                    // the cell widened by 1e-6 of its width and 1e-9 of its coordinates
+                    let mut clo = [0.0; 3];
+                    let mut chi = [0.0; 3];
+                    for i in 0..3 {
+                        let a = lo[i] + ix[i] as f64 * width[i];
+                        let b = if ix[i] + 1 == n[i] { hi[i] } else { lo[i] + (ix[i] + 1) as f64 * width[i] };
+                        let pad = 1e-6 * width[i] + 1e-9 * (a.abs() + b.abs()) + f64::MIN_POSITIVE;
+                        clo[i] = a - pad;
+                        chi[i] = b + pad;
+                    }
+                    let m: [f64; 3] = std::array::from_fn(|i| 0.5 * (clo[i] + chi[i]));
+                    let h: [f64; 3] = std::array::from_fn(|i| 0.5 * (chi[i] - clo[i]));
+                    let (mut sure, mut maybe) = (0u32, 0u32);
+                    for (k, (r, half, c, (blo, bhi))) in frames.iter().enumerate() {
+                        if (0..3).any(|i| chi[i] < blo[i] || clo[i] > bhi[i]) {
+                            continue;
+                        }
+                        let d = [m[0] - c[0], m[1] - c[1], m[2] - c[2]];
+                        let scale = d[0].abs() + d[1].abs() + d[2].abs() + h[0] + h[1] + h[2];
+                        let mut inside = true;
+                        let mut apart = false;
+                        for a in 0..3 {
+                            let l = r[0][a] * d[0] + r[1][a] * d[1] + r[2][a] * d[2];
+                            let e = r[0][a].abs() * h[0] + r[1][a].abs() * h[1] + r[2][a].abs() * h[2];
+                            let margin = 1e-9 * (scale + half[a]) + f64::MIN_POSITIVE;
+                            apart |= l.abs() - e > half[a] + margin;
+                            inside &= l.abs() + e < half[a] - margin;
+                        }
+                        if inside {
+                            sure |= 1 << k;
+                        } else if !apart {
+                            maybe |= 1 << k;
+                        }
+                    }
+                    cells[(x * n[1] + y) * n[2] + z] = (sure, maybe);
+                }
+            }
+        }
+        Self { lo, hi, inv, n, cells }
+    }
+
+    #[inline(always)]
+    fn bin(&self, axis: usize, v: f64) -> usize {
+        let f = (v - self.lo[axis]) * self.inv[axis];
+        // truncation is the floor for the positive values; no libm call in the hot loop
+        if f > 0.0 {
+            (f as usize).min(self.n[axis] - 1)
+        } else {
+            0
+        }
+    }
+
+    /// Whether `p` is inside the union's bounding box (no box outside it can hold `p`).
+    #[inline(always)]
+    fn in_union(&self, p: &[f64]) -> bool {
+        (p[0] >= self.lo[0]) & (p[0] <= self.hi[0]) & (p[1] >= self.lo[1]) & (p[1] <= self.hi[1])
+            & (p[2] >= self.lo[2]) & (p[2] <= self.hi[2])
+    }
+
+    /// The (sure, maybe) masks of the cell of `p`, a point inside the union's bounding box.
+    #[inline(always)]
+    fn masks(&self, p: &[f64]) -> (u32, u32) {
+        let c = (self.bin(0, p[0]) * self.n[1] + self.bin(1, p[1])) * self.n[2] + self.bin(2, p[2]);
+        self.cells[c]
+    }
+}
+
 /// For each box, the ascending indices of the points inside it. A point may
 /// fall in several boxes. One parallel pass over the points.
 pub fn classify(points: &[f64], boxes: &[OrientedBox]) -> Result<Vec<Vec<usize>>> {
@@ -200,10 +327,72 @@ pub fn classify(points: &[f64], boxes: &[OrientedBox]) -> Result<Vec<Vec<usize>>
     for (i, b) in boxes.iter().enumerate() {
         b.validate(&format!("#{i}"))?;
     }
+    if boxes.len() > GRID_BOXES {
+        return Ok(classify_binned(points, boxes));
+    }
     let nb = boxes.len();
     if nb == 0 {
         return Ok(Vec::new());
     }
+    let testers: Vec<_> = boxes.iter().map(|b| b.tester()).collect();
+    let grid = BoxGrid::new(boxes, points.len() / 3);
+    let parts: Vec<Vec<Vec<usize>>> = points
+        .par_chunks(3 * CHUNK)
+        .enumerate()
+        .map_init(Vec::new, |near: &mut Vec<u8>, (ci, chunk)| {
+            let mut out = vec![Vec::new(); nb];
+            // first whether each point is inside the union's bounding box (six comparisons,
+            // no branch: most points of a scan are outside), then eight points at a time
+            // skipped where none is
+            let npts = chunk.len() / 3;
+            near.clear();
+            near.extend(chunk.chunks_exact(3).map(|p| u8::from(grid.in_union(p))));
+            near.resize(npts.div_ceil(8) * 8, 0);
+            for (w, word) in near.chunks_exact(8).enumerate() {
+                if u64::from_ne_bytes(word.try_into().unwrap()) == 0 {
+                    continue;
+                }
+              for (j, &b) in word.iter().enumerate() {
+                if b == 0 {
+                    continue;
+                }
+                let i = 8 * w + j;
+                let p = &chunk[3 * i..3 * i + 3];
+                let (mut sure, mut maybe) = grid.masks(p);
+                while maybe != 0 {
+                    let k = maybe.trailing_zeros() as usize;
+                    maybe &= maybe - 1;
+                    if testers[k](p) {
+                        sure |= 1 << k;
+                    }
+                }
+                while sure != 0 {
+                    let k = sure.trailing_zeros() as usize;
+                    sure &= sure - 1;
+                    out[k].push(ci * CHUNK + i);
+                }
+              }
+            }
+            out
+        })
+        .collect();
+    Ok(merge_parts(parts, nb))
+}
+
+fn merge_parts(parts: Vec<Vec<Vec<usize>>>, nb: usize) -> Vec<Vec<usize>> {
+    let mut result = vec![Vec::new(); nb];
+    for part in parts {
+        for (k, v) in part.into_iter().enumerate() {
+            result[k].extend(v);
+        }
+    }
+    result
+}
+
+/// [`classify`] by the x-y bins of [`BoxBins`] (validated input): for more boxes than a
+/// [`BoxGrid`] holds.
+fn classify_binned(points: &[f64], boxes: &[OrientedBox]) -> Vec<Vec<usize>> {
+    let nb = boxes.len();
     let testers: Vec<_> = boxes.iter().map(|b| b.tester()).collect();
     let bins = BoxBins::new(boxes);
     let parts: Vec<Vec<Vec<usize>>> = points
@@ -238,13 +427,7 @@ pub fn classify(points: &[f64], boxes: &[OrientedBox]) -> Result<Vec<Vec<usize>>
             out
         })
         .collect();
-    let mut result = vec![Vec::new(); nb];
-    for part in parts {
-        for (k, v) in part.into_iter().enumerate() {
-            result[k].extend(v);
-        }
-    }
-    Ok(result)
+    merge_parts(parts, nb)
 }
 
 #[cfg(test)]
@@ -374,6 +557,63 @@ mod tests {
             for j in 0..3 {
                 let d: f64 = (0..3).map(|k| r[i][k] * r[j][k]).sum();
                 assert!((d - if i == j { 1.0 } else { 0.0 }).abs() < 1e-14);
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod grid_props {
+    use super::*;
+    use proptest::prelude::*;
+
+    /// The plain membership test: R^T (p - c) within half the size on every axis.
+    fn plain(b: &OrientedBox, p: &[f64]) -> bool {
+        let r = rotation_matrix(b.rotation);
+        let d = [p[0] - b.center[0], p[1] - b.center[1], p[2] - b.center[2]];
+        (0..3).all(|k| (r[0][k] * d[0] + r[1][k] * d[1] + r[2][k] * d[2]).abs() <= b.size[k] / 2.0)
+    }
+
+    fn a_box() -> impl Strategy<Value = OrientedBox> {
+        (
+            prop::array::uniform3(-5i32..6),
+            prop::array::uniform3(1i32..12),
+            prop::array::uniform3(-30i32..31),
+            0u8..3,
+        )
+            .prop_map(|(c, s, r, kind)| OrientedBox {
+                center: c.map(|v| v as f64 * 0.5),
+                size: s.map(|v| v as f64 * 0.5),
+                // axis-aligned (faces on the points' lattice), turned about z, or any turn
+                rotation: match kind {
+                    0 => [0.0; 3],
+                    1 => [0.0, 0.0, r[2] as f64 * 0.05],
+                    _ => r.map(|v| v as f64 * 0.05),
+                },
+            })
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 64, ..ProptestConfig::default() })]
+        /// The grid's classification (sure cells, exact tests where faces cross a cell)
+        /// gives every box exactly the points of the plain test, also for points on the
+        /// faces, on cell edges and just beside them, and for the x-y binned path.
+        #[test]
+        fn grid_classification_equals_the_direct_test(
+            boxes in prop::collection::vec(a_box(), 1..12),
+            raw in prop::collection::vec((prop::array::uniform3(-32i32..33), 0u8..4), 200..3000),
+        ) {
+            let mut pts = Vec::with_capacity(3 * raw.len());
+            for (q, nudge) in &raw {
+                let e = match nudge { 0 => 0.0, 1 => 1e-13, 2 => -1e-13, _ => 0.37 };
+                pts.extend(q.map(|v| v as f64 * 0.25 + e));
+            }
+            let got = classify(&pts, &boxes).unwrap();
+            let binned = classify_binned(&pts, &boxes);
+            for (k, b) in boxes.iter().enumerate() {
+                let want: Vec<usize> = pts.chunks_exact(3).enumerate().filter(|(_, p)| plain(b, p)).map(|(i, _)| i).collect();
+                prop_assert_eq!(&got[k], &want, "box {}", k);
+                prop_assert_eq!(&binned[k], &want, "binned, box {}", k);
             }
         }
     }

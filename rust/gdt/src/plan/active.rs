@@ -47,20 +47,22 @@ pub fn band(r: &[f64]) -> Vec<bool> {
 
 /// The fit of every point of `pts` (`dim` coordinates a point) by fitting the subset
 /// `sel` and growing it (module docstring). `bounds(fit, pts)`: every point's distance and
-/// the zone's (inner, outer) bound.
-pub fn active_fit<F, B, T>(pts: &[f64], dim: usize, mut sel: Vec<bool>, fit: F, bounds: B) -> Result<T>
+/// the zone's (inner, outer) bound. Returns the fit and, when it was made on a proper
+/// subset, the subset's point numbers in `pts` (its `k`-th point is `pts`' `map[k]`-th):
+/// the indices a fit names count within the subset until [`remap`] translates them.
+pub fn active_fit<F, B, T>(pts: &[f64], dim: usize, mut sel: Vec<bool>, fit: F, bounds: B) -> Result<(T, Option<Vec<usize>>)>
 where
     F: Fn(&[f64]) -> Result<T>,
     B: Fn(&T, &[f64]) -> (Vec<f64>, f64, f64),
 {
     loop {
         if sel.iter().all(|&s| s) {
-            return fit(pts);
+            return Ok((fit(pts)?, None));
         }
         let sub: Vec<f64> = pts.chunks_exact(dim).zip(&sel).filter(|(_, &s)| s).flat_map(|(p, _)| p.iter().copied()).collect();
         let f = match fit(&sub) {
             Ok(f) => f,
-            Err(_) => return fit(pts), // a subset too small or degenerate for the kernel
+            Err(_) => return Ok((fit(pts)?, None)), // a subset too small or degenerate for the kernel
         };
         let (r, lo, hi) = bounds(&f, pts);
         let mut grew = false;
@@ -71,7 +73,17 @@ where
             }
         }
         if !grew {
-            return Ok(f);
+            let map = sel.iter().enumerate().filter(|(_, &s)| s).map(|(i, _)| i).collect();
+            return Ok((f, Some(map)));
+        }
+    }
+}
+
+/// Point numbers of a subset (`active_fit`'s map) translated to those of every point.
+pub fn remap(indices: &mut [usize], map: &Option<Vec<usize>>) {
+    if let Some(m) = map {
+        for i in indices.iter_mut() {
+            *i = m[*i];
         }
     }
 }
@@ -80,10 +92,10 @@ fn radii(pts: &[f64], dim: usize, c: &[f64]) -> Vec<f64> {
     pts.chunks_exact(dim).map(|p| p.iter().zip(c).map(|(a, b)| (a - b) * (a - b)).sum::<f64>().sqrt()).collect()
 }
 
-/// The minimum-zone circle of flat (n, 2) points started near `center`.
+/// The minimum-zone circle of flat (n, 2) points started near `center`: the complete fit
+/// (its control points numbered in `xy`, its arc that of every point).
 pub fn circle_near(xy: &[f64], center: [f64; 2]) -> Result<circle::CircleFit> {
-    let start = band(&radii(xy, 2, &center));
-    active_fit(xy, 2, start, |p| circle::fit(p, FitCriterion::MinZone), |f, p| (radii(p, 2, &f.center), f.r_in, f.r_out))
+    circle::from_zone(xy, FitCriterion::MinZone, circle_zone_near(xy, center)?)
 }
 
 /// The minimum-zone circle's zone alone (centre and radii: what a Monte Carlo trial's
@@ -91,19 +103,26 @@ pub fn circle_near(xy: &[f64], center: [f64; 2]) -> Result<circle::CircleFit> {
 /// the complete fit's arc of every round.
 pub fn circle_zone_near(xy: &[f64], center: [f64; 2]) -> Result<circle::Zone> {
     let start = band(&radii(xy, 2, &center));
-    active_fit(xy, 2, start, circle::min_zone, |z, p| (radii(p, 2, &z.center), z.r_in, z.r_out))
+    let (mut z, map) = active_fit(xy, 2, start, circle::min_zone, |z, p| (radii(p, 2, &z.center), z.r_in, z.r_out))?;
+    remap(&mut z.control_in, &map);
+    remap(&mut z.control_out, &map);
+    Ok(z)
 }
 
 /// The minimum-zone sphere of flat (n, 3) points started near `center`.
 pub fn sphere_near(pts: &[f64], center: V3) -> Result<sphere::SphereZone> {
     let start = band(&radii(pts, 3, &center));
-    active_fit(pts, 3, start, sphere::min_zone, |f, p| (radii(p, 3, &f.center), f.r_in, f.r_out))
+    let (mut z, map) = active_fit(pts, 3, start, sphere::min_zone, |f, p| (radii(p, 3, &f.center), f.r_in, f.r_out))?;
+    remap(&mut z.control_in, &map);
+    remap(&mut z.control_out, &map);
+    Ok(z)
 }
 
 /// The thinnest slab (free orientation) of flat (n, 3) points started near `normal`.
 pub fn slab_near(pts: &[f64], normal: V3) -> Result<crate::width3::Slab> {
     let h: Vec<f64> = pts.chunks_exact(3).map(|p| dot([p[0], p[1], p[2]], normal)).collect();
-    active_fit(pts, 3, band(&h), |p| datum::slab(p, Orientation::Free), |f, p| {
+    let (slab, _) = active_fit(pts, 3, band(&h), |p| datum::slab(p, Orientation::Free), |f, p| {
         (p.chunks_exact(3).map(|q| dot([q[0], q[1], q[2]], f.normal)).collect(), f.lo, f.hi)
-    })
+    })?;
+    Ok(slab) // a slab names no points
 }

@@ -152,9 +152,21 @@ fn active_zones_equal_the_zones_of_all_points() {
         let all = gagekit_form::circle::min_zone(&xy).unwrap();
         let near = active::circle_zone_near(&xy, [4.0 + 1e-3, -1.0]).unwrap();
         assert!((near.form_error() - all.form_error()).abs() < 1e-12, "circle trial {trial}");
+        // the control points are numbered among every point (not the subset) and lie on the zone
+        let on = |pts: &[f64], dim: usize, c: &[f64], i: usize, r: f64| {
+            let d: f64 = (0..dim).map(|k| (pts[dim * i + k] - c[k]).powi(2)).sum::<f64>().sqrt();
+            (d - r).abs() < 1e-9
+        };
+        assert!(near.control_in.iter().all(|&i| on(&xy, 2, &near.center, i, near.r_in)), "circle trial {trial}");
+        assert!(near.control_out.iter().all(|&i| on(&xy, 2, &near.center, i, near.r_out)), "circle trial {trial}");
+        let complete = active::circle_near(&xy, [4.0 + 1e-3, -1.0]).unwrap();
+        assert_eq!(complete.control_in, near.control_in);
+        assert!((complete.arc - gagekit_form::circle::fit(&xy, FitCriterion::MinZone).unwrap().arc).abs() < 1e-9);
         let p = perturb(&sphere, 3, &model, 7, trial).unwrap();
         let all = gagekit_form::sphere::min_zone(&p).unwrap();
         let near = active::sphere_near(&p, [1.0, 2.0 + 1e-3, 3.0]).unwrap();
         assert!(((near.r_out - near.r_in) - (all.r_out - all.r_in)).abs() < 2e-9, "sphere trial {trial}");
+        assert!(near.control_in.iter().all(|&i| on(&p, 3, &near.center, i, near.r_in)), "sphere trial {trial}");
+        assert!(near.control_out.iter().all(|&i| on(&p, 3, &near.center, i, near.r_out)), "sphere trial {trial}");
     }
 }
