@@ -109,6 +109,25 @@ pub fn select(points: &[f64], b: &OrientedBox) -> Result<Vec<usize>> {
     Ok(parts.concat())
 }
 
+/// The bin (0..n) of the coordinate `v` on bins of width 1/inv from `lo`, clamped; the
+/// same monotone formula for box limits and points.
+#[inline(always)]
+fn bin_of(v: f64, lo: f64, inv: f64, n: usize) -> usize {
+    let f = (v - lo) * inv;
+    // truncation is the floor for the positive values; no libm call in the hot loop
+    if f > 0.0 {
+        (f as usize).min(n - 1)
+    } else {
+        0
+    }
+}
+
+/// Whether `p` lies within [lo, hi] (six comparisons, no branch).
+#[inline(always)]
+fn within(p: &[f64], lo: &[f64; 3], hi: &[f64; 3]) -> bool {
+    (p[0] >= lo[0]) & (p[0] <= hi[0]) & (p[1] >= lo[1]) & (p[1] <= hi[1]) & (p[2] >= lo[2]) & (p[2] <= hi[2])
+}
+
 /// The boxes' bounding boxes binned on a coarse x-y grid over their union: a point
 /// is tested only against the boxes whose bin it falls in (a few of the many regions
 /// of a spec), and a point outside the union against none. Bins are found with the
@@ -168,20 +187,13 @@ impl BoxBins {
 
     #[inline]
     fn bin(&self, axis: usize, v: f64) -> usize {
-        // truncation is the floor for the positive values; no libm call in the hot loop
-        let f = (v - self.lo[axis]) * self.inv[axis];
-        if f > 0.0 {
-            (f as usize).min(self.n[axis] - 1)
-        } else {
-            0
-        }
+        bin_of(v, self.lo[axis], self.inv[axis], self.n[axis])
     }
 
     /// Whether `p` is inside the union's bounding box (no box outside it can hold `p`).
     #[inline(always)]
     fn in_union(&self, p: &[f64]) -> bool {
-        (p[0] >= self.lo[0]) & (p[0] <= self.hi[0]) & (p[1] >= self.lo[1]) & (p[1] <= self.hi[1])
-            & (p[2] >= self.lo[2]) & (p[2] <= self.hi[2])
+        within(p, &self.lo, &self.hi)
     }
 
     /// The boxes (ascending) whose bounding boxes may hold `p`, a point inside the union's
@@ -296,20 +308,13 @@ impl BoxGrid {
 
     #[inline(always)]
     fn bin(&self, axis: usize, v: f64) -> usize {
-        let f = (v - self.lo[axis]) * self.inv[axis];
-        // truncation is the floor for the positive values; no libm call in the hot loop
-        if f > 0.0 {
-            (f as usize).min(self.n[axis] - 1)
-        } else {
-            0
-        }
+        bin_of(v, self.lo[axis], self.inv[axis], self.n[axis])
     }
 
     /// Whether `p` is inside the union's bounding box (no box outside it can hold `p`).
     #[inline(always)]
     fn in_union(&self, p: &[f64]) -> bool {
-        (p[0] >= self.lo[0]) & (p[0] <= self.hi[0]) & (p[1] >= self.lo[1]) & (p[1] <= self.hi[1])
-            & (p[2] >= self.lo[2]) & (p[2] <= self.hi[2])
+        within(p, &self.lo, &self.hi)
     }
 
     /// The (sure, maybe) masks of the cell of `p`, a point inside the union's bounding box.
@@ -336,47 +341,57 @@ pub fn classify(points: &[f64], boxes: &[OrientedBox]) -> Result<Vec<Vec<usize>>
     }
     let testers: Vec<_> = boxes.iter().map(|b| b.tester()).collect();
     let grid = BoxGrid::new(boxes, points.len() / 3);
+    Ok(classify_near(points, nb, |p| grid.in_union(p), |p, i, out| {
+        let (mut sure, mut maybe) = grid.masks(p);
+        while maybe != 0 {
+            let k = maybe.trailing_zeros() as usize;
+            maybe &= maybe - 1;
+            if testers[k](p) {
+                sure |= 1 << k;
+            }
+        }
+        while sure != 0 {
+            let k = sure.trailing_zeros() as usize;
+            sure &= sure - 1;
+            out[k].push(i);
+        }
+    }))
+}
+
+/// The points of each box, in order: `visit(p, i, out)` pushes i onto the lists of the
+/// boxes that hold the point p (number i), a point inside the union's bounding box
+/// (`in_union`). One parallel pass; whether each point is inside the union first (six
+/// comparisons, no branch: most points of a scan are outside), then eight points at a
+/// time skipped where none is.
+fn classify_near<U, V>(points: &[f64], nb: usize, in_union: U, visit: V) -> Vec<Vec<usize>>
+where
+    U: Fn(&[f64]) -> bool + Sync,
+    V: Fn(&[f64], usize, &mut [Vec<usize>]) + Sync,
+{
     let parts: Vec<Vec<Vec<usize>>> = points
         .par_chunks(3 * CHUNK)
         .enumerate()
         .map_init(Vec::new, |near: &mut Vec<u8>, (ci, chunk)| {
             let mut out = vec![Vec::new(); nb];
-            // first whether each point is inside the union's bounding box (six comparisons,
-            // no branch: most points of a scan are outside), then eight points at a time
-            // skipped where none is
             let npts = chunk.len() / 3;
             near.clear();
-            near.extend(chunk.chunks_exact(3).map(|p| u8::from(grid.in_union(p))));
+            near.extend(chunk.chunks_exact(3).map(|p| u8::from(in_union(p))));
             near.resize(npts.div_ceil(8) * 8, 0);
             for (w, word) in near.chunks_exact(8).enumerate() {
                 if u64::from_ne_bytes(word.try_into().unwrap()) == 0 {
                     continue;
                 }
-              for (j, &b) in word.iter().enumerate() {
-                if b == 0 {
-                    continue;
-                }
-                let i = 8 * w + j;
-                let p = &chunk[3 * i..3 * i + 3];
-                let (mut sure, mut maybe) = grid.masks(p);
-                while maybe != 0 {
-                    let k = maybe.trailing_zeros() as usize;
-                    maybe &= maybe - 1;
-                    if testers[k](p) {
-                        sure |= 1 << k;
+                for (j, &b) in word.iter().enumerate() {
+                    if b != 0 {
+                        let i = 8 * w + j;
+                        visit(&chunk[3 * i..3 * i + 3], ci * CHUNK + i, &mut out);
                     }
                 }
-                while sure != 0 {
-                    let k = sure.trailing_zeros() as usize;
-                    sure &= sure - 1;
-                    out[k].push(ci * CHUNK + i);
-                }
-              }
             }
             out
         })
         .collect();
-    Ok(merge_parts(parts, nb))
+    merge_parts(parts, nb)
 }
 
 fn merge_parts(parts: Vec<Vec<Vec<usize>>>, nb: usize) -> Vec<Vec<usize>> {
@@ -395,39 +410,13 @@ fn classify_binned(points: &[f64], boxes: &[OrientedBox]) -> Vec<Vec<usize>> {
     let nb = boxes.len();
     let testers: Vec<_> = boxes.iter().map(|b| b.tester()).collect();
     let bins = BoxBins::new(boxes);
-    let parts: Vec<Vec<Vec<usize>>> = points
-        .par_chunks(3 * CHUNK)
-        .enumerate()
-        .map_init(Vec::new, |near: &mut Vec<u8>, (ci, chunk)| {
-            let mut out = vec![Vec::new(); nb];
-            // first whether each point is inside the boxes' union (six comparisons, no
-            // branch: most points of a scan are outside), then eight points at a time
-            // skipped where none is, the others binned and tested
-            let npts = chunk.len() / 3;
-            near.clear();
-            near.extend(chunk.chunks_exact(3).map(|p| u8::from(bins.in_union(p))));
-            near.resize(npts.div_ceil(8) * 8, 0);
-            for (w, word) in near.chunks_exact(8).enumerate() {
-                if u64::from_ne_bytes(word.try_into().unwrap()) == 0 {
-                    continue;
-                }
-                for (j, &b) in word.iter().enumerate() {
-                    if b == 0 {
-                        continue;
-                    }
-                    let i = 8 * w + j;
-                    let p = &chunk[3 * i..3 * i + 3];
-                    for &k in bins.candidates_in_union(p) {
-                        if testers[k](p) {
-                            out[k].push(ci * CHUNK + i);
-                        }
-                    }
-                }
+    classify_near(points, nb, |p| bins.in_union(p), |p, i, out| {
+        for &k in bins.candidates_in_union(p) {
+            if testers[k](p) {
+                out[k].push(i);
             }
-            out
-        })
-        .collect();
-    merge_parts(parts, nb)
+        }
+    })
 }
 
 #[cfg(test)]
