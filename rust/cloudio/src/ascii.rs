@@ -229,15 +229,20 @@ pub(crate) fn line_at<'a>(bytes: &'a [u8], starts: &[usize], k: usize) -> &'a [u
 /// The text of `bytes`, after the checks of [`parse_ascii`]: `dim` is 2 or 3, the text
 /// is not UTF-16 nor binary (no NUL byte); a UTF-8 byte-order mark is skipped.
 fn checked_text<'a>(bytes: &'a [u8], dim: usize, what: &str) -> Result<&'a [u8]> {
+    let bytes = checked_top(bytes, dim, what)?;
+    check_no_nul(bytes, what)?;
+    Ok(bytes)
+}
+
+/// [`checked_text`] but for the NUL bytes, which the caller then looks for.
+fn checked_top<'a>(bytes: &'a [u8], dim: usize, what: &str) -> Result<&'a [u8]> {
     check_dim(dim, what)?;
     if bytes.starts_with(&[0xFF, 0xFE]) || bytes.starts_with(&[0xFE, 0xFF]) {
         return Err(GkError::file_format(format!(
             "{what}: UTF-16 text (as Excel's \"Unicode Text\"); save it as CSV UTF-8 or plain ASCII"
         )));
     }
-    let bytes = bytes.strip_prefix(&[0xEF, 0xBB, 0xBF]).unwrap_or(bytes);
-    check_no_nul(bytes, what)?;
-    Ok(bytes)
+    Ok(bytes.strip_prefix(&[0xEF, 0xBB, 0xBF]).unwrap_or(bytes))
 }
 
 fn check_dim(dim: usize, what: &str) -> Result<()> {
@@ -867,6 +872,35 @@ fn count_lines(block: &[u8]) -> usize {
     memchr::memchr_iter(b'\n', block).count() + usize::from(block.last().is_some_and(|&b| b != b'\n'))
 }
 
+/// [`count_lines`] of `block`, and whether it holds a NUL byte, 256 KB at a time (the
+/// second look at each piece finds it in the cache: one pass over memory, not two).
+fn count_lines_nul(block: &[u8]) -> (usize, bool) {
+    let (mut n, mut nul) = (0, false);
+    for piece in block.chunks(1 << 18) {
+        nul |= memchr::memchr(0, piece).is_some();
+        n += memchr::memchr_iter(b'\n', piece).count();
+    }
+    (n + usize::from(block.last().is_some_and(|&b| b != b'\n')), nul)
+}
+
+/// Map the file pages under `bytes` (a part of a read-only file map) in one call
+/// (`madvise(MADV_POPULATE_READ)`, Linux 5.14+; an older kernel refuses it and the pages
+/// fault in as they are read): each thread maps its own part of the file, in parallel,
+/// where `MAP_POPULATE` maps the whole file on one thread before the parse starts.
+fn populate_read(bytes: &[u8]) {
+    #[cfg(target_os = "linux")]
+    {
+        const PAGE: usize = 4096;
+        let (lo, hi) = (bytes.as_ptr() as usize, bytes.as_ptr() as usize + bytes.len());
+        let (start, end) = (lo / PAGE * PAGE, hi.next_multiple_of(PAGE));
+        if end >= start + 64 * PAGE {
+            // SAFETY: whole pages of the map `bytes` lies in (a map covers whole pages);
+            // the call only maps them, it changes nothing.
+            unsafe { libc::madvise(start as *mut libc::c_void, end - start, libc::MADV_POPULATE_READ) };
+        }
+    }
+}
+
 /// Chunks of `body` of about `target` bytes, each ending after a line break (the last at
 /// the end of `body`).
 fn line_chunks(body: &[u8], target: usize) -> Vec<std::ops::Range<usize>> {
@@ -899,9 +933,10 @@ pub fn plan_body(body: &[u8], target: usize) -> BodyPlan {
     BodyPlan { lines: counts.iter().sum(), chunks, counts }
 }
 
-/// The chunk size [`parse_body`] uses: eight chunks a thread, 1 to 32 MB.
+/// The chunk size [`parse_body`] uses: 32 chunks a thread, 1 to 32 MB (small enough
+/// that the threads finish together: the last chunk is a thirty-second of a thread's share).
 fn default_target(len: usize) -> usize {
-    (len / (rayon::current_num_threads() * 8)).clamp(1 << 20, 32 << 20)
+    (len / (rayon::current_num_threads() * 32)).clamp(1 << 20, 32 << 20)
 }
 
 /// Map the pages of `out` writable in one call (`madvise(MADV_POPULATE_WRITE)`, Linux
@@ -1012,12 +1047,29 @@ impl AsciiFile {
         }
         // SAFETY: read-only map of a file the reader does not write; alive with `self`
         // (see PlyFile::open).
-        let map = unsafe { memmap2::MmapOptions::new().populate().map(&file) }.map_err(io)?;
-        let text = checked_text(&map, opts.dim, what)?;
+        // not populated here: each thread maps its part as it counts the lines
+        let map = unsafe { memmap2::MmapOptions::new().map(&file) }.map_err(io)?;
+        // the checks of checked_text, the NUL bytes looked for as the lines are counted
+        // (an error about the top is the NUL one if the file holds any, as with checked_text)
+        let text = checked_top(&map, opts.dim, what)?;
         let bom = map.len() - text.len();
-        let start = data_start(text, opts, what)?;
+        let start = data_start(text, opts, what).map_err(|e| check_no_nul(text, what).err().unwrap_or(e))?;
         let offset = bom + start.offset;
-        let plan = plan_body(&map[offset..], default_target(map.len() - offset));
+        check_no_nul(&map[bom..offset], what)?;
+        let body = &map[offset..];
+        let chunks = line_chunks(body, default_target(body.len()));
+        let counted: Vec<(usize, bool)> = chunks
+            .par_iter()
+            .map(|r| {
+                populate_read(&body[r.clone()]);
+                count_lines_nul(&body[r.clone()])
+            })
+            .collect();
+        if counted.iter().any(|&(_, nul)| nul) {
+            check_no_nul(&[0], what)?;
+        }
+        let counts: Vec<usize> = counted.into_iter().map(|(n, _)| n).collect();
+        let plan = BodyPlan { lines: counts.iter().sum(), chunks, counts };
         Ok(AsciiFile { offset, start, plan, what: what.to_string(), map })
     }
 
@@ -1304,6 +1356,38 @@ mod tests {
                 (a, b) => prop_assert!(false, "{:?} vs {:?}", a, b),
             }
         }
+    }
+
+    #[test]
+    fn mapped_file_refuses_nul_bytes_anywhere() {
+        // the mapped read (the NUL bytes looked for as the lines are counted, in chunks)
+        // gives the errors of parse_ascii: a NUL byte anywhere makes it a binary file,
+        // before any other error; a clean file reads the same
+        let dir = std::env::temp_dir().join(format!("gagekit_ascii_nul_{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let body = "1 2 3\n4.5,-6.25,7\n".repeat(200_000); // 3.6 MB: several chunks
+        let cases: Vec<Vec<u8>> = vec![
+            [body.as_bytes(), b"4 5\x00 6\n"].concat(),
+            [b"x y z\n\x00\n".as_slice(), body.as_bytes()].concat(),
+            b"foo\x00\nbar\n".to_vec(),
+            [body.as_bytes(), b"# c\x00omment\n", body.as_bytes()].concat(),
+            body.clone().into_bytes(),
+        ];
+        for (i, bytes) in cases.iter().enumerate() {
+            let path = dir.join(format!("{i}.xyz"));
+            std::fs::write(&path, bytes).unwrap();
+            let want = parse_ascii(bytes, &AsciiOptions::default(), "f");
+            let got = read_ascii_file(&path, &AsciiOptions::default(), "f");
+            match (want, got) {
+                (Err(a), Err(b)) => {
+                    assert!(a.message.contains("binary file"), "{}", a.message);
+                    assert_eq!(a.message, b.message);
+                }
+                (Ok(a), Ok(b)) => assert!(i == 4 && a == b && a.coords.len() == 1_200_000),
+                (a, b) => panic!("case {i}: {a:?} vs {b:?}"),
+            }
+        }
+        std::fs::remove_dir_all(&dir).ok();
     }
 
     #[test]
