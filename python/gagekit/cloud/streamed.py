@@ -14,6 +14,8 @@ hull vertices and at most :data:`REHULL` pending points for ``keep="hull"``).
 
 from __future__ import annotations
 
+from collections import deque
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from typing import Iterable, Optional, Sequence
 
@@ -98,16 +100,15 @@ class StreamedRegion:
     def point_array(self) -> np.ndarray:
         return np.ascontiguousarray(np.vstack(self._in_order(self.points))) if self.points else np.zeros((0, 3))
 
-    def sample(self, seed: int, ids: np.ndarray, chunk: np.ndarray, offset: int, size: int) -> None:
-        """Bottom-k sampling: every point inside (numbers ``ids``, rows ``ids - offset`` of
-        ``chunk``) gets a seeded key (:func:`sample_keys`, a function of its number: the
-        same sample in any chunk order), the ``size`` smallest stay. Once ``size`` are
-        held, a key above the largest held cannot enter: only the others are gathered."""
+    def sample(self, seed: int, ids: np.ndarray, pts: np.ndarray, size: int) -> None:
+        """Bottom-k sampling: every point inside (numbers ``ids``, rows of ``pts``) gets a
+        seeded key (:func:`sample_keys`, a function of its number: the same sample in any
+        chunk order), the ``size`` smallest stay. Once ``size`` are held, a key above the
+        largest held cannot enter: only the others are kept."""
         keys = sample_keys(seed, ids)
         if self.sample_keys is not None and len(self.sample_keys) >= size:
             lower = keys < self.sample_keys.max()
-            keys, ids = keys[lower], ids[lower]
-        pts = chunk[ids - offset]
+            keys, ids, pts = keys[lower], ids[lower], pts[lower]
         if self.sample_keys is None:
             self.sample_keys, self.sample_idx, self.sample_pts = keys, ids, pts
         else:
@@ -204,18 +205,31 @@ def cut_stream(chunks: Iterable[np.ndarray], boxes: Sequence[Box], keep: Sequenc
     # points costs far less a point than many hulls of a chunk's few (the prefilter's
     # fixed cost), and memory stays bounded by REHULL points a region.
     hull = [False] * len(boxes)
-    want_inside = bool(all_indices or sample)
+
+    def take(start: int, cuts: list) -> None:
+        # every box keeps every inside point here (no hull in the call): kept is inside
+        for r, (count, _, kept, kpts) in zip(regions, cuts):
+            ids = kept + start
+            r.add_kept(count, ids, ids, kpts)
+            if sample and count:
+                r.sample(seed, ids, kpts, sample)
+
+    # the regions' share of chunk i (number shifts, samples, hulls of the piled-up points)
+    # is taken in a thread while this one cuts chunk i + 1 (the cut holds no GIL) and the
+    # read-ahead reads chunk i + 2: at most two chunks' cuts wait, in order
     n = 0
-    for start, pts in chunks_at:
-        n += len(pts)
-        if boxes:
-            # one Rust call: classify, gather (and moments), parallel inside
-            cuts = _core.cloud.cut_chunk(as_points(pts), rows, hull, want_inside, state, flags)
-            for r, (count, inside, kept, kpts) in zip(regions, cuts):
-                inside = (kept if inside is None else inside) + start
-                r.add_kept(count, inside, kept + start, kpts)
-                if sample and count:
-                    r.sample(seed, inside, pts, start, sample)
+    with ThreadPoolExecutor(1, thread_name_prefix="gagekit-regions") as ex:
+        waiting: deque = deque()
+        for start, pts in chunks_at:
+            n += len(pts)
+            if boxes:
+                # one Rust call: classify, gather (and moments), parallel inside
+                cuts = _core.cloud.cut_chunk(as_points(pts), rows, hull, False, state, flags)
+                while len(waiting) >= 2:
+                    waiting.popleft().result()
+                waiting.append(ex.submit(take, start, cuts))
+        for fut in waiting:
+            fut.result()
     for k, r in enumerate(regions):
         if flags and flags[k]:
             r.moments = state[k].copy()
