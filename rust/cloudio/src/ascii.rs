@@ -495,7 +495,13 @@ fn digit_run(w: u64) -> (usize, u64) {
 #[inline(always)]
 fn digits_value(w: u64, len: usize) -> u64 {
     const THREES: u64 = 0x3030_3030_3030_3030;
-    let v = w.wrapping_sub(THREES) << (8 * (8 - len));
+    combine_digits(w.wrapping_sub(THREES) << (8 * (8 - len)))
+}
+
+/// The value of the 8 digit values (0..=9) in the bytes of `v`, the first the lowest byte:
+/// combined pairwise, then by fours (two multiplications, as in simdjson / fast_float).
+#[inline(always)]
+fn combine_digits(v: u64) -> u64 {
     let v = v.wrapping_mul(10).wrapping_add(v >> 8);
     ((v & 0x0000_00FF_0000_00FF).wrapping_mul(0x000F_4240_0000_0064)
         .wrapping_add(((v >> 16) & 0x0000_00FF_0000_00FF).wrapping_mul(0x0000_2710_0000_0001)))
@@ -723,10 +729,22 @@ fn masked_decimal(block: &[u8], p: usize, from: usize, to: usize, minus: u64, do
     if nint > 8 || nfrac > 8 || nint + nfrac > 15 {
         return None;
     }
-    let mut m = digits_value(word(block, p + i0), nint);
-    if nfrac > 0 {
-        m = m * POW10_U64[nfrac] + digits_value(word(block, p + dp + 1), nfrac);
-    }
+    let len = to - i0;
+    let m = if nfrac > 0 && len <= 8 {
+        // the digits and the point in one word: the digits before the point moved up one
+        // byte over it, so that the first len bytes are a zero and the digits in order
+        let w = word(block, p + i0) & 0x0F0F_0F0F_0F0F_0F0F;
+        let before = w & ((1u64 << (8 * nint)) - 1);
+        let after = w & !((1u64 << (8 * nint + 8)) - 1);
+        combine_digits(((before << 8) | after) << (8 * (8 - len)))
+    } else {
+        let m = digits_value(word(block, p + i0), nint);
+        if nfrac > 0 {
+            m * POW10_U64[nfrac] + digits_value(word(block, p + dp + 1), nfrac)
+        } else {
+            m
+        }
+    };
     // m < 10^15 < 2^63: the signed conversion (one instruction) is exact
     let v = (m as i64) as f64 / POW10[nfrac];
     Some(f64::from_bits(v.to_bits() | neg << 63))
