@@ -706,31 +706,32 @@ fn window_masks_bytes(w: &[u8; 64]) -> Masks {
 /// The value of the field at bytes `from..to` (< 64) of the line at `p` of `block`,
 /// whose masks (shifted to the line's start, cut at its end) are `minus` and `dot`, and
 /// which [`plain_lines`] has checked to be `-?D+(.D+)?` (`D` an ASCII digit, at most one
-/// point is checked here): `None` if it has two points or more than 8 integer digits, 8
-/// decimals or 15 digits in all. The digits are an integer m < 10^15 < 2^53 and the value
-/// is m / 10^k, k <= 8, both exact in binary, so the one correctly rounded division is the
-/// correctly rounded value of the decimal (Clinger's fast path, as in [`parse_number`]):
-/// the same bits as fast-float2. 8 bytes from each digit run's start must exist.
+/// point is checked here): [`point_decimal`] of it; `None` if it has two points.
 #[inline(always)]
 fn masked_decimal(block: &[u8], p: usize, from: usize, to: usize, minus: u64, dot: u64) -> Option<f64> {
-    let neg = (minus >> from) & 1;
-    let i0 = from + neg as usize;
     let d = dot & ((1u64 << to) - 1) & !((1u64 << from) - 1);
     if d & d.wrapping_sub(1) != 0 {
         return None;
     }
-    let (dp, nfrac) = if d == 0 {
-        (to, 0)
-    } else {
-        let dp = d.trailing_zeros() as usize;
-        (dp, to - dp - 1)
-    };
+    let dp = if d == 0 { to } else { d.trailing_zeros() as usize };
+    point_decimal(block, p, from, dp, to, (minus >> from) & 1)
+}
+
+/// The value of the field at bytes `from..to` (< 64) of the line at `p` of `block`, a
+/// minus sign first if `neg` (0 or 1), its point at `dp` (`to`: none), checked by
+/// [`plain_lines`] to be `-?D+(.D+)?` (`D` an ASCII digit): `None` if it has more than 8
+/// integer digits, 8 decimals or 15 digits in all. The digits are an integer
+/// m < 10^15 < 2^53 and the value is m / 10^k, k <= 8, both exact in binary, so the one
+/// correctly rounded division is the correctly rounded value of the decimal (Clinger's
+/// fast path, as in [`parse_number`]): the same bits as fast-float2 and `str::parse`.
+/// 8 bytes from each digit run's start must exist.
+#[inline(always)]
+fn point_decimal(block: &[u8], p: usize, from: usize, dp: usize, to: usize, neg: u64) -> Option<f64> {
+    let i0 = from + neg as usize;
     let nint = dp - i0;
-    if nint > 8 || nfrac > 8 || nint + nfrac > 15 {
-        return None;
-    }
     let len = to - i0;
-    let m = if nfrac > 0 && len <= 8 {
+    let nfrac = len - nint - usize::from(dp < to);
+    let m = if dp < to && len <= 8 {
         // the digits and the point in one word: the digits before the point moved up one
         // byte over it, so that the first len bytes are a zero and the digits in order
         let w = word(block, p + i0) & 0x0F0F_0F0F_0F0F_0F0F;
@@ -738,6 +739,9 @@ fn masked_decimal(block: &[u8], p: usize, from: usize, to: usize, minus: u64, do
         let after = w & !((1u64 << (8 * nint + 8)) - 1);
         combine_digits(((before << 8) | after) << (8 * (8 - len)))
     } else {
+        if nint > 8 || nfrac > 8 || nint + nfrac > 15 {
+            return None;
+        }
         let m = digits_value(word(block, p + i0), nint);
         if nfrac > 0 {
             m * POW10_U64[nfrac] + digits_value(word(block, p + dp + 1), nfrac)
@@ -795,9 +799,37 @@ unsafe fn plain_lines<const AVX2: bool>(block: &[u8], mut pos: usize, dim: usize
             if !ok || sep == 0 || if dim == 3 { s2 == 0 || s3 != 0 } else { s2 != 0 } {
                 return p;
             }
+            let o = &mut out[*w * dim..*w * dim + dim];
+            // the usual line: each field has a point, so points and separators alternate
+            // (the first byte is a digit or a minus: a missing one shows as bit 0 here)
+            let st = sep | dot;
+            let b1 = st.trailing_zeros();
+            let st = st & st.wrapping_sub(1);
+            let b2 = st.trailing_zeros();
+            let st = st & st.wrapping_sub(1);
+            let b3 = st.trailing_zeros();
+            let st = st & st.wrapping_sub(1);
+            let b4 = st.trailing_zeros();
+            let b5 = (st & st.wrapping_sub(1)).trailing_zeros();
+            let bit = |b: u32| 1u64.wrapping_shl(b);
+            let (points, seps) = if dim == 3 { (bit(b1) | bit(b3) | bit(b5), bit(b2) | bit(b4)) } else { (bit(b1) | bit(b3), bit(b2)) };
+            if points == dot && seps == sep {
+                let (b1, b2, b3, b4, b5) = (b1 as usize, b2 as usize, b3 as usize, b4 as usize, b5 as usize);
+                let neg = |from: usize| (minus >> from) & 1;
+                let last = if dim == 3 { b4 + 1 } else { b2 + 1 };
+                let (Some(x), Some(y)) = (point_decimal(block, p, 0, b1, b2, neg(0)), point_decimal(block, p, b2 + 1, b3, if dim == 3 { b4 } else { c }, neg(b2 + 1))) else { return p };
+                o[0] = x;
+                o[1] = y;
+                if dim == 3 {
+                    let Some(z) = point_decimal(block, p, last, b5, c, neg(last)) else { return p };
+                    o[2] = z;
+                }
+                *w += 1;
+                base += e + 1;
+                continue;
+            }
             let a1 = sep.trailing_zeros() as usize;
             let a2 = if dim == 3 { s2.trailing_zeros() as usize } else { c };
-            let o = &mut out[*w * dim..*w * dim + dim];
             let (Some(x), Some(y)) = (masked_decimal(block, p, 0, a1, minus, dot), masked_decimal(block, p, a1 + 1, a2, minus, dot)) else { return p };
             o[0] = x;
             o[1] = y;
