@@ -249,3 +249,46 @@ def test_hull_regions_rehulled_midway_equal_the_whole_read(monkeypatch):
     path, spec = DATA / "casting_ok.ply", DATA / "casting_ok.toml"
     whole = check_gages(read_cloud(path).points, spec).to_dict()
     assert check_gages_stream(open_cloud(path, chunk=4999), spec).to_dict() == whole
+
+
+def test_a_reused_ply_chunk_is_valid_until_the_next_is_read():
+    """The reusing PLY stream's contract (two buffers in turn, the next filled in a thread
+    while the consumer holds this one): each chunk holds its own points as long as the
+    consumer holds it, and a chunk held past the next one's read is overwritten by a
+    later chunk (so a consumer that keeps points must copy them, as ``cut_stream`` does)."""
+    whole = read_cloud(DATA / "bracket.ply").points
+    s = open_cloud(DATA / "bracket.ply", chunk=997).reusing()
+    chunks, copies = [], []
+    for c in s:
+        # this chunk is intact while it is held, though the next is being read meanwhile
+        assert same(c, whole[997 * len(copies):997 * len(copies) + len(c)])
+        chunks.append(c)
+        copies.append(c.copy())
+    assert len(chunks) > 3 and same(np.vstack(copies), whole)
+    # chunk i and chunk i + 2 share a buffer: the held chunk 0 now shows a later chunk
+    assert np.shares_memory(chunks[0], chunks[2]) and not np.shares_memory(chunks[0], chunks[1])
+    assert not same(chunks[0], copies[0])
+
+
+def test_read_ahead_reads_the_next_chunk_while_this_one_is_held():
+    """``_read_ahead`` yields (i, read(i)) in order until read(i) is 0, and has already
+    started read(i + 1) when it hands out i."""
+    import threading
+
+    from gagekit.cloud.stream import _read_ahead
+
+    started, sizes = [], [5, 3, 2, 0, 7]
+    reading = threading.Event()
+
+    def read(i):
+        started.append(i)
+        if i == 1:
+            reading.set()
+        return sizes[i]
+
+    got = []
+    for i, k in _read_ahead(read):
+        if i == 0:
+            assert reading.wait(5), "read(1) did not start while chunk 0 was held"
+        got.append((i, k))
+    assert got == [(0, 5), (1, 3), (2, 2)] and started == [0, 1, 2, 3]

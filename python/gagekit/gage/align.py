@@ -86,8 +86,8 @@ class Alignment:
 class DatumStats:
     """The count, centroid and scatter matrix sum (p - mean)(p - mean)^T of a datum's
     points, from the flat moments of its regions (``_core.cloud.point_moments`` or
-    ``cut_chunk``'s ``moments``: n, origin, sums of d and d d^T about the origin, their
-    compensations), merged region by region (parallel-axis rule)."""
+    ``cut_chunk``'s ``moments``), merged region by region by the parallel-axis rule
+    (``_core.cloud.moments_scatter``)."""
 
     n: int
     mean: np.ndarray
@@ -95,21 +95,7 @@ class DatumStats:
 
     @staticmethod
     def of_moments(moments) -> "DatumStats":
-        parts = []
-        for a in moments:
-            a = np.asarray(a, dtype=np.float64)
-            k = float(a[0])
-            if k == 0:
-                continue
-            s = a[4:13] + a[13:22]
-            s1 = s[:3]
-            s2 = np.array([[s[3], s[4], s[5]], [s[4], s[6], s[7]], [s[5], s[7], s[8]]])
-            parts.append((k, a[1:4] + s1 / k, s2 - np.outer(s1, s1) / k))
-        if not parts:
-            return DatumStats(0, np.zeros(3), np.zeros((3, 3)))
-        n = sum(k for k, _, _ in parts)
-        mean = sum(k * m for k, m, _ in parts) / n
-        scatter = sum(c + k * np.outer(m - mean, m - mean) for k, m, c in parts)
+        n, mean, scatter = _core.cloud.moments_scatter([np.ascontiguousarray(a, dtype=np.float64) for a in moments])
         return DatumStats(int(n), mean, scatter)
 
     @staticmethod

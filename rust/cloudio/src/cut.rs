@@ -87,6 +87,57 @@ impl Moments {
     }
 }
 
+/// Count, centroid and scatter matrix sum (p - mean)(p - mean)^T of a point set: what
+/// the least-squares starts of the 3-2-1 datum fits read (Eqs. 5.13-5.14).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Scatter {
+    pub n: u64,
+    pub mean: [f64; 3],
+    pub scatter: [[f64; 3]; 3],
+}
+
+impl Moments {
+    /// The count, centroid and scatter of the points added (the compensations folded in).
+    pub fn scatter(&self) -> Scatter {
+        let k = self.n as f64;
+        let s: [f64; 9] = std::array::from_fn(|i| self.sum[i] + self.comp[i]);
+        let s1 = [s[0], s[1], s[2]];
+        let s2 = [[s[3], s[4], s[5]], [s[4], s[6], s[7]], [s[5], s[7], s[8]]];
+        Scatter {
+            n: self.n,
+            mean: std::array::from_fn(|i| self.origin[i] + s1[i] / k),
+            scatter: std::array::from_fn(|i| std::array::from_fn(|j| s2[i][j] - s1[i] * s1[j] / k)),
+        }
+    }
+}
+
+/// The scatter of several regions' points together, from each region's moments, merged
+/// by the parallel-axis rule; empty regions are skipped, and none with points gives n = 0.
+pub fn merged_scatter(parts: &[Moments]) -> Scatter {
+    let parts: Vec<Scatter> = parts.iter().filter(|m| m.n > 0).map(Moments::scatter).collect();
+    let n: u64 = parts.iter().map(|p| p.n).sum();
+    if n == 0 {
+        return Scatter { n: 0, mean: [0.0; 3], scatter: [[0.0; 3]; 3] };
+    }
+    let mut mean = [0.0; 3];
+    for p in &parts {
+        for i in 0..3 {
+            mean[i] += p.n as f64 * p.mean[i];
+        }
+    }
+    let mean = mean.map(|v| v / n as f64);
+    let mut scatter = [[0.0; 3]; 3];
+    for p in &parts {
+        let d: [f64; 3] = std::array::from_fn(|i| p.mean[i] - mean[i]);
+        for i in 0..3 {
+            for j in 0..3 {
+                scatter[i][j] += p.scatter[i][j] + p.n as f64 * d[i] * d[j];
+            }
+        }
+    }
+    Scatter { n, mean, scatter }
+}
+
 /// What [`cut_chunk`] kept of one box.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RegionCut {
@@ -194,5 +245,30 @@ mod tests {
         let mean_x: f64 = sel.chunks_exact(3).map(|p| p[0]).sum::<f64>() / idx.len() as f64;
         let got = whole.origin[0] + (whole.sum[0] + whole.comp[0]) / whole.n as f64;
         assert!((got - mean_x).abs() < 1e-9, "{got} {mean_x}");
+    }
+
+    /// The scatter merged from two regions' moments (parallel-axis rule) equals the scatter
+    /// of their points together, computed directly about their mean.
+    #[test]
+    fn merged_scatter_equals_the_scatter_of_all_points() {
+        let a: Vec<f64> = (0..3 * 700).map(|i| ((i * 7919) % 1000) as f64 * 0.011 + 250.0).collect();
+        let b: Vec<f64> = (0..3 * 300).map(|i| ((i * 104729) % 997) as f64 * 0.007 - 40.0).collect();
+        let (mut ma, mut mb) = (Moments::default(), Moments::default());
+        ma.add(&a);
+        mb.add(&b);
+        let got = merged_scatter(&[ma, Moments::default(), mb]);
+        let all: Vec<f64> = a.iter().chain(&b).copied().collect();
+        let n = all.len() / 3;
+        assert_eq!(got.n as usize, n);
+        let mean: [f64; 3] = std::array::from_fn(|i| all.chunks_exact(3).map(|p| p[i]).sum::<f64>() / n as f64);
+        for i in 0..3 {
+            assert!((got.mean[i] - mean[i]).abs() < 1e-10, "mean {i}");
+            for j in 0..3 {
+                let want: f64 = all.chunks_exact(3).map(|p| (p[i] - mean[i]) * (p[j] - mean[j])).sum();
+                assert!((got.scatter[i][j] - want).abs() <= 1e-9 * want.abs().max(1.0), "scatter {i}{j}: {} {want}", got.scatter[i][j]);
+            }
+        }
+        assert_eq!(merged_scatter(&[Moments::default()]).n, 0);
+        assert_eq!(ma.scatter(), merged_scatter(&[ma]));
     }
 }

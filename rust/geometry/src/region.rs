@@ -128,6 +128,19 @@ fn within(p: &[f64], lo: &[f64; 3], hi: &[f64; 3]) -> bool {
     (p[0] >= lo[0]) & (p[0] <= hi[0]) & (p[1] >= lo[1]) & (p[1] <= hi[1]) & (p[2] >= lo[2]) & (p[2] <= hi[2])
 }
 
+/// The bounding box (lo, hi) of the union of axis-aligned boxes; (+inf, -inf) for none.
+fn union_aabb<'a>(aabbs: impl IntoIterator<Item = &'a ([f64; 3], [f64; 3])>) -> ([f64; 3], [f64; 3]) {
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for (l, h) in aabbs {
+        for i in 0..3 {
+            lo[i] = lo[i].min(l[i]);
+            hi[i] = hi[i].max(h[i]);
+        }
+    }
+    (lo, hi)
+}
+
 /// The boxes' bounding boxes binned on a coarse x-y grid over their union: a point
 /// is tested only against the boxes whose bin it falls in (a few of the many regions
 /// of a spec), and a point outside the union against none. Bins are found with the
@@ -147,14 +160,7 @@ const BINS: usize = 32;
 impl BoxBins {
     fn new(boxes: &[OrientedBox]) -> Self {
         let aabbs: Vec<_> = boxes.iter().map(|b| b.aabb()).collect();
-        let mut lo = [f64::INFINITY; 3];
-        let mut hi = [f64::NEG_INFINITY; 3];
-        for (l, h) in &aabbs {
-            for i in 0..3 {
-                lo[i] = lo[i].min(l[i]);
-                hi[i] = hi[i].max(h[i]);
-            }
-        }
+        let (lo, hi) = union_aabb(&aabbs);
         let mut n = [1usize; 2];
         let mut inv = [0.0; 2];
         for i in 0..2 {
@@ -233,15 +239,7 @@ const GRID_BOXES: usize = 32;
 impl BoxGrid {
     fn new(boxes: &[OrientedBox], npts: usize) -> Self {
         assert!(boxes.len() <= GRID_BOXES);
-        let mut lo = [f64::INFINITY; 3];
-        let mut hi = [f64::NEG_INFINITY; 3];
-        for b in boxes {
-            let (l, h) = b.aabb();
-            for i in 0..3 {
-                lo[i] = lo[i].min(l[i]);
-                hi[i] = hi[i].max(h[i]);
-            }
-        }
+        let (lo, hi) = union_aabb(&boxes.iter().map(|b| b.aabb()).collect::<Vec<_>>());
         // about 8 points a cell at least: the grid's build stays below the chunk's cost
         let per_axis = ((npts / 8) as f64).cbrt().floor().clamp(1.0, GRID as f64) as usize;
         let mut n = [1usize; 3];

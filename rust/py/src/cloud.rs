@@ -1,10 +1,10 @@
 //! Bindings of gagekit-cloudio: point-cloud reading (ASCII, PLY, E57) and ASCII writing.
 
-use crate::arrays::{indices, matrix, rows};
+use crate::arrays::{indices, matrix, rows, values};
 use crate::errors::{invalid, run};
-use gagekit_cloudio::{cut_chunk, data_columns, Moments, MOMENTS_LEN, read_ascii_file, scale_in_place, Keep, PlyAsciiStream, read_e57, write_ascii, AsciiOptions, AsciiStream, E57Stream, PlyFile, PlyStream};
+use gagekit_cloudio::{cut_chunk, data_columns, merged_scatter, Moments, MOMENTS_LEN, read_ascii_file, scale_in_place, Keep, PlyAsciiStream, read_e57, write_ascii, AsciiOptions, AsciiStream, E57Stream, PlyFile, PlyStream};
 use gagekit_core::GkError;
-use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray2, PyReadwriteArray2};
+use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyReadwriteArray2};
 use pyo3::prelude::*;
 
 /// A parsed ASCII point file.
@@ -386,11 +386,35 @@ fn cloud_point_moments<'py>(py: Python<'py>, points: PyReadonlyArray2<'py, f64>)
     Ok(PyArray1::from_vec(py, m.to_array().to_vec()))
 }
 
+/// The count, centroid (3,) and scatter matrix (3, 3) of the points of several regions
+/// together, from each region's flat moments (`point_moments`, `cut_chunk`'s `moments`):
+/// each region's sums with their compensations folded in, merged by the parallel-axis rule
+/// (`gagekit-cloudio`'s `merged_scatter`); regions without points are skipped.
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyfunction(module = "gagekit._core.cloud"))]
+#[pyfunction]
+#[pyo3(name = "moments_scatter")]
+fn cloud_moments_scatter<'py>(
+    py: Python<'py>,
+    moments: Vec<PyReadonlyArray1<'py, f64>>,
+) -> PyResult<(u64, Bound<'py, PyArray1<f64>>, Bound<'py, PyArray2<f64>>)> {
+    let mut parts = Vec::with_capacity(moments.len());
+    for a in &moments {
+        let flat = values(py, a, "moments")?;
+        if flat.len() != MOMENTS_LEN {
+            return Err(invalid(format!("moments: expected {MOMENTS_LEN} values a region, got {}", flat.len())));
+        }
+        parts.push(Moments::from_array(flat));
+    }
+    let s = merged_scatter(&parts);
+    Ok((s.n, PyArray1::from_vec(py, s.mean.to_vec()), matrix(py, s.scatter.concat(), 3)?))
+}
+
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<AsciiChunks>()?;
     m.add_class::<PlyChunks>()?;
     m.add_function(wrap_pyfunction!(cloud_ascii_chunks, m)?)?;
     m.add_function(wrap_pyfunction!(cloud_point_moments, m)?)?;
+    m.add_function(wrap_pyfunction!(cloud_moments_scatter, m)?)?;
     m.add_function(wrap_pyfunction!(cloud_ply_chunks, m)?)?;
     m.add_function(wrap_pyfunction!(cloud_cut_chunk, m)?)?;
     m.add_class::<PlyAsciiChunks>()?;

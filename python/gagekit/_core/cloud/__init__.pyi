@@ -18,6 +18,7 @@ __all__ = [
     "ascii_columns",
     "cut_chunk",
     "e57_chunks",
+    "moments_scatter",
     "ply_ascii_chunks",
     "ply_chunks",
     "ply_layout",
@@ -205,6 +206,14 @@ def e57_chunks(path: builtins.str) -> typing.Optional[E57Chunks]:
     r"""
     Open an E57 file for reading its points in chunks, data packet by data packet; None
     when a scan is not one the stream reads (the file is then read whole).
+    """
+
+def moments_scatter(moments: typing.Sequence[numpy.typing.NDArray[numpy.float64]]) -> tuple[builtins.int, numpy.typing.NDArray[numpy.float64], numpy.typing.NDArray[numpy.float64]]:
+    r"""
+    The count, centroid (3,) and scatter matrix (3, 3) of the points of several regions
+    together, from each region's flat moments (`point_moments`, `cut_chunk`'s `moments`):
+    each region's sums with their compensations folded in, merged by the parallel-axis rule
+    (`gagekit-cloudio`'s `merged_scatter`); regions without points are skipped.
     """
 
 def ply_ascii_chunks(path: builtins.str) -> typing.Optional[PlyAsciiChunks]:

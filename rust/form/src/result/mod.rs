@@ -45,10 +45,18 @@ impl Certificate {
     }
 }
 
-/// The control points of a zone: `inner`, then those of `outer` not among them.
+/// The control points of a zone: `inner`, then those of `outer` not among them. Linear
+/// time through a hash set of `inner` (a form error near zero makes every point a control
+/// point on both sides: the membership scans took 15 s on the 280,500 points of a
+/// generated sphere).
 pub fn merge_control(inner: &[usize], outer: &[usize]) -> Vec<usize> {
     let mut c = inner.to_vec();
-    c.extend(outer.iter().filter(|i| !inner.contains(i)));
+    if inner.len() <= 32 {
+        c.extend(outer.iter().filter(|i| !inner.contains(i)));
+    } else {
+        let seen: rustc_hash::FxHashSet<usize> = inner.iter().copied().collect();
+        c.extend(outer.iter().filter(|i| !seen.contains(i)));
+    }
     c
 }
 

@@ -20,6 +20,12 @@ fn fmt_g_is_c_percent_g() {
 #[test]
 fn merged_control_points_keep_the_inner_ones_first() {
     assert_eq!(merge_control(&[3, 1], &[1, 7, 3, 2]), vec![3, 1, 7, 2]);
+    // the hash-set path (many control points) gives the list of the plain scan
+    let inner: Vec<usize> = (0..200).map(|i| (i * 37) % 501).collect();
+    let outer: Vec<usize> = (0..300).map(|i| (i * 11) % 499).collect();
+    let mut plain = inner.clone();
+    plain.extend(outer.iter().filter(|i| !inner.contains(i)));
+    assert_eq!(merge_control(&inner, &outer), plain);
 }
 
 #[test]
