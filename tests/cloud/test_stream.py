@@ -292,3 +292,43 @@ def test_read_ahead_reads_the_next_chunk_while_this_one_is_held():
             assert reading.wait(5), "read(1) did not start while chunk 0 was held"
         got.append((i, k))
     assert got == [(0, 5), (1, 3), (2, 2)] and started == [0, 1, 2, 3]
+
+
+@pytest.mark.parametrize("chunk", [1, 97, 4999])
+def test_a_backward_pass_keeps_what_a_forward_pass_keeps(tmp_path, chunk, monkeypatch):
+    """A pass from the end of the file back (binary PLY; the gage check's second pass)
+    keeps the same hull vertices and points, in the same ascending order, the same counts
+    and inside numbers and the same picture sample as a forward pass, at any chunk size,
+    with hulls re-made midway; exact duplicate points keep their lowest number (the
+    cloud is written twice over, so every point has a twin)."""
+    from gagekit.cloud import streamed
+    from gagekit.cloud.regions import Box
+    from gagekit.cloud.streamed import cut_stream
+
+    monkeypatch.setattr(streamed, "REHULL", 300)
+    pts = np.ascontiguousarray(read_cloud(DATA / "casting_ok.ply").points[::40])
+    pts = np.vstack([pts, pts[::-1]])
+    path = tmp_path / "twice.ply"
+    header = (f"ply\nformat binary_little_endian 1.0\nelement vertex {len(pts)}\nproperty double x\n"
+              "property double y\nproperty double z\nend_header\n")
+    path.write_bytes(header.encode() + pts.astype("<f8").tobytes())
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    mid = (lo + hi) / 2
+    boxes = [Box(tuple(mid), tuple((hi - lo) * 0.6), name="a"),
+             Box(tuple(lo + (hi - lo) * 0.3), tuple((hi - lo) * 0.5), rotation=(0.1, 0.2, 0.3), name="b")]
+    s = open_cloud(path, chunk=chunk)
+    assert s.backward() is not None
+    args = dict(all_indices=True, sample=50, seed=4)
+    fwd = cut_stream(s, boxes, ["hull", "all"], **args)
+    back = cut_stream(s, boxes, ["hull", "all"], backward=True, **args)
+    assert back.count == fwd.count == len(pts)
+    for f, b in zip(fwd.regions, back.regions):
+        assert b.count == f.count > 0
+        assert np.array_equal(b.index_array(), f.index_array())
+        assert np.all(np.diff(b.index_array()) > 0)
+        assert b.point_array().tobytes() == f.point_array().tobytes()
+        assert np.array_equal(np.concatenate(b.all_indices), np.concatenate(f.all_indices))
+        assert b.sample_points().tobytes() == f.sample_points().tobytes()
+    # the moments need file order: a pass summing them reads forward
+    assert cut_stream(s, boxes[:1], ["hull"], moments=[True], backward=True)["a"].moments.tobytes() == \
+        cut_stream(s, boxes[:1], ["hull"], moments=[True])["a"].moments.tobytes()

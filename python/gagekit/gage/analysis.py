@@ -307,7 +307,9 @@ def build_problem_stream(stream, spec: SpecLike) -> GageProblem:
     twice: the first pass keeps the hull vertices and the moments of the datum regions
     (what the 3-2-1 fit needs: :class:`~gagekit.gage.align.DatumStats`; memory does not
     grow with the datum regions' points); the second cuts the
-    gage regions, carried into the scanner frame by the fitted C_L^S. Scanner-frame gage
+    gage regions, carried into the scanner frame by the fitted C_L^S, reading the file
+    from its end back where the format allows (binary PLY), so that it starts on what
+    the page cache still holds of the first. Scanner-frame gage
     regions are cut in the first pass. Gage regions keep only their hull vertices, chunk
     by chunk (:mod:`gagekit.cloud.streamed`): the same vertices, in the same order, as a
     whole read, hence the same LP. The region pictures use a seeded uniform sample of each
@@ -332,7 +334,9 @@ def build_problem_stream(stream, spec: SpecLike) -> GageProblem:
             got[r.name] = first.regions[k0 + i]
     if late:
         boxes = [region_in_scanner(r, alignment) for r in late]
-        second = cut_stream(stream, boxes, ["hull"] * len(late), sample=PLOT_POINTS)
+        # from the end of the file back: a file larger than the page cache has its end,
+        # read last by the first pass, still cached (the same hulls, in the same order)
+        second = cut_stream(stream, boxes, ["hull"] * len(late), sample=PLOT_POINTS, backward=True)
         _check_caught(second, [r.name for r in late], [r.frame for r in late], source)
         for r, sr in zip(late, second.regions):
             got[r.name] = sr
