@@ -11,10 +11,13 @@ Each case runs ``gagekit gage check SCAN GAGES --json --memory M`` in a child pr
 in three reading modes: ``whole`` (--memory 64G: the file read whole, a no-copy map of
 gagekit's own PLY layout), ``stream`` (--memory 2G: chunks of 5.6 M points, two buffers
 of them: the next is read while the last is classified) and ``stream-256M`` (chunks of
-0.7 M points). A streamed check with a 3-2-1 alignment reads the file twice: the datum
-regions forward, then the gage regions from the end of the file back (a file larger
-than the page cache then starts its second pass on what the first left cached), each
-chunk's regions taken in a thread while the next chunk is cut. Printed per case and mode: wall time, the
+0.7 M points). A streamed check with a 3-2-1 alignment reads the file once when its
+first chunk gives a 3-2-1 frame (this scan's does): the part-frame gage regions are cut
+in the datum pass around the boxes that frame puts them at (hull vertices of a shrunk
+core, every point of a thin shell) and joined once the file's frame is fitted; else
+twice, the gage regions from the end of the file back (a file larger than the page
+cache then starts its second pass on what the first left cached). Each chunk's regions
+are taken in a thread while the next chunk is cut. Printed per case and mode: wall time, the
 child's peak RSS (max resident set, from wait4), the objective of Eq. 5.11, and whether
 the whole JSON result equals the whole read's (bit for bit). The file is written just
 before, so it is read from a warm page cache (the "warm" figures); --cold drops the page

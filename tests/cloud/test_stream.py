@@ -332,3 +332,29 @@ def test_a_backward_pass_keeps_what_a_forward_pass_keeps(tmp_path, chunk, monkey
     # the moments need file order: a pass summing them reads forward
     assert cut_stream(s, boxes[:1], ["hull"], moments=[True], backward=True)["a"].moments.tobytes() == \
         cut_stream(s, boxes[:1], ["hull"], moments=[True])["a"].moments.tobytes()
+
+
+@pytest.mark.parametrize("shell", [0.1, 1e-9])
+def test_a_one_pass_gage_check_equals_the_whole_read(monkeypatch, shell):
+    """With a first chunk that holds the datum regions, the streamed gage check reads the
+    file once: the part-frame gage regions are cut in the datum pass around the boxes the
+    first chunk's alignment puts them at (hull vertices of a shrunk core, every point of a
+    shell around it), and joined once the whole file's alignment is known. The result is
+    the whole read's, bit for bit; with a shell too thin to hold the fitted boxes it falls
+    back to the second pass, with the same result."""
+    from gagekit.cloud import streamed
+    from gagekit.gage import analysis
+    from gagekit.gage.analysis import check_gages, check_gages_stream
+
+    monkeypatch.setattr(streamed, "REHULL", 500)
+    monkeypatch.setattr(analysis, "SHELL_MM", shell)
+    passes = []
+    cut = streamed.cut_stream
+    monkeypatch.setattr(streamed, "cut_stream", lambda c, b, *a, **k: passes.append(len(b)) or cut(c, b, *a, **k))
+    path, spec = DATA / "casting_ok.ply", DATA / "casting_ok.toml"
+    whole = check_gages(read_cloud(path).points, spec).to_dict()
+    n = open_cloud(path).count
+    assert check_gages_stream(open_cloud(path, chunk=n // 3 + 1), spec).to_dict() == whole
+    # the first chunk's guess, then one pass with the datum, core and shell boxes; a second
+    # pass over the gage regions only when the shell is too thin
+    assert len(passes) == (2 if shell == 0.1 else 3)

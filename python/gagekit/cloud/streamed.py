@@ -182,7 +182,8 @@ def _numbered(chunks: Iterable[np.ndarray], backward: bool) -> tuple[Iterable[tu
 
 def cut_stream(chunks: Iterable[np.ndarray], boxes: Sequence[Box], keep: Sequence[str], *,
                all_indices: bool = False, sample: int = 0, seed: int = 0,
-               moments: Optional[Sequence[bool]] = None, backward: bool = False) -> Pass:
+               moments: Optional[Sequence[bool]] = None, backward: bool = False,
+               minus: Optional[Sequence[Optional[int]]] = None) -> Pass:
     """One pass over ``chunks`` ((m, 3) arrays in file order): every chunk classified into
     ``boxes``; per box ``keep`` is ``"all"`` (every point inside) or ``"hull"`` (hull
     vertices). ``all_indices`` also keeps every inside point's number (int64, 8 bytes a
@@ -192,7 +193,8 @@ def cut_stream(chunks: Iterable[np.ndarray], boxes: Sequence[Box], keep: Sequenc
     ``backward`` may not be combined with them). ``backward``: read the chunks from the
     end of the file back where the stream can (a second pass then starts on what the
     page cache holds of the first); the result is the same (the hull of a set, every
-    list joined in ascending point number)."""
+    list joined in ascending point number). ``minus[i]`` = k (a ``keep="all"`` box i):
+    box i keeps only its points outside box k (a shell around box k)."""
     flags = list(moments) if moments is not None and any(moments) else []
     chunks_at, back = _numbered(chunks, backward and not flags)
     regions = [StreamedRegion(b.name, k, all_indices=[] if all_indices else None, backward=back)
@@ -208,8 +210,13 @@ def cut_stream(chunks: Iterable[np.ndarray], boxes: Sequence[Box], keep: Sequenc
 
     def take(start: int, cuts: list) -> None:
         # every box keeps every inside point here (no hull in the call): kept is inside
-        for r, (count, _, kept, kpts) in zip(regions, cuts):
-            ids = kept + start
+        ids_of = [kept + start for _, _, kept, _ in cuts]
+        for i, (r, (count, _, _, kpts)) in enumerate(zip(regions, cuts)):
+            ids = ids_of[i]
+            if minus and minus[i] is not None and len(ids):
+                out = ~_members(ids, ids_of[minus[i]])
+                ids, kpts = ids[out], kpts[out]
+                count = len(ids)
             r.add_kept(count, ids, ids, kpts)
             if sample and count:
                 r.sample(seed, ids, kpts, sample)
@@ -234,6 +241,14 @@ def cut_stream(chunks: Iterable[np.ndarray], boxes: Sequence[Box], keep: Sequenc
         if flags and flags[k]:
             r.moments = state[k].copy()
     return Pass(n, [r.finish() for r in regions])
+
+
+def _members(ids: np.ndarray, of: np.ndarray) -> np.ndarray:
+    """Which of the ascending ``ids`` are among the ascending ``of``."""
+    if not len(of):
+        return np.zeros(len(ids), dtype=bool)
+    pos = np.minimum(np.searchsorted(of, ids), len(of) - 1)
+    return of[pos] == ids
 
 
 def hull_stream(chunks: Iterable[np.ndarray]) -> tuple[int, np.ndarray, np.ndarray]:
