@@ -184,10 +184,12 @@ def main() -> None:
         m2 = _core.mesh.Mesh(v2, t2)
         p2 = scan(1_000_000, 1, bumpy=True)  # the tube radius varies with u and v: one pose fits
         rot = Rotation.random(random_state=7).as_matrix()
-        moved = np.ascontiguousarray(p2 @ rot.T + [300.0, -200.0, 150.0])
+        # einsum, not `@`: a BLAS product wakes OpenBLAS's threads, which spin-wait for
+        # more work for a while after it, on the cores (and in the CPU time) of the fit
+        moved = np.ascontiguousarray(np.einsum("ij,kj->ik", p2, rot) + [300.0, -200.0, 150.0])
         t_fit, c_fit, fit = timed_cpu(lambda: m2.best_fit(moved))
         M = np.array(fit.matrix)
-        back = moved @ M[:3, :3].T + M[:3, 3]
+        back = np.einsum("ij,kj->ik", moved, M[:3, :3]) + M[:3, 3]
         line(f"best-fit {len(moved) / 1e6:.1f} M pts / {len(t2) / 1e3:.0f} k tri, random pose", t_fit, None)
         print(f"#   largest point displacement from the truth {np.abs(back - p2).max():.2e} mm, rms {fit.rms_before:.1f} -> "
               f"{fit.rms_after:.4f} mm, {fit.iterations} iterations")

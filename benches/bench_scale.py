@@ -11,7 +11,13 @@ Each case runs ``gagekit gage check SCAN GAGES --json --memory M`` in a child pr
 in three reading modes: ``whole`` (--memory 64G: the file read whole, a no-copy map of
 gagekit's own PLY layout), ``stream`` (--memory 2G: chunks of 5.6 M points, two buffers
 of them: the next is read while the last is classified) and ``stream-256M`` (chunks of
-0.7 M points). Printed per case and mode: wall time, the
+0.7 M points). A streamed check with a 3-2-1 alignment reads the file once when its
+first chunk gives a 3-2-1 frame (this scan's does): the part-frame gage regions are cut
+in the datum pass around the boxes that frame puts them at (hull vertices of a shrunk
+core, every point of a thin shell) and joined once the file's frame is fitted; else
+twice, the gage regions from the end of the file back (a file larger than the page
+cache then starts its second pass on what the first left cached). Each chunk's regions
+are taken in a thread while the next chunk is cut. Printed per case and mode: wall time, the
 child's peak RSS (max resident set, from wait4), the objective of Eq. 5.11, and whether
 the whole JSON result equals the whole read's (bit for bit). The file is written just
 before, so it is read from a warm page cache (the "warm" figures); --cold drops the page
@@ -243,7 +249,8 @@ def main() -> None:
     if args.dask:
         dask_line(args.dir, args.dask_scans, args.dask_points, args.dask_memory)
         return
-    sizes = [int(s) for s in args.sizes.split(",") if s] + ([1000] if args.huge else [])
+    # --huge adds 1000 once (``--sizes 1000 --huge`` does not write the 24 GB file twice)
+    sizes = list(dict.fromkeys([int(s) for s in args.sizes.split(",") if s] + ([1000] if args.huge else [])))
     modes = [m for m in MODES if m[0] in args.modes.split(",")]
     print(f"# load average at start: {' '.join(f'{x:.1f}' for x in os.getloadavg())} ({os.cpu_count()} cores); "
           "cpu s: the child's user + system time (less sensitive to a shared machine than the wall time)")

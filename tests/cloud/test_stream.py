@@ -292,3 +292,69 @@ def test_read_ahead_reads_the_next_chunk_while_this_one_is_held():
             assert reading.wait(5), "read(1) did not start while chunk 0 was held"
         got.append((i, k))
     assert got == [(0, 5), (1, 3), (2, 2)] and started == [0, 1, 2, 3]
+
+
+@pytest.mark.parametrize("chunk", [1, 97, 4999])
+def test_a_backward_pass_keeps_what_a_forward_pass_keeps(tmp_path, chunk, monkeypatch):
+    """A pass from the end of the file back (binary PLY; the gage check's second pass)
+    keeps the same hull vertices and points, in the same ascending order, the same counts
+    and inside numbers and the same picture sample as a forward pass, at any chunk size,
+    with hulls re-made midway; exact duplicate points keep their lowest number (the
+    cloud is written twice over, so every point has a twin)."""
+    from gagekit.cloud import streamed
+    from gagekit.cloud.regions import Box
+    from gagekit.cloud.streamed import cut_stream
+
+    monkeypatch.setattr(streamed, "REHULL", 300)
+    pts = np.ascontiguousarray(read_cloud(DATA / "casting_ok.ply").points[::40])
+    pts = np.vstack([pts, pts[::-1]])
+    path = tmp_path / "twice.ply"
+    header = (f"ply\nformat binary_little_endian 1.0\nelement vertex {len(pts)}\nproperty double x\n"
+              "property double y\nproperty double z\nend_header\n")
+    path.write_bytes(header.encode() + pts.astype("<f8").tobytes())
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    mid = (lo + hi) / 2
+    boxes = [Box(tuple(mid), tuple((hi - lo) * 0.6), name="a"),
+             Box(tuple(lo + (hi - lo) * 0.3), tuple((hi - lo) * 0.5), rotation=(0.1, 0.2, 0.3), name="b")]
+    s = open_cloud(path, chunk=chunk)
+    assert s.backward() is not None
+    args = dict(all_indices=True, sample=50, seed=4)
+    fwd = cut_stream(s, boxes, ["hull", "all"], **args)
+    back = cut_stream(s, boxes, ["hull", "all"], backward=True, **args)
+    assert back.count == fwd.count == len(pts)
+    for f, b in zip(fwd.regions, back.regions):
+        assert b.count == f.count > 0
+        assert np.array_equal(b.index_array(), f.index_array())
+        assert np.all(np.diff(b.index_array()) > 0)
+        assert b.point_array().tobytes() == f.point_array().tobytes()
+        assert np.array_equal(np.concatenate(b.all_indices), np.concatenate(f.all_indices))
+        assert b.sample_points().tobytes() == f.sample_points().tobytes()
+    # the moments need file order: a pass summing them reads forward
+    assert cut_stream(s, boxes[:1], ["hull"], moments=[True], backward=True)["a"].moments.tobytes() == \
+        cut_stream(s, boxes[:1], ["hull"], moments=[True])["a"].moments.tobytes()
+
+
+@pytest.mark.parametrize("shell", [0.1, 1e-9])
+def test_a_one_pass_gage_check_equals_the_whole_read(monkeypatch, shell):
+    """With a first chunk that holds the datum regions, the streamed gage check reads the
+    file once: the part-frame gage regions are cut in the datum pass around the boxes the
+    first chunk's alignment puts them at (hull vertices of a shrunk core, every point of a
+    shell around it), and joined once the whole file's alignment is known. The result is
+    the whole read's, bit for bit; with a shell too thin to hold the fitted boxes it falls
+    back to the second pass, with the same result."""
+    from gagekit.cloud import streamed
+    from gagekit.gage import analysis
+    from gagekit.gage.analysis import check_gages, check_gages_stream
+
+    monkeypatch.setattr(streamed, "REHULL", 500)
+    monkeypatch.setattr(analysis, "SHELL_MM", shell)
+    passes = []
+    cut = streamed.cut_stream
+    monkeypatch.setattr(streamed, "cut_stream", lambda c, b, *a, **k: passes.append(len(b)) or cut(c, b, *a, **k))
+    path, spec = DATA / "casting_ok.ply", DATA / "casting_ok.toml"
+    whole = check_gages(read_cloud(path).points, spec).to_dict()
+    n = open_cloud(path).count
+    assert check_gages_stream(open_cloud(path, chunk=n // 3 + 1), spec).to_dict() == whole
+    # the first chunk's guess, then one pass with the datum, core and shell boxes; a second
+    # pass over the gage regions only when the shell is too thin
+    assert len(passes) == (2 if shell == 0.1 else 3)

@@ -191,6 +191,30 @@ class CloudStream:
         self.points_read = n
 
 
+    def backward(self) -> Optional[Iterator[tuple[int, np.ndarray]]]:
+        """The chunks from the end of the file back, as (number of the chunk's first point,
+        chunk), in one reused buffer like :meth:`reusing`'s, or None when the format reads
+        only forward (binary PLY reads any range). A second pass over a file larger than
+        the page cache finds the end of the file, read last by the pass before, still
+        cached. The same rows as a forward pass, unit factor and checks applied alike."""
+        source = getattr(self._raw_chunks, "backward", None)
+        if source is None:
+            return None
+        scale = [self.scale_to_mm, self.scale_to_mm, self.z_scale_to_mm]
+
+        def chunks() -> Iterator[tuple[int, np.ndarray]]:
+            for start, raw in source():
+                pts = np.require(raw, np.float64, ["C_CONTIGUOUS", "WRITEABLE"])
+                if not self._finite_checked:
+                    _check_finite_from(pts, start, self.path)
+                if scale != [1.0, 1.0, 1.0] and len(pts):
+                    _scale_from(pts, scale, start, self.path)
+                if len(pts):
+                    yield start, pts
+
+        return chunks()
+
+
 def _check_finite_from(pts: np.ndarray, offset: int, what: str) -> None:
     try:
         check_finite(pts, what)
@@ -259,17 +283,41 @@ def _open_format(p: Path, suffix: str, m: int):
                 while s is not None and (c := s.next_chunk(m)) is not None:
                     yield c
 
+            count = int(s0.count)
+            held: list = []
+
+            def buffers() -> tuple:
+                # two buffers in turn, made once and kept for every pass (fresh pages
+                # cost more than the copy into them): the next chunk is read (in a
+                # thread, no GIL held) while the consumer uses this one, which stays
+                # valid until it asks for the next
+                if not held:
+                    size = min(m, max(1, count))
+                    held.extend((np.empty((size, 3)), np.empty((size, 3))))
+                return held[0], held[1]
+
             def ply_chunks_reused() -> Iterator[np.ndarray]:
                 s = _core.cloud.ply_chunks(str(p))
-                size = min(m, max(1, int(s0.count)))
-                bufs = (np.empty((size, 3)), np.empty((size, 3)))
-                # two buffers in turn: the next chunk is read (in a thread, no GIL held)
-                # while the consumer uses this one, which stays valid until it asks for
-                # the next
+                bufs = buffers()
                 for i, k in _read_ahead(lambda i: s.next_into(bufs[i % 2])):
                     yield bufs[i % 2][:k]
 
+            def ply_chunks_backward() -> Iterator[tuple[int, np.ndarray]]:
+                s = _core.cloud.ply_chunks(str(p))
+                bufs = buffers()
+                starts = list(range(0, count, m))[::-1]
+
+                def read(i: int) -> int:
+                    if i >= len(starts):
+                        return 0
+                    s.seek(starts[i])
+                    return s.next_into(bufs[i % 2][:min(m, count - starts[i])])
+
+                for i, k in _read_ahead(read):
+                    yield starts[i], bufs[i % 2][:k]
+
             ply_chunks.reusing = ply_chunks_reused  # type: ignore[attr-defined]
+            ply_chunks.backward = ply_chunks_backward  # type: ignore[attr-defined]
             return Raw(empty, f"ply {_ply_head(p)[1]}"), ply_chunks, int(s0.count), True, None
         a0 = _core.cloud.ply_ascii_chunks(str(p))
         if a0 is not None:

@@ -14,6 +14,8 @@ hull vertices and at most :data:`REHULL` pending points for ``keep="hull"``).
 
 from __future__ import annotations
 
+from collections import deque
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from typing import Iterable, Optional, Sequence
 
@@ -46,6 +48,9 @@ class StreamedRegion:
     sample_pts: Optional[np.ndarray] = None
     moments: Optional[np.ndarray] = None
     """the flat moments of every point inside (``_core.cloud.point_moments``), when asked for"""
+    backward: bool = False
+    """chunks come from the end of the file back: the lists hold descending blocks, each
+    ascending, so they are joined in reverse (ascending point numbers, as forward)"""
     _pending: int = 0
 
     def add(self, ids: np.ndarray, pts: np.ndarray) -> None:
@@ -79,23 +84,31 @@ class StreamedRegion:
     def finish(self) -> "StreamedRegion":
         if self.keep == "hull":
             self._rehull()
+        if self.backward:  # one ascending order from here on
+            for blocks in (self.indices, self.points, self.all_indices):
+                if blocks is not None:
+                    blocks.reverse()
+            self.backward = False
         return self
 
+    def _in_order(self, blocks: list) -> list:
+        return blocks[::-1] if self.backward else blocks
+
     def index_array(self) -> np.ndarray:
-        return np.concatenate(self.indices) if self.indices else np.zeros(0, dtype=np.int64)
+        return np.concatenate(self._in_order(self.indices)) if self.indices else np.zeros(0, dtype=np.int64)
 
     def point_array(self) -> np.ndarray:
-        return np.ascontiguousarray(np.vstack(self.points)) if self.points else np.zeros((0, 3))
+        return np.ascontiguousarray(np.vstack(self._in_order(self.points))) if self.points else np.zeros((0, 3))
 
-    def sample(self, rng: np.random.Generator, ids: np.ndarray, chunk: np.ndarray, offset: int, size: int) -> None:
-        """Bottom-k sampling: every point inside (numbers ``ids``, rows ``ids - offset`` of
-        ``chunk``) gets a seeded key, the ``size`` smallest stay. Once ``size`` are held, a
-        key above the largest held cannot enter: only the others are gathered."""
-        keys = rng.random(len(ids))
+    def sample(self, seed: int, ids: np.ndarray, pts: np.ndarray, size: int) -> None:
+        """Bottom-k sampling: every point inside (numbers ``ids``, rows of ``pts``) gets a
+        seeded key (:func:`sample_keys`, a function of its number: the same sample in any
+        chunk order), the ``size`` smallest stay. Once ``size`` are held, a key above the
+        largest held cannot enter: only the others are kept."""
+        keys = sample_keys(seed, ids)
         if self.sample_keys is not None and len(self.sample_keys) >= size:
             lower = keys < self.sample_keys.max()
-            keys, ids = keys[lower], ids[lower]
-        pts = chunk[ids - offset]
+            keys, ids, pts = keys[lower], ids[lower], pts[lower]
         if self.sample_keys is None:
             self.sample_keys, self.sample_idx, self.sample_pts = keys, ids, pts
         else:
@@ -112,6 +125,20 @@ class StreamedRegion:
         if self.sample_idx is None:
             return np.zeros((0, 3))
         return self.sample_pts[np.argsort(self.sample_idx, kind="stable")]
+
+
+def sample_keys(seed: int, ids: np.ndarray) -> np.ndarray:
+    """Keys in [0, 1) of the point numbers ``ids`` for ``seed``: the SplitMix64 finalizer of
+    the number mixed with the seed (53 bits), one key per point whatever the order the
+    points come in."""
+    with np.errstate(over="ignore"):
+        z = ids.astype(np.uint64) * np.uint64(0x9E3779B97F4A7C15) + np.uint64((seed * 0xD1B54A32D192ED03 + 1) % (1 << 64))
+        z ^= z >> np.uint64(30)
+        z *= np.uint64(0xBF58476D1CE4E5B9)
+        z ^= z >> np.uint64(27)
+        z *= np.uint64(0x94D049BB133111EB)
+        z ^= z >> np.uint64(31)
+    return (z >> np.uint64(11)).astype(np.float64) * (1.0 / (1 << 53))
 
 
 @dataclass
@@ -135,17 +162,43 @@ def _reused(chunks: Iterable[np.ndarray]) -> Iterable[np.ndarray]:
     return reusing() if callable(reusing) else chunks
 
 
+def _numbered(chunks: Iterable[np.ndarray], backward: bool) -> tuple[Iterable[tuple[int, np.ndarray]], bool]:
+    """(number of the first point, chunk) pairs of ``chunks``, from the end back when
+    ``backward`` is asked for and the stream reads backward (``CloudStream.backward``);
+    and whether they come backward."""
+    back = getattr(chunks, "backward", None) if backward else None
+    source = back() if callable(back) else None
+    if source is not None:
+        return source, True
+
+    def forward() -> Iterable[tuple[int, np.ndarray]]:
+        n = 0
+        for pts in _reused(chunks):
+            yield n, pts
+            n += len(pts)
+
+    return forward(), False
+
+
 def cut_stream(chunks: Iterable[np.ndarray], boxes: Sequence[Box], keep: Sequence[str], *,
                all_indices: bool = False, sample: int = 0, seed: int = 0,
-               moments: Optional[Sequence[bool]] = None) -> Pass:
+               moments: Optional[Sequence[bool]] = None, backward: bool = False,
+               minus: Optional[Sequence[Optional[int]]] = None) -> Pass:
     """One pass over ``chunks`` ((m, 3) arrays in file order): every chunk classified into
     ``boxes``; per box ``keep`` is ``"all"`` (every point inside) or ``"hull"`` (hull
     vertices). ``all_indices`` also keeps every inside point's number (int64, 8 bytes a
     point); ``sample`` > 0 draws that many points per box (seeded) for pictures;
     ``moments`` flags the boxes whose points' moments are summed (``StreamedRegion.moments``,
-    the bits of ``_core.cloud.point_moments`` of all of them)."""
-    regions = [StreamedRegion(b.name, k, all_indices=[] if all_indices else None) for b, k in zip(boxes, keep)]
+    the bits of ``_core.cloud.point_moments`` of all of them: they need file order, so
+    ``backward`` may not be combined with them). ``backward``: read the chunks from the
+    end of the file back where the stream can (a second pass then starts on what the
+    page cache holds of the first); the result is the same (the hull of a set, every
+    list joined in ascending point number). ``minus[i]`` = k (a ``keep="all"`` box i):
+    box i keeps only its points outside box k (a shell around box k)."""
     flags = list(moments) if moments is not None and any(moments) else []
+    chunks_at, back = _numbered(chunks, backward and not flags)
+    regions = [StreamedRegion(b.name, k, all_indices=[] if all_indices else None, backward=back)
+               for b, k in zip(boxes, keep)]
     state = np.zeros((len(boxes), 22)) if flags else None
     rows = np.array([b.row() for b in boxes], dtype=np.float64).reshape(-1, 9)
     # the hull boxes' points are gathered, not hulled chunk by chunk: they pile up to
@@ -154,24 +207,48 @@ def cut_stream(chunks: Iterable[np.ndarray], boxes: Sequence[Box], keep: Sequenc
     # points costs far less a point than many hulls of a chunk's few (the prefilter's
     # fixed cost), and memory stays bounded by REHULL points a region.
     hull = [False] * len(boxes)
-    want_inside = bool(all_indices or sample)
-    rng = np.random.default_rng(seed)
+
+    def take(start: int, cuts: list) -> None:
+        # every box keeps every inside point here (no hull in the call): kept is inside
+        ids_of = [kept + start for _, _, kept, _ in cuts]
+        for i, (r, (count, _, _, kpts)) in enumerate(zip(regions, cuts)):
+            ids = ids_of[i]
+            if minus and minus[i] is not None and len(ids):
+                out = ~_members(ids, ids_of[minus[i]])
+                ids, kpts = ids[out], kpts[out]
+                count = len(ids)
+            r.add_kept(count, ids, ids, kpts)
+            if sample and count:
+                r.sample(seed, ids, kpts, sample)
+
+    # the regions' share of chunk i (number shifts, samples, hulls of the piled-up points)
+    # is taken in a thread while this one cuts chunk i + 1 (the cut holds no GIL) and the
+    # read-ahead reads chunk i + 2: at most two chunks' cuts wait, in order
     n = 0
-    for pts in _reused(chunks):
-        m = len(pts)
-        if boxes:
-            # one Rust call: classify, gather (and moments), parallel inside
-            cuts = _core.cloud.cut_chunk(as_points(pts), rows, hull, want_inside, state, flags)
-            for r, (count, inside, kept, kpts) in zip(regions, cuts):
-                inside = (kept if inside is None else inside) + n
-                r.add_kept(count, inside, kept + n, kpts)
-                if sample and count:
-                    r.sample(rng, inside, pts, n, sample)
-        n += m
+    with ThreadPoolExecutor(1, thread_name_prefix="gagekit-regions") as ex:
+        waiting: deque = deque()
+        for start, pts in chunks_at:
+            n += len(pts)
+            if boxes:
+                # one Rust call: classify, gather (and moments), parallel inside
+                cuts = _core.cloud.cut_chunk(as_points(pts), rows, hull, False, state, flags)
+                while len(waiting) >= 2:
+                    waiting.popleft().result()
+                waiting.append(ex.submit(take, start, cuts))
+        for fut in waiting:
+            fut.result()
     for k, r in enumerate(regions):
         if flags and flags[k]:
             r.moments = state[k].copy()
     return Pass(n, [r.finish() for r in regions])
+
+
+def _members(ids: np.ndarray, of: np.ndarray) -> np.ndarray:
+    """Which of the ascending ``ids`` are among the ascending ``of``."""
+    if not len(of):
+        return np.zeros(len(ids), dtype=bool)
+    pos = np.minimum(np.searchsorted(of, ids), len(of) - 1)
+    return of[pos] == ids
 
 
 def hull_stream(chunks: Iterable[np.ndarray]) -> tuple[int, np.ndarray, np.ndarray]:

@@ -304,15 +304,23 @@ def build_problem_stream(stream, spec: SpecLike) -> GageProblem:
     or any re-iterable of (m, 3) chunks in file order), keeping only region points.
 
     With an ``[alignment]`` whose gage regions are in the part frame the file is read
-    twice: the first pass keeps the hull vertices and the moments of the datum regions
-    (what the 3-2-1 fit needs: :class:`~gagekit.gage.align.DatumStats`; memory does not
-    grow with the datum regions' points); the second cuts the
-    gage regions, carried into the scanner frame by the fitted C_L^S. Scanner-frame gage
+    once or twice: the datum pass keeps the hull vertices and the moments of the datum
+    regions (what the 3-2-1 fit needs: :class:`~gagekit.gage.align.DatumStats`; memory
+    does not grow with the datum regions' points). When the first chunk alone gives a
+    3-2-1 frame, the same pass also cuts each part-frame gage region around the box that
+    frame puts it at: the hull vertices of the box shrunk by :data:`SHELL_MM` and every
+    point of the shell between the shrunk and the grown box; if the whole file's frame
+    puts every box between the two, the shell points inside the fitted box join the
+    core's vertices (the points of the box, hence the same hull) and the file is read
+    once. Otherwise a second pass cuts the
+    gage regions, carried into the scanner frame by the fitted C_L^S, reading the file
+    from its end back where the format allows (binary PLY), so that it starts on what
+    the page cache still holds of the first. Scanner-frame gage
     regions are cut in the first pass. Gage regions keep only their hull vertices, chunk
     by chunk (:mod:`gagekit.cloud.streamed`): the same vertices, in the same order, as a
     whole read, hence the same LP. The region pictures use a seeded uniform sample of each
     region instead of the whole read's draw (the numbers do not depend on it)."""
-    from ..cloud.streamed import cut_stream
+    from ..cloud.streamed import Pass, cut_stream
 
     spec = _as_spec(spec)
     source = spec.source
@@ -325,14 +333,33 @@ def build_problem_stream(stream, spec: SpecLike) -> GageProblem:
     if al is not None:
         early = [r for r in regions if r.frame != "part"]
         late = [r for r in regions if r.frame == "part"]
-        alignment, first = _datum_pass(stream, spec, [r.box for r in early])
-        k0 = len(first.regions) - len(early)
+        guess = _first_chunk_alignment(stream, spec) if late else None
+        extra, keep, minus = [r.box for r in early], ["hull"] * len(early), [None] * len(early)
+        if guess is not None:
+            k = len(dict.fromkeys([*al.primary, *al.secondary, *al.tertiary])) + len(early)
+            ahead = [region_in_scanner(r, guess) for r in late]
+            extra += [_grown(b, -SHELL_MM) for b in ahead] + [_grown(b, SHELL_MM) for b in ahead]
+            keep += ["hull"] * len(late) + ["all"] * len(late)
+            minus += [None] * len(late) + [k + i for i in range(len(late))]
+        alignment, first = _datum_pass(stream, spec, extra, keep, minus)
+        k0 = len(first.regions) - len(extra)
         _check_caught(first, [r.name for r in early], [r.frame for r in early], source, offset=k0)
         for i, r in enumerate(early):
             got[r.name] = first.regions[k0 + i]
+        if guess is not None:
+            exact = [region_in_scanner(r, alignment) for r in late]
+            c0, s0 = k0 + len(early), k0 + len(early) + len(late)
+            if all(_box_within(_grown(a, -SHELL_MM), b) and _box_within(b, _grown(a, SHELL_MM))
+                   for a, b in zip(ahead, exact)):
+                joined = [_joined(first.regions[c0 + i], first.regions[s0 + i], b) for i, b in enumerate(exact)]
+                _check_caught(Pass(0, joined), [r.name for r in late], [r.frame for r in late], source)
+                got.update({r.name: j for r, j in zip(late, joined)})
+                late = []
     if late:
         boxes = [region_in_scanner(r, alignment) for r in late]
-        second = cut_stream(stream, boxes, ["hull"] * len(late), sample=PLOT_POINTS)
+        # from the end of the file back: a file larger than the page cache has its end,
+        # read last by the first pass, still cached (the same hulls, in the same order)
+        second = cut_stream(stream, boxes, ["hull"] * len(late), sample=PLOT_POINTS, backward=True)
         _check_caught(second, [r.name for r in late], [r.frame for r in late], source)
         for r, sr in zip(late, second.regions):
             got[r.name] = sr
@@ -343,23 +370,94 @@ def build_problem_stream(stream, spec: SpecLike) -> GageProblem:
     return _assemble(spec, alignment, filtered, counts, plot)
 
 
-def _datum_pass(stream, spec: GageSpec, extra: list):
+def _datum_pass(stream, spec: GageSpec, extra: list, keep: Optional[list] = None, minus: Optional[list] = None):
     """One pass: the hull vertices and moments of the datum regions (scanner frame) and
-    the hull vertices of the ``extra`` boxes; the 3-2-1 frame fitted to the datums as
+    what ``keep`` says of the ``extra`` boxes (default their hull vertices; ``minus``: see
+    :func:`~gagekit.cloud.streamed.cut_stream`); the 3-2-1 frame fitted to the datums as
     :func:`_alignment` fits it (the same hulls, the same moments bit for bit)."""
     from ..cloud.streamed import cut_stream
 
     al = spec.alignment
     names = list(dict.fromkeys([*al.primary, *al.secondary, *al.tertiary]))
     boxes = [spec.region(n).box for n in names] + list(extra)
-    first = cut_stream(stream, boxes, ["hull"] * (len(names) + len(extra)), sample=PLOT_POINTS,
-                       moments=[True] * len(names) + [False] * len(extra))
+    first = cut_stream(stream, boxes, ["hull"] * len(names) + list(keep or ["hull"] * len(extra)),
+                       sample=PLOT_POINTS, moments=[True] * len(names) + [False] * len(extra),
+                       minus=[None] * len(names) + list(minus) if minus and any(m is not None for m in minus) else None)
     _check_caught(first, names, ["scanner"] * len(names), spec.source)
     groups_in = {}
     for key, lst in (("primary", al.primary), ("secondary", al.secondary), ("tertiary", al.tertiary)):
         stats = DatumStats.of_moments([first[n].moments for n in lst])
         groups_in[key] = (lst, stats, np.vstack([first[n].point_array() for n in lst]))
     return fit_321(groups_in), first  # the datums' own points, as the whole read
+
+
+SHELL_MM = 0.1
+"""Half-thickness (mm) of the shell around each part-frame gage region that a one-pass
+streamed check keeps whole (:func:`build_problem_stream`)."""
+
+
+def _first_chunk_alignment(stream, spec: GageSpec) -> Optional[Alignment]:
+    """The 3-2-1 frame fitted to the first chunk's datum points alone (a guess of the
+    whole file's), or None when that chunk cannot give one."""
+    import warnings
+
+    from ..cloud.streamed import _reused
+
+    chunks = iter(_reused(stream))
+    try:
+        chunk = next(chunks, None)
+        if chunk is None:
+            return None
+        with warnings.catch_warnings():  # a guess: what it finds is not the result's to report
+            warnings.simplefilter("ignore")
+            return _datum_pass([chunk], spec, [])[0]  # the chunk stays valid until the next is asked for
+    except Exception:  # no datum points in the first chunk, a degenerate fit...: no guess, two passes
+        return None
+    finally:
+        close = getattr(chunks, "close", None)
+        if close is not None:
+            close()
+
+
+def _grown(b: Box, by: float) -> Box:
+    """``b`` with every face moved out by ``by`` mm (in, for a negative ``by``)."""
+    return Box(b.center, tuple(s + 2 * by for s in b.size), b.rotation, name=b.name)
+
+
+def _box_within(inner: Box, outer: Box, margin: float = 1e-6) -> bool:
+    """Whether every point of ``inner`` (a box with positive sizes) lies in ``outer`` by
+    ``margin`` mm plus 1e-9 of the coordinates (far above the rounding of either box's
+    membership test): its eight corners do (both are convex)."""
+    if min(inner.size) <= 0:
+        return False
+    Ri, Ro = rotation_from_vector(inner.rotation), rotation_from_vector(outer.rotation)
+    signs = np.array([[x, y, z] for x in (-0.5, 0.5) for y in (-0.5, 0.5) for z in (-0.5, 0.5)])
+    corners = np.asarray(inner.center) + (signs * np.asarray(inner.size)) @ Ri.T
+    local = np.abs((corners - np.asarray(outer.center)) @ Ro)
+    pad = margin + 1e-9 * (np.abs(corners).max() + np.abs(outer.center).max() + max(outer.size))
+    return bool(np.all(local <= np.asarray(outer.size) / 2 - pad))
+
+
+def _joined(core, shell, box: Box):
+    """A part-frame gage region cut in the datum pass: the hull vertices of its points
+    surely inside (``core``, the box guessed from the first chunk, shrunk by
+    :data:`SHELL_MM`), and the points of the shell around it (``shell``), of which those
+    inside the fitted ``box`` join them. The core lies in the box, the box in the core
+    grown by twice the shell, so these are the points of the box: the same hull vertices
+    (of the same set), count and picture sample as a second pass over the box."""
+    from ..cloud.streamed import StreamedRegion
+
+    sids, spts = shell.index_array(), shell.point_array()
+    inside = _core.geometry.classify_boxes(spts, np.array([box.row()], dtype=np.float64))[0] if len(sids) else []
+    sids, spts = sids[inside], spts[inside]
+    ids = np.concatenate([core.index_array(), sids])
+    order = np.argsort(ids, kind="stable")
+    r = StreamedRegion(box.name, "hull", count=core.count + len(sids))
+    r.indices, r.points = [ids[order]], [np.ascontiguousarray(np.vstack([core.point_array(), spts])[order])]
+    r.sample_keys, r.sample_idx, r.sample_pts = core.sample_keys, core.sample_idx, core.sample_pts
+    if len(sids):
+        r.sample(0, sids, spts, PLOT_POINTS)
+    return r.finish()
 
 
 def region_boxes_stream(stream, spec: SpecLike) -> list[Box]:

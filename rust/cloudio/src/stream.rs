@@ -135,6 +135,12 @@ impl PlyStream {
         Ok(Some(out))
     }
 
+    /// Move to vertex `index` (at most the count): the next read starts there (the
+    /// ranges may be read in any order, e.g. from the end of the file back).
+    pub fn seek(&mut self, index: usize) {
+        self.next = index.min(self.rec.count);
+    }
+
     /// The next vertices into `out` (as many as fit: `out.len() / 3`, fewer at the end of
     /// the file), reusing the caller's buffer (no fresh pages a chunk); the number read,
     /// 0 at the end.
@@ -235,6 +241,16 @@ mod tests {
                 all.extend(c);
             }
             assert_eq!(all, whole);
+            // ranges read from the end back, after a seek each: the same rows
+            let mut back = vec![0.0; 3 * n];
+            for start in (0..n).step_by(77).rev() {
+                s.seek(start);
+                let k = s.next_into(&mut back[3 * start..3 * (start + 77).min(n)]).unwrap();
+                assert_eq!(k, 77.min(n - start));
+            }
+            assert_eq!(back, whole);
+            s.seek(n + 5);
+            assert_eq!(s.next_into(&mut back).unwrap(), 0);
         }
     }
 }

@@ -101,20 +101,25 @@ impl<'a> Frame<'a> {
     /// from the chunk's previous point's; points beyond the bound are left out.
     pub fn eval(&self, idx: &[u32], p: &[f64; 6], hints: &mut [Cache]) -> Result<Vec<Option<Eval>>> {
         let mut out = empty_evals(idx.len());
-        self.eval_into(idx, p, hints, &mut out)?;
+        let mut ad = vec![0.0; idx.len()];
+        self.eval_into(idx, p, hints, &mut out, &mut ad)?;
         Ok(out)
     }
 
     /// [`Frame::eval`] into `out` (one entry per point of `idx`, each overwritten): the
-    /// iterations reuse one buffer instead of allocating and clearing one per pass.
-    pub fn eval_into(&self, idx: &[u32], p: &[f64; 6], hints: &mut [Cache], out: &mut [Option<Eval>]) -> Result<()> {
+    /// iterations reuse one buffer instead of allocating and clearing one per pass. In
+    /// the same pass, `ad` gets each point's |d| (+inf beyond the bound); returns the
+    /// number of points within the bound (one parallel pass where there were three).
+    pub fn eval_into(&self, idx: &[u32], p: &[f64; 6], hints: &mut [Cache], out: &mut [Option<Eval>], ad: &mut [f64]) -> Result<usize> {
         let pose = Pose::from_params(p);
         let signed = self.mesh.signed();
         assert_eq!(out.len(), idx.len());
-        out.par_chunks_mut(CHUNK).zip(hints.par_chunks_mut(CHUNK)).enumerate().try_for_each(|(c, (o, h))| -> Result<()> {
+        assert_eq!(ad.len(), idx.len());
+        out.par_chunks_mut(CHUNK).zip(hints.par_chunks_mut(CHUNK)).zip(ad.par_chunks_mut(CHUNK)).enumerate().map(|(c, ((o, h), a))| -> Result<usize> {
             if c % 64 == 0 {
                 interrupt::check()?;
             }
+            let mut within = 0;
             let mut prev = Cache::EMPTY;
             for k in 0..o.len() {
                 let i = idx[c * CHUNK + k];
@@ -127,14 +132,23 @@ impl<'a> Frame<'a> {
                     cache = prev;
                 }
                 let hit = self.mesh.hit_cached(q, self.bound2, &mut cache, signed);
-                if hit.is_some() {
-                    h[k] = cache;
-                    prev = cache;
+                match hit {
+                    Some(hit) => {
+                        h[k] = cache;
+                        prev = cache;
+                        let d = hit.distance - self.offset;
+                        o[k] = Some(Eval { index: i, d, g: hit.gradient, x });
+                        a[k] = d.abs();
+                        within += 1;
+                    }
+                    None => {
+                        o[k] = None;
+                        a[k] = f64::INFINITY;
+                    }
                 }
-                o[k] = hit.map(|hit| Eval { index: i, d: hit.distance - self.offset, g: hit.gradient, x });
             }
-            Ok(())
-        })
+            Ok(within)
+        }).try_reduce(|| 0, |a, b| Ok(a + b))
     }
 
     /// The same points and bound from another initial pose (the points already checked).
@@ -173,21 +187,12 @@ pub fn empty_evals(n: usize) -> Vec<Option<Eval>> {
     (0..n).into_par_iter().map(|_| None).collect()
 }
 
-fn median_abs(v: &mut [f64]) -> f64 {
-    if v.is_empty() {
-        return 0.0;
-    }
-    let m = v.len() / 2;
-    let (_, x, _) = v.select_nth_unstable_by(m, |a, b| a.total_cmp(b));
-    *x
-}
-
 /// Evenly spaced indices: `m` of `0..n` (all when m >= n).
 pub fn sample(n: usize, m: usize) -> Vec<u32> {
     if m >= n {
-        return (0..n as u32).collect();
+        return (0..n as u32).into_par_iter().collect();
     }
-    (0..m).map(|k| ((k as u128 * n as u128) / m as u128) as u32).collect()
+    (0..m).into_par_iter().map(|k| ((k as u128 * n as u128) / m as u128) as u32).collect()
 }
 
 /// When to stop iterating: the last step below `rot` (rad) and `tr` (mm).
@@ -222,42 +227,38 @@ pub struct Iterated {
 pub fn iterate(frame: &Frame, idx: &[u32], p: &mut [f64; 6], hints: &mut [Cache], max_iter: usize, tol: Tol, last: bool) -> Result<Iterated> {
     let nf = frame.free.len();
     let mut it = 0;
-    let summary = |ev: &[Option<Eval>], it: usize| -> Iterated {
-        let mut ad: Vec<f64> = ev.iter().flatten().map(|e| e.d.abs()).collect();
-        let ss: f64 = ad.iter().map(|d| d * d).sum();
-        let used = ad.len();
+    // from the |d| buffer (+inf beyond the bound) and the count within
+    let summary = |ad: &mut [f64], used: usize, it: usize| -> Iterated {
+        let ss: f64 = ad.iter().filter(|d| d.is_finite()).map(|d| d * d).sum();
         let rms = if used > 0 { (ss / used as f64).sqrt() } else { 0.0 };
-        Iterated { iterations: it, median: median_abs(&mut ad), rms, used }
+        let median = if used > 0 { *ad.select_nth_unstable_by(used / 2, |a, b| a.total_cmp(b)).1 } else { 0.0 };
+        Iterated { iterations: it, median, rms, used }
     };
     let mut prev: Option<[f64; 6]> = None;
     let mut ev = empty_evals(idx.len());
-    let mut ad: Vec<f64> = Vec::new();
+    let mut ad = vec![0.0; idx.len()];
     loop {
-        frame.eval_into(idx, p, hints, &mut ev)?;
-        // |d| per point (in parallel, into one buffer; +inf beyond the bound: the
-        // median of the `within` finite values is then the (within / 2)-th smallest)
-        ev.par_iter().map(|e| e.as_ref().map_or(f64::INFINITY, |e| e.d.abs())).collect_into_vec(&mut ad);
-        // (counted on the |d| buffer, an eighth of the evaluations' bytes: the same count)
-        let within = ad.par_iter().filter(|d| d.is_finite()).count();
+        // |d| per point into `ad` (+inf beyond the bound: the median of the `within`
+        // finite values is then the (within / 2)-th smallest), counted in the same pass
+        let within = frame.eval_into(idx, p, hints, &mut ev, &mut ad)?;
         if within < nf.max(3) {
             return Err(GkError::degenerate(format!(
                 "best-fit: only {within} point(s) within reach of the model; check the units, --max-distance and the initial pose"
             )));
         }
         if it >= max_iter || nf == 0 {
-            return Ok(summary(&ev, it));
+            return Ok(summary(&mut ad, within, it));
         }
         let med = *ad.select_nth_unstable_by(within / 2, |a, b| a.total_cmp(b)).1;
         let sigma = (1.4826 * med).max(1e-12);
         let c = 4.685 * sigma;
         let (_, dr) = rotation_and_derivatives(p);
-        // normal equations, summed per fixed chunk then in chunk order (deterministic)
-        // (plain arrays: the same sums in the same order as nalgebra's, without its
-        // bounds checks in the inner loop)
-        let parts: Vec<([[f64; 6]; 6], [f64; 6])> = ev
+        // normal equations, summed per fixed chunk then in chunk order (deterministic);
+        // the upper triangle only (the matrix is symmetric), mirrored after the sum
+        let parts: Vec<([f64; 21], [f64; 6])> = ev
             .par_chunks(CHUNK)
             .map(|chunk| {
-                let mut a = [[0.0f64; 6]; 6];
+                let mut a = [0.0f64; 21];
                 let mut b = [0.0f64; 6];
                 for e in chunk.iter().flatten() {
                     let u = e.d / c;
@@ -266,11 +267,13 @@ pub fn iterate(frame: &Frame, idx: &[u32], p: &mut [f64; 6], hints: &mut [Cache]
                     }
                     let w = (1.0 - u * u) * (1.0 - u * u);
                     let j = Frame::jacobian(e, &dr);
+                    let mut k = 0;
                     for r in 0..6 {
                         let wj = w * j[r];
                         b[r] += wj * e.d;
-                        for s in 0..6 {
-                            a[r][s] += wj * j[s];
+                        for s in r..6 {
+                            a[k] += wj * j[s];
+                            k += 1;
                         }
                     }
                 }
@@ -280,15 +283,26 @@ pub fn iterate(frame: &Frame, idx: &[u32], p: &mut [f64; 6], hints: &mut [Cache]
         let mut a = Matrix6::<f64>::zeros();
         let mut b = Vector6::<f64>::zeros();
         for (pa, pb) in parts {
-            a += Matrix6::from_fn(|r, s| pa[r][s]);
-            b += Vector6::from_fn(|r, _| pb[r]);
+            let mut k = 0;
+            for r in 0..6 {
+                b[r] += pb[r];
+                for s in r..6 {
+                    a[(r, s)] += pa[k];
+                    k += 1;
+                }
+            }
+        }
+        for r in 0..6 {
+            for s in 0..r {
+                a[(r, s)] = a[(s, r)];
+            }
         }
         let af = a.select_rows(&frame.free).select_columns(&frame.free);
         let bf = b.select_rows(&frame.free);
         let svd = af.clone().svd(true, true);
         let smax = svd.singular_values.max();
         if !(smax > 0.0) {
-            return Ok(summary(&ev, it));
+            return Ok(summary(&mut ad, within, it));
         }
         let delta = svd.solve(&(-bf), smax * 1e-12).map_err(|e| GkError::numerical(format!("best-fit: {e}")))?;
         let mut step = [0.0; 6];
@@ -324,8 +338,8 @@ pub fn iterate(frame: &Frame, idx: &[u32], p: &mut [f64; 6], hints: &mut [Cache]
             if !last {
                 return Ok(Iterated { iterations: it, median: f64::NAN, rms: f64::NAN, used: 0 });
             }
-            frame.eval_into(idx, p, hints, &mut ev)?;
-            return Ok(summary(&ev, it));
+            let used = frame.eval_into(idx, p, hints, &mut ev, &mut ad)?;
+            return Ok(summary(&mut ad, used, it));
         }
     }
 }
@@ -375,23 +389,54 @@ fn principal_axes(mean: V3, cov: [[f64; 3]; 3]) -> (V3, M3) {
     (mean, axes)
 }
 
-fn point_moments(points: &[f64]) -> (V3, [[f64; 3]; 3]) {
+/// The mean and covariance of the points moved by `pose`: summed per fixed chunk, then
+/// in chunk order (in parallel, deterministic; no moved copy of the cloud).
+fn point_moments(points: &[f64], pose: &Pose) -> (V3, [[f64; 3]; 3]) {
+    const PART: usize = 3 * 8192;
     let n = (points.len() / 3) as f64;
+    let sums: Vec<V3> = points
+        .par_chunks(PART)
+        .map(|c| {
+            let mut s = [0.0; 3];
+            for p in c.chunks_exact(3) {
+                let q = pose.apply([p[0], p[1], p[2]]);
+                for k in 0..3 {
+                    s[k] += q[k];
+                }
+            }
+            s
+        })
+        .collect();
     let mut mean = [0.0; 3];
-    for p in points.chunks_exact(3) {
+    for s in sums {
         for k in 0..3 {
-            mean[k] += p[k];
+            mean[k] += s[k];
         }
     }
     for v in mean.iter_mut() {
         *v /= n;
     }
+    let parts: Vec<[[f64; 3]; 3]> = points
+        .par_chunks(PART)
+        .map(|c| {
+            let mut cov = [[0.0; 3]; 3];
+            for p in c.chunks_exact(3) {
+                let q = pose.apply([p[0], p[1], p[2]]);
+                let d = [q[0] - mean[0], q[1] - mean[1], q[2] - mean[2]];
+                for i in 0..3 {
+                    for j in 0..3 {
+                        cov[i][j] += d[i] * d[j];
+                    }
+                }
+            }
+            cov
+        })
+        .collect();
     let mut cov = [[0.0; 3]; 3];
-    for p in points.chunks_exact(3) {
-        let d = [p[0] - mean[0], p[1] - mean[1], p[2] - mean[2]];
+    for part in parts {
         for i in 0..3 {
             for j in 0..3 {
-                cov[i][j] += d[i] * d[j];
+                cov[i][j] += part[i][j];
             }
         }
     }
@@ -407,8 +452,7 @@ fn point_moments(points: &[f64]) -> (V3, [[f64; 3]; 3]) {
 /// rotations of the cube group (the axes' order and signs: a scan's point density can
 /// reorder its principal axes), centroid on centroid.
 pub fn principal_starts(mesh: &TriMesh, points: &[f64], initial: &Pose) -> Vec<Pose> {
-    let moved: Vec<f64> = points.chunks_exact(3).flat_map(|p| initial.apply([p[0], p[1], p[2]])).collect();
-    let (ms, cs) = point_moments(&moved);
+    let (ms, cs) = point_moments(points, initial);
     let (mm, cm) = mesh.surface_moments();
     let (_, u) = principal_axes(ms, cs);
     let (_, v) = principal_axes(mm, cm);
@@ -474,14 +518,15 @@ pub fn refine(frame: &Frame, p: &mut [f64; 6], stages: &[usize]) -> Result<(Iter
     let mut iterations = 0;
     // every point's cache, kept from stage to stage (a point of several subsamples
     // starts each from where the last left it)
-    let mut caches = vec![Cache::EMPTY; n];
+    let mut caches: Vec<Cache> = (0..n).into_par_iter().map(|_| Cache::EMPTY).collect();
     for &m in stages {
         let idx = sample(n, m);
-        let mut hints: Vec<Cache> = idx.iter().map(|&i| caches[i as usize]).collect();
         if m >= n {
-            let r = iterate(frame, &idx, p, &mut hints, MAX_FINAL, FINE, true)?;
+            // every point: their caches as they are (no copy)
+            let r = iterate(frame, &idx, p, &mut caches, MAX_FINAL, FINE, true)?;
             return Ok((r, iterations + r.iterations));
         }
+        let mut hints: Vec<Cache> = idx.par_iter().map(|&i| caches[i as usize]).collect();
         iterations += iterate(frame, &idx, p, &mut hints, 30, COARSE, false)?.iterations;
         for (&i, h) in idx.iter().zip(hints) {
             caches[i as usize] = h;

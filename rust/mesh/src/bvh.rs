@@ -390,7 +390,7 @@ impl Bvh {
     #[inline]
     pub fn nearest(&self, p: V3, bound2: f64, hint: Option<u32>) -> Option<Nearest> {
         let start = hint.filter(|&h| (h as usize) < self.corners.len()).map(|h| self.to_slot(p, h));
-        self.search::<false>(p, bound2, start).0
+        self.search::<false>(p, bound2, start).best
     }
 
     /// [`Bvh::nearest`] from a triangle already measured (`start`, e.g. [`Bvh::to_slot`]
@@ -400,21 +400,53 @@ impl Bvh {
     /// near `p` without a search (see [`crate::distance::Cache`]).
     #[inline]
     pub fn nearest_with_margin(&self, p: V3, bound2: f64, start: Option<Nearest>) -> (Option<Nearest>, f64) {
+        let r = self.search::<true>(p, bound2, start);
+        (r.best, r.margin2)
+    }
+
+    /// [`Bvh::nearest_with_margin`] with the runner-up: the nearest of the triangles the
+    /// search measured and did not keep, and the margin of every triangle but those two.
+    /// Where two triangles tie (a point whose closest point is on their shared edge) the
+    /// margin of the nearest alone is its own distance, and certifies nothing; the pair's
+    /// margin still does ([`crate::distance::Cache`]).
+    #[inline]
+    pub fn nearest_with_runner_up(&self, p: V3, bound2: f64, start: Option<Nearest>) -> Searched {
         self.search::<true>(p, bound2, start)
     }
 
     #[inline(always)]
-    fn search<const MARGIN: bool>(&self, p: V3, bound2: f64, start: Option<Nearest>) -> (Option<Nearest>, f64) {
+    fn search<const MARGIN: bool>(&self, p: V3, bound2: f64, start: Option<Nearest>) -> Searched {
         let mut best: Option<Nearest> = None;
         let mut best_d2 = bound2;
         let mut skip = u32::MAX;
         let mut margin = f64::INFINITY;
+        // the runner-up (slot, squared distance): kept out of `margin`
+        let mut second: (u32, f64) = (u32::MAX, f64::INFINITY);
         // record a lower bound of something pruned (compiled out without MARGIN)
         macro_rules! pruned {
             ($d:expr) => {
                 if MARGIN {
                     margin = margin.min($d);
                 }
+            };
+        }
+        // a triangle measured and not kept: the runner-up if nearer than the last one
+        // (which then goes to the margin), else to the margin
+        macro_rules! passed {
+            ($slot:expr, $d:expr) => {
+                if MARGIN {
+                    if $d < second.1 {
+                        margin = margin.min(second.1);
+                        second = ($slot, $d);
+                    } else {
+                        margin = margin.min($d);
+                    }
+                }
+            };
+        }
+        macro_rules! done {
+            () => {
+                return Searched { best, margin2: margin.min(second.1), second: second.0, rest2: margin }
             };
         }
         if let Some(n) = start {
@@ -436,7 +468,7 @@ impl Bvh {
         let d_root = box_distance2(&p, &self.root_lo, &self.root_hi);
         if !open!(d_root) {
             pruned!(d_root);
-            return (best, margin);
+            done!();
         }
         let mut stack = [(Child { index: 0, count: 0 }, 0.0f64); MAX_DEPTH + 2];
         let mut sp = 0usize;
@@ -453,12 +485,12 @@ impl Bvh {
                     let d2 = dot(v, v);
                     if better(d2, slot, best_d2, best.as_ref().map(|b| b.slot)) {
                         if let Some(b) = &best {
-                            pruned!(b.d2);
+                            passed!(b.slot, b.d2);
                         }
                         best_d2 = d2;
                         best = Some(Nearest { slot, d2, foot, feature });
                     } else {
-                        pruned!(d2);
+                        passed!(slot, d2);
                     }
                 }
             } else {
@@ -480,7 +512,7 @@ impl Bvh {
             // pop the next subtree still worth visiting
             loop {
                 if sp == 0 {
-                    return (best, margin);
+                    done!();
                 }
                 sp -= 1;
                 let (c, d) = stack[sp];
@@ -610,6 +642,18 @@ impl Bvh {
 
 /// Points per group of [`Bvh::nearest_group`].
 pub const GROUP: usize = 8;
+
+/// What a search with margins found: the nearest triangle (None: none within the
+/// bound), `margin2` the least squared distance any other triangle can have, `second`
+/// the runner-up's slot (`u32::MAX`: none measured) and `rest2` the least squared
+/// distance of any triangle but those two.
+#[derive(Debug, Clone, Copy)]
+pub struct Searched {
+    pub best: Option<Nearest>,
+    pub margin2: f64,
+    pub second: u32,
+    pub rest2: f64,
+}
 
 /// Does a triangle (`slot`, squared distance `d2`) beat the best so far (`best_d2`, the
 /// bound when there is none yet; `best` its slot)? Nearer, or as near with a lower slot.

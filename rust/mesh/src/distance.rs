@@ -63,16 +63,19 @@ pub struct Hit {
 
 /// A point's memory between queries ([`TriMesh::hit_cached`]): the position last
 /// searched from, the nearest triangle's slot there (`u32::MAX`: none yet) and the margin
-/// (mm) within which no other triangle lies around that position.
+/// (mm) within which no other triangle lies around that position; the runner-up's slot
+/// (`u32::MAX`: none) and the margin within which no triangle but those two lies.
 #[derive(Debug, Clone, Copy)]
 pub struct Cache {
     pub slot: u32,
+    pub second: u32,
     pub margin: f64,
+    pub rest: f64,
     pub at: V3,
 }
 
 impl Cache {
-    pub const EMPTY: Cache = Cache { slot: u32::MAX, margin: 0.0, at: [0.0; 3] };
+    pub const EMPTY: Cache = Cache { slot: u32::MAX, second: u32::MAX, margin: 0.0, rest: 0.0, at: [0.0; 3] };
 }
 
 impl TriMesh {
@@ -125,31 +128,48 @@ impl TriMesh {
     /// [`TriMesh::hit`] for a point queried again and again as it moves a little (the
     /// iterations of an alignment, the next point of a scan line): `cache` holds a
     /// searched position, its nearest triangle and its margin (every other triangle was at
-    /// least that far, [`crate::bvh::Bvh::nearest_with_margin`]). When the cached triangle
+    /// least that far, [`crate::bvh::Bvh::nearest_with_runner_up`]). When the cached triangle
     /// is nearer to `p` than the margin less the distance from that position (by the
     /// triangle inequality no other triangle can be as near; with a slack far above
-    /// rounding), it is the nearest and no search is made; otherwise a search starting
-    /// from it refreshes the cache. The answer is the one [`TriMesh::hit`] gives with the
-    /// cached triangle as hint, to the bit.
+    /// rounding), it is the nearest and no search is made. Else, when the nearer of it and
+    /// the cached runner-up is nearer than the margin of every other triangle less that
+    /// distance, that one is the nearest (a point near an edge two triangles share, whose
+    /// single margin is its own distance). Otherwise a search starting from the nearer
+    /// refreshes the cache. The answer is the one [`TriMesh::hit`] gives with the cached
+    /// triangle as hint, to the bit.
     #[inline]
     pub fn hit_cached(&self, p: V3, bound2: f64, cache: &mut Cache, signed: bool) -> Option<Hit> {
         let signed = signed && self.signed();
         let mut start = None;
-        if (cache.slot as usize) < self.bvh.corners.len() {
-            let n = self.bvh.to_slot(p, cache.slot);
-            if n.d2 <= bound2 && cache.margin > 0.0 {
+        let slots = self.bvh.corners.len();
+        if (cache.slot as usize) < slots {
+            let mut n = self.bvh.to_slot(p, cache.slot);
+            if cache.margin > 0.0 {
                 let moved = norm(sub(p, cache.at));
-                let d = n.d2.sqrt();
-                let slack = 1e-11 * (1.0 + p[0].abs().max(p[1].abs()).max(p[2].abs()) + d);
-                if d + moved + 2.0 * slack < cache.margin {
+                let scale = 1.0 + p[0].abs().max(p[1].abs()).max(p[2].abs());
+                // n within the bound and nearer than `margin` less the move
+                let certified = |n: &Nearest, margin: f64| {
+                    let d = n.d2.sqrt();
+                    n.d2 <= bound2 && d + moved + 2e-11 * (scale + d) < margin
+                };
+                if certified(&n, cache.margin) {
                     return Some(self.hit_of(p, &n, signed));
+                }
+                if (cache.second as usize) < slots {
+                    let m = self.bvh.to_slot(p, cache.second);
+                    if m.d2 < n.d2 || (m.d2 == n.d2 && m.slot < n.slot) {
+                        n = m;
+                    }
+                    if certified(&n, cache.rest) {
+                        return Some(self.hit_of(p, &n, signed));
+                    }
                 }
             }
             start = Some(n);
         }
-        let (found, margin2) = self.bvh.nearest_with_margin(p, bound2, start);
-        let n = found?;
-        *cache = Cache { slot: n.slot, margin: margin2.sqrt(), at: p };
+        let r = self.bvh.nearest_with_runner_up(p, bound2, start);
+        let n = r.best?;
+        *cache = Cache { slot: n.slot, second: r.second, margin: r.margin2.sqrt(), rest: r.rest2.sqrt(), at: p };
         Some(self.hit_of(p, &n, signed))
     }
 

@@ -538,3 +538,42 @@ proptest! {
         }
     }
 }
+
+/// On a closed mesh, points on and near the edges and vertices two or more triangles
+/// share (the cache's runner-up certifies an edge's tie), walking in tiny steps: every
+/// cached query gives the plain search's triangle, distance and closest point to the bit,
+/// and some queries are certified by the pair (the runner-up path is exercised).
+#[test]
+fn cached_queries_at_shared_edges_equal_the_search() {
+    let (v, t) = sphere_mesh(12, 10.0);
+    let mesh = TriMesh::new(&v, &t).unwrap();
+    let mut rng = ChaCha8Rng::seed_from_u64(5);
+    let (mut searched, mut walked) = (0usize, 0usize);
+    for k in 0..t.len() / 3 {
+        // the midpoint of an edge of triangle k, pushed out or in along the radius
+        let (a, b) = (t[3 * k] as usize, t[3 * k + 1] as usize);
+        let mid = [(v[3 * a] + v[3 * b]) / 2.0, (v[3 * a + 1] + v[3 * b + 1]) / 2.0, (v[3 * a + 2] + v[3 * b + 2]) / 2.0];
+        let s = 1.0 + rng.random_range(-0.05..0.05);
+        let mut p = [mid[0] * s, mid[1] * s, mid[2] * s];
+        let mut cache = crate::distance::Cache::EMPTY;
+        for _ in 0..20 {
+            let hint = (cache.slot != u32::MAX).then_some(cache.slot);
+            let plain = mesh.hit(p, f64::INFINITY, hint, true).unwrap();
+            let before = cache;
+            let cached = mesh.hit_cached(p, f64::INFINITY, &mut cache, true).unwrap();
+            assert_eq!(plain.slot, cached.slot);
+            assert_eq!(plain.distance.to_bits(), cached.distance.to_bits());
+            assert_eq!(plain.foot.map(f64::to_bits), cached.foot.map(f64::to_bits));
+            assert_eq!(plain.feature, cached.feature);
+            if cache.at != before.at {
+                searched += 1;
+            } else if before.slot != cached.slot {
+                walked += 1; // certified as the runner-up
+            }
+            for x in p.iter_mut() {
+                *x += rng.random_range(-1e-4..1e-4);
+            }
+        }
+    }
+    assert!(walked > 0, "the runner-up never certified a query ({searched} searches)");
+}

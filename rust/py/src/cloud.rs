@@ -227,6 +227,11 @@ impl PlyChunks {
         let inner = &mut self.inner;
         run(py, || inner.next_into(buf))
     }
+
+    /// Move to vertex `index` (clamped to the count): the next read starts there.
+    fn seek(&mut self, index: usize) {
+        self.inner.seek(index);
+    }
 }
 
 /// Open a binary PLY file (every element of fixed-size records) for reading its vertices

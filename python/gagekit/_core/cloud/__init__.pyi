@@ -147,6 +147,10 @@ class PlyChunks:
         The next vertices into the C-contiguous (m, 3) float64 array `out` (a buffer
         reused from chunk to chunk); the number read, 0 at the end.
         """
+    def seek(self, index: builtins.int) -> None:
+        r"""
+        Move to vertex `index` (clamped to the count): the next read starts there.
+        """
 
 @typing.final
 class PlyCloud:
