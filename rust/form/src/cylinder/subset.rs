@@ -95,11 +95,31 @@ pub(super) fn fit_near_in(
 /// The first active subset: the [`SUBSET_EXTREMES`] points of smallest and largest
 /// distance `dist` each criterion needs (MCC: the 2k largest; MIC: the 2k smallest and
 /// k largest; MZC: k of each).
+///
+/// The order is total (ties by index), so these sets are unique: on many points two
+/// linear-time selections find them (the same sets as a full sort, whose order the
+/// active-subset iteration does not read: it sorts the subset by index).
 fn first_subset(dist: &[f64], crit: Criterion) -> Vec<usize> {
     let n = dist.len();
     let mut order: Vec<usize> = (0..n).collect();
-    order.sort_by(|&i, &j| dist[i].total_cmp(&dist[j]).then(i.cmp(&j)));
+    let cmp = |i: &usize, j: &usize| dist[*i].total_cmp(&dist[*j]).then(i.cmp(j));
     let k = SUBSET_EXTREMES;
+    if n > 8 * k {
+        let (low, high) = match crit {
+            Criterion::MinCircumscribed => (0, 2 * k),
+            Criterion::MaxInscribed => (2 * k, k),
+            Criterion::MinZone => (k, k),
+        };
+        let mut out = Vec::with_capacity(low + high);
+        if low > 0 {
+            order.select_nth_unstable_by(low, cmp);
+            out.extend_from_slice(&order[..low]);
+        }
+        order.select_nth_unstable_by(n - high - 1, cmp);
+        out.extend_from_slice(&order[n - high..]);
+        return out;
+    }
+    order.sort_by(cmp);
     match crit {
         Criterion::MinCircumscribed => order[n - 2 * k..].to_vec(),
         Criterion::MaxInscribed => order[..2 * k].iter().chain(&order[n - k..]).copied().collect(),
@@ -145,4 +165,31 @@ pub(crate) fn settle<R>(
         subset.extend(bad.into_iter().take(SUBSET_ADD));
     }
     Err(GkError::numerical(format!("{what}: the active-subset iteration did not settle; please report this data set")))
+}
+
+#[cfg(test)]
+mod first_subset_tests {
+    use super::*;
+
+    #[test]
+    fn the_selected_extremes_are_those_of_a_full_sort() {
+        // many ties (distances rounded to a few values) and distinct ones
+        for n in [300, 1025, 5000] {
+            let dist: Vec<f64> = (0..n).map(|i| ((i * 7919 % 97) as f64 * 0.25).floor() + if i % 3 == 0 { 1e-9 * i as f64 } else { 0.0 }).collect();
+            for crit in [Criterion::MinCircumscribed, Criterion::MaxInscribed, Criterion::MinZone] {
+                let mut order: Vec<usize> = (0..n).collect();
+                order.sort_by(|&i, &j| dist[i].total_cmp(&dist[j]).then(i.cmp(&j)));
+                let k = SUBSET_EXTREMES;
+                let mut want: Vec<usize> = match crit {
+                    Criterion::MinCircumscribed => order[n - 2 * k..].to_vec(),
+                    Criterion::MaxInscribed => order[..2 * k].iter().chain(&order[n - k..]).copied().collect(),
+                    Criterion::MinZone => order[..k].iter().chain(&order[n - k..]).copied().collect(),
+                };
+                let mut got = first_subset(&dist, crit);
+                want.sort_unstable();
+                got.sort_unstable();
+                assert_eq!(got, want, "n {n}");
+            }
+        }
+    }
 }
