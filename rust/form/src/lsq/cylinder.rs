@@ -8,7 +8,7 @@
 //! data instead of some sixty.
 
 use super::frame::{arr, centred3, centroid, check_points, orthonormal_basis, principal_axes, upper, vec3, DEGENERATE};
-use super::lm::{det_sum, levenberg_marquardt, normal_equations};
+use super::lm::{levenberg_marquardt_fused, normal_equations_cost};
 use super::sphere::algebraic_sphere;
 use super::Vector3;
 use gagekit_core::{GkError, Result};
@@ -33,17 +33,20 @@ fn refine_cylinder(
     max_iter: usize,
 ) -> Result<(Cylinder, f64)> {
     type S = (Vector3<f64>, Vector3<f64>, f64);
-    let cost = |s: &S| det_sum(q, |x| ((vec3(x) - s.0).cross(&s.1).norm() - s.2).powi(2));
     // Step (x0, y0, alpha, beta, dr) in the frame (u, v, a) of the current axis:
     // point += x0 u + y0 v, direction = normalize(a + alpha u + beta v) (Forbes 1989).
+    // A trial step is judged by the cost this pass sums beside the normal equations (the
+    // squared distance to the axis by the cross product, as a separate cost pass had it,
+    // bit for bit: one pass an accepted step instead of two, the same iterates).
     let eval = |s: &S| {
         let (u, v) = orthonormal_basis(&s.1);
-        normal_equations::<5>(q, |x| {
+        normal_equations_cost::<5>(q, |x| {
             let d = vec3(x) - s.0;
+            let cost = (d.cross(&s.1).norm() - s.2).powi(2);
             let (xu, yv, z) = (d.dot(&u), d.dot(&v), d.dot(&s.1));
             let rho = xu.hypot(yv);
             let (cx, cy) = if rho > 0.0 { (xu / rho, yv / rho) } else { (0.0, 0.0) };
-            (rho - s.2, [-cx, -cy, -cx * z, -cy * z, -1.0])
+            (cost, rho - s.2, [-cx, -cy, -cx * z, -cy * z, -1.0])
         })
     };
     let apply = |s: &S, st: &DVector<f64>| {
@@ -55,8 +58,7 @@ fn refine_cylinder(
         (l, a, s.2 + st[4])
     };
     let l0 = l0 - a0 * l0.dot(&a0);
-    let (s, _) = levenberg_marquardt((l0, a0, r0), 5, r0, max_iter, eval, cost, apply, "cylinder")?;
-    let f = cost(&s);
+    let (s, _, f) = levenberg_marquardt_fused((l0, a0, r0), 5, r0, max_iter, eval, apply, "cylinder")?;
     Ok((Cylinder { point: arr(&s.0), direction: arr(&s.1), radius: s.2.abs() }, f))
 }
 

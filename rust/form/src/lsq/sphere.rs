@@ -2,7 +2,7 @@
 //! algebraic (Kasa) start; 2-D points go to the circle kernel ([`crate::circle::least_squares`]).
 
 use super::frame::{centred3, centroid, check_points, principal_axes, vec3, DEGENERATE};
-use super::lm::{det_sum, levenberg_marquardt, normal_equations};
+use super::lm::{levenberg_marquardt_fused, normal_equations};
 use super::Vector3;
 use gagekit_core::{GkError, Result};
 use nalgebra::{DMatrix, DVector};
@@ -19,8 +19,13 @@ pub(crate) fn algebraic_sphere(q: &[[f64; 3]], dim: usize) -> Option<(Vector3<f6
     let p = dim + 1;
     let mut a = DMatrix::<f64>::zeros(p, p);
     let mut b = DVector::<f64>::zeros(p);
+    let mut row = [0.0; 4];
     for x in q {
-        let row: Vec<f64> = (0..dim).map(|d| 2.0 * x[d]).chain([1.0]).collect();
+        // (2 x_d ..., 1) in a fixed array (a vector a point before: one allocation each)
+        for d in 0..dim {
+            row[d] = 2.0 * x[d];
+        }
+        row[dim] = 1.0;
         let rhs: f64 = (0..dim).map(|d| x[d] * x[d]).sum();
         for i in 0..p {
             b[i] += row[i] * rhs;
@@ -41,17 +46,19 @@ pub(crate) fn algebraic_sphere(q: &[[f64; 3]], dim: usize) -> Option<(Vector3<f6
 /// Geometric least-squares sphere of centred 3-D points.
 fn geometric_sphere(q: &[[f64; 3]]) -> Result<(Vector3<f64>, f64)> {
     let start = algebraic_sphere(q, 3).ok_or_else(|| GkError::degenerate("sphere: the points do not determine a sphere"))?;
-    let cost = |s: &(Vector3<f64>, f64)| det_sum(q, |x| ((vec3(x) - s.0).norm() - s.1).powi(2));
+    // a trial step is judged by the residuals' sum of the normal equations' pass (the
+    // same sum, bit for bit, as a separate cost pass: one pass an accepted step)
     let eval = |s: &(Vector3<f64>, f64)| {
-        normal_equations::<4>(q, |x: &[f64; 3]| {
+        let e = normal_equations::<4>(q, |x: &[f64; 3]| {
             let dv = vec3(x) - s.0;
             let rho = dv.norm();
             let g = |d: usize| if rho > 0.0 { -dv[d] / rho } else { 0.0 };
             (rho - s.1, [g(0), g(1), g(2), -1.0])
-        })
+        });
+        (e.0, e)
     };
     let apply = |s: &(Vector3<f64>, f64), st: &DVector<f64>| (s.0 + Vector3::new(st[0], st[1], st[2]), s.1 + st[3]);
-    let (s, _) = levenberg_marquardt(start, 4, start.1, 500, eval, cost, apply, "sphere")?;
+    let (s, _, _) = levenberg_marquardt_fused(start, 4, start.1, 500, eval, apply, "sphere")?;
     Ok((s.0, s.1.abs()))
 }
 

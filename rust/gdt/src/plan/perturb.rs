@@ -3,12 +3,16 @@
 //!
 //! Every draw of trial `i` comes from a ChaCha8 generator keyed by (seed, i) alone, so a
 //! trial's perturbation is the same on any number of threads and in any order. Normal
-//! deviates by the Marsaglia polar method, uniform ones by the generator's `f64`.
+//! deviates by the ziggurat method of `rand_distr::StandardNormal` (256 layers: a deviate
+//! from one 64-bit output of the generator, a table look-up and a multiplication in about
+//! 99 % of the draws; the Marsaglia polar method before needed 2.5 outputs, a logarithm
+//! and a square root a pair), uniform ones by the generator's `f64`.
 
 use crate::vec3::V3;
 use gagekit_core::{GkError, Result};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use rand_distr::StandardNormal;
 
 /// An instrument's error model (`gagekit.uncertainty.model.MeasurementModel`); lengths mm.
 #[derive(Debug, Clone, PartialEq)]
@@ -49,29 +53,6 @@ pub fn trial_rng(seed: u64, trial: u64) -> ChaCha8Rng {
     ChaCha8Rng::from_seed(key)
 }
 
-/// Standard normal deviates by the Marsaglia polar method, both of each accepted pair.
-struct Normal {
-    spare: Option<f64>,
-}
-
-impl Normal {
-    fn next(&mut self, rng: &mut ChaCha8Rng) -> f64 {
-        if let Some(z) = self.spare.take() {
-            return z;
-        }
-        loop {
-            let u = 2.0 * rng.random::<f64>() - 1.0;
-            let v = 2.0 * rng.random::<f64>() - 1.0;
-            let s = u * u + v * v;
-            if s > 0.0 && s < 1.0 {
-                let f = (-2.0 * s.ln() / s).sqrt();
-                self.spare = Some(v * f);
-                return u * f;
-            }
-        }
-    }
-}
-
 fn uniform(rng: &mut ChaCha8Rng, lo: f64, hi: f64) -> f64 {
     lo + (hi - lo) * rng.random::<f64>()
 }
@@ -87,8 +68,7 @@ pub fn perturb(pts: &[f64], dim: usize, model: &Model, seed: u64, trial: u64) ->
         return Err(GkError::invalid(format!("measurement model: a scanner origin needs 3-D points, got {dim}-D")));
     }
     let mut rng = trial_rng(seed, trial);
-    let mut gauss = Normal { spare: None };
-    let mut normal = |rng: &mut ChaCha8Rng| gauss.next(rng);
+    let normal = |rng: &mut ChaCha8Rng| -> f64 { rng.sample(StandardNormal) };
     let mut out = pts.to_vec();
     let n = pts.len() / dim;
     let centre = model.origin.unwrap_or([0.0; 3]);
