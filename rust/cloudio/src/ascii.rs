@@ -1149,13 +1149,19 @@ pub fn read_ascii_file(path: &std::path::Path, opts: &AsciiOptions, what: &str) 
     let n = f.read_into(&mut coords)?;
     coords.truncate(n * opts.dim);
     let lay = f.layout();
-    Ok(Parsed {
+    let parsed = Parsed {
         coords,
         header_lines: lay.header_lines,
         columns: lay.columns.clone(),
         ncols: lay.ncols,
         decimal_comma: lay.style == Style::DecimalComma,
-    })
+    };
+    // the file is unmapped on a thread of its own, which the caller need not wait for (on
+    // Linux: Windows keeps a mapped file from being deleted, so there it is unmapped here);
+    // if no thread can be started, here too
+    #[cfg(target_os = "linux")]
+    let _ = std::thread::Builder::new().name("gagekit-unmap".into()).spawn(move || drop(f));
+    Ok(parsed)
 }
 
 /// Write points as ASCII, one per line, values separated by `sep`, with an
