@@ -626,6 +626,33 @@ struct Masks {
     digit: u64,
 }
 
+/// The [`Masks`] of the 64 bytes at `$ptr`, `$lanes` loads of one vector width: the
+/// intrinsics of that width (`$set`: broadcast, `$load`: unaligned load, `$eq`, `$or`,
+/// `$sub`, `$min`: per byte, `$movemask`: one bit a byte, read as `$bits` bits).
+#[cfg(target_arch = "x86_64")]
+macro_rules! simd_masks {
+    ($ptr:expr, $vec:ty, $lanes:literal, $bits:ty, $set:ident, $load:ident, $eq:ident, $or:ident, $sub:ident, $min:ident, $movemask:ident) => {{
+        let mut m = Masks { nl: 0, sep: 0, dot: 0, minus: 0, digit: 0 };
+        let set = |b: u8| $set(b as i8);
+        let (nl, sp, tab, comma, semi, dot, minus, zero, nine) =
+            (set(b'\n'), set(b' '), set(b'\t'), set(b','), set(b';'), set(b'.'), set(b'-'), set(b'0'), set(9));
+        let width = 64 / $lanes;
+        let bits = |v: $vec, q: usize| u64::from($movemask(v) as $bits) << (width * q);
+        for q in 0..$lanes {
+            let v = $load($ptr.add(width * q) as *const $vec);
+            let s = $or($or($eq(v, sp), $eq(v, tab)), $or($eq(v, comma), $eq(v, semi)));
+            // a digit: b - '0' (wrapping) is at most 9 unsigned
+            let d = $sub(v, zero);
+            m.nl |= bits($eq(v, nl), q);
+            m.sep |= bits(s, q);
+            m.dot |= bits($eq(v, dot), q);
+            m.minus |= bits($eq(v, minus), q);
+            m.digit |= bits($eq($min(d, nine), d), q);
+        }
+        m
+    }};
+}
+
 /// The [`Masks`] of the 64 bytes `w`. SSE2 (every x86-64) compares 16 bytes at a time,
 /// AVX2 32; other targets take the byte loop, which gives the same masks.
 ///
@@ -637,51 +664,15 @@ unsafe fn window_masks<const AVX2: bool>(w: &[u8; 64]) -> Masks {
     {
         use std::arch::x86_64::*;
         if AVX2 {
-            let mut m = Masks { nl: 0, sep: 0, dot: 0, minus: 0, digit: 0 };
             // SAFETY: AVX2 is there (the caller's promise); the two unaligned 32-byte loads
             // stay inside the 64 bytes of `w`.
-            unsafe {
-                let set = |b: u8| _mm256_set1_epi8(b as i8);
-                let (nl, sp, tab, comma, semi, dot, minus, zero, nine) =
-                    (set(b'\n'), set(b' '), set(b'\t'), set(b','), set(b';'), set(b'.'), set(b'-'), set(b'0'), set(9));
-                let bits = |v: __m256i, q: usize| u64::from(_mm256_movemask_epi8(v) as u32) << (32 * q);
-                for q in 0..2 {
-                    let v = _mm256_loadu_si256(w.as_ptr().add(32 * q) as *const __m256i);
-                    let s = _mm256_or_si256(
-                        _mm256_or_si256(_mm256_cmpeq_epi8(v, sp), _mm256_cmpeq_epi8(v, tab)),
-                        _mm256_or_si256(_mm256_cmpeq_epi8(v, comma), _mm256_cmpeq_epi8(v, semi)),
-                    );
-                    let d = _mm256_sub_epi8(v, zero);
-                    m.nl |= bits(_mm256_cmpeq_epi8(v, nl), q);
-                    m.sep |= bits(s, q);
-                    m.dot |= bits(_mm256_cmpeq_epi8(v, dot), q);
-                    m.minus |= bits(_mm256_cmpeq_epi8(v, minus), q);
-                    m.digit |= bits(_mm256_cmpeq_epi8(_mm256_min_epu8(d, nine), d), q);
-                }
-            }
-            return m;
+            return unsafe {
+                simd_masks!(w.as_ptr(), __m256i, 2, u32, _mm256_set1_epi8, _mm256_loadu_si256, _mm256_cmpeq_epi8, _mm256_or_si256, _mm256_sub_epi8, _mm256_min_epu8, _mm256_movemask_epi8)
+            };
         }
-        let mut m = Masks { nl: 0, sep: 0, dot: 0, minus: 0, digit: 0 };
         // SAFETY: SSE2 is part of the x86-64 baseline; the four unaligned 16-byte loads
         // stay inside the 64 bytes of `w`.
-        unsafe {
-            let set = |b: u8| _mm_set1_epi8(b as i8);
-            let (nl, sp, tab, comma, semi, dot, minus, zero, nine) =
-                (set(b'\n'), set(b' '), set(b'\t'), set(b','), set(b';'), set(b'.'), set(b'-'), set(b'0'), set(9));
-            let bits = |v: __m128i, q: usize| u64::from(_mm_movemask_epi8(v) as u16) << (16 * q);
-            for q in 0..4 {
-                let v = _mm_loadu_si128(w.as_ptr().add(16 * q) as *const __m128i);
-                let s = _mm_or_si128(_mm_or_si128(_mm_cmpeq_epi8(v, sp), _mm_cmpeq_epi8(v, tab)), _mm_or_si128(_mm_cmpeq_epi8(v, comma), _mm_cmpeq_epi8(v, semi)));
-                // a digit: b - '0' (wrapping) is at most 9 unsigned
-                let d = _mm_sub_epi8(v, zero);
-                m.nl |= bits(_mm_cmpeq_epi8(v, nl), q);
-                m.sep |= bits(s, q);
-                m.dot |= bits(_mm_cmpeq_epi8(v, dot), q);
-                m.minus |= bits(_mm_cmpeq_epi8(v, minus), q);
-                m.digit |= bits(_mm_cmpeq_epi8(_mm_min_epu8(d, nine), d), q);
-            }
-        }
-        m
+        unsafe { simd_masks!(w.as_ptr(), __m128i, 4, u16, _mm_set1_epi8, _mm_loadu_si128, _mm_cmpeq_epi8, _mm_or_si128, _mm_sub_epi8, _mm_min_epu8, _mm_movemask_epi8) }
     }
     #[cfg(not(target_arch = "x86_64"))]
     {
