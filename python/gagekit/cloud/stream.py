@@ -169,18 +169,24 @@ class CloudStream:
         as :func:`~gagekit.cloud.streamed.cut_stream` does)."""
         return replace(self, _reuse=True)
 
-    def __iter__(self) -> Iterator[np.ndarray]:
+    def _ready(self, raw: np.ndarray, start: int) -> np.ndarray:
+        """A raw chunk whose first point is number ``start``, checked finite (where the
+        reader did not) and scaled to millimetres in place."""
+        pts = np.require(raw, np.float64, ["C_CONTIGUOUS", "WRITEABLE"])
+        if not self._finite_checked:
+            _check_finite_from(pts, start, self.path)
         scale = [self.scale_to_mm, self.scale_to_mm, self.z_scale_to_mm]
+        if scale != [1.0, 1.0, 1.0] and len(pts):
+            _scale_from(pts, scale, start, self.path)
+        return pts
+
+    def __iter__(self) -> Iterator[np.ndarray]:
         n = 0
         source = self._raw_chunks
         if self._reuse:
             source = getattr(source, "reusing", source)
         for raw in source():
-            pts = np.require(raw, np.float64, ["C_CONTIGUOUS", "WRITEABLE"])
-            if not self._finite_checked:
-                _check_finite_from(pts, n, self.path)
-            if scale != [1.0, 1.0, 1.0] and len(pts):
-                _scale_from(pts, scale, n, self.path)
+            pts = self._ready(raw, n)
             n += len(pts)
             if len(pts):
                 yield pts
@@ -189,7 +195,6 @@ class CloudStream:
         if self._at_end is not None:
             self._at_end(n)
         self.points_read = n
-
 
     def backward(self) -> Optional[Iterator[tuple[int, np.ndarray]]]:
         """The chunks from the end of the file back, as (number of the chunk's first point,
@@ -200,15 +205,10 @@ class CloudStream:
         source = getattr(self._raw_chunks, "backward", None)
         if source is None:
             return None
-        scale = [self.scale_to_mm, self.scale_to_mm, self.z_scale_to_mm]
 
         def chunks() -> Iterator[tuple[int, np.ndarray]]:
             for start, raw in source():
-                pts = np.require(raw, np.float64, ["C_CONTIGUOUS", "WRITEABLE"])
-                if not self._finite_checked:
-                    _check_finite_from(pts, start, self.path)
-                if scale != [1.0, 1.0, 1.0] and len(pts):
-                    _scale_from(pts, scale, start, self.path)
+                pts = self._ready(raw, start)
                 if len(pts):
                     yield start, pts
 
