@@ -170,3 +170,32 @@ fn active_zones_equal_the_zones_of_all_points() {
         assert!(near.control_out.iter().all(|&i| on(&p, 3, &near.center, i, near.r_out)), "sphere trial {trial}");
     }
 }
+
+#[test]
+fn the_feature_buffers_hold_the_perturbed_rows_bit_for_bit() {
+    let (pts, _) = part();
+    let n = pts.len() / 3;
+    // overlapping, unsorted and gapped rows, and active points in no feature
+    let a: Vec<usize> = (0..300).collect();
+    let b: Vec<usize> = (250..400).chain(10..20).collect();
+    let c: Vec<usize> = (0..n).rev().step_by(7).collect();
+    let d: Vec<usize> = vec![5, 5, 900, 3];
+    let rows: Vec<&[usize]> = vec![&a, &b, &c, &d];
+    let map = super::perturb::Scatter::new(n, &rows);
+    let models = [
+        noise(0.01),
+        Model { probing: 0.002, relative_scale: 1e-5, offset: 0.001, ..noise(0.01) },
+        Model { origin: Some([1.0, -2.0, 30.0]), sigma_per_m: 0.5, probing: 0.002, relative_scale: 1e-5, offset: 0.001, ..noise(0.01) },
+        Model { relative_scale: 1e-5, ..noise(0.0) },
+        noise(0.0),
+    ];
+    for m in &models {
+        let flat = perturb(&pts, 3, m, 3, 9).unwrap();
+        let bufs = super::perturb::perturb_features(&pts, &map, m, 3, 9).unwrap();
+        for (r, buf) in rows.iter().zip(&bufs) {
+            let want: Vec<f64> = r.iter().flat_map(|&i| flat[3 * i..3 * i + 3].to_vec()).collect();
+            assert_eq!(want.iter().map(|v| v.to_bits()).collect::<Vec<_>>(), buf.iter().map(|v| v.to_bits()).collect::<Vec<_>>());
+        }
+    }
+    assert!(super::perturb::perturb_features(&pts[..30], &map, &models[0], 3, 9).is_err());
+}
