@@ -199,3 +199,34 @@ fn the_feature_buffers_hold_the_perturbed_rows_bit_for_bit() {
     }
     assert!(super::perturb::perturb_features(&pts[..30], &map, &models[0], 3, 9).is_err());
 }
+
+#[test]
+fn the_band_holds_the_extremes_of_a_full_sort() {
+    use super::active::{band, BAND, MIN_EXTREMES};
+    let reference = |r: &[f64]| -> Vec<bool> {
+        let lo = r.iter().cloned().fold(f64::INFINITY, f64::min);
+        let hi = r.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
+        let w = BAND * (hi - lo);
+        let mut sel: Vec<bool> = r.iter().map(|&x| x <= lo + w || x >= hi - w).collect();
+        let mut order: Vec<usize> = (0..r.len()).collect();
+        order.sort_by(|a, b| r[*a].total_cmp(&r[*b]).then(a.cmp(b)));
+        for &i in order[..MIN_EXTREMES].iter().chain(&order[r.len() - MIN_EXTREMES..]) {
+            sel[i] = true;
+        }
+        sel
+    };
+    let mut cases: Vec<Vec<f64>> = Vec::new();
+    for n in [40usize, 100, 1000] {
+        // even spread; one far outlier on each side (few points in the band); ties
+        cases.push((0..n).map(|i| ((i * 7919) % n) as f64).collect());
+        let mut v: Vec<f64> = (0..n).map(|i| ((i * 31) % 17) as f64 * 0.01).collect();
+        v[3] = -10.0;
+        v[n - 2] = 10.0;
+        cases.push(v);
+        cases.push((0..n).map(|i| (i % 3) as f64).collect());
+        cases.push((0..n).map(|i| if i == 5 { 1.0 } else { 0.0 }).collect());
+    }
+    for r in &cases {
+        assert_eq!(band(r), reference(r));
+    }
+}
