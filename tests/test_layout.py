@@ -56,3 +56,10 @@ def test_cli_registers_its_sub_apps_in_one_place():
     names = {g.name for g in app.registered_groups} | {c.name for c in app.registered_commands}
     assert {"cloud", "form", "gage", "machine", "demo"} <= names
     assert {"design", "evaluate-plan", "track", "history", "simulate-cycles"} <= {c.name for c in machine_app.registered_commands}
+
+
+def test_the_files_run_first_exist():
+    # tests/conftest.py starts the longest files first; a renamed file would silently drop out
+    from conftest import ROOT, SLOW_FILES_FIRST
+
+    assert [f for f in SLOW_FILES_FIRST if not (ROOT / f).is_file()] == []

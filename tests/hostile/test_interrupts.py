@@ -180,3 +180,47 @@ def test_sigterm_and_sighup_mid_write_leave_no_temporary_file(tmp_path, sig):
     name = signal.Signals(sig).name
     assert p.returncode == 128 + sig and se.strip() == f"gagekit: error: interrupted ({name})", (p.returncode, se)
     assert out.read_text() == "old\n" and leftovers(tmp_path) == []
+
+
+_TWO_THREADS = """
+import os, signal, threading, time
+import numpy as np
+import gagekit
+
+rng = np.random.default_rng(0)
+pts = rng.uniform(-1, 1, (10**6, 2))
+small = pts[:64]
+gagekit.fit_circle(small, "least-squares")
+stop = threading.Event()
+def short_calls():  # another thread's kernel calls, one after another, during the long one
+    while not stop.is_set():
+        gagekit.fit_circle(small, "least-squares")
+worker = threading.Thread(target=short_calls)
+worker.start()
+t0 = time.monotonic()
+ref = gagekit.fit_circle(pts, "max-inscribed")
+full = time.monotonic() - t0
+threading.Timer(0.2 * full, lambda: os.kill(os.getpid(), signal.SIGINT)).start()
+t0 = time.monotonic()
+try:
+    gagekit.fit_circle(pts, "max-inscribed")
+    print("returned", full, time.monotonic() - t0)
+except KeyboardInterrupt:
+    print("raised", full, time.monotonic() - t0)
+stop.set()
+worker.join()
+"""
+
+
+def test_another_threads_kernel_calls_do_not_swallow_ctrl_c(tmp_path):
+    """Ctrl-C during a long kernel call stops it even while another thread starts kernel
+    calls of its own: a new call forgets an earlier request only when no other call runs
+    (``rust/py/src/errors.rs``, ``run``). Wall times of the same fit in the same process,
+    with the same other thread: the interrupted one is answered long before the whole fit."""
+    script = tmp_path / "two_threads.py"
+    script.write_text(_TWO_THREADS)
+    p = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=300)
+    assert p.returncode == 0, p.stderr
+    what, full, interrupted = p.stdout.split()
+    assert what == "raised", p.stdout
+    assert float(interrupted) < 0.6 * float(full), p.stdout

@@ -208,15 +208,13 @@ def cut_stream(chunks: Iterable[np.ndarray], boxes: Sequence[Box], keep: Sequenc
     # fixed cost), and memory stays bounded by REHULL points a region.
     hull = [False] * len(boxes)
 
+    cut_minus = list(minus) if minus and any(k is not None for k in minus) else []
+
     def take(start: int, cuts: list) -> None:
         # every box keeps every inside point here (no hull in the call): kept is inside
-        ids_of = [kept + start for _, _, kept, _ in cuts]
-        for i, (r, (count, _, _, kpts)) in enumerate(zip(regions, cuts)):
-            ids = ids_of[i]
-            if minus and minus[i] is not None and len(ids):
-                out = ~_members(ids, ids_of[minus[i]])
-                ids, kpts = ids[out], kpts[out]
-                count = len(ids)
+        # (for a box with ``minus``, the points outside the other box: the cut's own)
+        for r, (count, _, kept, kpts) in zip(regions, cuts):
+            ids = kept + start
             r.add_kept(count, ids, ids, kpts)
             if sample and count:
                 r.sample(seed, ids, kpts, sample)
@@ -231,7 +229,7 @@ def cut_stream(chunks: Iterable[np.ndarray], boxes: Sequence[Box], keep: Sequenc
             n += len(pts)
             if boxes:
                 # one Rust call: classify, gather (and moments), parallel inside
-                cuts = _core.cloud.cut_chunk(as_points(pts), rows, hull, False, state, flags)
+                cuts = _core.cloud.cut_chunk(as_points(pts), rows, hull, False, state, flags, cut_minus)
                 while len(waiting) >= 2:
                     waiting.popleft().result()
                 waiting.append(ex.submit(take, start, cuts))
@@ -241,14 +239,6 @@ def cut_stream(chunks: Iterable[np.ndarray], boxes: Sequence[Box], keep: Sequenc
         if flags and flags[k]:
             r.moments = state[k].copy()
     return Pass(n, [r.finish() for r in regions])
-
-
-def _members(ids: np.ndarray, of: np.ndarray) -> np.ndarray:
-    """Which of the ascending ``ids`` are among the ascending ``of``."""
-    if not len(of):
-        return np.zeros(len(ids), dtype=bool)
-    pos = np.minimum(np.searchsorted(of, ids), len(of) - 1)
-    return of[pos] == ids
 
 
 def hull_stream(chunks: Iterable[np.ndarray]) -> tuple[int, np.ndarray, np.ndarray]:

@@ -160,15 +160,51 @@ fn gather(points: &[f64], idx: &[usize]) -> Vec<f64> {
     out
 }
 
+/// The ascending `a` without the members of the ascending `b` (one merge walk).
+fn difference(a: &[usize], b: &[usize]) -> Vec<usize> {
+    let mut out = Vec::with_capacity(a.len().saturating_sub(b.len()).max(a.len() / 16));
+    let mut j = 0;
+    for &i in a {
+        while j < b.len() && b[j] < i {
+            j += 1;
+        }
+        if j == b.len() || b[j] != i {
+            out.push(i);
+        }
+    }
+    out
+}
+
 /// Classify the row-major (n, 3) `points` into `boxes` and keep, per box, what `keep`
 /// says; `want_inside` also returns every inside index of the [`Keep::Hull`] boxes (for
 /// a sample of each region, or the numbers of all its points). `moments` (empty, or one
-/// per box) receive the points inside their box, in order ([`Moments::add`]). The errors
-/// of [`classify`] (a non-finite point, a bad box).
-pub fn cut_chunk(points: &[f64], boxes: &[OrientedBox], keep: &[Keep], want_inside: bool, moments: &mut [Option<Moments>]) -> Result<Vec<RegionCut>> {
+/// per box) receive the points inside their box, in order ([`Moments::add`]). `minus`
+/// (empty, or one per box): `Some(k)` makes box i hold only its points outside box k (a
+/// shell around box k; the count, kept points and moments are of those), decided on the
+/// indices before any point is gathered. The errors of [`classify`] (a non-finite point,
+/// a bad box).
+pub fn cut_chunk(
+    points: &[f64],
+    boxes: &[OrientedBox],
+    keep: &[Keep],
+    want_inside: bool,
+    moments: &mut [Option<Moments>],
+    minus: &[Option<usize>],
+) -> Result<Vec<RegionCut>> {
     assert_eq!(boxes.len(), keep.len(), "one keep mode per box");
     assert!(moments.is_empty() || moments.len() == boxes.len(), "no moments, or one per box");
-    let inside = classify(points, boxes)?;
+    assert!(minus.is_empty() || minus.len() == boxes.len(), "no minus, or one per box");
+    assert!(minus.iter().enumerate().all(|(i, m)| m.is_none_or(|k| k < boxes.len() && k != i)), "minus: another box");
+    let mut inside = classify(points, boxes)?;
+    if minus.iter().any(Option::is_some) {
+        let shells: Vec<Option<Vec<usize>>> =
+            minus.par_iter().enumerate().map(|(i, m)| m.map(|k| difference(&inside[i], &inside[k]))).collect();
+        for (i, s) in shells.into_iter().enumerate() {
+            if let Some(s) = s {
+                inside[i] = s;
+            }
+        }
+    }
     let mut none = vec![None; if moments.is_empty() { boxes.len() } else { 0 }];
     let moments = if moments.is_empty() { &mut none[..] } else { moments };
     inside
@@ -206,7 +242,7 @@ mod tests {
             OrientedBox { center: [1.0, -1.0, 0.5], size: [3.0, 4.0, 5.0], rotation: [0.1, 0.2, 0.3] },
             OrientedBox { center: [100.0; 3], size: [1.0; 3], rotation: [0.0; 3] },
         ];
-        let cuts = cut_chunk(&pts, &boxes, &[Keep::All, Keep::Hull, Keep::Hull], true, &mut []).unwrap();
+        let cuts = cut_chunk(&pts, &boxes, &[Keep::All, Keep::Hull, Keep::Hull], true, &mut [], &[]).unwrap();
         for (b, c) in boxes.iter().zip(&cuts) {
             let idx = select(&pts, b).unwrap();
             assert_eq!(c.count, idx.len());
@@ -218,8 +254,29 @@ mod tests {
         assert_eq!(cuts[1].kept, h.iter().map(|&j| idx[j]).collect::<Vec<_>>());
         assert_eq!(cuts[1].points, gather(&pts, &cuts[1].kept));
         assert_eq!((cuts[2].count, cuts[2].kept.len()), (0, 0));
-        let no = cut_chunk(&pts, &boxes[1..2], &[Keep::Hull], false, &mut []).unwrap();
+        let no = cut_chunk(&pts, &boxes[1..2], &[Keep::Hull], false, &mut [], &[]).unwrap();
         assert!(no[0].inside.is_none());
+    }
+
+    /// A box cut `minus` another keeps exactly its points outside that box (the shell),
+    /// with the count and points of those, whatever the order of the two boxes.
+    #[test]
+    fn minus_keeps_the_points_outside_the_other_box() {
+        let pts: Vec<f64> = (0..3 * 6000).map(|i| ((i * 7919) % 1000) as f64 * 0.013 - 6.0).collect();
+        let grown = OrientedBox { center: [0.5, -0.5, 0.2], size: [5.0, 6.0, 7.0], rotation: [0.1, 0.2, 0.3] };
+        let core = OrientedBox { size: [4.0, 5.0, 6.0], ..grown.clone() };
+        let (g, c) = (select(&pts, &grown).unwrap(), select(&pts, &core).unwrap());
+        let want: Vec<usize> = g.iter().copied().filter(|i| !c.contains(i)).collect();
+        assert!(!want.is_empty() && want.len() < g.len());
+        assert_eq!(difference(&g, &c), want);
+        assert_eq!(difference(&c, &g), Vec::<usize>::new());
+        assert_eq!(difference(&g, &[]), g);
+        for (boxes, minus, at) in [([core.clone(), grown.clone()], [None, Some(0)], 1), ([grown.clone(), core.clone()], [Some(1), None], 0)] {
+            let cuts = cut_chunk(&pts, &boxes, &[Keep::All, Keep::All], false, &mut [], &minus).unwrap();
+            assert_eq!((cuts[at].count, &cuts[at].kept), (want.len(), &want));
+            assert_eq!(cuts[at].points, gather(&pts, &want));
+            assert_eq!(cuts[1 - at].kept, c);
+        }
     }
 
     /// A region's moments are the same bits whether its points come at once or chunk by
@@ -235,7 +292,7 @@ mod tests {
         for chunk in [1usize, 7, 997, 5000] {
             let mut m = [Some(Moments::default())];
             for c in pts.chunks(3 * chunk) {
-                cut_chunk(c, &b, &[Keep::Hull], false, &mut m).unwrap();
+                cut_chunk(c, &b, &[Keep::Hull], false, &mut m, &[]).unwrap();
             }
             assert_eq!(m[0].unwrap(), whole, "chunk {chunk}");
         }

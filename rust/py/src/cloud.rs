@@ -333,12 +333,13 @@ type CutRow<'py> = (usize, Option<Bound<'py, PyArray1<i64>>>, Bound<'py, PyArray
 /// and keep, per box, every inside point or (`hull[i]`) the hull vertices of them;
 /// `inside` also returns every inside index of the hull boxes; `moments` ((k, 22), the
 /// flat moments of each box, see `point_moments`) gets the inside points of the boxes
-/// flagged in `moments_of` added, in place (`gagekit-cloudio`'s `cut_chunk`: one call a
-/// chunk, parallel inside).
+/// flagged in `moments_of` added, in place; `minus[i]` = k makes box i keep only its
+/// points outside box k (a shell; decided on the indices, before any point is gathered)
+/// (`gagekit-cloudio`'s `cut_chunk`: one call a chunk, parallel inside).
 #[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyfunction(module = "gagekit._core.cloud"))]
 #[pyfunction]
 #[pyo3(name = "cut_chunk")]
-#[pyo3(signature = (points, boxes, hull, inside=false, moments=None, moments_of=Vec::new()))]
+#[pyo3(signature = (points, boxes, hull, inside=false, moments=None, moments_of=Vec::new(), minus=Vec::new()))]
 fn cloud_cut_chunk<'py>(
     py: Python<'py>,
     points: PyReadonlyArray2<'py, f64>,
@@ -347,11 +348,18 @@ fn cloud_cut_chunk<'py>(
     inside: bool,
     moments: Option<PyReadwriteArray2<'py, f64>>,
     moments_of: Vec<bool>,
+    minus: Vec<Option<usize>>,
 ) -> PyResult<Vec<CutRow<'py>>> {
     let pts = rows(py, &points, 3, "points")?;
     let bx = crate::geometry::boxes_from(py, &boxes)?;
     if hull.len() != bx.len() {
         return Err(invalid(format!("hull: expected {} flags (one per box), got {}", bx.len(), hull.len())));
+    }
+    if !minus.is_empty() && minus.len() != bx.len() {
+        return Err(invalid(format!("minus: expected {} entries (one per box), got {}", bx.len(), minus.len())));
+    }
+    if let Some((i, k)) = minus.iter().enumerate().find_map(|(i, m)| m.filter(|&k| k >= bx.len() || k == i).map(|k| (i, k))) {
+        return Err(invalid(format!("minus: box {i} cannot be cut by box {k} (another of the {} boxes)", bx.len())));
     }
     let keep: Vec<Keep> = hull.iter().map(|&h| if h { Keep::Hull } else { Keep::All }).collect();
     let mut moments = moments;
@@ -363,7 +371,7 @@ fn cloud_cut_chunk<'py>(
         }
         state = flat.chunks_exact(MOMENTS_LEN).zip(&moments_of).map(|(r, &f)| f.then(|| Moments::from_array(r))).collect();
     }
-    let cuts = run(py, || cut_chunk(pts, &bx, &keep, inside, &mut state))?;
+    let cuts = run(py, || cut_chunk(pts, &bx, &keep, inside, &mut state, &minus))?;
     if let Some(m) = moments.as_mut() {
         let flat = m.as_slice_mut().map_err(|_| invalid("moments: expected a C-contiguous array".to_string()))?;
         for (r, s) in flat.chunks_exact_mut(MOMENTS_LEN).zip(&state) {

@@ -7,6 +7,7 @@
 use gagekit_core::{ErrorKind, GkError};
 use pyo3::prelude::*;
 use std::panic::{catch_unwind, AssertUnwindSafe};
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 pyo3::import_exception!(gagekit.errors, InvalidInputError);
 pyo3::import_exception!(gagekit.errors, DegenerateGeometryError);
@@ -38,6 +39,30 @@ pub fn invalid(message: impl Into<String>) -> PyErr {
     to_pyerr(GkError::invalid(message))
 }
 
+/// How many kernel calls run at this moment, in all threads.
+static RUNNING: AtomicUsize = AtomicUsize::new(0);
+
+/// One kernel call in progress (counted in [`RUNNING`] until dropped). The first call to
+/// start while none runs forgets an earlier stop request; a call that starts while another
+/// runs leaves it set, so that a Ctrl-C meant for the running call is not swallowed by a
+/// call another thread starts (the request stops every running kernel, this one too).
+struct Running;
+
+impl Running {
+    fn enter() -> Self {
+        if RUNNING.fetch_add(1, Ordering::SeqCst) == 0 {
+            gagekit_core::interrupt::clear();
+        }
+        Running
+    }
+}
+
+impl Drop for Running {
+    fn drop(&mut self) {
+        RUNNING.fetch_sub(1, Ordering::SeqCst);
+    }
+}
+
 /// Run a kernel with the GIL released, turning its errors and any panic into
 /// gagekit exceptions (a panic becomes `gagekit.errors.InternalError`).
 ///
@@ -54,15 +79,25 @@ where
 {
     loop {
         crate::sigint::ensure();
-        gagekit_core::interrupt::clear();
+        let running = Running::enter();
         py.check_signals()?; // a Ctrl-C that came just before the clear
-        match py.detach(|| catch_unwind(AssertUnwindSafe(&mut f))) {
+        let outcome = py.detach(|| catch_unwind(AssertUnwindSafe(&mut f)));
+        drop(running);
+        match outcome {
             Ok(Ok(v)) => return Ok(v),
             Ok(Err(e)) if e.kind == ErrorKind::Interrupted => {
                 // Python's handler for the SIGINT that stopped the kernel
                 py.check_signals()?;
                 // the handler returned (or this is not the main thread, whose handler
-                // raises there): the run goes on
+                // raises there): the run goes on once the request is forgotten, which the
+                // first call to start while none runs does (this one, if every call the
+                // request stopped has ended). The wait is without the GIL, which the other
+                // calls need to end.
+                py.detach(|| {
+                    while RUNNING.load(Ordering::SeqCst) != 0 && gagekit_core::interrupt::requested() {
+                        std::thread::sleep(std::time::Duration::from_millis(1));
+                    }
+                });
                 continue;
             }
             Ok(Err(e)) => return Err(to_pyerr(e)),

@@ -7,7 +7,10 @@
 //! so the result is the stationary point of the full problem, in a few passes over the
 //! data instead of some sixty.
 
-use super::frame::{arr, centred3, centroid, check_points, orthonormal_basis, principal_axes, upper, vec3, DEGENERATE};
+use super::frame::{
+    arr, centred3, centred3_scatter, centroid, check_points, clearly_spread, orthonormal_basis, principal_axes, upper, vec3,
+    DEGENERATE,
+};
 use super::lm::{levenberg_marquardt_fused, normal_equations_cost};
 use super::sphere::algebraic_sphere;
 use super::Vector3;
@@ -86,15 +89,29 @@ pub fn cylinder_near(pts: &[f64], axis: [f64; 3]) -> Result<Cylinder> {
 fn cylinder_from(pts: &[f64], start_axis: Option<[f64; 3]>, principal: bool) -> Result<Cylinder> {
     check_points(pts, 3, 5, "cylinder")?;
     let c = centroid(pts, 3);
-    let q = centred3(pts, 3, &c);
-    let (sv, axes) = principal_axes(&q);
-    if sv[0] == 0.0 {
-        return Err(GkError::degenerate("cylinder: all points coincide"));
-    }
-    if sv[1] <= DEGENERATE * sv[0] {
-        return Err(GkError::degenerate("cylinder: the points are collinear; no cylinder is determined"));
-    }
-    let mut starts: Vec<Vector3<f64>> = if principal { axes.to_vec() } else { Vec::new() };
+    let spreads = |sv: [f64; 3]| {
+        if sv[0] == 0.0 {
+            return Err(GkError::degenerate("cylinder: all points coincide"));
+        }
+        if sv[1] <= DEGENERATE * sv[0] {
+            return Err(GkError::degenerate("cylinder: the points are collinear; no cylinder is determined"));
+        }
+        Ok(())
+    };
+    // from a given axis alone the principal axes only check the spreads: from the scatter
+    // summed with the centred copy when that decides them (`clearly_spread`), else as before
+    let (q, mut starts) = if principal {
+        let q = centred3(pts, 3, &c);
+        let (sv, axes) = principal_axes(&q);
+        spreads(sv)?;
+        (q, axes.to_vec())
+    } else {
+        let (q, s) = centred3_scatter(pts, &c);
+        if !clearly_spread(&s) {
+            spreads(principal_axes(&q).0)?;
+        }
+        (q, Vec::new())
+    };
     if let Some(a) = start_axis {
         let a = vec3(&a);
         if a.norm() > 0.0 && a.iter().all(|v| v.is_finite()) {
@@ -177,5 +194,33 @@ mod tests {
     #[test]
     fn coincident_points() {
         assert!(cylinder(&[0.0; 15], None).is_err());
+    }
+
+    #[test]
+    fn from_an_axis_the_spread_checks_and_input_errors_are_those_of_the_principal_path() {
+        use gagekit_core::ErrorKind;
+        let a = [0.0, 0.0, 1.0];
+        // coincident, collinear, a NaN, a coordinate beyond MAX_COORD: the same errors
+        let line: Vec<f64> = (0..50).flat_map(|i| [1.0, 2.0, i as f64]).collect();
+        let mut nan = cyl_points(50, [0.0; 3], a, 3.0, 0.0);
+        nan[7] = f64::NAN;
+        let mut huge = cyl_points(50, [0.0; 3], a, 3.0, 0.0);
+        huge[7] = 1e151;
+        for pts in [vec![1.0; 30], line, nan, huge] {
+            let (e1, e2) = (cylinder(&pts, None).unwrap_err(), cylinder_near(&pts, a).unwrap_err());
+            assert_eq!((e1.kind, e1.message), (e2.kind, e2.message));
+        }
+        assert_eq!(cylinder_near(&[1.0; 30], a).unwrap_err().kind, ErrorKind::DegenerateGeometry);
+        // the scatter's certificate never passes points the recomputed spreads would refuse,
+        // and defers (recomputes) when barely spread
+        for (w, want) in [(1e-7, false), (1e-12, false), (1e-1, true), (3.0, true)] {
+            let pts: Vec<f64> = (0..60).flat_map(|i| [1.0 + w * ((i % 2) as f64), 2.0 + w * ((i % 3) as f64), i as f64]).collect();
+            let c = centroid(&pts, 3);
+            let (q, s) = centred3_scatter(&pts, &c);
+            assert_eq!(q, centred3(&pts, 3, &c));
+            assert_eq!(clearly_spread(&s), want, "width {w}");
+            let (sv, _) = principal_axes(&q);
+            assert!(!clearly_spread(&s) || sv[1] > 1e-4 * sv[0]);
+        }
     }
 }

@@ -14,8 +14,12 @@ pub(crate) fn check_points(pts: &[f64], dim: usize, min_n: usize, shape: &str) -
     if dim != 2 && dim != 3 {
         return Err(GkError::invalid(format!("{shape}: points must be 2-D or 3-D, got {dim}-D")));
     }
-    check_finite(pts, dim, "points")?;
-    check_magnitude(pts, dim)?;
+    // one vectorised pass for the common case (every coordinate finite and within
+    // MAX_COORD: NaN fails the comparison); the two checks name a bad point otherwise
+    if pts.len() % dim != 0 || !pts.iter().fold(true, |ok, v| ok & (v.abs() <= MAX_COORD)) {
+        check_finite(pts, dim, "points")?;
+        check_magnitude(pts, dim)?;
+    }
     let n = pts.len() / dim;
     if n < min_n {
         return Err(GkError::invalid(format!(
@@ -74,6 +78,39 @@ pub(crate) fn centred3(pts: &[f64], dim: usize, c: &[f64]) -> Vec<[f64; 3]> {
             q
         })
         .collect()
+}
+
+/// [`centred3`] of 3-D points with their scatter matrix summed in the same pass.
+pub(crate) fn centred3_scatter(pts: &[f64], c: &[f64]) -> (Vec<[f64; 3]>, Matrix3<f64>) {
+    let mut s = [0.0; 6];
+    let q = pts
+        .chunks_exact(3)
+        .map(|p| {
+            let q = [p[0] - c[0], p[1] - c[1], p[2] - c[2]];
+            s[0] += q[0] * q[0];
+            s[1] += q[0] * q[1];
+            s[2] += q[0] * q[2];
+            s[3] += q[1] * q[1];
+            s[4] += q[1] * q[2];
+            s[5] += q[2] * q[2];
+            q
+        })
+        .collect();
+    (q, Matrix3::new(s[0], s[1], s[2], s[1], s[3], s[4], s[2], s[4], s[5]))
+}
+
+/// Whether the points of scatter matrix `s` certainly pass the spread checks of
+/// [`principal_axes`]' singular values (`sv[0] > 0` and `sv[1] > DEGENERATE * sv[0]`): the
+/// second eigenvalue at least 1e-6 of the first (sv[1]^2 / sv[0]^2 is then about 1e-6,
+/// fourteen orders of magnitude above DEGENERATE^2 = 1e-20, far beyond the rounding of the
+/// sums and of the eigenvalues, about 1e-16 of the first). `false`: recompute the spreads.
+pub(crate) fn clearly_spread(s: &Matrix3<f64>) -> bool {
+    if !s.iter().all(|v| v.is_finite()) {
+        return false;
+    }
+    let mut e: Vec<f64> = SymmetricEigen::new(*s).eigenvalues.iter().copied().collect();
+    e.sort_by(|a, b| b.total_cmp(a));
+    e[0] > 0.0 && e[1] >= 1e-6 * e[0]
 }
 
 /// Principal axes of centred points: singular values (descending) and the

@@ -30,8 +30,22 @@ pub fn band(r: &[f64]) -> Vec<bool> {
     let lo = r.iter().cloned().fold(f64::INFINITY, f64::min);
     let hi = r.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
     let w = BAND * (hi - lo);
-    let mut sel: Vec<bool> = r.iter().map(|&x| x <= lo + w || x >= hi - w).collect();
-    // the MIN_EXTREMES smallest and largest (ties by index): two partial selections
+    let (mut n_lo, mut n_hi) = (0usize, 0usize);
+    let mut sel: Vec<bool> = r
+        .iter()
+        .map(|&x| {
+            let (a, b) = (x <= lo + w, x >= hi - w);
+            n_lo += a as usize;
+            n_hi += b as usize;
+            a || b
+        })
+        .collect();
+    // the MIN_EXTREMES smallest and largest (ties by index): two partial selections, needed
+    // only when the band holds fewer on a side (else the MIN_EXTREMES-th smallest is itself
+    // within lo + w, so all of them are in already; the same mask)
+    if n_lo >= MIN_EXTREMES && n_hi >= MIN_EXTREMES {
+        return sel;
+    }
     let mut order: Vec<usize> = (0..n).collect();
     let cmp = |a: &usize, b: &usize| r[*a].total_cmp(&r[*b]).then(a.cmp(b));
     order.select_nth_unstable_by(MIN_EXTREMES, cmp);

@@ -3,7 +3,9 @@
 //!
 //! `gagekit.uncertainty.plan` compiles a drawing (features, datums, callouts) once; a
 //! trial is then one pass of [`evaluate`] over a perturbed copy of the active points (the
-//! union of the feature regions, [`perturb::perturb`]), and [`run`] evaluates a block of
+//! union of the feature regions, [`perturb::perturb`]; [`run`] draws them straight into
+//! each feature's buffer, [`perturb::perturb_features`]: the same values, no copy of the
+//! active set), and [`run`] evaluates a block of
 //! trials in parallel (rayon), trial `i` seeded by (seed, i) alone, so any thread count
 //! gives the same values. Each step is the kernel the Python evaluation
 //! (`gagekit.inspect.zones`, `gagekit.inspect.datums`) calls, with the same inputs, started
@@ -631,20 +633,30 @@ impl<'a> Trial<'a> {
 /// points `pts` (flat (n, 3)).
 pub fn evaluate(plan: &Plan, pts: &[f64]) -> Result<Values> {
     plan.check(pts)?;
-    evaluate_checked(plan, pts)
+    evaluate_checked(plan, gather(plan, pts))
 }
 
-fn evaluate_checked(plan: &Plan, pts: &[f64]) -> Result<Values> {
-    let feats = plan
-        .features
+/// Each feature's points gathered from the active points (flat (n, 3)).
+fn gather(plan: &Plan, pts: &[f64]) -> Vec<Vec<f64>> {
+    plan.features
         .iter()
         .map(|spec| {
             let mut p = Vec::with_capacity(3 * spec.rows.len());
             for &i in &spec.rows {
                 p.extend_from_slice(&pts[3 * i..3 * i + 3]);
             }
-            Feat { spec, pts: p, lsq: None, mz: None, cyl: [None, None, None], axis_pts: None }
+            p
         })
+        .collect()
+}
+
+/// One trial of the plan on each feature's points (`pts[k]`: feature `k`'s, flat (m, 3)).
+fn evaluate_checked(plan: &Plan, pts: Vec<Vec<f64>>) -> Result<Values> {
+    let feats = plan
+        .features
+        .iter()
+        .zip(pts)
+        .map(|(spec, p)| Feat { spec, pts: p, lsq: None, mz: None, cyl: [None, None, None], axis_pts: None })
         .collect();
     let mut t = Trial { plan, feats, sims: Vec::with_capacity(plan.datums.len()), frames: Vec::new(), counts: (0, 0) };
     for k in 0..plan.datums.len() {
@@ -672,14 +684,16 @@ fn evaluate_checked(plan: &Plan, pts: &[f64]) -> Result<Values> {
 /// `threads` 0: rayon's global pool.
 pub fn run(plan: &Plan, pts: &[f64], model: &perturb::Model, seed: u64, first: u64, count: usize, threads: usize) -> Result<Values> {
     plan.check(pts)?;
+    let rows: Vec<&[usize]> = plan.features.iter().map(|f| f.rows.as_slice()).collect();
+    let map = perturb::Scatter::new(pts.len() / 3, &rows);
     let trials = || -> Vec<Result<Values>> {
         (0..count as u64)
             .into_par_iter()
             .map(|k| {
                 let trial = first + k;
                 gagekit_core::interrupt::check()?;
-                let p = perturb::perturb(pts, 3, model, seed, trial)?;
-                evaluate_checked(plan, &p)
+                let p = perturb::perturb_features(pts, &map, model, seed, trial)?;
+                evaluate_checked(plan, p)
                     .map_err(|e| GkError::new(e.kind, format!("Monte Carlo trial {trial} (a simulated measurement): {}", e.message)))
             })
             .collect()

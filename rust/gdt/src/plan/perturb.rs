@@ -57,20 +57,144 @@ fn uniform(rng: &mut ChaCha8Rng, lo: f64, hi: f64) -> f64 {
     lo + (hi - lo) * rng.random::<f64>()
 }
 
-/// One simulated measurement of the flat (n, `dim`) points (`dim` 2 or 3; the line of
-/// sight needs 3): a new buffer. Draw order: the per-point noise, the probing error, the
-/// offset, the scale error.
-pub fn perturb(pts: &[f64], dim: usize, model: &Model, seed: u64, trial: u64) -> Result<Vec<f64>> {
+/// Where a perturbation writes the points: [`each`](Sink::each) visits every point in
+/// order with its current coordinates (`dim` of them), or with the input's when `init`, and
+/// stores what the visit leaves.
+pub trait Sink {
+    fn each(&mut self, init: bool, f: impl FnMut(usize, &mut [f64]));
+}
+
+/// A flat (n, `dim`) copy of the points.
+struct Flat {
+    dim: usize,
+    out: Vec<f64>,
+}
+
+impl Sink for Flat {
+    fn each(&mut self, init: bool, mut f: impl FnMut(usize, &mut [f64])) {
+        let dim = self.dim;
+        let _ = init; // `out` starts as a copy of the points
+        for (i, p) in self.out.chunks_exact_mut(dim).enumerate() {
+            f(i, p);
+        }
+    }
+}
+
+/// The rows of each feature of a plan in the active points, as runs: the active points
+/// `a..b` of a segment go to `dests` (feature, position of point `a` in its buffer). Built
+/// once per block of trials; a trial's perturbation then writes each feature's points
+/// directly ([`perturb_features`]), with no perturbed copy of the active set.
+#[derive(Debug, Clone)]
+pub struct Scatter {
+    n: usize,
+    sizes: Vec<usize>,
+    segs: Vec<(usize, usize, usize, usize)>,
+    dests: Vec<(usize, usize)>,
+}
+
+impl Scatter {
+    /// The runs of `rows` (each feature's rows, every row < `n`).
+    pub fn new(n: usize, rows: &[&[usize]]) -> Scatter {
+        // maximal runs (active a, length, feature, position): consecutive rows at consecutive positions
+        let mut runs: Vec<(usize, usize, usize, usize)> = Vec::new();
+        for (f, r) in rows.iter().enumerate() {
+            let mut k = 0;
+            while k < r.len() {
+                let mut len = 1;
+                while k + len < r.len() && r[k + len] == r[k] + len {
+                    len += 1;
+                }
+                runs.push((r[k], len, f, k));
+                k += len;
+            }
+        }
+        let mut cuts: Vec<usize> = runs.iter().flat_map(|&(a, len, _, _)| [a, a + len]).chain([0, n]).collect();
+        cuts.sort_unstable();
+        cuts.dedup();
+        let mut lists: Vec<Vec<(usize, usize)>> = vec![Vec::new(); cuts.len() - 1];
+        for &(a, len, f, pos) in &runs {
+            let mut j = cuts.partition_point(|&c| c < a);
+            while cuts[j] < a + len {
+                lists[j].push((f, pos + cuts[j] - a));
+                j += 1;
+            }
+        }
+        let mut segs = Vec::with_capacity(lists.len());
+        let mut dests = Vec::new();
+        for (j, l) in lists.into_iter().enumerate() {
+            segs.push((cuts[j], cuts[j + 1], dests.len(), dests.len() + l.len()));
+            dests.extend(l);
+        }
+        Scatter { n, sizes: rows.iter().map(|r| r.len()).collect(), segs, dests }
+    }
+}
+
+/// The feature buffers of one trial, written through a [`Scatter`].
+struct Features<'a> {
+    pts: &'a [f64],
+    map: &'a Scatter,
+    bufs: Vec<Vec<f64>>,
+}
+
+impl Sink for Features<'_> {
+    fn each(&mut self, init: bool, mut f: impl FnMut(usize, &mut [f64])) {
+        for &(a, b, d0, d1) in &self.map.segs {
+            let dests = &self.map.dests[d0..d1];
+            for i in a..b {
+                let mut p = [0.0; 3];
+                match dests.first() {
+                    Some(&(k, pos)) if !init => p.copy_from_slice(&self.bufs[k][3 * (pos + i - a)..][..3]),
+                    _ => p.copy_from_slice(&self.pts[3 * i..3 * i + 3]),
+                }
+                f(i, &mut p);
+                for &(k, pos) in dests {
+                    self.bufs[k][3 * (pos + i - a)..][..3].copy_from_slice(&p);
+                }
+            }
+        }
+    }
+}
+
+fn check_dim(pts: &[f64], dim: usize, model: &Model) -> Result<()> {
     if !(dim == 2 || dim == 3) || pts.len() % dim != 0 {
         return Err(GkError::invalid(format!("measurement model: points must be (n, 2) or (n, 3), got dimension {dim}")));
     }
     if model.origin.is_some() && dim != 3 {
         return Err(GkError::invalid(format!("measurement model: a scanner origin needs 3-D points, got {dim}-D")));
     }
+    Ok(())
+}
+
+/// One simulated measurement of the flat (n, `dim`) points (`dim` 2 or 3; the line of
+/// sight needs 3): a new buffer. Draw order: the per-point noise, the probing error, the
+/// offset, the scale error.
+pub fn perturb(pts: &[f64], dim: usize, model: &Model, seed: u64, trial: u64) -> Result<Vec<f64>> {
+    check_dim(pts, dim, model)?;
+    let mut sink = Flat { dim, out: pts.to_vec() };
+    apply(&mut sink, pts, dim, model, seed, trial);
+    Ok(sink.out)
+}
+
+/// [`perturb`] of the flat (n, 3) active points `pts`, written straight into each
+/// feature's buffer by `map` (built from the same `n`): buffer `k` holds the perturbed
+/// points of feature `k`'s rows, the values [`perturb`] gives them bit for bit (the same
+/// draws in the same order, the same operations on each point).
+pub fn perturb_features(pts: &[f64], map: &Scatter, model: &Model, seed: u64, trial: u64) -> Result<Vec<Vec<f64>>> {
+    check_dim(pts, 3, model)?;
+    if pts.len() != 3 * map.n {
+        return Err(GkError::invalid("measurement model: the points are not those of the feature map"));
+    }
+    let bufs = map.sizes.iter().map(|&m| vec![0.0; 3 * m]).collect();
+    let mut sink = Features { pts, map, bufs };
+    apply(&mut sink, pts, 3, model, seed, trial);
+    Ok(sink.bufs)
+}
+
+/// The model's steps on `sink`, whose points start as `pts`; the first step writes them
+/// from `pts` (`init`), so each point is read and written once when only noise is drawn.
+fn apply(sink: &mut impl Sink, pts: &[f64], dim: usize, model: &Model, seed: u64, trial: u64) {
     let mut rng = trial_rng(seed, trial);
     let normal = |rng: &mut ChaCha8Rng| -> f64 { rng.sample(StandardNormal) };
-    let mut out = pts.to_vec();
-    let n = pts.len() / dim;
     let centre = model.origin.unwrap_or([0.0; 3]);
     let los = |i: usize| -> (V3, f64) {
         let q = [pts[3 * i] - centre[0], pts[3 * i + 1] - centre[1], pts[3 * i + 2] - centre[2]];
@@ -78,23 +202,27 @@ pub fn perturb(pts: &[f64], dim: usize, model: &Model, seed: u64, trial: u64) ->
         let s = if r > 0.0 { r } else { 1.0 };
         ([q[0] / s, q[1] / s, q[2] / s], r)
     };
+    let mut init = true;
     if model.sigma > 0.0 || model.sigma_per_m > 0.0 {
         if model.origin.is_none() {
-            for x in out.iter_mut() {
-                *x += normal(&mut rng) * model.sigma;
-            }
+            sink.each(init, |_, p| {
+                for x in p.iter_mut() {
+                    *x += normal(&mut rng) * model.sigma;
+                }
+            });
         } else {
-            for i in 0..n {
+            sink.each(init, |i, p| {
                 let (l, r) = los(i);
                 let e = normal(&mut rng) * (model.sigma + model.sigma_per_m * r / 1000.0);
                 for k in 0..3 {
-                    out[3 * i + k] += l[k] * e;
+                    p[k] += l[k] * e;
                 }
-            }
+            });
         }
+        init = false;
     }
     if model.probing > 0.0 {
-        for p in out.chunks_exact_mut(dim) {
+        sink.each(init, |_, p| {
             let mut d = [0.0; 3];
             for dk in d.iter_mut().take(dim) {
                 *dk = normal(&mut rng);
@@ -106,7 +234,8 @@ pub fn perturb(pts: &[f64], dim: usize, model: &Model, seed: u64, trial: u64) ->
                     p[k] += d[k] / m * a;
                 }
             }
-        }
+        });
+        init = false;
     }
     if model.offset > 0.0 {
         if model.origin.is_none() {
@@ -114,28 +243,32 @@ pub fn perturb(pts: &[f64], dim: usize, model: &Model, seed: u64, trial: u64) ->
             for tk in t.iter_mut().take(dim) {
                 *tk = normal(&mut rng) * model.offset;
             }
-            for p in out.chunks_exact_mut(dim) {
+            sink.each(init, |_, p| {
                 for k in 0..dim {
                     p[k] += t[k];
                 }
-            }
+            });
         } else {
             let e = normal(&mut rng) * model.offset;
-            for i in 0..n {
+            sink.each(init, |i, p| {
                 let (l, _) = los(i);
                 for k in 0..3 {
-                    out[3 * i + k] += l[k] * e;
+                    p[k] += l[k] * e;
                 }
-            }
+            });
         }
+        init = false;
     }
     if model.relative_scale > 0.0 {
         let s = 1.0 + uniform(&mut rng, -model.relative_scale, model.relative_scale);
-        for p in out.chunks_exact_mut(dim) {
+        sink.each(init, |_, p| {
             for k in 0..dim {
                 p[k] = centre[k] + (p[k] - centre[k]) * s;
             }
-        }
+        });
+        init = false;
     }
-    Ok(out)
+    if init {
+        sink.each(true, |_, _| {});
+    }
 }

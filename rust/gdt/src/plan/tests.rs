@@ -170,3 +170,63 @@ fn active_zones_equal_the_zones_of_all_points() {
         assert!(near.control_out.iter().all(|&i| on(&p, 3, &near.center, i, near.r_out)), "sphere trial {trial}");
     }
 }
+
+#[test]
+fn the_feature_buffers_hold_the_perturbed_rows_bit_for_bit() {
+    let (pts, _) = part();
+    let n = pts.len() / 3;
+    // overlapping, unsorted and gapped rows, and active points in no feature
+    let a: Vec<usize> = (0..300).collect();
+    let b: Vec<usize> = (250..400).chain(10..20).collect();
+    let c: Vec<usize> = (0..n).rev().step_by(7).collect();
+    let d: Vec<usize> = vec![5, 5, 900, 3];
+    let rows: Vec<&[usize]> = vec![&a, &b, &c, &d];
+    let map = super::perturb::Scatter::new(n, &rows);
+    let models = [
+        noise(0.01),
+        Model { probing: 0.002, relative_scale: 1e-5, offset: 0.001, ..noise(0.01) },
+        Model { origin: Some([1.0, -2.0, 30.0]), sigma_per_m: 0.5, probing: 0.002, relative_scale: 1e-5, offset: 0.001, ..noise(0.01) },
+        Model { relative_scale: 1e-5, ..noise(0.0) },
+        noise(0.0),
+    ];
+    for m in &models {
+        let flat = perturb(&pts, 3, m, 3, 9).unwrap();
+        let bufs = super::perturb::perturb_features(&pts, &map, m, 3, 9).unwrap();
+        for (r, buf) in rows.iter().zip(&bufs) {
+            let want: Vec<f64> = r.iter().flat_map(|&i| flat[3 * i..3 * i + 3].to_vec()).collect();
+            assert_eq!(want.iter().map(|v| v.to_bits()).collect::<Vec<_>>(), buf.iter().map(|v| v.to_bits()).collect::<Vec<_>>());
+        }
+    }
+    assert!(super::perturb::perturb_features(&pts[..30], &map, &models[0], 3, 9).is_err());
+}
+
+#[test]
+fn the_band_holds_the_extremes_of_a_full_sort() {
+    use super::active::{band, BAND, MIN_EXTREMES};
+    let reference = |r: &[f64]| -> Vec<bool> {
+        let lo = r.iter().cloned().fold(f64::INFINITY, f64::min);
+        let hi = r.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
+        let w = BAND * (hi - lo);
+        let mut sel: Vec<bool> = r.iter().map(|&x| x <= lo + w || x >= hi - w).collect();
+        let mut order: Vec<usize> = (0..r.len()).collect();
+        order.sort_by(|a, b| r[*a].total_cmp(&r[*b]).then(a.cmp(b)));
+        for &i in order[..MIN_EXTREMES].iter().chain(&order[r.len() - MIN_EXTREMES..]) {
+            sel[i] = true;
+        }
+        sel
+    };
+    let mut cases: Vec<Vec<f64>> = Vec::new();
+    for n in [40usize, 100, 1000] {
+        // even spread; one far outlier on each side (few points in the band); ties
+        cases.push((0..n).map(|i| ((i * 7919) % n) as f64).collect());
+        let mut v: Vec<f64> = (0..n).map(|i| ((i * 31) % 17) as f64 * 0.01).collect();
+        v[3] = -10.0;
+        v[n - 2] = 10.0;
+        cases.push(v);
+        cases.push((0..n).map(|i| (i % 3) as f64).collect());
+        cases.push((0..n).map(|i| if i == 5 { 1.0 } else { 0.0 }).collect());
+    }
+    for r in &cases {
+        assert_eq!(band(r), reference(r));
+    }
+}
