@@ -150,6 +150,11 @@ fn active_zones_equal_the_zones_of_all_points() {
     for trial in 0..5 {
         let xy = perturb(&circle, 2, &model, 7, trial).unwrap();
         let all = gagekit_form::circle::min_zone(&xy).unwrap();
+        // from starts near and far (a trial's roundness sections start from its axis)
+        for start in [[4.05, -1.02], [3.9, -0.9], [4.0, -1.0]] {
+            let z = active::circle_zone_near(&xy, start).unwrap();
+            assert!((z.form_error() - all.form_error()).abs() < 1e-12, "circle trial {trial} from {start:?}");
+        }
         let near = active::circle_zone_near(&xy, [4.0 + 1e-3, -1.0]).unwrap();
         assert!((near.form_error() - all.form_error()).abs() < 1e-12, "circle trial {trial}");
         // the control points are numbered among every point (not the subset) and lie on the zone
