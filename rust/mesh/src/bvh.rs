@@ -658,6 +658,11 @@ impl Bvh {
         let mut bd = [f64::NEG_INFINITY; GROUP];
         let mut skip = [u32::MAX; GROUP];
         let mut slack = [0.0f64; GROUP];
+        // the lanes in single precision for the box tests (see `widen`)
+        let (mut qx, mut qy, mut qz) = ([0.0f32; GROUP], [0.0f32; GROUP], [0.0f32; GROUP]);
+        let mut err = [0.0f64; GROUP];
+        let mut bw = [f32::NEG_INFINITY; GROUP];
+        let size = self.root_lo.iter().chain(self.root_hi.iter()).fold(0.0f64, |s, x| s.max(x.abs()));
         let mut all = 0u32;
         for i in 0..g {
             (px[i], py[i], pz[i]) = (ps[i][0], ps[i][1], ps[i][2]);
@@ -670,6 +675,9 @@ impl Bvh {
                 }
                 _ => best[i] = None,
             }
+            (qx[i], qy[i], qz[i]) = (px[i] as f32, py[i] as f32, pz[i] as f32);
+            err[i] = F32_ERR * (size + px[i].abs().max(py[i].abs()).max(pz[i].abs()));
+            bw[i] = widen(bd[i], err[i]);
             all |= 1 << i;
         }
         // lanes of `m` whose squared box distance in `d` may hold something better
@@ -688,7 +696,15 @@ impl Bvh {
         if mask == 0 {
             return;
         }
-        let mut stack = [(Child { index: 0, count: 0 }, 0u32, [0.0f64; GROUP]); MAX_DEPTH + 2];
+        // lanes of `m` whose single-precision box distance in `d` is within the widened best
+        let open32 = |d: &[f32; GROUP], bw: &[f32; GROUP], m: u32| -> u32 {
+            let mut o = 0u32;
+            for i in 0..GROUP {
+                o |= ((d[i] <= bw[i]) as u32) << i;
+            }
+            o & m
+        };
+        let mut stack = [(Child { index: 0, count: 0 }, 0u32, [0.0f32; GROUP]); MAX_DEPTH + 2];
         let mut sp = 0usize;
         let mut cur = self.root;
         loop {
@@ -708,26 +724,27 @@ impl Bvh {
                         let d2 = dot(v, v);
                         if better(d2, slot, bd[i], best[i].as_ref().map(|b| b.slot)) {
                             bd[i] = d2;
+                            bw[i] = widen(d2, err[i]);
                             best[i] = Some(Nearest { slot, d2, foot, feature });
                         }
                     }
                 }
             } else {
                 let n = &self.nodes[cur.index as usize];
-                let (mut d0, mut d1) = ([0.0f64; GROUP], [0.0f64; GROUP]);
+                let (mut d0, mut d1) = ([0.0f32; GROUP], [0.0f32; GROUP]);
                 for i in 0..GROUP {
-                    let q = [px[i], py[i], pz[i]];
-                    let (mut a, mut b) = (0.0, 0.0);
+                    let q = [qx[i], qy[i], qz[i]];
+                    let (mut a, mut b) = (0.0f32, 0.0f32);
                     for k in 0..3 {
-                        let u = (n.lo[k][0] as f64 - q[k]).max(q[k] - n.hi[k][0] as f64).max(0.0);
-                        let w = (n.lo[k][1] as f64 - q[k]).max(q[k] - n.hi[k][1] as f64).max(0.0);
+                        let u = (n.lo[k][0] - q[k]).max(q[k] - n.hi[k][0]).max(0.0);
+                        let w = (n.lo[k][1] - q[k]).max(q[k] - n.hi[k][1]).max(0.0);
                         a += u * u;
                         b += w * w;
                     }
                     d0[i] = a;
                     d1[i] = b;
                 }
-                let (m0, m1) = (open(&d0, &bd, mask), open(&d1, &bd, mask));
+                let (m0, m1) = (open32(&d0, &bw, mask), open32(&d1, &bw, mask));
                 if m0 != 0 || m1 != 0 {
                     // the nearer child first: the one nearer to the group's first open lane
                     let i = (m0 | m1).trailing_zeros() as usize;
@@ -751,7 +768,7 @@ impl Bvh {
                 }
                 sp -= 1;
                 let (c, m, ds) = stack[sp];
-                let o = open(&ds, &bd, m);
+                let o = open32(&ds, &bw, m);
                 if o != 0 {
                     cur = c;
                     mask = o;
@@ -760,6 +777,26 @@ impl Bvh {
             }
         }
     }
+}
+
+/// Relative rounding of a coordinate to single precision, with room: the lanes' box
+/// tests of [`Bvh::nearest_group`] run on the point rounded to f32 (the boxes are f32
+/// already), each axis's gap then off by at most `F32_ERR * (size of the coordinates)`.
+const F32_ERR: f64 = 1.0 / (1u64 << 22) as f64;
+
+/// The single-precision threshold a lane's f32 squared box distance is compared with:
+/// a box whose exact squared distance is at most `bd` has an f32 distance at most
+/// (sqrt(bd) (1 + 2^-21) + sqrt(3) err)^2 (each of the three gaps is off by at most
+/// `err` from the point's rounding and the subtraction, the squares and the sum by a
+/// relative 2^-22), widened by 1e-5 and rounded up. So the boxes opened are a superset
+/// of those the exact test opens: only the speed depends on it, never the answer.
+#[inline(always)]
+fn widen(bd: f64, err: f64) -> f32 {
+    if !(bd >= 0.0) {
+        return f32::NEG_INFINITY;
+    }
+    let r = bd.sqrt() * (1.0 + 1.0 / (1u64 << 21) as f64) + 1.7320508075688772 * err;
+    f32_out(r * r * (1.0 + 1e-5), true)
 }
 
 /// Points per group of [`Bvh::nearest_group`].

@@ -609,3 +609,37 @@ proptest! {
         prop_assert!(!b.may_beat(&p, 0.25, bvh.slack));
     }
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(48))]
+    /// Groups of points near, far and very far (up to 1e6, where single precision is
+    /// coarse: the lanes' box tests run in f32 with a widened threshold) get the brute
+    /// force's least squared distance and lowest slot, to the bit.
+    #[test]
+    fn group_queries_of_far_points_equal_brute_force(seed in 0u64..1_000_000, n in 1usize..200) {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let corners = soup(&mut rng, n);
+        let bvh = crate::bvh::Bvh::new(&corners);
+        for round in 0..20 {
+            let s: f64 = [0.5, 12.0, 1e3, 1e6][round % 4];
+            let c: [f64; 3] = [rng.random_range(-s..s), rng.random_range(-s..s), rng.random_range(-s..s)];
+            let ps: Vec<[f64; 3]> = (0..crate::bvh::GROUP)
+                .map(|_| [c[0] + rng.random_range(-1e-3..1e-3) * s, c[1] + rng.random_range(-1e-3..1e-3) * s, c[2]])
+                .collect();
+            let mut best: Vec<Option<crate::bvh::Nearest>> = vec![None; ps.len()];
+            bvh.nearest_group(&ps, f64::INFINITY, &mut best);
+            for (q, got) in ps.iter().zip(&best) {
+                let mut want: Option<(f64, u32)> = None;
+                for (slot, c) in bvh.corners.iter().enumerate() {
+                    let d2 = brute_force(&[*c], *q);
+                    if want.map_or(true, |(w, _)| d2 < w) {
+                        want = Some((d2, slot as u32));
+                    }
+                }
+                let (d2, slot) = want.unwrap();
+                let a = got.unwrap();
+                prop_assert_eq!((a.slot, a.d2.to_bits()), (slot, d2.to_bits()));
+            }
+        }
+    }
+}
