@@ -105,6 +105,35 @@ pub struct PlyStream {
     rec: VertexRecords,
     next: usize,
     buf: Vec<u8>,
+    /// First vertex of the last range read (where the reads are heading: see [`advise`]).
+    last: Option<usize>,
+}
+
+/// Ask the kernel to start reading `len` bytes of `file` at `at` into the page cache now
+/// (`POSIX_FADV_WILLNEED`): the disk reads the range a stream will ask for next while
+/// the cores work on the range just read. Only a hint: where it fails or is not
+/// available, the read itself reads the range as before.
+fn advise(file: &File, at: u64, len: usize, how: Advice) {
+    #[cfg(target_os = "linux")]
+    {
+        use std::os::unix::io::AsRawFd;
+        let advice = match how {
+            Advice::Sequential => libc::POSIX_FADV_SEQUENTIAL,
+            Advice::WillNeed => libc::POSIX_FADV_WILLNEED,
+        };
+        // SAFETY: a plain system call on an open descriptor; any range is valid for it.
+        unsafe { libc::posix_fadvise(file.as_raw_fd(), at as libc::off_t, len as libc::off_t, advice) };
+    }
+    #[cfg(not(target_os = "linux"))]
+    let _ = (file, at, len, how);
+}
+
+#[derive(Clone, Copy)]
+enum Advice {
+    /// The whole file is read in order (a larger kernel read-ahead window).
+    Sequential,
+    /// This range is needed soon.
+    WillNeed,
 }
 
 impl PlyStream {
@@ -116,7 +145,8 @@ impl PlyStream {
         let Some(rec) = ply.vertex_records()? else { return Ok(None) };
         drop(ply);
         let file = File::open(path).map_err(io_error(what))?;
-        Ok(Some(PlyStream { file, what: what.to_string(), rec, next: 0, buf: Vec::new() }))
+        advise(&file, 0, 0, Advice::Sequential);
+        Ok(Some(PlyStream { file, what: what.to_string(), rec, next: 0, buf: Vec::new(), last: None }))
     }
 
     /// Number of vertices.
@@ -151,6 +181,14 @@ impl PlyStream {
         }
         let out = &mut out[..3 * m];
         let at = (self.rec.offset + self.next * self.rec.stride) as u64;
+        // the range after this one (before it, when the reads go from the end of the file
+        // back) is asked for while this one is read and worked on
+        let ahead = if self.last.is_some_and(|l| l > self.next) { self.next.checked_sub(m) } else { Some(self.next + m) };
+        if let Some(a) = ahead.filter(|&a| a < self.rec.count) {
+            let k = m.min(self.rec.count - a);
+            advise(&self.file, (self.rec.offset + a * self.rec.stride) as u64, k * self.rec.stride, Advice::WillNeed);
+        }
+        self.last = Some(self.next);
         if self.rec.is_f64_xyz() && cfg!(target_endian = "little") {
             // the records are the points: read them straight into the output
             // SAFETY: any 8 bytes are a valid f64 bit pattern; the slice covers `out` exactly.

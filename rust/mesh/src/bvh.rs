@@ -21,9 +21,16 @@
 //! coherent points. The pruning only ever skips boxes whose lower bound exceeds the best
 //! squared distance found, so the result is the exact minimum over all triangles (tested
 //! against a brute-force scan).
+//!
+//! Before the exact closest point of a leaf's triangle is computed, a cheap lower bound
+//! of its distance ([`Bound`]: the plane distance and the in-plane distance to the
+//! farthest-out edge line, from data precomputed per slot) is tested against the best
+//! distance so far; a triangle is skipped only when that bound, reduced by a slack far
+//! above rounding, proves it farther than the best (never a tie), so the answer is the
+//! one the exact test of every triangle gives, to the bit.
 
 use crate::closest::{box_distance2, closest_point, Feature};
-use gagekit_gdt::vec3::{dot, sub, V3};
+use gagekit_gdt::vec3::{cross, dot, norm, scale, sub, V3};
 
 /// Most triangles per leaf.
 pub const LEAF: usize = 4;
@@ -79,6 +86,81 @@ pub struct Bvh {
     pub root_hi: V3,
     pub corners: Vec<[V3; 3]>,
     pub order: Vec<u32>,
+    /// per slot: the data of the triangle's distance lower bound
+    pub bounds: Vec<Bound>,
+    /// the slack (mm) the lower bounds are reduced by: far above their rounding error
+    pub slack: f64,
+}
+
+/// Per triangle, the planes of its lower bound: `n` the unit normal and `m[k]` the unit
+/// in-plane outward normal of edge k (`n x` the edge, pointing away from the opposite
+/// corner), each with its offset (`w[0] = n . a`, `w[k + 1] = m[k] . corner k`). For any
+/// point x of the triangle n . x = w[0] and m[k] . x <= w[k + 1]; since |p - x|^2 is the
+/// squared plane component plus the squared in-plane part, and the in-plane part is at
+/// least m[k] . (p - x) for each k (m[k] is a unit vector in the plane),
+/// dist(p, T)^2 >= (n . p - w[0])^2 + max(0, max_k m[k] . p - w[k + 1])^2.
+#[derive(Debug, Clone, Copy)]
+#[repr(C, align(64))]
+pub struct Bound {
+    pub n: V3,
+    pub m: [V3; 3],
+    pub w: [f64; 4],
+}
+
+impl Bound {
+    /// No bound (never rejects): for triangles whose normal is ill-conditioned.
+    const NONE: Bound = Bound { n: [0.0; 3], m: [[0.0; 3]; 3], w: [0.0; 4] };
+
+    /// The bound's planes of triangle `c`. The normal is the cross product of the two
+    /// edges at the corner with the largest sine of its angle; its direction is then exact
+    /// to a few ulp over that sine. Below a sine of 1e-4 (slivers) the triangle gets
+    /// [`Bound::NONE`]; above it every plane is within 1e-11 rad of the exact one, so the
+    /// bound's error is below 1e-11 of the point's distance plus the coordinates'
+    /// rounding, far inside [`Bvh::slack`].
+    fn of(c: &[V3; 3]) -> Bound {
+        let mut best = (0.0f64, [0.0; 3]);
+        for k in 0..3 {
+            let (u, v) = (sub(c[(k + 1) % 3], c[k]), sub(c[(k + 2) % 3], c[k]));
+            let x = cross(u, v);
+            let sine = norm(x) / (norm(u) * norm(v));
+            if sine > best.0 {
+                best = (sine, x);
+            }
+        }
+        if !(best.0 >= 1e-4) {
+            return Bound::NONE;
+        }
+        let n = scale(best.1, 1.0 / norm(best.1));
+        let m = std::array::from_fn(|k| {
+            let e = sub(c[(k + 1) % 3], c[k]);
+            let mk = cross(e, n);
+            let mk = scale(mk, 1.0 / norm(mk));
+            // outward: away from the opposite corner
+            if dot(mk, sub(c[(k + 2) % 3], c[k])) > 0.0 {
+                scale(mk, -1.0)
+            } else {
+                mk
+            }
+        });
+        let w = [dot(n, c[0]), dot(m[0], c[0]), dot(m[1], c[1]), dot(m[2], c[2])];
+        Bound { n, m, w }
+    }
+
+    /// May the triangle be as near to `p` as `best_d2` (squared)? False only when its
+    /// lower bound, each part reduced by `slack`, exceeds `best_d2` by more than rounding:
+    /// then the exact squared distance computed by [`closest_point`] is larger than
+    /// `best_d2` too (the slack covers the rounding of the bound's data, of its
+    /// evaluation and of the closest point; the margin 1e-12 covers the squares' rounding).
+    #[inline(always)]
+    pub fn may_beat(&self, p: &V3, best_d2: f64, slack: f64) -> bool {
+        let plane = (dot(self.n, *p) - self.w[0]).abs();
+        let e0 = dot(self.m[0], *p) - self.w[1];
+        let e1 = dot(self.m[1], *p) - self.w[2];
+        let e2 = dot(self.m[2], *p) - self.w[3];
+        let a = (plane - slack).max(0.0);
+        let b = (e0.max(e1).max(e2) - slack).max(0.0);
+        a * a + b * b <= best_d2 * (1.0 + 1e-12)
+    }
 }
 
 /// The nearest triangle found: its slot (leaf order), squared distance, closest point and feature.
@@ -358,8 +440,12 @@ impl Bvh {
         let root = part.flatten(&mut nodes);
         nodes.shrink_to_fit();
         let order: Vec<u32> = items.iter().map(|it| it.tri).collect();
-        let corners = order.par_iter().map(|&t| corners[t as usize]).collect();
-        Self { nodes, root, root_lo: b.lo, root_hi: b.hi, corners, order }
+        let corners: Vec<[V3; 3]> = order.par_iter().map(|&t| corners[t as usize]).collect();
+        let bounds = corners.par_iter().map(Bound::of).collect();
+        // the bound's data and evaluation are exact to about 1e-15 of the coordinates'
+        // size (points are compared within the same size, see `slack_at`)
+        let size = b.lo.iter().chain(b.hi.iter()).fold(0.0f64, |s, x| s.max(x.abs()));
+        Self { nodes, root, root_lo: b.lo, root_hi: b.hi, corners, order, bounds, slack: 1e-9 * (1.0 + size) }
     }
 
     /// The depth of the deepest leaf (the root is at depth 0).
@@ -412,6 +498,13 @@ impl Bvh {
     #[inline]
     pub fn nearest_with_runner_up(&self, p: V3, bound2: f64, start: Option<Nearest>) -> Searched {
         self.search::<true>(p, bound2, start)
+    }
+
+    /// The slack of the lower bounds for a point `p`: [`Bvh::slack`] grown with the
+    /// point's own size (a far point's coordinates round on a coarser grid).
+    #[inline(always)]
+    fn slack_at(&self, p: &V3) -> f64 {
+        self.slack + 1e-9 * p[0].abs().max(p[1].abs()).max(p[2].abs())
     }
 
     #[inline(always)]
@@ -473,10 +566,16 @@ impl Bvh {
         let mut stack = [(Child { index: 0, count: 0 }, 0.0f64); MAX_DEPTH + 2];
         let mut sp = 0usize;
         let mut cur = self.root;
+        let slack = self.slack_at(&p);
         loop {
             if cur.count > 0 {
                 for slot in cur.index..cur.index + cur.count {
                     if slot == skip {
+                        continue;
+                    }
+                    // a triangle proved farther than the best is not measured (without
+                    // margins only: the margins need every triangle's distance)
+                    if !MARGIN && !self.bounds[slot as usize].may_beat(&p, best_d2, slack) {
                         continue;
                     }
                     let c = &self.corners[slot as usize];
@@ -531,16 +630,38 @@ impl Bvh {
     /// curve) share the path from the root. `best[i]` holds point i's start on entry (a
     /// triangle measured with [`Bvh::to_slot`]; None: no start) and its nearest triangle
     /// within `sqrt(bound2)` on return. Each answer is [`Bvh::nearest`]'s, to the bit.
+    ///
+    /// On x86-64 processors with AVX2 the same code is run compiled for AVX2 (chosen at
+    /// run time): wider vectors for the per-lane box distances. Rust never fuses a
+    /// multiply and an add unless told to, so both builds give the same bits.
     pub fn nearest_group(&self, ps: &[V3], bound2: f64, best: &mut [Option<Nearest>]) {
+        #[cfg(target_arch = "x86_64")]
+        if std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("bmi1") {
+            // SAFETY: the features were detected on this processor
+            return unsafe { self.nearest_group_avx2(ps, bound2, best) };
+        }
+        self.nearest_group_impl(ps, bound2, best)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,bmi1")]
+    unsafe fn nearest_group_avx2(&self, ps: &[V3], bound2: f64, best: &mut [Option<Nearest>]) {
+        self.nearest_group_impl(ps, bound2, best)
+    }
+
+    #[inline(always)]
+    fn nearest_group_impl(&self, ps: &[V3], bound2: f64, best: &mut [Option<Nearest>]) {
         let g = ps.len();
         assert!(g <= GROUP && best.len() == g);
         // per lane: coordinates (SoA), the best squared distance, the start's slot
         let (mut px, mut py, mut pz) = ([0.0f64; GROUP], [0.0f64; GROUP], [0.0f64; GROUP]);
         let mut bd = [f64::NEG_INFINITY; GROUP];
         let mut skip = [u32::MAX; GROUP];
+        let mut slack = [0.0f64; GROUP];
         let mut all = 0u32;
         for i in 0..g {
             (px[i], py[i], pz[i]) = (ps[i][0], ps[i][1], ps[i][2]);
+            slack[i] = self.slack_at(&ps[i]);
             bd[i] = bound2;
             match best[i] {
                 Some(n) if n.d2 <= bound2 => {
@@ -574,11 +695,12 @@ impl Bvh {
             if cur.count > 0 {
                 for slot in cur.index..cur.index + cur.count {
                     let c = &self.corners[slot as usize];
+                    let lb = &self.bounds[slot as usize];
                     let mut m = mask;
                     while m != 0 {
                         let i = m.trailing_zeros() as usize;
                         m &= m - 1;
-                        if slot == skip[i] {
+                        if slot == skip[i] || !lb.may_beat(&ps[i], bd[i], slack[i]) {
                             continue;
                         }
                         let (foot, feature) = closest_point(ps[i], c[0], c[1], c[2]);

@@ -577,3 +577,35 @@ fn cached_queries_at_shared_edges_equal_the_search() {
     }
     assert!(walked > 0, "the runner-up never certified a query ({searched} searches)");
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(64))]
+    /// The leaf test's lower bound never rejects a triangle at its own exact squared
+    /// distance (nor at anything larger), on soups of slivers, needles and shared edges,
+    /// for points near, far and very far; and it does reject where the bound is clearly
+    /// below (a point straight above a face, against a best at half its distance).
+    #[test]
+    fn triangle_lower_bound_never_exceeds_the_exact_distance(seed in 0u64..1_000_000, n in 1usize..200) {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let corners = soup(&mut rng, n);
+        let bvh = crate::bvh::Bvh::new(&corners);
+        for k in 0..200 {
+            let s: f64 = [0.5, 12.0, 1e3, 1e6][k % 4];
+            let p: [f64; 3] = [rng.random_range(-s..s), rng.random_range(-s..s), rng.random_range(-s..s)];
+            let slack = bvh.slack + 1e-9 * p[0].abs().max(p[1].abs()).max(p[2].abs());
+            for (slot, c) in bvh.corners.iter().enumerate() {
+                let d2 = brute_force(&[*c], p);
+                prop_assert!(bvh.bounds[slot].may_beat(&p, d2, slack), "slot {} point {:?} d2 {}", slot, p, d2);
+            }
+        }
+        // above the centroid of a fat triangle of the patch, 1 mm off its plane
+        let slot = (0..bvh.corners.len()).rev().find(|&s| bvh.corners[s][0][0].fract() == 0.0 && bvh.corners[s][1][0].fract() == 0.0).unwrap();
+        let c = bvh.corners[slot];
+        let b = &bvh.bounds[slot];
+        let g = [(c[0][0] + c[1][0] + c[2][0]) / 3.0, (c[0][1] + c[1][1] + c[2][1]) / 3.0, (c[0][2] + c[1][2] + c[2][2]) / 3.0];
+        let p = [g[0] + b.n[0], g[1] + b.n[1], g[2] + b.n[2]];
+        let d2 = brute_force(&[c], p);
+        prop_assert!((d2 - 1.0).abs() < 1e-9);
+        prop_assert!(!b.may_beat(&p, 0.25, bvh.slack));
+    }
+}
