@@ -324,6 +324,19 @@ fn brute_force(corners: &[[[f64; 3]; 3]], p: [f64; 3]) -> f64 {
         .fold(f64::INFINITY, f64::min)
 }
 
+/// Brute force over a hierarchy's slots: the least squared distance within `bound2`, then
+/// the lowest slot (the tie rule of the searches).
+fn brute_force_slot(bvh: &crate::bvh::Bvh, q: [f64; 3], bound2: f64) -> Option<(f64, u32)> {
+    let mut want: Option<(f64, u32)> = None;
+    for (slot, c) in bvh.corners.iter().enumerate() {
+        let d2 = brute_force(&[*c], q);
+        if d2 <= bound2 && want.map_or(true, |(w, _)| d2 < w) {
+            want = Some((d2, slot as u32));
+        }
+    }
+    want
+}
+
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(96))]
     /// The BVH's nearest triangle has exactly the squared distance of a brute-force scan
@@ -485,14 +498,7 @@ proptest! {
             bvh.nearest_group(&ps, bound2, &mut best);
             for (q, got) in ps.iter().zip(&best) {
                 let single = bvh.nearest(*q, bound2, None);
-                // brute force: the least squared distance, then the lowest slot
-                let mut want: Option<(f64, u32)> = None;
-                for (slot, c) in bvh.corners.iter().enumerate() {
-                    let d2 = brute_force(&[*c], *q);
-                    if d2 <= bound2 && want.map_or(true, |(w, _)| d2 < w) {
-                        want = Some((d2, slot as u32));
-                    }
-                }
+                let want = brute_force_slot(&bvh, *q, bound2);
                 match (got, single, want) {
                     (Some(a), Some(b), Some((d2, slot))) => {
                         prop_assert_eq!((a.slot, a.d2.to_bits()), (b.slot, b.d2.to_bits()));
@@ -629,14 +635,7 @@ proptest! {
             let mut best: Vec<Option<crate::bvh::Nearest>> = vec![None; ps.len()];
             bvh.nearest_group(&ps, f64::INFINITY, &mut best);
             for (q, got) in ps.iter().zip(&best) {
-                let mut want: Option<(f64, u32)> = None;
-                for (slot, c) in bvh.corners.iter().enumerate() {
-                    let d2 = brute_force(&[*c], *q);
-                    if want.map_or(true, |(w, _)| d2 < w) {
-                        want = Some((d2, slot as u32));
-                    }
-                }
-                let (d2, slot) = want.unwrap();
+                let (d2, slot) = brute_force_slot(&bvh, *q, f64::INFINITY).unwrap();
                 let a = got.unwrap();
                 prop_assert_eq!((a.slot, a.d2.to_bits()), (slot, d2.to_bits()));
             }
