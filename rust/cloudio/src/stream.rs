@@ -107,6 +107,46 @@ pub struct PlyStream {
     buf: Vec<u8>,
     /// First vertex of the last range read (where the reads are heading: see [`advise`]).
     last: Option<usize>,
+    /// Byte range (start, length) of the last range read: dropped from the page cache
+    /// when the next one is read, if the file is larger than the cache can hold.
+    read: Option<(u64, u64)>,
+    /// Size of the file and of the machine's memory in bytes, for [`consumed_to_drop`]
+    /// (memory 0: never drop, as on systems other than Linux).
+    file_len: u64,
+    mem: u64,
+}
+
+/// The byte range (start, length) of the page cache to drop once a stream has read the
+/// range `prev` and goes on to another one, or `None` to keep everything.
+///
+/// A file that fits in the page cache (at most half of the machine's memory `mem`) is
+/// never dropped from it: a second pass or a re-run reads it from memory. A larger file
+/// cannot stay cached anyway; without a hint the kernel fills the cache with it and
+/// then reclaims pages under pressure while the stream reads on, CPU spent on every
+/// page. Dropping each range once it is consumed (in either direction of reading) keeps
+/// the cache from filling. The last quarter of `mem`'s worth of the file is never
+/// dropped: a forward pass reads it last and a backward second pass (from the end of the
+/// file back, [`PlyStream::seek`]) starts there, from memory.
+pub(crate) fn consumed_to_drop(file_len: u64, mem: u64, prev: (u64, u64)) -> Option<(u64, u64)> {
+    if mem == 0 || file_len <= mem / 2 {
+        return None;
+    }
+    let keep_from = file_len.saturating_sub(mem / 4);
+    let end = prev.0.saturating_add(prev.1).min(keep_from);
+    (end > prev.0).then(|| (prev.0, end - prev.0))
+}
+
+/// The machine's physical memory in bytes; 0 where unknown (then nothing is dropped).
+fn physical_memory() -> u64 {
+    #[cfg(target_os = "linux")]
+    {
+        // SAFETY: plain queries without arguments to fill.
+        let (pages, size) = unsafe { (libc::sysconf(libc::_SC_PHYS_PAGES), libc::sysconf(libc::_SC_PAGESIZE)) };
+        if pages > 0 && size > 0 {
+            return (pages as u64).saturating_mul(size as u64);
+        }
+    }
+    0
 }
 
 /// Ask the kernel to start reading `len` bytes of `file` at `at` into the page cache now
@@ -120,6 +160,7 @@ fn advise(file: &File, at: u64, len: usize, how: Advice) {
         let advice = match how {
             Advice::Sequential => libc::POSIX_FADV_SEQUENTIAL,
             Advice::WillNeed => libc::POSIX_FADV_WILLNEED,
+            Advice::DontNeed => libc::POSIX_FADV_DONTNEED,
         };
         // SAFETY: a plain system call on an open descriptor; any range is valid for it.
         unsafe { libc::posix_fadvise(file.as_raw_fd(), at as libc::off_t, len as libc::off_t, advice) };
@@ -134,6 +175,9 @@ enum Advice {
     Sequential,
     /// This range is needed soon.
     WillNeed,
+    /// This range was consumed: its pages may leave the page cache (whole pages only:
+    /// the kernel keeps a page the range only partly covers).
+    DontNeed,
 }
 
 impl PlyStream {
@@ -146,7 +190,9 @@ impl PlyStream {
         drop(ply);
         let file = File::open(path).map_err(io_error(what))?;
         advise(&file, 0, 0, Advice::Sequential);
-        Ok(Some(PlyStream { file, what: what.to_string(), rec, next: 0, buf: Vec::new(), last: None }))
+        let file_len = file.metadata().map_or(0, |m| m.len());
+        let mem = physical_memory();
+        Ok(Some(PlyStream { file, what: what.to_string(), rec, next: 0, buf: Vec::new(), last: None, read: None, file_len, mem }))
     }
 
     /// Number of vertices.
@@ -188,6 +234,12 @@ impl PlyStream {
             let k = m.min(self.rec.count - a);
             advise(&self.file, (self.rec.offset + a * self.rec.stride) as u64, k * self.rec.stride, Advice::WillNeed);
         }
+        // the range read before this one is consumed: off the page cache if the file is
+        // larger than the cache can hold (its end kept for a backward pass)
+        if let Some((a, k)) = self.read.and_then(|prev| consumed_to_drop(self.file_len, self.mem, prev)) {
+            advise(&self.file, a, k as usize, Advice::DontNeed);
+        }
+        self.read = Some((at, (m * self.rec.stride) as u64));
         self.last = Some(self.next);
         if self.rec.is_f64_xyz() && cfg!(target_endian = "little") {
             // the records are the points: read them straight into the output
@@ -290,6 +342,67 @@ mod tests {
             s.seek(n + 5);
             assert_eq!(s.next_into(&mut back).unwrap(), 0);
         }
+    }
+
+    #[test]
+    fn consumed_ranges_are_dropped_only_from_a_file_larger_than_the_cache() {
+        const G: u64 = 1 << 30;
+        let mem = 24 * G;
+        // a file that fits in the cache (up to half the memory): nothing dropped, at any
+        // position, in either direction
+        for len in [0, 1, G, 12 * G] {
+            for prev in [(0, 1 << 20), (len / 2, 1 << 20), (len.saturating_sub(1 << 20), 1 << 20)] {
+                assert_eq!(consumed_to_drop(len, mem, prev), None, "file {len} range {prev:?}");
+            }
+        }
+        // unknown memory: nothing dropped
+        assert_eq!(consumed_to_drop(24 * G, 0, (0, G)), None);
+        // a 24 GB file: the range consumed is dropped, forward (the range before the
+        // current one) as backward (the range after it)
+        let len = 24 * G;
+        let keep_from = len - mem / 4; // the last 6 GB stay cached
+        assert_eq!(consumed_to_drop(len, mem, (0, 100 << 20)), Some((0, 100 << 20)));
+        assert_eq!(consumed_to_drop(len, mem, (5 * G, 100 << 20)), Some((5 * G, 100 << 20)));
+        // a range across the kept end: only its part before the end is dropped
+        assert_eq!(consumed_to_drop(len, mem, (keep_from - 10, 100)), Some((keep_from - 10, 10)));
+        // ranges inside the kept end: never dropped
+        assert_eq!(consumed_to_drop(len, mem, (keep_from, 100 << 20)), None);
+        assert_eq!(consumed_to_drop(len, mem, (len - (100 << 20), 100 << 20)), None);
+        // just over half the memory: dropped below the last quarter
+        let len = 12 * G + 1;
+        assert_eq!(consumed_to_drop(len, mem, (0, G)), Some((0, G)));
+        assert_eq!(consumed_to_drop(len, mem, (6 * G, G)), Some((6 * G, 1)));
+        // empty ranges and ranges past any size: no drop, no overflow
+        assert_eq!(consumed_to_drop(len, mem, (0, 0)), None);
+        assert_eq!(consumed_to_drop(u64::MAX, mem, (u64::MAX - 1, u64::MAX)), None);
+        assert_eq!(consumed_to_drop(u64::MAX, mem, (0, u64::MAX)), Some((0, u64::MAX - mem / 4)));
+    }
+
+    #[test]
+    fn ply_ranges_read_the_same_while_dropping_what_was_read() {
+        // a memory small enough that the file counts as larger than the cache: the
+        // consumed ranges are dropped from the page cache as the stream reads on
+        let n = 20_000usize;
+        let mut b = format!("ply\nformat binary_little_endian 1.0\nelement vertex {n}\nproperty double x\nproperty double y\nproperty double z\nend_header\n").into_bytes();
+        for i in 0..3 * n {
+            b.extend_from_slice(&(i as f64 * 0.5 - 3.0).to_le_bytes());
+        }
+        let p = tmp("drop.ply", &b);
+        let whole = read_ply_file(&p, "s").unwrap().coords;
+        let mut s = PlyStream::open(&p, "s").unwrap().unwrap();
+        s.mem = 4 * 4096; // keeps the last 4 KiB
+        assert!(consumed_to_drop(s.file_len, s.mem, (0, s.file_len)).is_some());
+        let mut all = Vec::new();
+        while let Some(c) = s.next_chunk(1000).unwrap() {
+            all.extend(c);
+        }
+        assert_eq!(all, whole);
+        let mut back = vec![0.0; 3 * n];
+        for start in (0..n).step_by(1000).rev() {
+            s.seek(start);
+            s.next_into(&mut back[3 * start..3 * (start + 1000).min(n)]).unwrap();
+        }
+        assert_eq!(back, whole);
     }
 }
 
