@@ -105,10 +105,9 @@ pub struct PlyStream {
     rec: VertexRecords,
     next: usize,
     buf: Vec<u8>,
-    /// First vertex of the last range read (where the reads are heading: see [`advise`]).
-    last: Option<usize>,
-    /// Byte range (start, length) of the last range read: dropped from the page cache
-    /// when the next one is read, if the file is larger than the cache can hold.
+    /// Byte range (start, length) of the last range read: where the reads are heading
+    /// (see [`advise`]), and dropped from the page cache when the next one is read if the
+    /// file is larger than the cache can hold.
     read: Option<(u64, u64)>,
     /// Size of the file and of the machine's memory in bytes, for [`consumed_to_drop`]
     /// (memory 0: never drop, as on systems other than Linux).
@@ -192,7 +191,7 @@ impl PlyStream {
         advise(&file, 0, 0, Advice::Sequential);
         let file_len = file.metadata().map_or(0, |m| m.len());
         let mem = physical_memory();
-        Ok(Some(PlyStream { file, what: what.to_string(), rec, next: 0, buf: Vec::new(), last: None, read: None, file_len, mem }))
+        Ok(Some(PlyStream { file, what: what.to_string(), rec, next: 0, buf: Vec::new(), read: None, file_len, mem }))
     }
 
     /// Number of vertices.
@@ -229,7 +228,7 @@ impl PlyStream {
         let at = (self.rec.offset + self.next * self.rec.stride) as u64;
         // the range after this one (before it, when the reads go from the end of the file
         // back) is asked for while this one is read and worked on
-        let ahead = if self.last.is_some_and(|l| l > self.next) { self.next.checked_sub(m) } else { Some(self.next + m) };
+        let ahead = if self.read.is_some_and(|(l, _)| l > at) { self.next.checked_sub(m) } else { Some(self.next + m) };
         if let Some(a) = ahead.filter(|&a| a < self.rec.count) {
             let k = m.min(self.rec.count - a);
             advise(&self.file, (self.rec.offset + a * self.rec.stride) as u64, k * self.rec.stride, Advice::WillNeed);
@@ -240,7 +239,6 @@ impl PlyStream {
             advise(&self.file, a, k as usize, Advice::DontNeed);
         }
         self.read = Some((at, (m * self.rec.stride) as u64));
-        self.last = Some(self.next);
         if self.rec.is_f64_xyz() && cfg!(target_endian = "little") {
             // the records are the points: read them straight into the output
             // SAFETY: any 8 bytes are a valid f64 bit pattern; the slice covers `out` exactly.
@@ -326,22 +324,28 @@ mod tests {
             let p = tmp(&format!("p{size}{be}.ply"), &b);
             let whole = read_ply_file(&p, "s").unwrap().coords;
             let mut s = PlyStream::open(&p, "s").unwrap().unwrap();
-            let mut all = Vec::new();
-            while let Some(c) = s.next_chunk(77).unwrap() {
-                all.extend(c);
-            }
-            assert_eq!(all, whole);
-            // ranges read from the end back, after a seek each: the same rows
-            let mut back = vec![0.0; 3 * n];
-            for start in (0..n).step_by(77).rev() {
-                s.seek(start);
-                let k = s.next_into(&mut back[3 * start..3 * (start + 77).min(n)]).unwrap();
-                assert_eq!(k, 77.min(n - start));
-            }
-            assert_eq!(back, whole);
+            reads_the_whole_forward_and_back(&mut s, &whole, 77);
             s.seek(n + 5);
-            assert_eq!(s.next_into(&mut back).unwrap(), 0);
+            assert_eq!(s.next_into(&mut vec![0.0; 3 * n]).unwrap(), 0);
         }
+    }
+
+    /// `s` read forward in ranges of `step` points, then from the end back after a seek
+    /// each: both times the rows of the whole read `whole`.
+    fn reads_the_whole_forward_and_back(s: &mut PlyStream, whole: &[f64], step: usize) {
+        let n = whole.len() / 3;
+        let mut all = Vec::new();
+        while let Some(c) = s.next_chunk(step).unwrap() {
+            all.extend(c);
+        }
+        assert_eq!(all, whole);
+        let mut back = vec![0.0; 3 * n];
+        for start in (0..n).step_by(step).rev() {
+            s.seek(start);
+            let k = s.next_into(&mut back[3 * start..3 * (start + step).min(n)]).unwrap();
+            assert_eq!(k, step.min(n - start));
+        }
+        assert_eq!(back, whole);
     }
 
     #[test]
@@ -392,17 +396,7 @@ mod tests {
         let mut s = PlyStream::open(&p, "s").unwrap().unwrap();
         s.mem = 4 * 4096; // keeps the last 4 KiB
         assert!(consumed_to_drop(s.file_len, s.mem, (0, s.file_len)).is_some());
-        let mut all = Vec::new();
-        while let Some(c) = s.next_chunk(1000).unwrap() {
-            all.extend(c);
-        }
-        assert_eq!(all, whole);
-        let mut back = vec![0.0; 3 * n];
-        for start in (0..n).step_by(1000).rev() {
-            s.seek(start);
-            s.next_into(&mut back[3 * start..3 * (start + 1000).min(n)]).unwrap();
-        }
-        assert_eq!(back, whole);
+        reads_the_whole_forward_and_back(&mut s, &whole, 1000);
     }
 }
 
