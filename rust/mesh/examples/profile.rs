@@ -1,5 +1,6 @@
-//! Timing harness (not a test): `cargo run --release -p gagekit-mesh --example profile -- [points] [nu nv] [fit]`.
-//! The torus and scan-line scan of benches/bench_compare.py, built in Rust.
+//! Timing harness (not a test): `cargo run --release -p gagekit-mesh --example profile -- [points] [nu nv] [fit|shuffle|of=N]`.
+//! The torus and scan-line scan of benches/bench_compare.py, built in Rust; `of=N`: the
+//! first `points` points of an N-point scan (the density of the full scan on a subset).
 use gagekit_mesh::align::{best_fit, FitOptions};
 use gagekit_mesh::distance::Query;
 use gagekit_mesh::rigid::Pose;
@@ -69,7 +70,9 @@ fn main() {
     let nv: usize = args.get(3).and_then(|s| s.parse().ok()).unwrap_or(500);
     let fit = args.get(4).map(|s| s == "fit").unwrap_or(false);
     let (v, t) = torus(nu, nv, fit);
-    let mut pts = scan(n, 0, fit);
+    let of = args.get(4).and_then(|s| s.strip_prefix("of=")).and_then(|s| s.parse().ok()).unwrap_or(n);
+    let mut pts = scan(of.max(n), 0, fit);
+    pts.truncate(3 * n);
     if args.get(4).map(|s| s == "shuffle").unwrap_or(false) {
         // a deterministic shuffle (Fisher-Yates, seeded)
         let mut rng = ChaCha8Rng::seed_from_u64(5);

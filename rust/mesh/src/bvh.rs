@@ -155,13 +155,21 @@ impl Bound {
     /// evaluation and of the closest point; the margin 1e-12 covers the squares' rounding).
     #[inline(always)]
     pub fn may_beat(&self, p: &V3, best_d2: f64, slack: f64) -> bool {
+        let (bound, best) = self.terms(p, best_d2, slack);
+        bound <= best
+    }
+
+    /// The two sides of [`Bound::may_beat`]'s comparison: the squared lower bound and the
+    /// best widened by the squares' rounding.
+    #[inline(always)]
+    fn terms(&self, p: &V3, best_d2: f64, slack: f64) -> (f64, f64) {
         let plane = (dot(self.n, *p) - self.w[0]).abs();
         let e0 = dot(self.m[0], *p) - self.w[1];
         let e1 = dot(self.m[1], *p) - self.w[2];
         let e2 = dot(self.m[2], *p) - self.w[3];
-        let a = (plane - slack).max(0.0);
-        let b = (e0.max(e1).max(e2) - slack).max(0.0);
-        a * a + b * b <= best_d2 * (1.0 + 1e-12)
+        let a = larger(plane - slack, 0.0);
+        let b = larger(larger(larger(e0, e1), e2) - slack, 0.0);
+        (a * a + b * b, best_d2 * (1.0 + 1e-12))
     }
 
     /// [`Bound::may_beat`] of the [`GROUP`] lanes of a group at once (coordinates by axis,
@@ -170,11 +178,18 @@ impl Bound {
     /// instructions instead of one lane after another.
     #[inline(always)]
     pub fn may_beat_lanes(&self, p: [&[f64; GROUP]; 3], best_d2: &[f64; GROUP], slack: &[f64; GROUP]) -> u32 {
-        let mut o = 0u32;
+        self.may_beat_lanes_in::<false>(p, best_d2, slack)
+    }
+
+    /// [`Bound::may_beat_lanes`]; `AVX`: the lanes' comparison by AVX instructions (only
+    /// in code compiled for AVX2, see [`lanes_le64`]).
+    #[inline(always)]
+    fn may_beat_lanes_in<const AVX: bool>(&self, p: [&[f64; GROUP]; 3], best_d2: &[f64; GROUP], slack: &[f64; GROUP]) -> u32 {
+        let (mut bound, mut best) = ([0.0; GROUP], [0.0; GROUP]);
         for i in 0..GROUP {
-            o |= (self.may_beat(&[p[0][i], p[1][i], p[2][i]], best_d2[i], slack[i]) as u32) << i;
+            (bound[i], best[i]) = self.terms(&[p[0][i], p[1][i], p[2][i]], best_d2[i], slack[i]);
         }
-        o
+        lanes_le64::<AVX>(&bound, &best)
     }
 }
 
@@ -655,17 +670,17 @@ impl Bvh {
             // SAFETY: the features were detected on this processor
             return unsafe { self.nearest_group_avx2(ps, bound2, best) };
         }
-        self.nearest_group_impl(ps, bound2, best)
+        self.nearest_group_impl::<false>(ps, bound2, best)
     }
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,bmi1")]
     unsafe fn nearest_group_avx2(&self, ps: &[V3], bound2: f64, best: &mut [Option<Nearest>]) {
-        self.nearest_group_impl(ps, bound2, best)
+        self.nearest_group_impl::<true>(ps, bound2, best)
     }
 
     #[inline(always)]
-    fn nearest_group_impl(&self, ps: &[V3], bound2: f64, best: &mut [Option<Nearest>]) {
+    fn nearest_group_impl<const AVX: bool>(&self, ps: &[V3], bound2: f64, best: &mut [Option<Nearest>]) {
         let g = ps.len();
         assert!(g <= GROUP && best.len() == g);
         // per lane: coordinates (SoA), the best squared distance, the start's slot
@@ -712,13 +727,7 @@ impl Bvh {
             return;
         }
         // lanes of `m` whose single-precision box distance in `d` is within the widened best
-        let open32 = |d: &[f32; GROUP], bw: &[f32; GROUP], m: u32| -> u32 {
-            let mut o = 0u32;
-            for i in 0..GROUP {
-                o |= ((d[i] <= bw[i]) as u32) << i;
-            }
-            o & m
-        };
+        let open32 = |d: &[f32; GROUP], bw: &[f32; GROUP], m: u32| -> u32 { lanes_le32::<AVX>(d, bw) & m };
         // the subtrees still to visit: (reference, lanes, the lanes' box distances); left
         // uninitialised (3 KB of zeros a group cost more than the search of a near group):
         // entries below `sp` are always written before they are read
@@ -731,7 +740,7 @@ impl Bvh {
                     let c = &self.corners[slot as usize];
                     // the lanes the triangle's lower bound does not rule out (all lanes
                     // at once; a lane's best changes only by its own test of this slot)
-                    let mut m = mask & self.bounds[slot as usize].may_beat_lanes([&px, &py, &pz], &bd, &slack);
+                    let mut m = mask & self.bounds[slot as usize].may_beat_lanes_in::<AVX>([&px, &py, &pz], &bd, &slack);
                     while m != 0 {
                         let i = m.trailing_zeros() as usize;
                         m &= m - 1;
@@ -755,8 +764,8 @@ impl Bvh {
                     let q = [qx[i], qy[i], qz[i]];
                     let (mut a, mut b) = (0.0f32, 0.0f32);
                     for k in 0..3 {
-                        let u = (n.lo[k][0] - q[k]).max(q[k] - n.hi[k][0]).max(0.0);
-                        let w = (n.lo[k][1] - q[k]).max(q[k] - n.hi[k][1]).max(0.0);
+                        let u = larger(larger(n.lo[k][0] - q[k], q[k] - n.hi[k][0]), 0.0);
+                        let w = larger(larger(n.lo[k][1] - q[k], q[k] - n.hi[k][1]), 0.0);
                         a += u * u;
                         b += w * w;
                     }
@@ -818,6 +827,62 @@ fn widen(bd: f64, err: f64) -> f32 {
     let r = bd.sqrt() * (1.0 + 1.0 / (1u64 << 21) as f64) + 1.7320508075688772 * err;
     f32_out(r * r * (1.0 + 1e-5), true)
 }
+
+/// The larger of `a` and `b`; `b` when either is NaN. The same value as `a.max(b)` for
+/// numbers, and one max instruction where `max` needs three (its NaN rule). In the lower
+/// bounds and box distances a NaN (none arises from finite data) can then only drop a
+/// term or turn a part into 0 (`larger(NaN, 0.0)` is 0): a smaller bound, which opens
+/// more, so the answers stay exact.
+#[inline(always)]
+fn larger<T: PartialOrd>(a: T, b: T) -> T {
+    if a > b {
+        a
+    } else {
+        b
+    }
+}
+
+/// Bit i set where `a[i] <= b[i]` (false for a NaN, as `<=`), for the [`GROUP`] lanes.
+/// `AVX`: by one vector comparison and its sign mask, which compilers do not find for
+/// the loop; only to be set in code compiled for AVX2 ([`Bvh::nearest_group`] checks the
+/// processor before running it).
+#[inline(always)]
+pub(crate) fn lanes_le32<const AVX: bool>(a: &[f32; GROUP], b: &[f32; GROUP]) -> u32 {
+    #[cfg(target_arch = "x86_64")]
+    if AVX {
+        use std::arch::x86_64::{_mm256_cmp_ps, _mm256_loadu_ps, _mm256_movemask_ps, _CMP_LE_OQ};
+        // SAFETY: AVX is there (the caller runs compiled for AVX2, chosen at run time);
+        // the loads read the arrays' 8 lanes
+        return unsafe { _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(_mm256_loadu_ps(a.as_ptr()), _mm256_loadu_ps(b.as_ptr()))) as u32 };
+    }
+    let mut o = 0u32;
+    for i in 0..GROUP {
+        o |= ((a[i] <= b[i]) as u32) << i;
+    }
+    o
+}
+
+/// [`lanes_le32`] for f64 lanes (two vectors of four).
+#[inline(always)]
+pub(crate) fn lanes_le64<const AVX: bool>(a: &[f64; GROUP], b: &[f64; GROUP]) -> u32 {
+    #[cfg(target_arch = "x86_64")]
+    if AVX {
+        use std::arch::x86_64::{_mm256_cmp_pd, _mm256_loadu_pd, _mm256_movemask_pd, _CMP_LE_OQ};
+        // SAFETY: as in `lanes_le32`; the loads read lanes 0-3 and 4-7
+        return unsafe {
+            let lo = _mm256_movemask_pd(_mm256_cmp_pd::<_CMP_LE_OQ>(_mm256_loadu_pd(a.as_ptr()), _mm256_loadu_pd(b.as_ptr())));
+            let hi = _mm256_movemask_pd(_mm256_cmp_pd::<_CMP_LE_OQ>(_mm256_loadu_pd(a.as_ptr().add(4)), _mm256_loadu_pd(b.as_ptr().add(4))));
+            (lo | hi << 4) as u32
+        };
+    }
+    let mut o = 0u32;
+    for i in 0..GROUP {
+        o |= ((a[i] <= b[i]) as u32) << i;
+    }
+    o
+}
+
+const _: () = assert!(GROUP == 8, "lanes_le32 and lanes_le64 compare eight lanes");
 
 /// Points per group of [`Bvh::nearest_group`].
 pub const GROUP: usize = 8;

@@ -662,3 +662,31 @@ proptest! {
         }
     }
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(256))]
+    /// The lanes' comparison masks by AVX instructions equal the plain `<=` lane by lane,
+    /// with ties, signed zeros, infinities and NaN among the lanes (run where the
+    /// processor has AVX2, as the group query does).
+    #[test]
+    fn lane_masks_equal_the_plain_comparison(seed in 0u64..1_000_000) {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let special = [0.0, -0.0, 1.0, -1.0, f64::INFINITY, f64::NEG_INFINITY, f64::NAN, 1e-300];
+        let pick = |rng: &mut ChaCha8Rng| if rng.random_range(0..3) == 0 { special[rng.random_range(0..special.len())] } else { rng.random_range(-2.0..2.0) };
+        let (mut a, mut b) = ([0.0f64; crate::bvh::GROUP], [0.0f64; crate::bvh::GROUP]);
+        for i in 0..crate::bvh::GROUP {
+            a[i] = pick(&mut rng);
+            b[i] = if rng.random_range(0..4) == 0 { a[i] } else { pick(&mut rng) };
+        }
+        let (a32, b32) = (a.map(|x| x as f32), b.map(|x| x as f32));
+        let want64 = (0..crate::bvh::GROUP).fold(0u32, |o, i| o | ((a[i] <= b[i]) as u32) << i);
+        let want32 = (0..crate::bvh::GROUP).fold(0u32, |o, i| o | ((a32[i] <= b32[i]) as u32) << i);
+        prop_assert_eq!(crate::bvh::lanes_le64::<false>(&a, &b), want64);
+        prop_assert_eq!(crate::bvh::lanes_le32::<false>(&a32, &b32), want32);
+        #[cfg(target_arch = "x86_64")]
+        if std::is_x86_feature_detected!("avx2") {
+            prop_assert_eq!(crate::bvh::lanes_le64::<true>(&a, &b), want64);
+            prop_assert_eq!(crate::bvh::lanes_le32::<true>(&a32, &b32), want32);
+        }
+    }
+}
