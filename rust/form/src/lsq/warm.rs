@@ -364,33 +364,3 @@ mod tests {
         assert_eq!(sphere_warm(&[1.0; 30], [1.0, 1.0, 1.0], 1.0).unwrap_err().kind, ErrorKind::DegenerateGeometry);
     }
 }
-
-#[cfg(test)]
-mod speed {
-    use super::*;
-    use rand::{Rng, SeedableRng};
-    #[test]
-    #[ignore]
-    fn timing() {
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(1);
-        let n = 378_000;
-        let pts: Vec<f64> = (0..n).flat_map(|_| {
-            let t = rng.random::<f64>() * 6.28; let z = rng.random::<f64>() * 30.0;
-            [50.0 + 10.0 * t.cos() + 1e-3 * (rng.random::<f64>() - 0.5), 20.0 + 10.0 * t.sin(), z]
-        }).collect();
-        let m = crate::lsq::cylinder(&pts, None).unwrap();
-        let trial: Vec<f64> = pts.iter().map(|x| x + 1e-3 * (rng.random::<f64>() - 0.5)).collect();
-        for _ in 0..3 {
-            let t = std::time::Instant::now();
-            let a = cylinder_warm(&trial, &m).unwrap();
-            let t1 = t.elapsed();
-            let t = std::time::Instant::now();
-            let sums = pass::<5>(&trial, m.point, |x| { let rho = (x[0]*x[0]+x[1]*x[1]).sqrt(); (rho - 10.0, [x[0], x[1], x[0]*x[2], x[1]*x[2], -1.0], x[2]) });
-            let t2 = t.elapsed();
-            let t = std::time::Instant::now();
-            let b = cylinder_near(&trial, m.direction).unwrap();
-            let t3 = t.elapsed();
-            eprintln!("warm {:.2} ms, one pass {:.2} ms, near {:.2} ms; {:e} {}", t1.as_secs_f64()*1e3, t2.as_secs_f64()*1e3, t3.as_secs_f64()*1e3, a.radius - b.radius, sums.cost);
-        }
-    }
-}
