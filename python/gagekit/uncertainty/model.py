@@ -28,7 +28,7 @@ A model is a few numbers, from a ``[measurement]`` table of a TOML file or from 
     ``origin``, else a translation of the whole scan (every coordinate).
 
 Every draw of one simulated measurement comes from its own generator keyed by
-(seed, trial index) (:meth:`MeasurementModel.simulate`: the kernel's ChaCha8 stream,
+(seed, trial index) (:meth:`MeasurementModel.simulate`: the kernel's xoshiro256++ stream,
 ``gagekit_gdt::plan::perturb``), so a trial's perturbation never depends on the order or
 the number of threads the trials run on.
 """

@@ -90,6 +90,8 @@ pub struct Bvh {
     pub bounds: Vec<Bound>,
     /// the slack (mm) the lower bounds are reduced by: far above their rounding error
     pub slack: f64,
+    /// the largest |coordinate| of the root's box (the scale of the rounding errors)
+    pub size: f64,
 }
 
 /// Per triangle, the planes of its lower bound: `n` the unit normal and `m[k]` the unit
@@ -160,6 +162,19 @@ impl Bound {
         let a = (plane - slack).max(0.0);
         let b = (e0.max(e1).max(e2) - slack).max(0.0);
         a * a + b * b <= best_d2 * (1.0 + 1e-12)
+    }
+
+    /// [`Bound::may_beat`] of the [`GROUP`] lanes of a group at once (coordinates by axis,
+    /// each lane's best and slack): bit i set when lane i may beat. The same arithmetic
+    /// lane by lane, so the same answers; written over arrays so it compiles to vector
+    /// instructions instead of one lane after another.
+    #[inline(always)]
+    pub fn may_beat_lanes(&self, p: [&[f64; GROUP]; 3], best_d2: &[f64; GROUP], slack: &[f64; GROUP]) -> u32 {
+        let mut o = 0u32;
+        for i in 0..GROUP {
+            o |= (self.may_beat(&[p[0][i], p[1][i], p[2][i]], best_d2[i], slack[i]) as u32) << i;
+        }
+        o
     }
 }
 
@@ -445,7 +460,7 @@ impl Bvh {
         // the bound's data and evaluation are exact to about 1e-15 of the coordinates'
         // size (points are compared within the same size, see `slack_at`)
         let size = b.lo.iter().chain(b.hi.iter()).fold(0.0f64, |s, x| s.max(x.abs()));
-        Self { nodes, root, root_lo: b.lo, root_hi: b.hi, corners, order, bounds, slack: 1e-9 * (1.0 + size) }
+        Self { nodes, root, root_lo: b.lo, root_hi: b.hi, corners, order, bounds, slack: 1e-9 * (1.0 + size), size }
     }
 
     /// The depth of the deepest leaf (the root is at depth 0).
@@ -662,7 +677,7 @@ impl Bvh {
         let (mut qx, mut qy, mut qz) = ([0.0f32; GROUP], [0.0f32; GROUP], [0.0f32; GROUP]);
         let mut err = [0.0f64; GROUP];
         let mut bw = [f32::NEG_INFINITY; GROUP];
-        let size = self.root_lo.iter().chain(self.root_hi.iter()).fold(0.0f64, |s, x| s.max(x.abs()));
+        let size = self.size;
         let mut all = 0u32;
         for i in 0..g {
             (px[i], py[i], pz[i]) = (ps[i][0], ps[i][1], ps[i][2]);
@@ -704,19 +719,23 @@ impl Bvh {
             }
             o & m
         };
-        let mut stack = [(Child { index: 0, count: 0 }, 0u32, [0.0f32; GROUP]); MAX_DEPTH + 2];
+        // the subtrees still to visit: (reference, lanes, the lanes' box distances); left
+        // uninitialised (3 KB of zeros a group cost more than the search of a near group):
+        // entries below `sp` are always written before they are read
+        let mut stack = [const { std::mem::MaybeUninit::<(Child, u32, [f32; GROUP])>::uninit() }; MAX_DEPTH + 2];
         let mut sp = 0usize;
         let mut cur = self.root;
         loop {
             if cur.count > 0 {
                 for slot in cur.index..cur.index + cur.count {
                     let c = &self.corners[slot as usize];
-                    let lb = &self.bounds[slot as usize];
-                    let mut m = mask;
+                    // the lanes the triangle's lower bound does not rule out (all lanes
+                    // at once; a lane's best changes only by its own test of this slot)
+                    let mut m = mask & self.bounds[slot as usize].may_beat_lanes([&px, &py, &pz], &bd, &slack);
                     while m != 0 {
                         let i = m.trailing_zeros() as usize;
                         m &= m - 1;
-                        if slot == skip[i] || !lb.may_beat(&ps[i], bd[i], slack[i]) {
+                        if slot == skip[i] {
                             continue;
                         }
                         let (foot, feature) = closest_point(ps[i], c[0], c[1], c[2]);
@@ -751,7 +770,7 @@ impl Bvh {
                     let first = if m0 == 0 || (m1 != 0 && d1[i] < d0[i]) { 1 } else { 0 };
                     let (mf, ms, ds) = if first == 0 { (m0, m1, d1) } else { (m1, m0, d0) };
                     if ms != 0 {
-                        stack[sp] = (n.child[1 - first], ms, ds);
+                        stack[sp].write((n.child[1 - first], ms, ds));
                         sp += 1;
                     }
                     if mf != 0 {
@@ -767,7 +786,8 @@ impl Bvh {
                     return;
                 }
                 sp -= 1;
-                let (c, m, ds) = stack[sp];
+                // SAFETY: every entry below the old `sp` was written by a push
+                let (c, m, ds) = unsafe { stack[sp].assume_init() };
                 let o = open32(&ds, &bw, m);
                 if o != 0 {
                     cur = c;

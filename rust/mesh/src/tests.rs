@@ -604,6 +604,26 @@ proptest! {
                 prop_assert!(bvh.bounds[slot].may_beat(&p, d2, slack), "slot {} point {:?} d2 {}", slot, p, d2);
             }
         }
+        // the lanes' form: bit i is lane i's may_beat (random lanes near and far, bests
+        // at, below and above their exact distances)
+        for k in 0..50 {
+            let s: f64 = [0.5, 12.0, 1e3, 1e6][k % 4];
+            let mut lanes = [[0.0; crate::bvh::GROUP]; 3];
+            let (mut best, mut slack) = ([0.0; crate::bvh::GROUP], [0.0; crate::bvh::GROUP]);
+            let slot = rng.random_range(0..bvh.corners.len());
+            for i in 0..crate::bvh::GROUP {
+                let p: [f64; 3] = [rng.random_range(-s..s), rng.random_range(-s..s), rng.random_range(-s..s)];
+                (lanes[0][i], lanes[1][i], lanes[2][i]) = (p[0], p[1], p[2]);
+                slack[i] = bvh.slack + 1e-9 * p[0].abs().max(p[1].abs()).max(p[2].abs());
+                best[i] = brute_force(&[bvh.corners[slot]], p) * [0.25, 1.0, 4.0, 0.999][rng.random_range(0..4)];
+            }
+            let b = &bvh.bounds[slot];
+            let got = b.may_beat_lanes([&lanes[0], &lanes[1], &lanes[2]], &best, &slack);
+            for i in 0..crate::bvh::GROUP {
+                let want = b.may_beat(&[lanes[0][i], lanes[1][i], lanes[2][i]], best[i], slack[i]);
+                prop_assert_eq!(got >> i & 1 == 1, want, "lane {}", i);
+            }
+        }
         // above the centroid of a fat triangle of the patch, 1 mm off its plane
         let slot = (0..bvh.corners.len()).rev().find(|&s| bvh.corners[s][0][0].fract() == 0.0 && bvh.corners[s][1][0].fract() == 0.0).unwrap();
         let c = bvh.corners[slot];
