@@ -367,19 +367,28 @@ impl BoxGrid {
 /// For each box, the ascending indices of the points inside it. A point may
 /// fall in several boxes. One parallel pass over the points.
 pub fn classify(points: &[f64], boxes: &[OrientedBox]) -> Result<Vec<Vec<usize>>> {
-    check_points(points)?;
+    if points.len() % 3 != 0 || boxes.is_empty() || boxes.len() > GRID_BOXES {
+        check_points(points)?;
+    }
     for (i, b) in boxes.iter().enumerate() {
-        b.validate(&format!("#{i}"))?;
+        if let Err(e) = b.validate(&format!("#{i}")) {
+            check_points(points)?; // a bad point is reported first, as always
+            return Err(e);
+        }
     }
     if boxes.len() > GRID_BOXES {
         return Ok(classify_binned(points, boxes));
     }
-    let nb = boxes.len();
-    if nb == 0 {
+    if boxes.is_empty() {
         return Ok(Vec::new());
     }
     let grid = BoxGrid::shared(boxes, cells_per_axis(points.len() / 3));
-    Ok(classify_grid(points, boxes, &grid))
+    // the points' finiteness is checked in the same pass (no pass of its own over the
+    // chunk); a non-finite point is in no box, and its error is the one check_points words
+    match classify_grid(points, boxes, &grid) {
+        Some(inside) => Ok(inside),
+        None => check_points(points).and(Err(GkError::invalid("point cloud: a non-finite coordinate".to_string()))),
+    }
 }
 
 /// Points a [`classify_grid`] block handles in each of its steps.
@@ -392,13 +401,15 @@ const BLOCK: usize = 256;
 /// points of a scan are in empty cells or outside the union); those cells' masks (the
 /// loads independent of each other, so their cache misses overlap); then the exact tests
 /// of the "maybe" boxes and the pushes. The same membership as a point-by-point walk.
-fn classify_grid(points: &[f64], boxes: &[OrientedBox], grid: &BoxGrid) -> Vec<Vec<usize>> {
+/// `None` when a point is not finite (checked in the first step).
+fn classify_grid(points: &[f64], boxes: &[OrientedBox], grid: &BoxGrid) -> Option<Vec<Vec<usize>>> {
     let nb = boxes.len();
     let testers: Vec<_> = boxes.iter().map(|b| b.tester()).collect();
-    let parts: Vec<Vec<Vec<usize>>> = points
+    let parts: Vec<Option<Vec<Vec<usize>>>> = points
         .par_chunks(3 * CHUNK)
         .enumerate()
         .map(|(ci, chunk)| {
+            let mut finite = true;
             let mut out = vec![Vec::new(); nb];
             let mut near = [0u16; BLOCK];
             let mut cell = [0u32; BLOCK];
@@ -410,6 +421,7 @@ fn classify_grid(points: &[f64], boxes: &[OrientedBox], grid: &BoxGrid) -> Vec<V
                 for (j, p) in block.chunks_exact(3).enumerate() {
                     near[nears] = j as u16;
                     nears += usize::from(grid.in_union(p));
+                    finite &= p[0].is_finite() & p[1].is_finite() & p[2].is_finite();
                 }
                 for (c, &j) in cell.iter_mut().zip(&near[..nears]) {
                     *c = grid.cell_of(&block[3 * j as usize..3 * j as usize + 3]);
@@ -442,10 +454,10 @@ fn classify_grid(points: &[f64], boxes: &[OrientedBox], grid: &BoxGrid) -> Vec<V
                     }
                 }
             }
-            out
+            finite.then_some(out)
         })
         .collect();
-    merge_parts(parts, nb)
+    Some(merge_parts(parts.into_iter().collect::<Option<Vec<_>>>()?, nb))
 }
 
 /// The points of each box, in order: `visit(p, i, out)` pushes i onto the lists of the
@@ -627,6 +639,29 @@ mod tests {
         let good = OrientedBox { center: [0.0; 3], size: [1.0; 3], rotation: [0.0; 3] };
         assert!(select(&[0.0, f64::NAN, 0.0], &good).is_err());
         assert!(select(&[], &good).unwrap().is_empty());
+    }
+
+    #[test]
+    fn a_non_finite_point_is_the_error_of_check_points_in_every_path() {
+        // the grid path checks finiteness in its own pass: the same error as the check
+        // before it, wherever the point sits (first, past a block, past a task, last)
+        let good = OrientedBox { center: [0.0; 3], size: [1.0; 3], rotation: [0.1, 0.0, 0.0] };
+        let bad_box = OrientedBox { center: [0.0; 3], size: [1.0, -1.0, 1.0], rotation: [0.0; 3] };
+        let n = CHUNK + 3 * BLOCK + 7;
+        for at in [0, 1, BLOCK + 3, CHUNK + 1, n - 1] {
+            for v in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+                let mut pts: Vec<f64> = (0..3 * n).map(|i| (i % 17) as f64 * 0.1 - 0.8).collect();
+                pts[3 * at + (at % 3)] = v;
+                let want = check_points(&pts).unwrap_err().message;
+                for boxes in [vec![good.clone()], vec![], vec![good.clone(); GRID_BOXES + 1], vec![good.clone(), bad_box.clone()]] {
+                    assert_eq!(classify(&pts, &boxes).unwrap_err().message, want, "point {at}, {v}, {} boxes", boxes.len());
+                }
+            }
+        }
+        // finite points and a bad box: the box's error
+        let e = classify(&[0.0; 6], &[good, bad_box]).unwrap_err();
+        assert!(e.message.contains("#1") && e.message.contains("y axis"), "{}", e.message);
+        assert!(classify(&[0.0; 4], &[]).is_err());
     }
 
     #[test]
