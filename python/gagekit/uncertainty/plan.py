@@ -4,14 +4,16 @@ of trials runs in parallel in Rust without the interpreter.
 
 :func:`compile_plan` turns the drawing and its measured evaluation into the plan: per
 feature its rows in the active points (the union of the feature regions), its shape and
-the starts the measured evaluation found (the least-squares cylinder's direction, the
+the starts the measured evaluation found (the least-squares cylinder or sphere, the
 minimax cylinders' axes, the flatness zone's normal, the minimum-zone sphere's centre);
 per datum (each prefix of a feature control frame's letters, ISO 5459) its feature, the
 datums before it and its basic angle; the datum frames the location callouts need; per
 callout its characteristic, feature, tolerance, datums, sections and nominal. The kernel
-evaluates exactly what :func:`gagekit.inspect.zones.evaluate` does, with the same kernels
-and the same starts (``tests/uncertainty/test_plan.py`` holds them equal on perturbed
-scans).
+evaluates what :func:`gagekit.inspect.zones.evaluate` does, with the same kernels and the
+same starts, except the least-squares cylinders and sphere: Gauss-Newton from the measured
+fit to a step of 1e-12 mm (``gagekit_form::lsq::warm``), the stationary point the complete
+fits converge to (``tests/uncertainty/test_plan.py`` holds the values equal to 1e-9 mm on
+perturbed scans).
 
 A drawing the plan does not cover -- a cone, slot, tab or CAD surface in a callout, a
 median-line axis, least-squares datums, a datum point, sizes, distances and angles,
@@ -52,6 +54,17 @@ def _axis(w: Any) -> Optional[tuple[Any, Any]]:
     return None if w is None else (_vec(w[0]), _vec(w[1]))
 
 
+def _lsq_start(fd: Any) -> Optional[tuple]:
+    """The measured least-squares cylinder (point, direction, radius) or sphere (centre,
+    None, radius) a trial's fit starts from (Gauss-Newton, ``gagekit_form::lsq::warm``)."""
+    fit = fd._cache.get("lsq")
+    if fd.shape == "cylinder" and fit is not None:
+        return (_vec(fit.point), _vec(fit.direction), float(fit.radius))
+    if fd.shape == "sphere" and fit is not None:
+        return (_vec(fit.center), None, float(fit.radius))
+    return None
+
+
 def compile_plan(spec: Any, feats: Mapping[str, Any], rows: Mapping[str, np.ndarray], warm: Mapping[str, dict],
                  near: Mapping[str, dict]) -> tuple[Optional[Any], str]:
     """(the plan, "") or (None, why not) for the drawing ``spec`` with its measured
@@ -79,11 +92,10 @@ def _compile(spec, feats, rows, warm, near):
         if fd.shape == "cylinder" and fd.spec.axis != "least-squares":
             raise _Unsupported(f"feature '{name}' has a median-line axis")
         w = warm.get(name, {})
-        ls = w.get("least-squares")
         box = fd.box_axes()
         features.append((fd.shape, np.ascontiguousarray(rows[name], dtype=np.int64), _vec(fd.spec.outward),
                          _vec(fd.sign_hint()), tuple(_vec(r) for r in box), fd.spec.kind == "hole",
-                         (None if ls is None else _vec(ls[1]), *(_axis(w.get(c)) for c in _CRITERIA),
+                         (_lsq_start(fd), *(_axis(w.get(c)) for c in _CRITERIA),
                           _vec(w.get("slab")), _vec(near[name]["center"]) if name in near else None)))
         index[name] = len(features) - 1
         return index[name]

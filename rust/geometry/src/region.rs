@@ -228,6 +228,11 @@ struct BoxGrid {
     n: [usize; 3],
     /// (sure, maybe) masks, cell (x, y, z) at (x n_y + y) n_z + z.
     cells: Vec<(u32, u32)>,
+    /// One bit a cell, set where either mask is not empty: 32 KiB for 64^3 cells, which
+    /// stay in the core's cache while the 2 MiB of masks do not.
+    occupied: Vec<u64>,
+    /// n_i - 1 as a float: a point's bin is its scaled coordinate clamped to [0, n_i - 1].
+    last: [f64; 3],
 }
 
 /// Most cells of the grid along an axis.
@@ -236,12 +241,40 @@ const GRID: usize = 64;
 /// Most boxes a [`BoxGrid`] holds (the bits of its masks).
 const GRID_BOXES: usize = 32;
 
+/// The cells a [`BoxGrid`] has along an axis for a call on `npts` points: about 8 points
+/// a cell at least, so that building the grid costs less than the call.
+fn cells_per_axis(npts: usize) -> usize {
+    ((npts / 8) as f64).cbrt().floor().clamp(1.0, GRID as f64) as usize
+}
+
+/// The grid of the last [`classify`] call: its boxes (bit patterns) and cells an axis.
+type GridKey = (Vec<[u64; 9]>, usize);
+
+static LAST_GRID: std::sync::Mutex<Option<(GridKey, std::sync::Arc<BoxGrid>)>> = std::sync::Mutex::new(None);
+
 impl BoxGrid {
-    fn new(boxes: &[OrientedBox], npts: usize) -> Self {
+    /// The grid of `boxes` with `per_axis` cells an axis ([`cells_per_axis`]), built once
+    /// for the calls of a streamed pass: a pass classifies chunk after chunk into the same
+    /// boxes, and each chunk of the same size gets the grid the last one built (the same
+    /// boxes to the bit and the same cells, hence the same grid).
+    fn shared(boxes: &[OrientedBox], per_axis: usize) -> std::sync::Arc<BoxGrid> {
+        let key: GridKey = (
+            boxes.iter().map(|b| std::array::from_fn(|i| [b.center, b.size, b.rotation][i / 3][i % 3].to_bits())).collect(),
+            per_axis,
+        );
+        let last = LAST_GRID.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some((_, grid)) = last.as_ref().filter(|(k, _)| *k == key) {
+            return grid.clone();
+        }
+        drop(last); // another thread's call need not wait for this build
+        let grid = std::sync::Arc::new(BoxGrid::new(boxes, per_axis));
+        *LAST_GRID.lock().unwrap_or_else(|e| e.into_inner()) = Some((key, grid.clone()));
+        grid
+    }
+
+    fn new(boxes: &[OrientedBox], per_axis: usize) -> Self {
         assert!(boxes.len() <= GRID_BOXES);
         let (lo, hi) = union_aabb(&boxes.iter().map(|b| b.aabb()).collect::<Vec<_>>());
-        // about 8 points a cell at least: the grid's build stays below the chunk's cost
-        let per_axis = ((npts / 8) as f64).cbrt().floor().clamp(1.0, GRID as f64) as usize;
         let mut n = [1usize; 3];
         let mut inv = [0.0; 3];
         let mut width = [0.0; 3];
@@ -301,12 +334,27 @@ impl BoxGrid {
                 }
             }
         }
-        Self { lo, hi, inv, n, cells }
+        let mut occupied = vec![0u64; cells.len().div_ceil(64)];
+        for (c, &(sure, maybe)) in cells.iter().enumerate() {
+            occupied[c / 64] |= u64::from(sure | maybe != 0) << (c % 64);
+        }
+        let last = n.map(|k| (k - 1) as f64);
+        Self { lo, hi, inv, n, cells, occupied, last }
     }
 
+    /// The cell number of `p`, a point inside the union's bounding box: no branch. The bin along each axis is [`bin_of`]'s: the scaled
+    /// coordinate clamped to [0, n - 1] then truncated is min(floor(f), n - 1) for f > 0
+    /// and 0 otherwise.
     #[inline(always)]
-    fn bin(&self, axis: usize, v: f64) -> usize {
-        bin_of(v, self.lo[axis], self.inv[axis], self.n[axis])
+    fn cell_of(&self, p: &[f64]) -> u32 {
+        let b: [u32; 3] = std::array::from_fn(|i| ((p[i] - self.lo[i]) * self.inv[i]).max(0.0).min(self.last[i]) as u32);
+        (b[0] * self.n[1] as u32 + b[1]) * self.n[2] as u32 + b[2]
+    }
+
+    /// Whether the cell `c` has a box in a mask.
+    #[inline(always)]
+    fn is_occupied(&self, c: u32) -> bool {
+        (self.occupied[c as usize / 64] >> (c % 64)) & 1 != 0
     }
 
     /// Whether `p` is inside the union's bounding box (no box outside it can hold `p`).
@@ -314,46 +362,102 @@ impl BoxGrid {
     fn in_union(&self, p: &[f64]) -> bool {
         within(p, &self.lo, &self.hi)
     }
-
-    /// The (sure, maybe) masks of the cell of `p`, a point inside the union's bounding box.
-    #[inline(always)]
-    fn masks(&self, p: &[f64]) -> (u32, u32) {
-        let c = (self.bin(0, p[0]) * self.n[1] + self.bin(1, p[1])) * self.n[2] + self.bin(2, p[2]);
-        self.cells[c]
-    }
 }
 
 /// For each box, the ascending indices of the points inside it. A point may
 /// fall in several boxes. One parallel pass over the points.
 pub fn classify(points: &[f64], boxes: &[OrientedBox]) -> Result<Vec<Vec<usize>>> {
-    check_points(points)?;
+    if points.len() % 3 != 0 || boxes.is_empty() || boxes.len() > GRID_BOXES {
+        check_points(points)?;
+    }
     for (i, b) in boxes.iter().enumerate() {
-        b.validate(&format!("#{i}"))?;
+        if let Err(e) = b.validate(&format!("#{i}")) {
+            check_points(points)?; // a bad point is reported first, as always
+            return Err(e);
+        }
     }
     if boxes.len() > GRID_BOXES {
         return Ok(classify_binned(points, boxes));
     }
-    let nb = boxes.len();
-    if nb == 0 {
+    if boxes.is_empty() {
         return Ok(Vec::new());
     }
+    let grid = BoxGrid::shared(boxes, cells_per_axis(points.len() / 3));
+    // the points' finiteness is checked in the same pass (no pass of its own over the
+    // chunk); a non-finite point is in no box, and its error is the one check_points words
+    match classify_grid(points, boxes, &grid) {
+        Some(inside) => Ok(inside),
+        None => check_points(points).and(Err(GkError::invalid("point cloud: a non-finite coordinate".to_string()))),
+    }
+}
+
+/// Points a [`classify_grid`] block handles in each of its steps.
+const BLOCK: usize = 256;
+
+/// [`classify`] on the cells of `grid` (validated input, at most [`GRID_BOXES`] boxes), a
+/// block of points at a time in steps that each do one thing, without the branches and
+/// the cache misses of one point's work delaying the next's: every point's cell number
+/// (no branch); the points whose cell holds a box, by the one-bit-a-cell table (most
+/// points of a scan are in empty cells or outside the union); those cells' masks (the
+/// loads independent of each other, so their cache misses overlap); then the exact tests
+/// of the "maybe" boxes and the pushes. The same membership as a point-by-point walk.
+/// `None` when a point is not finite (checked in the first step).
+fn classify_grid(points: &[f64], boxes: &[OrientedBox], grid: &BoxGrid) -> Option<Vec<Vec<usize>>> {
+    let nb = boxes.len();
     let testers: Vec<_> = boxes.iter().map(|b| b.tester()).collect();
-    let grid = BoxGrid::new(boxes, points.len() / 3);
-    Ok(classify_near(points, nb, |p| grid.in_union(p), |p, i, out| {
-        let (mut sure, mut maybe) = grid.masks(p);
-        while maybe != 0 {
-            let k = maybe.trailing_zeros() as usize;
-            maybe &= maybe - 1;
-            if testers[k](p) {
-                sure |= 1 << k;
+    let parts: Vec<Option<Vec<Vec<usize>>>> = points
+        .par_chunks(3 * CHUNK)
+        .enumerate()
+        .map(|(ci, chunk)| {
+            let mut finite = true;
+            let mut out = vec![Vec::new(); nb];
+            let mut near = [0u16; BLOCK];
+            let mut cell = [0u32; BLOCK];
+            let mut hit = [0u16; BLOCK];
+            let mut masks = [(0u32, 0u32); BLOCK];
+            for (bi, block) in chunk.chunks(3 * BLOCK).enumerate() {
+                let base = ci * CHUNK + bi * BLOCK;
+                let mut nears = 0;
+                for (j, p) in block.chunks_exact(3).enumerate() {
+                    near[nears] = j as u16;
+                    nears += usize::from(grid.in_union(p));
+                    finite &= p[0].is_finite() & p[1].is_finite() & p[2].is_finite();
+                }
+                for (c, &j) in cell.iter_mut().zip(&near[..nears]) {
+                    *c = grid.cell_of(&block[3 * j as usize..3 * j as usize + 3]);
+                }
+                let mut hits = 0;
+                for t in 0..nears {
+                    // the cells of the points kept move down in place (hits <= t)
+                    let c = cell[t];
+                    cell[hits] = c;
+                    hit[hits] = near[t];
+                    hits += usize::from(grid.is_occupied(c));
+                }
+                for (mk, &c) in masks.iter_mut().zip(&cell[..hits]) {
+                    *mk = grid.cells[c as usize];
+                }
+                for (&(mut sure, mut maybe), &j) in masks.iter().zip(&hit[..hits]) {
+                    let j = j as usize;
+                    let p = &block[3 * j..3 * j + 3];
+                    while maybe != 0 {
+                        let k = maybe.trailing_zeros() as usize;
+                        maybe &= maybe - 1;
+                        if testers[k](p) {
+                            sure |= 1 << k;
+                        }
+                    }
+                    while sure != 0 {
+                        let k = sure.trailing_zeros() as usize;
+                        sure &= sure - 1;
+                        out[k].push(base + j);
+                    }
+                }
             }
-        }
-        while sure != 0 {
-            let k = sure.trailing_zeros() as usize;
-            sure &= sure - 1;
-            out[k].push(i);
-        }
-    }))
+            finite.then_some(out)
+        })
+        .collect();
+    Some(merge_parts(parts.into_iter().collect::<Option<Vec<_>>>()?, nb))
 }
 
 /// The points of each box, in order: `visit(p, i, out)` pushes i onto the lists of the
@@ -538,6 +642,29 @@ mod tests {
     }
 
     #[test]
+    fn a_non_finite_point_is_the_error_of_check_points_in_every_path() {
+        // the grid path checks finiteness in its own pass: the same error as the check
+        // before it, wherever the point sits (first, past a block, past a task, last)
+        let good = OrientedBox { center: [0.0; 3], size: [1.0; 3], rotation: [0.1, 0.0, 0.0] };
+        let bad_box = OrientedBox { center: [0.0; 3], size: [1.0, -1.0, 1.0], rotation: [0.0; 3] };
+        let n = CHUNK + 3 * BLOCK + 7;
+        for at in [0, 1, BLOCK + 3, CHUNK + 1, n - 1] {
+            for v in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+                let mut pts: Vec<f64> = (0..3 * n).map(|i| (i % 17) as f64 * 0.1 - 0.8).collect();
+                pts[3 * at + (at % 3)] = v;
+                let want = check_points(&pts).unwrap_err().message;
+                for boxes in [vec![good.clone()], vec![], vec![good.clone(); GRID_BOXES + 1], vec![good.clone(), bad_box.clone()]] {
+                    assert_eq!(classify(&pts, &boxes).unwrap_err().message, want, "point {at}, {v}, {} boxes", boxes.len());
+                }
+            }
+        }
+        // finite points and a bad box: the box's error
+        let e = classify(&[0.0; 6], &[good, bad_box]).unwrap_err();
+        assert!(e.message.contains("#1") && e.message.contains("y axis"), "{}", e.message);
+        assert!(classify(&[0.0; 4], &[]).is_err());
+    }
+
+    #[test]
     fn rodrigues_is_orthonormal() {
         let r = rotation_matrix([0.3, -0.2, 0.9]);
         for i in 0..3 {
@@ -602,6 +729,123 @@ mod grid_props {
                 prop_assert_eq!(&got[k], &want, "box {}", k);
                 prop_assert_eq!(&binned[k], &want, "binned, box {}", k);
             }
+        }
+
+        /// The blocked walk of the grid over many blocks and parallel tasks (offsets past
+        /// [`BLOCK`] and [`CHUNK`]), with the grid shared between calls: calls on
+        /// clouds of different sizes and with other boxes in between each give every box
+        /// exactly [`select`]'s points.
+        #[test]
+        fn blocked_classification_with_a_shared_grid_equals_select(
+            sets in prop::collection::vec(prop::collection::vec(a_box(), 1..20), 2..4),
+            seed in any::<u64>(),
+            sizes in prop::collection::vec(1usize..40_000, 3..6),
+        ) {
+            let mut state = seed | 1;
+            let mut lattice = move || {
+                state ^= state << 13;
+                state ^= state >> 7;
+                state ^= state << 17;
+                // on the boxes' lattice, just beside it, or off it
+                let v = ((state >> 8) % 65) as f64 * 0.25 - 8.0;
+                match state % 4 { 0 => v, 1 => v + 1e-13, 2 => v - 1e-13, _ => v + 0.37 }
+            };
+            for (call, &n) in sizes.iter().enumerate() {
+                let boxes = &sets[call % sets.len()];
+                let pts: Vec<f64> = (0..3 * n).map(|_| lattice()).collect();
+                let got = classify(&pts, boxes).unwrap();
+                for (k, b) in boxes.iter().enumerate() {
+                    prop_assert_eq!(&got[k], &select(&pts, b).unwrap(), "call {}, {} points, box {}", call, n, k);
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod timing {
+    use super::*;
+
+    fn f64s(path: &str) -> Vec<f64> {
+        std::fs::read(path).unwrap().chunks_exact(8).map(|b| f64::from_le_bytes(b.try_into().unwrap())).collect()
+    }
+
+    /// The point-by-point walk of the grid (before the blocked steps), for comparison.
+    fn pointwise(points: &[f64], boxes: &[OrientedBox]) -> Vec<Vec<usize>> {
+        let testers: Vec<_> = boxes.iter().map(|b| b.tester()).collect();
+        let grid = BoxGrid::new(boxes, cells_per_axis(points.len() / 3));
+        classify_near(points, boxes.len(), |p| grid.in_union(p), |p, i, out| {
+            let (mut sure, mut maybe) = grid.cells[grid.cell_of(p) as usize];
+            while maybe != 0 {
+                let k = maybe.trailing_zeros() as usize;
+                maybe &= maybe - 1;
+                if testers[k](p) {
+                    sure |= 1 << k;
+                }
+            }
+            while sure != 0 {
+                let k = sure.trailing_zeros() as usize;
+                sure &= sure - 1;
+                out[k].push(i);
+            }
+        })
+    }
+
+    /// User and system CPU seconds of this process so far (the machine may be shared).
+    fn cpu() -> f64 {
+        let s = std::fs::read_to_string("/proc/self/stat").unwrap();
+        s.rsplit(')').next().unwrap().split_whitespace().skip(11).take(2).map(|x| x.parse::<f64>().unwrap()).sum::<f64>() / 100.0
+    }
+
+    /// Mean CPU seconds of `runs` calls of `f`, each result equal to `want`.
+    fn cpu_of(runs: usize, want: &[Vec<usize>], f: impl Fn() -> Vec<Vec<usize>>) -> f64 {
+        let c = cpu();
+        for _ in 0..runs {
+            assert_eq!(f(), want);
+        }
+        (cpu() - c) / runs as f64
+    }
+
+    /// CPU a point of [`classify`] on a chunk dumped by a streamed check (raw float64
+    /// points and box rows: centre, size, rotation), one thread, against the
+    /// point-by-point walk; runs alternated.
+    #[test]
+    #[ignore]
+    fn classify_speed() {
+        let dir = std::env::var("GK_CHUNK_DIR").unwrap_or_else(|_| "/tmp".into());
+        let pts = f64s(&format!("{dir}/chunk1.f64"));
+        let n = pts.len() / 3;
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+        for rows in ["rows0", "rows1"] {
+            let boxes: Vec<OrientedBox> = f64s(&format!("{dir}/{rows}.f64"))
+                .chunks_exact(9)
+                .map(|r| OrientedBox { center: [r[0], r[1], r[2]], size: [r[3], r[4], r[5]], rotation: [r[6], r[7], r[8]] })
+                .collect();
+            let want = pool.install(|| pointwise(&pts, &boxes));
+            let (mut new, mut old) = (0.0, 0.0);
+            for _ in 0..3 {
+                new += pool.install(|| cpu_of(3, &want, || classify(&pts, &boxes).unwrap()));
+                old += pool.install(|| cpu_of(3, &want, || pointwise(&pts, &boxes)));
+            }
+            let c = cpu();
+            for _ in 0..5 {
+                std::hint::black_box(BoxGrid::new(&boxes, cells_per_axis(n)));
+            }
+            let build = (cpu() - c) / 5.0;
+            println!("{rows}: {} boxes, {n} points: classify {:.1} ns a point, point by point {:.1} (grid build {:.1} ms, in the point-by-point walk)",
+                boxes.len(), new / 3.0 / n as f64 * 1e9, old / 3.0 / n as f64 * 1e9, build * 1e3);
+            let grid = BoxGrid::new(&boxes, cells_per_axis(n));
+            let (mut inu, mut hm, mut hs) = (0usize, [0usize; 8], [0usize; 8]);
+            for p in pts.chunks_exact(3) {
+                if grid.in_union(p) {
+                    inu += 1;
+                    let (s, m) = grid.cells[grid.cell_of(p) as usize];
+                    hm[(m.count_ones() as usize).min(7)] += 1;
+                    hs[(s.count_ones() as usize).min(7)] += 1;
+                }
+            }
+            println!("grid {:?}, in union {inu}, maybe counts {hm:?}, sure counts {hs:?}", grid.n);
+            println!("{} memberships", want.iter().map(Vec::len).sum::<usize>());
         }
     }
 }

@@ -296,9 +296,12 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
 // -- the compiled inspection of the Monte Carlo uncertainty (gagekit_gdt::plan) -------------
 
 type WarmAxis = Option<(V3, V3)>;
-/// The measured starts: (least-squares direction, minimum-zone / min-circumscribed /
+/// The measured least-squares fit: (a cylinder's point or a sphere's centre, the
+/// cylinder's direction or None for a sphere, radius)
+type WarmLsq = Option<(V3, Option<V3>, f64)>;
+/// The measured starts: (least-squares fit, minimum-zone / min-circumscribed /
 /// max-inscribed axes, flatness normal, minimum-zone sphere centre)
-type WarmArgs = (Option<V3>, WarmAxis, WarmAxis, WarmAxis, Option<V3>, Option<V3>);
+type WarmArgs = (WarmLsq, WarmAxis, WarmAxis, WarmAxis, Option<V3>, Option<V3>);
 /// (shape, rows, outward, sign hint, box axes, hole, the measured starts)
 type FeatureArgs<'py> = (String, PyReadonlyArray1<'py, i64>, Option<V3>, V3, (V3, V3, V3), bool, WarmArgs);
 /// (characteristic, feature, tolerance, datum entries, frame, angle deg, sections, nominal point, nominal direction)
@@ -330,7 +333,10 @@ fn plan_feature(f: FeatureArgs<'_>) -> PyResult<plan::Feature> {
         sign_hint: arr(hint),
         box_axes: [arr(bx), arr(by), arr(bz)],
         hole,
-        warm_lsq: warm_lsq.map(arr),
+        warm_lsq: warm_lsq.map(|(p, d, radius)| match d {
+            Some(d) => plan::LsqStart::Cylinder(gagekit_form::lsq::Cylinder { point: arr(p), direction: arr(d), radius }),
+            None => plan::LsqStart::Sphere { center: arr(p), radius },
+        }),
         warm_cylinder: [axis(mz), axis(mc), axis(mi)],
         warm_slab: slab.map(arr),
         warm_sphere: sphere.map(arr),

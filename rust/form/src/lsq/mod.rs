@@ -12,8 +12,9 @@
 //!
 //! One algorithm per file: [`line`](line()), [`plane`](plane()), [`sphere`](sphere()) (2-D
 //! circles too), [`circle3`](circle3()), [`cylinder`](cylinder()) and [`cone`](cone()); the
-//! shared Levenberg-Marquardt (`lm`), the centring and principal axes (`frame`) and the
-//! certificates (`extent`).
+//! shared Levenberg-Marquardt (`lm`), the centring and principal axes (`frame`), the
+//! certificates (`extent`), and the Gauss-Newton fits from a nearby fit of a Monte Carlo
+//! trial (`warm`).
 
 mod circle3;
 mod cone;
@@ -24,6 +25,7 @@ mod line;
 mod lm;
 mod plane;
 mod sphere;
+mod warm;
 
 use nalgebra::Vector3;
 
@@ -35,3 +37,4 @@ pub use frame::{centroid, check_magnitude, negligible, orthonormal_basis, plane_
 pub use line::{line, Line};
 pub use plane::{plane, Plane};
 pub use sphere::{sphere, Sphere};
+pub use warm::{cylinder_warm, sphere_warm};

@@ -26,6 +26,7 @@ mod frame;
 pub mod perturb;
 #[cfg(test)]
 mod tests;
+mod ziggurat;
 
 use crate::datum::{self, AxisFit, Orientation, PlaneFit};
 use crate::turn::{self, Frame};
@@ -63,8 +64,8 @@ pub struct Feature {
     pub box_axes: [V3; 3],
     /// A hole (a datum axis is its maximum inscribed cylinder), else a shaft.
     pub hole: bool,
-    /// The measured least-squares cylinder's direction (the trial's start).
-    pub warm_lsq: Option<V3>,
+    /// The measured least-squares cylinder or sphere (the trial's start).
+    pub warm_lsq: Option<LsqStart>,
     /// The measured minimax cylinders' axes (point, direction): minimum zone,
     /// min-circumscribed, max-inscribed.
     pub warm_cylinder: [Option<(V3, V3)>; 3],
@@ -72,6 +73,15 @@ pub struct Feature {
     pub warm_slab: Option<V3>,
     /// The measured minimum-zone sphere's centre.
     pub warm_sphere: Option<V3>,
+}
+
+/// The measured least-squares fit a trial's fit starts from (`lsq::cylinder_warm`,
+/// `lsq::sphere_warm`: Gauss-Newton to a stated step tolerance, the complete fit where it
+/// cannot converge).
+#[derive(Debug, Clone, PartialEq)]
+pub enum LsqStart {
+    Cylinder(lsq::Cylinder),
+    Sphere { center: V3, radius: f64 },
 }
 
 /// A datum simulated behind the datums `prior` (indices of earlier entries, in the
@@ -235,12 +245,19 @@ impl<'a> Feat<'a> {
                     let c = lsq::circle3(p)?;
                     Lsq::Circle { center: c.center, normal: c.normal }
                 }
-                Shape::Sphere => Lsq::Sphere { center: v3(&lsq::sphere(p, 3)?.center) },
+                Shape::Sphere => {
+                    let s = match &self.spec.warm_lsq {
+                        Some(LsqStart::Sphere { center, radius }) => lsq::sphere_warm(p, *center, *radius)?,
+                        _ => lsq::sphere(p, 3)?,
+                    };
+                    Lsq::Sphere { center: v3(&s.center) }
+                }
                 Shape::Cylinder => {
-                    // the axis alone (the complete fit's extent and arc are not needed)
-                    let c = match self.spec.warm_lsq {
-                        Some(a) => lsq::cylinder_near(p, a)?,
-                        None => lsq::cylinder(p, None)?,
+                    // the axis alone (the complete fit's extent and arc are not needed),
+                    // by Gauss-Newton from the measured fit
+                    let c = match &self.spec.warm_lsq {
+                        Some(LsqStart::Cylinder(m)) => lsq::cylinder_warm(p, m)?,
+                        _ => lsq::cylinder(p, None)?,
                     };
                     Lsq::Cylinder { point: c.point, direction: c.direction }
                 }

@@ -263,3 +263,37 @@ fn the_trials_draw_independent_standard_normals() {
 }
 
 const PINNED_FIRST_OUTPUT: u64 = 10309557242948042334;
+
+#[test]
+fn a_trial_from_the_measured_least_squares_cylinder_gives_the_complete_fits_values() {
+    // the bore's least-squares cylinder by Gauss-Newton from the measured fit
+    // (lsq::cylinder_warm) against the complete fit from the principal axes: every callout
+    // (perpendicularity, roundness and position ride on the bore's axis) to 1e-10 mm
+    let (pts, cold) = part();
+    let mut warm = cold.clone();
+    let bore: Vec<f64> = cold.features[2].rows.iter().flat_map(|&i| pts[3 * i..3 * i + 3].to_vec()).collect();
+    warm.features[2].warm_lsq = Some(LsqStart::Cylinder(lsq::cylinder(&bore, None).unwrap()));
+    let m = Model { probing: 0.002, ..noise(0.002) };
+    for trial in 0..6 {
+        let p = perturb(&pts, 3, &m, 9, trial).unwrap();
+        let (a, b) = (evaluate(&cold, &p).unwrap().values, evaluate(&warm, &p).unwrap().values);
+        let gap = a.iter().zip(&b).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max);
+        assert!(gap <= 1e-10, "trial {trial}: {gap:e}\n{a:?}\n{b:?}");
+    }
+}
+
+#[test]
+fn the_inlined_ziggurat_draws_the_deviates_of_rand_distr_bit_for_bit() {
+    use rand::Rng;
+    // 4 M draws: the rectangle, the wedges (about 1 % of the draws) and the tail beyond R
+    // (about 1 in 4,000) all met; the two generators stay in step
+    let (mut a, mut b) = (perturb::trial_rng(3, 1), perturb::trial_rng(3, 1));
+    let mut tail = 0;
+    for _ in 0..4_000_000 {
+        let (x, y): (f64, f64) = (perturb::normal(&mut a), b.sample(rand_distr::StandardNormal));
+        assert_eq!(x.to_bits(), y.to_bits());
+        tail += (x.abs() > 3.654152885361008796) as usize;
+    }
+    assert!(tail > 200, "{tail}");
+    assert_eq!(a.random::<u64>(), b.random::<u64>());
+}
