@@ -26,6 +26,7 @@ mod frame;
 pub mod perturb;
 #[cfg(test)]
 mod tests;
+mod ziggurat;
 
 use crate::datum::{self, AxisFit, Orientation, PlaneFit};
 use crate::turn::{self, Frame};
