@@ -364,12 +364,7 @@ fn checked_near(pts: &[f64], opts: &Options) -> Result<(Option<Vector3<f64>>, f6
         for k in 0..3 {
             s1[k] += d[k];
         }
-        s2[0] += d[0] * d[0];
-        s2[1] += d[0] * d[1];
-        s2[2] += d[0] * d[2];
-        s2[3] += d[1] * d[1];
-        s2[4] += d[1] * d[2];
-        s2[5] += d[2] * d[2];
+        lsq::add_outer(&mut s2, d);
     }
     if !ok {
         return checked(pts, opts);
