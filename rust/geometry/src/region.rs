@@ -437,27 +437,33 @@ fn classify_grid(points: &[f64], boxes: &[OrientedBox], grid: &BoxGrid) -> Optio
                 for (mk, &c) in masks.iter_mut().zip(&cell[..hits]) {
                     *mk = grid.cells[c as usize];
                 }
-                for (&(mut sure, mut maybe), &j) in masks.iter().zip(&hit[..hits]) {
+                for (&mk, &j) in masks.iter().zip(&hit[..hits]) {
                     let j = j as usize;
-                    let p = &block[3 * j..3 * j + 3];
-                    while maybe != 0 {
-                        let k = maybe.trailing_zeros() as usize;
-                        maybe &= maybe - 1;
-                        if testers[k](p) {
-                            sure |= 1 << k;
-                        }
-                    }
-                    while sure != 0 {
-                        let k = sure.trailing_zeros() as usize;
-                        sure &= sure - 1;
-                        out[k].push(base + j);
-                    }
+                    push_members(&block[3 * j..3 * j + 3], mk, &testers, base + j, &mut out);
                 }
             }
             finite.then_some(out)
         })
         .collect();
     Some(merge_parts(parts.into_iter().collect::<Option<Vec<_>>>()?, nb))
+}
+
+/// Push the point `p` (number `i`) onto the lists of the boxes of its cell's masks (sure,
+/// maybe) that hold it: every sure box, and each maybe box whose exact test says so.
+#[inline(always)]
+fn push_members<T: Fn(&[f64]) -> bool>(p: &[f64], (mut sure, mut maybe): (u32, u32), testers: &[T], i: usize, out: &mut [Vec<usize>]) {
+    while maybe != 0 {
+        let k = maybe.trailing_zeros() as usize;
+        maybe &= maybe - 1;
+        if testers[k](p) {
+            sure |= 1 << k;
+        }
+    }
+    while sure != 0 {
+        let k = sure.trailing_zeros() as usize;
+        sure &= sure - 1;
+        out[k].push(i);
+    }
 }
 
 /// The points of each box, in order: `visit(p, i, out)` pushes i onto the lists of the
@@ -775,19 +781,7 @@ mod timing {
         let testers: Vec<_> = boxes.iter().map(|b| b.tester()).collect();
         let grid = BoxGrid::new(boxes, cells_per_axis(points.len() / 3));
         classify_near(points, boxes.len(), |p| grid.in_union(p), |p, i, out| {
-            let (mut sure, mut maybe) = grid.cells[grid.cell_of(p) as usize];
-            while maybe != 0 {
-                let k = maybe.trailing_zeros() as usize;
-                maybe &= maybe - 1;
-                if testers[k](p) {
-                    sure |= 1 << k;
-                }
-            }
-            while sure != 0 {
-                let k = sure.trailing_zeros() as usize;
-                sure &= sure - 1;
-                out[k].push(i);
-            }
+            push_members(p, grid.cells[grid.cell_of(p) as usize], &testers, i, out)
         })
     }
 

@@ -342,6 +342,58 @@ fn checked(pts: &[f64], opts: &Options) -> Result<(Option<Vector3<f64>>, f64)> {
     Ok((nominal, sv[0]))
 }
 
+/// [`checked`] in one pass over the points where it can decide (a Monte Carlo trial's
+/// points, [`fit_near`]): every coordinate within [`lsq::MAX_COORD`] (NaN fails), at least
+/// 5 points, and the scatter matrix about the first point, corrected to the centroid,
+/// clearly spread (second eigenvalue at least 1e-6 of the first, fourteen orders of
+/// magnitude above the collinearity test's 1e-20); the largest spread is then the square
+/// root of the largest eigenvalue (the same quantity as [`checked`]'s, to rounding; it only
+/// scales the verification's 1e-12 tolerance). Anything else: [`checked`] itself (its
+/// typed errors, its spreads).
+fn checked_near(pts: &[f64], opts: &Options) -> Result<(Option<Vector3<f64>>, f64)> {
+    let n = pts.len() / 3;
+    if n < 5 || pts.len() % 3 != 0 {
+        return checked(pts, opts);
+    }
+    let o = [pts[0], pts[1], pts[2]];
+    let mut ok = true;
+    let (mut s1, mut s2) = ([0.0f64; 3], [0.0f64; 6]);
+    for p in pts.chunks_exact(3) {
+        ok &= (p[0].abs() <= lsq::MAX_COORD) & (p[1].abs() <= lsq::MAX_COORD) & (p[2].abs() <= lsq::MAX_COORD);
+        let d = [p[0] - o[0], p[1] - o[1], p[2] - o[2]];
+        for k in 0..3 {
+            s1[k] += d[k];
+        }
+        lsq::add_outer(&mut s2, d);
+    }
+    if !ok {
+        return checked(pts, opts);
+    }
+    let nominal = opts.search.validate()?;
+    let m = [s1[0] / n as f64, s1[1] / n as f64, s1[2] / n as f64];
+    let nf = n as f64;
+    let s = nalgebra::Matrix3::new(
+        s2[0] - nf * m[0] * m[0],
+        s2[1] - nf * m[0] * m[1],
+        s2[2] - nf * m[0] * m[2],
+        s2[1] - nf * m[0] * m[1],
+        s2[3] - nf * m[1] * m[1],
+        s2[4] - nf * m[1] * m[2],
+        s2[2] - nf * m[0] * m[2],
+        s2[4] - nf * m[1] * m[2],
+        s2[5] - nf * m[2] * m[2],
+    );
+    if !s.iter().all(|v| v.is_finite()) {
+        return checked(pts, opts);
+    }
+    let mut e: Vec<f64> = nalgebra::SymmetricEigen::new(s).eigenvalues.iter().copied().collect();
+    e.sort_by(|a, b| b.total_cmp(a));
+    if !(e[0] > 0.0 && e[1] >= 1e-6 * e[0]) {
+        return checked(pts, opts);
+    }
+    Ok((nominal, e[0].sqrt()))
+}
+
 /// A warm start for [`fit_near`]: the axis (a point on it and its direction) of a fit of
 /// nearby points -- a Monte Carlo trial's perturbed points start from the measured fit.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -383,7 +435,7 @@ fn near(pts: &[f64], crit: Criterion, opts: &Options, warm: &Warm, complete: boo
     if !(wp.iter().chain(wd.iter()).all(|x| x.is_finite()) && wd.norm() > 0.0) {
         return Err(GkError::invalid(format!("cylinder: the warm start must be a finite point and a non-zero direction, got {warm:?}")));
     }
-    let (nominal, spread) = checked(pts, opts)?;
+    let (nominal, spread) = checked_near(pts, opts)?;
     let lsq_fit = if nominal.is_none() { lsq::cylinder(pts, None).ok() } else { None };
     let reference = match (nominal, &lsq_fit) {
         (Some(a), _) => a,

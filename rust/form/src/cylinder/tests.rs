@@ -172,3 +172,29 @@ fn an_axis_on_the_cone_axis_has_tilt_zero() {
     assert!(tilt_from(&a, &w) < 1e-9);
     assert!((tilt_from(&Vector3::x(), &Vector3::z()) - FRAC_PI_2).abs() < 1e-15);
 }
+
+#[test]
+fn the_one_pass_checks_of_a_warm_fit_agree_with_the_complete_checks() {
+    // spread points: the same validated axis, the same largest spread to rounding; bad or
+    // degenerate points: the complete checks' typed errors
+    let opts = Options::default();
+    let pts: Vec<f64> = (0..400)
+        .flat_map(|i| {
+            let t = i as f64 * 0.37;
+            [1e4 + 5.0 * t.cos(), -2e4 + 5.0 * t.sin(), 3e4 + (i % 37) as f64 * 0.8]
+        })
+        .collect();
+    let (a, sa) = checked(&pts, &opts).unwrap();
+    let (b, sb) = checked_near(&pts, &opts).unwrap();
+    assert_eq!(a, b);
+    assert!((sa - sb).abs() <= 1e-9 * sa, "{sa} {sb}");
+    let line: Vec<f64> = (0..50).flat_map(|i| [1.0, 2.0, i as f64]).collect();
+    let mut nan = pts.clone();
+    nan[7] = f64::NAN;
+    let mut huge = pts.clone();
+    huge[7] = 1e151;
+    for bad in [vec![1.0; 30], line, nan, huge, pts[..12].to_vec()] {
+        let (e1, e2) = (checked(&bad, &opts).unwrap_err(), checked_near(&bad, &opts).unwrap_err());
+        assert_eq!((e1.kind, e1.message), (e2.kind, e2.message));
+    }
+}

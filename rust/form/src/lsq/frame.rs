@@ -87,16 +87,22 @@ pub(crate) fn centred3_scatter(pts: &[f64], c: &[f64]) -> (Vec<[f64; 3]>, Matrix
         .chunks_exact(3)
         .map(|p| {
             let q = [p[0] - c[0], p[1] - c[1], p[2] - c[2]];
-            s[0] += q[0] * q[0];
-            s[1] += q[0] * q[1];
-            s[2] += q[0] * q[2];
-            s[3] += q[1] * q[1];
-            s[4] += q[1] * q[2];
-            s[5] += q[2] * q[2];
+            add_outer(&mut s, q);
             q
         })
         .collect();
     (q, Matrix3::new(s[0], s[1], s[2], s[1], s[3], s[4], s[2], s[4], s[5]))
+}
+
+/// Adds q q^T to the upper triangle `s` (xx, xy, xz, yy, yz, zz) of a scatter matrix.
+#[inline(always)]
+pub(crate) fn add_outer(s: &mut [f64; 6], q: [f64; 3]) {
+    s[0] += q[0] * q[0];
+    s[1] += q[0] * q[1];
+    s[2] += q[0] * q[2];
+    s[3] += q[1] * q[1];
+    s[4] += q[1] * q[2];
+    s[5] += q[2] * q[2];
 }
 
 /// Whether the points of scatter matrix `s` certainly pass the spread checks of

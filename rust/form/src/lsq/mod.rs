@@ -21,6 +21,7 @@ mod cone;
 mod cylinder;
 mod extent;
 mod frame;
+pub(crate) use frame::add_outer;
 mod line;
 mod lm;
 mod plane;

@@ -5,9 +5,13 @@
 //!
 //! A trial's optimum is the measured one moved by the noise (a few sigma / sqrt(n) away),
 //! where Gauss-Newton converges linearly at a small rate rho (the residuals are small
-//! against the radius). Each pass sums, at the current parameters, J^T J, J^T r and the
-//! cost (sum of squared residuals), checks every coordinate (finite, within
-//! [`MAX_COORD`]) and the height of the points along the axis. The iteration stops when
+//! against the radius). Each pass sums, at the current parameters, J^T r and the cost (sum
+//! of squared residuals), checks every coordinate (finite, within [`MAX_COORD`]) and the
+//! height of the points along the axis; the first pass also sums J^T J, which the later
+//! steps keep (the simplified Gauss-Newton, or chord, method: its rate is Gauss-Newton's
+//! plus the relative change of J^T J over the steps, about the first step over the
+//! radius, 1e-7 on the bracket; the stopping rule below measures the rate it gets). The
+//! iteration stops when
 //! the step's size in mm (the largest change of the axis position or the radius, the
 //! direction change times the largest height of a point along the axis) is at most
 //! [`TOL`], or when the contraction estimate says the rest is: with rho estimated by the
@@ -94,8 +98,22 @@ impl<const P: usize> Sums<P> {
 }
 
 /// The sums of one pass over `pts` (flat (n, 3)) with rows `row(x) -> (r, J_row, height)`
-/// of the point's offset `x` from `origin`, in fixed chunks added in order (deterministic).
-fn pass<const P: usize>(pts: &[f64], origin: [f64; 3], row: impl Fn([f64; 3]) -> (f64, [f64; P], f64)) -> Sums<P> {
+/// of the point's offset `x` from `origin`, in fixed chunks added in order (deterministic);
+/// J^T J only when `full` (else zero: the caller keeps an earlier one).
+fn pass<const P: usize>(pts: &[f64], origin: [f64; 3], full: bool, row: impl Fn([f64; 3]) -> (f64, [f64; P], f64)) -> Sums<P> {
+    if full {
+        pass_with::<P, true>(pts, origin, row)
+    } else {
+        pass_with::<P, false>(pts, origin, row)
+    }
+}
+
+#[inline(always)]
+fn pass_with<const P: usize, const FULL: bool>(
+    pts: &[f64],
+    origin: [f64; 3],
+    row: impl Fn([f64; 3]) -> (f64, [f64; P], f64),
+) -> Sums<P> {
     let mut total = Sums::zero();
     for c in pts.chunks(3 * CHUNK) {
         let mut s = Sums::<P>::zero();
@@ -111,8 +129,10 @@ fn pass<const P: usize>(pts: &[f64], origin: [f64; 3], row: impl Fn([f64; 3]) ->
             s.hmax = s.hmax.max(h.abs());
             for a in 0..P {
                 s.jtr[a] += j[a] * r;
-                for b in a..P {
-                    s.jtj[a][b] += j[a] * j[b];
+                if FULL {
+                    for b in a..P {
+                        s.jtj[a][b] += j[a] * j[b];
+                    }
                 }
             }
         }
@@ -127,15 +147,19 @@ fn pass<const P: usize>(pts: &[f64], origin: [f64; 3], row: impl Fn([f64; 3]) ->
 /// back to the complete fit.
 fn gauss_newton<S: Clone, const P: usize>(
     start: S,
-    eval: impl Fn(&S) -> Sums<P>,
+    eval: impl Fn(&S, bool) -> Sums<P>,
     size: impl Fn(&SVector<f64, P>, &Sums<P>) -> f64,
     apply: impl Fn(&S, &SVector<f64, P>) -> S,
 ) -> Option<(S, Sums<P>)> {
     let mut s = start;
     let mut prev_cost = f64::INFINITY;
     let mut prev_size = f64::INFINITY;
+    let mut jtj = None;
     for _ in 0..MAX_PASSES {
-        let sums = eval(&s);
+        let mut sums = eval(&s, jtj.is_none());
+        // the J^T J of the first pass is kept (simplified Gauss-Newton, module docs)
+        let first = *jtj.get_or_insert(sums.jtj);
+        sums.jtj = first;
         if !sums.ok || !sums.cost.is_finite() || sums.cost > prev_cost * (1.0 + 1e-12) {
             return None;
         }
@@ -181,10 +205,10 @@ fn cylinder_gn(pts: &[f64], start: &Cylinder) -> Option<Cylinder> {
     // the axis), the unit direction a, the radius; a step (x0, y0, alpha, beta, dr) in the
     // frame (u, v, a): l += x0 u + y0 v, a = normalize(a + alpha u + beta v) (Forbes 1989)
     type S = (Vector3<f64>, Vector3<f64>, f64);
-    let eval = |s: &S| {
+    let eval = |s: &S, full: bool| {
         let (u, w) = orthonormal_basis(&s.1);
         let (l, a, r) = (s.0, s.1, s.2);
-        pass::<5>(pts, o, |x| {
+        pass::<5>(pts, o, full, |x| {
             let d = [x[0] - l[0], x[1] - l[1], x[2] - l[2]];
             let xu = d[0] * u[0] + d[1] * u[1] + d[2] * u[2];
             let yv = d[0] * w[0] + d[1] * w[1] + d[2] * w[2];
@@ -228,9 +252,9 @@ fn sphere_gn(pts: &[f64], center: [f64; 3], radius: f64) -> Option<Sphere> {
         return None;
     }
     type S = (Vector3<f64>, f64);
-    let eval = |s: &S| {
+    let eval = |s: &S, full: bool| {
         let (c, r) = (s.0, s.1);
-        pass::<4>(pts, center, |x| {
+        pass::<4>(pts, center, full, |x| {
             let d = [x[0] - c[0], x[1] - c[1], x[2] - c[2]];
             let rho = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
             let inv = if rho > 0.0 { 1.0 / rho } else { 0.0 };
