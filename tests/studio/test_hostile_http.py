@@ -117,7 +117,10 @@ def test_a_gage_document_with_a_bad_rotation_is_a_4xx(casting):
 def test_every_address_needs_the_token_and_the_browser_opens_the_tokenised_url(casting, tmp_path):
     seen = tmp_path / "opened.txt"
     recorder = tmp_path / "browser.py"
-    recorder.write_text("import sys\nopen(sys.argv[1], 'w').write(sys.argv[2])\n")
+    # written beside and renamed: the file appears whole (open(..., 'w') creates it empty
+    # before the URL is written, and the wait below could read it in between)
+    recorder.write_text("import os, sys\nopen(sys.argv[1] + '.part', 'w').write(sys.argv[2])\n"
+                        "os.replace(sys.argv[1] + '.part', sys.argv[1])\n")
     env = dict(os.environ, BROWSER=f"{sys.executable} {recorder} {seen} %s")
     studio = StudioServer(str(casting / "casting.ply"), env=env, browser=True)
     try:
