@@ -30,7 +30,7 @@
 //! cylinders and spheres).
 
 use super::cylinder::{cylinder_near, Cylinder};
-use super::frame::{orthonormal_basis, upper, MAX_COORD};
+use super::frame::{arr, orthonormal_basis, upper, MAX_COORD};
 use super::sphere::{sphere, Sphere};
 use super::Vector3;
 use gagekit_core::Result;
@@ -175,14 +175,6 @@ fn gauss_newton<S: Clone, const P: usize>(
     None
 }
 
-fn v(a: [f64; 3]) -> Vector3<f64> {
-    Vector3::new(a[0], a[1], a[2])
-}
-
-fn arr(a: &Vector3<f64>) -> [f64; 3] {
-    [a[0], a[1], a[2]]
-}
-
 /// The least-squares cylinder of `pts` (flat (n, 3)) from the cylinder `start` of points
 /// near them (module docs): the stationary point [`cylinder_near`] from `start.direction`
 /// converges to, the same kind of result (the point the foot of the centroid on the axis,
@@ -197,7 +189,7 @@ pub fn cylinder_warm(pts: &[f64], start: &Cylinder) -> Result<Cylinder> {
 /// The Gauss-Newton iteration of [`cylinder_warm`]; None: run the complete fit.
 fn cylinder_gn(pts: &[f64], start: &Cylinder) -> Option<Cylinder> {
     let o = start.point;
-    let a0 = v(start.direction);
+    let a0 = Vector3::from(start.direction);
     if pts.len() < 15 || pts.len() % 3 != 0 || !(a0.norm() > 0.0) || !o.iter().all(|x| x.is_finite()) || !start.radius.is_finite() {
         return None;
     }
@@ -231,8 +223,8 @@ fn cylinder_gn(pts: &[f64], start: &Cylinder) -> Option<Cylinder> {
     };
     let ((l, a, r), sums) = gauss_newton((Vector3::zeros(), a0.normalize(), start.radius), eval, size, apply)?;
     // the foot of the centroid (the offsets' mean from o) on the axis
-    let c = v(sums.off) / (pts.len() / 3) as f64;
-    let p = v(o) + l + a * (c - l).dot(&a);
+    let c = Vector3::from(sums.off) / (pts.len() / 3) as f64;
+    let p = Vector3::from(o) + l + a * (c - l).dot(&a);
     (p.iter().all(|x| x.is_finite()) && a.iter().all(|x| x.is_finite()) && r.is_finite())
         .then(|| Cylinder { point: arr(&p), direction: upper(arr(&a)), radius: r.abs() })
 }
@@ -264,7 +256,7 @@ fn sphere_gn(pts: &[f64], center: [f64; 3], radius: f64) -> Option<Sphere> {
     let size = |st: &SVector<f64, 4>, _: &Sums<4>| st.amax();
     let apply = |s: &S, st: &SVector<f64, 4>| (s.0 + Vector3::new(st[0], st[1], st[2]), s.1 + st[3]);
     let ((c, r), _) = gauss_newton((Vector3::zeros(), radius), eval, size, apply)?;
-    let c = v(center) + c;
+    let c = Vector3::from(center) + c;
     (c.iter().all(|x| x.is_finite()) && r.is_finite()).then(|| Sphere { center: arr(&c).to_vec(), radius: r.abs() })
 }
 
@@ -280,14 +272,14 @@ mod tests {
     /// Points on a cylinder (point, unit axis, radius, length; an arc of `arc` rad) with
     /// Gaussian-like noise (sum of uniforms) of size `noise`.
     fn cyl(rng: &mut ChaCha8Rng, n: usize, p: [f64; 3], a: [f64; 3], r: f64, len: f64, arc: f64, noise: f64) -> Vec<f64> {
-        let a = v(a).normalize();
+        let a = Vector3::from(a).normalize();
         let (u, w) = orthonormal_basis(&a);
         let mut out = Vec::with_capacity(3 * n);
         for _ in 0..n {
             let t = rng.random::<f64>() * arc;
             let z = (rng.random::<f64>() - 0.5) * len;
             let e: f64 = (0..4).map(|_| rng.random::<f64>() - 0.5).sum::<f64>() * noise * 1.7;
-            let q = v(p) + a * z + (u * t.cos() + w * t.sin()) * (r + e);
+            let q = Vector3::from(p) + a * z + (u * t.cos() + w * t.sin()) * (r + e);
             out.extend_from_slice(&[q[0], q[1], q[2]]);
         }
         out
@@ -300,9 +292,9 @@ mod tests {
     /// The distance of two axes over a height `h` about `p` (mm): of the points, the
     /// directions' change times `h`.
     fn axis_gap(a: &Cylinder, b: &Cylinder, h: f64) -> f64 {
-        let (da, db) = (v(a.direction), v(b.direction));
+        let (da, db) = (Vector3::from(a.direction), Vector3::from(b.direction));
         let db = if da.dot(&db) < 0.0 { -db } else { db };
-        let q = v(a.point) - v(b.point);
+        let q = Vector3::from(a.point) - Vector3::from(b.point);
         let off = (q - db * q.dot(&db)).norm();
         off + (da - db).norm() * h + (a.radius - b.radius).abs()
     }
@@ -325,7 +317,7 @@ mod tests {
             prop_assert!(cylinder_gn(&trial, &m).is_some(), "the Gauss-Newton path falls back");
             prop_assert!(axis_gap(&full, &warm, len) <= 1e-10, "{full:?} {warm:?}");
             // the point is the foot of the centroid, as the complete fit's
-            prop_assert!((v(full.point) - v(warm.point)).norm() <= 1e-9 + 1e-15 * far, "{full:?} {warm:?}");
+            prop_assert!((Vector3::from(full.point) - Vector3::from(warm.point)).norm() <= 1e-9 + 1e-15 * far, "{full:?} {warm:?}");
         }
 
         #[test]
