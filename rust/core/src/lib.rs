@@ -63,6 +63,8 @@ impl GkError {
     }
 }
 
+pub mod select;
+
 /// Cooperative cancellation of long kernels (Ctrl-C answered within a second).
 ///
 /// One process-wide flag: whoever handles the interrupt (the Python binding installs a

@@ -97,12 +97,10 @@ pub(super) fn fit_near_in(
 /// k largest; MZC: k of each).
 ///
 /// The order is total (ties by index), so these sets are unique: on many points two
-/// linear-time selections find them (the same sets as a full sort, whose order the
+/// one linear pass finds them (`gagekit_core::select::extremes`; the same sets as a full sort, whose order the
 /// active-subset iteration does not read: it sorts the subset by index).
 fn first_subset(dist: &[f64], crit: Criterion) -> Vec<usize> {
     let n = dist.len();
-    let mut order: Vec<usize> = (0..n).collect();
-    let cmp = |i: &usize, j: &usize| dist[*i].total_cmp(&dist[*j]).then(i.cmp(j));
     let k = SUBSET_EXTREMES;
     if n > 8 * k {
         let (low, high) = match crit {
@@ -110,16 +108,13 @@ fn first_subset(dist: &[f64], crit: Criterion) -> Vec<usize> {
             Criterion::MaxInscribed => (2 * k, k),
             Criterion::MinZone => (k, k),
         };
-        let mut out = Vec::with_capacity(low + high);
-        if low > 0 {
-            order.select_nth_unstable_by(low, cmp);
-            out.extend_from_slice(&order[..low]);
-        }
-        order.select_nth_unstable_by(n - high - 1, cmp);
-        out.extend_from_slice(&order[n - high..]);
+        // one pass (the same sets: the order is total)
+        let (mut out, large) = gagekit_core::select::extremes(dist, low, high);
+        out.extend(large);
         return out;
     }
-    order.sort_by(cmp);
+    let mut order: Vec<usize> = (0..n).collect();
+    order.sort_by(|&i, &j| dist[i].total_cmp(&dist[j]).then(i.cmp(&j)));
     match crit {
         Criterion::MinCircumscribed => order[n - 2 * k..].to_vec(),
         Criterion::MaxInscribed => order[..2 * k].iter().chain(&order[n - k..]).copied().collect(),

@@ -40,20 +40,14 @@ pub fn band(r: &[f64]) -> Vec<bool> {
             a || b
         })
         .collect();
-    // the MIN_EXTREMES smallest and largest (ties by index): two partial selections, needed
-    // only when the band holds fewer on a side (else the MIN_EXTREMES-th smallest is itself
-    // within lo + w, so all of them are in already; the same mask)
+    // the MIN_EXTREMES smallest and largest (ties by index; one pass, gagekit_core::select),
+    // needed only when the band holds fewer on a side (else the MIN_EXTREMES-th smallest is
+    // itself within lo + w, so all of them are in already; the same mask)
     if n_lo >= MIN_EXTREMES && n_hi >= MIN_EXTREMES {
         return sel;
     }
-    let mut order: Vec<usize> = (0..n).collect();
-    let cmp = |a: &usize, b: &usize| r[*a].total_cmp(&r[*b]).then(a.cmp(b));
-    order.select_nth_unstable_by(MIN_EXTREMES, cmp);
-    for &i in &order[..MIN_EXTREMES] {
-        sel[i] = true;
-    }
-    order.select_nth_unstable_by(n - MIN_EXTREMES - 1, cmp);
-    for &i in &order[n - MIN_EXTREMES..] {
+    let (small, large) = gagekit_core::select::extremes(r, MIN_EXTREMES, MIN_EXTREMES);
+    for i in small.into_iter().chain(large) {
         sel[i] = true;
     }
     sel
