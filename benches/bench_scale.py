@@ -293,6 +293,8 @@ def main() -> None:
     ap.add_argument("--repeat", type=int, default=1, help="runs of each streamed mode, alternated with the disk reads")
     ap.add_argument("--keep", action="store_true",
                     help="keep the generated scans in --dir (scan_NM.ply) and reuse them when already there")
+    ap.add_argument("--inflight", type=int, default=2,
+                    help="O_DIRECT requests of 16 MiB in flight for the disk's speed (1: one at a time, as before)")
     ap.add_argument("--ref-gb", type=float, default=0.0,
                     help="read only the first GB of the file for the disk's speed (default: the whole file)")
     ap.add_argument("--dask", action="store_true",
@@ -312,7 +314,7 @@ def main() -> None:
     print(f"# load average at start: {' '.join(f'{x:.1f}' for x in os.getloadavg())} ({os.cpu_count()} cores); "
           "cpu s: the child's user + system time (less sensitive to a shared machine than the wall time); "
           "cores: cpu s / time s")
-    print(f"# disk: the disk's read speed, read beside each streamed run ({'just before and just after it' if not args.cold else 'O_DIRECT just before, buffered after a cache drop just after'}): "
+    print(f"# disk: O_DIRECT reads of 16 MiB, {args.inflight} in flight; the disk's read speed, read beside each streamed run ({'just before and just after it' if not args.cold else 'O_DIRECT just before, buffered after a cache drop just after'}): "
           f"the faster of the plain sequential reads of the {'whole file' if not limit else f'first {args.ref_gb:g} GB'}")
     print(f"{'case':<22}{'mode':<13}{'time s':>9}{'cpu s':>9}{'peak RSS MB':>13}{'objective':>22}  "
           "equal to the first mode")
@@ -333,7 +335,7 @@ def main() -> None:
                     # the disk's speed next to the check: O_DIRECT just before it; after it,
                     # the buffered read after a cache drop (cold) or O_DIRECT again (warm:
                     # the cache is left as the check left it)
-                    before = disk_speed_direct(scan, limit) if mode != "whole" else float("nan")
+                    before = disk_speed_direct(scan, limit, args.inflight) if mode != "whole" else float("nan")
                     if args.cold:
                         drop_caches()
                     load = os.getloadavg()[0]
@@ -351,7 +353,7 @@ def main() -> None:
                     if args.cold and not limit:
                         after, how = disk_speed(scan), "buffered after a cache drop"
                     else:
-                        after, how = disk_speed_direct(scan, limit), "O_DIRECT"
+                        after, how = disk_speed_direct(scan, limit, args.inflight), "O_DIRECT"
                     disk = max(before, after)
                     print(f"# disk: O_DIRECT {before:.0f} MB/s before, {how} {after:.0f} MB/s after: "
                           f"the check at {speed / disk:.2f} of the faster ({speed:.0f} / {disk:.0f} MB/s)", flush=True)
