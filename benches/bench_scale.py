@@ -20,7 +20,8 @@ cache then starts its second pass on what the first left cached). Each chunk's r
 are taken in a thread while the next chunk is cut. Printed per case and mode: wall time, the
 child's peak RSS (max resident set, from wait4), the objective of Eq. 5.11, and whether
 the whole JSON result equals the whole read's (bit for bit), the CPU a point and the cores
-used (CPU / wall). The file is written just before (or, with --keep, reused), so it is read
+used (CPU / wall). The file is written just before (a ``scan_NM.ply`` of the right size in
+--dir, left there by a run with --keep, is reused instead), so it is read
 from a warm page cache (the "warm" figures); --cold drops the page cache first (needs root).
 
 The disk's read speed is measured in the same run, beside each streamed check, alternated
@@ -266,20 +267,25 @@ def dask_line(folder: str, scans: int, millions: int, memory_limit: str) -> None
 
 
 def scan_file(folder: str, millions: int, keep: bool):
-    """(scan path, gage file path, seconds spent writing (None: reused), temporary directory or None):
-    with ``keep`` the files are ``scan_{millions}M.ply`` and ``gages.toml`` in ``folder``,
-    kept at the end and reused by the next run when the scan has the expected size (the
-    generator is seeded: the same bytes)."""
+    """(scan path, gage file path, seconds spent writing (None: reused), temporary directory
+    or None): a scan ``scan_{millions}M.ply`` already in ``folder`` with the expected size is
+    reused and left there (the generator is seeded: the same bytes; a run with --keep left
+    it); else the scan is written, into ``folder`` itself with ``keep`` (kept at the end),
+    or into a temporary directory there (deleted at the end)."""
     n = millions * 1_000_000
-    tmp = None if keep else tempfile.TemporaryDirectory(dir=folder)
-    d = Path(tmp.name if tmp else (folder or tempfile.gettempdir()))
-    scan, gages = d / f"scan_{millions}M.ply", d / "gages.toml"
     base, doc = make_casting("casting_ok", density=BASE_DENSITY)
     text = to_toml(doc, "bench_scale: casting_ok gages")
-    t, gen = time.perf_counter(), None
-    if not (keep and scan.exists() and scan.stat().st_size == len(ply_header(n)) + 24 * n):
-        write_scan(scan, n)
-        gen = time.perf_counter() - t
+    kept = Path(folder or tempfile.gettempdir()) / f"scan_{millions}M.ply"
+    if kept.exists() and kept.stat().st_size == len(ply_header(n)) + 24 * n:
+        gages = kept.parent / "gages.toml"
+        gages.write_text(text)
+        return kept, gages, None, None
+    tmp = None if keep else tempfile.TemporaryDirectory(dir=folder)
+    d = Path(tmp.name) if tmp else kept.parent
+    scan, gages = d / kept.name, d / "gages.toml"
+    t = time.perf_counter()
+    write_scan(scan, n)
+    gen = time.perf_counter() - t
     gages.write_text(text)
     return scan, gages, gen, tmp
 
@@ -293,7 +299,7 @@ def main() -> None:
     ap.add_argument("--modes", default=",".join(m for m, _ in MODES))
     ap.add_argument("--repeat", type=int, default=1, help="runs of each streamed mode, alternated with the disk reads")
     ap.add_argument("--keep", action="store_true",
-                    help="keep the generated scans in --dir (scan_NM.ply) and reuse them when already there")
+                    help="keep the generated scans in --dir (scan_NM.ply; a scan found there is always reused)")
     ap.add_argument("--inflight", type=int, default=2,
                     help="O_DIRECT requests of 16 MiB in flight for the disk's speed (1: one at a time, as before)")
     ap.add_argument("--ref-gb", type=float, default=0.0,
