@@ -19,15 +19,25 @@ twice, the gage regions from the end of the file back (a file larger than the pa
 cache then starts its second pass on what the first left cached). Each chunk's regions
 are taken in a thread while the next chunk is cut. Printed per case and mode: wall time, the
 child's peak RSS (max resident set, from wait4), the objective of Eq. 5.11, and whether
-the whole JSON result equals the whole read's (bit for bit). The file is written just
-before, so it is read from a warm page cache (the "warm" figures); --cold drops the page
-cache first (needs root) for the disk-speed figures. The disk's sequential read speed
-is measured with dd-like reads of the same file after dropping the cache (--cold).
+the whole JSON result equals the whole read's (bit for bit), the CPU a point and the cores
+used (CPU / wall). The file is written just before (a ``scan_NM.ply`` of the right size in
+--dir, left there by a run with --keep, is reused instead), so it is read
+from a warm page cache (the "warm" figures); --cold drops the page cache first (needs root).
+
+The disk's read speed is measured in the same run, beside each streamed check, alternated
+with it: an O_DIRECT read of the whole file (--ref-gb: its first GB) just before the check,
+and just after it a buffered read of the whole file after dropping the cache (--cold) or a
+second O_DIRECT read (warm: the cache is left as the check left it). O_DIRECT reads 16 MiB
+blocks with two requests in flight, past the page cache: the device's own sequential speed,
+with no copy and no cache bookkeeping. The buffered read after a cache drop is what any
+program reading the file gets from the kernel's read-ahead. "The disk's read speed" of the
+goal is the faster of the two reads beside the check (the stricter reference: the device has
+been seen to read 408-773 MB/s within an hour on this VM, so only a reference read next to
+the check, of the same file, compares like with like); each line prints the check's MB/s as
+a fraction of it.
 
 A size whose float64 points would take more than half the RAM (1 G points: 24 GB) skips
 the whole read, which cannot run here, and compares the streamed modes with each other.
-Without --cold the disk's speed is measured with O_DIRECT reads of the file's first 4 GB
-(past the page cache, so nothing is dropped for the machine's other users).
 
 ``--dask``: only the cluster line of issue 29 section 3: ``gage batch`` of 16 generated
 scans of 50 M points (binary PLY, float32 x y z: 9.6 GB of disk) on a local Dask cluster
@@ -35,9 +45,10 @@ of 2 single-thread workers with ``memory_limit`` 3 GB each: the time, the worker
 RSS, whether a worker was lost, and the first scan's result against its whole read.
 
 Goals: 200 M points under 30 s warm; a 1 G-point PLY (24 GB) with peak RSS under 4 GB,
-at disk speed; the Dask batch with no worker lost. Generated files are deleted at the end.
+at or above the disk's read speed; the Dask batch with no worker lost. Generated files are
+deleted at the end (kept with --keep).
 
-    python benches/bench_scale.py [--sizes 50,200] [--huge] [--dir /tmp] [--cold]
+    python benches/bench_scale.py [--sizes 50,200] [--huge] [--dir /tmp] [--cold] [--repeat N] [--keep]
     python benches/bench_scale.py --dask [--dask-scans 16] [--dask-points 50] [--dask-memory 3GB]
 """
 
@@ -60,17 +71,22 @@ BASE_DENSITY = 24.0  # points per mm^2 of the casting sample (about 2 M points)
 MODES = [("whole", "64G"), ("stream", "2G"), ("stream-256M", "256M")]
 
 
+def ply_header(n: int) -> bytes:
+    """The PLY header of ``n`` float64 points, padded to a multiple of 8 bytes (the points
+    then lie 8-byte aligned in the file)."""
+    header = (f"ply\nformat binary_little_endian 1.0\ncomment gagekit bench_scale\nelement vertex {n}\n"
+              "property double x\nproperty double y\nproperty double z\nend_header\n")
+    pad = -len(header) % 8
+    return header.replace("bench_scale", "bench_scale" + " " * pad).encode("ascii")
+
+
 def write_scan(path: Path, n: int, seed: int = 0) -> str:
     """The casting sampled once, then passes with fresh noise until ``n`` points; returns
     the gage file text."""
     base, doc = make_casting("casting_ok", density=BASE_DENSITY)
     rng = np.random.default_rng(seed)
-    header = (f"ply\nformat binary_little_endian 1.0\ncomment gagekit bench_scale\nelement vertex {n}\n"
-              "property double x\nproperty double y\nproperty double z\nend_header\n")
-    pad = -len(header) % 8
-    header = header.replace("bench_scale", "bench_scale" + " " * pad)
     with open(path, "wb") as fh:
-        fh.write(header.encode("ascii"))
+        fh.write(ply_header(n))
         left = n
         while left:
             k = min(left, len(base))
@@ -109,7 +125,8 @@ def drop_caches() -> bool:
 
 
 def disk_speed(path: Path) -> float:
-    """MB/s of reading ``path`` sequentially in 16 MiB blocks (after dropping the cache)."""
+    """MB/s of reading the whole of ``path`` sequentially in 16 MiB blocks through the page
+    cache, after dropping it (the kernel's read-ahead keeps the disk busy between reads)."""
     drop_caches()
     t = time.perf_counter()
     with open(path, "rb", buffering=0) as fh:
@@ -145,20 +162,37 @@ def write_scans_fast(folder: Path, scans: int, n: int, base) -> list[str]:
     return paths
 
 
-def disk_speed_direct(path: Path, limit: int = 4 << 30) -> float:
-    """MB/s of reading the first ``limit`` bytes of ``path`` with O_DIRECT (past the page
-    cache, which other users of the machine keep; no cache drop needed)."""
+def disk_speed_direct(path: Path, limit: int = 0, inflight: int = 2) -> float:
+    """MB/s of reading ``path`` (its first ``limit`` bytes; 0: the whole file) with O_DIRECT,
+    past the page cache (nothing cached is used or evicted): 16 MiB blocks, ``inflight``
+    threads each reading every ``inflight``-th block, so that many requests are in flight
+    (one at a time leaves the device idle between requests, an underestimate)."""
     import mmap
+    import threading
 
-    buf = mmap.mmap(-1, 16 << 20)  # page-aligned, as O_DIRECT needs
-    fd = os.open(path, os.O_RDONLY | os.O_DIRECT)
-    done, t = 0, time.perf_counter()
-    try:
-        while done < limit and (k := os.readv(fd, [buf])) > 0:
-            done += k
-    finally:
-        os.close(fd)
-    return done / 1e6 / (time.perf_counter() - t)
+    size = path.stat().st_size if not limit else min(limit, path.stat().st_size)
+    block = 16 << 20
+    done = [0] * inflight
+
+    def reader(k: int) -> None:
+        buf = mmap.mmap(-1, block)  # page-aligned, as O_DIRECT needs
+        fd = os.open(path, os.O_RDONLY | os.O_DIRECT)
+        try:
+            at = k * block
+            while at < size and (got := os.preadv(fd, [buf], at)) > 0:
+                done[k] += min(got, size - at)
+                at += inflight * block
+        finally:
+            os.close(fd)
+            buf.close()
+
+    t = time.perf_counter()
+    threads = [threading.Thread(target=reader, args=(k,)) for k in range(inflight)]
+    for th in threads:
+        th.start()
+    for th in threads:
+        th.join()
+    return sum(done) / 1e6 / (time.perf_counter() - t)
 
 
 def dask_line(folder: str, scans: int, millions: int, memory_limit: str) -> None:
@@ -232,6 +266,30 @@ def dask_line(folder: str, scans: int, millions: int, memory_limit: str) -> None
               f"   (load {os.getloadavg()[0]:.1f}; the whole read's RSS {rss_whole:.0f} MB)", flush=True)
 
 
+def scan_file(folder: str, millions: int, keep: bool):
+    """(scan path, gage file path, seconds spent writing (None: reused), temporary directory
+    or None): a scan ``scan_{millions}M.ply`` already in ``folder`` with the expected size is
+    reused and left there (the generator is seeded: the same bytes; a run with --keep left
+    it); else the scan is written, into ``folder`` itself with ``keep`` (kept at the end),
+    or into a temporary directory there (deleted at the end)."""
+    n = millions * 1_000_000
+    base, doc = make_casting("casting_ok", density=BASE_DENSITY)
+    text = to_toml(doc, "bench_scale: casting_ok gages")
+    kept = Path(folder or tempfile.gettempdir()) / f"scan_{millions}M.ply"
+    if kept.exists() and kept.stat().st_size == len(ply_header(n)) + 24 * n:
+        gages = kept.parent / "gages.toml"
+        gages.write_text(text)
+        return kept, gages, None, None
+    tmp = None if keep else tempfile.TemporaryDirectory(dir=folder)
+    d = Path(tmp.name) if tmp else kept.parent
+    scan, gages = d / kept.name, d / "gages.toml"
+    t = time.perf_counter()
+    write_scan(scan, n)
+    gen = time.perf_counter() - t
+    gages.write_text(text)
+    return scan, gages, gen, tmp
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--sizes", default="50,200", help="millions of points, comma separated")
@@ -239,6 +297,13 @@ def main() -> None:
     ap.add_argument("--dir", default=None)
     ap.add_argument("--cold", action="store_true", help="drop the page cache before each run (root)")
     ap.add_argument("--modes", default=",".join(m for m, _ in MODES))
+    ap.add_argument("--repeat", type=int, default=1, help="runs of each streamed mode, alternated with the disk reads")
+    ap.add_argument("--keep", action="store_true",
+                    help="keep the generated scans in --dir (scan_NM.ply; a scan found there is always reused)")
+    ap.add_argument("--inflight", type=int, default=2,
+                    help="O_DIRECT requests of 16 MiB in flight for the disk's speed (1: one at a time, as before)")
+    ap.add_argument("--ref-gb", type=float, default=0.0,
+                    help="read only the first GB of the file for the disk's speed (default: the whole file)")
     ap.add_argument("--dask", action="store_true",
                     help="only the Dask line: gage batch of 16 scans of 50 M points (float32 PLY, 9.6 GB of disk) "
                          "on a local cluster of 2 workers with a 3 GB memory limit each")
@@ -252,19 +317,20 @@ def main() -> None:
     # --huge adds 1000 once (``--sizes 1000 --huge`` does not write the 24 GB file twice)
     sizes = list(dict.fromkeys([int(s) for s in args.sizes.split(",") if s] + ([1000] if args.huge else [])))
     modes = [m for m in MODES if m[0] in args.modes.split(",")]
+    limit = int(args.ref_gb * 1e9)
     print(f"# load average at start: {' '.join(f'{x:.1f}' for x in os.getloadavg())} ({os.cpu_count()} cores); "
-          "cpu s: the child's user + system time (less sensitive to a shared machine than the wall time)")
+          "cpu s: the child's user + system time (less sensitive to a shared machine than the wall time); "
+          "cores: cpu s / time s")
+    print(f"# disk: O_DIRECT reads of 16 MiB, {args.inflight} in flight; the disk's read speed, read beside each streamed run ({'just before and just after it' if not args.cold else 'O_DIRECT just before, buffered after a cache drop just after'}): "
+          f"the faster of the plain sequential reads of the {'whole file' if not limit else f'first {args.ref_gb:g} GB'}")
     print(f"{'case':<22}{'mode':<13}{'time s':>9}{'cpu s':>9}{'peak RSS MB':>13}{'objective':>22}  "
           "equal to the first mode")
     for millions in sizes:
         n = millions * 1_000_000
-        with tempfile.TemporaryDirectory(dir=args.dir) as d:
-            scan, gages = Path(d) / "scan.ply", Path(d) / "gages.toml"
-            t = time.perf_counter()
-            gages.write_text(write_scan(scan, n))
-            gen = time.perf_counter() - t
+        scan, gages, gen, tmp = scan_file(args.dir, millions, args.keep)
+        try:
             size_gb = scan.stat().st_size / 1e9
-            print(f"# {millions} M points, {size_gb:.1f} GB PLY, written in {gen:.0f} s")
+            print(f"# {millions} M points, {size_gb:.1f} GB PLY, {'reused' if gen is None else f'written in {gen:.0f} s'}")
             ref = None
             ram = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
             for mode, memory in modes:
@@ -272,20 +338,35 @@ def main() -> None:
                     print(f"# whole read skipped: {n * 24 / 1e9:.0f} GB of float64 points on a {ram / 2**30:.0f} GiB "
                           "machine; the streamed modes are compared with each other")
                     continue
-                if args.cold:
-                    drop_caches()
-                seconds, cpu, rss, res = run_child(scan, gages, memory)
-                ref = res if ref is None else ref
-                same = "yes" if res == ref else "NO"
-                print(f"{millions:>4} M points{'':<10}{mode:<13}{seconds:>9.1f}{cpu:>9.1f}{rss:>13.0f}"
-                      f"{res['objective']:>22.15g}  {same}   load {os.getloadavg()[0]:.1f}, "
-                      f"{scan.stat().st_size / 1e6 / seconds:.0f} MB/s of file, {cpu / n * 1e9:.0f} ns CPU a point",
-                      flush=True)
-            if args.cold:
-                print(f"# disk: sequential read of the file after dropping the cache: {disk_speed(scan):.0f} MB/s")
-            else:
-                print(f"# disk: O_DIRECT sequential read of the file's first 4 GB (past the page cache): "
-                      f"{disk_speed_direct(scan):.0f} MB/s; load {os.getloadavg()[0]:.1f}", flush=True)
+                for _ in range(args.repeat if mode != "whole" else 1):
+                    # the disk's speed next to the check: O_DIRECT just before it; after it,
+                    # the buffered read after a cache drop (cold) or O_DIRECT again (warm:
+                    # the cache is left as the check left it)
+                    before = disk_speed_direct(scan, limit, args.inflight) if mode != "whole" else float("nan")
+                    if args.cold:
+                        drop_caches()
+                    load = os.getloadavg()[0]
+                    seconds, cpu, rss, res = run_child(scan, gages, memory)
+                    load = max(load, os.getloadavg()[0])
+                    ref = res if ref is None else ref
+                    same = "yes" if res == ref else "NO"
+                    speed = scan.stat().st_size / 1e6 / seconds
+                    print(f"{millions:>4} M points{'':<10}{mode:<13}{seconds:>9.1f}{cpu:>9.1f}{rss:>13.0f}"
+                          f"{res['objective']:>22.15g}  {same}   load {load:.1f}, {speed:.0f} MB/s of file, "
+                          f"{cpu / n * 1e9:.0f} ns CPU a point, {cpu / seconds:.2f} cores{' (--cold)' if args.cold else ''}",
+                          flush=True)
+                    if mode == "whole":
+                        continue
+                    if args.cold and not limit:
+                        after, how = disk_speed(scan), "buffered after a cache drop"
+                    else:
+                        after, how = disk_speed_direct(scan, limit, args.inflight), "O_DIRECT"
+                    disk = max(before, after)
+                    print(f"# disk: O_DIRECT {before:.0f} MB/s before, {how} {after:.0f} MB/s after: "
+                          f"the check at {speed / disk:.2f} of the faster ({speed:.0f} / {disk:.0f} MB/s)", flush=True)
+        finally:
+            if tmp is not None:
+                tmp.cleanup()
 
 
 if __name__ == "__main__":

@@ -358,3 +358,33 @@ def test_a_one_pass_gage_check_equals_the_whole_read(monkeypatch, shell):
     # the first chunk's guess, then one pass with the datum, core and shell boxes; a second
     # pass over the gage regions only when the shell is too thin
     assert len(passes) == (2 if shell == 0.1 else 3)
+
+
+def test_the_streamed_sample_is_the_bottom_k_of_every_inside_point():
+    """A region's picture sample, streamed in chunks with the keys filtered in Rust below
+    the largest held, holds the ``sample`` points of the smallest keys among every inside
+    point, as keying the whole region at once; the keys are the SplitMix64 numpy form's
+    bits, also for numbers above 2^32 and a negative seed."""
+    from gagekit.cloud.regions import Box, classify
+    from gagekit.cloud.streamed import cut_stream, sample_keys
+
+    ids = np.array([0, 1, 7, 2**32 + 5, 2**40 + 3, 2**62 + 11], dtype=np.int64)
+    for seed in (0, 4, -3, 2**70 + 1):
+        with np.errstate(over="ignore"):
+            z = ids.astype(np.uint64) * np.uint64(0x9E3779B97F4A7C15) + np.uint64((seed * 0xD1B54A32D192ED03 + 1) % (1 << 64))
+            z ^= z >> np.uint64(30)
+            z *= np.uint64(0xBF58476D1CE4E5B9)
+            z ^= z >> np.uint64(27)
+            z *= np.uint64(0x94D049BB133111EB)
+            z ^= z >> np.uint64(31)
+        assert sample_keys(seed, ids).tobytes() == ((z >> np.uint64(11)).astype(np.float64) * (1.0 / (1 << 53))).tobytes()
+    pts = np.ascontiguousarray(read_cloud(DATA / "casting_ok.ply").points[::7])
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    box = Box(tuple((lo + hi) / 2), tuple((hi - lo) * 0.7), rotation=(0.1, 0.2, 0.3), name="a")
+    inside = classify(pts, [box])[0]
+    for size, chunk in [(50, 997), (50, 31), (len(inside) + 5, 4001)]:
+        p = cut_stream([pts[i:i + chunk] for i in range(0, len(pts), chunk)], [box], ["hull"], sample=size, seed=9)
+        want = np.sort(inside[np.argsort(sample_keys(9, inside), kind="stable")[:size]])
+        r = p["a"]
+        assert np.array_equal(np.sort(r.sample_idx), want)
+        assert r.sample_points().tobytes() == pts[want].tobytes()

@@ -105,10 +105,12 @@ class StreamedRegion:
         seeded key (:func:`sample_keys`, a function of its number: the same sample in any
         chunk order), the ``size`` smallest stay. Once ``size`` are held, a key above the
         largest held cannot enter: only the others are kept."""
-        keys = sample_keys(seed, ids)
-        if self.sample_keys is not None and len(self.sample_keys) >= size:
-            lower = keys < self.sample_keys.max()
-            keys, ids, pts = keys[lower], ids[lower], pts[lower]
+        below = self.sample_keys.max() if self.sample_keys is not None and len(self.sample_keys) >= size \
+            else np.inf
+        # the keys below the largest held, in Rust (no temporaries the size of ``ids``)
+        pos, keys = _core.cloud.sample_keys_below(np.ascontiguousarray(ids, dtype=np.int64), seed % (1 << 64), below)
+        if len(pos) < len(ids):
+            ids, pts = ids[pos], pts[pos]
         if self.sample_keys is None:
             self.sample_keys, self.sample_idx, self.sample_pts = keys, ids, pts
         else:
@@ -130,15 +132,8 @@ class StreamedRegion:
 def sample_keys(seed: int, ids: np.ndarray) -> np.ndarray:
     """Keys in [0, 1) of the point numbers ``ids`` for ``seed``: the SplitMix64 finalizer of
     the number mixed with the seed (53 bits), one key per point whatever the order the
-    points come in."""
-    with np.errstate(over="ignore"):
-        z = ids.astype(np.uint64) * np.uint64(0x9E3779B97F4A7C15) + np.uint64((seed * 0xD1B54A32D192ED03 + 1) % (1 << 64))
-        z ^= z >> np.uint64(30)
-        z *= np.uint64(0xBF58476D1CE4E5B9)
-        z ^= z >> np.uint64(27)
-        z *= np.uint64(0x94D049BB133111EB)
-        z ^= z >> np.uint64(31)
-    return (z >> np.uint64(11)).astype(np.float64) * (1.0 / (1 << 53))
+    points come in (``_core.cloud.sample_keys_below``)."""
+    return _core.cloud.sample_keys_below(np.ascontiguousarray(ids, dtype=np.int64), seed % (1 << 64), np.inf)[1]
 
 
 @dataclass
@@ -238,7 +233,10 @@ def cut_stream(chunks: Iterable[np.ndarray], boxes: Sequence[Box], keep: Sequenc
     for k, r in enumerate(regions):
         if flags and flags[k]:
             r.moments = state[k].copy()
-    return Pass(n, [r.finish() for r in regions])
+    # the last hulls of the piled-up points, two regions at a time (the hull holds no GIL):
+    # nothing else runs after the last chunk
+    with ThreadPoolExecutor(2, thread_name_prefix="gagekit-regions") as ex:
+        return Pass(n, list(ex.map(StreamedRegion.finish, regions)))
 
 
 def hull_stream(chunks: Iterable[np.ndarray]) -> tuple[int, np.ndarray, np.ndarray]:

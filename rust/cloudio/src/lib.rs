@@ -16,6 +16,7 @@ pub mod e57;
 mod e57_fast;
 pub mod e57_stream;
 pub mod ply;
+pub mod sample;
 pub mod scale;
 pub mod stream;
 
@@ -36,6 +37,7 @@ pub use e57::{read_e57, E57Points};
 pub use e57_stream::E57Stream;
 pub use ply::{read_ply, read_ply_file, PlyAsciiStream, PlyFile, PlyPoints, VertexRecords};
 pub use stream::{AsciiStream, PlyStream};
+pub use sample::{keys_below, sample_key};
 pub use scale::scale_in_place;
 
 #[cfg(test)]

@@ -12,11 +12,14 @@
 use crate::ascii::{ascii_layout, check_no_nul, parse_body, AsciiOptions, Layout};
 use crate::ply::{PlyFile, VertexRecords};
 use gagekit_core::{GkError, Result};
-use rayon::prelude::*;
 use std::fs::File;
 use std::io::Read;
 use std::os::unix::fs::FileExt;
 use std::path::Path;
+
+/// Points read by one positioned read of a float64 PLY (768 KiB: the block is checked
+/// finite while the core's cache holds it).
+const READ_BLOCK: usize = 1 << 15;
 
 fn io_error(what: &str) -> impl Fn(std::io::Error) -> GkError + '_ {
     move |e| crate::read_error(what, e)
@@ -240,18 +243,21 @@ impl PlyStream {
         }
         self.read = Some((at, (m * self.rec.stride) as u64));
         if self.rec.is_f64_xyz() && cfg!(target_endian = "little") {
-            // the records are the points: read them straight into the output
-            // SAFETY: any 8 bytes are a valid f64 bit pattern; the slice covers `out` exactly.
-            let bytes = unsafe { std::slice::from_raw_parts_mut(out.as_mut_ptr().cast::<u8>(), 24 * m) };
-            self.file.read_exact_at(bytes, at).map_err(io_error(&self.what))?;
-            if let Some(i) = out.par_chunks(1 << 16).position_first(|c| c.iter().any(|v| !v.is_finite())).map(|c| {
-                c * (1 << 16) + out[c * (1 << 16)..].iter().position(|v| !v.is_finite()).unwrap_or(0)
-            }) {
-                return Err(GkError::file_format(format!(
-                    "{}: vertex {} has a non-finite coordinate (NaN or inf)",
-                    self.what,
-                    self.next + i / 3
-                )));
+            // the records are the points: read them straight into the output, a block at a
+            // time, each block checked finite while the core's cache still holds it (one
+            // pass over memory instead of a read and a second pass to check)
+            for (b, block) in out.chunks_mut(3 * READ_BLOCK).enumerate() {
+                // SAFETY: any 8 bytes are a valid f64 bit pattern; the slice covers `block` exactly.
+                let bytes = unsafe { std::slice::from_raw_parts_mut(block.as_mut_ptr().cast::<u8>(), 8 * block.len()) };
+                self.file.read_exact_at(bytes, at + (24 * b * READ_BLOCK) as u64).map_err(io_error(&self.what))?;
+                if !block.iter().fold(true, |ok, v| ok & v.is_finite()) {
+                    let i = b * READ_BLOCK + block.iter().position(|v| !v.is_finite()).unwrap_or(0) / 3;
+                    return Err(GkError::file_format(format!(
+                        "{}: vertex {} has a non-finite coordinate (NaN or inf)",
+                        self.what,
+                        self.next + i
+                    )));
+                }
             }
         } else {
             self.buf.resize(m * self.rec.stride, 0);
@@ -304,6 +310,36 @@ mod tests {
         let want = parse_ascii(&bad, &AsciiOptions::default(), "s").unwrap_err().message;
         for block in [1, 100, 1 << 20] {
             assert_eq!(drain_ascii(&p, block).unwrap_err().message, want);
+        }
+    }
+
+    /// A non-finite coordinate is the same error (the vertex named in the whole file)
+    /// whether it lies in the first read block of a range or a later one, and whatever
+    /// range it is read in.
+    #[test]
+    fn a_non_finite_vertex_is_named_in_any_block() {
+        let n = 2 * READ_BLOCK + 100;
+        for bad in [0, 7, READ_BLOCK - 1, READ_BLOCK, READ_BLOCK + 5, n - 1] {
+            let mut b = format!("ply\nformat binary_little_endian 1.0\nelement vertex {n}\nproperty double x\nproperty double y\nproperty double z\nend_header\n").into_bytes();
+            for i in 0..3 * n {
+                let v = if i == 3 * bad + 2 { f64::NAN } else { i as f64 * 0.5 };
+                b.extend_from_slice(&v.to_le_bytes());
+            }
+            let p = tmp(&format!("nan{bad}.ply"), &b);
+            let want = format!("s: vertex {bad} has a non-finite coordinate (NaN or inf)");
+            let mut s = PlyStream::open(&p, "s").unwrap().unwrap();
+            assert_eq!(s.next_into(&mut vec![0.0; 3 * n]).unwrap_err().message, want);
+            let mut s = PlyStream::open(&p, "s").unwrap().unwrap();
+            let step = READ_BLOCK / 2 + 3;
+            let mut got = None;
+            for start in (0..n).step_by(step) {
+                s.seek(start);
+                if let Err(e) = s.next_into(&mut vec![0.0; 3 * step]) {
+                    got = Some((start, e.message));
+                    break;
+                }
+            }
+            assert_eq!(got, Some((bad / step * step, want)));
         }
     }
 

@@ -109,4 +109,14 @@ fn main() {
     println!("distances cpu {:.2} s ({:.0} ns/pt)", cpu() - c2, (cpu() - c2) * 1e9 / n as f64);
     let s: f64 = d.distance.iter().map(|x| x.abs()).sum();
     println!("distances {:.3} s ({:.1} ns/pt wall), sum|d| {:.6}", el, el * 1e9 / n as f64, s);
+    // the outputs' fingerprints (std's SipHash with its fixed keys): any change of a bit shows
+    use std::hash::{Hash, Hasher};
+    let fp = |f: &dyn Fn(&mut std::hash::DefaultHasher)| {
+        let mut h = std::hash::DefaultHasher::new();
+        f(&mut h);
+        h.finish()
+    };
+    let hd = fp(&|h| d.distance.iter().map(|x| x.to_bits()).collect::<Vec<u64>>().hash(h));
+    let ht = fp(&|h| d.triangle.hash(h));
+    println!("hash distance {hd:016x} triangle {ht:016x}");
 }

@@ -2,7 +2,7 @@
 
 use crate::arrays::{indices, matrix, rows, values};
 use crate::errors::{invalid, run};
-use gagekit_cloudio::{cut_chunk, data_columns, merged_scatter, Moments, MOMENTS_LEN, read_ascii_file, scale_in_place, Keep, PlyAsciiStream, read_e57, write_ascii, AsciiOptions, AsciiStream, E57Stream, PlyFile, PlyStream};
+use gagekit_cloudio::{keys_below, cut_chunk, data_columns, merged_scatter, Moments, MOMENTS_LEN, read_ascii_file, scale_in_place, Keep, PlyAsciiStream, read_e57, write_ascii, AsciiOptions, AsciiStream, E57Stream, PlyFile, PlyStream};
 use gagekit_core::GkError;
 use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyReadwriteArray2};
 use pyo3::prelude::*;
@@ -422,6 +422,24 @@ fn cloud_moments_scatter<'py>(
     Ok((s.n, PyArray1::from_vec(py, s.mean.to_vec()), matrix(py, s.scatter.concat(), 3)?))
 }
 
+/// The positions (ascending) in `ids` (point numbers) whose seeded sample key is below
+/// `below` (every position for an infinite `below`), and those keys: the SplitMix64
+/// finalizer of the number mixed with `seed` (modulo 2^64), its top 53 bits as a fraction
+/// in [0, 1) (`gagekit-cloudio`'s `keys_below`, one pass without the GIL).
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyfunction(module = "gagekit._core.cloud"))]
+#[pyfunction]
+#[pyo3(name = "sample_keys_below")]
+fn cloud_sample_keys_below<'py>(
+    py: Python<'py>,
+    ids: PyReadonlyArray1<'py, i64>,
+    seed: u64,
+    below: f64,
+) -> PyResult<(Bound<'py, PyArray1<i64>>, Bound<'py, PyArray1<f64>>)> {
+    let ids = ids.as_slice().map_err(|_| invalid("ids: expected a contiguous int64 array"))?;
+    let (pos, keys) = run(py, || Ok(keys_below(seed, ids, below)))?;
+    Ok((indices(py, pos), PyArray1::from_vec(py, keys)))
+}
+
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<AsciiChunks>()?;
     m.add_class::<PlyChunks>()?;
@@ -430,6 +448,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(cloud_moments_scatter, m)?)?;
     m.add_function(wrap_pyfunction!(cloud_ply_chunks, m)?)?;
     m.add_function(wrap_pyfunction!(cloud_cut_chunk, m)?)?;
+    m.add_function(wrap_pyfunction!(cloud_sample_keys_below, m)?)?;
     m.add_class::<PlyAsciiChunks>()?;
     m.add_function(wrap_pyfunction!(cloud_ply_ascii_chunks, m)?)?;
     m.add_class::<AsciiCloud>()?;

@@ -26,6 +26,7 @@ __all__ = [
     "read_ascii",
     "read_e57",
     "read_ply",
+    "sample_keys_below",
     "scale_in_place",
     "write_ascii",
 ]
@@ -264,6 +265,14 @@ def read_ply(path: builtins.str) -> PlyCloud:
     r"""
     Read the vertices of a PLY file (memory-mapped), decoded straight into numpy's
     allocation (one pass, no copy).
+    """
+
+def sample_keys_below(ids: numpy.typing.NDArray[numpy.int64], seed: builtins.int, below: builtins.float) -> tuple[numpy.typing.NDArray[numpy.int64], numpy.typing.NDArray[numpy.float64]]:
+    r"""
+    The positions (ascending) in `ids` (point numbers) whose seeded sample key is below
+    `below` (every position for an infinite `below`), and those keys: the SplitMix64
+    finalizer of the number mixed with `seed` (modulo 2^64), its top 53 bits as a fraction
+    in [0, 1) (`gagekit-cloudio`'s `keys_below`, one pass without the GIL).
     """
 
 def scale_in_place(points: numpy.typing.NDArray[numpy.float64], scale: typing.Sequence[builtins.float], what: builtins.str) -> None:
