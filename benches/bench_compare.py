@@ -17,11 +17,12 @@ plus 2 % far points (up to 5 mm), written as a binary PLY (float64). Cases:
 
 Agreement: the largest |difference| of the distances, gagekit vs each peer.
 Prints one line per case: case, gagekit time, peer time, ratio (peer / gagekit).
-Run: python benches/bench_compare.py [--quick]   (--quick: 1.4 M points, 100 k triangles)
+Run: python benches/bench_compare.py [--quick] [--cases distances,c2m,best-fit]   (--quick: 1.4 M points, 100 k triangles)
 """
 
 from __future__ import annotations
 
+import argparse
 import math
 import os
 import shutil
@@ -101,7 +102,11 @@ def main() -> None:
     from gagekit import _core
     from gagekit.cad import read_cad
 
-    quick = "--quick" in sys.argv
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--quick", action="store_true", help="1.4 M points, 100 k triangles")
+    ap.add_argument("--cases", default="distances,c2m,best-fit", help="comma separated: distances, c2m, best-fit")
+    args = ap.parse_args()
+    quick = args.quick
     n_pts = 1_400_000 if quick else 14_000_000
     nu, nv = (500, 100) if quick else (1000, 500)
     work = Path(tempfile.mkdtemp(prefix="bench_compare."))
@@ -118,7 +123,7 @@ def main() -> None:
             m = _core.mesh.Mesh(v, t)
             return m.distances(pts)[0]
 
-        only = next((a.split("=", 1)[1].split(",") for a in sys.argv if a.startswith("--cases=")), ["distances", "c2m", "best-fit"])
+        only = args.cases.split(",")
         if "distances" in only:
             t_ours, c_ours, d_ours = timed_cpu(ours)
             try:
