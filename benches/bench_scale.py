@@ -80,10 +80,9 @@ def ply_header(n: int) -> bytes:
     return header.replace("bench_scale", "bench_scale" + " " * pad).encode("ascii")
 
 
-def write_scan(path: Path, n: int, seed: int = 0) -> str:
-    """The casting sampled once, then passes with fresh noise until ``n`` points; returns
-    the gage file text."""
-    base, doc = make_casting("casting_ok", density=BASE_DENSITY)
+def write_scan(path: Path, n: int, base: np.ndarray, seed: int = 0) -> None:
+    """The casting's points ``base`` (sampled once), then passes with fresh noise until
+    ``n`` points."""
     rng = np.random.default_rng(seed)
     with open(path, "wb") as fh:
         fh.write(ply_header(n))
@@ -93,7 +92,6 @@ def write_scan(path: Path, n: int, seed: int = 0) -> str:
             block = base[:k] + rng.normal(0.0, 0.005, (k, 3))
             block.astype("<f8").tofile(fh)
             left -= k
-    return to_toml(doc, "bench_scale: casting_ok gages")
 
 
 def run_child(scan: Path, gages: Path, memory: str) -> tuple[float, float, float, dict]:
@@ -284,7 +282,7 @@ def scan_file(folder: str, millions: int, keep: bool):
     d = Path(tmp.name) if tmp else kept.parent
     scan, gages = d / kept.name, d / "gages.toml"
     t = time.perf_counter()
-    write_scan(scan, n)
+    write_scan(scan, n, base)
     gen = time.perf_counter() - t
     gages.write_text(text)
     return scan, gages, gen, tmp

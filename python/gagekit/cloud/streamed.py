@@ -108,7 +108,7 @@ class StreamedRegion:
         below = self.sample_keys.max() if self.sample_keys is not None and len(self.sample_keys) >= size \
             else np.inf
         # the keys below the largest held, in Rust (no temporaries the size of ``ids``)
-        pos, keys = _core.cloud.sample_keys_below(np.ascontiguousarray(ids, dtype=np.int64), seed % (1 << 64), below)
+        pos, keys = keys_below(seed, ids, below)
         if len(pos) < len(ids):
             ids, pts = ids[pos], pts[pos]
         if self.sample_keys is None:
@@ -133,7 +133,13 @@ def sample_keys(seed: int, ids: np.ndarray) -> np.ndarray:
     """Keys in [0, 1) of the point numbers ``ids`` for ``seed``: the SplitMix64 finalizer of
     the number mixed with the seed (53 bits), one key per point whatever the order the
     points come in (``_core.cloud.sample_keys_below``)."""
-    return _core.cloud.sample_keys_below(np.ascontiguousarray(ids, dtype=np.int64), seed % (1 << 64), np.inf)[1]
+    return keys_below(seed, ids, np.inf)[1]
+
+
+def keys_below(seed: int, ids: np.ndarray, below: float) -> tuple[np.ndarray, np.ndarray]:
+    """(positions, keys) of the points ``ids`` whose :func:`sample_keys` key is below
+    ``below``, in one pass in Rust (no temporaries the size of ``ids``)."""
+    return _core.cloud.sample_keys_below(np.ascontiguousarray(ids, dtype=np.int64), seed % (1 << 64), below)
 
 
 @dataclass

@@ -96,9 +96,9 @@ pub(super) fn fit_near_in(
 /// distance `dist` each criterion needs (MCC: the 2k largest; MIC: the 2k smallest and
 /// k largest; MZC: k of each).
 ///
-/// The order is total (ties by index), so these sets are unique: on many points two
-/// one linear pass finds them (`gagekit_core::select::extremes`; the same sets as a full sort, whose order the
-/// active-subset iteration does not read: it sorts the subset by index).
+/// The order is total (ties by index), so these sets are unique: on many points one
+/// linear pass finds them (`gagekit_core::select::extremes`; the same sets as a full sort,
+/// whose order the active-subset iteration does not read: it sorts the subset by index).
 fn first_subset(dist: &[f64], crit: Criterion) -> Vec<usize> {
     let n = dist.len();
     let k = SUBSET_EXTREMES;
