@@ -271,8 +271,9 @@ def test_a_reused_ply_chunk_is_valid_until_the_next_is_read():
 
 
 def test_read_ahead_reads_the_next_chunk_while_this_one_is_held():
-    """``_read_ahead`` yields (i, read(i)) in order until read(i) is 0, and has already
-    started read(i + 1) when it hands out i."""
+    """``_read_ahead`` yields (i, read(i)) in order until read(i) reads no point (its
+    (offset, points) pair has 0 points), and has already started read(i + 1) when it
+    hands out i."""
     import threading
 
     from gagekit.cloud.stream import _read_ahead
@@ -284,14 +285,14 @@ def test_read_ahead_reads_the_next_chunk_while_this_one_is_held():
         started.append(i)
         if i == 1:
             reading.set()
-        return sizes[i]
+        return 8 * i, sizes[i]
 
     got = []
     for i, k in _read_ahead(read):
         if i == 0:
             assert reading.wait(5), "read(1) did not start while chunk 0 was held"
         got.append((i, k))
-    assert got == [(0, 5), (1, 3), (2, 2)] and started == [0, 1, 2, 3]
+    assert got == [(0, (0, 5)), (1, (8, 3)), (2, (16, 2))] and started == [0, 1, 2, 3]
 
 
 @pytest.mark.parametrize("chunk", [1, 97, 4999])
@@ -332,6 +333,45 @@ def test_a_backward_pass_keeps_what_a_forward_pass_keeps(tmp_path, chunk, monkey
     # the moments need file order: a pass summing them reads forward
     assert cut_stream(s, boxes[:1], ["hull"], moments=[True], backward=True)["a"].moments.tobytes() == \
         cut_stream(s, boxes[:1], ["hull"], moments=[True])["a"].moments.tobytes()
+
+
+@pytest.mark.parametrize("chunk", [333, 4999])
+def test_reads_past_the_page_cache_equal_the_buffered_reads(tmp_path, chunk, monkeypatch):
+    """A float64 PLY read past the page cache (O_DIRECT: what a file larger than half the
+    memory gets) gives the buffered read's chunks, forward and from the end back, and the
+    same gage check to the bit (the header padded to a multiple of 8 bytes, so the points
+    can land in place)."""
+    from gagekit import _core
+    from gagekit.gage.analysis import check_gages_stream
+
+    pts = read_cloud(DATA / "casting_ok.ply").points
+    header = (f"ply\nformat binary_little_endian 1.0\ncomment c\nelement vertex {len(pts)}\nproperty double x\n"
+              "property double y\nproperty double z\nend_header\n")
+    header = header.replace("comment c", "comment c" + " " * (-len(header) % 8))
+    path = tmp_path / "direct.ply"
+    path.write_bytes(header.encode() + pts.astype("<f8").tobytes())
+    spec = DATA / "casting_ok.toml"
+    buffered = _core.cloud.ply_chunks(str(path), direct=False)
+    assert not buffered.direct
+    want_chunks = [c.copy() for c in open_cloud(path, chunk=chunk).reusing()]
+    want_back = [(k, c.copy()) for k, c in open_cloud(path, chunk=chunk).backward()]
+    want = check_gages_stream(open_cloud(path, chunk=chunk), spec).to_dict()
+
+    made = []
+    real = _core.cloud.ply_chunks
+
+    def direct(p, direct=None):
+        made.append(real(p, direct=True))
+        return made[-1]
+
+    monkeypatch.setattr(_core.cloud, "ply_chunks", direct)
+    got_chunks = [c.copy() for c in open_cloud(path, chunk=chunk).reusing()]
+    assert made and all(s.direct for s in made)  # ext4, the tests' file system, has O_DIRECT
+    assert len(got_chunks) == len(want_chunks) and all(same(a, b) for a, b in zip(got_chunks, want_chunks))
+    got_back = [(k, c.copy()) for k, c in open_cloud(path, chunk=chunk).backward()]
+    assert [k for k, _ in got_back] == [k for k, _ in want_back]
+    assert all(same(a, b) for (_, a), (_, b) in zip(got_back, want_back))
+    assert check_gages_stream(open_cloud(path, chunk=chunk), spec).to_dict() == want
 
 
 @pytest.mark.parametrize("shell", [0.1, 1e-9])

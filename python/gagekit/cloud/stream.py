@@ -16,6 +16,8 @@ XYZ/CSV/TXT/ASC/PTS/.ds   Rust ``AsciiStream``: blocks cut after a line break, e
 PLY binary                Rust ``PlyStream``: ranges of vertex records by positioned reads,
                           decoded in parallel (every element of fixed-size records: the
                           header's sizes are checked first, as a whole read checks them).
+                          A float64 file larger than half the memory is read past the page
+                          cache (O_DIRECT) straight into the chunk's buffer.
 PLY ASCII                 Rust ``PlyAsciiStream``: a first pass counts the body's lines against
                           the header (the whole read's check), then blocks of vertex lines,
                           each parsed in parallel (faces after the vertices are not read).
@@ -287,34 +289,40 @@ def _open_format(p: Path, suffix: str, m: int):
             held: list = []
 
             def buffers() -> tuple:
-                # two buffers in turn, made once and kept for every pass (fresh pages
-                # cost more than the copy into them): the next chunk is read (in a
+                # two byte buffers in turn, made once and kept for every pass (fresh
+                # pages cost more than the copy into them): the next chunk is read (in a
                 # thread, no GIL held) while the consumer uses this one, which stays
-                # valid until it asks for the next
+                # valid until it asks for the next. Room for whole aligned blocks around
+                # the points: a file larger than the page cache is read past it
+                # (O_DIRECT, PlyStream.next_direct), straight into the buffer
                 if not held:
                     size = min(m, max(1, count))
-                    held.extend((np.empty((size, 3)), np.empty((size, 3))))
+                    held.extend(np.empty(24 * size + _DIRECT_SLACK, dtype=np.uint8) for _ in range(2))
                 return held[0], held[1]
+
+            def points_at(buf: np.ndarray, got: tuple) -> np.ndarray:
+                at, k = got
+                return buf[at:at + 24 * k].view(np.float64).reshape(k, 3)
 
             def ply_chunks_reused() -> Iterator[np.ndarray]:
                 s = _core.cloud.ply_chunks(str(p))
                 bufs = buffers()
-                for i, k in _read_ahead(lambda i: s.next_into(bufs[i % 2])):
-                    yield bufs[i % 2][:k]
+                for i, got in _read_ahead(lambda i: s.next_direct(bufs[i % 2], m)):
+                    yield points_at(bufs[i % 2], got)
 
             def ply_chunks_backward() -> Iterator[tuple[int, np.ndarray]]:
                 s = _core.cloud.ply_chunks(str(p))
                 bufs = buffers()
                 starts = list(range(0, count, m))[::-1]
 
-                def read(i: int) -> int:
+                def read(i: int) -> tuple:
                     if i >= len(starts):
-                        return 0
+                        return (0, 0)
                     s.seek(starts[i])
-                    return s.next_into(bufs[i % 2][:min(m, count - starts[i])])
+                    return s.next_direct(bufs[i % 2], min(m, count - starts[i]))
 
-                for i, k in _read_ahead(read):
-                    yield starts[i], bufs[i % 2][:k]
+                for i, got in _read_ahead(read):
+                    yield starts[i], points_at(bufs[i % 2], got)
 
             ply_chunks.reusing = ply_chunks_reused  # type: ignore[attr-defined]
             ply_chunks.backward = ply_chunks_backward  # type: ignore[attr-defined]
@@ -338,15 +346,21 @@ def _open_format(p: Path, suffix: str, m: int):
     raise FileFormatError(f"{p}: cannot stream '{suffix}' files")  # pragma: no cover - suffixes above are all
 
 
-def _read_ahead(read: Callable[[int], int]) -> Iterator[tuple[int, int]]:
-    """(i, read(i)) for i = 0, 1, ... until read(i) is 0, with read(i + 1) running in a
+_DIRECT_SLACK = 12288
+"""Bytes of a read buffer beyond its points: the whole aligned blocks of an O_DIRECT read
+around them (``_core.cloud.PlyChunks.next_direct``)."""
+
+
+def _read_ahead(read: Callable[[int], tuple]) -> Iterator[tuple[int, tuple]]:
+    """(i, read(i)) for i = 0, 1, ... until read(i) reads no point ((offset, points
+    read) pairs, 0 points at the end), with read(i + 1) running in a
     thread while the consumer holds (i, read(i)): the file's reading overlaps the work on
     the chunk before (the disk and the page-cache copies run while the cores classify)."""
     from concurrent.futures import ThreadPoolExecutor
 
     with ThreadPoolExecutor(1, thread_name_prefix="gagekit-read-ahead") as ex:
         i, fut = 0, ex.submit(read, 0)
-        while k := fut.result():
+        while (k := fut.result())[1]:
             fut = ex.submit(read, i + 1)
             yield i, k
             i += 1

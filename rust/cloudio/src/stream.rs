@@ -7,7 +7,9 @@
 //!   columns) decided once from the top of the file, as the whole read decides it.
 //! - [`PlyStream`]: binary PLY whose elements all have fixed-size records: ranges of
 //!   vertex records read with positioned reads (no memory map kept: the pages read
-//!   never count towards the process's resident memory) and decoded in parallel.
+//!   never count towards the process's resident memory) and decoded in parallel; a
+//!   float64 file larger than the page cache can hold is read past it (`O_DIRECT`,
+//!   [`PlyStream::next_direct`]): no copy from the cache, no page to allocate and drop.
 
 use crate::ascii::{ascii_layout, check_no_nul, parse_body, AsciiOptions, Layout};
 use crate::ply::{PlyFile, VertexRecords};
@@ -116,6 +118,44 @@ pub struct PlyStream {
     /// (memory 0: never drop, as on systems other than Linux).
     file_len: u64,
     mem: u64,
+    /// The file opened a second time with `O_DIRECT` (Linux), for [`PlyStream::next_direct`]
+    /// on a file larger than the page cache can hold: the device writes the records
+    /// straight into the caller's buffer, with no page-cache copy, no page to allocate,
+    /// account and drop again. `None`: every read goes through the page cache.
+    direct: Option<File>,
+}
+
+/// Alignment of the memory, file offsets and lengths of an `O_DIRECT` read (the largest
+/// logical block size of common devices).
+pub const DIRECT_ALIGN: usize = 4096;
+
+/// Read at least `need` bytes of `file` from `at` into `area` (aligned reads of whole
+/// blocks); false when the file ends before.
+fn read_direct(file: &File, area: &mut [u8], at: u64, need: usize) -> std::io::Result<bool> {
+    let mut got = 0;
+    while got < need {
+        match file.read_at(&mut area[got..], at + got as u64) {
+            Ok(0) => return Ok(false),
+            Ok(n) => got += n,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+            Err(e) => return Err(e),
+        }
+    }
+    Ok(true)
+}
+
+/// Open `path` for `O_DIRECT` reads, or `None` where the system or the file system has none.
+fn open_direct(path: &Path) -> Option<File> {
+    #[cfg(target_os = "linux")]
+    {
+        use std::os::unix::fs::OpenOptionsExt;
+        std::fs::OpenOptions::new().read(true).custom_flags(libc::O_DIRECT).open(path).ok()
+    }
+    #[cfg(not(target_os = "linux"))]
+    {
+        let _ = path;
+        None
+    }
 }
 
 /// The byte range (start, length) of the page cache to drop once a stream has read the
@@ -194,7 +234,27 @@ impl PlyStream {
         advise(&file, 0, 0, Advice::Sequential);
         let file_len = file.metadata().map_or(0, |m| m.len());
         let mem = physical_memory();
-        Ok(Some(PlyStream { file, what: what.to_string(), rec, next: 0, buf: Vec::new(), read: None, file_len, mem }))
+        let mut s = PlyStream { file, what: what.to_string(), rec, next: 0, buf: Vec::new(), read: None, file_len, mem, direct: None };
+        // a file the page cache cannot hold is read past it (its pages would only be
+        // dropped again: see consumed_to_drop)
+        let large = mem > 0 && file_len > mem / 2;
+        s.set_direct(path, large);
+        Ok(Some(s))
+    }
+
+    /// Read the records past the page cache (`O_DIRECT`) in [`PlyStream::next_direct`], or
+    /// not. Only float64 x, y, z records at an offset that is a multiple of 8 can be read so
+    /// (they are the points, in place); where the system or file system has no `O_DIRECT`,
+    /// the reads stay buffered. Whether the reads go direct.
+    pub fn set_direct(&mut self, path: &Path, on: bool) -> bool {
+        let able = self.rec.is_f64_xyz() && cfg!(target_endian = "little") && self.rec.offset % 8 == 0;
+        self.direct = if on && able { open_direct(path) } else { None };
+        self.direct.is_some()
+    }
+
+    /// Whether the reads of [`PlyStream::next_direct`] go past the page cache.
+    pub fn is_direct(&self) -> bool {
+        self.direct.is_some()
     }
 
     /// Number of vertices.
@@ -217,6 +277,66 @@ impl PlyStream {
     /// ranges may be read in any order, e.g. from the end of the file back).
     pub fn seek(&mut self, index: usize) {
         self.next = index.min(self.rec.count);
+    }
+
+    /// The next at most `max_points` vertices into the byte buffer `buf` (reused from
+    /// chunk to chunk; at least `24 max_points + 3 DIRECT_ALIGN` bytes): (byte offset in
+    /// `buf` of the first point, number of points), the points being float64 x, y, z rows
+    /// from that offset, which is a multiple of 8 from an 8-aligned `buf`. Past the page
+    /// cache when [`PlyStream::is_direct`] (the device writes whole aligned blocks around
+    /// the points; the bytes of `buf` outside the points are left undefined), else as
+    /// [`PlyStream::next_into`]. The same values and errors as `next_into`; 0 points at
+    /// the end.
+    pub fn next_direct(&mut self, buf: &mut [u8], max_points: usize) -> Result<(usize, usize)> {
+        let m = max_points.min(self.rec.count - self.next);
+        assert!(buf.len() >= 24 * m + 3 * DIRECT_ALIGN, "next_direct: a buffer of 24 max_points + 3 DIRECT_ALIGN bytes");
+        if m == 0 {
+            return Ok((0, 0));
+        }
+        let at = self.rec.offset + self.next * self.rec.stride;
+        let pad = buf.as_ptr().align_offset(DIRECT_ALIGN);
+        let head = at % DIRECT_ALIGN;
+        if let Some(f) = &self.direct {
+            // whole aligned blocks from the one holding the first point to the one
+            // holding the last, into the aligned part of `buf`: the first point lands at
+            // pad + head (a multiple of 8 from buf's alignment: `at` is one of 8)
+            let need = head + 24 * m;
+            let len = need.div_ceil(DIRECT_ALIGN) * DIRECT_ALIGN;
+            match read_direct(f, &mut buf[pad..pad + len], (at - head) as u64, need) {
+                Ok(true) => {}
+                Ok(false) => return Err(GkError::file_format(format!("{}: the file ends before its last vertex", self.what))),
+                Err(e) if e.raw_os_error() == Some(libc::EINVAL) => {
+                    // no O_DIRECT for this file after all: buffered from here on
+                    self.direct = None;
+                    return self.next_direct(buf, max_points);
+                }
+                Err(e) => return Err(io_error(&self.what)(e)),
+            }
+            let s = pad + head;
+            // SAFETY: s is 8-aligned in memory (pad aligns to 4096, head is a multiple of
+            // 8), and s + 24 m <= pad + len <= buf.len(); any 8 bytes are a valid f64.
+            let out = unsafe { std::slice::from_raw_parts(buf.as_ptr().add(s).cast::<f64>(), 3 * m) };
+            for (b, block) in out.chunks(3 * READ_BLOCK).enumerate() {
+                self.check_finite(block, b)?;
+            }
+            self.next += m;
+            return Ok((s, m));
+        }
+        let s = buf.as_ptr().align_offset(8);
+        // SAFETY: s is 8-aligned in memory and s + 24 m <= buf.len() (s < 8 <= 2 DIRECT_ALIGN).
+        let out = unsafe { std::slice::from_raw_parts_mut(buf.as_mut_ptr().add(s).cast::<f64>(), 3 * m) };
+        let k = self.next_into(out)?;
+        Ok((s, k))
+    }
+
+    /// The error of a non-finite coordinate in `block` (block number `b` of READ_BLOCK
+    /// points from the vertex `self.next`), if any.
+    fn check_finite(&self, block: &[f64], b: usize) -> Result<()> {
+        if block.iter().fold(true, |ok, v| ok & v.is_finite()) {
+            return Ok(());
+        }
+        let i = b * READ_BLOCK + block.iter().position(|v| !v.is_finite()).unwrap_or(0) / 3;
+        Err(GkError::file_format(format!("{}: vertex {} has a non-finite coordinate (NaN or inf)", self.what, self.next + i)))
     }
 
     /// The next vertices into `out` (as many as fit: `out.len() / 3`, fewer at the end of
@@ -250,14 +370,7 @@ impl PlyStream {
                 // SAFETY: any 8 bytes are a valid f64 bit pattern; the slice covers `block` exactly.
                 let bytes = unsafe { std::slice::from_raw_parts_mut(block.as_mut_ptr().cast::<u8>(), 8 * block.len()) };
                 self.file.read_exact_at(bytes, at + (24 * b * READ_BLOCK) as u64).map_err(io_error(&self.what))?;
-                if !block.iter().fold(true, |ok, v| ok & v.is_finite()) {
-                    let i = b * READ_BLOCK + block.iter().position(|v| !v.is_finite()).unwrap_or(0) / 3;
-                    return Err(GkError::file_format(format!(
-                        "{}: vertex {} has a non-finite coordinate (NaN or inf)",
-                        self.what,
-                        self.next + i
-                    )));
-                }
+                self.check_finite(block, b)?;
             }
         } else {
             self.buf.resize(m * self.rec.stride, 0);
@@ -368,6 +481,62 @@ mod tests {
 
     /// `s` read forward in ranges of `step` points, then from the end back after a seek
     /// each: both times the rows of the whole read `whole`.
+    /// A float64 PLY whose header is padded to `pad` bytes past a multiple of 8.
+    fn f64_ply(name: &str, n: usize, pad: usize, nan_at: Option<usize>) -> (std::path::PathBuf, Vec<f64>) {
+        let mut head = format!("ply\nformat binary_little_endian 1.0\ncomment x\nelement vertex {n}\nproperty double x\nproperty double y\nproperty double z\nend_header\n");
+        while head.len() % 8 != pad {
+            head = head.replacen("comment x", "comment xx", 1);
+        }
+        let mut b = head.into_bytes();
+        let vals: Vec<f64> = (0..3 * n).map(|i| if nan_at == Some(i / 3) && i % 3 == 1 { f64::NAN } else { i as f64 * 0.125 - 9.0 }).collect();
+        for v in &vals {
+            b.extend_from_slice(&v.to_le_bytes());
+        }
+        (tmp(name, &b), vals)
+    }
+
+    /// Reads past the page cache (O_DIRECT, on a file system that has it) give the
+    /// buffered reads' points, forward and from the end back, for chunks across the
+    /// device's blocks, from buffers at any 8-byte offset; a header at an offset that is
+    /// not a multiple of 8 reads buffered, and a non-finite vertex is named alike.
+    #[test]
+    fn direct_reads_equal_the_buffered_ones() {
+        let n = 5000;
+        let (p, whole) = f64_ply("direct.ply", n, 0, None);
+        for on in [true, false] {
+            let mut s = PlyStream::open(&p, "s").unwrap().unwrap();
+            let direct = s.set_direct(&p, on);
+            assert!(!on || direct || cfg!(not(target_os = "linux")), "ext4 and most Linux file systems have O_DIRECT");
+            for step in [1usize, 77, 700, 5000] {
+                for shift in [0usize, 8, 24, 4000] {
+                    let mut buf = vec![0u8; shift + 24 * step + 3 * DIRECT_ALIGN];
+                    let buf = &mut buf[shift..];
+                    let starts: Vec<usize> = (0..n).step_by(step).collect();
+                    for &start in starts.iter().rev().chain(&starts) {
+                        s.seek(start);
+                        let (at, k) = s.next_direct(buf, step).unwrap();
+                        assert_eq!(k, step.min(n - start));
+                        assert_eq!((buf.as_ptr() as usize + at) % 8, 0);
+                        let got: Vec<f64> = buf[at..at + 24 * k].chunks_exact(8).map(|c| f64::from_le_bytes(c.try_into().unwrap())).collect();
+                        assert_eq!(got, whole[3 * start..3 * (start + k)], "on {on} step {step} shift {shift} start {start}");
+                    }
+                    s.seek(n);
+                    assert_eq!(s.next_direct(buf, step).unwrap().1, 0);
+                }
+            }
+        }
+        let (q, _) = f64_ply("direct4.ply", 300, 4, None);
+        assert!(!PlyStream::open(&q, "s").unwrap().unwrap().set_direct(&q, true));
+        let (r, _) = f64_ply("directnan.ply", n, 0, Some(4321));
+        for on in [true, false] {
+            let mut s = PlyStream::open(&r, "r").unwrap().unwrap();
+            s.set_direct(&r, on);
+            let mut buf = vec![0u8; 24 * 3000 + 3 * DIRECT_ALIGN];
+            s.seek(2000);
+            assert_eq!(s.next_direct(&mut buf, 3000).unwrap_err().message, "r: vertex 4321 has a non-finite coordinate (NaN or inf)");
+        }
+    }
+
     fn reads_the_whole_forward_and_back(s: &mut PlyStream, whole: &[f64], step: usize) {
         let n = whole.len() / 3;
         let mut all = Vec::new();

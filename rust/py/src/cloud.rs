@@ -228,6 +228,26 @@ impl PlyChunks {
         run(py, || inner.next_into(buf))
     }
 
+    /// The next at most `max_points` vertices into the uint8 array `buf` (a buffer reused
+    /// from chunk to chunk, at least 24 max_points + 12288 bytes): (byte offset of the first
+    /// point in `buf`, number of points), float64 x, y, z rows from there; past the page
+    /// cache when `direct` (whole aligned blocks around the points land in `buf`).
+    fn next_direct(&mut self, py: Python<'_>, mut buf: numpy::PyReadwriteArray1<'_, u8>, max_points: usize) -> PyResult<(usize, usize)> {
+        let bytes = buf.as_slice_mut().map_err(|_| invalid("buf: expected a contiguous uint8 array"))?;
+        if bytes.len() < 24 * max_points + 3 * gagekit_cloudio::DIRECT_ALIGN {
+            return Err(invalid(format!("buf: {} bytes for {max_points} points; expected at least {}", bytes.len(),
+                                       24 * max_points + 3 * gagekit_cloudio::DIRECT_ALIGN)));
+        }
+        let inner = &mut self.inner;
+        run(py, || inner.next_direct(bytes, max_points))
+    }
+
+    /// Whether `next_direct` reads past the page cache (O_DIRECT).
+    #[getter]
+    fn direct(&self) -> bool {
+        self.inner.is_direct()
+    }
+
     /// Move to vertex `index` (clamped to the count): the next read starts there.
     fn seek(&mut self, index: usize) {
         self.inner.seek(index);
@@ -236,11 +256,18 @@ impl PlyChunks {
 
 /// Open a binary PLY file (every element of fixed-size records) for reading its vertices
 /// in ranges; None for an ASCII PLY or one with lists (faces), which is read whole.
+/// `direct`: read past the page cache (O_DIRECT, float64 x y z records only) or not; by
+/// default only a file larger than half the memory (which the cache cannot hold).
 #[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyfunction(module = "gagekit._core.cloud"))]
 #[pyfunction]
 #[pyo3(name = "ply_chunks")]
-fn cloud_ply_chunks(py: Python<'_>, path: String) -> PyResult<Option<PlyChunks>> {
-    let s = run(py, || PlyStream::open(std::path::Path::new(&path), &path))?;
+#[pyo3(signature = (path, direct=None))]
+fn cloud_ply_chunks(py: Python<'_>, path: String, direct: Option<bool>) -> PyResult<Option<PlyChunks>> {
+    let p = std::path::Path::new(&path);
+    let mut s = run(py, || PlyStream::open(p, &path))?;
+    if let (Some(s), Some(on)) = (s.as_mut(), direct) {
+        s.set_direct(p, on);
+    }
     Ok(s.map(|inner| PlyChunks { inner }))
 }
 

@@ -139,6 +139,11 @@ class PlyChunks:
         r"""
         Number of vertices.
         """
+    @property
+    def direct(self) -> builtins.bool:
+        r"""
+        Whether `next_direct` reads past the page cache (O_DIRECT).
+        """
     def next_chunk(self, max_points: builtins.int) -> typing.Optional[typing.Any]:
         r"""
         The next at most `max_points` vertices as an (m, 3) array, None at the end.
@@ -147,6 +152,13 @@ class PlyChunks:
         r"""
         The next vertices into the C-contiguous (m, 3) float64 array `out` (a buffer
         reused from chunk to chunk); the number read, 0 at the end.
+        """
+    def next_direct(self, buf: numpy.typing.NDArray[numpy.uint8], max_points: builtins.int) -> tuple[builtins.int, builtins.int]:
+        r"""
+        The next at most `max_points` vertices into the uint8 array `buf` (a buffer reused
+        from chunk to chunk, at least 24 max_points + 12288 bytes): (byte offset of the first
+        point in `buf`, number of points), float64 x, y, z rows from there; past the page
+        cache when `direct` (whole aligned blocks around the points land in `buf`).
         """
     def seek(self, index: builtins.int) -> None:
         r"""
@@ -228,10 +240,12 @@ def ply_ascii_chunks(path: builtins.str) -> typing.Optional[PlyAsciiChunks]:
     counted against the header first, as a whole read checks them); None for a binary one.
     """
 
-def ply_chunks(path: builtins.str) -> typing.Optional[PlyChunks]:
+def ply_chunks(path: builtins.str, direct: typing.Optional[builtins.bool] = None) -> typing.Optional[PlyChunks]:
     r"""
     Open a binary PLY file (every element of fixed-size records) for reading its vertices
     in ranges; None for an ASCII PLY or one with lists (faces), which is read whole.
+    `direct`: read past the page cache (O_DIRECT, float64 x y z records only) or not; by
+    default only a file larger than half the memory (which the cache cannot hold).
     """
 
 def ply_layout(path: builtins.str) -> PlyLayout:
