@@ -323,7 +323,7 @@ impl PlyStream {
             return Ok((s, m));
         }
         let s = buf.as_ptr().align_offset(8);
-        // SAFETY: s is 8-aligned in memory and s + 24 m <= buf.len() (s < 8 <= 2 DIRECT_ALIGN).
+        // SAFETY: s is 8-aligned in memory and s + 24 m <= buf.len() (s < 8 <= 3 DIRECT_ALIGN).
         let out = unsafe { std::slice::from_raw_parts_mut(buf.as_mut_ptr().add(s).cast::<f64>(), 3 * m) };
         let k = self.next_into(out)?;
         Ok((s, k))
