@@ -212,11 +212,17 @@ def test_ballbar_run_as_an_observation(machine, tmp_path):
     (tmp_path / "bad.csv").write_text("# kind = ballbar\n# plane = XY\nangle_deg,deviation_um,direction\n0,1,cw\n")
     with pytest.raises(FileFormatError):
         read_instrument(tmp_path / "bad.csv", machine)
+    for at, msg in (("B=0,X=0,Z=1500,Y=1400,W=-500,Q=1", "'Q' is not a joint"), ("B=0,X=0,Z=1500,Y=1400", "missing W")):
+        (tmp_path / "bad.csv").write_text(f.read_text().replace("B=0,X=0,Z=1500,Y=1400,W=-500", at))
+        with pytest.raises(FileFormatError, match=msg):  # an unknown joint was dropped silently
+            read_instrument(tmp_path / "bad.csv", machine)
 
 
 def test_design_for_instruments(machine, tmp_path):
     from gagekit.machine.instrument_design import design_instrument
 
+    with pytest.raises(InvalidInputError, match="'Q' is not a joint"):  # was ignored silently
+        design_instrument(machine, "sphere", 12, at={"W": -500.0, "Q": 1.0})
     d = design_instrument(machine, "sphere", 12, at={"W": -500.0})
     assert len(d["positions"]) == 12 and set(d["unknowns"]) == {"sphere x", "sphere y", "sphere z", "EXOB", "EZOB", "EAOB", "ECOB"}
     # the I-optimal positions identify the location errors at least as well as 12 even ones

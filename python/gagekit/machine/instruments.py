@@ -178,9 +178,7 @@ def _read_ballbar_kind(p: Path, machine: Machine, meta: dict, sigma: float) -> I
             at[k] = float(v)
         except ValueError:
             raise FileFormatError(f"{p}: at {k}: {v!r} is not a number") from None
-    missing = [j for j in machine.joint_names if j not in at]
-    if missing:
-        raise FileFormatError(f"{p}: at must give every joint of the machine (missing {', '.join(missing)})")
+    centre = machine.position(at, f"{p}: at", FileFormatError)
     for name in PLANES[plane]:
         if name not in machine.joint_names or machine.joints[machine.joint_names.index(name)].kind != "prismatic":
             raise InvalidInputError(f"{p}: plane {plane} needs prismatic joints named {' and '.join(PLANES[plane])}")
@@ -188,7 +186,6 @@ def _read_ballbar_kind(p: Path, machine: Machine, meta: dict, sigma: float) -> I
     ang = np.round(np.mod(run.angles_deg, 360.0), 9)
     uniq = np.unique(ang)
     dev = np.array([run.deviations_um[ang == a].mean() for a in uniq]) * 1e-3  # both directions averaged
-    centre = np.array([at[j] for j in machine.joint_names])
     cmds = circle_commands(machine, plane, radius, centre, np.radians(uniq))
     return InstrumentObservations("ballbar", machine.commands_array(cmds, str(p)), np.append(dev, 0.0)[:, None],
                                   None, np.array([[radius]]), sigma, str(p))
