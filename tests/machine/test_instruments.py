@@ -10,7 +10,7 @@ import sys
 import numpy as np
 import pytest
 
-from gagekit.errors import FileFormatError, InvalidInputError
+from gagekit.errors import DegenerateGeometryError, FileFormatError, InvalidInputError
 from gagekit.machine import Truth, load_machine, simulate
 from gagekit.machine.frame import frame_columns
 from gagekit.machine.instruments import InstrumentObservations, identify_mixed, instrument_view, read_instrument
@@ -221,6 +221,10 @@ def test_ballbar_run_as_an_observation(machine, tmp_path):
 def test_design_for_instruments(machine, tmp_path):
     from gagekit.machine.instrument_design import design_instrument
 
+    same = "\n".join(["# kind = sphere", ",".join(machine.joint_names + ["sphere"])] + ["0,150,1512,400,-500,0"] * 12)
+    (tmp_path / "same.csv").write_text(same + "\n")
+    with pytest.raises(DegenerateGeometryError, match="see none of the location errors"):  # was exit 0, all "not seen"
+        identify_mixed(machine, [read_instrument(tmp_path / "same.csv", machine)])
     with pytest.raises(InvalidInputError, match="'Q' is not a joint"):  # was ignored silently
         design_instrument(machine, "sphere", 12, at={"W": -500.0, "Q": 1.0})
     d = design_instrument(machine, "sphere", 12, at={"W": -500.0})
