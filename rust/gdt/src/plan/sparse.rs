@@ -339,7 +339,10 @@ impl Layout {
 /// The layout of the last active points a plan ran on (building it evaluates the plan
 /// on the measured points once: about a trial's time), kept between blocks of trials.
 #[derive(Debug, Default)]
-pub struct Cache(std::sync::Mutex<Option<(Vec<f64>, Option<std::sync::Arc<Layout>>)>>);
+pub struct Cache(std::sync::Mutex<Option<Cached>>);
+
+/// The points a layout was built on, and the layout (None: no sparse feature).
+type Cached = (Vec<f64>, Option<std::sync::Arc<Layout>>);
 
 impl Cache {
     /// The layout of `plan` on `pts`, built once for the same points.
