@@ -9,7 +9,9 @@ block of trials is one kernel call running its trials in parallel on 2 threads
 evaluation (docs/uncertainty.md, "How a trial is evaluated fast"): the minimax cylinders run
 the exact local method from the measured axis (the global search where it cannot decide:
 counted), the least-squares cylinders start from the measured axis, the minimum-zone
-sphere, flatness slabs and roundness sections run on active sets verified on every point.
+sphere, flatness slabs and roundness sections run on active sets verified on every point;
+with isotropic noise the planes A, B, C and top are evaluated on their blocks of points that
+can be extreme, the others certified inside every zone (``gagekit_gdt::plan::sparse``).
 The peer: what a user writes without it -- a loop of ``gagekit.inspect`` on a perturbed copy
 of the whole scan (regions cut again every time), one trial after the other; timed on
 ``--peer-trials`` trials and scaled to the same number of trials (said on the line).

@@ -76,8 +76,24 @@ def test_blocks_and_threads_give_the_same_trials(bracket):
     split = np.vstack([plan.run(active, args, 3, 0, 2, 2)[0], plan.run(active, args, 3, 2, 4, 2)[0]])
     assert one.shape == (6, 40) and fits == 12
     assert np.array_equal(one, two) and np.array_equal(one, split)
-    # trial i is the plan's evaluation of simulated measurement i
-    assert np.array_equal(one[4], plan.evaluate(measurement_model(sigma=0.001).simulate(active, 3, 4))[0])
+    # trial i is the plan's evaluation of simulated measurement i: its plane features on their
+    # certified extreme blocks (gagekit_gdt::plan::sparse), the same zones to the active sets'
+    # containment tolerance (1e-9 mm) as every point
+    assert np.abs(one[4] - plan.evaluate(plan.simulate(active, args, 3, 4))[0]).max() <= 1e-9
+    every, fits_every, _ = plan.run(active, args, 3, 0, 6, 2, every_point=True)
+    assert np.abs(every - one).max() <= 1e-9 and fits_every == fits
+
+
+def test_the_trials_draw_each_block_of_points_from_seed_trial_and_block(bracket):
+    active, plan = bracket[6], bracket[8]
+    args = measurement_model(sigma=0.001).kernel_args()
+    a = plan.simulate(active, args, 3, 4)
+    assert np.array_equal(a, plan.simulate(active, args, 3, 4)) and not np.array_equal(a, plan.simulate(active, args, 3, 5))
+    d = (a - active).ravel()
+    assert abs(d.mean()) < 2e-5 and abs(d.std() - 0.001) < 2e-5
+    # a model beyond isotropic noise draws as the measurement model's simulate
+    other = measurement_model(sigma=0.001, probing=0.002)
+    assert np.array_equal(plan.simulate(active, other.kernel_args(), 3, 4), other.simulate(active, 3, 4))
 
 
 def test_inspect_uncertainty_runs_the_plan_and_a_drawing_it_does_not_cover_runs_python():

@@ -58,7 +58,10 @@ WARM_METHOD = ("the exact local method (2-D fit, SLP; no basin hopping) from the
 
 #: How the trials of a compiled inspection run (the JSON ``monte_carlo.evaluation``).
 PLAN_METHOD = ("compiled: each block of trials is one kernel call (gagekit_gdt::plan), the trials in parallel, "
-               "trial i's perturbation drawn by the generator of (seed, i)")
+               "trial i's perturbation drawn by the generator of (seed, i); with isotropic noise alone each block of "
+               "64 points by the generator of (seed, i, block), and the plane features evaluated on their blocks that "
+               "can be extreme, certified: every other block lies inside every zone read (no bound on the noise "
+               "assumed; gagekit_gdt::plan::sparse)")
 #: ... and of one the plan does not cover.
 PYTHON_METHOD = "the Python evaluation of each trial"
 

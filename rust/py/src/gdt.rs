@@ -387,6 +387,7 @@ fn plan_model(m: ModelArgs) -> gagekit_core::Result<plan::perturb::Model> {
 #[pyclass(frozen, module = "gagekit._core.gdt")]
 pub struct InspectionPlan {
     plan: plan::Plan,
+    cache: plan::sparse::Cache,
 }
 
 #[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pymethods)]
@@ -402,7 +403,7 @@ impl InspectionPlan {
         let features = features.into_iter().map(plan_feature).collect::<PyResult<Vec<_>>>()?;
         let datums = datums.into_iter().map(|(feature, prior, angle)| plan::Datum { feature, prior, angle }).collect();
         let callouts = callouts.into_iter().map(plan_callout).collect::<PyResult<Vec<_>>>()?;
-        Ok(Self { plan: plan::Plan { features, datums, frames, callouts } })
+        Ok(Self { plan: plan::Plan { features, datums, frames, callouts }, cache: Default::default() })
     }
 
     /// The callouts' (measured, margin) of the active points (n, 3), one evaluation:
@@ -416,8 +417,11 @@ impl InspectionPlan {
     /// Trials `first .. first + count`, each a perturbation of the active points (n, 3)
     /// by `model` (sigma, origin, sigma_per_m, probing, relative scale, offset) drawn by
     /// the generator of (seed, trial), evaluated on `threads` threads (0: all): ((count,
-    /// 2 x callouts) values, warm-started cylinder fits, fallbacks).
+    /// 2 x callouts) values, warm-started cylinder fits, fallbacks). `every_point`: the
+    /// plane features evaluated on every point instead of their certified extreme blocks
+    /// (the reference; `gagekit_gdt::plan::sparse`).
     #[allow(clippy::too_many_arguments)]
+    #[pyo3(signature = (points, model, seed, first, count, threads, every_point = false))]
     fn run<'py>(
         &self,
         py: Python<'py>,
@@ -427,11 +431,21 @@ impl InspectionPlan {
         first: u64,
         count: usize,
         threads: usize,
+        every_point: bool,
     ) -> PyResult<(Bound<'py, PyArray2<f64>>, usize, usize)> {
         let pts = rows(py, &points, 3, "points")?;
-        let v = run(py, || plan::run(&self.plan, pts, &plan_model(model)?, seed, first, count, threads))?;
+        let v = run(py, || plan::run_with(&self.plan, pts, &plan_model(model)?, seed, first, count, threads, every_point, &self.cache))?;
         let m = 2 * self.plan.callouts.len();
         Ok((crate::arrays::matrix(py, v.values, m)?, v.warm_fits, v.fallbacks))
+    }
+
+    /// Trial `trial`'s simulated measurement of the active points (n, 3) as `run` draws
+    /// it (by blocks, `gagekit_gdt::plan::sparse`, for isotropic noise alone; else as
+    /// `gagekit._core.gdt.perturb`).
+    fn simulate<'py>(&self, py: Python<'py>, points: PyReadonlyArray2<'py, f64>, model: ModelArgs, seed: u64, trial: u64) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let pts = rows(py, &points, 3, "points")?;
+        let p = run(py, || plan::simulate(&self.plan, pts, &plan_model(model)?, seed, trial))?;
+        crate::arrays::matrix(py, p, 3)
     }
 }
 

@@ -37,12 +37,20 @@ class InspectionPlan:
         The callouts' (measured, margin) of the active points (n, 3), one evaluation:
         (values, warm-started cylinder fits, fallbacks to the global search).
         """
-    def run(self, points: numpy.typing.NDArray[numpy.float64], model: tuple[builtins.float, typing.Optional[tuple[builtins.float, builtins.float, builtins.float]], builtins.float, builtins.float, builtins.float, builtins.float], seed: builtins.int, first: builtins.int, count: builtins.int, threads: builtins.int) -> tuple[numpy.typing.NDArray[numpy.float64], builtins.int, builtins.int]:
+    def run(self, points: numpy.typing.NDArray[numpy.float64], model: tuple[builtins.float, typing.Optional[tuple[builtins.float, builtins.float, builtins.float]], builtins.float, builtins.float, builtins.float, builtins.float], seed: builtins.int, first: builtins.int, count: builtins.int, threads: builtins.int, every_point: builtins.bool = ...) -> tuple[numpy.typing.NDArray[numpy.float64], builtins.int, builtins.int]:
         r"""
         Trials `first .. first + count`, each a perturbation of the active points (n, 3)
         by `model` (sigma, origin, sigma_per_m, probing, relative scale, offset) drawn by
         the generator of (seed, trial), evaluated on `threads` threads (0: all): ((count,
-        2 x callouts) values, warm-started cylinder fits, fallbacks).
+        2 x callouts) values, warm-started cylinder fits, fallbacks). `every_point`: the
+        plane features evaluated on every point instead of their certified extreme blocks
+        (the reference; `gagekit_gdt::plan::sparse`).
+        """
+    def simulate(self, points: numpy.typing.NDArray[numpy.float64], model: tuple[builtins.float, typing.Optional[tuple[builtins.float, builtins.float, builtins.float]], builtins.float, builtins.float, builtins.float, builtins.float], seed: builtins.int, trial: builtins.int) -> numpy.typing.NDArray[numpy.float64]:
+        r"""
+        Trial `trial`'s simulated measurement of the active points (n, 3) as `run` draws
+        it (by blocks, `gagekit_gdt::plan::sparse`, for isotropic noise alone; else as
+        `gagekit._core.gdt.perturb`).
         """
 
 def axis_along(points: numpy.typing.NDArray[numpy.float64], direction: tuple[builtins.float, builtins.float, builtins.float], fit: builtins.str) -> tuple[tuple[builtins.float, builtins.float, builtins.float], tuple[builtins.float, builtins.float, builtins.float], builtins.float, builtins.float, builtins.float]:

@@ -24,6 +24,7 @@
 pub mod active;
 mod frame;
 pub mod perturb;
+pub mod sparse;
 #[cfg(test)]
 mod tests;
 mod ziggurat;
@@ -33,8 +34,6 @@ use crate::turn::{self, Frame};
 use crate::vec3::{self, basis, cross, dot, norm, scale, sub, V3};
 use crate::width2;
 use gagekit_core::{GkError, Result};
-use gagekit_form::circle;
-use gagekit_form::criterion::FitCriterion;
 use gagekit_form::cylinder::{self, Criterion, CylinderFit, Options, Search, Warm};
 use gagekit_form::{lsq, sphere};
 use rayon::prelude::*;
@@ -229,10 +228,24 @@ struct Feat<'a> {
     mz: Option<(f64, V3)>,
     cyl: [Option<CylinderFit>; 3],
     axis_pts: Option<Vec<f64>>,
+    /// Only the points of some blocks are here ([`sparse`]): every result that reads the
+    /// points is a zone recorded in `zones`, and a result that needs every point (a
+    /// least-squares fit) is refused (the trial then runs on every point).
+    sparse: bool,
+    /// The zones (normal, lo, hi: lo <= normal . p <= hi) of the results computed on the
+    /// points, which the points not here must lie in ([`sparse`]).
+    zones: Vec<(V3, f64, f64)>,
 }
 
 impl<'a> Feat<'a> {
+    fn new(spec: &'a Feature, pts: Vec<f64>, sparse: bool) -> Self {
+        Feat { spec, pts, lsq: None, mz: None, cyl: [None, None, None], axis_pts: None, sparse, zones: Vec::new() }
+    }
+
     fn lsq(&mut self) -> Result<&Lsq> {
+        if self.sparse {
+            return Err(GkError::numerical(sparse::NEEDS_ALL));
+        }
         if self.lsq.is_none() {
             let p = &self.pts;
             self.lsq = Some(match self.spec.shape {
@@ -302,6 +315,7 @@ impl<'a> Feat<'a> {
                 Some(n) => active::slab_near(&self.pts, n)?,
                 None => datum::slab(&self.pts, Orientation::Free)?,
             };
+            self.zones.push((s.normal, s.lo, s.hi));
             let mut n = s.normal;
             if let Some(o) = self.spec.outward {
                 if dot(n, o) > 0.0 {
@@ -419,6 +433,7 @@ struct Trial<'a> {
     sims: Vec<Simulated>,
     frames: Vec<Frame>,
     counts: (usize, usize),
+    reuse: Vec<Option<f64>>,
 }
 
 impl<'a> Trial<'a> {
@@ -430,13 +445,14 @@ impl<'a> Trial<'a> {
         let f = &mut self.feats[fi];
         if f.spec.shape == Shape::Plane {
             let out = unit(f.spec.outward.ok_or_else(|| GkError::config("a datum plane needs 'outward'"))?);
-            let n_ls = f.plane_normal_out()?;
             let orient = match prior.as_slice() {
                 [] => Orientation::Fixed(f.min_zone()?.1),
                 [a] if a.plane => {
                     if spec.angle == 90.0 {
                         Orientation::PerpendicularTo(a.vector)
                     } else {
+                        // the least-squares normal only signs the datum's direction here
+                        let n_ls = f.plane_normal_out()?;
                         Orientation::AtAngle(scale(a.vector, sign(dot(n_ls, a.vector))), spec.angle.to_radians())
                     }
                 }
@@ -446,6 +462,7 @@ impl<'a> Trial<'a> {
                 _ => return Err(GkError::config("a tertiary plane after two datum axes is not supported")),
             };
             let d = datum::plane(&f.pts, out, orient, PlaneFit::Chebyshev)?;
+            f.zones.push((d.normal, d.offset - d.deviation, d.offset));
             return Ok(Simulated { plane: true, point: d.point, vector: d.normal, feature: fi });
         }
         let fit = if f.spec.hole { AxisFit::Inscribed } else { AxisFit::Circumscribed };
@@ -492,7 +509,9 @@ impl<'a> Trial<'a> {
                 };
                 let (u, v) = basis(normal);
                 let idx: Vec<usize> = (0..f.pts.len() / 3).collect();
-                circle::fit(&plane_2d(&f.pts, &idx, center, u, v), FitCriterion::MinZone)?.form_error()
+                // the zone on an active set from the least-squares centre, verified on every
+                // point: the zone of circle::fit's minimum zone without its complete fit
+                active::circle_zone_near(&plane_2d(&f.pts, &idx, center, u, v), [0.0, 0.0])?.form_error()
             }
             C::Roundness => {
                 let (p0, d) = f.axis_line()?;
@@ -549,7 +568,9 @@ impl<'a> Trial<'a> {
                             Orientation::AtAngle(scale(a, s), if plane_datum { th } else { std::f64::consts::FRAC_PI_2 - th })
                         }
                     };
-                    slab_width(&pts, o)?
+                    let s = datum::slab(&pts, o)?;
+                    f.zones.push((s.normal, s.lo, s.hi));
+                    s.width
                 } else {
                     match ch {
                         C::Parallelism if plane_datum => slab_width(&pts, Orientation::Fixed(a))?,
@@ -581,7 +602,17 @@ impl<'a> Trial<'a> {
                 match f.spec.shape {
                     Shape::Plane => {
                         let n0 = nd.ok_or_else(|| GkError::config("the callout needs a nominal direction"))?;
-                        turn::plane_location(&f.pts, frame, p0, n0)?.0
+                        let w = turn::plane_location(&f.pts, frame, p0, n0)?.0;
+                        if f.sparse {
+                            // without a turn searched the zone is that of n0 . p (turn::plane_location)
+                            let nz = dot(n0, frame.axes[2]);
+                            if frame.free_rotation && nz.abs() < 1.0 - 1e-12 {
+                                return Err(GkError::numerical(sparse::NEEDS_ALL));
+                            }
+                            let (lo, hi) = crate::width3::extent(&f.pts, n0);
+                            f.zones.push((n0, lo, hi));
+                        }
+                        w
                     }
                     Shape::Sphere => 2.0 * turn::position(&f.center()?, frame, p0, None)?.0,
                     Shape::Circle => {
@@ -655,6 +686,16 @@ impl<'a> Trial<'a> {
     }
 }
 
+/// Trial `trial`'s simulated measurement of the active points `pts` as [`run`] draws it:
+/// by blocks ([`sparse`]) where it evaluates a trial that way, else [`perturb::perturb`].
+pub fn simulate(plan: &Plan, pts: &[f64], model: &perturb::Model, seed: u64, trial: u64) -> Result<Vec<f64>> {
+    plan.check(pts)?;
+    match sparse::Layout::new(plan, pts) {
+        Some(lay) if sparse::covers(model) => Ok(lay.simulate(pts, model.sigma, seed, trial)),
+        _ => perturb::perturb(pts, 3, model, seed, trial),
+    }
+}
+
 /// One trial: every callout's (measured, margin = tolerance - measured) of the active
 /// points `pts` (flat (n, 3)).
 pub fn evaluate(plan: &Plan, pts: &[f64]) -> Result<Values> {
@@ -682,25 +723,43 @@ fn evaluate_checked(plan: &Plan, pts: Vec<Vec<f64>>) -> Result<Values> {
         .features
         .iter()
         .zip(pts)
-        .map(|(spec, p)| Feat { spec, pts: p, lsq: None, mz: None, cyl: [None, None, None], axis_pts: None })
+        .map(|(spec, p)| Feat::new(spec, p, false))
         .collect();
-    let mut t = Trial { plan, feats, sims: Vec::with_capacity(plan.datums.len()), frames: Vec::new(), counts: (0, 0) };
-    for k in 0..plan.datums.len() {
-        let s = t.simulate(k)?;
-        t.sims.push(s);
+    evaluate_feats(plan, feats, Vec::new()).0
+}
+
+/// One trial of the plan on its features' states (kept by the caller between rounds of
+/// [`sparse::trial`]): the values, and the states back.
+/// `reuse[i]`: callout `i`'s value when already known (its inputs unchanged since).
+fn evaluate_feats<'a>(plan: &'a Plan, feats: Vec<Feat<'a>>, reuse: Vec<Option<f64>>) -> (Result<Values>, Vec<Feat<'a>>) {
+    let mut t = Trial { plan, feats, sims: Vec::with_capacity(plan.datums.len()), frames: Vec::new(), counts: (0, 0), reuse };
+    let r = t.all();
+    (r, t.feats)
+}
+
+impl Trial<'_> {
+    fn all(&mut self) -> Result<Values> {
+        let plan = self.plan;
+        for k in 0..plan.datums.len() {
+            let s = self.simulate(k)?;
+            self.sims.push(s);
+        }
+        for letters in &plan.frames {
+            let sims: Vec<Simulated> = letters.iter().map(|&k| self.sims[k]).collect();
+            let box_axes = plan.features[sims[0].feature].box_axes;
+            self.frames.push(build_frame(&sims, box_axes)?);
+        }
+        let mut values = Vec::with_capacity(2 * plan.callouts.len());
+        for (i, c) in plan.callouts.iter().enumerate() {
+            let m = match self.reuse.get(i).copied().flatten() {
+                Some(m) => m,
+                None => self.callout(c)?,
+            };
+            values.push(m);
+            values.push(c.tolerance - m);
+        }
+        Ok(Values { values, warm_fits: self.counts.0, fallbacks: self.counts.1 })
     }
-    for letters in &plan.frames {
-        let sims: Vec<Simulated> = letters.iter().map(|&k| t.sims[k]).collect();
-        let box_axes = plan.features[sims[0].feature].box_axes;
-        t.frames.push(build_frame(&sims, box_axes)?);
-    }
-    let mut values = Vec::with_capacity(2 * plan.callouts.len());
-    for c in &plan.callouts {
-        let m = t.callout(c)?;
-        values.push(m);
-        values.push(c.tolerance - m);
-    }
-    Ok(Values { values, warm_fits: t.counts.0, fallbacks: t.counts.1 })
 }
 
 /// Trials `first .. first + count` of the simulation: each perturbs the active points by
@@ -709,18 +768,40 @@ fn evaluate_checked(plan: &Plan, pts: Vec<Vec<f64>>) -> Result<Values> {
 /// and the warm-start counts summed. A failing trial's error names it.
 /// `threads` 0: rayon's global pool.
 pub fn run(plan: &Plan, pts: &[f64], model: &perturb::Model, seed: u64, first: u64, count: usize, threads: usize) -> Result<Values> {
+    run_with(plan, pts, model, seed, first, count, threads, false, &sparse::Cache::default())
+}
+
+/// [`run`]; `every_point`: the sparse features' trials evaluated on every point (the
+/// reference the certified subsets of [`sparse`] equal; tests); `cache`: the blocks of
+/// the last points run.
+#[allow(clippy::too_many_arguments)]
+pub fn run_with(
+    plan: &Plan,
+    pts: &[f64],
+    model: &perturb::Model,
+    seed: u64,
+    first: u64,
+    count: usize,
+    threads: usize,
+    every_point: bool,
+    cache: &sparse::Cache,
+) -> Result<Values> {
     plan.check(pts)?;
     let rows: Vec<&[usize]> = plan.features.iter().map(|f| f.rows.as_slice()).collect();
-    let map = perturb::Scatter::new(pts.len() / 3, &rows);
+    let layout = if sparse::covers(model) { cache.layout(plan, pts) } else { None };
+    let map = if layout.is_none() { Some(perturb::Scatter::new(pts.len() / 3, &rows)) } else { None };
     let trials = || -> Vec<Result<Values>> {
         (0..count as u64)
             .into_par_iter()
             .map(|k| {
                 let trial = first + k;
                 gagekit_core::interrupt::check()?;
-                let p = perturb::perturb_features(pts, &map, model, seed, trial)?;
-                evaluate_checked(plan, p)
-                    .map_err(|e| GkError::new(e.kind, format!("Monte Carlo trial {trial} (a simulated measurement): {}", e.message)))
+                match (&layout, &map) {
+                    (Some(lay), _) => sparse::trial(plan, pts, lay, model.sigma, seed, trial, every_point),
+                    (None, Some(map)) => evaluate_checked(plan, perturb::perturb_features(pts, map, model, seed, trial)?),
+                    (None, None) => unreachable!(),
+                }
+                .map_err(|e| GkError::new(e.kind, format!("Monte Carlo trial {trial} (a simulated measurement): {}", e.message)))
             })
             .collect()
     };

@@ -4,6 +4,7 @@
 
 use super::perturb::{perturb, Model};
 use super::*;
+use gagekit_form::criterion::FitCriterion;
 use gagekit_core::ErrorKind;
 
 fn part() -> (Vec<f64>, Plan) {
@@ -96,8 +97,19 @@ fn trials_are_the_same_on_any_thread_count_and_split() {
     split.extend(run(&plan, &pts, &m, 5, 2, 4, 2).unwrap().values);
     assert_eq!(one, two);
     assert_eq!(one.values, split);
-    let p = perturb(&pts, 3, &m, 5, 3).unwrap();
-    assert_eq!(evaluate(&plan, &p).unwrap().values, one.values[30..40].to_vec());
+    // trial 3 is the plan's evaluation of its simulated measurement 3 (its planes on their
+    // certified extreme blocks: the same zones to the active sets' containment tolerance,
+    // 1e-9 mm), and the same as the trials evaluated on every point
+    let p = simulate(&plan, &pts, &m, 5, 3).unwrap();
+    let full = evaluate(&plan, &p).unwrap().values;
+    assert!(full.iter().zip(&one.values[30..40]).all(|(a, b)| (a - b).abs() <= 1e-9), "{full:?} {:?}", &one.values[30..40]);
+    let every = run_with(&plan, &pts, &m, 5, 0, 6, 2, true, &sparse::Cache::default()).unwrap();
+    assert!(every.values.iter().zip(&one.values).all(|(a, b)| (a - b).abs() <= 1e-9));
+    // a model with more than isotropic noise draws as perturb does
+    let m2 = Model { probing: 0.002, ..noise(0.001) };
+    let p = perturb(&pts, 3, &m2, 5, 3).unwrap();
+    assert_eq!(simulate(&plan, &pts, &m2, 5, 3).unwrap(), p);
+    assert_eq!(evaluate(&plan, &p).unwrap().values, run(&plan, &pts, &m2, 5, 0, 4, 2).unwrap().values[30..40].to_vec());
 }
 
 #[test]
