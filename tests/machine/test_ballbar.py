@@ -202,3 +202,20 @@ def test_groups_behind_the_diagnostics(machine, simulated):
     for label in ("squareness_um_per_m", "scale_mismatch_um_per_m"):
         predicted = sum(v * groups[k] for k, v in sens[label].items())
         assert predicted == pytest.approx(d[label]["value"], rel=0.02), label
+
+
+def test_centre_joints_are_checked(machine):
+    """``at`` names every joint exactly: an unknown name is an error (it was dropped silently),
+    a missing one too, and a centre outside a joint's range warns as every command does."""
+    from gagekit.errors import InvalidInputError
+    from gagekit.machine.ballbar import group_sensitivities
+
+    at = dict(zip(machine.joint_names, [0.0, 0.0, 1500.0, 1400.0, -500.0]))
+    with pytest.raises(InvalidInputError, match="'Q' is not a joint of machine"):
+        group_sensitivities(machine, "XY", R, {**at, "Q": 3.0})
+    with pytest.raises(InvalidInputError, match="missing W"):
+        group_sensitivities(machine, "XY", R, {k: v for k, v in at.items() if k != "W"})
+    with pytest.raises(InvalidInputError, match="non-finite X"):
+        group_sensitivities(machine, "XY", R, {**at, "X": float("nan")})
+    with pytest.warns(UserWarning, match=r"outside the machine's joint ranges \(X: 1\)"):
+        group_sensitivities(machine, "XY", R, {**at, "X": 50_000.0})

@@ -10,7 +10,7 @@ import sys
 import numpy as np
 import pytest
 
-from gagekit.errors import FileFormatError, InvalidInputError
+from gagekit.errors import DegenerateGeometryError, FileFormatError, InvalidInputError
 from gagekit.machine import Truth, load_machine, simulate
 from gagekit.machine.frame import frame_columns
 from gagekit.machine.instruments import InstrumentObservations, identify_mixed, instrument_view, read_instrument
@@ -212,11 +212,21 @@ def test_ballbar_run_as_an_observation(machine, tmp_path):
     (tmp_path / "bad.csv").write_text("# kind = ballbar\n# plane = XY\nangle_deg,deviation_um,direction\n0,1,cw\n")
     with pytest.raises(FileFormatError):
         read_instrument(tmp_path / "bad.csv", machine)
+    for at, msg in (("B=0,X=0,Z=1500,Y=1400,W=-500,Q=1", "'Q' is not a joint"), ("B=0,X=0,Z=1500,Y=1400", "missing W")):
+        (tmp_path / "bad.csv").write_text(f.read_text().replace("B=0,X=0,Z=1500,Y=1400,W=-500", at))
+        with pytest.raises(FileFormatError, match=msg):  # an unknown joint was dropped silently
+            read_instrument(tmp_path / "bad.csv", machine)
 
 
 def test_design_for_instruments(machine, tmp_path):
     from gagekit.machine.instrument_design import design_instrument
 
+    same = "\n".join(["# kind = sphere", ",".join(machine.joint_names + ["sphere"])] + ["0,150,1512,400,-500,0"] * 12)
+    (tmp_path / "same.csv").write_text(same + "\n")
+    with pytest.raises(DegenerateGeometryError, match="see none of the location errors"):  # was exit 0, all "not seen"
+        identify_mixed(machine, [read_instrument(tmp_path / "same.csv", machine)])
+    with pytest.raises(InvalidInputError, match="'Q' is not a joint"):  # was ignored silently
+        design_instrument(machine, "sphere", 12, at={"W": -500.0, "Q": 1.0})
     d = design_instrument(machine, "sphere", 12, at={"W": -500.0})
     assert len(d["positions"]) == 12 and set(d["unknowns"]) == {"sphere x", "sphere y", "sphere z", "EXOB", "EZOB", "EAOB", "ECOB"}
     # the I-optimal positions identify the location errors at least as well as 12 even ones

@@ -26,6 +26,7 @@ CASES = {
     "truncated": (CTC01_TEXT[: len(CTC01_TEXT) // 2], "the XML is malformed"),
     "qif2": (CTC01_TEXT.replace("http://qifstandards.org/xsd/qif3", "http://qifstandards.org/xsd/qif2")
              .replace('versionQIF="3.0.0"', 'versionQIF="2.1"'), "QIF version 2.1 is not supported"),
+    "no-version": (CTC01_TEXT.replace(' versionQIF="3.0.0"', "", 1), "has no versionQIF attribute"),
     "other-root": ('<?xml version="1.0"?><svg xmlns="http://www.w3.org/2000/svg"/>', "not a QIF document"),
     "missing-definition": (CTC01_TEXT.replace("<CharacteristicDefinitionId>1469</CharacteristicDefinitionId>",
                                               "<CharacteristicDefinitionId>99999</CharacteristicDefinitionId>"),

@@ -226,6 +226,17 @@ def test_bad_input_is_typed(case):
         type1_study([1.0, 1.1], 1.0, 0.0)
 
 
+def test_huge_values_are_refused_not_read_as_no_variation():
+    """1e308 made the sums of squares overflow, and the study said "do not vary"."""
+    rows = aiag_rows()
+    rows = [(a, b, c, 1e308 if i % 2 else v) for i, (a, b, c, v) in enumerate(rows)]
+    y, _, _ = study_table([r[0] for r in rows], [r[1] for r in rows], [r[3] for r in rows])
+    with pytest.raises(InvalidInputError, match="magnitude 1e\\+308, beyond 1e\\+100; check the units"):
+        anova_grr(y)
+    with pytest.raises(InvalidInputError, match="beyond 1e\\+100"):
+        type1_study([1.0, 1e200, 2.0], 1.0, 0.1)
+
+
 def test_name_pattern():
     parse = name_parser("{part}_{appraiser}_{trial}")
     assert parse("P03_anna_2") == {"part": "P03", "appraiser": "anna", "trial": "2"}

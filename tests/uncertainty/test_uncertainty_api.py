@@ -146,6 +146,9 @@ def test_noise_auto_is_the_dof_corrected_rms():
     assert s == pytest.approx(np.sqrt((r @ r) / 2)) and "degrees of freedom" in how
     with pytest.raises(InvalidInputError):
         estimate_sigma([(r[:3], 3)])
+    with pytest.warns(UserWarning, match="below any instrument's noise"):  # computed points: U would count nothing
+        s, _ = estimate_sigma([(r * 1e-13, 3)])
+    assert s == pytest.approx(np.sqrt((r @ r) / 2) * 1e-13)
 
 
 def test_scale_and_line_of_sight_perturbations():

@@ -256,15 +256,13 @@ def group_sensitivities(machine, plane: str, radius: float, at: dict, min_share:
     if pl not in PLANES:
         raise InvalidInputError(f"plane must be XY, YZ or ZX, got {plane!r}")
     names = machine.joint_names
-    missing = [j for j in names if j not in at]
-    if missing:
-        raise InvalidInputError(f"--at must give every joint of the machine (missing {', '.join(missing)})")
+    centre = machine.position(at, "--at")
     for x in PLANES[pl]:
         if x not in names:
             raise InvalidInputError(f"machine '{machine.name}' has no joints {' and '.join(PLANES[pl])} for plane {pl}")
     st = machine.structure()
     t = np.radians(np.arange(0.0, 360.0, 5.0))
-    cmds = circle_commands(machine, pl, radius, np.array([float(at[j]) for j in names]), t)
+    cmds = circle_commands(machine, pl, radius, centre, t)
     rows, _ = radial_rows(machine, cmds, st.reduce(machine.design_matrix(cmds)))  # radial effect of each group
     sq = 2.0 / len(t) * np.sin(2 * t) @ rows * 2.0 / radius * 1e6  # um/m per unit group
     sc = 2.0 / len(t) * np.cos(2 * t) @ rows * 2.0 / radius * 1e6

@@ -97,9 +97,7 @@ def make_grid(
     axes = list(axes)
     if not axes:
         raise InvalidInputError("grid: no axes")
-    for a in axes:
-        if a not in spec:
-            raise InvalidInputError(f"grid axis '{a}' is not a joint of machine '{machine.name}' ({', '.join(names)})")
+    machine.check_joint_names(axes, "grid axes")
     if len(set(axes)) != len(axes):
         raise InvalidInputError(f"grid axes repeat a joint: {', '.join(axes)}")
     if step is not None and points is not None:
@@ -136,9 +134,8 @@ def make_grid(
         values.append(np.linspace(lo, hi, n))
     fixed = {}
     at = dict(at or {})
+    machine.check_joint_names(at, "--at")
     for k in at:
-        if k not in spec:
-            raise InvalidInputError(f"--at: '{k}' is not a joint of machine '{machine.name}' ({', '.join(names)})")
         if k in axes:
             raise InvalidInputError(f"--at: '{k}' is a grid axis; fix only the other joints")
     for name in names:

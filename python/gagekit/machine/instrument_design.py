@@ -56,6 +56,7 @@ def design_instrument(
 
     if points < 1:
         raise InvalidInputError(f"--points must be at least 1, got {points}")
+    machine.check_joint_names(at or {}, "--at")
     if instrument in ("sphere", "rtest"):
         return _design_sphere(machine, instrument, points, criterion, sphere, at or {}, joint, step, seed, optimal_design)
     if instrument == "ballbar":

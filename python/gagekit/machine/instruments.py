@@ -178,9 +178,7 @@ def _read_ballbar_kind(p: Path, machine: Machine, meta: dict, sigma: float) -> I
             at[k] = float(v)
         except ValueError:
             raise FileFormatError(f"{p}: at {k}: {v!r} is not a number") from None
-    missing = [j for j in machine.joint_names if j not in at]
-    if missing:
-        raise FileFormatError(f"{p}: at must give every joint of the machine (missing {', '.join(missing)})")
+    centre = machine.position(at, f"{p}: at", FileFormatError)
     for name in PLANES[plane]:
         if name not in machine.joint_names or machine.joints[machine.joint_names.index(name)].kind != "prismatic":
             raise InvalidInputError(f"{p}: plane {plane} needs prismatic joints named {' and '.join(PLANES[plane])}")
@@ -188,7 +186,6 @@ def _read_ballbar_kind(p: Path, machine: Machine, meta: dict, sigma: float) -> I
     ang = np.round(np.mod(run.angles_deg, 360.0), 9)
     uniq = np.unique(ang)
     dev = np.array([run.deviations_um[ang == a].mean() for a in uniq]) * 1e-3  # both directions averaged
-    centre = np.array([at[j] for j in machine.joint_names])
     cmds = circle_commands(machine, plane, radius, centre, np.radians(uniq))
     return InstrumentObservations("ballbar", machine.commands_array(cmds, str(p)), np.append(dev, 0.0)[:, None],
                                   None, np.array([[radius]]), sigma, str(p))
@@ -362,9 +359,12 @@ def identify_mixed(
     observations: Sequence[InstrumentObservations],
     unknowns: Optional[str] = None,
     structure: Optional[ModelStructure] = None,
+    require_seen: bool = True,
 ) -> MixedResult:
     """Identify from any mix of tracker, sphere and R-test observations (see the module's doc):
-    generalized least squares over all rows, each kind with its own sigma."""
+    generalized least squares over all rows, each kind with its own sigma. Observations that
+    see none of the unknowns are an error unless ``require_seen`` is False (what an instrument
+    sees, :func:`instrument_view`)."""
     if not observations:
         raise InvalidInputError("no observations given")
     kinds = {o.kind for o in observations}
@@ -430,6 +430,9 @@ def identify_mixed(
     if r == 0:
         raise DegenerateGeometryError("the observations see none of the unknowns")
     seen = _seen(vt, sv, r, k)
+    if require_seen and not seen.any():  # r > 0 from the nuisance columns alone (a sphere's centre, a ballbar's length)
+        raise DegenerateGeometryError(f"the observations see none of the {'groups' if unknowns == 'groups' else 'location errors'} "
+                                      f"(only the instruments' own unknowns): take readings at several positions of the axes")
     x = (vt[:r].T @ (qtb[:r] / sv[:r])) / norms
     cov = ((vt[:r].T / sv[:r] ** 2) @ vt[:r]) / np.outer(norms, norms)  # unit weight: sigmas as given
     x[dead] = 0.0
@@ -558,12 +561,12 @@ def instrument_view(machine: Machine, kinds: Sequence[str]) -> dict:
     out = {}
     sets = {k: _sample(machine, k) for k in kinds}
     for label, obs in list(sets.items()) + ([("combined", [o for k in kinds for o in sets[k]])] if len(kinds) > 1 else []):
-        res_g = identify_mixed(machine, obs, unknowns="groups", structure=st)
+        res_g = identify_mixed(machine, obs, unknowns="groups", structure=st, require_seen=False)
         entry = {
             "groups_seen": [n for n, s in zip(res_g.names, res_g.seen) if s],
             "groups_not_seen": [n for n, s in zip(res_g.names, res_g.seen) if not s],
         }
-        res_l = identify_mixed(machine, obs, unknowns="location", structure=st)
+        res_l = identify_mixed(machine, obs, unknowns="location", structure=st, require_seen=False)
         entry["location_errors_seen"] = [n for n, s in zip(res_l.names, res_l.seen) if s]
         entry["location_errors_not_seen"] = [n for n, s in zip(res_l.names, res_l.seen) if not s]
         out[label] = entry

@@ -25,6 +25,7 @@ from __future__ import annotations
 import math
 import re
 import warnings
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Optional, Union
@@ -289,6 +290,27 @@ class Machine:
         bad = self.out_of_range(commands)
         if bad:
             warn_outside_ranges(what, ", ".join(f"{k}: {v}" for k, v in bad.items()), stacklevel=4)
+
+    def check_joint_names(self, names: Any, what: str = "--at", error: type = InvalidInputError) -> None:
+        """Every name in ``names`` is a joint of this machine (else ``error``, naming them all):
+        options that fix some joints must not drop a misspelt one silently."""
+        unknown = [k for k in names if k not in self.joint_names]
+        if unknown:
+            raise error(f"{what}: {', '.join(map(repr, unknown))} {'is not a joint' if len(unknown) == 1 else 'are not joints'} "
+                        f"of machine '{self.name}' ({', '.join(self.joint_names)})")
+
+    def position(self, at: Mapping[str, float], what: str = "--at", error: type = InvalidInputError) -> np.ndarray:
+        """One command (J,) from ``{joint: value}`` naming every joint of the machine exactly
+        once: a missing or unknown joint name, or a non-finite value, is an error (an unknown
+        name would otherwise be dropped silently); a value outside its joint's range warns, as
+        every command does. ``error``: the exception class (``FileFormatError`` for a file's line)."""
+        self.check_joint_names(at, what, error)
+        missing = [j for j in self.joint_names if j not in at]
+        if missing:
+            raise error(f"{what} must give every joint of the machine (missing {', '.join(missing)})")
+        cmd = self.commands_array([float(at[j]) for j in self.joint_names], what)
+        self.warn_out_of_range(cmd, what)
+        return cmd[0]
 
     def sample_commands(self, n: int, seed: Optional[int] = 0) -> np.ndarray:
         """``n`` quasi-random commands (shifted Halton) over the joint ranges, file units

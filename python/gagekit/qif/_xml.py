@@ -84,7 +84,7 @@ def floats(s: Optional[str], n: int, where: str) -> tuple:
     except ValueError:
         vals = ()
     if len(vals) != n or any(v != v or v in (float("inf"), float("-inf")) for v in vals):
-        raise FileFormatError(f"{where}: expected {n} finite numbers, got {s!r}")
+        raise FileFormatError(f"{where}: expected {n} finite number{'s' if n != 1 else ''}, got {s!r}")
     return vals
 
 

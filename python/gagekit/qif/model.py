@@ -401,6 +401,9 @@ def read_model(path: Any) -> QifModel:
     if name != "QIFDocument":
         raise FileFormatError(f"{path}: not a QIF document (the root element is <{name}>, not <QIFDocument>)")
     version = root.get("versionQIF") or ""
+    if ns == X.NS and not version:
+        raise FileFormatError(f"{path}: the <QIFDocument> has no versionQIF attribute (QIF 3.0 requires it, "
+                              f"e.g. versionQIF=\"3.0.0\")")
     if ns != X.NS or not version.startswith("3."):
         found = version or (ns.rsplit("/", 1)[-1] if ns else "no namespace")
         raise FileFormatError(f"{path}: QIF version {found} is not supported; gagekit reads QIF 3.0 "

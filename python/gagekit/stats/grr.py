@@ -225,6 +225,21 @@ def name_parser(pattern: str):
 
 # ------------------------------------------------------------------ studies
 
+#: Largest |value| a study takes: squared sums of larger values overflow double precision
+#: (and no measured length or angle comes near it in any unit).
+_MAX_VALUE = 1e100
+
+
+def _check_values(y: np.ndarray, what: str) -> None:
+    """NaN, infinity or a value beyond :data:`_MAX_VALUE` is an error (a huge value made the
+    sums of squares overflow and the study read as "does not vary")."""
+    if not np.all(np.isfinite(y)):
+        raise InvalidInputError(f"{what} holds NaN or infinite values")
+    big = float(np.max(np.abs(y)))
+    if big > _MAX_VALUE:
+        raise InvalidInputError(f"{what} holds a value of magnitude {big:.4g}, beyond {_MAX_VALUE:.0e}; check the units")
+
+
 def acceptance(pct: float) -> str:
     """AIAG band of a %GRR: ``acceptable`` (< 10), ``conditional`` (10-30), ``unacceptable`` (> 30)."""
     return "acceptable" if pct < 10.0 else ("conditional" if pct <= 30.0 else "unacceptable")
@@ -255,8 +270,7 @@ def anova_grr(y, *, tolerance: Optional[float] = None, pool_alpha: float = POOL_
     p, o, r = y.shape
     if p < 2 or o < 2 or r < 2:
         raise InvalidInputError(f"gage R&R: {p} parts x {o} appraisers x {r} trials; each needs at least 2")
-    if not np.all(np.isfinite(y)):
-        raise InvalidInputError("gage R&R: the study holds NaN or infinite values")
+    _check_values(y, "gage R&R: the study")
     if tolerance is not None and not (math.isfinite(tolerance) and tolerance > 0):
         raise InvalidInputError(f"gage R&R: tolerance {tolerance}: a positive number (USL - LSL)")
     gm = y.mean()
@@ -373,8 +387,7 @@ def type1_study(values: Sequence[float], reference: float, tolerance: float) -> 
     x = np.asarray(values, dtype=float)
     if x.ndim != 1 or x.size < 2:
         raise InvalidInputError("Type-1 study: needs at least 2 repeated measurements (VDA 5: 25, Bosch: 50)")
-    if not np.all(np.isfinite(x)):
-        raise InvalidInputError("Type-1 study: the measurements hold NaN or infinite values")
+    _check_values(x, "Type-1 study: the measurements")
     if not (math.isfinite(reference)):
         raise InvalidInputError("Type-1 study: the reference value must be finite")
     if not (math.isfinite(tolerance) and tolerance > 0):

@@ -36,6 +36,7 @@ the number of threads the trials run on.
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any, Mapping, Optional, Union
@@ -202,6 +203,11 @@ def load_measurement_model(path: Union[str, Path], **overrides: Any) -> Measurem
 FEATURE_PARAMETERS = {"plane": 3, "line": 4, "circle": 6, "sphere": 4, "cylinder": 5, "cone": 6, "slot": 4, "tab": 4}
 
 
+#: ``--noise auto`` below this (mm, 0.1 nm) warns: no instrument is that quiet, so the points
+#: were computed (a CAD sampling) or smoothed, and the residuals say nothing about noise.
+SIGMA_AUTO_FLOOR = 1e-7
+
+
 def estimate_sigma(residual_sets: list[tuple[np.ndarray, int]]) -> tuple[float, str]:
     """``--noise auto``: sigma = sqrt(sum r^2 / sum (n_i - p_i)), the pooled RMS of the
     least-squares residuals r (normal to each fitted feature) of every feature i with its
@@ -218,5 +224,9 @@ def estimate_sigma(residual_sets: list[tuple[np.ndarray, int]]) -> tuple[float, 
         raise InvalidInputError("--noise auto: the fitted features have no degrees of freedom left to estimate the noise "
                                 "(give sigma)")
     sigma = math.sqrt(ss / dof)
+    if sigma < SIGMA_AUTO_FLOOR:
+        warnings.warn(f"--noise auto: the residuals give sigma {sigma:.3g} mm, below any instrument's noise "
+                      f"({SIGMA_AUTO_FLOOR:g} mm): the points look computed or smoothed, so the uncertainty counts no "
+                      f"measurement noise; give --noise SIGMA or --measurement MODEL.toml", UserWarning, stacklevel=2)
     return sigma, (f"auto: pooled RMS of the least-squares residuals of {n} feature(s), "
                    f"sqrt(sum r^2 / (n - p)) with {dof} degrees of freedom")
