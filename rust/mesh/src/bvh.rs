@@ -797,7 +797,13 @@ impl Bvh {
                     let c = &self.corners[slot as usize];
                     // the lanes the triangle's lower bound does not rule out (all lanes
                     // at once; a lane's best changes only by its own test of this slot)
-                    let mut m = mask & self.bounds[slot as usize].may_beat_lanes_in::<AVX>([&px, &py, &pz], &bd, &slack);
+                    let mut m = if mask.is_power_of_two() {
+                        // one lane (an outlier's search, mostly): its bound alone, the same bits
+                        let i = mask.trailing_zeros() as usize;
+                        if self.bounds[slot as usize].may_beat(&ps[i], bd[i], slack[i]) { mask } else { 0 }
+                    } else {
+                        mask & self.bounds[slot as usize].may_beat_lanes_in::<AVX>([&px, &py, &pz], &bd, &slack)
+                    };
                     if m.count_ones() >= VECTOR_EXACT {
                         // many lanes: their exact tests at once, the same bits
                         closest_lanes([&px, &py, &pz], c[0], c[1], c[2], &mut cl);
