@@ -1,6 +1,6 @@
-//! Timing harness (not a test): `cargo run --release -p gagekit-mesh --example profile -- [points] [nu nv] [fit|shuffle|of=N]`.
+//! Timing harness (not a test): `cargo run --release -p gagekit-mesh --example profile -- [points] [nu nv] [fit|shuffle|of=N] [from=K]`.
 //! The torus and scan-line scan of benches/bench_compare.py, built in Rust; `of=N`: the
-//! first `points` points of an N-point scan (the density of the full scan on a subset).
+//! first `points` points of an N-point scan (the density of the full scan on a subset); `from=K`: from its K-th point on.
 use gagekit_mesh::align::{best_fit, FitOptions};
 use gagekit_mesh::distance::Query;
 use gagekit_mesh::rigid::Pose;
@@ -71,7 +71,10 @@ fn main() {
     let fit = args.get(4).map(|s| s == "fit").unwrap_or(false);
     let (v, t) = torus(nu, nv, fit);
     let of = args.get(4).and_then(|s| s.strip_prefix("of=")).and_then(|s| s.parse().ok()).unwrap_or(n);
-    let mut pts = scan(of.max(n), 0, fit);
+    // `from=K` (any argument after the first): the points from the K-th on
+    let from: usize = args.iter().skip(2).find_map(|s| s.strip_prefix("from=")).and_then(|s| s.parse().ok()).unwrap_or(0);
+    let mut pts = scan(of.max(n + from), 0, fit);
+    pts.drain(..3 * from);
     pts.truncate(3 * n);
     if args.get(4).map(|s| s == "shuffle").unwrap_or(false) {
         // a deterministic shuffle (Fisher-Yates, seeded)

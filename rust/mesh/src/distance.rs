@@ -210,17 +210,10 @@ impl TriMesh {
                 for (j, k) in ks.clone().enumerate() {
                     let i = order[c * CHUNK + k] as usize;
                     ps[j] = [points[3 * i], points[3 * i + 1], points[3 * i + 2]];
-                    for &h in &hints {
-                        if h != u32::MAX {
-                            let n = self.bvh.to_slot(ps[j], h);
-                            if best[j].map_or(true, |b| n.d2 < b.d2 || (n.d2 == b.d2 && n.slot < b.slot)) {
-                                best[j] = Some(n);
-                            }
-                        }
-                    }
                 }
                 let g = ks.len();
-                self.bvh.nearest_group(&ps[..g], bound2, &mut best[..g]);
+                let nh = if hints[0] == u32::MAX { 0 } else if hints[1] == u32::MAX { 1 } else { 2 };
+                self.bvh.nearest_group_from(&ps[..g], bound2, &hints[..nh], &mut best[..g]);
                 for (j, k) in ks.clone().enumerate() {
                     let (dk, tk, fk) = match &best[j] {
                         Some(n) => {

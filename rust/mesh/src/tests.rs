@@ -495,7 +495,9 @@ proptest! {
                     _ => Some(bvh.to_slot(q, rng.random_range(0..bvh.corners.len() as u32))),
                 })
                 .collect();
-            bvh.nearest_group(&ps, bound2, &mut best);
+            // hints measured for every lane at once (some out of range, some repeated)
+            let hints: Vec<u32> = (0..rng.random_range(0..4)).map(|_| rng.random_range(0..bvh.corners.len() as u32 + 2)).collect();
+            bvh.nearest_group_from(&ps, bound2, &hints, &mut best);
             for (q, got) in ps.iter().zip(&best) {
                 let single = bvh.nearest(*q, bound2, None);
                 let want = brute_force_slot(&bvh, *q, bound2);
@@ -687,6 +689,65 @@ proptest! {
         if std::is_x86_feature_detected!("avx2") {
             prop_assert_eq!(crate::bvh::lanes_le64::<true>(&a, &b), want64);
             prop_assert_eq!(crate::bvh::lanes_le32::<true>(&a32, &b32), want32);
+        }
+    }
+}
+
+/// [`crate::closest::closest_lanes`] on eight points, lane by lane against
+/// [`crate::closest::closest_point`]: the same closest point, feature and squared distance
+/// to the bit (also compiled for AVX2 where the processor has it, as the group query runs it).
+fn check_lanes(ps: &[[f64; 3]; 8], c: &[[f64; 3]; 3]) -> Result<(), TestCaseError> {
+    use crate::closest::{closest_lanes, closest_point, feature_of_code, Closest8, LANES};
+    let axes: [[f64; LANES]; 3] = std::array::from_fn(|k| std::array::from_fn(|i| ps[i][k]));
+    let mut outs = vec![];
+    let mut out = Closest8 { d2: [0.0; LANES], foot: [[0.0; LANES]; 3], code: [0; LANES] };
+    closest_lanes([&axes[0], &axes[1], &axes[2]], c[0], c[1], c[2], &mut out);
+    outs.push(out);
+    #[cfg(target_arch = "x86_64")]
+    if std::is_x86_feature_detected!("avx2") {
+        // SAFETY: AVX2 was detected
+        unsafe { crate::closest::closest_lanes_avx2([&axes[0], &axes[1], &axes[2]], c[0], c[1], c[2], &mut out) };
+        outs.push(out);
+    }
+    for out in &outs {
+        for (i, p) in ps.iter().enumerate() {
+            let (f, feature) = closest_point(*p, c[0], c[1], c[2]);
+            let v = [p[0] - f[0], p[1] - f[1], p[2] - f[2]];
+            let d2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+            prop_assert_eq!(out.d2[i].to_bits(), d2.to_bits(), "lane {}", i);
+            prop_assert_eq!([out.foot[0][i], out.foot[1][i], out.foot[2][i]].map(f64::to_bits), f.map(f64::to_bits));
+            prop_assert_eq!(feature_of_code(out.code[i]), feature);
+        }
+    }
+    Ok(())
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(256))]
+    /// Eight points at once get [`crate::closest::closest_point`]'s answers to the bit:
+    /// triangles of every shape (slivers, needles, repeated corners), points near and far,
+    /// on corners, edges and in the plane (the regions' boundaries, where ties decide).
+    #[test]
+    fn closest_lanes_equal_closest_point(seed in 0u64..1_000_000) {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let mut tris = soup(&mut rng, 6);
+        let a = tris[0][0];
+        tris.push([a, a, tris[1][2]]);
+        tris.push([a, a, a]);
+        for c in &tris {
+            let ps: [[f64; 3]; 8] = std::array::from_fn(|_| {
+                let (s, t) = (rng.random_range(-0.5..1.5), rng.random_range(-0.5..1.5));
+                let on = [0, 1, 2].map(|k| c[0][k] + s * (c[1][k] - c[0][k]) + t * (c[2][k] - c[0][k]));
+                match rng.random_range(0..6) {
+                    0 => c[rng.random_range(0..3)],
+                    1 => [0, 1, 2].map(|k| 0.5 * (c[0][k] + c[1][k])),
+                    2 => on,
+                    3 => [0, 1, 2].map(|k| on[k] + rng.random_range(-1.0..1.0)),
+                    4 => [0, 1, 2].map(|_| rng.random_range(-1e3..1e3)),
+                    _ => [0, 1, 2].map(|k| c[0][k] + rng.random_range(-1e-9..1e-9)),
+                }
+            });
+            check_lanes(&ps, c)?;
         }
     }
 }
