@@ -31,8 +31,10 @@ import contextlib
 import errno
 import os
 import shutil
+import signal
 import stat
 import tempfile
+import threading
 from pathlib import Path
 from typing import IO, Iterator, Optional, Union
 
@@ -279,6 +281,26 @@ def _fsync_dir(folder: Path) -> None:
         os.close(fd)
 
 
+#: The signals the command line turns into an exception (Ctrl-C, a timeout, a closed terminal).
+_HELD = tuple(s for s in (getattr(signal, n, None) for n in ("SIGINT", "SIGTERM", "SIGHUP")) if s is not None)
+
+
+@contextlib.contextmanager
+def _signals_held() -> Iterator[None]:
+    """Hold SIGINT, SIGTERM and SIGHUP back for the block (they arrive when it ends): a
+    signal's exception between creating a temporary file and recording its name would leave
+    the file behind, one between moving the old output aside and the new one in would lose
+    both. Only the main thread runs Python's signal handlers, so only there is it needed."""
+    if not hasattr(signal, "pthread_sigmask") or threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, _HELD)
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, old)
+
+
 @contextlib.contextmanager
 def atomic_path(path: PathLike) -> Iterator[Path]:
     """Yield a temporary path in the folder of ``path`` (same suffix, so writers that
@@ -286,10 +308,13 @@ def atomic_path(path: PathLike) -> Iterator[Path]:
     exception the temporary file is fsynced and renamed onto ``path``, otherwise it is
     removed (also on Ctrl-C). ``OSError`` inside the block becomes a typed error."""
     p = output_file(path)
-    fd, tmp_name = tempfile.mkstemp(prefix=f".{p.stem}.", suffix=f".gk-tmp{p.suffix}", dir=p.parent if str(p.parent) else ".")
-    os.close(fd)
-    tmp = Path(tmp_name)
+    tmp: Optional[Path] = None
     try:
+        with _signals_held():  # the file and its name together (see _signals_held)
+            fd, tmp_name = tempfile.mkstemp(prefix=f".{p.stem}.", suffix=f".gk-tmp{p.suffix}",
+                                            dir=p.parent if str(p.parent) else ".")
+            os.close(fd)
+            tmp = Path(tmp_name)
         try:
             yield tmp
             if not tmp.exists():
@@ -308,8 +333,9 @@ def atomic_path(path: PathLike) -> Iterator[Path]:
             raise os_error(exc, p, "write") from None
         _fsync_dir(p.parent if str(p.parent) else Path("."))
     finally:
-        with contextlib.suppress(OSError):
-            tmp.unlink()
+        if tmp is not None:
+            with contextlib.suppress(OSError):
+                tmp.unlink()
 
 
 @contextlib.contextmanager
@@ -354,27 +380,30 @@ def atomic_dir(path: PathLike) -> Iterator[Path]:
     replaced, see :func:`output_dir`); on any exception it is deleted and ``path`` is
     left as it was. The folder receives :data:`REPORT_MARKER`."""
     p = output_dir(path)
-    try:
-        tmp = Path(tempfile.mkdtemp(prefix=f".{p.name}.", suffix=".gk-tmp", dir=p.parent))
-    except OSError as exc:
-        raise os_error(exc, p, "write") from None
+    tmp: Optional[Path] = None
     old = None
     try:
+        try:
+            with _signals_held():  # the folder and its name together (see _signals_held)
+                tmp = Path(tempfile.mkdtemp(prefix=f".{p.name}.", suffix=".gk-tmp", dir=p.parent))
+        except OSError as exc:
+            raise os_error(exc, p, "write") from None
         try:
             yield tmp
             (tmp / REPORT_MARKER).write_text("written by gagekit; this folder may be replaced by the next run\n")
             os.chmod(tmp, 0o777 & ~_umask())
-            if p.exists():
-                if not any(True for _ in os.scandir(p)):
-                    p.rmdir()
-                else:
-                    old = p.parent / f".{p.name}.{os.getpid()}.gk-old"
-                    os.replace(p, old)
-            os.replace(tmp, p)
+            with _signals_held():  # never the old folder moved aside and the new one not in
+                if p.exists():
+                    if not any(True for _ in os.scandir(p)):
+                        p.rmdir()
+                    else:
+                        old = p.parent / f".{p.name}.{os.getpid()}.gk-old"
+                        os.replace(p, old)
+                os.replace(tmp, p)
         except OSError as exc:
             raise os_error(exc, p, "write") from None
     finally:
-        if tmp.exists():
+        if tmp is not None and tmp.exists():
             shutil.rmtree(tmp, ignore_errors=True)
         if old is not None and old.exists():
             shutil.rmtree(old, ignore_errors=True)

@@ -120,3 +120,36 @@ def test_atomic_dir_builds_beside_and_never_replaces_foreign_folders(tmp_path):
         _files.output_dir(mine)
     with pytest.raises(FileAccessError, match="a file of that name"):
         _files.output_dir(mine / "thesis.tex")
+
+
+def test_a_signal_as_the_temporary_file_is_made_leaves_nothing(tmp_path, monkeypatch):
+    """Ctrl-C (or SIGTERM, which the command line turns into the same) arriving just after the
+    temporary file or folder exists but before its name is held: it is delivered once the name
+    is held, and the file is removed (a SIGTERM there left '.obs.*.gk-tmp.csv' behind)."""
+    import signal
+    import tempfile
+
+    real_mkstemp, real_mkdtemp = tempfile.mkstemp, tempfile.mkdtemp
+
+    def mkstemp(*a, **k):
+        r = real_mkstemp(*a, **k)
+        os.kill(os.getpid(), signal.SIGINT)  # the signal lands here, the file just made
+        return r
+
+    def mkdtemp(*a, **k):
+        r = real_mkdtemp(*a, **k)
+        os.kill(os.getpid(), signal.SIGINT)
+        return r
+
+    monkeypatch.setattr(tempfile, "mkstemp", mkstemp)
+    monkeypatch.setattr(tempfile, "mkdtemp", mkdtemp)
+    out = tmp_path / "obs.csv"
+    out.write_text("old\n")
+    with pytest.raises(KeyboardInterrupt):
+        with _files.atomic_path(out) as tmp:
+            tmp.write_text("new\n")
+    rep = tmp_path / "rep"
+    with pytest.raises(KeyboardInterrupt):
+        with _files.atomic_dir(rep) as d:
+            (d / "report.html").write_text("x")
+    assert out.read_text() == "old\n" and sorted(x.name for x in tmp_path.iterdir()) == ["obs.csv"]
