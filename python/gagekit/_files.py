@@ -287,18 +287,41 @@ _HELD = tuple(s for s in (getattr(signal, n, None) for n in ("SIGINT", "SIGTERM"
 
 @contextlib.contextmanager
 def _signals_held() -> Iterator[None]:
-    """Hold SIGINT, SIGTERM and SIGHUP back for the block (they arrive when it ends): a
+    """Hold SIGINT, SIGTERM and SIGHUP back for the block (their handlers run when it ends): a
     signal's exception between creating a temporary file and recording its name would leave
     the file behind, one between moving the old output aside and the new one in would lose
-    both. Only the main thread runs Python's signal handlers, so only there is it needed."""
-    if not hasattr(signal, "pthread_sigmask") or threading.current_thread() is not threading.main_thread():
+    both. The Python-level handlers are swapped for one that only records the signal, then put
+    back and called for what arrived. (Blocking the signal with ``pthread_sigmask`` is not
+    enough: it blocks the calling thread only, so with any other thread alive, a Rust worker
+    or a Dask thread, the kernel delivers the signal there and Python still raises it in the
+    main thread at once.) Only the main thread runs Python's signal handlers, and only it may
+    change them, so elsewhere the block runs as is."""
+    if threading.current_thread() is not threading.main_thread():
         yield
         return
-    old = signal.pthread_sigmask(signal.SIG_BLOCK, _HELD)
+    caught: list = []
+
+    def record(signum, frame):  # noqa: ANN001 - signal handler signature
+        caught.append((signum, frame))
+
+    saved = {}
+    for s in _HELD:
+        h = signal.getsignal(s)
+        if h is None:  # installed outside Python: leave it alone
+            continue
+        saved[s] = h
+        signal.signal(s, record)
     try:
         yield
     finally:
-        signal.pthread_sigmask(signal.SIG_SETMASK, old)
+        for s, h in saved.items():
+            signal.signal(s, h)
+        for signum, frame in caught:
+            h = saved[signum]
+            if callable(h):
+                h(signum, frame)
+            elif h == signal.SIG_DFL:
+                signal.raise_signal(signum)
 
 
 @contextlib.contextmanager
