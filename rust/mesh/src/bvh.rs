@@ -851,9 +851,11 @@ impl Bvh {
                 }
                 let (m0, m1) = (open32(&d0, &bw, mask), open32(&d1, &bw, mask));
                 if m0 != 0 || m1 != 0 {
-                    // the nearer child first: the one nearer to the group's first open lane
-                    let i = (m0 | m1).trailing_zeros() as usize;
-                    let first = if m0 == 0 || (m1 != 0 && d1[i] < d0[i]) { 1 } else { 0 };
+                    // the nearer child first: the one nearer to most of the open lanes (not
+                    // to the first open lane: 300 k points of the torus bench, 522 M against
+                    // 528 M instructions)
+                    let near1 = !lanes_le32::<AVX>(&d0, &d1) & (m0 | m1);
+                    let first = if m0 == 0 || (m1 != 0 && 2 * near1.count_ones() > (m0 | m1).count_ones()) { 1 } else { 0 };
                     let (mf, ms, ds) = if first == 0 { (m0, m1, d1) } else { (m1, m0, d0) };
                     if ms != 0 {
                         stack[sp].write((n.child[1 - first], ms, ds));
