@@ -335,12 +335,13 @@ def test_a_backward_pass_keeps_what_a_forward_pass_keeps(tmp_path, chunk, monkey
         cut_stream(s, boxes[:1], ["hull"], moments=[True])["a"].moments.tobytes()
 
 
-@pytest.mark.parametrize("chunk", [333, 4999])
+@pytest.mark.parametrize("chunk", [333, 4999, 10**7])
 def test_reads_past_the_page_cache_equal_the_buffered_reads(tmp_path, chunk, monkeypatch):
     """A float64 PLY read past the page cache (O_DIRECT: what a file larger than half the
     memory gets) gives the buffered read's chunks, forward and from the end back, and the
     same gage check to the bit (the header padded to a multiple of 8 bytes, so the points
-    can land in place)."""
+    can land in place); also with chunks larger than the file (buffers for its points only).
+    A read buffer smaller than ``direct_buffer_len`` of the points read is refused."""
     from gagekit import _core
     from gagekit.gage.analysis import check_gages_stream
 
@@ -372,6 +373,11 @@ def test_reads_past_the_page_cache_equal_the_buffered_reads(tmp_path, chunk, mon
     assert [k for k, _ in got_back] == [k for k, _ in want_back]
     assert all(same(a, b) for (_, a), (_, b) in zip(got_back, want_back))
     assert check_gages_stream(open_cloud(path, chunk=chunk), spec).to_dict() == want
+    s = real(str(path), direct=True)
+    with pytest.raises(InvalidInputError, match="expected at least"):
+        s.next_direct(np.empty(_core.cloud.direct_buffer_len(100) - 1, dtype=np.uint8), 100)
+    at, k = s.next_direct(np.empty(_core.cloud.direct_buffer_len(100), dtype=np.uint8), 100)
+    assert k == 100
 
 
 @pytest.mark.parametrize("shell", [0.1, 1e-9])

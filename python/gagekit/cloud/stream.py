@@ -297,7 +297,7 @@ def _open_format(p: Path, suffix: str, m: int):
                 # (O_DIRECT, PlyStream.next_direct), straight into the buffer
                 if not held:
                     size = min(m, max(1, count))
-                    held.extend(np.empty(24 * size + _DIRECT_SLACK, dtype=np.uint8) for _ in range(2))
+                    held.extend(np.empty(_core.cloud.direct_buffer_len(size), dtype=np.uint8) for _ in range(2))
                 return held[0], held[1]
 
             def points_at(buf: np.ndarray, got: tuple) -> np.ndarray:
@@ -344,11 +344,6 @@ def _open_format(p: Path, suffix: str, m: int):
     if suffix == ".e57":
         return _e57(p, m)
     raise FileFormatError(f"{p}: cannot stream '{suffix}' files")  # pragma: no cover - suffixes above are all
-
-
-_DIRECT_SLACK = 12288
-"""Bytes of a read buffer beyond its points: the whole aligned blocks of an O_DIRECT read
-around them (``_core.cloud.PlyChunks.next_direct``)."""
 
 
 def _read_ahead(read: Callable[[int], tuple]) -> Iterator[tuple[int, tuple]]:
