@@ -387,7 +387,8 @@ def test_a_one_pass_gage_check_equals_the_whole_read(monkeypatch, shell):
     first chunk's alignment puts them at (hull vertices of a shrunk core, every point of a
     shell around it), and joined once the whole file's alignment is known. The result is
     the whole read's, bit for bit; with a shell too thin to hold the fitted boxes it falls
-    back to the second pass, with the same result."""
+    back to the second pass, with the same result. The guess's chunk is read once: the
+    pass goes on from it."""
     from gagekit.cloud import streamed
     from gagekit.gage import analysis
     from gagekit.gage.analysis import check_gages, check_gages_stream
@@ -400,10 +401,25 @@ def test_a_one_pass_gage_check_equals_the_whole_read(monkeypatch, shell):
     path, spec = DATA / "casting_ok.ply", DATA / "casting_ok.toml"
     whole = check_gages(read_cloud(path).points, spec).to_dict()
     n = open_cloud(path).count
-    assert check_gages_stream(open_cloud(path, chunk=n // 3 + 1), spec).to_dict() == whole
+    stream = open_cloud(path, chunk=n // 3 + 1)
+    reads = []
+    reusing, backward = stream.reusing, stream.backward
+
+    def counted(source):
+        def chunks():
+            for c in source():
+                reads.append(1)
+                yield c
+        return chunks
+
+    monkeypatch.setattr(stream, "reusing", counted(reusing))
+    monkeypatch.setattr(stream, "backward", counted(backward))
+    assert check_gages_stream(stream, spec).to_dict() == whole
     # the first chunk's guess, then one pass with the datum, core and shell boxes; a second
     # pass over the gage regions only when the shell is too thin
     assert len(passes) == (2 if shell == 0.1 else 3)
+    # three chunks a pass; the guess's is not read again
+    assert len(reads) == (3 if shell == 0.1 else 6)
 
 
 def test_the_streamed_sample_is_the_bottom_k_of_every_inside_point():
