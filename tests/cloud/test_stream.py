@@ -15,7 +15,7 @@ import pytest
 
 import gagekit
 from gagekit.cloud import read_cloud
-from gagekit.cloud.stream import chunk_points, memory_budget, open_cloud, should_stream
+from gagekit.cloud.stream import READ_AHEAD, chunk_points, memory_budget, open_cloud, should_stream
 from gagekit.errors import FileFormatError, InvalidInputError
 
 DATA = Path(gagekit.__file__).parent / "data"
@@ -252,8 +252,8 @@ def test_hull_regions_rehulled_midway_equal_the_whole_read(monkeypatch):
 
 
 def test_a_reused_ply_chunk_is_valid_until_the_next_is_read():
-    """The reusing PLY stream's contract (two buffers in turn, the next filled in a thread
-    while the consumer holds this one): each chunk holds its own points as long as the
+    """The reusing PLY stream's contract (READ_AHEAD + 1 buffers in turn, the next ones
+    filled in a thread while the consumer holds this one): each chunk holds its own points as long as the
     consumer holds it, and a chunk held past the next one's read is overwritten by a
     later chunk (so a consumer that keeps points must copy them, as ``cut_stream`` does)."""
     whole = read_cloud(DATA / "bracket.ply").points
@@ -265,34 +265,37 @@ def test_a_reused_ply_chunk_is_valid_until_the_next_is_read():
         chunks.append(c)
         copies.append(c.copy())
     assert len(chunks) > 3 and same(np.vstack(copies), whole)
-    # chunk i and chunk i + 2 share a buffer: the held chunk 0 now shows a later chunk
-    assert np.shares_memory(chunks[0], chunks[2]) and not np.shares_memory(chunks[0], chunks[1])
+    # chunk i and chunk i + READ_AHEAD + 1 share a buffer: the held chunk 0 now shows a later chunk
+    assert READ_AHEAD == 2 and len(chunks) > READ_AHEAD + 1
+    assert np.shares_memory(chunks[0], chunks[3])
+    assert not any(np.shares_memory(chunks[0], chunks[j]) for j in (1, 2))
     assert not same(chunks[0], copies[0])
 
 
-def test_read_ahead_reads_the_next_chunk_while_this_one_is_held():
+@pytest.mark.parametrize("ahead", [1, 2])
+def test_read_ahead_reads_the_next_chunks_while_this_one_is_held(ahead):
     """``_read_ahead`` yields (i, read(i)) in order until read(i) reads no point (its
-    (offset, points) pair has 0 points), and has already started read(i + 1) when it
-    hands out i."""
+    (offset, points) pair has 0 points), and has already started read(i + 1) ...
+    read(i + ahead), in order, when it hands out i (not read(i + ahead + 1), whose buffer
+    is chunk i's)."""
     import threading
 
     from gagekit.cloud.stream import _read_ahead
 
-    started, sizes = [], [5, 3, 2, 0, 7]
-    reading = threading.Event()
+    started, sizes = [], [5, 3, 2, 0, 7, 1]
+    reading = [threading.Event() for _ in sizes]
 
     def read(i):
         started.append(i)
-        if i == 1:
-            reading.set()
+        reading[i].set()
         return 8 * i, sizes[i]
 
     got = []
-    for i, k in _read_ahead(read):
-        if i == 0:
-            assert reading.wait(5), "read(1) did not start while chunk 0 was held"
+    for i, k in _read_ahead(read, ahead):
+        assert reading[i + ahead].wait(5), f"read({i + ahead}) did not start while chunk {i} was held"
+        assert not reading[i + ahead + 1].is_set()
         got.append((i, k))
-    assert got == [(0, (0, 5)), (1, (8, 3)), (2, (16, 2))] and started == [0, 1, 2, 3]
+    assert got == [(0, (0, 5)), (1, (8, 3)), (2, (16, 2))] and started == list(range(3 + ahead))
 
 
 @pytest.mark.parametrize("chunk", [1, 97, 4999])
