@@ -705,7 +705,7 @@ impl Bvh {
         let mut slack = [0.0f64; GROUP];
         // the lanes in single precision for the box tests (see `widen`)
         let (mut qx, mut qy, mut qz) = ([0.0f32; GROUP], [0.0f32; GROUP], [0.0f32; GROUP]);
-        let mut err = [0.0f64; GROUP];
+        let mut err2 = [0.0f64; GROUP];
         let mut bw = [f32::NEG_INFINITY; GROUP];
         let size = self.size;
         let mut all = 0u32;
@@ -735,8 +735,8 @@ impl Bvh {
                 _ => best[i] = None,
             }
             (qx[i], qy[i], qz[i]) = (px[i] as f32, py[i] as f32, pz[i] as f32);
-            err[i] = F32_ERR * (size + px[i].abs().max(py[i].abs()).max(pz[i].abs()));
-            bw[i] = widen(bd[i], err[i]);
+            err2[i] = widen_err2(F32_ERR * (size + px[i].abs().max(py[i].abs()).max(pz[i].abs())));
+            bw[i] = widen(bd[i], err2[i]);
             all |= 1 << i;
         }
         // lanes of `m` whose squared box distance in `d` may hold something better
@@ -815,7 +815,7 @@ impl Bvh {
                             let d2 = cl.d2[i];
                             if slot != skip[i] && better(d2, slot, bd[i], best[i].as_ref().map(|b| b.slot)) {
                                 bd[i] = d2;
-                                bw[i] = widen(d2, err[i]);
+                                bw[i] = widen(d2, err2[i]);
                                 best[i] = Some(Nearest { slot, d2, foot: [cl.foot[0][i], cl.foot[1][i], cl.foot[2][i]], feature: feature_of_code(cl.code[i]) });
                             }
                         }
@@ -831,7 +831,7 @@ impl Bvh {
                         let d2 = dot(v, v);
                         if better(d2, slot, bd[i], best[i].as_ref().map(|b| b.slot)) {
                             bd[i] = d2;
-                            bw[i] = widen(d2, err[i]);
+                            bw[i] = widen(d2, err2[i]);
                             best[i] = Some(Nearest { slot, d2, foot, feature });
                         }
                     }
@@ -896,17 +896,38 @@ const F32_ERR: f64 = 1.0 / (1u64 << 22) as f64;
 
 /// The single-precision threshold a lane's f32 squared box distance is compared with:
 /// a box whose exact squared distance is at most `bd` has an f32 distance at most
-/// (sqrt(bd) (1 + 2^-21) + sqrt(3) err)^2 (each of the three gaps is off by at most
-/// `err` from the point's rounding and the subtraction, the squares and the sum by a
-/// relative 2^-22), widened by 1e-5 and rounded up. So the boxes opened are a superset
-/// of those the exact test opens: only the speed depends on it, never the answer.
+/// (x c + s)^2 with x = sqrt(bd), c = 1 + 2^-21, s = sqrt(3) err (each of the three gaps
+/// is off by at most `err` from the point's rounding and the subtraction, the squares and
+/// the sum by a relative 2^-22). Without the square root: 2 x c s <= t x^2 c^2 + s^2 / t
+/// for any t > 0 (the square (sqrt(t) x c - s / sqrt(t))^2 is not negative), so
+/// (x c + s)^2 <= bd c^2 (1 + t) + 3 err^2 (1 + 1 / t); with t = 2^-10 the threshold
+/// grows by under 0.05 % of the distance and the rounding term by a factor 32 of the
+/// distance (both only open a few more boxes). That sum ([`WIDEN_BD`] times `bd` plus
+/// [`widen_err2`] of `err`, both with the room 1e-5) is rounded to the nearest single
+/// precision number: the room covers the sum's few f64 roundings (relative 2^-53 each)
+/// and that last one (relative 2^-24 in the normal range; the 1e-38 in [`widen_err2`]
+/// covers its absolute 2^-150 below it), so no branch is needed to round up. So the boxes opened
+/// are a superset of those the exact test opens: only the speed depends on it, never
+/// the answer.
 #[inline(always)]
-fn widen(bd: f64, err: f64) -> f32 {
+pub(crate) fn widen(bd: f64, err2: f64) -> f32 {
     if !(bd >= 0.0) {
         return f32::NEG_INFINITY;
     }
-    let r = bd.sqrt() * (1.0 + 1.0 / (1u64 << 21) as f64) + 1.7320508075688772 * err;
-    f32_out(r * r * (1.0 + 1e-5), true)
+    (bd * WIDEN_BD + err2) as f32
+}
+
+/// The factor t of [`widen`]'s bound 2 x c s <= t x^2 c^2 + s^2 / t.
+const WIDEN_T: f64 = 1.0 / 1024.0;
+/// [`widen`]'s factor of `bd`: c^2 (1 + t) with c = 1 + 2^-21, and the room 1e-5.
+const WIDEN_BD: f64 = (1.0 + 1.0 / (1u64 << 21) as f64) * (1.0 + 1.0 / (1u64 << 21) as f64) * (1.0 + WIDEN_T) * (1.0 + 1e-5);
+
+/// [`widen`]'s rounding term of a lane whose gaps are off by at most `err`:
+/// 3 err^2 (1 + 1 / t), with the room 1e-5, plus 1e-38 (for the rounding to single
+/// precision below its normal range).
+#[inline(always)]
+pub(crate) fn widen_err2(err: f64) -> f64 {
+    3.0 * err * err * (1.0 + 1.0 / WIDEN_T) * (1.0 + 1e-5) + 1e-38
 }
 
 /// The larger of `a` and `b`; `b` when either is NaN. The same value as `a.max(b)` for

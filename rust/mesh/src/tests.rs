@@ -751,3 +751,23 @@ proptest! {
         }
     }
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(4096))]
+    /// The group query's single-precision threshold (without a square root) is never
+    /// below the one with it, (sqrt(bd) (1 + 2^-21) + sqrt(3) err)^2, which bounds the f32
+    /// box distance of every box the exact test opens: from distances 1e-10 to 1e6 and
+    /// rounding errors 1e-12 to 1 (the point's f32 error at any coordinate up to 1e6),
+    /// and at 0 and infinity.
+    #[test]
+    fn widened_threshold_covers_the_rounded_box_distance(e_bd in -20.0f64..12.0, e_err in -12.0f64..0.0, special in 0usize..6) {
+        let bd = match special { 0 => 0.0, 1 => f64::INFINITY, _ => 10f64.powf(e_bd) };
+        let err = 10f64.powf(e_err);
+        let need = bd.sqrt() * (1.0 + 1.0 / (1u64 << 21) as f64) + 3f64.sqrt() * err;
+        let w = crate::bvh::widen(bd, crate::bvh::widen_err2(err));
+        prop_assert!(w as f64 >= need * need, "bd {} err {}: {} < {}", bd, err, w, need * need);
+        // no lane is opened by a lane without a best (NEG_INFINITY) or a NaN
+        prop_assert_eq!(crate::bvh::widen(f64::NEG_INFINITY, crate::bvh::widen_err2(err)), f32::NEG_INFINITY);
+        prop_assert_eq!(crate::bvh::widen(f64::NAN, crate::bvh::widen_err2(err)), f32::NEG_INFINITY);
+    }
+}
