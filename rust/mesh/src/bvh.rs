@@ -165,16 +165,30 @@ impl Bound {
     }
 
     /// The two sides of [`Bound::may_beat`]'s comparison: the squared lower bound and the
-    /// best widened by the squares' rounding.
+    /// best widened by the squares' rounding ([`Bound::best_side`]).
     #[inline(always)]
     fn terms(&self, p: &V3, best_d2: f64, slack: f64) -> (f64, f64) {
+        (self.lower(p, slack), Self::best_side(best_d2))
+    }
+
+    /// The best squared distance widened by the squares' rounding: the right side of
+    /// [`Bound::may_beat`]'s comparison.
+    #[inline(always)]
+    fn best_side(best_d2: f64) -> f64 {
+        best_d2 * (1.0 + 1e-12)
+    }
+
+    /// The squared lower bound, each part reduced by `slack`: the left side of
+    /// [`Bound::may_beat`]'s comparison.
+    #[inline(always)]
+    fn lower(&self, p: &V3, slack: f64) -> f64 {
         let plane = (dot(self.n, *p) - self.w[0]).abs();
         let e0 = dot(self.m[0], *p) - self.w[1];
         let e1 = dot(self.m[1], *p) - self.w[2];
         let e2 = dot(self.m[2], *p) - self.w[3];
         let a = larger(plane - slack, 0.0);
         let b = larger(larger(larger(e0, e1), e2) - slack, 0.0);
-        (a * a + b * b, best_d2 * (1.0 + 1e-12))
+        a * a + b * b
     }
 
     /// [`Bound::may_beat`] of the [`GROUP`] lanes of a group at once (coordinates by axis,
@@ -183,18 +197,20 @@ impl Bound {
     /// instructions instead of one lane after another.
     #[inline(always)]
     pub fn may_beat_lanes(&self, p: [&[f64; GROUP]; 3], best_d2: &[f64; GROUP], slack: &[f64; GROUP]) -> u32 {
-        self.may_beat_lanes_in::<false>(p, best_d2, slack)
+        self.may_beat_lanes_in::<false>(p, &best_d2.map(Self::best_side), slack)
     }
 
-    /// [`Bound::may_beat_lanes`]; `AVX`: the lanes' comparison by AVX instructions (only
+    /// [`Bound::may_beat_lanes`] with the lanes' right sides given ([`Bound::best_side`]
+    /// of their best, kept by the group query as the best changes instead of computed
+    /// again for every triangle); `AVX`: the lanes' comparison by AVX instructions (only
     /// in code compiled for AVX2, see [`lanes_le64`]).
     #[inline(always)]
-    fn may_beat_lanes_in<const AVX: bool>(&self, p: [&[f64; GROUP]; 3], best_d2: &[f64; GROUP], slack: &[f64; GROUP]) -> u32 {
-        let (mut bound, mut best) = ([0.0; GROUP], [0.0; GROUP]);
+    fn may_beat_lanes_in<const AVX: bool>(&self, p: [&[f64; GROUP]; 3], best_side: &[f64; GROUP], slack: &[f64; GROUP]) -> u32 {
+        let mut bound = [0.0; GROUP];
         for i in 0..GROUP {
-            (bound[i], best[i]) = self.terms(&[p[0][i], p[1][i], p[2][i]], best_d2[i], slack[i]);
+            bound[i] = self.lower(&[p[0][i], p[1][i], p[2][i]], slack[i]);
         }
-        lanes_le64::<AVX>(&bound, &best)
+        lanes_le64::<AVX>(&bound, best_side)
     }
 }
 
@@ -701,6 +717,8 @@ impl Bvh {
         // per lane: coordinates (SoA), the best squared distance, the start's slot
         let (mut px, mut py, mut pz) = ([0.0f64; GROUP], [0.0f64; GROUP], [0.0f64; GROUP]);
         let mut bd = [f64::NEG_INFINITY; GROUP];
+        // per lane: `Bound::best_side` of `bd`, the leaf bounds' right side
+        let mut bs = [f64::NEG_INFINITY; GROUP];
         let mut skip = [u32::MAX; GROUP];
         let mut slack = [0.0f64; GROUP];
         // the lanes in single precision for the box tests (see `widen`)
@@ -735,6 +753,7 @@ impl Bvh {
                 _ => best[i] = None,
             }
             (qx[i], qy[i], qz[i]) = (px[i] as f32, py[i] as f32, pz[i] as f32);
+            bs[i] = Bound::best_side(bd[i]);
             err2[i] = widen_err2(F32_ERR * (size + px[i].abs().max(py[i].abs()).max(pz[i].abs())));
             bw[i] = widen(bd[i], err2[i]);
             all |= 1 << i;
@@ -804,7 +823,7 @@ impl Bvh {
                         let i = mask.trailing_zeros() as usize;
                         if self.bounds[slot as usize].may_beat(&ps[i], bd[i], slack[i]) { mask } else { 0 }
                     } else {
-                        mask & self.bounds[slot as usize].may_beat_lanes_in::<AVX>([&px, &py, &pz], &bd, &slack)
+                        mask & self.bounds[slot as usize].may_beat_lanes_in::<AVX>([&px, &py, &pz], &bs, &slack)
                     };
                     if m.count_ones() >= VECTOR_EXACT {
                         // many lanes: their exact tests at once, the same bits
@@ -815,6 +834,7 @@ impl Bvh {
                             let d2 = cl.d2[i];
                             if slot != skip[i] && better(d2, slot, bd[i], best[i].as_ref().map(|b| b.slot)) {
                                 bd[i] = d2;
+                                bs[i] = Bound::best_side(d2);
                                 bw[i] = widen(d2, err2[i]);
                                 best[i] = Some(Nearest { slot, d2, foot: [cl.foot[0][i], cl.foot[1][i], cl.foot[2][i]], feature: feature_of_code(cl.code[i]) });
                             }
@@ -831,6 +851,7 @@ impl Bvh {
                         let d2 = dot(v, v);
                         if better(d2, slot, bd[i], best[i].as_ref().map(|b| b.slot)) {
                             bd[i] = d2;
+                            bs[i] = Bound::best_side(d2);
                             bw[i] = widen(d2, err2[i]);
                             best[i] = Some(Nearest { slot, d2, foot, feature });
                         }
