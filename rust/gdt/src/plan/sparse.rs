@@ -105,6 +105,7 @@ pub fn block_rng(seed: u64, trial: u64, block: u64) -> TrialRng {
 /// 1988, 477-484), relative error about 1e-16. The tails use r = sqrt(-ln p) of the
 /// smaller tail, so a tail probability p near 0 keeps its full precision.
 #[inline]
+#[allow(clippy::excessive_precision)]
 pub fn normal_quantile(p: f64) -> f64 {
     const A: [f64; 8] = [
         3.387_132_872_796_366_608, 133.141_667_891_784_377_45, 1_971.590_950_306_551_442_7, 13_731.693_765_509_461_125,
