@@ -9,8 +9,8 @@ point: 200 M points = 4.8 GB). The gage file is the case's own.
 
 Each case runs ``gagekit gage check SCAN GAGES --json --memory M`` in a child process,
 in three reading modes: ``whole`` (--memory 64G: the file read whole, a no-copy map of
-gagekit's own PLY layout), ``stream`` (--memory 2G: chunks of 5.6 M points, two buffers
-of them: the next is read while the last is classified) and ``stream-256M`` (chunks of
+gagekit's own PLY layout), ``stream`` (--memory 2G: chunks of 5.6 M points, three buffers
+of them: the next two are read while the last is classified) and ``stream-256M`` (chunks of
 0.7 M points). A streamed check with a 3-2-1 alignment reads the file once when its
 first chunk gives a 3-2-1 frame (this scan's does): the part-frame gage regions are cut
 in the datum pass around the boxes that frame puts them at (hull vertices of a shrunk

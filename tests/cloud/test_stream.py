@@ -15,7 +15,7 @@ import pytest
 
 import gagekit
 from gagekit.cloud import read_cloud
-from gagekit.cloud.stream import chunk_points, memory_budget, open_cloud, should_stream
+from gagekit.cloud.stream import READ_AHEAD, chunk_points, memory_budget, open_cloud, should_stream
 from gagekit.errors import FileFormatError, InvalidInputError
 
 DATA = Path(gagekit.__file__).parent / "data"
@@ -252,8 +252,8 @@ def test_hull_regions_rehulled_midway_equal_the_whole_read(monkeypatch):
 
 
 def test_a_reused_ply_chunk_is_valid_until_the_next_is_read():
-    """The reusing PLY stream's contract (two buffers in turn, the next filled in a thread
-    while the consumer holds this one): each chunk holds its own points as long as the
+    """The reusing PLY stream's contract (READ_AHEAD + 1 buffers in turn, the next ones
+    filled in a thread while the consumer holds this one): each chunk holds its own points as long as the
     consumer holds it, and a chunk held past the next one's read is overwritten by a
     later chunk (so a consumer that keeps points must copy them, as ``cut_stream`` does)."""
     whole = read_cloud(DATA / "bracket.ply").points
@@ -265,34 +265,37 @@ def test_a_reused_ply_chunk_is_valid_until_the_next_is_read():
         chunks.append(c)
         copies.append(c.copy())
     assert len(chunks) > 3 and same(np.vstack(copies), whole)
-    # chunk i and chunk i + 2 share a buffer: the held chunk 0 now shows a later chunk
-    assert np.shares_memory(chunks[0], chunks[2]) and not np.shares_memory(chunks[0], chunks[1])
+    # chunk i and chunk i + READ_AHEAD + 1 share a buffer: the held chunk 0 now shows a later chunk
+    assert READ_AHEAD == 2 and len(chunks) > READ_AHEAD + 1
+    assert np.shares_memory(chunks[0], chunks[3])
+    assert not any(np.shares_memory(chunks[0], chunks[j]) for j in (1, 2))
     assert not same(chunks[0], copies[0])
 
 
-def test_read_ahead_reads_the_next_chunk_while_this_one_is_held():
+@pytest.mark.parametrize("ahead", [1, 2])
+def test_read_ahead_reads_the_next_chunks_while_this_one_is_held(ahead):
     """``_read_ahead`` yields (i, read(i)) in order until read(i) reads no point (its
-    (offset, points) pair has 0 points), and has already started read(i + 1) when it
-    hands out i."""
+    (offset, points) pair has 0 points), and has already started read(i + 1) ...
+    read(i + ahead), in order, when it hands out i (not read(i + ahead + 1), whose buffer
+    is chunk i's)."""
     import threading
 
     from gagekit.cloud.stream import _read_ahead
 
-    started, sizes = [], [5, 3, 2, 0, 7]
-    reading = threading.Event()
+    started, sizes = [], [5, 3, 2, 0, 7, 1]
+    reading = [threading.Event() for _ in sizes]
 
     def read(i):
         started.append(i)
-        if i == 1:
-            reading.set()
+        reading[i].set()
         return 8 * i, sizes[i]
 
     got = []
-    for i, k in _read_ahead(read):
-        if i == 0:
-            assert reading.wait(5), "read(1) did not start while chunk 0 was held"
+    for i, k in _read_ahead(read, ahead):
+        assert reading[i + ahead].wait(5), f"read({i + ahead}) did not start while chunk {i} was held"
+        assert not reading[i + ahead + 1].is_set()
         got.append((i, k))
-    assert got == [(0, (0, 5)), (1, (8, 3)), (2, (16, 2))] and started == [0, 1, 2, 3]
+    assert got == [(0, (0, 5)), (1, (8, 3)), (2, (16, 2))] and started == list(range(3 + ahead))
 
 
 @pytest.mark.parametrize("chunk", [1, 97, 4999])
@@ -335,12 +338,13 @@ def test_a_backward_pass_keeps_what_a_forward_pass_keeps(tmp_path, chunk, monkey
         cut_stream(s, boxes[:1], ["hull"], moments=[True])["a"].moments.tobytes()
 
 
-@pytest.mark.parametrize("chunk", [333, 4999])
+@pytest.mark.parametrize("chunk", [333, 4999, 10**7])
 def test_reads_past_the_page_cache_equal_the_buffered_reads(tmp_path, chunk, monkeypatch):
     """A float64 PLY read past the page cache (O_DIRECT: what a file larger than half the
     memory gets) gives the buffered read's chunks, forward and from the end back, and the
     same gage check to the bit (the header padded to a multiple of 8 bytes, so the points
-    can land in place)."""
+    can land in place); also with chunks larger than the file (buffers for its points only).
+    A read buffer smaller than ``direct_buffer_len`` of the points read is refused."""
     from gagekit import _core
     from gagekit.gage.analysis import check_gages_stream
 
@@ -372,6 +376,11 @@ def test_reads_past_the_page_cache_equal_the_buffered_reads(tmp_path, chunk, mon
     assert [k for k, _ in got_back] == [k for k, _ in want_back]
     assert all(same(a, b) for (_, a), (_, b) in zip(got_back, want_back))
     assert check_gages_stream(open_cloud(path, chunk=chunk), spec).to_dict() == want
+    s = real(str(path), direct=True)
+    with pytest.raises(InvalidInputError, match="expected at least"):
+        s.next_direct(np.empty(_core.cloud.direct_buffer_len(100) - 1, dtype=np.uint8), 100)
+    at, k = s.next_direct(np.empty(_core.cloud.direct_buffer_len(100), dtype=np.uint8), 100)
+    assert k == 100
 
 
 @pytest.mark.parametrize("shell", [0.1, 1e-9])
@@ -381,7 +390,8 @@ def test_a_one_pass_gage_check_equals_the_whole_read(monkeypatch, shell):
     first chunk's alignment puts them at (hull vertices of a shrunk core, every point of a
     shell around it), and joined once the whole file's alignment is known. The result is
     the whole read's, bit for bit; with a shell too thin to hold the fitted boxes it falls
-    back to the second pass, with the same result."""
+    back to the second pass, with the same result. The guess's chunk is read once: the
+    pass goes on from it."""
     from gagekit.cloud import streamed
     from gagekit.gage import analysis
     from gagekit.gage.analysis import check_gages, check_gages_stream
@@ -394,10 +404,25 @@ def test_a_one_pass_gage_check_equals_the_whole_read(monkeypatch, shell):
     path, spec = DATA / "casting_ok.ply", DATA / "casting_ok.toml"
     whole = check_gages(read_cloud(path).points, spec).to_dict()
     n = open_cloud(path).count
-    assert check_gages_stream(open_cloud(path, chunk=n // 3 + 1), spec).to_dict() == whole
+    stream = open_cloud(path, chunk=n // 3 + 1)
+    reads = []
+    reusing, backward = stream.reusing, stream.backward
+
+    def counted(source):
+        def chunks():
+            for c in source():
+                reads.append(1)
+                yield c
+        return chunks
+
+    monkeypatch.setattr(stream, "reusing", counted(reusing))
+    monkeypatch.setattr(stream, "backward", counted(backward))
+    assert check_gages_stream(stream, spec).to_dict() == whole
     # the first chunk's guess, then one pass with the datum, core and shell boxes; a second
     # pass over the gage regions only when the shell is too thin
     assert len(passes) == (2 if shell == 0.1 else 3)
+    # three chunks a pass; the guess's is not read again
+    assert len(reads) == (3 if shell == 0.1 else 6)
 
 
 def test_the_streamed_sample_is_the_bottom_k_of_every_inside_point():

@@ -289,16 +289,16 @@ def _open_format(p: Path, suffix: str, m: int):
             held: list = []
 
             def buffers() -> tuple:
-                # two byte buffers in turn, made once and kept for every pass (fresh
-                # pages cost more than the copy into them): the next chunk is read (in a
-                # thread, no GIL held) while the consumer uses this one, which stays
-                # valid until it asks for the next. Room for whole aligned blocks around
+                # READ_AHEAD + 1 byte buffers in turn, made once and kept for every pass
+                # (fresh pages cost more than the copy into them): the next chunks are
+                # read (in a thread, no GIL held) while the consumer uses this one, which
+                # stays valid until it asks for the next. Room for whole aligned blocks around
                 # the points: a file larger than the page cache is read past it
                 # (O_DIRECT, PlyStream.next_direct), straight into the buffer
                 if not held:
                     size = min(m, max(1, count))
-                    held.extend(np.empty(24 * size + _DIRECT_SLACK, dtype=np.uint8) for _ in range(2))
-                return held[0], held[1]
+                    held.extend(np.empty(_core.cloud.direct_buffer_len(size), dtype=np.uint8) for _ in range(READ_AHEAD + 1))
+                return tuple(held)
 
             def points_at(buf: np.ndarray, got: tuple) -> np.ndarray:
                 at, k = got
@@ -307,8 +307,8 @@ def _open_format(p: Path, suffix: str, m: int):
             def ply_chunks_reused() -> Iterator[np.ndarray]:
                 s = _core.cloud.ply_chunks(str(p))
                 bufs = buffers()
-                for i, got in _read_ahead(lambda i: s.next_direct(bufs[i % 2], m)):
-                    yield points_at(bufs[i % 2], got)
+                for i, got in _read_ahead(lambda i: s.next_direct(bufs[i % len(bufs)], m)):
+                    yield points_at(bufs[i % len(bufs)], got)
 
             def ply_chunks_backward() -> Iterator[tuple[int, np.ndarray]]:
                 s = _core.cloud.ply_chunks(str(p))
@@ -319,10 +319,10 @@ def _open_format(p: Path, suffix: str, m: int):
                     if i >= len(starts):
                         return (0, 0)
                     s.seek(starts[i])
-                    return s.next_direct(bufs[i % 2], min(m, count - starts[i]))
+                    return s.next_direct(bufs[i % len(bufs)], min(m, count - starts[i]))
 
                 for i, got in _read_ahead(read):
-                    yield starts[i], points_at(bufs[i % 2], got)
+                    yield starts[i], points_at(bufs[i % len(bufs)], got)
 
             ply_chunks.reusing = ply_chunks_reused  # type: ignore[attr-defined]
             ply_chunks.backward = ply_chunks_backward  # type: ignore[attr-defined]
@@ -346,22 +346,29 @@ def _open_format(p: Path, suffix: str, m: int):
     raise FileFormatError(f"{p}: cannot stream '{suffix}' files")  # pragma: no cover - suffixes above are all
 
 
-_DIRECT_SLACK = 12288
-"""Bytes of a read buffer beyond its points: the whole aligned blocks of an O_DIRECT read
-around them (``_core.cloud.PlyChunks.next_direct``)."""
+READ_AHEAD = 2
+"""Chunks of a binary PLY read ahead of the one in use (each in a buffer of its own). With
+one, the disk waits whenever a chunk's work takes longer than its read (a hull of the
+piled-up points of a region, the other programs on the cores), and the cores wait on the
+next slow read: the pass takes the sum of the slower of the two chunk by chunk. With two,
+a slow chunk on one side is made up by fast ones on the other."""
 
 
-def _read_ahead(read: Callable[[int], tuple]) -> Iterator[tuple[int, tuple]]:
+def _read_ahead(read: Callable[[int], tuple], ahead: int = READ_AHEAD) -> Iterator[tuple[int, tuple]]:
     """(i, read(i)) for i = 0, 1, ... until read(i) reads no point ((offset, points
-    read) pairs, 0 points at the end), with read(i + 1) running in a
-    thread while the consumer holds (i, read(i)): the file's reading overlaps the work on
-    the chunk before (the disk and the page-cache copies run while the cores classify)."""
+    read) pairs, 0 points at the end), with read(i + 1) ... read(i + ahead) running in
+    order in a thread while the consumer holds (i, read(i)): the file's reading overlaps
+    the work on the chunks before (the disk and the page-cache copies run while the
+    cores classify). read(i + ahead) starts once the consumer has asked for chunk i (so
+    done with chunk i - 1: its buffer may be reused)."""
+    from collections import deque
     from concurrent.futures import ThreadPoolExecutor
 
     with ThreadPoolExecutor(1, thread_name_prefix="gagekit-read-ahead") as ex:
-        i, fut = 0, ex.submit(read, 0)
-        while (k := fut.result())[1]:
-            fut = ex.submit(read, i + 1)
+        futs = deque(ex.submit(read, j) for j in range(ahead))
+        i = 0
+        while (k := futs.popleft().result())[1]:
+            futs.append(ex.submit(read, i + ahead))
             yield i, k
             i += 1
 

@@ -23,7 +23,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Mapping, Optional, Union
+from typing import Any, Iterator, Mapping, Optional, Union
 
 import numpy as np
 
@@ -333,7 +333,7 @@ def build_problem_stream(stream, spec: SpecLike) -> GageProblem:
     if al is not None:
         early = [r for r in regions if r.frame != "part"]
         late = [r for r in regions if r.frame == "part"]
-        guess = _first_chunk_alignment(stream, spec) if late else None
+        guess, rest = _first_chunk_alignment(stream, spec) if late else (None, None)
         extra, keep, minus = [r.box for r in early], ["hull"] * len(early), [None] * len(early)
         if guess is not None:
             k = len(dict.fromkeys([*al.primary, *al.secondary, *al.tertiary])) + len(early)
@@ -341,7 +341,8 @@ def build_problem_stream(stream, spec: SpecLike) -> GageProblem:
             extra += [_grown(b, -SHELL_MM) for b in ahead] + [_grown(b, SHELL_MM) for b in ahead]
             keep += ["hull"] * len(late) + ["all"] * len(late)
             minus += [None] * len(late) + [k + i for i in range(len(late))]
-        alignment, first = _datum_pass(stream, spec, extra, keep, minus)
+        # the pass goes on from the guess's chunk (read once) when there is a guess
+        alignment, first = _datum_pass(stream if rest is None else rest, spec, extra, keep, minus)
         k0 = len(first.regions) - len(extra)
         _check_caught(first, [r.name for r in early], [r.frame for r in early], source, offset=k0)
         for i, r in enumerate(early):
@@ -396,26 +397,31 @@ SHELL_MM = 0.1
 streamed check keeps whole (:func:`build_problem_stream`)."""
 
 
-def _first_chunk_alignment(stream, spec: GageSpec) -> Optional[Alignment]:
+def _first_chunk_alignment(stream, spec: GageSpec) -> tuple[Optional[Alignment], Optional[Iterator]]:
     """The 3-2-1 frame fitted to the first chunk's datum points alone (a guess of the
-    whole file's), or None when that chunk cannot give one."""
+    whole file's), and the stream's chunks from that first one on (the chunk not read a
+    second time: the file's reading goes on ahead while the guess is fitted); (None,
+    None) when that chunk cannot give one."""
+    import itertools
     import warnings
 
     from ..cloud.streamed import _reused
 
     chunks = iter(_reused(stream))
+    guess = None
     try:
         chunk = next(chunks, None)
         if chunk is None:
-            return None
+            return None, None
         with warnings.catch_warnings():  # a guess: what it finds is not the result's to report
             warnings.simplefilter("ignore")
-            return _datum_pass([chunk], spec, [])[0]  # the chunk stays valid until the next is asked for
+            guess = _datum_pass([chunk], spec, [])[0]  # the chunk stays valid until the next is asked for
+        return guess, itertools.chain([chunk], chunks)
     except Exception:  # no datum points in the first chunk, a degenerate fit...: no guess, two passes
-        return None
+        return None, None
     finally:
         close = getattr(chunks, "close", None)
-        if close is not None:
+        if guess is None and close is not None:
             close()
 
 

@@ -36,7 +36,7 @@ pub use cut::{cut_chunk, merged_scatter, Keep, Moments, RegionCut, Scatter, MOME
 pub use e57::{read_e57, E57Points};
 pub use e57_stream::E57Stream;
 pub use ply::{read_ply, read_ply_file, PlyAsciiStream, PlyFile, PlyPoints, VertexRecords};
-pub use stream::{AsciiStream, PlyStream, DIRECT_ALIGN};
+pub use stream::{direct_buffer_len, AsciiStream, PlyStream, DIRECT_ALIGN};
 pub use sample::{keys_below, sample_key};
 pub use scale::scale_in_place;
 

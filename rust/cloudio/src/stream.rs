@@ -129,6 +129,14 @@ pub struct PlyStream {
 /// logical block size of common devices).
 pub const DIRECT_ALIGN: usize = 4096;
 
+/// Bytes of a buffer for [`PlyStream::next_direct`] of `points` vertices: their 24
+/// `points` bytes and the whole aligned blocks of an `O_DIRECT` read around them (up to
+/// one block to align the buffer's start, one before the first point and one after the
+/// last).
+pub fn direct_buffer_len(points: usize) -> usize {
+    24 * points + 3 * DIRECT_ALIGN
+}
+
 /// Read at least `need` bytes of `file` from `at` into `area` (aligned reads of whole
 /// blocks); false when the file ends before.
 fn read_direct(file: &File, area: &mut [u8], at: u64, need: usize) -> std::io::Result<bool> {
@@ -280,7 +288,8 @@ impl PlyStream {
     }
 
     /// The next at most `max_points` vertices into the byte buffer `buf` (reused from
-    /// chunk to chunk; at least `24 max_points + 3 DIRECT_ALIGN` bytes): (byte offset in
+    /// chunk to chunk; at least [`direct_buffer_len`] of the points read, `max_points` or
+    /// the fewer left, else an invalid-argument error): (byte offset in
     /// `buf` of the first point, number of points), the points being float64 x, y, z rows
     /// from that offset, which is a multiple of 8 from an 8-aligned `buf`. Past the page
     /// cache when [`PlyStream::is_direct`] (the device writes whole aligned blocks around
@@ -289,7 +298,10 @@ impl PlyStream {
     /// the end.
     pub fn next_direct(&mut self, buf: &mut [u8], max_points: usize) -> Result<(usize, usize)> {
         let m = max_points.min(self.rec.count - self.next);
-        assert!(buf.len() >= 24 * m + 3 * DIRECT_ALIGN, "next_direct: a buffer of 24 max_points + 3 DIRECT_ALIGN bytes");
+        if buf.len() < direct_buffer_len(m) {
+            return Err(GkError::invalid(format!("{}: a read buffer of {} bytes for {m} points; expected at least {}", self.what,
+                                                buf.len(), direct_buffer_len(m))));
+        }
         if m == 0 {
             return Ok((0, 0));
         }
@@ -323,7 +335,7 @@ impl PlyStream {
             return Ok((s, m));
         }
         let s = buf.as_ptr().align_offset(8);
-        // SAFETY: s is 8-aligned in memory and s + 24 m <= buf.len() (s < 8 <= 3 DIRECT_ALIGN).
+        // SAFETY: s is 8-aligned in memory and s + 24 m <= buf.len() (s < 8 <= direct_buffer_len(0)).
         let out = unsafe { std::slice::from_raw_parts_mut(buf.as_mut_ptr().add(s).cast::<f64>(), 3 * m) };
         let k = self.next_into(out)?;
         Ok((s, k))
@@ -509,7 +521,7 @@ mod tests {
             assert!(!on || direct || cfg!(not(target_os = "linux")), "ext4 and most Linux file systems have O_DIRECT");
             for step in [1usize, 77, 700, 5000] {
                 for shift in [0usize, 8, 24, 4000] {
-                    let mut buf = vec![0u8; shift + 24 * step + 3 * DIRECT_ALIGN];
+                    let mut buf = vec![0u8; shift + direct_buffer_len(step)];
                     let buf = &mut buf[shift..];
                     let starts: Vec<usize> = (0..n).step_by(step).collect();
                     for &start in starts.iter().rev().chain(&starts) {
@@ -525,13 +537,24 @@ mod tests {
                 }
             }
         }
+        // a buffer too small for the points read is an error, not a panic; one for the
+        // points left is enough however many are asked for
+        let mut s = PlyStream::open(&p, "s").unwrap().unwrap();
+        s.set_direct(&p, true);
+        let mut small = vec![0u8; direct_buffer_len(100) - 1];
+        let e = s.next_direct(&mut small, 100).unwrap_err();
+        assert_eq!(e.kind, gagekit_core::ErrorKind::InvalidInput);
+        assert!(e.message.contains("expected at least 14688"), "{}", e.message);
+        s.seek(n - 10);
+        let mut ten = vec![0u8; direct_buffer_len(10)];
+        assert_eq!(s.next_direct(&mut ten, 1000).unwrap().1, 10);
         let (q, _) = f64_ply("direct4.ply", 300, 4, None);
         assert!(!PlyStream::open(&q, "s").unwrap().unwrap().set_direct(&q, true));
         let (r, _) = f64_ply("directnan.ply", n, 0, Some(4321));
         for on in [true, false] {
             let mut s = PlyStream::open(&r, "r").unwrap().unwrap();
             s.set_direct(&r, on);
-            let mut buf = vec![0u8; 24 * 3000 + 3 * DIRECT_ALIGN];
+            let mut buf = vec![0u8; direct_buffer_len(3000)];
             s.seek(2000);
             assert_eq!(s.next_direct(&mut buf, 3000).unwrap_err().message, "r: vertex 4321 has a non-finite coordinate (NaN or inf)");
         }

@@ -229,15 +229,11 @@ impl PlyChunks {
     }
 
     /// The next at most `max_points` vertices into the uint8 array `buf` (a buffer reused
-    /// from chunk to chunk, at least 24 max_points + 12288 bytes): (byte offset of the first
-    /// point in `buf`, number of points), float64 x, y, z rows from there; past the page
-    /// cache when `direct` (whole aligned blocks around the points land in `buf`).
+    /// from chunk to chunk, at least `direct_buffer_len` of the points read): (byte offset of
+    /// the first point in `buf`, number of points), float64 x, y, z rows from there; past
+    /// the page cache when `direct` (whole aligned blocks around the points land in `buf`).
     fn next_direct(&mut self, py: Python<'_>, mut buf: numpy::PyReadwriteArray1<'_, u8>, max_points: usize) -> PyResult<(usize, usize)> {
         let bytes = buf.as_slice_mut().map_err(|_| invalid("buf: expected a contiguous uint8 array"))?;
-        if bytes.len() < 24 * max_points + 3 * gagekit_cloudio::DIRECT_ALIGN {
-            return Err(invalid(format!("buf: {} bytes for {max_points} points; expected at least {}", bytes.len(),
-                                       24 * max_points + 3 * gagekit_cloudio::DIRECT_ALIGN)));
-        }
         let inner = &mut self.inner;
         run(py, || inner.next_direct(bytes, max_points))
     }
@@ -252,6 +248,15 @@ impl PlyChunks {
     fn seek(&mut self, index: usize) {
         self.inner.seek(index);
     }
+}
+
+/// Bytes of a read buffer for `PlyChunks.next_direct` of `points` vertices: the points
+/// and the whole aligned blocks of a read past the page cache around them.
+#[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyfunction(module = "gagekit._core.cloud"))]
+#[pyfunction]
+#[pyo3(name = "direct_buffer_len")]
+fn cloud_direct_buffer_len(points: usize) -> usize {
+    gagekit_cloudio::direct_buffer_len(points)
 }
 
 /// Open a binary PLY file (every element of fixed-size records) for reading its vertices
@@ -474,6 +479,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(cloud_point_moments, m)?)?;
     m.add_function(wrap_pyfunction!(cloud_moments_scatter, m)?)?;
     m.add_function(wrap_pyfunction!(cloud_ply_chunks, m)?)?;
+    m.add_function(wrap_pyfunction!(cloud_direct_buffer_len, m)?)?;
     m.add_function(wrap_pyfunction!(cloud_cut_chunk, m)?)?;
     m.add_function(wrap_pyfunction!(cloud_sample_keys_below, m)?)?;
     m.add_class::<PlyAsciiChunks>()?;

@@ -17,6 +17,7 @@ __all__ = [
     "ascii_chunks",
     "ascii_columns",
     "cut_chunk",
+    "direct_buffer_len",
     "e57_chunks",
     "moments_scatter",
     "ply_ascii_chunks",
@@ -156,9 +157,9 @@ class PlyChunks:
     def next_direct(self, buf: numpy.typing.NDArray[numpy.uint8], max_points: builtins.int) -> tuple[builtins.int, builtins.int]:
         r"""
         The next at most `max_points` vertices into the uint8 array `buf` (a buffer reused
-        from chunk to chunk, at least 24 max_points + 12288 bytes): (byte offset of the first
-        point in `buf`, number of points), float64 x, y, z rows from there; past the page
-        cache when `direct` (whole aligned blocks around the points land in `buf`).
+        from chunk to chunk, at least `direct_buffer_len` of the points read): (byte offset of
+        the first point in `buf`, number of points), float64 x, y, z rows from there; past
+        the page cache when `direct` (whole aligned blocks around the points land in `buf`).
         """
     def seek(self, index: builtins.int) -> None:
         r"""
@@ -218,6 +219,12 @@ def cut_chunk(points: numpy.typing.NDArray[numpy.float64], boxes: numpy.typing.N
     flagged in `moments_of` added, in place; `minus[i]` = k makes box i keep only its
     points outside box k (a shell; decided on the indices, before any point is gathered)
     (`gagekit-cloudio`'s `cut_chunk`: one call a chunk, parallel inside).
+    """
+
+def direct_buffer_len(points: builtins.int) -> builtins.int:
+    r"""
+    Bytes of a read buffer for `PlyChunks.next_direct` of `points` vertices: the points
+    and the whole aligned blocks of a read past the page cache around them.
     """
 
 def e57_chunks(path: builtins.str) -> typing.Optional[E57Chunks]:
