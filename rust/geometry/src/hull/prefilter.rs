@@ -672,4 +672,44 @@ mod tests {
             assert!(claimed > n / 10, "the grid covers a good share ({claimed})");
         }
     }
+
+    /// A thin plate tilted off every coordinate axis leaves no cell of the grid proven:
+    /// no grid (its lookup would cost every point and decide none), and the filter
+    /// still discards most points, exactly.
+    #[test]
+    fn no_inner_grid_for_a_tilted_plate() {
+        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        let (c, s) = (0.3f64.cos(), 0.3f64.sin());
+        let n = 40_000;
+        let points: Vec<f64> = (0..n)
+            .flat_map(|_| {
+                let (u, v, w) = (rng.random::<f64>() * 200.0, rng.random::<f64>() * 150.0, (rng.random::<f64>() - 0.5) * 0.01);
+                // about x by 0.3 rad, then about z by 0.3 rad
+                let (y, z) = (c * v - s * w, s * v + c * w);
+                [c * u - s * y, s * u + c * y, z]
+            })
+            .collect();
+        let (frame, sample) = Frame::new(&points);
+        let dirs: Vec<P3> = directions(120).into_iter().map(|u| frame.to_world_normal(u)).collect();
+        let ext = extremes(&points, Some(&sample), &dirs).0;
+        let poly = Polytope::new(&points, ext, &frame, bounding_box(&points), 16).expect("polytope");
+        assert!(poly.inner.is_none(), "no cell can be proven inside a tilted plate");
+        let mut inside = 0;
+        for i in 0..n {
+            let x = pt(&points, i);
+            if poly.strictly_inside(x) {
+                inside += 1;
+                assert!(poly.faces.iter().all(|f| orient3d(f[0], f[1], f[2], x) > 0.0));
+            }
+        }
+        assert!(inside > n / 2, "most points discarded ({inside})");
+        // the whole prefilter keeps every hull vertex
+        let kept = survivors(&points);
+        let all: Vec<usize> = (0..n).collect();
+        let mut a = super::super::hull_of(&points, kept).expect("hull");
+        let mut b = super::super::hull_of(&points, all).expect("hull");
+        a.sort_unstable();
+        b.sort_unstable();
+        assert_eq!(a, b);
+    }
 }
