@@ -5,7 +5,7 @@
 //! inside a chunk, groups of [`GROUP`] consecutive points walk the tree together
 //! ([`crate::bvh::Bvh::nearest_group`]: one read of a node for the group; neighbours on
 //! the curve share the path from the root), each point's search bounded from the start
-//! by the previous group's nearest triangles (neighbours in the order are neighbours in
+//! by the previous group's last nearest triangle (neighbours in the order are neighbours in
 //! space, so most of the tree is pruned at once, whatever the order of the file). Each
 //! answer is the nearest triangle, the lowest slot among exact ties: a function of the
 //! point alone, so the order, the groups, the chunks and the thread count change the
@@ -200,9 +200,11 @@ impl TriMesh {
             if c % 64 == 0 {
                 interrupt::check()?;
             }
-            // the previous group's nearest triangles start each point's search (their
-            // distance bounds it: neighbours in the order are neighbours in space)
-            let mut hints = [u32::MAX; 2];
+            // the previous group's last nearest triangle starts each point's search (its
+            // distance bounds it: neighbours in the order are neighbours in space). One
+            // start, not the first and last lanes' two: 300 k points of the torus bench,
+            // 505 M against 528 M instructions
+            let mut hint = u32::MAX;
             for k0 in (0..d.len()).step_by(GROUP) {
                 let ks = k0..(k0 + GROUP).min(d.len());
                 let mut ps = [[0.0; 3]; GROUP];
@@ -212,8 +214,8 @@ impl TriMesh {
                     ps[j] = [points[3 * i], points[3 * i + 1], points[3 * i + 2]];
                 }
                 let g = ks.len();
-                let nh = if hints[0] == u32::MAX { 0 } else if hints[1] == u32::MAX { 1 } else { 2 };
-                self.bvh.nearest_group_from(&ps[..g], bound2, &hints[..nh], &mut best[..g]);
+                let nh = (hint != u32::MAX) as usize;
+                self.bvh.nearest_group_from(&ps[..g], bound2, &[hint][..nh], &mut best[..g]);
                 for (j, k) in ks.clone().enumerate() {
                     let (dk, tk, fk) = match &best[j] {
                         Some(n) => {
@@ -230,8 +232,10 @@ impl TriMesh {
                 }
                 let found = |j: usize| best[j].map_or(u32::MAX, |n| n.slot);
                 let (a, b) = (found(0), found(g - 1));
-                if a != u32::MAX || b != u32::MAX {
-                    hints = if a == b || a == u32::MAX { [b, u32::MAX] } else if b == u32::MAX { [a, u32::MAX] } else { [b, a] };
+                if b != u32::MAX {
+                    hint = b;
+                } else if a != u32::MAX {
+                    hint = a;
                 }
             }
             Ok(())
