@@ -218,6 +218,11 @@ impl Extremes {
         if j == self.at_lo[k] {
             return self.lo[k];
         }
+        if !(self.lo[k] < self.hi[k]) {
+            // lo rounded up to hi (b in the far tail, Phi(b) = 1 in f64): no deviate lies
+            // strictly between, and the loop below would never end
+            return self.lo[k];
+        }
         loop {
             let d = normal(rng);
             if d > self.lo[k] && d < self.hi[k] {
@@ -730,6 +735,15 @@ mod tests {
             // the deviates in (lo, hi) of a block: inside
             assert!(lo.iter().zip(&hi).all(|(a, b)| a <= b));
         }
+    }
+
+    #[test]
+    fn extremes_rounded_together_draw_the_rest_without_looping() {
+        // b far in the tail: Phi(b) is 1 in f64 and the smallest can round up to b; the
+        // other deviates then take that value instead of being rejected for ever
+        let e = Extremes { lo: [8.3; 3], hi: [8.3; 3], at_lo: [1; 3], at_hi: [0; 3] };
+        let mut rng = block_rng(0, 0, 0);
+        assert_eq!((0..5).map(|j| e.rest(&mut rng, j, 2)).collect::<Vec<_>>(), vec![8.3; 5]);
     }
 
     #[test]
