@@ -98,6 +98,11 @@ impl InnerGrid {
                 });
             }
         }
+        if h.iter().all(|c| c[0] > c[1]) {
+            // no cell proven (a thin face tilted off the axis, a curved band): the test
+            // would only cost every point its lookup
+            return None;
+        }
         let inv = [0, 1].map(|k| g as f64 / (hi[uv[k]] - lo[uv[k]]));
         Some(InnerGrid {
             g,

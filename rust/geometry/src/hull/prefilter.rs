@@ -555,20 +555,24 @@ impl<'f> Polytope<'f> {
 #[inline]
 fn cell_of(w: P3) -> usize {
     let ab = [w[0].abs(), w[1].abs(), w[2].abs()];
-    let m = if ab[0] >= ab[1] && ab[0] >= ab[2] {
-        0
+    // the dominant axis, the coordinate along it, and the other two in cyclic order
+    let (m, wm, a, b) = if ab[0] >= ab[1] && ab[0] >= ab[2] {
+        (0, w[0], w[1], w[2])
     } else if ab[1] >= ab[2] {
-        1
+        (1, w[1], w[2], w[0])
     } else {
-        2
+        (2, w[2], w[0], w[1])
     };
-    if ab[m] == 0.0 || !ab[m].is_finite() {
-        return 0;
+    let am = wm.abs();
+    if !(am > 0.0 && am < f64::INFINITY) {
+        return 0; // zero, infinite or NaN
     }
-    let side = 2 * m + usize::from(w[m] < 0.0);
-    let r = 1.0 / ab[m];
-    let (u, v) = (w[(m + 1) % 3] * r, w[(m + 2) % 3] * r);
-    let g = |t: f64| (((t + 1.0) * 0.5 * GRID as f64) as usize).min(GRID - 1);
+    let side = 2 * m + usize::from(wm < 0.0);
+    let r = 1.0 / am;
+    let (u, v) = (a * r, b * r);
+    // t is within [-1, 1] up to rounding: the i32 conversion truncates as the usize one
+    // did (toward zero, a tiny negative to 0), with fewer instructions
+    let g = |t: f64| (((t + 1.0) * 0.5 * GRID as f64) as i32).clamp(0, GRID as i32 - 1) as usize;
     (side * GRID + g(u)) * GRID + g(v)
 }
 
@@ -672,4 +676,66 @@ mod tests {
             assert!(claimed > n / 10, "the grid covers a good share ({claimed})");
         }
     }
+
+    /// The cube-map cell of a cell's own central direction is that cell; a direction
+    /// on a cell's border (a cube face's edge, a corner) lands in a cell of the map;
+    /// no direction (zero, NaN, infinite) gives cell 0.
+    #[test]
+    fn cell_of_inverts_cell_dir() {
+        for c in 0..6 * GRID * GRID {
+            let w = cell_dir(c);
+            assert_eq!(cell_of(w), c);
+            assert_eq!(cell_of(w.map(|x| x * 1e-200)), c);
+            assert_eq!(cell_of(w.map(|x| x * 1e200)), c);
+        }
+        for w in [[1.0, 1.0, 1.0], [-1.0, 1.0, -1.0], [1.0, -1.0, 0.0], [0.0, 0.0, -1.0], [-1.0, 1.0 + 1e-16, -1.0]] {
+            assert!(cell_of(w) < 6 * GRID * GRID);
+        }
+        assert_eq!(cell_of([1.0, 1.0, 1.0]), (GRID - 1) * GRID + GRID - 1);
+        assert_eq!(cell_of([-1.0, -1.0, -1.0]), GRID * GRID);
+        for w in [[0.0; 3], [0.0, f64::INFINITY, 1.0], [f64::NAN; 3]] {
+            assert_eq!(cell_of(w), 0);
+        }
+    }
+
+    /// A thin plate tilted off every coordinate axis leaves no cell of the grid proven:
+    /// no grid (its lookup would cost every point and decide none), and the filter
+    /// still discards most points, exactly.
+    #[test]
+    fn no_inner_grid_for_a_tilted_plate() {
+        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        let (c, s) = (0.3f64.cos(), 0.3f64.sin());
+        let n = 40_000;
+        let points: Vec<f64> = (0..n)
+            .flat_map(|_| {
+                let (u, v, w) = (rng.random::<f64>() * 200.0, rng.random::<f64>() * 150.0, (rng.random::<f64>() - 0.5) * 0.01);
+                // about x by 0.3 rad, then about z by 0.3 rad
+                let (y, z) = (c * v - s * w, s * v + c * w);
+                [c * u - s * y, s * u + c * y, z]
+            })
+            .collect();
+        let (frame, sample) = Frame::new(&points);
+        let dirs: Vec<P3> = directions(120).into_iter().map(|u| frame.to_world_normal(u)).collect();
+        let ext = extremes(&points, Some(&sample), &dirs).0;
+        let poly = Polytope::new(&points, ext, &frame, bounding_box(&points), 16).expect("polytope");
+        assert!(poly.inner.is_none(), "no cell can be proven inside a tilted plate");
+        let mut inside = 0;
+        for i in 0..n {
+            let x = pt(&points, i);
+            if poly.strictly_inside(x) {
+                inside += 1;
+                assert!(poly.faces.iter().all(|f| orient3d(f[0], f[1], f[2], x) > 0.0));
+            }
+        }
+        assert!(inside > n / 2, "most points discarded ({inside})");
+        // the whole prefilter keeps every hull vertex
+        let kept = survivors(&points);
+        let all: Vec<usize> = (0..n).collect();
+        let mut a = super::super::hull_of(&points, kept).expect("hull");
+        let mut b = super::super::hull_of(&points, all).expect("hull");
+        a.sort_unstable();
+        b.sort_unstable();
+        assert_eq!(a, b);
+    }
 }
+
