@@ -192,9 +192,12 @@ impl TriMesh {
         }
         let order = query_order(points);
         let identity = order.iter().enumerate().all(|(k, &i)| k == i as usize);
-        // per point in query order: the distance, the triangle and (if asked) the foot
+        // per point in query order: the distance, the triangle and (if asked) the foot.
+        // All zero bits, so allocated zeroed (fresh pages, no pass writing them): `work`
+        // writes every element of its chunk (each k of 0..len, in groups of GROUP), and
+        // the chunks cover the arrays, before any is read; on an error none is returned
         let mut distance = vec![0.0; n];
-        let mut triangle = vec![-1i64; n];
+        let mut triangle = vec![0i64; n];
         let mut foot = if q.foot { vec![0.0; 3 * n] } else { Vec::new() };
         let work = |c: usize, d: &mut [f64], t: &mut [i64], mut f: Option<&mut [f64]>| -> Result<()> {
             if c % 64 == 0 {

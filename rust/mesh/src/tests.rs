@@ -110,6 +110,44 @@ fn max_distance_leaves_far_points_apart() {
     assert!((d.distance[0] - 0.2).abs() < 1e-15);
 }
 
+/// The output arrays are allocated zeroed, not filled with -1 / NaN: every point's entry
+/// must be written by the query. Points beyond `max_distance` (triangle -1, distance NaN)
+/// interleaved with near ones, over several chunks with a partial last group, in the
+/// points' own order and shuffled (the Morton order, back to input order), with feet.
+#[test]
+fn every_output_entry_is_written() {
+    let (v, t) = box_mesh([1.0, 1.0, 1.0]);
+    let mesh = TriMesh::new(&v, &t).unwrap();
+    let n = 2 * crate::distance::CHUNK + 3;
+    let mut rng = ChaCha8Rng::seed_from_u64(11);
+    for shuffle in [false, true] {
+        // a scan line along x (coherent), every third point far above the box
+        let mut idx: Vec<usize> = (0..n).collect();
+        if shuffle {
+            for i in (1..n).rev() {
+                idx.swap(i, rng.random_range(0..=i));
+            }
+        }
+        let pts: Vec<f64> = idx.iter().flat_map(|&i| [-0.9 + 1.8 * i as f64 / n as f64, 0.1, if i % 3 == 0 { 5.0 } else { 1.1 }]).collect();
+        for foot in [false, true] {
+            let q = Query { max_distance: Some(0.5), foot, ..Default::default() };
+            let d = mesh.distances(&pts, &q).unwrap();
+            assert_eq!(d.beyond, (0..n).filter(|i| i % 3 == 0).count());
+            for (k, &i) in idx.iter().enumerate() {
+                if i % 3 == 0 {
+                    assert_eq!(d.triangle[k], -1, "point {k}");
+                    assert!(d.distance[k].is_nan());
+                    assert!(!foot || d.foot[3 * k..3 * k + 3].iter().all(|x| x.is_nan()));
+                } else {
+                    assert!(d.triangle[k] >= 0, "point {k}");
+                    assert!((d.distance[k] - 0.1).abs() < 1e-12, "point {k}: {}", d.distance[k]);
+                    assert!(!foot || (d.foot[3 * k + 2] - 1.0).abs() < 1e-12);
+                }
+            }
+        }
+    }
+}
+
 fn sphere_mesh(n: usize, r: f64) -> (Vec<f64>, Vec<u32>) {
     // a UV sphere: n rings, 2n segments
     let mut v = vec![0.0, 0.0, r];
