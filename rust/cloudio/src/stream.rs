@@ -132,9 +132,10 @@ pub const DIRECT_ALIGN: usize = 4096;
 /// Bytes of a buffer for [`PlyStream::next_direct`] of `points` vertices: their 24
 /// `points` bytes and the whole aligned blocks of an `O_DIRECT` read around them (up to
 /// one block to align the buffer's start, one before the first point and one after the
-/// last).
+/// last). Saturates at `usize::MAX` (no buffer that large exists, so a count beyond any
+/// file is refused rather than wrapped to a small size).
 pub fn direct_buffer_len(points: usize) -> usize {
-    24 * points + 3 * DIRECT_ALIGN
+    points.saturating_mul(24).saturating_add(3 * DIRECT_ALIGN)
 }
 
 /// Read at least `need` bytes of `file` from `at` into `area` (aligned reads of whole
@@ -546,6 +547,7 @@ mod tests {
         assert_eq!(e.kind, gagekit_core::ErrorKind::InvalidInput);
         assert!(e.message.contains("expected at least 14688"), "{}", e.message);
         s.seek(n - 10);
+        assert_eq!(direct_buffer_len(usize::MAX / 8), usize::MAX);
         let mut ten = vec![0u8; direct_buffer_len(10)];
         assert_eq!(s.next_direct(&mut ten, 1000).unwrap().1, 10);
         let (q, _) = f64_ply("direct4.ply", 300, 4, None);
