@@ -90,8 +90,19 @@ def os_error(exc: OSError, path: PathLike, action: str = "read") -> FileAccessEr
     return FileAccessError(f"{path}: cannot {action}: {reason}")
 
 
-def decode_error(exc: UnicodeDecodeError, path: PathLike) -> FileFormatError:
-    """A text file that is not UTF-8: name the byte offset (an editor finds it)."""
+_BINARY_DATA = (".ply", ".e57", ".stl", ".las", ".laz", ".npy", ".npz", ".3mf", ".gz", ".zip", ".db", ".sqlite")
+"""Suffixes of the scans, meshes and archives gagekit reads as binary data: one of them
+where a text file was expected is most often two arguments given in the wrong order."""
+
+
+def decode_error(exc: UnicodeDecodeError, path: PathLike, what: Optional[str] = None) -> FileFormatError:
+    """A text file that is not UTF-8: name the byte offset (an editor finds it). When the
+    caller expected a text ``what`` (:func:`read_text`) and got a scan, mesh or archive,
+    that is said instead."""
+    suffix = Path(path).suffix.lower()
+    if what is not None and suffix in _BINARY_DATA:
+        return FileFormatError(f"{path}: a binary {suffix} file where a text {what} was expected "
+                               "(check the order of the arguments)")
     bad = exc.object[exc.start : exc.start + 1].hex() if isinstance(exc.object, (bytes, bytearray)) else "?"
     return FileFormatError(f"{path}: not UTF-8 text (byte 0x{bad} at offset {exc.start}); save it as UTF-8")
 
@@ -160,7 +171,7 @@ def read_text(path: PathLike, what: str = "file") -> str:
     try:
         return data.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
-        raise decode_error(exc, p) from None
+        raise decode_error(exc, p, what) from None
 
 
 def csv_rows(text: str, path: PathLike) -> Iterator[tuple[int, list[str]]]:

@@ -108,3 +108,12 @@ def test_inspect_scan_is_the_default_subcommand_with_options_anywhere(tmp_path):
         d.pop("seconds")
         outs.append(d)
     assert outs[0] == outs[1] == outs[2] and outs[0]["part"] == "bracket"
+
+
+def test_scan_and_drawing_swapped_say_so():
+    """`inspect PART.toml SCAN.ply`: the binary scan where the drawing's TOML was expected is
+    named as such, with the hint to check the order (it said only 'not UTF-8 text')."""
+    proc = run("inspect", TOML, PLY)
+    assert proc.returncode == 2 and proc.stdout == ""
+    assert proc.stderr.strip() == (f"gagekit: error: {PLY}: a binary .ply file where a text TOML file was expected "
+                                   "(check the order of the arguments)")

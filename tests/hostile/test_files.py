@@ -29,6 +29,11 @@ def test_read_text_maps_decoding_and_drops_a_bom(tmp_path):
         _files.read_text(p)
     p.write_bytes(b"\xef\xbb\xbfa = 1")
     assert _files.read_text(p) == "a = 1"
+    scan = tmp_path / "scan.ply"  # a binary scan where a text file was expected: said so
+    scan.write_bytes(b"ply\nformat binary_little_endian 1.0\nend_header\n\xf0\x9f\xff")
+    with pytest.raises(FileFormatError, match=r"scan.ply: a binary \.ply file where a text machine file was expected "
+                                              r"\(check the order of the arguments\)"):
+        _files.read_text(scan, "machine file")
 
 
 def test_errors_are_gagekit_and_os_errors():
