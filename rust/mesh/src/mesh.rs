@@ -72,20 +72,23 @@ impl TriMesh {
         if nv > u32::MAX as usize - 1 || nt > u32::MAX as usize - 1 {
             return Err(GkError::invalid("mesh: more than 2^32 - 2 vertices or triangles"));
         }
-        if let Some(pos) = vertices.iter().position(|v| !v.is_finite()) {
+        // copied first, then checked: the copy is what the mesh uses (the caller's arrays
+        // may be read in place while other threads run)
+        let verts: Vec<V3> = (0..nv).map(|i| vertex(vertices, i)).collect();
+        let tris: Vec<[u32; 3]> = triangles.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect();
+        if let Some(pos) = verts.as_flattened().iter().position(|v| !v.is_finite()) {
             return Err(GkError::invalid(format!(
                 "mesh: vertex {} has a non-finite coordinate ({}); the model is damaged",
                 pos / 3,
-                vertices[pos]
+                verts.as_flattened()[pos]
             )));
         }
-        let verts: Vec<V3> = (0..nv).map(|i| vertex(vertices, i)).collect();
-        let tris: Vec<[u32; 3]> = triangles.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect();
         if let Some((i, &bad)) = tris.iter().enumerate().find_map(|(i, t)| t.iter().find(|&&k| k as usize >= nv).map(|b| (i, b))) {
             return Err(GkError::invalid(format!("mesh: triangle {i} names vertex {bad}, but there are {nv} vertices")));
         }
-        // per triangle (in parallel): the unit normal and twice the area, or None when degenerate
-        let faces: Vec<Option<(V3, f64)>> = {
+        // per triangle (in parallel): the unit normal and twice the area, or ([0; 3], -1)
+        // when degenerate; the area summed in triangle order
+        let (mut normals, twice_area): (Vec<V3>, Vec<f64>) = {
             use rayon::prelude::*;
             tris.par_iter()
                 .map(|t| {
@@ -94,29 +97,23 @@ impl TriMesh {
                     let n2 = norm(n);
                     let longest = [sub(b, a), sub(c, b), sub(a, c)].iter().map(|e| dot(*e, *e)).fold(0.0, f64::max);
                     if t[0] == t[1] || t[1] == t[2] || t[0] == t[2] || !(n2 > 1e-12 * longest) {
-                        None
+                        ([0.0; 3], -1.0)
                     } else {
-                        Some((scale(n, 1.0 / n2), n2))
+                        (scale(n, 1.0 / n2), n2)
                     }
                 })
-                .collect()
+                .unzip()
         };
-        let mut normals = Vec::with_capacity(nt);
         let mut area = 0.0;
         let mut degenerate = Vec::new();
-        for (i, f) in faces.iter().enumerate() {
-            match f {
-                None => {
-                    degenerate.push(i);
-                    normals.push([0.0; 3]);
-                }
-                Some((n, n2)) => {
-                    area += 0.5 * n2;
-                    normals.push(*n);
-                }
+        for (i, &n2) in twice_area.iter().enumerate() {
+            if n2 < 0.0 {
+                degenerate.push(i);
+            } else {
+                area += 0.5 * n2;
             }
         }
-        drop(faces);
+        drop(twice_area);
         if !degenerate.is_empty() {
             let first: Vec<String> = degenerate.iter().take(5).map(|i| i.to_string()).collect();
             return Err(GkError::degenerate(format!(
@@ -133,11 +130,10 @@ impl TriMesh {
             }
         }
         let (vertex_normals, edge_normals) = pseudonormals(&verts, &tris, &normals, &edges);
-        let corners: Vec<[V3; 3]> = {
-            use rayon::prelude::*;
-            tris.par_iter().map(|t| [verts[t[0] as usize], verts[t[1] as usize], verts[t[2] as usize]]).collect()
-        };
-        let bvh = Bvh::new(&corners);
+        let bvh = Bvh::build(tris.len(), |i| {
+            let t = &tris[i];
+            [verts[t[0] as usize], verts[t[1] as usize], verts[t[2] as usize]]
+        });
         Ok(Self { vertices: verts, triangles: tris, face_normals: normals, vertex_normals, edge_normals, area, topology, bvh })
     }
 

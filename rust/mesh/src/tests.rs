@@ -809,3 +809,45 @@ proptest! {
         prop_assert_eq!(crate::bvh::widen(f64::NAN, crate::bvh::widen_err2(err)), f32::NEG_INFINITY);
     }
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(256))]
+    /// The median split's key sort of at most 32 items gives `select_nth_unstable_by`'s
+    /// arrangement for up to 16 items (it sorts them all) and its two halves' sets above
+    /// (centroids from a few values, signed zeros among them: many ties, broken by the index).
+    #[test]
+    fn small_sort_is_the_median_selection(n in 5usize..=crate::bvh::SMALL_SORT, seed in 0u64..1_000_000, axis in 0usize..3) {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let values = [-0.0, 0.0, 1.5, -2.25, 1e300, -1e-300, 7.0];
+        let items: Vec<crate::bvh::Item> = (0..n)
+            .map(|_| {
+                let c = [0; 3].map(|_| values[rng.random_range(0..values.len())]);
+                crate::bvh::Item { tri: rng.random_range(0..40), centroid: c, lo: c, hi: c }
+            })
+            .collect();
+        // distinct triangles (as in a build)
+        let mut items: Vec<_> = items.into_iter().enumerate().map(|(i, mut it)| { it.tri = it.tri * 64 + i as u32; it }).collect();
+        items.reverse();
+        let mut want = items.clone();
+        want.select_nth_unstable_by(n / 2, |a, b| a.centroid[axis].total_cmp(&b.centroid[axis]).then(a.tri.cmp(&b.tri)));
+        crate::bvh::sort_small(&mut items, axis);
+        let tris = |v: &[crate::bvh::Item]| v.iter().map(|it| it.tri).collect::<Vec<u32>>();
+        if n <= 16 {
+            prop_assert_eq!(tris(&items), tris(&want));
+        } else {
+            let (mut a, mut b) = (tris(&items[..n / 2]), tris(&want[..n / 2]));
+            a.sort_unstable();
+            b.sort_unstable();
+            prop_assert_eq!(a, b);
+        }
+        prop_assert!(items.windows(2).all(|w| w[0].centroid[axis].total_cmp(&w[1].centroid[axis]).then(w[0].tri.cmp(&w[1].tri)).is_lt()));
+    }
+
+    /// A centroid's bin is `((c - lo) * scale) as usize` capped at the last bin, for any
+    /// numbers (NaN, infinities and negative products too).
+    #[test]
+    fn bin_of_is_the_saturating_cast(c in prop::num::f64::ANY, lo in prop::num::f64::ANY, scale in prop::num::f64::ANY) {
+        let want = (((c - lo) * scale) as usize).min(crate::bvh::BINS - 1);
+        prop_assert_eq!(crate::bvh::bin_of(c, lo, scale), want);
+    }
+}
