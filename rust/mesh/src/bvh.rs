@@ -125,19 +125,22 @@ impl Bound {
     /// bound's error is below 1e-11 of the point's distance plus the coordinates'
     /// rounding, far inside [`Bvh::slack`].
     fn of(c: &[V3; 3]) -> Bound {
-        let mut best = (0.0f64, [0.0; 3]);
+        // the edges' lengths, each edge taken by two corners (reversed, the same length)
+        let len: [f64; 3] = std::array::from_fn(|k| norm(sub(c[(k + 1) % 3], c[k])));
+        let mut best = (0.0f64, [0.0; 3], 0.0);
         for k in 0..3 {
             let (u, v) = (sub(c[(k + 1) % 3], c[k]), sub(c[(k + 2) % 3], c[k]));
             let x = cross(u, v);
-            let sine = norm(x) / (norm(u) * norm(v));
+            let nx = norm(x);
+            let sine = nx / (len[k] * len[(k + 2) % 3]);
             if sine > best.0 {
-                best = (sine, x);
+                best = (sine, x, nx);
             }
         }
         if !(best.0 >= 1e-4) {
             return Bound::NONE;
         }
-        let n = scale(best.1, 1.0 / norm(best.1));
+        let n = scale(best.1, 1.0 / best.2);
         let m = std::array::from_fn(|k| {
             let e = sub(c[(k + 1) % 3], c[k]);
             let mk = cross(e, n);

@@ -260,23 +260,25 @@ fn angle(u: V3, v: V3) -> f64 {
 
 fn pseudonormals(verts: &[V3], tris: &[[u32; 3]], normals: &[V3], edges: &[(u64, u32, u8)]) -> (Vec<V3>, Vec<[V3; 3]>) {
     use rayon::prelude::*;
-    // each corner's angle (in parallel), then summed per vertex in triangle order
-    let angles: Vec<[f64; 3]> = tris
-        .par_iter()
-        .map(|t| {
-            std::array::from_fn(|k| {
-                let p = verts[t[k] as usize];
-                angle(sub(verts[t[(k + 1) % 3] as usize], p), sub(verts[t[(k + 2) % 3] as usize], p))
-            })
-        })
-        .collect();
+    // each vertex's pseudonormal: its corners' angle-weighted face normals summed in
+    // triangle order. The vertices in ranges, one a thread, in parallel: each range
+    // scans all the triangles for its own corners (no array of all angles, no
+    // sequential scatter; the same sums in the same order, whatever the thread count)
     let mut vn = vec![[0.0; 3]; verts.len()];
-    for ((t, n), a) in tris.iter().zip(normals).zip(&angles) {
-        for k in 0..3 {
-            let i = t[k] as usize;
-            vn[i] = add(vn[i], scale(*n, a[k]));
+    let per = verts.len().div_ceil(rayon::current_num_threads().clamp(1, 16)).max(1);
+    vn.par_chunks_mut(per).enumerate().for_each(|(c, out)| {
+        let lo = c * per;
+        for (t, n) in tris.iter().zip(normals) {
+            for k in 0..3 {
+                let i = (t[k] as usize).wrapping_sub(lo);
+                if i < out.len() {
+                    let p = verts[t[k] as usize];
+                    let a = angle(sub(verts[t[(k + 1) % 3] as usize], p), sub(verts[t[(k + 2) % 3] as usize], p));
+                    out[i] = add(out[i], scale(*n, a));
+                }
+            }
         }
-    }
+    });
     // edge normals: the sum of the normals of the triangles sharing the edge
     let mut en = vec![[[0.0; 3]; 3]; tris.len()];
     for g in edge_groups(edges) {
