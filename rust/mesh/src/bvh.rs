@@ -226,12 +226,14 @@ pub struct Nearest {
     pub feature: Feature,
 }
 
-/// A triangle during the build: its index, centroid and box.
+/// A triangle during the build: its index, centroid and box (in the order low corner,
+/// centroid, high corner: [`Binned::add`] reads two runs of six numbers).
 #[derive(Clone, Copy)]
+#[repr(C)]
 pub(crate) struct Item {
     pub(crate) tri: u32,
-    pub(crate) centroid: V3,
     pub(crate) lo: V3,
+    pub(crate) centroid: V3,
     pub(crate) hi: V3,
 }
 
@@ -269,24 +271,78 @@ impl Aabb {
     }
 }
 
-/// Per bin along the split axis: the count and the triangles' box.
+/// Per bin along the split axis: the count, the triangles' box and their centroids' box
+/// (the centroid boxes give the two sides' centroid bounds of any split plane, so the
+/// children's bins are known before the partition, which fills them).
 #[derive(Clone)]
 struct Binned {
     count: [u32; BINS],
-    bound: [Aabb; BINS],
+    /// the low corners of the triangles' box and of the centroids' box
+    mins: [[f64; 6]; BINS],
+    /// the high corners of the centroids' box and of the triangles' box
+    maxs: [[f64; 6]; BINS],
 }
 
 impl Binned {
     fn new() -> Self {
-        Self { count: [0; BINS], bound: [Aabb::EMPTY; BINS] }
+        Self { count: [0; BINS], mins: [[f64::INFINITY; 6]; BINS], maxs: [[f64::NEG_INFINITY; 6]; BINS] }
+    }
+    /// Bin `b`'s triangles' box.
+    #[inline]
+    fn bound(&self, b: usize) -> Aabb {
+        let (m, x) = (&self.mins[b], &self.maxs[b]);
+        Aabb { lo: [m[0], m[1], m[2]], hi: [x[3], x[4], x[5]] }
+    }
+    /// Bin `b`'s centroids' box.
+    #[inline]
+    fn cent(&self, b: usize) -> Aabb {
+        let (m, x) = (&self.mins[b], &self.maxs[b]);
+        Aabb { lo: [m[3], m[4], m[5]], hi: [x[0], x[1], x[2]] }
+    }
+    /// Grow bin `b` by six low and six high values (the comparisons of [`Aabb::grow`]).
+    #[inline(always)]
+    fn grow(&mut self, b: usize, lo: &[f64; 6], hi: &[f64; 6]) {
+        let (m, x) = (&mut self.mins[b], &mut self.maxs[b]);
+        for q in 0..6 {
+            m[q] = if lo[q] < m[q] { lo[q] } else { m[q] };
+            x[q] = if hi[q] > x[q] { hi[q] } else { x[q] };
+        }
     }
     fn merge(mut self, o: &Binned) -> Self {
         for b in 0..BINS {
             self.count[b] += o.count[b];
-            self.bound[b] = self.bound[b].join(&o.bound[b]);
+            self.grow(b, &o.mins[b], &o.maxs[b]);
         }
         self
     }
+    #[inline(always)]
+    fn add(&mut self, it: &Item, k: usize, lo: f64, scale: f64) {
+        let i = bin_of(it.centroid[k], lo, scale);
+        self.count[i] += 1;
+        let (l, c, h) = (&it.lo, &it.centroid, &it.hi);
+        self.grow(i, &[l[0], l[1], l[2], c[0], c[1], c[2]], &[c[0], c[1], c[2], h[0], h[1], h[2]]);
+    }
+}
+
+/// How a node of `n` items with centroid bounds `cb` at `depth` splits: the centroids'
+/// longest axis, its extent, and whether by SAH bins (else by the object median).
+#[inline]
+fn plan(cb: &Aabb, n: usize, depth: usize) -> (usize, f64, bool) {
+    let ext = [cb.hi[0] - cb.lo[0], cb.hi[1] - cb.lo[1], cb.hi[2] - cb.lo[2]];
+    let axis = if ext[0] >= ext[1] && ext[0] >= ext[2] { 0 } else if ext[1] >= ext[2] { 1 } else { 2 };
+    (axis, ext[axis], depth < MAX_SAH_DEPTH && n > SAH_MIN && ext[axis] > 0.0)
+}
+
+/// A node's bins along `axis`: (axis, low end, bins per unit).
+#[inline]
+fn bins_of(cb: &Aabb, axis: usize, ext: f64) -> (usize, f64, f64) {
+    (axis, cb.lo[axis], BINS as f64 / ext)
+}
+
+/// What a node's parent found of it: its centroid bounds, and its bins when it splits by them.
+pub(crate) struct Known {
+    cb: Aabb,
+    bins: Option<Box<Binned>>,
 }
 
 /// The bin of centroid coordinate `c`: `((c - lo) * scale) as usize` capped at the last
@@ -304,11 +360,33 @@ pub(crate) fn bin_of(c: f64, lo: f64, scale: f64) -> usize {
 fn bin_items(items: &[Item], k: usize, lo: f64, scale: f64) -> Binned {
     let mut b = Binned::new();
     for it in items {
-        let i = bin_of(it.centroid[k], lo, scale);
-        b.count[i] += 1;
-        b.bound[i].grow(&it.lo, &it.hi);
+        b.add(it, k, lo, scale);
     }
     b
+}
+
+/// Two-pointer partition of `items` by bin `b` of (`k`, `lo`, `scale`), in place and
+/// deterministic (each item is tested once, where its side is known), binning each item
+/// into its side's bins (`L`, `R`: whether that side splits by bins, by `lp`, `rp`).
+#[allow(clippy::too_many_arguments)]
+fn partition<const L: bool, const R: bool>(items: &mut [Item], (k, lo, scale): (usize, f64, f64), b: usize, lp: (usize, f64, f64), rp: (usize, f64, f64), lb: &mut Binned, rb: &mut Binned) -> usize {
+    let (mut i, mut j) = (0usize, items.len());
+    while i < j {
+        let it = &items[i];
+        if bin_of(it.centroid[k], lo, scale) < b {
+            if L {
+                lb.add(it, lp.0, lp.1, lp.2);
+            }
+            i += 1;
+        } else {
+            if R {
+                rb.add(it, rp.0, rp.1, rp.2);
+            }
+            j -= 1;
+            items.swap(i, j);
+        }
+    }
+    i
 }
 
 fn centroid_bounds(items: &[Item]) -> Aabb {
@@ -319,47 +397,48 @@ fn centroid_bounds(items: &[Item]) -> Aabb {
     c
 }
 
-/// Split `items` into two non-empty parts: (the number on the left, and the two parts'
-/// centroid bounds when the split found them); SAH by bins, or the object median along
-/// the centroids' longest axis (deep subtrees, coincident centroids). `cb`: the items'
-/// centroid bounds if known.
-fn split(items: &mut [Item], depth: usize, cb: Option<Aabb>) -> (usize, Option<[Aabb; 2]>) {
+/// Split `items` into two non-empty parts: (the number on the left, and what the split
+/// found of the two parts); SAH by bins, or the object median along the centroids'
+/// longest axis (deep subtrees, coincident centroids). `known`: the items' centroid bounds
+/// and bins if known.
+fn split(items: &mut [Item], depth: usize, known: Option<Known>) -> (usize, Option<[Known; 2]>) {
     let n = items.len();
-    let cb = match cb {
-        Some(cb) => cb,
+    let (cb, pre) = match known {
+        Some(k) => (k.cb, k.bins),
         None if n > PAR => {
             let parts: Vec<Aabb> = {
                 use rayon::prelude::*;
                 items.par_chunks(PAR).map(centroid_bounds).collect()
             };
-            parts.iter().fold(Aabb::EMPTY, |a, b| a.join(b))
+            (parts.iter().fold(Aabb::EMPTY, |a, b| a.join(b)), None)
         }
-        None => centroid_bounds(items),
+        None => (centroid_bounds(items), None),
     };
-    let ext = [cb.hi[0] - cb.lo[0], cb.hi[1] - cb.lo[1], cb.hi[2] - cb.lo[2]];
-    let axis = if ext[0] >= ext[1] && ext[0] >= ext[2] { 0 } else if ext[1] >= ext[2] { 1 } else { 2 };
-    if depth < MAX_SAH_DEPTH && n > SAH_MIN && ext[axis] > 0.0 {
+    let (axis, ext, sah) = plan(&cb, n, depth);
+    if sah {
         // bins along the centroids' longest axis
-        let (k, lo, scale) = (axis, cb.lo[axis], BINS as f64 / ext[axis]);
-        let binned = if n > PAR {
-            use rayon::prelude::*;
-            let parts: Vec<Binned> = items.par_chunks(PAR).map(|c| bin_items(c, k, lo, scale)).collect();
-            parts.iter().fold(Binned::new(), |a, b| a.merge(b))
-        } else {
-            bin_items(items, k, lo, scale)
+        let (k, lo, scale) = bins_of(&cb, axis, ext);
+        let binned = match pre {
+            Some(b) => *b,
+            None if n > PAR => {
+                use rayon::prelude::*;
+                let parts: Vec<Binned> = items.par_chunks(PAR).map(|c| bin_items(c, k, lo, scale)).collect();
+                parts.iter().fold(Binned::new(), |a, b| a.merge(b))
+            }
+            None => bin_items(items, k, lo, scale),
         };
         // the cheapest split plane (ties: the lowest plane)
         let mut best: Option<(f64, usize)> = None;
         let mut right_area = [0.0; BINS];
         let mut acc = Aabb::EMPTY;
         for b in (1..BINS).rev() {
-            acc = acc.join(&binned.bound[b]);
+            acc = acc.join(&binned.bound(b));
             right_area[b] = acc.half_area();
         }
         let mut left = Aabb::EMPTY;
         let mut nl = 0u64;
         for b in 1..BINS {
-            left = left.join(&binned.bound[b - 1]);
+            left = left.join(&binned.bound(b - 1));
             nl += binned.count[b - 1] as u64;
             let nr = n as u64 - nl;
             if nl == 0 || nr == 0 {
@@ -371,23 +450,28 @@ fn split(items: &mut [Item], depth: usize, cb: Option<Aabb>) -> (usize, Option<[
             }
         }
         if let Some((_, b)) = best {
-            // in-place two-pointer partition (deterministic); each item is tested once,
-            // where its side is known, and grows that side's centroid bounds
-            let (mut i, mut j) = (0usize, n);
-            let (mut lcb, mut rcb) = (Aabb::EMPTY, Aabb::EMPTY);
-            while i < j {
-                let c = items[i].centroid;
-                if bin_of(c[k], lo, scale) < b {
-                    lcb.grow(&c, &c);
-                    i += 1;
-                } else {
-                    rcb.grow(&c, &c);
-                    j -= 1;
-                    items.swap(i, j);
-                }
-            }
+            // the two sides' centroid bounds and sizes from the bins, then their own bins
+            // filled during the partition
+            let lcb = (0..b).fold(Aabb::EMPTY, |a, c| a.join(&binned.cent(c)));
+            let rcb = (b..BINS).fold(Aabb::EMPTY, |a, c| a.join(&binned.cent(c)));
+            let nl = binned.count[..b].iter().map(|&c| c as usize).sum::<usize>();
+            let (la, le, ls) = plan(&lcb, nl, depth + 1);
+            let (ra, re, rs) = plan(&rcb, n - nl, depth + 1);
+            let (lp, rp) = (if ls { bins_of(&lcb, la, le) } else { (0, 0.0, 0.0) }, if rs { bins_of(&rcb, ra, re) } else { (0, 0.0, 0.0) });
+            let kls = (k, lo, scale);
+            let (mut lb, mut rb) = (Box::new(Binned::new()), Box::new(Binned::new()));
+            let (l, r) = (&mut *lb, &mut *rb);
+            let i = match (ls, rs) {
+                (true, true) => partition::<true, true>(items, kls, b, lp, rp, l, r),
+                (true, false) => partition::<true, false>(items, kls, b, lp, rp, l, r),
+                (false, true) => partition::<false, true>(items, kls, b, lp, rp, l, r),
+                (false, false) => partition::<false, false>(items, kls, b, lp, rp, l, r),
+            };
+            debug_assert_eq!(i, nl);
             if i > 0 && i < n {
-                return (i, Some([lcb, rcb]));
+                let l = Known { cb: lcb, bins: ls.then_some(lb) };
+                let r = Known { cb: rcb, bins: rs.then_some(rb) };
+                return (i, Some([l, r]));
             }
         }
     }
@@ -457,16 +541,20 @@ fn leaf(items: &[Item], first: u32) -> (Aabb, Child) {
 }
 
 /// Build the subtree of `items` (slots from `first`) into `out`, depth first: its box and reference.
-fn build_seq(items: &mut [Item], first: u32, depth: usize, cb: Option<Aabb>, out: &mut Vec<Node>) -> (Aabb, Child) {
+fn build_seq(items: &mut [Item], first: u32, depth: usize, known: Option<Known>, out: &mut Vec<Node>) -> (Aabb, Child) {
     if items.len() <= LEAF {
         return leaf(items, first);
     }
-    let (mid, cbs) = split(items, depth, cb);
+    let (mid, parts) = split(items, depth, known);
     let (left, right) = items.split_at_mut(mid);
     let at = out.len();
     out.push(Node { lo: [[0.0f32; 2]; 3], hi: [[0.0f32; 2]; 3], child: [Child { index: 0, count: 0 }; 2] });
-    let (lb, lc) = build_seq(left, first, depth + 1, cbs.map(|c| c[0]), out);
-    let (rb, rc) = build_seq(right, first + mid as u32, depth + 1, cbs.map(|c| c[1]), out);
+    let (lk, rk) = match parts {
+        Some([l, r]) => (Some(l), Some(r)),
+        None => (None, None),
+    };
+    let (lb, lc) = build_seq(left, first, depth + 1, lk, out);
+    let (rb, rc) = build_seq(right, first + mid as u32, depth + 1, rk, out);
     out[at] = node_of(&lb, &rb, lc, rc);
     (lb.join(&rb), Child { index: at as u32, count: 0 })
 }
@@ -477,16 +565,19 @@ enum Part {
     Split(Aabb, Box<Part>, Box<Part>),
 }
 
-fn build_par(items: &mut [Item], first: u32, depth: usize, cb: Option<Aabb>) -> Part {
+fn build_par(items: &mut [Item], first: u32, depth: usize, known: Option<Known>) -> Part {
     if items.len() <= PAR {
         let mut out = Vec::new();
-        let (b, c) = build_seq(items, first, depth, cb, &mut out);
+        let (b, c) = build_seq(items, first, depth, known, &mut out);
         return Part::Seq(b, c, out);
     }
-    let (mid, cbs) = split(items, depth, cb);
+    let (mid, parts) = split(items, depth, known);
     let (left, right) = items.split_at_mut(mid);
-    let (lcb, rcb) = (cbs.map(|c| c[0]), cbs.map(|c| c[1]));
-    let (l, r) = rayon::join(|| build_par(left, first, depth + 1, lcb), || build_par(right, first + mid as u32, depth + 1, rcb));
+    let (lk, rk) = match parts {
+        Some([l, r]) => (Some(l), Some(r)),
+        None => (None, None),
+    };
+    let (l, r) = rayon::join(|| build_par(left, first, depth + 1, lk), || build_par(right, first + mid as u32, depth + 1, rk));
     let b = l.bounds().join(&r.bounds());
     Part::Split(b, Box::new(l), Box::new(r))
 }
