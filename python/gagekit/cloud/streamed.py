@@ -2,8 +2,9 @@
 classified into the regions (one Rust pass over the chunk), and only the points inside
 regions are kept; where the evaluation needs only the convex-hull vertices (the LP of
 Eq. 5.11: a linear constraint that holds at the hull vertices holds everywhere), a
-region's points are hull-filtered whenever :data:`REHULL` of them have piled up (with the
-vertices kept so far) and at the end. The hull of the union is the hull of the union of
+region's points are hull-filtered in the chunk's cut when the chunk holds at least
+:data:`HULL_IN_CUT` of them, else whenever :data:`REHULL` of them have piled up (with the
+vertices kept so far), and at the end. The hull of the union is the hull of the union of
 the hulls, and the exact predicates keep the same extreme points (the lowest index among
 duplicates), so the vertices kept, and their order (ascending point number), are those of
 a whole read.
