@@ -190,8 +190,8 @@ impl TriMesh {
         if n > u32::MAX as usize {
             return Err(GkError::invalid(format!("points: {n} points, more than 2^32 - 1 in one call; split the cloud")));
         }
+        // None: the points' own order (no identity vector of n indices to fill and read)
         let order = query_order(points);
-        let identity = order.iter().enumerate().all(|(k, &i)| k == i as usize);
         // per point in query order: the distance, the triangle and (if asked) the foot.
         // All zero bits, so allocated zeroed (fresh pages, no pass writing them): `work`
         // writes every element of its chunk (each k of 0..len, in groups of GROUP), and
@@ -213,7 +213,10 @@ impl TriMesh {
                 let mut ps = [[0.0; 3]; GROUP];
                 let mut best: [Option<Nearest>; GROUP] = [None; GROUP];
                 for (j, k) in ks.clone().enumerate() {
-                    let i = order[c * CHUNK + k] as usize;
+                    let i = match &order {
+                        Some(o) => o[c * CHUNK + k] as usize,
+                        None => c * CHUNK + k,
+                    };
                     ps[j] = [points[3 * i], points[3 * i + 1], points[3 * i + 2]];
                 }
                 let g = ks.len();
@@ -253,7 +256,7 @@ impl TriMesh {
         } else {
             distance.par_chunks_mut(CHUNK).zip(triangle.par_chunks_mut(CHUNK)).enumerate().try_for_each(|(c, (d, t))| work(c, d, t, None))?;
         }
-        if !identity {
+        if let Some(order) = order {
             // back to input order
             let mut rank = vec![0u32; n];
             for (k, &i) in order.iter().enumerate() {
@@ -271,14 +274,15 @@ impl TriMesh {
     }
 }
 
-/// The order to query the points in: their own when the file's order is already
+/// The order to query the points in: their own (None) when the file's order is already
 /// coherent (the median step between consecutive points, on 4096 evenly spaced pairs, is
 /// below 1/100 of the cloud's extent: scan lines), else [`morton_order`]. Only the speed
-/// depends on it.
-pub fn query_order(points: &[f64]) -> Vec<u32> {
+/// depends on it. Their own order is None rather than the identity permutation: 4 bytes
+/// a point less to allocate, fill and read (56 MB at 14 M points).
+pub fn query_order(points: &[f64]) -> Option<Vec<u32>> {
     let n = points.len() / 3;
     if n < 2 {
-        return (0..n as u32).collect();
+        return None;
     }
     let at = |i: usize| [points[3 * i], points[3 * i + 1], points[3 * i + 2]];
     let m = 4096.min(n - 1);
@@ -294,9 +298,9 @@ pub fn query_order(points: &[f64]) -> Vec<u32> {
     let (lo, hi) = bounds(points);
     let ext = (0..3).map(|k| hi[k] - lo[k]).fold(0.0, f64::max);
     if median < 1e-2 * ext {
-        (0..n as u32).collect()
+        None
     } else {
-        morton_order(points)
+        Some(morton_order(points))
     }
 }
 
