@@ -199,7 +199,10 @@ impl TriMesh {
         let mut distance = vec![0.0; n];
         let mut triangle = vec![0i64; n];
         let mut foot = if q.foot { vec![0.0; 3 * n] } else { Vec::new() };
-        let work = |c: usize, d: &mut [f64], t: &mut [i64], mut f: Option<&mut [f64]>| -> Result<()> {
+        // each chunk's work returns how many of its points have no triangle (beyond
+        // `max_distance`), summed over the chunks: no pass over the triangles afterwards
+        let work = |c: usize, d: &mut [f64], t: &mut [i64], mut f: Option<&mut [f64]>| -> Result<usize> {
+            let mut beyond = 0;
             if c % 64 == 0 {
                 interrupt::check()?;
             }
@@ -228,7 +231,10 @@ impl TriMesh {
                             let h = self.hit_of(ps[j], n, signed);
                             (h.distance, h.triangle as i64, h.foot)
                         }
-                        None => (f64::NAN, -1, [f64::NAN; 3]),
+                        None => {
+                            beyond += 1;
+                            (f64::NAN, -1, [f64::NAN; 3])
+                        }
                     };
                     d[k] = dk;
                     t[k] = tk;
@@ -244,18 +250,19 @@ impl TriMesh {
                     hint = a;
                 }
             }
-            Ok(())
+            Ok(beyond)
         };
-        if q.foot {
+        let beyond = if q.foot {
             distance
                 .par_chunks_mut(CHUNK)
                 .zip(triangle.par_chunks_mut(CHUNK))
                 .zip(foot.par_chunks_mut(3 * CHUNK))
                 .enumerate()
-                .try_for_each(|(c, ((d, t), f))| work(c, d, t, Some(f)))?;
+                .map(|(c, ((d, t), f))| work(c, d, t, Some(f)))
+                .try_reduce(|| 0, |a, b| Ok(a + b))?
         } else {
-            distance.par_chunks_mut(CHUNK).zip(triangle.par_chunks_mut(CHUNK)).enumerate().try_for_each(|(c, (d, t))| work(c, d, t, None))?;
-        }
+            distance.par_chunks_mut(CHUNK).zip(triangle.par_chunks_mut(CHUNK)).enumerate().map(|(c, (d, t))| work(c, d, t, None)).try_reduce(|| 0, |a, b| Ok(a + b))?
+        };
         if let Some(order) = order {
             // back to input order
             let mut rank = vec![0u32; n];
@@ -269,7 +276,6 @@ impl TriMesh {
                 foot = rank.par_iter().flat_map_iter(|&k| [foot[3 * k as usize], foot[3 * k as usize + 1], foot[3 * k as usize + 2]]).collect();
             }
         }
-        let beyond = triangle.iter().filter(|&&t| t < 0).count();
         Ok(Distances { distance, triangle, foot, beyond, signed })
     }
 }
