@@ -26,6 +26,18 @@ fn active_subset_equals_the_full_fit() {
     let full = fit_direct(&pts, Criterion::MinCircumscribed, &opts, lsq_axis, &Region::half_sphere()).unwrap();
     assert!((sub.r_out - full.r_out).abs() < 1e-9, "{} vs {}", sub.r_out, full.r_out);
     assert!((sub.extent.max - sub.r_out).abs() < 1e-9);
+    // the point is the foot of all the points' centroid, as the full fit's (not of the
+    // active subset's: it moved along the axis with the subset)
+    assert_foot_of_centroid(&pts, &sub);
+    assert_foot_of_centroid(&pts, &full);
+}
+
+/// The reported point is the foot of the centroid of `pts` on the axis.
+fn assert_foot_of_centroid(pts: &[f64], r: &CylinderFit) {
+    let c = Vector3::from_column_slice(&centroid(pts, 3));
+    let (p, d) = (Vector3::from(r.point), Vector3::from(r.direction));
+    let off = c - p;
+    assert!(off.dot(&d).abs() < 1e-9, "{:?} is {} mm along the axis from the centroid's foot", r.point, off.dot(&d));
 }
 
 /// Data set 3 of the dissertation (24 points; reference-data/seed-cylinders/set3.csv).
@@ -130,6 +142,8 @@ fn warm_start_equals_the_global_search_on_perturbed_points() {
                 let global = fit(&trial, crit, &opts).unwrap();
                 let (near, fallback) = fit_near(&trial, crit, &opts, &warm).unwrap();
                 assert!(!fallback, "{crit:?} trial {salt}: fell back");
+                assert_foot_of_centroid(&trial, &near);
+                assert_foot_of_centroid(&trial, &global);
                 assert!(near.outside.is_none());
                 assert!((near.size() - global.size()).abs() < 1e-9, "{crit:?} trial {salt}: {} vs {}", near.size(), global.size());
                 let e = lsq::axis_extent(&trial, &near.point, &near.direction);

@@ -38,14 +38,18 @@ pub struct CylinderResult {
 }
 
 /// (theta, phi) of a direction, flipped into the upper half sphere (theta <= pi/2); the
-/// norm summed in order, as the package always computed it.
+/// norm summed in order, as the package always computed it. An axis whose theta is 0
+/// (z within rounding: the x and y parts below about 1e-8) has phi 0: its azimuth is the
+/// angle of rounding noise (the bracket's boss, direction (0, -5e-16, 1), reported phi
+/// -90 degrees, and -50.7 degrees after a rounding-level change of its fit).
 pub fn axis_angles(d: [f64; 3]) -> (f64, f64) {
     let n = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
     let mut a = [d[0] / n, d[1] / n, d[2] / n];
     if a[2] < 0.0 || (a[2] == 0.0 && (a[1] < 0.0 || (a[1] == 0.0 && a[0] < 0.0))) {
         a = [-a[0], -a[1], -a[2]];
     }
-    (a[2].clamp(-1.0, 1.0).acos(), a[1].atan2(a[0]))
+    let theta = a[2].clamp(-1.0, 1.0).acos();
+    (theta, if theta == 0.0 { 0.0 } else { a[1].atan2(a[0]) })
 }
 
 /// The least-squares cylinder of `n_points` points.

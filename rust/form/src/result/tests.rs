@@ -49,4 +49,10 @@ fn axis_angles_flip_into_the_upper_half_sphere() {
     assert_eq!(t, 0.0);
     let (t, _) = axis::axis_angles([1.0, 0.0, 0.0]);
     assert!((t - std::f64::consts::FRAC_PI_2).abs() < 1e-15);
+    // along z within rounding: theta 0 and phi 0, whatever the sign of the noise
+    for d in [[0.0, -5e-16, 1.0], [3e-17, -2e-16, 1.0], [-1e-12, 0.0, -1.0]] {
+        assert_eq!(axis::axis_angles(d), (0.0, 0.0), "{d:?}");
+    }
+    let (t, p) = axis::axis_angles([0.0, -1e-3, 1.0]);
+    assert!(t > 0.0 && (p + std::f64::consts::FRAC_PI_2).abs() < 1e-15);
 }
