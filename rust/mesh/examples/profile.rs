@@ -1,6 +1,8 @@
 //! Timing harness (not a test): `cargo run --release -p gagekit-mesh --example profile -- [points] [nu nv] [fit|shuffle|of=N] [from=K]`.
 //! The torus and scan-line scan of benches/bench_compare.py, built in Rust; `of=N`: the
 //! first `points` points of an N-point scan (the density of the full scan on a subset); `from=K`: from its K-th point on.
+//! `build [runs] [nu nv] [nohash]`: only `TriMesh::new` of the torus, `runs` times (wall and CPU seconds of each, and a
+//! fingerprint of all it built).
 use gagekit_mesh::align::{best_fit, FitOptions};
 use gagekit_mesh::distance::Query;
 use gagekit_mesh::rigid::Pose;
@@ -63,8 +65,46 @@ fn cpu() -> f64 {
     (t(11) + t(12)) / 100.0
 }
 
+/// `TriMesh::new` of the torus alone, `runs` times: each run's wall and CPU seconds.
+fn build_only(args: &[String]) {
+    let runs: usize = args.get(2).and_then(|s| s.parse().ok()).unwrap_or(5);
+    let nu: usize = args.get(3).and_then(|s| s.parse().ok()).unwrap_or(1000);
+    let nv: usize = args.get(4).and_then(|s| s.parse().ok()).unwrap_or(500);
+    let (v, t) = torus(nu, nv, false);
+    for _ in 0..runs {
+        let (c0, t0) = (cpu(), Instant::now());
+        let mesh = TriMesh::new(&v, &t).unwrap();
+        let (wall, c) = (t0.elapsed().as_secs_f64(), cpu() - c0);
+        // `nohash`: no fingerprint (its instructions would hide the build's in a count)
+        let hash = if args.iter().any(|s| s == "nohash") { String::new() } else { format!(", mesh {:016x}", mesh_hash(&mesh)) };
+        println!("{} tri: TriMesh::new {wall:.3} s wall, {c:.2} s cpu, {} nodes{hash}", t.len() / 3, mesh.bvh.nodes.len());
+    }
+}
+
+/// A fingerprint of every bit the build makes: the tree (nodes, root, slots' triangles,
+/// corners and bound data), the normals and pseudonormals, the area and the topology.
+fn mesh_hash(m: &TriMesh) -> u64 {
+    use std::hash::{Hash, Hasher};
+    let mut h = std::hash::DefaultHasher::new();
+    let b = &m.bvh;
+    for n in &b.nodes {
+        n.lo.iter().chain(n.hi.iter()).flatten().for_each(|x| x.to_bits().hash(&mut h));
+        n.child.iter().for_each(|c| (c.index, c.count).hash(&mut h));
+    }
+    (b.root.index, b.root.count, &b.order).hash(&mut h);
+    let f = |x: &f64| x.to_bits();
+    let bits = b.root_lo.iter().chain(&b.root_hi).chain(b.corners.iter().flatten().flatten());
+    bits.chain(b.bounds.iter().flat_map(|q| q.n.iter().chain(q.m.iter().flatten()).chain(&q.w))).map(f).for_each(|x| x.hash(&mut h));
+    (b.slack.to_bits(), b.size.to_bits(), m.area.to_bits(), format!("{:?}", m.topology)).hash(&mut h);
+    m.face_normals.iter().chain(&m.vertex_normals).chain(m.edge_normals.iter().flatten()).flatten().map(f).for_each(|x| x.hash(&mut h));
+    h.finish()
+}
+
 fn main() {
     let args: Vec<String> = std::env::args().collect();
+    if args.get(1).map(|s| s == "build").unwrap_or(false) {
+        return build_only(&args);
+    }
     let n: usize = args.get(1).and_then(|s| s.parse().ok()).unwrap_or(1_400_000);
     let nu: usize = args.get(2).and_then(|s| s.parse().ok()).unwrap_or(1000);
     let nv: usize = args.get(3).and_then(|s| s.parse().ok()).unwrap_or(500);

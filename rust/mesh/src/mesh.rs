@@ -72,20 +72,23 @@ impl TriMesh {
         if nv > u32::MAX as usize - 1 || nt > u32::MAX as usize - 1 {
             return Err(GkError::invalid("mesh: more than 2^32 - 2 vertices or triangles"));
         }
-        if let Some(pos) = vertices.iter().position(|v| !v.is_finite()) {
+        // copied first, then checked: the copy is what the mesh uses (the caller's arrays
+        // may be read in place while other threads run)
+        let verts: Vec<V3> = (0..nv).map(|i| vertex(vertices, i)).collect();
+        let tris: Vec<[u32; 3]> = triangles.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect();
+        if let Some(pos) = verts.as_flattened().iter().position(|v| !v.is_finite()) {
             return Err(GkError::invalid(format!(
                 "mesh: vertex {} has a non-finite coordinate ({}); the model is damaged",
                 pos / 3,
-                vertices[pos]
+                verts.as_flattened()[pos]
             )));
         }
-        let verts: Vec<V3> = (0..nv).map(|i| vertex(vertices, i)).collect();
-        let tris: Vec<[u32; 3]> = triangles.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect();
         if let Some((i, &bad)) = tris.iter().enumerate().find_map(|(i, t)| t.iter().find(|&&k| k as usize >= nv).map(|b| (i, b))) {
             return Err(GkError::invalid(format!("mesh: triangle {i} names vertex {bad}, but there are {nv} vertices")));
         }
-        // per triangle (in parallel): the unit normal and twice the area, or None when degenerate
-        let faces: Vec<Option<(V3, f64)>> = {
+        // per triangle (in parallel): the unit normal and twice the area, or ([0; 3], -1)
+        // when degenerate; the area summed in triangle order
+        let (mut normals, twice_area): (Vec<V3>, Vec<f64>) = {
             use rayon::prelude::*;
             tris.par_iter()
                 .map(|t| {
@@ -94,29 +97,23 @@ impl TriMesh {
                     let n2 = norm(n);
                     let longest = [sub(b, a), sub(c, b), sub(a, c)].iter().map(|e| dot(*e, *e)).fold(0.0, f64::max);
                     if t[0] == t[1] || t[1] == t[2] || t[0] == t[2] || !(n2 > 1e-12 * longest) {
-                        None
+                        ([0.0; 3], -1.0)
                     } else {
-                        Some((scale(n, 1.0 / n2), n2))
+                        (scale(n, 1.0 / n2), n2)
                     }
                 })
-                .collect()
+                .unzip()
         };
-        let mut normals = Vec::with_capacity(nt);
         let mut area = 0.0;
         let mut degenerate = Vec::new();
-        for (i, f) in faces.iter().enumerate() {
-            match f {
-                None => {
-                    degenerate.push(i);
-                    normals.push([0.0; 3]);
-                }
-                Some((n, n2)) => {
-                    area += 0.5 * n2;
-                    normals.push(*n);
-                }
+        for (i, &n2) in twice_area.iter().enumerate() {
+            if n2 < 0.0 {
+                degenerate.push(i);
+            } else {
+                area += 0.5 * n2;
             }
         }
-        drop(faces);
+        drop(twice_area);
         if !degenerate.is_empty() {
             let first: Vec<String> = degenerate.iter().take(5).map(|i| i.to_string()).collect();
             return Err(GkError::degenerate(format!(
@@ -133,11 +130,10 @@ impl TriMesh {
             }
         }
         let (vertex_normals, edge_normals) = pseudonormals(&verts, &tris, &normals, &edges);
-        let corners: Vec<[V3; 3]> = {
-            use rayon::prelude::*;
-            tris.par_iter().map(|t| [verts[t[0] as usize], verts[t[1] as usize], verts[t[2] as usize]]).collect()
-        };
-        let bvh = Bvh::new(&corners);
+        let bvh = Bvh::build(tris.len(), |i| {
+            let t = &tris[i];
+            [verts[t[0] as usize], verts[t[1] as usize], verts[t[2] as usize]]
+        });
         Ok(Self { vertices: verts, triangles: tris, face_normals: normals, vertex_normals, edge_normals, area, topology, bvh })
     }
 
@@ -264,23 +260,25 @@ fn angle(u: V3, v: V3) -> f64 {
 
 fn pseudonormals(verts: &[V3], tris: &[[u32; 3]], normals: &[V3], edges: &[(u64, u32, u8)]) -> (Vec<V3>, Vec<[V3; 3]>) {
     use rayon::prelude::*;
-    // each corner's angle (in parallel), then summed per vertex in triangle order
-    let angles: Vec<[f64; 3]> = tris
-        .par_iter()
-        .map(|t| {
-            std::array::from_fn(|k| {
-                let p = verts[t[k] as usize];
-                angle(sub(verts[t[(k + 1) % 3] as usize], p), sub(verts[t[(k + 2) % 3] as usize], p))
-            })
-        })
-        .collect();
+    // each vertex's pseudonormal: its corners' angle-weighted face normals summed in
+    // triangle order. The vertices in ranges, one a thread, in parallel: each range
+    // scans all the triangles for its own corners (no array of all angles, no
+    // sequential scatter; the same sums in the same order, whatever the thread count)
     let mut vn = vec![[0.0; 3]; verts.len()];
-    for ((t, n), a) in tris.iter().zip(normals).zip(&angles) {
-        for k in 0..3 {
-            let i = t[k] as usize;
-            vn[i] = add(vn[i], scale(*n, a[k]));
+    let per = verts.len().div_ceil(rayon::current_num_threads().clamp(1, 16)).max(1);
+    vn.par_chunks_mut(per).enumerate().for_each(|(c, out)| {
+        let lo = c * per;
+        for (t, n) in tris.iter().zip(normals) {
+            for k in 0..3 {
+                let i = (t[k] as usize).wrapping_sub(lo);
+                if i < out.len() {
+                    let p = verts[t[k] as usize];
+                    let a = angle(sub(verts[t[(k + 1) % 3] as usize], p), sub(verts[t[(k + 2) % 3] as usize], p));
+                    out[i] = add(out[i], scale(*n, a));
+                }
+            }
         }
-    }
+    });
     // edge normals: the sum of the normals of the triangles sharing the edge
     let mut en = vec![[[0.0; 3]; 3]; tris.len()];
     for g in edge_groups(edges) {

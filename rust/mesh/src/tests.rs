@@ -485,14 +485,14 @@ fn shuffled_points_give_the_same_distances() {
         }
     }
     let n = pts.len() / 3;
-    assert!(crate::distance::query_order(&pts) == (0..n as u32).collect::<Vec<_>>(), "scan lines keep their order");
+    assert!(crate::distance::query_order(&pts).is_none(), "scan lines keep their order");
     let mut rng = ChaCha8Rng::seed_from_u64(4);
     let mut perm: Vec<usize> = (0..n).collect();
     for i in (1..n).rev() {
         perm.swap(i, rng.random_range(0..=i));
     }
     let shuffled: Vec<f64> = perm.iter().flat_map(|&i| [pts[3 * i], pts[3 * i + 1], pts[3 * i + 2]]).collect();
-    let mut order = crate::distance::query_order(&shuffled);
+    let mut order = crate::distance::query_order(&shuffled).expect("a shuffled cloud is sorted");
     assert!(order != (0..n as u32).collect::<Vec<_>>(), "a shuffled cloud is sorted");
     order.sort_unstable();
     assert!(order == (0..n as u32).collect::<Vec<_>>(), "a permutation");
@@ -535,7 +535,13 @@ proptest! {
                 .collect();
             // hints measured for every lane at once (some out of range, some repeated)
             let hints: Vec<u32> = (0..rng.random_range(0..4)).map(|_| rng.random_range(0..bvh.corners.len() as u32 + 2)).collect();
+            let builds = bvh.nearest_group_every_build(&ps, bound2, &hints, &best);
             bvh.nearest_group_from(&ps, bound2, &hints, &mut best);
+            // every build (plain, AVX2, AVX-512, as the processor has them) gives the same bits
+            let bits = |b: &Option<crate::bvh::Nearest>| b.map(|n| (n.slot, n.d2.to_bits(), n.foot.map(f64::to_bits), n.feature));
+            for other in &builds {
+                prop_assert_eq!(other.iter().map(bits).collect::<Vec<_>>(), best.iter().map(bits).collect::<Vec<_>>());
+            }
             for (q, got) in ps.iter().zip(&best) {
                 let single = bvh.nearest(*q, bound2, None);
                 let want = brute_force_slot(&bvh, *q, bound2);
@@ -694,10 +700,13 @@ proptest! {
                 .collect();
             let mut best: Vec<Option<crate::bvh::Nearest>> = vec![None; ps.len()];
             bvh.nearest_group(&ps, f64::INFINITY, &mut best);
-            for (q, got) in ps.iter().zip(&best) {
-                let (d2, slot) = brute_force_slot(&bvh, *q, f64::INFINITY).unwrap();
-                let a = got.unwrap();
-                prop_assert_eq!((a.slot, a.d2.to_bits()), (slot, d2.to_bits()));
+            // and every build the processor runs (plain, AVX2, AVX-512)
+            for best in std::iter::once(best.clone()).chain(bvh.nearest_group_every_build(&ps, f64::INFINITY, &[], &best.iter().map(|_| None).collect::<Vec<_>>())) {
+                for (q, got) in ps.iter().zip(&best) {
+                    let (d2, slot) = brute_force_slot(&bvh, *q, f64::INFINITY).unwrap();
+                    let a = got.unwrap();
+                    prop_assert_eq!((a.slot, a.d2.to_bits()), (slot, d2.to_bits()));
+                }
             }
         }
     }
@@ -807,5 +816,47 @@ proptest! {
         // no lane is opened by a lane without a best (NEG_INFINITY) or a NaN
         prop_assert_eq!(crate::bvh::widen(f64::NEG_INFINITY, crate::bvh::widen_err2(err)), f32::NEG_INFINITY);
         prop_assert_eq!(crate::bvh::widen(f64::NAN, crate::bvh::widen_err2(err)), f32::NEG_INFINITY);
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(256))]
+    /// The median split's key sort of at most 32 items gives `select_nth_unstable_by`'s
+    /// arrangement for up to 16 items (it sorts them all) and its two halves' sets above
+    /// (centroids from a few values, signed zeros among them: many ties, broken by the index).
+    #[test]
+    fn small_sort_is_the_median_selection(n in 5usize..=crate::bvh::SMALL_SORT, seed in 0u64..1_000_000, axis in 0usize..3) {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let values = [-0.0, 0.0, 1.5, -2.25, 1e300, -1e-300, 7.0];
+        let items: Vec<crate::bvh::Item> = (0..n)
+            .map(|_| {
+                let c = [0; 3].map(|_| values[rng.random_range(0..values.len())]);
+                crate::bvh::Item { tri: rng.random_range(0..40), centroid: c, lo: c, hi: c }
+            })
+            .collect();
+        // distinct triangles (as in a build)
+        let mut items: Vec<_> = items.into_iter().enumerate().map(|(i, mut it)| { it.tri = it.tri * 64 + i as u32; it }).collect();
+        items.reverse();
+        let mut want = items.clone();
+        want.select_nth_unstable_by(n / 2, |a, b| a.centroid[axis].total_cmp(&b.centroid[axis]).then(a.tri.cmp(&b.tri)));
+        crate::bvh::sort_small(&mut items, axis);
+        let tris = |v: &[crate::bvh::Item]| v.iter().map(|it| it.tri).collect::<Vec<u32>>();
+        if n <= 16 {
+            prop_assert_eq!(tris(&items), tris(&want));
+        } else {
+            let (mut a, mut b) = (tris(&items[..n / 2]), tris(&want[..n / 2]));
+            a.sort_unstable();
+            b.sort_unstable();
+            prop_assert_eq!(a, b);
+        }
+        prop_assert!(items.windows(2).all(|w| w[0].centroid[axis].total_cmp(&w[1].centroid[axis]).then(w[0].tri.cmp(&w[1].tri)).is_lt()));
+    }
+
+    /// A centroid's bin is `((c - lo) * scale) as usize` capped at the last bin, for any
+    /// numbers (NaN, infinities and negative products too).
+    #[test]
+    fn bin_of_is_the_saturating_cast(c in prop::num::f64::ANY, lo in prop::num::f64::ANY, scale in prop::num::f64::ANY) {
+        let want = (((c - lo) * scale) as usize).min(crate::bvh::BINS - 1);
+        prop_assert_eq!(crate::bvh::bin_of(c, lo, scale), want);
     }
 }

@@ -68,7 +68,8 @@ impl Mesh {
     /// Build from (n, 3) float64 vertices and (m, 3) int64 vertex indices.
     #[new]
     fn new(py: Python<'_>, vertices: PyReadonlyArray2<'_, f64>, triangles: PyReadonlyArray2<'_, i64>) -> PyResult<Self> {
-        let v = rows(py, &vertices, 3, "vertices")?.to_vec();
+        // read in place (TriMesh::new copies the vertices before checking them)
+        let v = rows(py, &vertices, 3, "vertices")?;
         if triangles.shape()[1] != 3 {
             return Err(invalid(format!("triangles: expected an (m, 3) array, got shape {:?}", triangles.shape())));
         }
@@ -77,7 +78,7 @@ impl Mesh {
             .iter()
             .map(|&i| u32::try_from(i).map_err(|_| invalid(format!("triangles: vertex index {i} out of range"))))
             .collect::<PyResult<_>>()?;
-        let mesh = run(py, || TriMesh::new(&v, &t))?;
+        let mesh = run(py, || TriMesh::new(v, &t))?;
         Ok(Self { mesh: Arc::new(mesh) })
     }
 
