@@ -238,14 +238,17 @@ def test_datum_moments_stream_to_the_whole_reads_bits(chunk):
     assert np.allclose(np.abs(vt @ vt_np.T), np.eye(3), atol=1e-9)
 
 
-def test_hull_regions_rehulled_midway_equal_the_whole_read(monkeypatch):
+@pytest.mark.parametrize("in_cut", [1 << 18, 200, 1])
+def test_hull_regions_rehulled_midway_equal_the_whole_read(monkeypatch, in_cut):
     """A hull region's points are hulled whenever REHULL of them pile up (with the vertices
-    kept so far): with REHULL at 64 points, many such rounds in each pass, the streamed
-    gage check is still the whole read's, bit for bit."""
+    kept so far), and in the chunk's cut when it holds HULL_IN_CUT of them: with REHULL at
+    64 points, many such rounds in each pass, and every region, some or none hulled in
+    the cut, the streamed gage check is still the whole read's, bit for bit."""
     from gagekit.cloud import streamed
     from gagekit.gage.analysis import check_gages, check_gages_stream
 
     monkeypatch.setattr(streamed, "REHULL", 64)
+    monkeypatch.setattr(streamed, "HULL_IN_CUT", in_cut)
     path, spec = DATA / "casting_ok.ply", DATA / "casting_ok.toml"
     whole = check_gages(read_cloud(path).points, spec).to_dict()
     assert check_gages_stream(open_cloud(path, chunk=4999), spec).to_dict() == whole
@@ -333,6 +336,16 @@ def test_a_backward_pass_keeps_what_a_forward_pass_keeps(tmp_path, chunk, monkey
         assert b.point_array().tobytes() == f.point_array().tobytes()
         assert np.array_equal(np.concatenate(b.all_indices), np.concatenate(f.all_indices))
         assert b.sample_points().tobytes() == f.sample_points().tobytes()
+    # every chunk's hull made in its cut (no inside numbers asked for): the same vertices,
+    # duplicates' lowest numbers, samples, both ways
+    monkeypatch.setattr(streamed, "HULL_IN_CUT", 1)
+    for way in (False, True):
+        got = cut_stream(s, boxes, ["hull", "all"], sample=50, seed=4, backward=way)
+        for f, g in zip(fwd.regions, got.regions):
+            assert g.count == f.count
+            assert np.array_equal(g.index_array(), f.index_array())
+            assert g.point_array().tobytes() == f.point_array().tobytes()
+            assert g.sample_points().tobytes() == f.sample_points().tobytes()
     # the moments need file order: a pass summing them reads forward
     assert cut_stream(s, boxes[:1], ["hull"], moments=[True], backward=True)["a"].moments.tobytes() == \
         cut_stream(s, boxes[:1], ["hull"], moments=[True])["a"].moments.tobytes()
@@ -425,13 +438,18 @@ def test_a_one_pass_gage_check_equals_the_whole_read(monkeypatch, shell):
     assert len(reads) == (3 if shell == 0.1 else 6)
 
 
-def test_the_streamed_sample_is_the_bottom_k_of_every_inside_point():
+@pytest.mark.parametrize("in_cut", [1 << 18, 1])
+def test_the_streamed_sample_is_the_bottom_k_of_every_inside_point(monkeypatch, in_cut):
     """A region's picture sample, streamed in chunks with the keys filtered in Rust below
-    the largest held, holds the ``sample`` points of the smallest keys among every inside
-    point, as keying the whole region at once; the keys are the SplitMix64 numpy form's
-    bits, also for numbers above 2^32 and a negative seed."""
+    the largest held (drawn in the chunk's cut, whether the cut hulls the region or not),
+    holds the ``sample`` points of the smallest keys among every inside point, as keying
+    the whole region at once; the keys are the SplitMix64 numpy form's bits, also for
+    numbers above 2^32 and a negative seed."""
+    from gagekit.cloud import streamed
     from gagekit.cloud.regions import Box, classify
     from gagekit.cloud.streamed import cut_stream, sample_keys
+
+    monkeypatch.setattr(streamed, "HULL_IN_CUT", in_cut)
 
     ids = np.array([0, 1, 7, 2**32 + 5, 2**40 + 3, 2**62 + 11], dtype=np.int64)
     for seed in (0, 4, -3, 2**70 + 1):

@@ -2,8 +2,9 @@
 classified into the regions (one Rust pass over the chunk), and only the points inside
 regions are kept; where the evaluation needs only the convex-hull vertices (the LP of
 Eq. 5.11: a linear constraint that holds at the hull vertices holds everywhere), a
-region's points are hull-filtered whenever :data:`REHULL` of them have piled up (with the
-vertices kept so far) and at the end. The hull of the union is the hull of the union of
+region's points are hull-filtered in the chunk's cut when the chunk holds at least
+:data:`HULL_IN_CUT` of them, else whenever :data:`REHULL` of them have piled up (with the
+vertices kept so far), and at the end. The hull of the union is the hull of the union of
 the hulls, and the exact predicates keep the same extreme points (the lowest index among
 duplicates), so the vertices kept, and their order (ascending point number), are those of
 a whole read.
@@ -28,6 +29,12 @@ from .regions import Box
 
 REHULL = 1 << 20
 """Kept points of a ``keep="hull"`` region above which they are hulled during the pass."""
+
+HULL_IN_CUT = 1 << 18
+"""Points of a ``keep="hull"`` region in one chunk from which the chunk's cut hulls them
+itself (in its parallel pass, beside the other regions' gathers), rather than piling them
+up for a later hull (the pile's joins and hull would run beside the next chunk's cut, one
+core's work while that cut waits for it)."""
 
 
 @dataclass
@@ -105,15 +112,25 @@ class StreamedRegion:
         seeded key (:func:`sample_keys`, a function of its number: the same sample in any
         chunk order), the ``size`` smallest stay. Once ``size`` are held, a key above the
         largest held cannot enter: only the others are kept."""
-        below = self.sample_keys.max() if self.sample_keys is not None and len(self.sample_keys) >= size \
-            else np.inf
         # the keys below the largest held, in Rust (no temporaries the size of ``ids``)
-        pos, keys = keys_below(seed, ids, below)
+        pos, keys = keys_below(seed, ids, self.sample_bound(size))
         if len(pos) < len(ids):
             ids, pts = ids[pos], pts[pos]
+        self.sample_drawn(ids, keys, pts, size)
+
+    def sample_bound(self, size: int) -> float:
+        """The key below which a point may still enter a sample of ``size``: the largest
+        held once ``size`` are held, else infinity."""
+        keys = self.sample_keys
+        return float(keys.max()) if keys is not None and len(keys) >= size else np.inf
+
+    def sample_drawn(self, ids: np.ndarray, keys: np.ndarray, pts: np.ndarray, size: int) -> None:
+        """Points (numbers ``ids``, keys, rows of ``pts``) that may enter the sample: every
+        point inside whose key is below a bound at least :meth:`sample_bound` (the others
+        could not enter), merged with those held, the ``size`` smallest keys kept."""
         if self.sample_keys is None:
             self.sample_keys, self.sample_idx, self.sample_pts = keys, ids, pts
-        else:
+        elif len(keys):
             self.sample_keys = np.concatenate([self.sample_keys, keys])
             self.sample_idx = np.concatenate([self.sample_idx, ids])
             self.sample_pts = np.vstack([self.sample_pts, pts])
@@ -202,27 +219,33 @@ def cut_stream(chunks: Iterable[np.ndarray], boxes: Sequence[Box], keep: Sequenc
                for b, k in zip(boxes, keep)]
     state = np.zeros((len(boxes), 22)) if flags else None
     rows = np.array([b.row() for b in boxes], dtype=np.float64).reshape(-1, 9)
-    # the hull boxes' points are gathered, not hulled chunk by chunk: they pile up to
-    # REHULL points and are hulled then, with the vertices kept so far (the hull of the
-    # union is the hull of the union of the hulls, at any batching). A hull of a million
-    # points costs far less a point than many hulls of a chunk's few (the prefilter's
-    # fixed cost), and memory stays bounded by REHULL points a region.
-    hull = [False] * len(boxes)
+    # a hull box's points are hulled in the cut when a chunk holds at least HULL_IN_CUT
+    # of them (a large region: one parallel pass, no serial stage after it), else they
+    # pile up to REHULL points and are hulled then, with the vertices kept so far (the
+    # hull of the union is the hull of the union of the hulls, at any batching). A hull
+    # of many points costs less a point than many hulls of a chunk's few (the
+    # prefilter's fixed cost), and memory stays bounded by REHULL points a region.
+    # With ``all_indices`` every inside point's number is needed: nothing is hulled in
+    # the cut.
+    hull = [k == "hull" and not all_indices for k in keep]
 
     cut_minus = list(minus) if minus and any(k is not None for k in minus) else []
 
     def take(start: int, cuts: list) -> None:
-        # every box keeps every inside point here (no hull in the call): kept is inside
-        # (for a box with ``minus``, the points outside the other box: the cut's own)
-        for r, (count, _, kept, kpts) in zip(regions, cuts):
+        # kept: every inside point, or a large hull box's hull vertices (for a box with
+        # ``minus``, the points outside the other box: the cut's own); drawn: the sample
+        # candidates the cut drew (keys below the bound the sample had at the cut)
+        for r, (count, _, kept, kpts, drawn) in zip(regions, cuts):
             ids = kept + start
             r.add_kept(count, ids, ids, kpts)
-            if sample and count:
-                r.sample(seed, ids, kpts, sample)
+            if drawn is not None and len(drawn[0]):
+                r.sample_drawn(drawn[0] + start, drawn[1], drawn[2], sample)
 
     # the regions' share of chunk i (number shifts, samples, hulls of the piled-up points)
     # is taken in a thread while this one cuts chunk i + 1 (the cut holds no GIL) and the
-    # read-ahead reads chunk i + 2: at most two chunks' cuts wait, in order
+    # read-ahead reads chunk i + 2: at most two chunks' cuts wait, in order. A sample's
+    # bound read here may be that of a chunk not yet taken: larger, so the cut draws
+    # more candidates, never fewer (the same sample).
     n = 0
     with ThreadPoolExecutor(1, thread_name_prefix="gagekit-regions") as ex:
         waiting: deque = deque()
@@ -230,7 +253,9 @@ def cut_stream(chunks: Iterable[np.ndarray], boxes: Sequence[Box], keep: Sequenc
             n += len(pts)
             if boxes:
                 # one Rust call: classify, gather (and moments), parallel inside
-                cuts = _core.cloud.cut_chunk(as_points(pts), rows, hull, False, state, flags, cut_minus)
+                below = [r.sample_bound(sample) for r in regions] if sample else []
+                cuts = _core.cloud.cut_chunk(as_points(pts), rows, hull, False, state, flags, cut_minus,
+                                             HULL_IN_CUT, start, seed % (1 << 64), below)
                 while len(waiting) >= 2:
                     waiting.popleft().result()
                 waiting.append(ex.submit(take, start, cuts))
@@ -257,4 +282,4 @@ def hull_stream(chunks: Iterable[np.ndarray]) -> tuple[int, np.ndarray, np.ndarr
     return n, acc.index_array(), acc.point_array()
 
 
-__all__ = ["StreamedRegion", "Pass", "cut_stream", "hull_stream", "REHULL"]
+__all__ = ["StreamedRegion", "Pass", "cut_stream", "hull_stream", "REHULL", "HULL_IN_CUT"]

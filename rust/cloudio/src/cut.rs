@@ -7,6 +7,7 @@
 //! chunk, indexing it and hulling each box's points one after the other, hence the same
 //! indices and points.
 
+use crate::sample::sample_key;
 use gagekit_core::Result;
 use gagekit_geometry::{classify, convex_hull_indices, OrientedBox};
 use rayon::prelude::*;
@@ -18,6 +19,36 @@ pub enum Keep {
     All,
     /// The convex-hull vertices of the points inside (Eq. 5.21, exact predicates).
     Hull,
+    /// The hull vertices when at least this many points are inside, else every point
+    /// inside (a caller piling up a region's points to hull them later: a large share
+    /// of a chunk is hulled here, in the cut's parallel pass, the few points of a small
+    /// region wait for a hull of many chunks' points together, which costs less a point).
+    HullFrom(usize),
+}
+
+/// The bottom-k sample of each box's inside points a [`cut_chunk`] draws (the region
+/// pictures of a streamed check): the points whose key ([`sample_key`] of `seed` and
+/// the point's number, `start` + its row in the chunk) is below the box's `below` (the
+/// largest key the caller's sample holds, or infinity while it holds fewer than k: any
+/// value at least that leaves the sample the same).
+#[derive(Debug, Clone, PartialEq)]
+pub struct SampleSpec {
+    pub seed: u64,
+    /// Number of the chunk's first point.
+    pub start: u64,
+    /// Per box: the key below which its points may enter the sample.
+    pub below: Vec<f64>,
+}
+
+/// The points of a box a [`cut_chunk`] drew for its sample ([`SampleSpec`]).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Sampled {
+    /// Rows in the chunk (ascending).
+    pub rows: Vec<usize>,
+    /// Their keys.
+    pub keys: Vec<f64>,
+    /// Their points, row-major.
+    pub points: Vec<f64>,
 }
 
 /// Number of `f64` in the flat form of [`Moments`] ([`Moments::to_array`]).
@@ -150,6 +181,8 @@ pub struct RegionCut {
     pub kept: Vec<usize>,
     /// The kept points, row-major (x, y, z).
     pub points: Vec<f64>,
+    /// The points drawn for the box's sample, when asked for ([`SampleSpec`]).
+    pub sample: Option<Sampled>,
 }
 
 fn gather(points: &[f64], idx: &[usize]) -> Vec<f64> {
@@ -181,8 +214,9 @@ fn difference(a: &[usize], b: &[usize]) -> Vec<usize> {
 /// per box) receive the points inside their box, in order ([`Moments::add`]). `minus`
 /// (empty, or one per box): `Some(k)` makes box i hold only its points outside box k (a
 /// shell around box k; the count, kept points and moments are of those), decided on the
-/// indices before any point is gathered. The errors of [`classify`] (a non-finite point,
-/// a bad box).
+/// indices before any point is gathered. `sample`: each box's sample candidates
+/// ([`SampleSpec`], of the points the box holds, after `minus`). The errors of
+/// [`classify`] (a non-finite point, a bad box).
 pub fn cut_chunk(
     points: &[f64],
     boxes: &[OrientedBox],
@@ -190,8 +224,10 @@ pub fn cut_chunk(
     want_inside: bool,
     moments: &mut [Option<Moments>],
     minus: &[Option<usize>],
+    sample: Option<&SampleSpec>,
 ) -> Result<Vec<RegionCut>> {
     assert_eq!(boxes.len(), keep.len(), "one keep mode per box");
+    assert!(sample.is_none_or(|s| s.below.len() == boxes.len()), "sample: one bound per box");
     assert!(moments.is_empty() || moments.len() == boxes.len(), "no moments, or one per box");
     assert!(minus.is_empty() || minus.len() == boxes.len(), "no minus, or one per box");
     assert!(minus.iter().enumerate().all(|(i, m)| m.is_none_or(|k| k < boxes.len() && k != i)), "minus: another box");
@@ -211,22 +247,43 @@ pub fn cut_chunk(
         .into_par_iter()
         .zip(keep.par_iter())
         .zip(moments.par_iter_mut())
-        .map(|((idx, &k), mom)| {
+        .enumerate()
+        .map(|(b, ((idx, &k), mom))| {
             let sel = gather(points, &idx);
             if let Some(m) = mom {
                 m.add(&sel);
             }
             let count = idx.len();
-            if k == Keep::All || idx.is_empty() {
-                let inside = (k == Keep::Hull && want_inside).then(|| idx.clone());
-                return Ok(RegionCut { count, inside, kept: idx, points: sel });
+            let sample = sample.map(|s| draw(s, s.below[b], &idx, &sel));
+            let hull = match k {
+                Keep::All => false,
+                Keep::Hull => true,
+                Keep::HullFrom(m) => count >= m,
+            };
+            if !hull || idx.is_empty() {
+                let inside = (k != Keep::All && want_inside).then(|| idx.clone());
+                return Ok(RegionCut { count, inside, kept: idx, points: sel, sample });
             }
             let h = convex_hull_indices(&sel)?;
             let kept: Vec<usize> = h.iter().map(|&j| idx[j]).collect();
             let pts = gather(&sel, &h);
-            Ok(RegionCut { count, inside: want_inside.then_some(idx), kept, points: pts })
+            Ok(RegionCut { count, inside: want_inside.then_some(idx), kept, points: pts, sample })
         })
         .collect()
+}
+
+/// The rows `idx` (ascending, points `sel`) whose key is below `below`.
+fn draw(s: &SampleSpec, below: f64, idx: &[usize], sel: &[f64]) -> Sampled {
+    let mut out = Sampled::default();
+    for (j, &i) in idx.iter().enumerate() {
+        let k = sample_key(s.seed, s.start.wrapping_add(i as u64));
+        if k < below {
+            out.rows.push(i);
+            out.keys.push(k);
+            out.points.extend_from_slice(&sel[3 * j..3 * j + 3]);
+        }
+    }
+    out
 }
 
 #[cfg(test)]
@@ -242,7 +299,7 @@ mod tests {
             OrientedBox { center: [1.0, -1.0, 0.5], size: [3.0, 4.0, 5.0], rotation: [0.1, 0.2, 0.3] },
             OrientedBox { center: [100.0; 3], size: [1.0; 3], rotation: [0.0; 3] },
         ];
-        let cuts = cut_chunk(&pts, &boxes, &[Keep::All, Keep::Hull, Keep::Hull], true, &mut [], &[]).unwrap();
+        let cuts = cut_chunk(&pts, &boxes, &[Keep::All, Keep::Hull, Keep::Hull], true, &mut [], &[], None).unwrap();
         for (b, c) in boxes.iter().zip(&cuts) {
             let idx = select(&pts, b).unwrap();
             assert_eq!(c.count, idx.len());
@@ -254,8 +311,38 @@ mod tests {
         assert_eq!(cuts[1].kept, h.iter().map(|&j| idx[j]).collect::<Vec<_>>());
         assert_eq!(cuts[1].points, gather(&pts, &cuts[1].kept));
         assert_eq!((cuts[2].count, cuts[2].kept.len()), (0, 0));
-        let no = cut_chunk(&pts, &boxes[1..2], &[Keep::Hull], false, &mut [], &[]).unwrap();
+        let no = cut_chunk(&pts, &boxes[1..2], &[Keep::Hull], false, &mut [], &[], None).unwrap();
         assert!(no[0].inside.is_none());
+    }
+
+    /// `HullFrom(m)` hulls a box holding at least m points and keeps every point of a
+    /// smaller one; the sample drawn in the cut is the points whose key of their number
+    /// (chunk start + row) is below the box's bound, with their keys and points.
+    #[test]
+    fn hull_from_and_sample() {
+        use crate::sample::sample_key;
+        let pts: Vec<f64> = (0..3 * 4000).map(|i| ((i * 7919) % 1000) as f64 * 0.013 - 6.0).collect();
+        let b = OrientedBox { center: [1.0, -1.0, 0.5], size: [3.0, 4.0, 5.0], rotation: [0.1, 0.2, 0.3] };
+        let idx = select(&pts, &b).unwrap();
+        assert!(idx.len() > 100);
+        let boxes = [b.clone(), b.clone(), b.clone()];
+        let keep = [Keep::HullFrom(idx.len()), Keep::HullFrom(idx.len() + 1), Keep::All];
+        let spec = SampleSpec { seed: 7, start: 1 << 33, below: vec![f64::INFINITY, 0.25, 0.0] };
+        let cuts = cut_chunk(&pts, &boxes, &keep, false, &mut [], &[], Some(&spec)).unwrap();
+        let h = convex_hull_indices(&gather(&pts, &idx)).unwrap();
+        assert_eq!(cuts[0].kept, h.iter().map(|&j| idx[j]).collect::<Vec<_>>());
+        assert_eq!((cuts[1].count, &cuts[1].kept), (idx.len(), &idx));
+        assert_eq!(cuts[1].points, gather(&pts, &idx));
+        for (c, below) in cuts.iter().zip(&spec.below) {
+            let s = c.sample.as_ref().unwrap();
+            let want: Vec<usize> = idx.iter().copied().filter(|&i| sample_key(7, (1 << 33) + i as u64) < *below).collect();
+            assert_eq!(s.rows, want);
+            assert_eq!(s.keys, want.iter().map(|&i| sample_key(7, (1 << 33) + i as u64)).collect::<Vec<_>>());
+            assert_eq!(s.points, gather(&pts, &want));
+        }
+        assert_eq!(cuts[0].sample.as_ref().unwrap().rows, idx);
+        assert!(cuts[2].sample.as_ref().unwrap().rows.is_empty());
+        assert!(cut_chunk(&pts, &boxes, &keep, false, &mut [], &[], None).unwrap().iter().all(|c| c.sample.is_none()));
     }
 
     /// A box cut `minus` another keeps exactly its points outside that box (the shell),
@@ -272,7 +359,7 @@ mod tests {
         assert_eq!(difference(&c, &g), Vec::<usize>::new());
         assert_eq!(difference(&g, &[]), g);
         for (boxes, minus, at) in [([core.clone(), grown.clone()], [None, Some(0)], 1), ([grown.clone(), core.clone()], [Some(1), None], 0)] {
-            let cuts = cut_chunk(&pts, &boxes, &[Keep::All, Keep::All], false, &mut [], &minus).unwrap();
+            let cuts = cut_chunk(&pts, &boxes, &[Keep::All, Keep::All], false, &mut [], &minus, None).unwrap();
             assert_eq!((cuts[at].count, &cuts[at].kept), (want.len(), &want));
             assert_eq!(cuts[at].points, gather(&pts, &want));
             assert_eq!(cuts[1 - at].kept, c);
@@ -292,7 +379,7 @@ mod tests {
         for chunk in [1usize, 7, 997, 5000] {
             let mut m = [Some(Moments::default())];
             for c in pts.chunks(3 * chunk) {
-                cut_chunk(c, &b, &[Keep::Hull], false, &mut m, &[]).unwrap();
+                cut_chunk(c, &b, &[Keep::Hull], false, &mut m, &[], None).unwrap();
             }
             assert_eq!(m[0].unwrap(), whole, "chunk {chunk}");
         }

@@ -32,7 +32,7 @@ pub(crate) fn read_error(what: &str, e: std::io::Error) -> gagekit_core::GkError
 }
 
 pub use ascii::{ascii_layout, data_columns, detect_style, parse_ascii, parse_body, read_ascii_file, write_ascii, AsciiFile, AsciiOptions, DataStart, Layout, Parsed, Style};
-pub use cut::{cut_chunk, merged_scatter, Keep, Moments, RegionCut, Scatter, MOMENTS_LEN};
+pub use cut::{cut_chunk, merged_scatter, Keep, Moments, RegionCut, SampleSpec, Sampled, Scatter, MOMENTS_LEN};
 pub use e57::{read_e57, E57Points};
 pub use e57_stream::E57Stream;
 pub use ply::{read_ply, read_ply_file, PlyAsciiStream, PlyFile, PlyPoints, VertexRecords};

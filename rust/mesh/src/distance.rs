@@ -190,8 +190,8 @@ impl TriMesh {
         if n > u32::MAX as usize {
             return Err(GkError::invalid(format!("points: {n} points, more than 2^32 - 1 in one call; split the cloud")));
         }
+        // None: the points' own order (no identity vector of n indices to fill and read)
         let order = query_order(points);
-        let identity = order.iter().enumerate().all(|(k, &i)| k == i as usize);
         // per point in query order: the distance, the triangle and (if asked) the foot.
         // All zero bits, so allocated zeroed (fresh pages, no pass writing them): `work`
         // writes every element of its chunk (each k of 0..len, in groups of GROUP), and
@@ -199,7 +199,10 @@ impl TriMesh {
         let mut distance = vec![0.0; n];
         let mut triangle = vec![0i64; n];
         let mut foot = if q.foot { vec![0.0; 3 * n] } else { Vec::new() };
-        let work = |c: usize, d: &mut [f64], t: &mut [i64], mut f: Option<&mut [f64]>| -> Result<()> {
+        // each chunk's work returns how many of its points have no triangle (beyond
+        // `max_distance`), summed over the chunks: no pass over the triangles afterwards
+        let work = |c: usize, d: &mut [f64], t: &mut [i64], mut f: Option<&mut [f64]>| -> Result<usize> {
+            let mut beyond = 0;
             if c % 64 == 0 {
                 interrupt::check()?;
             }
@@ -213,7 +216,10 @@ impl TriMesh {
                 let mut ps = [[0.0; 3]; GROUP];
                 let mut best: [Option<Nearest>; GROUP] = [None; GROUP];
                 for (j, k) in ks.clone().enumerate() {
-                    let i = order[c * CHUNK + k] as usize;
+                    let i = match &order {
+                        Some(o) => o[c * CHUNK + k] as usize,
+                        None => c * CHUNK + k,
+                    };
                     ps[j] = [points[3 * i], points[3 * i + 1], points[3 * i + 2]];
                 }
                 let g = ks.len();
@@ -225,7 +231,10 @@ impl TriMesh {
                             let h = self.hit_of(ps[j], n, signed);
                             (h.distance, h.triangle as i64, h.foot)
                         }
-                        None => (f64::NAN, -1, [f64::NAN; 3]),
+                        None => {
+                            beyond += 1;
+                            (f64::NAN, -1, [f64::NAN; 3])
+                        }
                     };
                     d[k] = dk;
                     t[k] = tk;
@@ -241,19 +250,20 @@ impl TriMesh {
                     hint = a;
                 }
             }
-            Ok(())
+            Ok(beyond)
         };
-        if q.foot {
+        let beyond = if q.foot {
             distance
                 .par_chunks_mut(CHUNK)
                 .zip(triangle.par_chunks_mut(CHUNK))
                 .zip(foot.par_chunks_mut(3 * CHUNK))
                 .enumerate()
-                .try_for_each(|(c, ((d, t), f))| work(c, d, t, Some(f)))?;
+                .map(|(c, ((d, t), f))| work(c, d, t, Some(f)))
+                .try_reduce(|| 0, |a, b| Ok(a + b))?
         } else {
-            distance.par_chunks_mut(CHUNK).zip(triangle.par_chunks_mut(CHUNK)).enumerate().try_for_each(|(c, (d, t))| work(c, d, t, None))?;
-        }
-        if !identity {
+            distance.par_chunks_mut(CHUNK).zip(triangle.par_chunks_mut(CHUNK)).enumerate().map(|(c, (d, t))| work(c, d, t, None)).try_reduce(|| 0, |a, b| Ok(a + b))?
+        };
+        if let Some(order) = order {
             // back to input order
             let mut rank = vec![0u32; n];
             for (k, &i) in order.iter().enumerate() {
@@ -266,19 +276,19 @@ impl TriMesh {
                 foot = rank.par_iter().flat_map_iter(|&k| [foot[3 * k as usize], foot[3 * k as usize + 1], foot[3 * k as usize + 2]]).collect();
             }
         }
-        let beyond = triangle.iter().filter(|&&t| t < 0).count();
         Ok(Distances { distance, triangle, foot, beyond, signed })
     }
 }
 
-/// The order to query the points in: their own when the file's order is already
+/// The order to query the points in: their own (None) when the file's order is already
 /// coherent (the median step between consecutive points, on 4096 evenly spaced pairs, is
 /// below 1/100 of the cloud's extent: scan lines), else [`morton_order`]. Only the speed
-/// depends on it.
-pub fn query_order(points: &[f64]) -> Vec<u32> {
+/// depends on it. Their own order is None rather than the identity permutation: 4 bytes
+/// a point less to allocate, fill and read (56 MB at 14 M points).
+pub fn query_order(points: &[f64]) -> Option<Vec<u32>> {
     let n = points.len() / 3;
     if n < 2 {
-        return (0..n as u32).collect();
+        return None;
     }
     let at = |i: usize| [points[3 * i], points[3 * i + 1], points[3 * i + 2]];
     let m = 4096.min(n - 1);
@@ -294,9 +304,9 @@ pub fn query_order(points: &[f64]) -> Vec<u32> {
     let (lo, hi) = bounds(points);
     let ext = (0..3).map(|k| hi[k] - lo[k]).fold(0.0, f64::max);
     if median < 1e-2 * ext {
-        (0..n as u32).collect()
+        None
     } else {
-        morton_order(points)
+        Some(morton_order(points))
     }
 }
 

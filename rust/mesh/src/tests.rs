@@ -485,14 +485,14 @@ fn shuffled_points_give_the_same_distances() {
         }
     }
     let n = pts.len() / 3;
-    assert!(crate::distance::query_order(&pts) == (0..n as u32).collect::<Vec<_>>(), "scan lines keep their order");
+    assert!(crate::distance::query_order(&pts).is_none(), "scan lines keep their order");
     let mut rng = ChaCha8Rng::seed_from_u64(4);
     let mut perm: Vec<usize> = (0..n).collect();
     for i in (1..n).rev() {
         perm.swap(i, rng.random_range(0..=i));
     }
     let shuffled: Vec<f64> = perm.iter().flat_map(|&i| [pts[3 * i], pts[3 * i + 1], pts[3 * i + 2]]).collect();
-    let mut order = crate::distance::query_order(&shuffled);
+    let mut order = crate::distance::query_order(&shuffled).expect("a shuffled cloud is sorted");
     assert!(order != (0..n as u32).collect::<Vec<_>>(), "a shuffled cloud is sorted");
     order.sort_unstable();
     assert!(order == (0..n as u32).collect::<Vec<_>>(), "a permutation");
@@ -535,7 +535,13 @@ proptest! {
                 .collect();
             // hints measured for every lane at once (some out of range, some repeated)
             let hints: Vec<u32> = (0..rng.random_range(0..4)).map(|_| rng.random_range(0..bvh.corners.len() as u32 + 2)).collect();
+            let builds = bvh.nearest_group_every_build(&ps, bound2, &hints, &best);
             bvh.nearest_group_from(&ps, bound2, &hints, &mut best);
+            // every build (plain, AVX2, AVX-512, as the processor has them) gives the same bits
+            let bits = |b: &Option<crate::bvh::Nearest>| b.map(|n| (n.slot, n.d2.to_bits(), n.foot.map(f64::to_bits), n.feature));
+            for other in &builds {
+                prop_assert_eq!(other.iter().map(bits).collect::<Vec<_>>(), best.iter().map(bits).collect::<Vec<_>>());
+            }
             for (q, got) in ps.iter().zip(&best) {
                 let single = bvh.nearest(*q, bound2, None);
                 let want = brute_force_slot(&bvh, *q, bound2);
@@ -694,10 +700,13 @@ proptest! {
                 .collect();
             let mut best: Vec<Option<crate::bvh::Nearest>> = vec![None; ps.len()];
             bvh.nearest_group(&ps, f64::INFINITY, &mut best);
-            for (q, got) in ps.iter().zip(&best) {
-                let (d2, slot) = brute_force_slot(&bvh, *q, f64::INFINITY).unwrap();
-                let a = got.unwrap();
-                prop_assert_eq!((a.slot, a.d2.to_bits()), (slot, d2.to_bits()));
+            // and every build the processor runs (plain, AVX2, AVX-512)
+            for best in std::iter::once(best.clone()).chain(bvh.nearest_group_every_build(&ps, f64::INFINITY, &[], &best.iter().map(|_| None).collect::<Vec<_>>())) {
+                for (q, got) in ps.iter().zip(&best) {
+                    let (d2, slot) = brute_force_slot(&bvh, *q, f64::INFINITY).unwrap();
+                    let a = got.unwrap();
+                    prop_assert_eq!((a.slot, a.d2.to_bits()), (slot, d2.to_bits()));
+                }
             }
         }
     }

@@ -2,7 +2,7 @@
 
 use crate::arrays::{indices, matrix, rows, values};
 use crate::errors::{invalid, run};
-use gagekit_cloudio::{keys_below, cut_chunk, data_columns, merged_scatter, Moments, MOMENTS_LEN, read_ascii_file, scale_in_place, Keep, PlyAsciiStream, read_e57, write_ascii, AsciiOptions, AsciiStream, E57Stream, PlyFile, PlyStream};
+use gagekit_cloudio::{keys_below, cut_chunk, SampleSpec, data_columns, merged_scatter, Moments, MOMENTS_LEN, read_ascii_file, scale_in_place, Keep, PlyAsciiStream, read_e57, write_ascii, AsciiOptions, AsciiStream, E57Stream, PlyFile, PlyStream};
 use gagekit_core::GkError;
 use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyReadwriteArray2};
 use pyo3::prelude::*;
@@ -357,21 +357,29 @@ fn cloud_e57_chunks(py: Python<'_>, path: String) -> PyResult<Option<E57Chunks>>
     Ok(s.map(|inner| E57Chunks { inner }))
 }
 
+/// The sample candidates of a region in a chunk: (rows, keys, points (m, 3)).
+type SampleRow<'py> = (Bound<'py, PyArray1<i64>>, Bound<'py, PyArray1<f64>>, Bound<'py, PyArray2<f64>>);
+
 /// One region's share of a streamed chunk: (points inside, every inside index or None,
-/// kept indices, kept points (m, 3)); indices are rows of the chunk.
-type CutRow<'py> = (usize, Option<Bound<'py, PyArray1<i64>>>, Bound<'py, PyArray1<i64>>, Bound<'py, PyArray2<f64>>);
+/// kept indices, kept points (m, 3), sample candidates or None); indices are rows of the chunk.
+type CutRow<'py> = (usize, Option<Bound<'py, PyArray1<i64>>>, Bound<'py, PyArray1<i64>>, Bound<'py, PyArray2<f64>>, Option<SampleRow<'py>>);
 
 /// Classify a chunk of points into region boxes ((k, 9): centre, size, rotation vector)
 /// and keep, per box, every inside point or (`hull[i]`) the hull vertices of them;
 /// `inside` also returns every inside index of the hull boxes; `moments` ((k, 22), the
 /// flat moments of each box, see `point_moments`) gets the inside points of the boxes
 /// flagged in `moments_of` added, in place; `minus[i]` = k makes box i keep only its
-/// points outside box k (a shell; decided on the indices, before any point is gathered)
-/// (`gagekit-cloudio`'s `cut_chunk`: one call a chunk, parallel inside).
+/// points outside box k (a shell; decided on the indices, before any point is gathered).
+/// `hull_from` > 0: a hull box holding fewer points than that keeps every point inside
+/// (its points are hulled later with other chunks'). `sample_below` (one bound per box, or
+/// empty for no sample): the rows, keys and points of each box's points whose seeded key
+/// (`sample_keys_below` of `sample_seed` and the point's number, `start` + its row) is
+/// below the box's bound (`gagekit-cloudio`'s `cut_chunk`: one call a chunk, parallel inside).
 #[cfg_attr(feature = "stubs", pyo3_stub_gen::derive::gen_stub_pyfunction(module = "gagekit._core.cloud"))]
 #[pyfunction]
 #[pyo3(name = "cut_chunk")]
-#[pyo3(signature = (points, boxes, hull, inside=false, moments=None, moments_of=Vec::new(), minus=Vec::new()))]
+#[pyo3(signature = (points, boxes, hull, inside=false, moments=None, moments_of=Vec::new(), minus=Vec::new(), hull_from=0, start=0, sample_seed=0, sample_below=Vec::new()))]
+#[allow(clippy::too_many_arguments)]
 fn cloud_cut_chunk<'py>(
     py: Python<'py>,
     points: PyReadonlyArray2<'py, f64>,
@@ -381,6 +389,10 @@ fn cloud_cut_chunk<'py>(
     moments: Option<PyReadwriteArray2<'py, f64>>,
     moments_of: Vec<bool>,
     minus: Vec<Option<usize>>,
+    hull_from: usize,
+    start: u64,
+    sample_seed: u64,
+    sample_below: Vec<f64>,
 ) -> PyResult<Vec<CutRow<'py>>> {
     let pts = rows(py, &points, 3, "points")?;
     let bx = crate::geometry::boxes_from(py, &boxes)?;
@@ -393,7 +405,18 @@ fn cloud_cut_chunk<'py>(
     if let Some((i, k)) = minus.iter().enumerate().find_map(|(i, m)| m.filter(|&k| k >= bx.len() || k == i).map(|k| (i, k))) {
         return Err(invalid(format!("minus: box {i} cannot be cut by box {k} (another of the {} boxes)", bx.len())));
     }
-    let keep: Vec<Keep> = hull.iter().map(|&h| if h { Keep::Hull } else { Keep::All }).collect();
+    if !sample_below.is_empty() && sample_below.len() != bx.len() {
+        return Err(invalid(format!("sample_below: expected {} bounds (one per box), got {}", bx.len(), sample_below.len())));
+    }
+    let keep: Vec<Keep> = hull
+        .iter()
+        .map(|&h| match (h, hull_from) {
+            (false, _) => Keep::All,
+            (true, 0) => Keep::Hull,
+            (true, m) => Keep::HullFrom(m),
+        })
+        .collect();
+    let spec = (!sample_below.is_empty()).then(|| SampleSpec { seed: sample_seed, start, below: sample_below });
     let mut moments = moments;
     let mut state: Vec<Option<Moments>> = Vec::new();
     if let Some(m) = moments.as_mut() {
@@ -403,7 +426,7 @@ fn cloud_cut_chunk<'py>(
         }
         state = flat.chunks_exact(MOMENTS_LEN).zip(&moments_of).map(|(r, &f)| f.then(|| Moments::from_array(r))).collect();
     }
-    let cuts = run(py, || cut_chunk(pts, &bx, &keep, inside, &mut state, &minus))?;
+    let cuts = run(py, || cut_chunk(pts, &bx, &keep, inside, &mut state, &minus, spec.as_ref()))?;
     if let Some(m) = moments.as_mut() {
         let flat = m.as_slice_mut().map_err(|_| invalid("moments: expected a C-contiguous array".to_string()))?;
         for (r, s) in flat.chunks_exact_mut(MOMENTS_LEN).zip(&state) {
@@ -413,7 +436,13 @@ fn cloud_cut_chunk<'py>(
         }
     }
     cuts.into_iter()
-        .map(|c| Ok((c.count, c.inside.map(|v| indices(py, v)), indices(py, c.kept), matrix(py, c.points, 3)?)))
+        .map(|c| {
+            let sample = match c.sample {
+                Some(s) => Some((indices(py, s.rows), PyArray1::from_vec(py, s.keys), matrix(py, s.points, 3)?)),
+                None => None,
+            };
+            Ok((c.count, c.inside.map(|v| indices(py, v)), indices(py, c.kept), matrix(py, c.points, 3)?, sample))
+        })
         .collect()
 }
 

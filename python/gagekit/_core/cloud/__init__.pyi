@@ -210,15 +210,19 @@ def ascii_columns(head: bytes) -> builtins.int:
     1000 lines), read as `cloud_read_ascii` reads it (decimal commas included); 0 if none.
     """
 
-def cut_chunk(points: numpy.typing.NDArray[numpy.float64], boxes: numpy.typing.NDArray[numpy.float64], hull: typing.Sequence[builtins.bool], inside: builtins.bool = ..., moments: typing.Optional[numpy.typing.NDArray[numpy.float64]] = None, moments_of: typing.Sequence[builtins.bool] = ..., minus: typing.Sequence[typing.Optional[builtins.int]] = ...) -> builtins.list[tuple[builtins.int, typing.Optional[numpy.typing.NDArray[numpy.int64]], numpy.typing.NDArray[numpy.int64], numpy.typing.NDArray[numpy.float64]]]:
+def cut_chunk(points: numpy.typing.NDArray[numpy.float64], boxes: numpy.typing.NDArray[numpy.float64], hull: typing.Sequence[builtins.bool], inside: builtins.bool = ..., moments: typing.Optional[numpy.typing.NDArray[numpy.float64]] = None, moments_of: typing.Sequence[builtins.bool] = ..., minus: typing.Sequence[typing.Optional[builtins.int]] = ..., hull_from: builtins.int = ..., start: builtins.int = ..., sample_seed: builtins.int = ..., sample_below: typing.Sequence[builtins.float] = ...) -> builtins.list[tuple[builtins.int, typing.Optional[numpy.typing.NDArray[numpy.int64]], numpy.typing.NDArray[numpy.int64], numpy.typing.NDArray[numpy.float64], typing.Optional[tuple[numpy.typing.NDArray[numpy.int64], numpy.typing.NDArray[numpy.float64], numpy.typing.NDArray[numpy.float64]]]]]:
     r"""
     Classify a chunk of points into region boxes ((k, 9): centre, size, rotation vector)
     and keep, per box, every inside point or (`hull[i]`) the hull vertices of them;
     `inside` also returns every inside index of the hull boxes; `moments` ((k, 22), the
     flat moments of each box, see `point_moments`) gets the inside points of the boxes
     flagged in `moments_of` added, in place; `minus[i]` = k makes box i keep only its
-    points outside box k (a shell; decided on the indices, before any point is gathered)
-    (`gagekit-cloudio`'s `cut_chunk`: one call a chunk, parallel inside).
+    points outside box k (a shell; decided on the indices, before any point is gathered).
+    `hull_from` > 0: a hull box holding fewer points than that keeps every point inside
+    (its points are hulled later with other chunks'). `sample_below` (one bound per box, or
+    empty for no sample): the rows, keys and points of each box's points whose seeded key
+    (`sample_keys_below` of `sample_seed` and the point's number, `start` + its row) is
+    below the box's bound (`gagekit-cloudio`'s `cut_chunk`: one call a chunk, parallel inside).
     """
 
 def direct_buffer_len(points: builtins.int) -> builtins.int:

@@ -1,13 +1,13 @@
 //! Least-squares cylinder: Levenberg-Marquardt on the orthogonal distances (Forbes 1989),
 //! started from every principal axis of the data and from the best directions of a grid
-//! over the half sphere ([`grid_starts`]).
+//! over the half sphere ([`grid_axes`]).
 //!
 //! The principal axes alone miss the axis of a short partial bore: on a 141-degree arc
 //! 19.8 mm long of radius 28.7 mm, the spreads along the axis and along the arc's depth
 //! are nearly equal (19.8 and 19.1 mm), their principal directions mix, and every start
 //! lay in the basin of a wrong cylinder (radius 7.8 mm across the patch, RMS residual
 //! 2.75 mm against the true 0.1 um). The grid's directions are judged by the circle fit
-//! of the points projected along them, cheap on a subsample.
+//! of the points projected along them ([`circle_score`]), cheap on a subsample.
 //!
 //! Large inputs (more than [`SUBSAMPLE_ABOVE`] points) choose the start and converge on an
 //! evenly spaced subsample of [`SUBSAMPLE`] points first, then finish on all points from
@@ -16,8 +16,8 @@
 //! data instead of some sixty.
 
 use super::frame::{
-    arr, centred3, centred3_scatter, centroid, check_points, clearly_spread, orthonormal_basis, principal_axes, upper, vec3,
-    DEGENERATE,
+    arr, centred3, centred3_scatter, centroid, check_points, clearly_spread, grid_axes, orthonormal_basis, principal_axes, upper,
+    vec3, DEGENERATE,
 };
 use super::lm::{levenberg_marquardt_fused, normal_equations_cost};
 use super::sphere::algebraic_sphere;
@@ -73,58 +73,14 @@ fn refine_cylinder(
     Ok((Cylinder { point: arr(&s.0), direction: arr(&s.1), radius: s.2.abs() }, f))
 }
 
-/// Rings of the start grid over the half sphere (tilt every 90 / [`GRID_RINGS`] degrees
-/// from the first principal axis, 6 k directions on ring k: 127 directions).
-const GRID_RINGS: usize = 6;
-/// Grid directions kept as starts (the lowest costs, pairwise more than
-/// [`GRID_APART`] rad apart).
-const GRID_STARTS: usize = 3;
-const GRID_APART: f64 = 0.35;
-/// Points the grid judges a direction on (every k-th point of the start set).
-const GRID_POINTS: usize = 2048;
-
-/// The best directions of a grid over the half sphere about `axes[0]` (rings of
-/// [`GRID_RINGS`], the seam of each ring turned by half a step on alternate rings), by
-/// the sum of squared radial residuals of the points projected along the direction
-/// about their algebraic (Kåsa) circle: the cylinder cost of that direction with the
-/// circle's centre and radius not yet optimised, an upper bound of the cost a start
-/// there can reach. Deterministic: a fixed grid, a fixed subsample, ties to the earlier
-/// direction.
-fn grid_starts(first: &[[f64; 3]], axes: &[Vector3<f64>]) -> Vec<Vector3<f64>> {
-    let sub: Vec<[f64; 3]> = first.iter().step_by(first.len().div_ceil(GRID_POINTS).max(1)).copied().collect();
-    let (e0, e1, w) = (axes[1], axes[2], axes[0]);
-    let mut dirs = vec![w];
-    for ring in 1..=GRID_RINGS {
-        let t = std::f64::consts::FRAC_PI_2 * ring as f64 / GRID_RINGS as f64;
-        let n = 6 * ring;
-        // the last ring is the equator: half of it, since a and -a are the same axis
-        let count = if ring == GRID_RINGS { n / 2 } else { n };
-        for k in 0..count {
-            let g = std::f64::consts::TAU * (k as f64 + 0.5 * (ring % 2) as f64) / n as f64;
-            dirs.push(w * t.cos() + (e0 * g.cos() + e1 * g.sin()) * t.sin());
-        }
-    }
-    let mut scored: Vec<(f64, Vector3<f64>)> = dirs
-        .into_iter()
-        .filter_map(|a| {
-            let (u, v) = orthonormal_basis(&a);
-            let q2: Vec<[f64; 3]> = sub.iter().map(|x| [vec3(x).dot(&u), vec3(x).dot(&v), 0.0]).collect();
-            let (c, r) = algebraic_sphere(&q2, 2)?;
-            let cost: f64 = q2.iter().map(|p| ((p[0] - c[0]).hypot(p[1] - c[1]) - r).powi(2)).sum();
-            cost.is_finite().then_some((cost, a))
-        })
-        .collect();
-    scored.sort_by(|x, y| x.0.total_cmp(&y.0));
-    let mut out: Vec<Vector3<f64>> = Vec::new();
-    for (_, a) in scored {
-        if out.len() == GRID_STARTS {
-            break;
-        }
-        if out.iter().all(|b| a.dot(b).abs().min(1.0).acos() > GRID_APART) {
-            out.push(a);
-        }
-    }
-    out
+/// The sum of squared radial residuals of the points `sub` projected along `a` about
+/// their algebraic (Kasa) circle: the cylinder cost of that direction with the circle's
+/// centre and radius not yet optimised, the score of a grid start ([`grid_axes`]).
+fn circle_score(sub: &[[f64; 3]], a: &Vector3<f64>) -> Option<f64> {
+    let (u, v) = orthonormal_basis(a);
+    let q2: Vec<[f64; 3]> = sub.iter().map(|x| [vec3(x).dot(&u), vec3(x).dot(&v), 0.0]).collect();
+    let (c, r) = algebraic_sphere(&q2, 2)?;
+    Some(q2.iter().map(|p| ((p[0] - c[0]).hypot(p[1] - c[1]) - r).powi(2)).sum())
 }
 
 /// Inputs above this many points start on a subsample.
@@ -190,7 +146,7 @@ fn cylinder_from(pts: &[f64], start_axis: Option<[f64; 3]>, principal: bool) -> 
         &q
     };
     if principal {
-        let grid = grid_starts(first, &starts[starts.len() - 3..]);
+        let grid = grid_axes(first, &starts[starts.len() - 3..], circle_score);
         starts.extend(grid);
     }
     let mut best: Option<(Cylinder, f64)> = None;

@@ -169,6 +169,60 @@ pub fn orthonormal_basis(a: &Vector3<f64>) -> (Vector3<f64>, Vector3<f64>) {
     (u, v)
 }
 
+/// Rings of the start grid over the half sphere (tilt every 90 / [`GRID_RINGS`] degrees
+/// from the first principal axis, 6 k directions on ring k: 127 directions).
+const GRID_RINGS: usize = 6;
+/// Grid directions kept as starts (the lowest scores, pairwise more than
+/// [`GRID_APART`] rad apart).
+const GRID_STARTS: usize = 3;
+const GRID_APART: f64 = 0.35;
+/// Points the grid judges a direction on (every k-th point of the centred points).
+const GRID_POINTS: usize = 2048;
+
+/// Start axes of the least-squares cylinder ([`super::cylinder`]) beyond the principal
+/// axes `axes` (largest spread first): the [`GRID_STARTS`] best directions of a grid over
+/// the half sphere about `axes[0]` (rings of [`GRID_RINGS`], the seam of each ring turned
+/// by half a step on alternate rings, half of the equator since a and -a are one axis), by
+/// `score(sub, a)` on an evenly spaced subsample `sub` of at most [`GRID_POINTS`] of the
+/// centred points `q` (None: the direction is refused). Deterministic: a fixed grid, a
+/// fixed subsample, ties to the earlier direction.
+///
+/// The principal axes alone miss the axis of a short partial bore: on a 141-degree arc
+/// 19.8 mm long of radius 28.7 mm the spreads along the axis and across the arc's depth
+/// are nearly equal (19.8 and 19.1 mm), their principal directions mix, and every start
+/// lay in the basin of a wrong cylinder.
+pub(crate) fn grid_axes(
+    q: &[[f64; 3]],
+    axes: &[Vector3<f64>],
+    score: impl Fn(&[[f64; 3]], &Vector3<f64>) -> Option<f64>,
+) -> Vec<Vector3<f64>> {
+    let sub: Vec<[f64; 3]> = q.iter().step_by(q.len().div_ceil(GRID_POINTS).max(1)).copied().collect();
+    let (w, e0, e1) = (axes[0], axes[1], axes[2]);
+    let mut dirs = vec![w];
+    for ring in 1..=GRID_RINGS {
+        let t = std::f64::consts::FRAC_PI_2 * ring as f64 / GRID_RINGS as f64;
+        let n = 6 * ring;
+        let count = if ring == GRID_RINGS { n / 2 } else { n };
+        for k in 0..count {
+            let g = std::f64::consts::TAU * (k as f64 + 0.5 * (ring % 2) as f64) / n as f64;
+            dirs.push(w * t.cos() + (e0 * g.cos() + e1 * g.sin()) * t.sin());
+        }
+    }
+    let mut scored: Vec<(f64, Vector3<f64>)> =
+        dirs.into_iter().filter_map(|a| score(&sub, &a).filter(|f| f.is_finite()).map(|f| (f, a))).collect();
+    scored.sort_by(|x, y| x.0.total_cmp(&y.0));
+    let mut out: Vec<Vector3<f64>> = Vec::new();
+    for (_, a) in scored {
+        if out.len() == GRID_STARTS {
+            break;
+        }
+        if out.iter().all(|b| a.dot(b).abs().min(1.0).acos() > GRID_APART) {
+            out.push(a);
+        }
+    }
+    out
+}
+
 /// Spread of 3-D points along their principal axes (root sum of squares of the
 /// centred coordinates), largest first: zero entries mean coincident,
 /// collinear or coplanar points.
