@@ -177,15 +177,17 @@ const GRID_RINGS: usize = 6;
 const GRID_STARTS: usize = 3;
 const GRID_APART: f64 = 0.35;
 /// Points the grid judges a direction on (every k-th point of the centred points).
-const GRID_POINTS: usize = 2048;
+const GRID_POINTS: usize = 256;
 
 /// Start axes of the least-squares cylinder ([`super::cylinder`]) beyond the principal
-/// axes `axes` (largest spread first): the [`GRID_STARTS`] best directions of a grid over
-/// the half sphere about `axes[0]` (rings of [`GRID_RINGS`], the seam of each ring turned
-/// by half a step on alternate rings, half of the equator since a and -a are one axis), by
-/// `score(sub, a)` on an evenly spaced subsample `sub` of at most [`GRID_POINTS`] of the
-/// centred points `q` (None: the direction is refused). Deterministic: a fixed grid, a
-/// fixed subsample, ties to the earlier direction.
+/// axes `axes` (largest spread first): of a grid over the half sphere about `axes[0]`
+/// (rings of [`GRID_RINGS`], the seam of each ring turned by half a step on alternate
+/// rings, half of the equator since a and -a are one axis), the at most [`GRID_STARTS`]
+/// best directions by `score(sub, a)` (an evenly spaced subsample `sub` of at most
+/// [`GRID_POINTS`] of the centred points `q`; None: the direction is refused) that score
+/// lower than every principal axis: none when a principal axis is already the best start
+/// (a well-spread bore), so that the fit then costs no more local iterations than before.
+/// Deterministic: a fixed grid, a fixed subsample, ties to the earlier direction.
 ///
 /// The principal axes alone miss the axis of a short partial bore: on a 141-degree arc
 /// 19.8 mm long of radius 28.7 mm the spreads along the axis and across the arc's depth
@@ -208,8 +210,9 @@ pub(crate) fn grid_axes(
             dirs.push(w * t.cos() + (e0 * g.cos() + e1 * g.sin()) * t.sin());
         }
     }
+    let bar = axes.iter().filter_map(|a| score(&sub, a)).filter(|f| f.is_finite()).fold(f64::INFINITY, f64::min);
     let mut scored: Vec<(f64, Vector3<f64>)> =
-        dirs.into_iter().filter_map(|a| score(&sub, &a).filter(|f| f.is_finite()).map(|f| (f, a))).collect();
+        dirs.into_iter().filter_map(|a| score(&sub, &a).filter(|&f| f < bar).map(|f| (f, a))).collect();
     scored.sort_by(|x, y| x.0.total_cmp(&y.0));
     let mut out: Vec<Vector3<f64>> = Vec::new();
     for (_, a) in scored {
