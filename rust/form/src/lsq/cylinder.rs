@@ -271,19 +271,8 @@ mod tests {
     /// Points on an arc of `arc` rad of a cylinder (point `p`, axis `a`, radius `r`,
     /// length `len`) with noise of size `noise` (a sum of four uniforms).
     fn arc_points(seed: u64, n: usize, p: [f64; 3], a: [f64; 3], r: f64, len: f64, arc: f64, noise: f64) -> Vec<f64> {
-        use rand::{Rng, SeedableRng};
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
-        let a = vec3(&a).normalize();
-        let (u, v) = orthonormal_basis(&a);
-        let mut out = Vec::with_capacity(3 * n);
-        for _ in 0..n {
-            let t = rng.random::<f64>() * arc;
-            let z = (rng.random::<f64>() - 0.5) * len;
-            let e: f64 = (0..4).map(|_| rng.random::<f64>() - 0.5).sum::<f64>() * noise * 1.7;
-            let q = vec3(&p) + a * z + (u * t.cos() + v * t.sin()) * (r + e);
-            out.extend_from_slice(&[q[0], q[1], q[2]]);
-        }
-        out
+        use rand::SeedableRng;
+        super::super::warm::tests::cyl(&mut rand_chacha::ChaCha8Rng::seed_from_u64(seed), n, p, a, r, len, arc, noise)
     }
 
     /// The sum of squared orthogonal residuals of `pts` to `c`.

@@ -261,7 +261,7 @@ fn sphere_gn(pts: &[f64], center: [f64; 3], radius: f64) -> Option<Sphere> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
     use crate::lsq::cylinder;
     use gagekit_core::ErrorKind;
@@ -270,8 +270,9 @@ mod tests {
     use rand_chacha::ChaCha8Rng;
 
     /// Points on a cylinder (point, unit axis, radius, length; an arc of `arc` rad) with
-    /// Gaussian-like noise (sum of uniforms) of size `noise`.
-    fn cyl(rng: &mut ChaCha8Rng, n: usize, p: [f64; 3], a: [f64; 3], r: f64, len: f64, arc: f64, noise: f64) -> Vec<f64> {
+    /// Gaussian-like noise (sum of uniforms) of size `noise` (also the least-squares
+    /// cylinder's tests' partial arcs).
+    pub(in crate::lsq) fn cyl(rng: &mut ChaCha8Rng, n: usize, p: [f64; 3], a: [f64; 3], r: f64, len: f64, arc: f64, noise: f64) -> Vec<f64> {
         let a = Vector3::from(a).normalize();
         let (u, w) = orthonormal_basis(&a);
         let mut out = Vec::with_capacity(3 * n);
