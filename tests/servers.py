@@ -135,7 +135,9 @@ def dask_cluster():
         unavailable(f"dask.distributed is not installed ({exc})")
     t0 = time.perf_counter()
     try:
-        cluster = LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None,
+        # the dashboard on a free loopback port: None still binds :8787, and two test
+        # workers' clusters then collide there (a UserWarning in every full run)
+        cluster = LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address="127.0.0.1:0",
                                host="127.0.0.1", env={"RAYON_NUM_THREADS": "1"})
     except Exception as exc:  # pragma: no cover - depends on the machine
         unavailable(f"cannot start a Dask LocalCluster: {exc}")
