@@ -350,24 +350,34 @@ fn checked(pts: &[f64], opts: &Options) -> Result<(Option<Vector3<f64>>, f64)> {
 /// root of the largest eigenvalue (the same quantity as [`checked`]'s, to rounding; it only
 /// scales the verification's 1e-12 tolerance). Anything else: [`checked`] itself (its
 /// typed errors, its spreads).
+#[cfg(test)]
 fn checked_near(pts: &[f64], opts: &Options) -> Result<(Option<Vector3<f64>>, f64)> {
+    checked_near_sum(pts, opts).map(|(a, s, _)| (a, s))
+}
+
+/// [`checked_near`], and from the same pass the plain sum of the points' coordinates in
+/// input order (the first pass of [`lsq::centroid`], the same bits; `None` when the checks
+/// ran as [`checked`]): the active-subset fit's centroid takes one pass less (`subset`).
+fn checked_near_sum(pts: &[f64], opts: &Options) -> Result<(Option<Vector3<f64>>, f64, Option<[f64; 3]>)> {
     let n = pts.len() / 3;
+    let complete = |pts: &[f64]| checked(pts, opts).map(|(a, s)| (a, s, None));
     if n < 5 || pts.len() % 3 != 0 {
-        return checked(pts, opts);
+        return complete(pts);
     }
     let o = [pts[0], pts[1], pts[2]];
     let mut ok = true;
-    let (mut s1, mut s2) = ([0.0f64; 3], [0.0f64; 6]);
+    let (mut s1, mut s2, mut sum) = ([0.0f64; 3], [0.0f64; 6], [0.0f64; 3]);
     for p in pts.chunks_exact(3) {
         ok &= (p[0].abs() <= lsq::MAX_COORD) & (p[1].abs() <= lsq::MAX_COORD) & (p[2].abs() <= lsq::MAX_COORD);
         let d = [p[0] - o[0], p[1] - o[1], p[2] - o[2]];
         for k in 0..3 {
             s1[k] += d[k];
+            sum[k] += p[k];
         }
         lsq::add_outer(&mut s2, d);
     }
     if !ok {
-        return checked(pts, opts);
+        return complete(pts);
     }
     let nominal = opts.search.validate()?;
     let m = [s1[0] / n as f64, s1[1] / n as f64, s1[2] / n as f64];
@@ -384,14 +394,14 @@ fn checked_near(pts: &[f64], opts: &Options) -> Result<(Option<Vector3<f64>>, f6
         s2[5] - nf * m[2] * m[2],
     );
     if !s.iter().all(|v| v.is_finite()) {
-        return checked(pts, opts);
+        return complete(pts);
     }
     let mut e: Vec<f64> = nalgebra::SymmetricEigen::new(s).eigenvalues.iter().copied().collect();
     e.sort_by(|a, b| b.total_cmp(a));
     if !(e[0] > 0.0 && e[1] >= 1e-6 * e[0]) {
-        return checked(pts, opts);
+        return complete(pts);
     }
-    Ok((nominal, e[0].sqrt()))
+    Ok((nominal, e[0].sqrt(), Some(sum)))
 }
 
 /// A warm start for [`fit_near`]: the axis (a point on it and its direction) of a fit of
@@ -435,7 +445,7 @@ fn near(pts: &[f64], crit: Criterion, opts: &Options, warm: &Warm, complete: boo
     if !(wp.iter().chain(wd.iter()).all(|x| x.is_finite()) && wd.norm() > 0.0) {
         return Err(GkError::invalid(format!("cylinder: the warm start must be a finite point and a non-zero direction, got {warm:?}")));
     }
-    let (nominal, spread) = checked_near(pts, opts)?;
+    let (nominal, spread, sum) = checked_near_sum(pts, opts)?;
     let lsq_fit = if nominal.is_none() { lsq::cylinder(pts, None).ok() } else { None };
     let reference = match (nominal, &lsq_fit) {
         (Some(a), _) => a,
@@ -446,7 +456,7 @@ fn near(pts: &[f64], crit: Criterion, opts: &Options, warm: &Warm, complete: boo
     let free = max_tilt >= FRAC_PI_2 - 1e-12;
     let region = if free { Region::free() } else { Region::cone(reference, max_tilt) };
     let start = slp::Axis::new(wd, wp);
-    let Some(mut r) = subset::fit_near_in(pts, crit, &start, &region, spread)? else {
+    let Some(mut r) = subset::fit_near_in(pts, crit, &start, &region, spread, sum)? else {
         return fit_spread(pts, crit, opts, nominal, spread).map(|r| (r, true));
     };
     let reference = lsq::upper([reference[0], reference[1], reference[2]]);

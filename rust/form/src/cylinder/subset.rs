@@ -7,9 +7,10 @@
 use super::search::{fit_direct, fit_warm, Region};
 use super::slp;
 use super::{Criterion, CylinderFit, Options};
-use crate::lsq::{self, Cylinder};
+use crate::lsq::{self, Cylinder, Extent};
 use gagekit_core::{GkError, Result};
 use nalgebra::Vector3;
+use std::cell::Cell;
 
 /// Above this many points the fit runs on an active subset.
 pub(crate) const SUBSET_ABOVE: usize = 2000;
@@ -43,12 +44,14 @@ pub(super) fn fit_in(
         evaluations += r.evaluations;
         Ok(r)
     };
-    let violations = |r: &CylinderFit| violations(pts, crit, r, spread);
+    let c = lsq::centroid(pts, 3);
+    let c = [c[0], c[1], c[2]];
+    let last = Cell::new(None);
+    let violations = |r: &CylinderFit| violations(pts, crit, r, spread, &c, &last);
     let (mut r, subset) = settle(pts, subset, "cylinder", fit_sub, violations)?;
     r.control_in = r.control_in.iter().map(|&j| subset[j]).collect();
     r.control_out = r.control_out.iter().map(|&j| subset[j]).collect();
-    r.point = centroid_foot(pts, &r.point, &r.direction);
-    r.extent = lsq::axis_extent(pts, &r.point, &r.direction);
+    (r.point, r.extent) = last.get().expect("the last round's foot and extent");
     r.iterations = iterations;
     r.evaluations = evaluations;
     Ok(r)
@@ -63,13 +66,36 @@ pub(super) fn fit_near_in(
     warm: &slp::Axis,
     region: &Region,
     spread: f64,
+    sum: Option<[f64; 3]>,
 ) -> Result<Option<CylinderFit>> {
     let n = pts.len() / 3;
     if n <= SUBSET_ABOVE {
         return fit_warm(pts, crit, warm, region);
     }
     let (p, d) = ([warm.point[0], warm.point[1], warm.point[2]], [warm.dir[0], warm.dir[1], warm.dir[2]]);
-    let dist: Vec<f64> = lsq::axis_distances(pts, &p, &d).collect();
+    let (dist, c): (Vec<f64>, [f64; 3]) = match sum {
+        // lsq::centroid's two passes: its sum came from the checks' pass, its correction
+        // joins the distances' pass (the same sums in the same order: the same bits)
+        Some(sum) => {
+            let nf = n as f64;
+            let mean = [sum[0] / nf, sum[1] / nf, sum[2] / nf];
+            let mut corr = [0.0f64; 3];
+            let dist = lsq::axis_distances(pts, &p, &d)
+                .zip(pts.chunks_exact(3))
+                .map(|(x, q)| {
+                    for k in 0..3 {
+                        corr[k] += q[k] - mean[k];
+                    }
+                    x
+                })
+                .collect();
+            (dist, [mean[0] + corr[0] / nf, mean[1] + corr[1] / nf, mean[2] + corr[2] / nf])
+        }
+        None => {
+            let c = lsq::centroid(pts, 3);
+            (lsq::axis_distances(pts, &p, &d).collect(), [c[0], c[1], c[2]])
+        }
+    };
     let subset = first_subset(&dist, crit);
     let (mut iterations, mut evaluations, mut undecided) = (0, 0, false);
     let fit_sub = |sub: &[f64]| -> Result<Option<CylinderFit>> {
@@ -82,25 +108,24 @@ pub(super) fn fit_near_in(
         }
         Ok(r)
     };
-    let violations = |r: &Option<CylinderFit>| -> Vec<f64> { r.as_ref().map_or_else(Vec::new, |r| violations(pts, crit, r, spread)) };
+    let last = Cell::new(None);
+    let violations = |r: &Option<CylinderFit>| -> Vec<f64> { r.as_ref().map_or_else(Vec::new, |r| violations(pts, crit, r, spread, &c, &last)) };
     let (r, subset) = settle(pts, subset, "cylinder", fit_sub, violations)?;
     let Some(mut r) = r.filter(|_| !undecided) else { return Ok(None) };
     r.control_in = r.control_in.iter().map(|&j| subset[j]).collect();
     r.control_out = r.control_out.iter().map(|&j| subset[j]).collect();
-    r.point = centroid_foot(pts, &r.point, &r.direction);
-    r.extent = lsq::axis_extent(pts, &r.point, &r.direction);
+    (r.point, r.extent) = last.get().expect("the last round's foot and extent");
     r.iterations = iterations;
     r.evaluations = evaluations;
     Ok(Some(r))
 }
 
-/// The foot on the axis (`point`, unit `dir`) of the centroid of all `pts`: the point a
-/// [`CylinderFit`] reports. The subset's fit gives the foot of the subset's centroid,
-/// which moves along the axis with the subset (the bracket's boss datum: 0.58 mm, when a
-/// start of the least-squares fit changed at the rounding level).
-fn centroid_foot(pts: &[f64], point: &[f64; 3], dir: &[f64; 3]) -> [f64; 3] {
+/// The foot on the axis (`point`, unit `dir`) of the centroid `c` of all the points
+/// ([`lsq::centroid`]): the point a [`CylinderFit`] reports. The subset's fit gives the foot
+/// of the subset's centroid, which moves along the axis with the subset (the bracket's boss
+/// datum: 0.58 mm, when a start of the least-squares fit changed at the rounding level).
+fn centroid_foot(c: &[f64; 3], point: &[f64; 3], dir: &[f64; 3]) -> [f64; 3] {
     let (p, d) = (Vector3::from(*point), Vector3::from(*dir));
-    let c = lsq::centroid(pts, 3);
     let foot = p + d * ((Vector3::new(c[0], c[1], c[2]) - p).dot(&d));
     if foot.iter().all(|x| x.is_finite()) {
         [foot[0], foot[1], foot[2]]
@@ -140,16 +165,25 @@ fn first_subset(dist: &[f64], crit: Criterion) -> Vec<usize> {
 }
 
 /// How far each point lies outside the fitted cylinder(s) `r` (positive: outside, beyond
-/// a tolerance of 1e-12 of the part's size).
-fn violations(pts: &[f64], crit: Criterion, r: &CylinderFit, spread: f64) -> Vec<f64> {
+/// a tolerance of 1e-12 of the part's size), by the distances to its axis through the foot
+/// of the centroid `c` of all the points ([`centroid_foot`]: the point the fit reports).
+/// `last` gets that foot and the extent of the distances (the certificate, as
+/// [`lsq::axis_extent`] computes it) of the fit in hand: when no point violates, the fit's
+/// point and extent, without two more passes over the points.
+fn violations(pts: &[f64], crit: Criterion, r: &CylinderFit, spread: f64, c: &[f64; 3], last: &Cell<Option<([f64; 3], Extent)>>) -> Vec<f64> {
     let tol = 1e-12 * spread.max(r.r_out);
-    lsq::axis_distances(pts, &r.point, &r.direction)
+    let foot = centroid_foot(c, &r.point, &r.direction);
+    let mut e = Extent { min: f64::INFINITY, max: f64::NEG_INFINITY };
+    let v = lsq::axis_distances(pts, &foot, &r.direction)
         .map(|d| {
+            e = Extent { min: e.min.min(d), max: e.max.max(d) };
             let hi = if crit == Criterion::MaxInscribed { 0.0 } else { d - r.r_out };
             let lo = if crit == Criterion::MinCircumscribed { 0.0 } else { r.r_in - d };
             hi.max(lo) - tol
         })
-        .collect()
+        .collect();
+    last.set(Some((foot, e)));
+    v
 }
 
 /// The active-subset iteration: fit the points `subset` of `pts` (flat, row-major), add
