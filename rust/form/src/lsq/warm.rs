@@ -99,7 +99,8 @@ impl<const P: usize> Sums<P> {
 
 /// The sums of one pass over `pts` (flat (n, 3)) with rows `row(x) -> (r, J_row, height)`
 /// of the point's offset `x` from `origin`, in fixed chunks added in order (deterministic);
-/// J^T J only when `full` (else zero: the caller keeps an earlier one).
+/// J^T J, the offsets' sum and the coordinates' check only when `full` (else zero and
+/// true: the caller keeps the first pass's, which no later pass would change).
 fn pass<const P: usize>(pts: &[f64], origin: [f64; 3], full: bool, row: impl Fn([f64; 3]) -> (f64, [f64; P], f64)) -> Sums<P> {
     if full {
         pass_with::<P, true>(pts, origin, row)
@@ -119,13 +120,17 @@ fn pass_with<const P: usize, const FULL: bool>(
         let mut s = Sums::<P>::zero();
         let mut ok = true;
         for p in c.chunks_exact(3) {
-            ok &= (p[0].abs() <= MAX_COORD) & (p[1].abs() <= MAX_COORD) & (p[2].abs() <= MAX_COORD);
             let x = [p[0] - origin[0], p[1] - origin[1], p[2] - origin[2]];
+            if FULL {
+                // the points and their offsets do not change between passes: the first checks
+                // and sums them for every pass ([`gauss_newton`] keeps them)
+                ok &= (p[0].abs() <= MAX_COORD) & (p[1].abs() <= MAX_COORD) & (p[2].abs() <= MAX_COORD);
+                for k in 0..3 {
+                    s.off[k] += x[k];
+                }
+            }
             let (r, j, h) = row(x);
             s.cost += r * r;
-            for k in 0..3 {
-                s.off[k] += x[k];
-            }
             s.hmax = s.hmax.max(h.abs());
             for a in 0..P {
                 s.jtr[a] += j[a] * r;
@@ -157,9 +162,10 @@ fn gauss_newton<S: Clone, const P: usize>(
     let mut jtj = None;
     for _ in 0..MAX_PASSES {
         let mut sums = eval(&s, jtj.is_none());
-        // the J^T J of the first pass is kept (simplified Gauss-Newton, module docs)
-        let first = *jtj.get_or_insert(sums.jtj);
-        sums.jtj = first;
+        // the J^T J of the first pass is kept (simplified Gauss-Newton, module docs), and
+        // its sum of the offsets (the same in every pass)
+        let (first, off) = *jtj.get_or_insert((sums.jtj, sums.off));
+        (sums.jtj, sums.off) = (first, off);
         if !sums.ok || !sums.cost.is_finite() || sums.cost > prev_cost * (1.0 + 1e-12) {
             return None;
         }
