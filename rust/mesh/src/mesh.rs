@@ -122,18 +122,29 @@ impl TriMesh {
                 first.join(", ")
             )));
         }
-        let edges = sorted_edges(&tris, nv);
-        let topology = topology(&verts, &tris, &edges);
-        if topology.flipped {
-            for n in normals.iter_mut() {
-                *n = scale(*n, -1.0);
-            }
-        }
-        let (vertex_normals, edge_normals) = pseudonormals(&verts, &tris, &normals, &edges);
-        let bvh = Bvh::build(tris.len(), |i| {
-            let t = &tris[i];
-            [verts[t[0] as usize], verts[t[1] as usize], verts[t[2] as usize]]
-        });
+        // the topology and pseudonormals (partly serial: the edges' counting sort, the
+        // topology loop, the edge normals' scatter) beside the tree's build, which needs
+        // neither: the idle core of the tree's serial stretches runs them. Each side is
+        // computed as alone (no shared state), so the same bits
+        let ((topology, normals, vertex_normals, edge_normals), bvh) = rayon::join(
+            || {
+                let edges = sorted_edges(&tris, nv);
+                let topology = topology(&verts, &tris, &edges);
+                if topology.flipped {
+                    for n in normals.iter_mut() {
+                        *n = scale(*n, -1.0);
+                    }
+                }
+                let (vertex_normals, edge_normals) = pseudonormals(&verts, &tris, &normals, &edges);
+                (topology, normals, vertex_normals, edge_normals)
+            },
+            || {
+                Bvh::build(tris.len(), |i| {
+                    let t = &tris[i];
+                    [verts[t[0] as usize], verts[t[1] as usize], verts[t[2] as usize]]
+                })
+            },
+        );
         Ok(Self { vertices: verts, triangles: tris, face_normals: normals, vertex_normals, edge_normals, area, topology, bvh })
     }
 
