@@ -875,21 +875,23 @@ impl Bvh {
             // SAFETY: the features were detected on this processor
             return unsafe { self.nearest_group_avx2(ps, bound2, hints, best) };
         }
-        self.nearest_group_impl::<false>(ps, bound2, hints, best)
+        self.nearest_group_impl::<false, false>(ps, bound2, hints, best)
     }
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,bmi1,popcnt")]
     unsafe fn nearest_group_avx2(&self, ps: &[V3], bound2: f64, hints: &[u32], best: &mut [Option<Nearest>]) {
-        self.nearest_group_impl::<true>(ps, bound2, hints, best)
+        self.nearest_group_impl::<true, false>(ps, bound2, hints, best)
     }
 
-    /// [`Bvh::nearest_group_impl`] compiled for AVX-512 (its lanes' masks by AVX2's
+    /// [`Bvh::nearest_group_impl`] compiled for AVX-512: a node's two children's box
+    /// tests in one 16-lane single-precision vector ([`child_boxes16`]); the other lanes'
+    /// masks by AVX2's comparisons
     /// comparisons, [`lanes_le32`], [`lanes_le64`]).
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx512f,avx512vl,avx2,bmi1,popcnt")]
     unsafe fn nearest_group_avx512(&self, ps: &[V3], bound2: f64, hints: &[u32], best: &mut [Option<Nearest>]) {
-        self.nearest_group_impl::<true>(ps, bound2, hints, best)
+        self.nearest_group_impl::<true, true>(ps, bound2, hints, best)
     }
 
     /// [`Bvh::nearest_group_from`]'s answers from every build this processor runs (plain,
@@ -897,7 +899,7 @@ impl Bvh {
     #[cfg(test)]
     pub(crate) fn nearest_group_every_build(&self, ps: &[V3], bound2: f64, hints: &[u32], best: &[Option<Nearest>]) -> Vec<Vec<Option<Nearest>>> {
         let mut out = vec![best.to_vec()];
-        self.nearest_group_impl::<false>(ps, bound2, hints, &mut out[0]);
+        self.nearest_group_impl::<false, false>(ps, bound2, hints, &mut out[0]);
         #[cfg(target_arch = "x86_64")]
         if std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("bmi1") && std::is_x86_feature_detected!("popcnt") {
             let mut b = best.to_vec();
@@ -914,8 +916,10 @@ impl Bvh {
         out
     }
 
+    /// `AVX`: compiled for AVX2 (see [`lanes_le32`]); `W16`: compiled for AVX-512, the
+    /// node's box tests by [`child_boxes16`].
     #[inline(always)]
-    fn nearest_group_impl<const AVX: bool>(&self, ps: &[V3], bound2: f64, hints: &[u32], best: &mut [Option<Nearest>]) {
+    fn nearest_group_impl<const AVX: bool, const W16: bool>(&self, ps: &[V3], bound2: f64, hints: &[u32], best: &mut [Option<Nearest>]) {
         let g = ps.len();
         assert!(g <= GROUP && best.len() == g);
         // per lane: coordinates (SoA), the best squared distance, the start's slot
@@ -929,6 +933,9 @@ impl Bvh {
         let (mut qx, mut qy, mut qz) = ([0.0f32; GROUP], [0.0f32; GROUP], [0.0f32; GROUP]);
         let mut err2 = [0.0f64; GROUP];
         let mut bw = [f32::NEG_INFINITY; GROUP];
+        // the lanes in single precision twice over (lanes 0-7 against child 0, 8-15
+        // against child 1: [`child_boxes16`])
+        let mut q16 = [[0.0f32; 2 * GROUP]; 3];
         let size = self.size;
         let mut all = 0u32;
         for i in 0..g {
@@ -957,6 +964,9 @@ impl Bvh {
                 _ => best[i] = None,
             }
             (qx[i], qy[i], qz[i]) = (px[i] as f32, py[i] as f32, pz[i] as f32);
+            for (q, v) in q16.iter_mut().zip([qx[i], qy[i], qz[i]]) {
+                (q[i], q[i + GROUP]) = (v, v);
+            }
             bs[i] = Bound::best_side(bd[i]);
             err2[i] = widen_err2(F32_ERR * (size + px[i].abs().max(py[i].abs()).max(pz[i].abs())));
             bw[i] = widen(bd[i], err2[i]);
@@ -1064,19 +1074,27 @@ impl Bvh {
             } else {
                 let n = &self.nodes[cur.index as usize];
                 let (mut d0, mut d1) = ([0.0f32; GROUP], [0.0f32; GROUP]);
-                for i in 0..GROUP {
-                    let q = [qx[i], qy[i], qz[i]];
-                    let (mut a, mut b) = (0.0f32, 0.0f32);
-                    for k in 0..3 {
-                        let u = larger(larger(n.lo[k][0] - q[k], q[k] - n.hi[k][0]), 0.0);
-                        let w = larger(larger(n.lo[k][1] - q[k], q[k] - n.hi[k][1]), 0.0);
-                        a += u * u;
-                        b += w * w;
+                let (m0, m1);
+                if W16 {
+                    // SAFETY: W16 is set only in the build compiled for AVX-512 F and VL,
+                    // run only where the processor has them
+                    let m = unsafe { child_boxes16(n, &q16, &bw, &mut d0, &mut d1) };
+                    (m0, m1) = (m & mask, (m >> GROUP) & mask);
+                } else {
+                    for i in 0..GROUP {
+                        let q = [qx[i], qy[i], qz[i]];
+                        let (mut a, mut b) = (0.0f32, 0.0f32);
+                        for k in 0..3 {
+                            let u = larger(larger(n.lo[k][0] - q[k], q[k] - n.hi[k][0]), 0.0);
+                            let w = larger(larger(n.lo[k][1] - q[k], q[k] - n.hi[k][1]), 0.0);
+                            a += u * u;
+                            b += w * w;
+                        }
+                        d0[i] = a;
+                        d1[i] = b;
                     }
-                    d0[i] = a;
-                    d1[i] = b;
+                    (m0, m1) = (open32(&d0, &bw, mask), open32(&d1, &bw, mask));
                 }
-                let (m0, m1) = (open32(&d0, &bw, mask), open32(&d1, &bw, mask));
                 if m0 != 0 || m1 != 0 {
                     // the nearer child first: the one nearer to most of the open lanes (not
                     // to the first open lane: 300 k points of the torus bench, 522 M against
@@ -1113,6 +1131,48 @@ impl Bvh {
         }
     }
 }
+
+/// A node's two children's squared single-precision box distances for the [`GROUP`]
+/// lanes in one 16-lane AVX-512 vector (lanes 0-7 the lanes against child 0, 8-15 against
+/// child 1; `q` each coordinate of the lanes twice over): written to `d0` and `d1`, and
+/// the mask of those within the lanes' widened best `bw` (bits 0-7 child 0, 8-15 child 1).
+/// The arithmetic of the eight-lane loop it replaces, operation for operation
+/// (`max(max(lo - q, q - hi), 0)` squared, summed over x, y, z from 0, no fused
+/// multiply-add; `vmaxps` is [`larger`]), so the same bits: half the vector instructions.
+///
+/// # Safety
+/// The processor has AVX-512 F and VL (the caller runs compiled for them).
+#[inline(always)]
+#[allow(unused_variables)]
+unsafe fn child_boxes16(n: &Node, q: &[[f32; 2 * GROUP]; 3], bw: &[f32; GROUP], d0: &mut [f32; GROUP], d1: &mut [f32; GROUP]) -> u32 {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::*;
+        // the node's 64 bytes: lo (x0 x1 y0 y1 z0 z1), hi (the same), the children
+        let raw = _mm512_load_ps(n as *const Node as *const f32);
+        let zero = _mm512_setzero_ps();
+        let mut d = zero;
+        for k in 0..3 {
+            let (l, h) = (2 * k as i32, 6 + 2 * k as i32);
+            // child 0's value in lanes 0-7, child 1's in lanes 8-15
+            let lo = _mm512_permutexvar_ps(_mm512_set_epi32(l + 1, l + 1, l + 1, l + 1, l + 1, l + 1, l + 1, l + 1, l, l, l, l, l, l, l, l), raw);
+            let hi = _mm512_permutexvar_ps(_mm512_set_epi32(h + 1, h + 1, h + 1, h + 1, h + 1, h + 1, h + 1, h + 1, h, h, h, h, h, h, h, h), raw);
+            let qk = _mm512_loadu_ps(q[k].as_ptr());
+            let u = _mm512_max_ps(_mm512_max_ps(_mm512_sub_ps(lo, qk), _mm512_sub_ps(qk, hi)), zero);
+            d = _mm512_add_ps(d, _mm512_mul_ps(u, u));
+        }
+        let w = _mm256_loadu_ps(bw.as_ptr());
+        let w16 = _mm512_castpd_ps(_mm512_broadcast_f64x4(_mm256_castps_pd(w)));
+        let m = _mm512_cmp_ps_mask::<_CMP_LE_OQ>(d, w16) as u32;
+        _mm256_storeu_ps(d0.as_mut_ptr(), _mm512_castps512_ps256(d));
+        _mm256_storeu_ps(d1.as_mut_ptr(), _mm256_castpd_ps(_mm512_extractf64x4_pd::<1>(_mm512_castps_pd(d))));
+        m
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    unreachable!("the 16-lane box test runs only in the AVX-512 build")
+}
+
+const _: () = assert!(std::mem::size_of::<Node>() == 64 && std::mem::align_of::<Node>() == 64, "child_boxes16 loads a node as one aligned vector");
 
 /// Relative rounding of a coordinate to single precision, with room: the lanes' box
 /// tests of [`Bvh::nearest_group`] run on the point rounded to f32 (the boxes are f32
