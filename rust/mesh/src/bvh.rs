@@ -200,18 +200,23 @@ impl Bound {
     /// instructions instead of one lane after another.
     #[inline(always)]
     pub fn may_beat_lanes(&self, p: [&[f64; GROUP]; 3], best_d2: &[f64; GROUP], slack: &[f64; GROUP]) -> u32 {
-        self.may_beat_lanes_in::<false>(p, &best_d2.map(Self::best_side), slack)
+        self.may_beat_lanes_in::<false, false>(p, &best_d2.map(Self::best_side), slack)
     }
 
     /// [`Bound::may_beat_lanes`] with the lanes' right sides given ([`Bound::best_side`]
     /// of their best, kept by the group query as the best changes instead of computed
     /// again for every triangle); `AVX`: the lanes' comparison by AVX instructions (only
-    /// in code compiled for AVX2, see [`lanes_le64`]).
+    /// in code compiled for AVX2, see [`lanes_le64`]); `W16`: by one AVX-512 comparison
+    /// into a mask ([`lanes_le64_512`], only in code compiled for AVX-512).
     #[inline(always)]
-    fn may_beat_lanes_in<const AVX: bool>(&self, p: [&[f64; GROUP]; 3], best_side: &[f64; GROUP], slack: &[f64; GROUP]) -> u32 {
+    fn may_beat_lanes_in<const AVX: bool, const W16: bool>(&self, p: [&[f64; GROUP]; 3], best_side: &[f64; GROUP], slack: &[f64; GROUP]) -> u32 {
         let mut bound = [0.0; GROUP];
         for i in 0..GROUP {
             bound[i] = self.lower(&[p[0][i], p[1][i], p[2][i]], slack[i]);
+        }
+        if W16 {
+            // SAFETY: W16 is set only in the build compiled for AVX-512 F
+            return unsafe { lanes_le64_512(&bound, best_side) };
         }
         lanes_le64::<AVX>(&bound, best_side)
     }
@@ -1015,10 +1020,20 @@ impl Bvh {
                 }
             }
             let (glo, ghi) = (glo.map(|x| f32_out(x, false)), ghi.map(|x| f32_out(x, true)));
+            // the box's ends as one vector: lanes 0-5 the high ends against the nodes'
+            // low bounds, lanes 6-11 the low ends against their high bounds (the node's layout)
+            let g16: [f32; 16] = [ghi[0], ghi[0], ghi[1], ghi[1], ghi[2], ghi[2], glo[0], glo[0], glo[1], glo[1], glo[2], glo[2], 0.0, 0.0, 0.0, 0.0];
             while cur.count == 0 {
                 let n = &self.nodes[cur.index as usize];
-                let meets = |c: usize| (0..3).all(|k| n.lo[k][c] <= ghi[k] && n.hi[k][c] >= glo[k]);
-                match (meets(0), meets(1)) {
+                let (m0, m1) = if W16 {
+                    // SAFETY: W16 is set only in the build compiled for AVX-512 F
+                    unsafe { boxes_meet16(n, &g16) }
+                } else {
+                    // every comparison made (no short cut): no branch to mispredict
+                    let meets = |c: usize| (0..3).fold(true, |a, k| a & (n.lo[k][c] <= ghi[k]) & (n.hi[k][c] >= glo[k]));
+                    (meets(0), meets(1))
+                };
+                match (m0, m1) {
                     (true, true) => break,
                     (true, false) => cur = n.child[0],
                     (false, true) => cur = n.child[1],
@@ -1037,7 +1052,7 @@ impl Bvh {
                         let i = mask.trailing_zeros() as usize;
                         if self.bounds[slot as usize].may_beat(&ps[i], bd[i], slack[i]) { mask } else { 0 }
                     } else {
-                        mask & self.bounds[slot as usize].may_beat_lanes_in::<AVX>([&px, &py, &pz], &bs, &slack)
+                        mask & self.bounds[slot as usize].may_beat_lanes_in::<AVX, W16>([&px, &py, &pz], &bs, &slack)
                     };
                     if m.count_ones() >= VECTOR_EXACT {
                         // many lanes: their exact tests at once, the same bits
@@ -1172,6 +1187,30 @@ unsafe fn child_boxes16(n: &Node, q: &[[f32; 2 * GROUP]; 3], bw: &[f32; GROUP], 
     unreachable!("the 16-lane box test runs only in the AVX-512 build")
 }
 
+/// Does each child's box of `n` meet the box whose ends are `g` (lanes 0-5: the high
+/// ends x x y y z z, lanes 6-11: the low ends)? All 12 comparisons of the plain test
+/// (`lo <= high end`, `hi >= low end`, per axis and child) by two AVX-512 comparisons of
+/// the node loaded as one vector: (child 0, child 1).
+///
+/// # Safety
+/// The processor has AVX-512 F.
+#[inline(always)]
+#[allow(unused_variables)]
+unsafe fn boxes_meet16(n: &Node, g: &[f32; 16]) -> (bool, bool) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::*;
+        let raw = _mm512_load_ps(n as *const Node as *const f32);
+        let gv = _mm512_loadu_ps(g.as_ptr());
+        let le = _mm512_cmp_ps_mask::<_CMP_LE_OQ>(raw, gv) as u32;
+        let ge = _mm512_cmp_ps_mask::<_CMP_GE_OQ>(raw, gv) as u32;
+        let m = (le & 0x03f) | (ge & 0xfc0);
+        (m & 0x555 == 0x555, m & 0xaaa == 0xaaa)
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    unreachable!("only in the AVX-512 build")
+}
+
 const _: () = assert!(std::mem::size_of::<Node>() == 64 && std::mem::align_of::<Node>() == 64, "child_boxes16 loads a node as one aligned vector");
 
 /// Relative rounding of a coordinate to single precision, with room: the lanes' box
@@ -1273,6 +1312,23 @@ pub(crate) fn lanes_le64<const AVX: bool>(a: &[f64; GROUP], b: &[f64; GROUP]) ->
 /// vector pass costs about five single tests in instructions; 300 k points of the torus
 /// bench: 3 lanes 728 M instructions, 5 lanes 717 M, never 728 M).
 const VECTOR_EXACT: u32 = 5;
+
+/// [`lanes_le64`] by one AVX-512 comparison of the eight f64 lanes into a mask (`<=`,
+/// ordered and quiet: false for a NaN, as `<=`).
+///
+/// # Safety
+/// The processor has AVX-512 F.
+#[inline(always)]
+#[allow(unused_variables)]
+pub(crate) unsafe fn lanes_le64_512(a: &[f64; GROUP], b: &[f64; GROUP]) -> u32 {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{_mm512_cmp_pd_mask, _mm512_loadu_pd, _CMP_LE_OQ};
+        _mm512_cmp_pd_mask::<_CMP_LE_OQ>(_mm512_loadu_pd(a.as_ptr()), _mm512_loadu_pd(b.as_ptr())) as u32
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    unreachable!("only in the AVX-512 build")
+}
 
 const _: () = assert!(GROUP == 8 && LANES == GROUP, "lanes_le32 and lanes_le64 compare eight lanes");
 

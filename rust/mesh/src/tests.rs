@@ -737,6 +737,11 @@ proptest! {
             prop_assert_eq!(crate::bvh::lanes_le64::<true>(&a, &b), want64);
             prop_assert_eq!(crate::bvh::lanes_le32::<true>(&a32, &b32), want32);
         }
+        #[cfg(target_arch = "x86_64")]
+        if std::is_x86_feature_detected!("avx512f") {
+            // SAFETY: the processor has AVX-512 F
+            prop_assert_eq!(unsafe { crate::bvh::lanes_le64_512(&a, &b) }, want64);
+        }
     }
 }
 
