@@ -565,6 +565,7 @@ fn build_seq(items: &mut [Item], first: u32, depth: usize, known: Option<Known>,
 }
 
 /// A subtree built in parallel: built sequentially (nodes indexed from 0), or split in two.
+#[cfg_attr(test, derive(Clone))]
 enum Part {
     Seq(Aabb, Child, Vec<Node>),
     Split(Aabb, Box<Part>, Box<Part>),
@@ -593,7 +594,41 @@ impl Part {
             Part::Seq(b, _, _) | Part::Split(b, _, _) => *b,
         }
     }
+    /// The number of nodes of the subtree.
+    fn len(&self) -> usize {
+        match self {
+            Part::Seq(_, _, nodes) => nodes.len(),
+            Part::Split(_, l, r) => 1 + l.len() + r.len(),
+        }
+    }
+
+    /// Write the subtree's nodes into `out` (exactly [`Part::len`] of them, the first at
+    /// index `at` of the tree), depth first: the order and nodes of [`Part::flatten`], the
+    /// two halves of a split written in parallel; its reference.
+    fn flatten_into(self, out: &mut [Node], at: u32) -> Child {
+        debug_assert_eq!(out.len(), self.len());
+        match self {
+            Part::Seq(_, c, nodes) => {
+                let shift = |c: Child| if c.count == 0 { Child { index: c.index + at, count: 0 } } else { c };
+                for (o, n) in out.iter_mut().zip(&nodes) {
+                    *o = Node { child: [shift(n.child[0]), shift(n.child[1])], ..*n };
+                }
+                shift(c)
+            }
+            Part::Split(_, l, r) => {
+                let (lb, rb) = (l.bounds(), r.bounds());
+                let nl = l.len();
+                let (head, rest) = out.split_at_mut(1);
+                let (lo, ro) = rest.split_at_mut(nl);
+                let (lc, rc) = rayon::join(|| l.flatten_into(lo, at + 1), || r.flatten_into(ro, at + 1 + nl as u32));
+                head[0] = node_of(&lb, &rb, lc, rc);
+                Child { index: at, count: 0 }
+            }
+        }
+    }
+
     /// Append the subtree's nodes to `out` (depth first); its reference.
+    #[cfg(test)]
     fn flatten(self, out: &mut Vec<Node>) -> Child {
         match self {
             Part::Seq(_, c, nodes) => {
@@ -628,6 +663,27 @@ fn child_distances2(p: &V3, n: &Node) -> [f64; 2] {
     d
 }
 
+/// The build's items of `n` triangles (corners `corner(i)`): index, box and centroid.
+fn build_items(n: usize, corner: impl Fn(usize) -> [V3; 3] + Sync) -> Vec<Item> {
+    use rayon::prelude::*;
+    (0..n)
+        .into_par_iter()
+        .map(|i| {
+            let c = &corner(i);
+            let mut lo = c[0];
+            let mut hi = c[0];
+            for v in &c[1..] {
+                for k in 0..3 {
+                    lo[k] = lo[k].min(v[k]);
+                    hi[k] = hi[k].max(v[k]);
+                }
+            }
+            let centroid = [(c[0][0] + c[1][0] + c[2][0]) / 3.0, (c[0][1] + c[1][1] + c[2][1]) / 3.0, (c[0][2] + c[1][2] + c[2][2]) / 3.0];
+            Item { tri: i as u32, centroid, lo, hi }
+        })
+        .collect()
+}
+
 impl Bvh {
     /// The hierarchy of the triangles `corners` (at least one).
     pub fn new(corners: &[[V3; 3]]) -> Self {
@@ -639,28 +695,14 @@ impl Bvh {
     /// corners in triangle order).
     pub fn build(n: usize, corner: impl Fn(usize) -> [V3; 3] + Sync) -> Self {
         use rayon::prelude::*;
-        let mut items: Vec<Item> = (0..n)
-            .into_par_iter()
-            .map(|i| {
-                let c = &corner(i);
-                let mut lo = c[0];
-                let mut hi = c[0];
-                for v in &c[1..] {
-                    for k in 0..3 {
-                        lo[k] = lo[k].min(v[k]);
-                        hi[k] = hi[k].max(v[k]);
-                    }
-                }
-                let centroid = [(c[0][0] + c[1][0] + c[2][0]) / 3.0, (c[0][1] + c[1][1] + c[2][1]) / 3.0, (c[0][2] + c[1][2] + c[2][2]) / 3.0];
-                Item { tri: i as u32, centroid, lo, hi }
-            })
-            .collect();
+        let mut items = build_items(n, &corner);
         let part = build_par(&mut items, 0, 0, None);
         let b = part.bounds();
-        let mut nodes = Vec::with_capacity(n / 2);
-        let root = part.flatten(&mut nodes);
-        nodes.shrink_to_fit();
-        let order: Vec<u32> = items.iter().map(|it| it.tri).collect();
+        // the nodes written in place by subtrees in parallel (zeroed first: fresh pages,
+        // every node then written once)
+        let mut nodes = vec![Node { lo: [[0.0f32; 2]; 3], hi: [[0.0f32; 2]; 3], child: [Child { index: 0, count: 0 }; 2] }; part.len()];
+        let root = part.flatten_into(&mut nodes, 0);
+        let order: Vec<u32> = items.par_iter().map(|it| it.tri).collect();
         let corners: Vec<[V3; 3]> = order.par_iter().map(|&t| corner(t as usize)).collect();
         let bounds = corners.par_iter().map(Bound::of).collect();
         // the bound's data and evaluation are exact to about 1e-15 of the coordinates'
@@ -1354,5 +1396,39 @@ fn better(d2: f64, slot: u32, best_d2: f64, best: Option<u32>) -> bool {
     match best {
         None => d2 <= best_d2,
         Some(b) => d2 < best_d2 || (d2 == best_d2 && slot < b),
+    }
+}
+
+#[cfg(test)]
+mod flatten_tests {
+    use super::*;
+
+    /// The nodes written in parallel in place ([`Part::flatten_into`]) are those appended
+    /// one subtree after another ([`Part::flatten`]): the same nodes in the same order.
+    #[test]
+    fn the_parallel_flatten_writes_the_serial_one() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+        let n = 20 * PAR + 37;
+        let corners: Vec<[V3; 3]> = (0..n)
+            .map(|_| {
+                let a: V3 = std::array::from_fn(|_| rng.random_range(-50.0..50.0));
+                std::array::from_fn(|_| std::array::from_fn(|k| a[k] + rng.random_range(-1.0..1.0)))
+            })
+            .collect();
+        let mut items = build_items(n, |i| corners[i]);
+        let part = build_par(&mut items, 0, 0, None);
+        let mut serial = Vec::new();
+        let root_serial = part.clone().flatten(&mut serial);
+        let mut par = vec![Node { lo: [[0.0f32; 2]; 3], hi: [[0.0f32; 2]; 3], child: [Child { index: 0, count: 0 }; 2] }; part.len()];
+        let root_par = part.flatten_into(&mut par, 0);
+        assert!(matches!(build_par(&mut build_items(n, |i| corners[i]), 0, 0, None), Part::Split(..)));
+        assert_eq!(root_serial, root_par);
+        assert_eq!(serial.len(), par.len());
+        for (a, b) in serial.iter().zip(&par) {
+            assert_eq!(a.child, b.child);
+            assert_eq!(a.lo.map(|x| x.map(f32::to_bits)), b.lo.map(|x| x.map(f32::to_bits)));
+            assert_eq!(a.hi.map(|x| x.map(f32::to_bits)), b.hi.map(|x| x.map(f32::to_bits)));
+        }
     }
 }
