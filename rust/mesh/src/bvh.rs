@@ -955,7 +955,8 @@ impl Bvh {
     /// where the lanes' masks are counted (`count_ones`, `is_power_of_two`) instead of
     /// about a dozen. With AVX-512 (F and VL) it is compiled for that: the eight lanes'
     /// f64 lower bounds and exact tests in one vector each instead of two (the group
-    /// query alone, 1 M scan points, one thread: 4-14 % less CPU than the AVX2 build).
+    /// query alone, 1 M scan points, one thread: 4-14 % less CPU than the AVX2 build),
+    /// and a node's two children's box tests in one 16-lane vector (`child_boxes16`).
     /// Rust never fuses a multiply and an add unless told to (`mul_add`; AVX-512 enables
     /// the FMA instructions, none is emitted here), so every build gives the same bits
     /// (tested: each build the processor runs against the others).
