@@ -480,9 +480,12 @@ fn classify_grid(points: &[f64], boxes: &[OrientedBox], grid: &BoxGrid) -> Optio
     let parts: Vec<Option<Vec<Vec<usize>>>> = points
         .par_chunks(3 * CHUNK)
         .enumerate()
-        .map(|(ci, chunk)| {
+        .map_init(Vec::new, |last: &mut Vec<usize>, (ci, chunk)| {
             let mut finite = true;
-            let mut out = vec![Vec::new(); nb];
+            // each box's list sized by what this thread's last task found (a scan's
+            // density changes slowly along the file): few regrowths, each a copy
+            last.resize(nb, 0);
+            let mut out: Vec<Vec<usize>> = last.iter().map(|&c| Vec::with_capacity(c + c / 4 + 16)).collect();
             let mut codes = [0u32; BLOCK];
             let mut cell = [0u32; BLOCK];
             let mut hit = [0u16; BLOCK];
@@ -504,6 +507,9 @@ fn classify_grid(points: &[f64], boxes: &[OrientedBox], grid: &BoxGrid) -> Optio
                     let j = j as usize;
                     push_members(&block[3 * j..3 * j + 3], mk, &testers, base + j, &mut out);
                 }
+            }
+            for (c, v) in last.iter_mut().zip(&out) {
+                *c = v.len();
             }
             finite.then_some(out)
         })
@@ -569,7 +575,8 @@ where
 }
 
 fn merge_parts(parts: Vec<Vec<Vec<usize>>>, nb: usize) -> Vec<Vec<usize>> {
-    let mut result = vec![Vec::new(); nb];
+    // each list allocated once at its final size (no regrowth, no copy of what it holds)
+    let mut result: Vec<Vec<usize>> = (0..nb).map(|k| Vec::with_capacity(parts.iter().map(|p| p[k].len()).sum())).collect();
     for part in parts {
         for (k, v) in part.into_iter().enumerate() {
             result[k].extend(v);
