@@ -195,13 +195,9 @@ mod tests {
             psi in 0.05f64..0.7, noise in 1e-4f64..0.01, tilt in -1.0f64..1.0, far in 0.0f64..1e3,
         ) {
             // the length puts the spread along the axis near that across the arc's depth or
-            // along its chord (variances of r cos s and r sin s, s uniform on the arc), where
-            // the principal directions mix
-            let h = 0.5 * arc;
-            let depth = r * r * (0.5 + arc.sin() / (2.0 * arc) - (h.sin() / h).powi(2));
-            let across = r * r * (0.5 - arc.sin() / (2.0 * arc));
-            // (one nappe: the radius stays above 0.2 r at the narrow end)
-            let len_r = ((12.0 * ratio * if chord { across } else { depth }).sqrt().max(0.05 * r) / r).min(1.6 / psi.tan());
+            // along its chord, where the principal directions mix (one nappe: the radius
+            // stays above 0.2 r at the narrow end)
+            let len_r = (crate::lsq::warm::tests::mixing_length(r, arc, ratio, chord) / r).min(1.6 / psi.tan());
             use rand::{Rng, SeedableRng};
             let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
             let a = Vector3::new(tilt, 0.4, 1.0).normalize();

@@ -74,32 +74,19 @@ fn refine_cylinder(
 }
 
 /// The sum of squared radial residuals of the points `sub` projected along `a` about
-/// their algebraic (Kasa) circle: the cylinder cost of that direction with the circle's
-/// centre and radius not yet optimised, the score of a grid start ([`grid_axes`]). Two
-/// passes and a 3 x 3 solve, no allocation (it runs for 127 directions a fit).
+/// their algebraic (Kasa) circle ([`algebraic_sphere`]): the cylinder cost of that direction
+/// with the circle's centre and radius not yet optimised, the score of a grid start
+/// ([`grid_axes`]). Two passes and a 3 x 3 solve, no allocation (it runs for 127 directions
+/// a fit).
 fn circle_score(sub: &[[f64; 3]], a: &Vector3<f64>) -> Option<f64> {
     let (u, v) = orthonormal_basis(a);
-    // normal equations of (x^2 + y^2) = 2 cx x + 2 cy y + k, rows (2x, 2y, 1)
-    let mut m = nalgebra::Matrix3::<f64>::zeros();
-    let mut b = Vector3::<f64>::zeros();
-    for p in sub {
-        let (x, y) = (p[0] * u[0] + p[1] * u[1] + p[2] * u[2], p[0] * v[0] + p[1] * v[1] + p[2] * v[2]);
-        let row = Vector3::new(2.0 * x, 2.0 * y, 1.0);
-        m += row * row.transpose();
-        b += row * (x * x + y * y);
-    }
-    let sol = m.lu().solve(&b)?;
-    let (cx, cy) = (sol[0], sol[1]);
-    let r2 = sol[2] + cx * cx + cy * cy;
-    if !(r2 > 0.0) || !sol.iter().all(|x| x.is_finite()) {
-        return None;
-    }
-    let r = r2.sqrt();
+    let project = |p: &[f64; 3]| [vec3(p).dot(&u), vec3(p).dot(&v), 0.0];
+    let (c, r) = algebraic_sphere(sub.iter().map(project), 2)?;
     Some(
         sub.iter()
             .map(|p| {
-                let (x, y) = (p[0] * u[0] + p[1] * u[1] + p[2] * u[2], p[0] * v[0] + p[1] * v[1] + p[2] * v[2]);
-                ((x - cx).hypot(y - cy) - r).powi(2)
+                let [x, y, _] = project(p);
+                ((x - c[0]).hypot(y - c[1]) - r).powi(2)
             })
             .sum(),
     )
@@ -175,8 +162,7 @@ fn cylinder_from(pts: &[f64], start_axis: Option<[f64; 3]>, principal: bool) -> 
     let mut last_err = None;
     for a in starts {
         let (u, v) = orthonormal_basis(&a);
-        let q2: Vec<[f64; 3]> = first.iter().map(|x| [vec3(x).dot(&u), vec3(x).dot(&v), 0.0]).collect();
-        let Some((off, r)) = algebraic_sphere(&q2, 2) else { continue };
+        let Some((off, r)) = algebraic_sphere(first.iter().map(|x| [vec3(x).dot(&u), vec3(x).dot(&v), 0.0]), 2) else { continue };
         let l0 = u * off[0] + v * off[1];
         match refine_cylinder(first, l0, a, r, 6) {
             Ok((cyl, f)) => {
@@ -305,11 +291,7 @@ mod tests {
             seed in 0u64..1000, far in 0.0f64..1e4, r in 2.0f64..80.0, arc in 1.05f64..6.3,
             chord in proptest::bool::ANY, ratio in 0.6f64..1.6, noise in 1e-4f64..0.01, tilt in -1.0f64..1.0,
         ) {
-            // variances of r cos s and r sin s, s uniform on an arc of `arc` rad
-            let h = 0.5 * arc;
-            let depth = r * r * (0.5 + arc.sin() / (2.0 * arc) - (h.sin() / h).powi(2));
-            let across = r * r * (0.5 - arc.sin() / (2.0 * arc));
-            let len = (12.0 * ratio * if chord { across } else { depth }).sqrt().max(0.05 * r);
+            let len = crate::lsq::warm::tests::mixing_length(r, arc, ratio, chord);
             let a = [tilt, 0.4, 1.0];
             let pts = arc_points(seed, 2000, [far, -0.5 * far, 0.3 * far], a, r, len, arc, noise);
             let c = cylinder(&pts, None).unwrap();

@@ -187,12 +187,9 @@ const GRID_POINTS: usize = 256;
 /// [`GRID_POINTS`] of the centred points `q`; None: the direction is refused) that score
 /// lower than every principal axis: none when a principal axis is already the best start
 /// (a well-spread bore), so that the fit then costs no more local iterations than before.
-/// Deterministic: a fixed grid, a fixed subsample, ties to the earlier direction.
-///
-/// The principal axes alone miss the axis of a short partial bore: on a 141-degree arc
-/// 19.8 mm long of radius 28.7 mm the spreads along the axis and across the arc's depth
-/// are nearly equal (19.8 and 19.1 mm), their principal directions mix, and every start
-/// lay in the basin of a wrong cylinder.
+/// Deterministic: a fixed grid, a fixed subsample, ties to the earlier direction. Why the
+/// principal axes alone are not enough (a short partial bore): the module documentation of
+/// `lsq/cylinder.rs`.
 pub(crate) fn grid_axes(
     q: &[[f64; 3]],
     axes: &[Vector3<f64>],

@@ -286,6 +286,18 @@ pub(super) mod tests {
         out
     }
 
+    /// The length of a partial arc of radius `r` over `arc` rad that makes the spread along
+    /// the axis `ratio` times that across the arc's depth (`chord` false) or along its chord
+    /// (the variances of r cos s and r sin s, s uniform on the arc; a uniform length `len`
+    /// has variance len^2 / 12), at least 0.05 r: where the principal directions mix, the
+    /// partial bores and cones of the cylinder's and cone's start tests.
+    pub(in crate::lsq) fn mixing_length(r: f64, arc: f64, ratio: f64, chord: bool) -> f64 {
+        let h = 0.5 * arc;
+        let depth = r * r * (0.5 + arc.sin() / (2.0 * arc) - (h.sin() / h).powi(2));
+        let across = r * r * (0.5 - arc.sin() / (2.0 * arc));
+        (12.0 * ratio * if chord { across } else { depth }).sqrt().max(0.05 * r)
+    }
+
     fn jitter(rng: &mut ChaCha8Rng, pts: &[f64], sigma: f64) -> Vec<f64> {
         pts.iter().map(|x| x + sigma * ((0..4).map(|_| rng.random::<f64>() - 0.5).sum::<f64>() * 1.7)).collect()
     }
