@@ -229,14 +229,19 @@ struct BoxGrid {
     /// (sure, maybe) masks, cell (x, y, z) at (x n_y + y) n_z + z.
     cells: Vec<(u32, u32)>,
     /// One bit a cell, set where either mask is not empty: 32 KiB for 64^3 cells, which
-    /// stay in the core's cache while the 2 MiB of masks do not.
-    occupied: Vec<u64>,
+    /// stay in the core's cache while the 2 MiB of masks do not. Always [`OCCUPIED`]
+    /// words (the most cells a grid has), so that a cell's word is found without a
+    /// bounds check, in a vectorised loop.
+    occupied: Box<[u64; OCCUPIED]>,
     /// n_i - 1 as a float: a point's bin is its scaled coordinate clamped to [0, n_i - 1].
     last: [f64; 3],
 }
 
 /// Most cells of the grid along an axis.
 const GRID: usize = 64;
+
+/// Words of [`BoxGrid::occupied`]: one bit for each of the most cells a grid has.
+const OCCUPIED: usize = GRID * GRID * GRID / 64;
 
 /// Most boxes a [`BoxGrid`] holds (the bits of its masks).
 const GRID_BOXES: usize = 32;
@@ -334,7 +339,7 @@ impl BoxGrid {
                 }
             }
         }
-        let mut occupied = vec![0u64; cells.len().div_ceil(64)];
+        let mut occupied = Box::new([0u64; OCCUPIED]);
         for (c, &(sure, maybe)) in cells.iter().enumerate() {
             occupied[c / 64] |= u64::from(sure | maybe != 0) << (c % 64);
         }
@@ -342,10 +347,11 @@ impl BoxGrid {
         Self { lo, hi, inv, n, cells, occupied, last }
     }
 
-    /// The cell number of `p`, a point inside the union's bounding box: no branch. The bin along each axis is [`bin_of`]'s: the scaled
+    /// The cell number of `p`, a point inside the union's bounding box (the plain form of
+    /// [`BoxGrid::codes`]' cells, for the tests). The bin along each axis is [`bin_of`]'s: the scaled
     /// coordinate clamped to [0, n - 1] then truncated is min(floor(f), n - 1) for f > 0
     /// and 0 otherwise.
-    #[inline(always)]
+    #[cfg(test)]
     fn cell_of(&self, p: &[f64]) -> u32 {
         let b: [u32; 3] = std::array::from_fn(|i| ((p[i] - self.lo[i]) * self.inv[i]).max(0.0).min(self.last[i]) as u32);
         (b[0] * self.n[1] as u32 + b[1]) * self.n[2] as u32 + b[2]
@@ -354,11 +360,76 @@ impl BoxGrid {
     /// Whether the cell `c` has a box in a mask.
     #[inline(always)]
     fn is_occupied(&self, c: u32) -> bool {
-        (self.occupied[c as usize / 64] >> (c % 64)) & 1 != 0
+        // c < GRID^3, so the word's index is below OCCUPIED (the mask only tells the compiler)
+        (self.occupied[(c as usize / 64) & (OCCUPIED - 1)] >> (c % 64)) & 1 != 0
+    }
+
+    /// The first step of a [`classify_grid`] block: for each point of `block` (row-major,
+    /// `codes.len()` points), its cell number when the point is inside the union's bounding
+    /// box and its cell holds a box (`OCC`; else only inside the union, the cell's bit to be
+    /// looked up after), [`NO_CELL`] otherwise; and whether every coordinate is finite.
+    /// One branch-free loop, vectorised: the points' coordinates four or eight at a time in
+    /// the AVX2 and AVX-512 builds ([`BoxGrid::codes`]). A point inside the union gets
+    /// [`BoxGrid::cell_of`]'s cell: the same clamped scaled coordinate (its clamp written so
+    /// that the conversion needs no range check).
+    #[inline(always)]
+    fn codes_impl<const OCC: bool>(&self, block: &[f64], codes: &mut [u32]) -> bool {
+        let (lo, hi, inv, last) = (self.lo, self.hi, self.inv, self.last);
+        let (n1, n2) = (self.n[1] as u32, self.n[2] as u32);
+        let occupied: &[u64; OCCUPIED] = &self.occupied;
+        for (code, p) in codes.iter_mut().zip(block.chunks_exact(3)) {
+            let q = [p[0], p[1], p[2]];
+            let inside = (q[0] >= lo[0]) & (q[0] <= hi[0]) & (q[1] >= lo[1]) & (q[1] <= hi[1]) & (q[2] >= lo[2]) & (q[2] <= hi[2]);
+            let b: [u32; 3] = std::array::from_fn(|i| {
+                let f = (q[i] - lo[i]) * inv[i];
+                // f clamped to [0, n_i - 1] (a NaN to 0): what cell_of's max and min give for
+                // any f of a point inside the union
+                let f = if f > 0.0 { f } else { 0.0 };
+                let f = if f < last[i] { f } else { last[i] };
+                // SAFETY: f is a number in [0, n_i - 1], n_i <= GRID: it fits an i32
+                unsafe { f.to_int_unchecked::<i32>() as u32 }
+            });
+            let cell = (b[0] * n1 + b[1]) * n2 + b[2];
+            let keep = if OCC { inside & ((occupied[(cell as usize >> 6) & (OCCUPIED - 1)] >> (cell & 63)) & 1 != 0) } else { inside };
+            *code = if keep { cell } else { NO_CELL };
+        }
+        block.iter().fold(true, |ok, v| ok & v.is_finite())
+    }
+
+    /// [`BoxGrid::codes_impl`] in the widest build this processor runs; whether the cells
+    /// given are only those that hold a box (else the caller looks their bits up).
+    #[inline]
+    fn codes(&self, block: &[f64], codes: &mut [u32], finite: &mut bool) -> bool {
+        #[cfg(target_arch = "x86_64")]
+        if std::is_x86_feature_detected!("avx512f") && std::is_x86_feature_detected!("avx512vl") && std::is_x86_feature_detected!("avx2") {
+            // SAFETY: the features were detected on this processor
+            *finite &= unsafe { self.codes_avx512(block, codes) };
+            return true;
+        }
+        #[cfg(target_arch = "x86_64")]
+        if std::is_x86_feature_detected!("avx2") {
+            // SAFETY: as above
+            *finite &= unsafe { self.codes_avx2(block, codes) };
+            return true;
+        }
+        *finite &= self.codes_impl::<false>(block, codes);
+        false
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn codes_avx2(&self, block: &[f64], codes: &mut [u32]) -> bool {
+        self.codes_impl::<true>(block, codes)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx512f,avx512vl,avx2")]
+    unsafe fn codes_avx512(&self, block: &[f64], codes: &mut [u32]) -> bool {
+        self.codes_impl::<true>(block, codes)
     }
 
     /// Whether `p` is inside the union's bounding box (no box outside it can hold `p`).
-    #[inline(always)]
+    #[cfg(test)]
     fn in_union(&self, p: &[f64]) -> bool {
         within(p, &self.lo, &self.hi)
     }
@@ -396,9 +467,10 @@ const BLOCK: usize = 256;
 
 /// [`classify`] on the cells of `grid` (validated input, at most [`GRID_BOXES`] boxes), a
 /// block of points at a time in steps that each do one thing, without the branches and
-/// the cache misses of one point's work delaying the next's: every point's cell number
-/// (no branch); the points whose cell holds a box, by the one-bit-a-cell table (most
-/// points of a scan are in empty cells or outside the union); those cells' masks (the
+/// the cache misses of one point's work delaying the next's: every point's cell number,
+/// kept where the point is inside the union and its cell holds a box by the one-bit-a-cell
+/// table (most points of a scan are in empty cells or outside the union), in one
+/// branch-free vectorised loop ([`BoxGrid::codes`]); those cells' masks (the
 /// loads independent of each other, so their cache misses overlap); then the exact tests
 /// of the "maybe" boxes and the pushes. The same membership as a point-by-point walk.
 /// `None` when a point is not finite (checked in the first step).
@@ -408,31 +480,25 @@ fn classify_grid(points: &[f64], boxes: &[OrientedBox], grid: &BoxGrid) -> Optio
     let parts: Vec<Option<Vec<Vec<usize>>>> = points
         .par_chunks(3 * CHUNK)
         .enumerate()
-        .map(|(ci, chunk)| {
+        .map_init(Vec::new, |last: &mut Vec<usize>, (ci, chunk)| {
             let mut finite = true;
-            let mut out = vec![Vec::new(); nb];
-            let mut near = [0u16; BLOCK];
+            // each box's list sized by what this thread's last task found (a scan's
+            // density changes slowly along the file): few regrowths, each a copy
+            last.resize(nb, 0);
+            let mut out: Vec<Vec<usize>> = last.iter().map(|&c| Vec::with_capacity(c + c / 4 + 16)).collect();
+            let mut codes = [0u32; BLOCK];
             let mut cell = [0u32; BLOCK];
             let mut hit = [0u16; BLOCK];
             let mut masks = [(0u32, 0u32); BLOCK];
             for (bi, block) in chunk.chunks(3 * BLOCK).enumerate() {
                 let base = ci * CHUNK + bi * BLOCK;
-                let mut nears = 0;
-                for (j, p) in block.chunks_exact(3).enumerate() {
-                    near[nears] = j as u16;
-                    nears += usize::from(grid.in_union(p));
-                    finite &= p[0].is_finite() & p[1].is_finite() & p[2].is_finite();
-                }
-                for (c, &j) in cell.iter_mut().zip(&near[..nears]) {
-                    *c = grid.cell_of(&block[3 * j as usize..3 * j as usize + 3]);
-                }
+                let codes = &mut codes[..block.len() / 3];
+                let occupied_only = grid.codes(block, codes, &mut finite);
                 let mut hits = 0;
-                for t in 0..nears {
-                    // the cells of the points kept move down in place (hits <= t)
-                    let c = cell[t];
+                for (j, &c) in codes.iter().enumerate() {
                     cell[hits] = c;
-                    hit[hits] = near[t];
-                    hits += usize::from(grid.is_occupied(c));
+                    hit[hits] = j as u16;
+                    hits += usize::from(c != NO_CELL && (occupied_only || grid.is_occupied(c)));
                 }
                 for (mk, &c) in masks.iter_mut().zip(&cell[..hits]) {
                     *mk = grid.cells[c as usize];
@@ -442,11 +508,17 @@ fn classify_grid(points: &[f64], boxes: &[OrientedBox], grid: &BoxGrid) -> Optio
                     push_members(&block[3 * j..3 * j + 3], mk, &testers, base + j, &mut out);
                 }
             }
+            for (c, v) in last.iter_mut().zip(&out) {
+                *c = v.len();
+            }
             finite.then_some(out)
         })
         .collect();
     Some(merge_parts(parts.into_iter().collect::<Option<Vec<_>>>()?, nb))
 }
+
+/// The code of a point in no cell that holds a box ([`BoxGrid::codes`]).
+const NO_CELL: u32 = u32::MAX;
 
 /// Push the point `p` (number `i`) onto the lists of the boxes of its cell's masks (sure,
 /// maybe) that hold it: every sure box, and each maybe box whose exact test says so.
@@ -503,7 +575,8 @@ where
 }
 
 fn merge_parts(parts: Vec<Vec<Vec<usize>>>, nb: usize) -> Vec<Vec<usize>> {
-    let mut result = vec![Vec::new(); nb];
+    // each list allocated once at its final size (no regrowth, no copy of what it holds)
+    let mut result: Vec<Vec<usize>> = (0..nb).map(|k| Vec::with_capacity(parts.iter().map(|p| p[k].len()).sum())).collect();
     for part in parts {
         for (k, v) in part.into_iter().enumerate() {
             result[k].extend(v);
@@ -668,6 +741,72 @@ mod tests {
         let e = classify(&[0.0; 6], &[good, bad_box]).unwrap_err();
         assert!(e.message.contains("#1") && e.message.contains("y axis"), "{}", e.message);
         assert!(classify(&[0.0; 4], &[]).is_err());
+    }
+
+    /// Every build of a block's first step (plain, AVX2, AVX-512: those this processor
+    /// runs) gives each point the cell of [`BoxGrid::cell_of`] when the point is inside the
+    /// union's bounding box (and, in the builds that look the bit up, its cell holds a
+    /// box), [`NO_CELL`] otherwise, and the same finiteness: for points on and beside cell
+    /// edges and the union's faces, outside it, and not finite.
+    #[test]
+    fn every_build_of_the_cell_step_agrees() {
+        let boxes = [
+            OrientedBox { center: [0.0; 3], size: [3.0, 2.0, 1.0], rotation: [0.1, 0.2, 0.3] },
+            OrientedBox { center: [2.0, -1.0, 0.5], size: [1.0, 4.0, 2.0], rotation: [0.0; 3] },
+        ];
+        let mut seed = 7u64;
+        let mut rnd = move || {
+            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            seed >> 11
+        };
+        for per_axis in [1, 5, GRID] {
+            let grid = BoxGrid::new(&boxes, per_axis);
+            let w: [f64; 3] = std::array::from_fn(|i| (grid.hi[i] - grid.lo[i]) / grid.n[i] as f64);
+            let mut pts = Vec::new();
+            for _ in 0..4000 {
+                for i in 0..3 {
+                    // a cell edge (from a little outside the union to a little past it), just
+                    // beside one, a face of the union, or anywhere
+                    let edge = grid.lo[i] + (rnd() % (grid.n[i] as u64 + 3)) as f64 * w[i] - w[i];
+                    pts.push(match rnd() % 8 {
+                        0 => edge,
+                        1 => edge * (1.0 + 1e-15),
+                        2 => edge - 1e-13,
+                        3 => grid.lo[i],
+                        4 => grid.hi[i],
+                        5 => f64::from_bits(grid.hi[i].to_bits() + 1),
+                        _ => grid.lo[i] - w[i] + (rnd() % 1000) as f64 * 1e-3 * (grid.hi[i] - grid.lo[i] + 2.0 * w[i]),
+                    });
+                }
+            }
+            for (at, v) in [(5, f64::NAN), (3 * 300 + 1, f64::INFINITY), (3 * 700 + 2, f64::NEG_INFINITY), (3 * 900, -0.0)] {
+                pts[at] = v;
+            }
+            for block in pts.chunks(3 * BLOCK) {
+                let k = block.len() / 3;
+                let want: Vec<u32> = block.chunks_exact(3).map(|p| if grid.in_union(p) { grid.cell_of(p) } else { NO_CELL }).collect();
+                let finite = block.iter().all(|v| v.is_finite());
+                let occupied: Vec<u32> = want.iter().map(|&c| if c != NO_CELL && grid.is_occupied(c) { c } else { NO_CELL }).collect();
+                let mut codes = vec![0u32; k];
+                assert_eq!(grid.codes_impl::<false>(block, &mut codes), finite);
+                assert_eq!(codes, want, "{per_axis} cells an axis, plain");
+                assert_eq!(grid.codes_impl::<true>(block, &mut codes), finite);
+                assert_eq!(codes, occupied, "{per_axis} cells an axis, plain with the bits");
+                #[cfg(target_arch = "x86_64")]
+                if std::is_x86_feature_detected!("avx2") {
+                    // SAFETY: the features were detected on this processor
+                    assert_eq!(unsafe { grid.codes_avx2(block, &mut codes) }, finite);
+                    assert_eq!(codes, occupied, "{per_axis} cells an axis, AVX2");
+                    if std::is_x86_feature_detected!("avx512f") && std::is_x86_feature_detected!("avx512vl") {
+                        // SAFETY: as above
+                        assert_eq!(unsafe { grid.codes_avx512(block, &mut codes) }, finite);
+                        assert_eq!(codes, occupied, "{per_axis} cells an axis, AVX-512");
+                    }
+                }
+            }
+            let inside = pts.chunks_exact(3).filter(|p| grid.in_union(p)).count();
+            assert!(inside > 250 && inside < 3800, "{per_axis} cells an axis: {inside} points inside the union");
+        }
     }
 
     #[test]

@@ -200,18 +200,23 @@ impl Bound {
     /// instructions instead of one lane after another.
     #[inline(always)]
     pub fn may_beat_lanes(&self, p: [&[f64; GROUP]; 3], best_d2: &[f64; GROUP], slack: &[f64; GROUP]) -> u32 {
-        self.may_beat_lanes_in::<false>(p, &best_d2.map(Self::best_side), slack)
+        self.may_beat_lanes_in::<false, false>(p, &best_d2.map(Self::best_side), slack)
     }
 
     /// [`Bound::may_beat_lanes`] with the lanes' right sides given ([`Bound::best_side`]
     /// of their best, kept by the group query as the best changes instead of computed
     /// again for every triangle); `AVX`: the lanes' comparison by AVX instructions (only
-    /// in code compiled for AVX2, see [`lanes_le64`]).
+    /// in code compiled for AVX2, see [`lanes_le64`]); `W16`: by one AVX-512 comparison
+    /// into a mask ([`lanes_le64_512`], only in code compiled for AVX-512).
     #[inline(always)]
-    fn may_beat_lanes_in<const AVX: bool>(&self, p: [&[f64; GROUP]; 3], best_side: &[f64; GROUP], slack: &[f64; GROUP]) -> u32 {
+    fn may_beat_lanes_in<const AVX: bool, const W16: bool>(&self, p: [&[f64; GROUP]; 3], best_side: &[f64; GROUP], slack: &[f64; GROUP]) -> u32 {
         let mut bound = [0.0; GROUP];
         for i in 0..GROUP {
             bound[i] = self.lower(&[p[0][i], p[1][i], p[2][i]], slack[i]);
+        }
+        if W16 {
+            // SAFETY: W16 is set only in the build compiled for AVX-512 F
+            return unsafe { lanes_le64_512(&bound, best_side) };
         }
         lanes_le64::<AVX>(&bound, best_side)
     }
@@ -560,6 +565,7 @@ fn build_seq(items: &mut [Item], first: u32, depth: usize, known: Option<Known>,
 }
 
 /// A subtree built in parallel: built sequentially (nodes indexed from 0), or split in two.
+#[cfg_attr(test, derive(Clone))]
 enum Part {
     Seq(Aabb, Child, Vec<Node>),
     Split(Aabb, Box<Part>, Box<Part>),
@@ -588,7 +594,41 @@ impl Part {
             Part::Seq(b, _, _) | Part::Split(b, _, _) => *b,
         }
     }
+    /// The number of nodes of the subtree.
+    fn len(&self) -> usize {
+        match self {
+            Part::Seq(_, _, nodes) => nodes.len(),
+            Part::Split(_, l, r) => 1 + l.len() + r.len(),
+        }
+    }
+
+    /// Write the subtree's nodes into `out` (exactly [`Part::len`] of them, the first at
+    /// index `at` of the tree), depth first: the order and nodes of [`Part::flatten`], the
+    /// two halves of a split written in parallel; its reference.
+    fn flatten_into(self, out: &mut [Node], at: u32) -> Child {
+        debug_assert_eq!(out.len(), self.len());
+        match self {
+            Part::Seq(_, c, nodes) => {
+                let shift = |c: Child| if c.count == 0 { Child { index: c.index + at, count: 0 } } else { c };
+                for (o, n) in out.iter_mut().zip(&nodes) {
+                    *o = Node { child: [shift(n.child[0]), shift(n.child[1])], ..*n };
+                }
+                shift(c)
+            }
+            Part::Split(_, l, r) => {
+                let (lb, rb) = (l.bounds(), r.bounds());
+                let nl = l.len();
+                let (head, rest) = out.split_at_mut(1);
+                let (lo, ro) = rest.split_at_mut(nl);
+                let (lc, rc) = rayon::join(|| l.flatten_into(lo, at + 1), || r.flatten_into(ro, at + 1 + nl as u32));
+                head[0] = node_of(&lb, &rb, lc, rc);
+                Child { index: at, count: 0 }
+            }
+        }
+    }
+
     /// Append the subtree's nodes to `out` (depth first); its reference.
+    #[cfg(test)]
     fn flatten(self, out: &mut Vec<Node>) -> Child {
         match self {
             Part::Seq(_, c, nodes) => {
@@ -623,6 +663,83 @@ fn child_distances2(p: &V3, n: &Node) -> [f64; 2] {
     d
 }
 
+/// The build's items of `n` triangles (corners `corner(i)`): index, box and centroid.
+/// Their buffer's capacity is a multiple of 9 items (720 bytes, 10 slots' corners), so
+/// that [`corners_over_items`] can reuse it.
+fn build_items(n: usize, corner: impl Fn(usize) -> [V3; 3] + Sync) -> Vec<Item> {
+    use rayon::prelude::*;
+    // `with_capacity` gives exactly the capacity asked for, and `par_extend` of an
+    // exact-length iterator within it does not reallocate
+    let mut items = Vec::with_capacity(n.div_ceil(9) * 9);
+    items.par_extend((0..n).into_par_iter().map(|i| {
+        let c = &corner(i);
+        let mut lo = c[0];
+        let mut hi = c[0];
+        for v in &c[1..] {
+            for k in 0..3 {
+                lo[k] = lo[k].min(v[k]);
+                hi[k] = hi[k].max(v[k]);
+            }
+        }
+        let centroid = [(c[0][0] + c[1][0] + c[2][0]) / 3.0, (c[0][1] + c[1][1] + c[2][1]) / 3.0, (c[0][2] + c[1][2] + c[2][2]) / 3.0];
+        Item { tri: i as u32, centroid, lo, hi }
+    }));
+    items
+}
+
+const _: () = assert!(std::mem::size_of::<Item>() == 80 && std::mem::size_of::<[V3; 3]>() == 72 && std::mem::align_of::<Item>() == std::mem::align_of::<[V3; 3]>());
+
+/// The slots' corners (`corner(order[s])` for slot s) written over the items' buffer,
+/// which the build no longer reads: 72 of each item's 80 bytes, front to back, in
+/// parallel. Saves a fresh 72 MB at 1 M triangles (18 k page faults, each a kernel
+/// entry and a page cleared) and the release of the items' 80 MB. When the buffer's
+/// size is not a whole number of corner triples (not from [`build_items`]), a new
+/// vector, the same values.
+fn corners_over_items(items: Vec<Item>, order: &[u32], corner: &(impl Fn(usize) -> [V3; 3] + Sync)) -> Vec<[V3; 3]> {
+    use rayon::prelude::*;
+    let n = order.len();
+    let bytes = items.capacity() * std::mem::size_of::<Item>();
+    if items.len() != n || bytes % std::mem::size_of::<[V3; 3]>() != 0 {
+        return order.par_iter().map(|&t| corner(t as usize)).collect();
+    }
+    let cap = bytes / std::mem::size_of::<[V3; 3]>();
+    let mut items = std::mem::ManuallyDrop::new(items);
+    let ptr = items.as_mut_ptr() as *mut std::mem::MaybeUninit<[V3; 3]>;
+    // SAFETY: the buffer holds `cap` >= n corner triples (its bytes, aligned alike, checked
+    // above); the items are `Copy` (nothing to drop) and never read again (`items` is
+    // forgotten); each element is written once, through a `MaybeUninit` (the items'
+    // padding bytes are not read)
+    let out = unsafe { std::slice::from_raw_parts_mut(ptr, n) };
+    out.par_iter_mut().zip(order.par_iter()).for_each(|(o, &t)| {
+        o.write(corner(t as usize));
+    });
+    // SAFETY: the first n elements are written; the allocation's size is cap * 72 bytes
+    // and its alignment that of the corners (the same as the items')
+    unsafe { Vec::from_raw_parts(ptr as *mut [V3; 3], n, cap) }
+}
+
+/// (The items' former collection, kept for the in-place test.)
+#[cfg(test)]
+fn build_items_plain(n: usize, corner: impl Fn(usize) -> [V3; 3] + Sync) -> Vec<Item> {
+    use rayon::prelude::*;
+    (0..n)
+        .into_par_iter()
+        .map(|i| {
+            let c = &corner(i);
+            let mut lo = c[0];
+            let mut hi = c[0];
+            for v in &c[1..] {
+                for k in 0..3 {
+                    lo[k] = lo[k].min(v[k]);
+                    hi[k] = hi[k].max(v[k]);
+                }
+            }
+            let centroid = [(c[0][0] + c[1][0] + c[2][0]) / 3.0, (c[0][1] + c[1][1] + c[2][1]) / 3.0, (c[0][2] + c[1][2] + c[2][2]) / 3.0];
+            Item { tri: i as u32, centroid, lo, hi }
+        })
+        .collect()
+}
+
 impl Bvh {
     /// The hierarchy of the triangles `corners` (at least one).
     pub fn new(corners: &[[V3; 3]]) -> Self {
@@ -634,29 +751,15 @@ impl Bvh {
     /// corners in triangle order).
     pub fn build(n: usize, corner: impl Fn(usize) -> [V3; 3] + Sync) -> Self {
         use rayon::prelude::*;
-        let mut items: Vec<Item> = (0..n)
-            .into_par_iter()
-            .map(|i| {
-                let c = &corner(i);
-                let mut lo = c[0];
-                let mut hi = c[0];
-                for v in &c[1..] {
-                    for k in 0..3 {
-                        lo[k] = lo[k].min(v[k]);
-                        hi[k] = hi[k].max(v[k]);
-                    }
-                }
-                let centroid = [(c[0][0] + c[1][0] + c[2][0]) / 3.0, (c[0][1] + c[1][1] + c[2][1]) / 3.0, (c[0][2] + c[1][2] + c[2][2]) / 3.0];
-                Item { tri: i as u32, centroid, lo, hi }
-            })
-            .collect();
+        let mut items = build_items(n, &corner);
         let part = build_par(&mut items, 0, 0, None);
         let b = part.bounds();
-        let mut nodes = Vec::with_capacity(n / 2);
-        let root = part.flatten(&mut nodes);
-        nodes.shrink_to_fit();
-        let order: Vec<u32> = items.iter().map(|it| it.tri).collect();
-        let corners: Vec<[V3; 3]> = order.par_iter().map(|&t| corner(t as usize)).collect();
+        // the nodes written in place by subtrees in parallel (zeroed first: fresh pages,
+        // every node then written once)
+        let mut nodes = vec![Node { lo: [[0.0f32; 2]; 3], hi: [[0.0f32; 2]; 3], child: [Child { index: 0, count: 0 }; 2] }; part.len()];
+        let root = part.flatten_into(&mut nodes, 0);
+        let order: Vec<u32> = items.par_iter().map(|it| it.tri).collect();
+        let corners = corners_over_items(items, &order, &corner);
         let bounds = corners.par_iter().map(Bound::of).collect();
         // the bound's data and evaluation are exact to about 1e-15 of the coordinates'
         // size (points are compared within the same size, see `slack_at`)
@@ -852,7 +955,8 @@ impl Bvh {
     /// where the lanes' masks are counted (`count_ones`, `is_power_of_two`) instead of
     /// about a dozen. With AVX-512 (F and VL) it is compiled for that: the eight lanes'
     /// f64 lower bounds and exact tests in one vector each instead of two (the group
-    /// query alone, 1 M scan points, one thread: 4-14 % less CPU than the AVX2 build).
+    /// query alone, 1 M scan points, one thread: 4-14 % less CPU than the AVX2 build),
+    /// and a node's two children's box tests in one 16-lane vector (`child_boxes16`).
     /// Rust never fuses a multiply and an add unless told to (`mul_add`; AVX-512 enables
     /// the FMA instructions, none is emitted here), so every build gives the same bits
     /// (tested: each build the processor runs against the others).
@@ -875,21 +979,23 @@ impl Bvh {
             // SAFETY: the features were detected on this processor
             return unsafe { self.nearest_group_avx2(ps, bound2, hints, best) };
         }
-        self.nearest_group_impl::<false>(ps, bound2, hints, best)
+        self.nearest_group_impl::<false, false>(ps, bound2, hints, best)
     }
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,bmi1,popcnt")]
     unsafe fn nearest_group_avx2(&self, ps: &[V3], bound2: f64, hints: &[u32], best: &mut [Option<Nearest>]) {
-        self.nearest_group_impl::<true>(ps, bound2, hints, best)
+        self.nearest_group_impl::<true, false>(ps, bound2, hints, best)
     }
 
-    /// [`Bvh::nearest_group_impl`] compiled for AVX-512 (its lanes' masks by AVX2's
+    /// [`Bvh::nearest_group_impl`] compiled for AVX-512: a node's two children's box
+    /// tests in one 16-lane single-precision vector ([`child_boxes16`]); the other lanes'
+    /// masks by AVX2's comparisons
     /// comparisons, [`lanes_le32`], [`lanes_le64`]).
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx512f,avx512vl,avx2,bmi1,popcnt")]
     unsafe fn nearest_group_avx512(&self, ps: &[V3], bound2: f64, hints: &[u32], best: &mut [Option<Nearest>]) {
-        self.nearest_group_impl::<true>(ps, bound2, hints, best)
+        self.nearest_group_impl::<true, true>(ps, bound2, hints, best)
     }
 
     /// [`Bvh::nearest_group_from`]'s answers from every build this processor runs (plain,
@@ -897,7 +1003,7 @@ impl Bvh {
     #[cfg(test)]
     pub(crate) fn nearest_group_every_build(&self, ps: &[V3], bound2: f64, hints: &[u32], best: &[Option<Nearest>]) -> Vec<Vec<Option<Nearest>>> {
         let mut out = vec![best.to_vec()];
-        self.nearest_group_impl::<false>(ps, bound2, hints, &mut out[0]);
+        self.nearest_group_impl::<false, false>(ps, bound2, hints, &mut out[0]);
         #[cfg(target_arch = "x86_64")]
         if std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("bmi1") && std::is_x86_feature_detected!("popcnt") {
             let mut b = best.to_vec();
@@ -914,8 +1020,10 @@ impl Bvh {
         out
     }
 
+    /// `AVX`: compiled for AVX2 (see [`lanes_le32`]); `W16`: compiled for AVX-512, the
+    /// node's box tests by [`child_boxes16`].
     #[inline(always)]
-    fn nearest_group_impl<const AVX: bool>(&self, ps: &[V3], bound2: f64, hints: &[u32], best: &mut [Option<Nearest>]) {
+    fn nearest_group_impl<const AVX: bool, const W16: bool>(&self, ps: &[V3], bound2: f64, hints: &[u32], best: &mut [Option<Nearest>]) {
         let g = ps.len();
         assert!(g <= GROUP && best.len() == g);
         // per lane: coordinates (SoA), the best squared distance, the start's slot
@@ -929,6 +1037,9 @@ impl Bvh {
         let (mut qx, mut qy, mut qz) = ([0.0f32; GROUP], [0.0f32; GROUP], [0.0f32; GROUP]);
         let mut err2 = [0.0f64; GROUP];
         let mut bw = [f32::NEG_INFINITY; GROUP];
+        // the lanes in single precision twice over (lanes 0-7 against child 0, 8-15
+        // against child 1: [`child_boxes16`])
+        let mut q16 = [[0.0f32; 2 * GROUP]; 3];
         let size = self.size;
         let mut all = 0u32;
         for i in 0..g {
@@ -957,6 +1068,9 @@ impl Bvh {
                 _ => best[i] = None,
             }
             (qx[i], qy[i], qz[i]) = (px[i] as f32, py[i] as f32, pz[i] as f32);
+            for (q, v) in q16.iter_mut().zip([qx[i], qy[i], qz[i]]) {
+                (q[i], q[i + GROUP]) = (v, v);
+            }
             bs[i] = Bound::best_side(bd[i]);
             err2[i] = widen_err2(F32_ERR * (size + px[i].abs().max(py[i].abs()).max(pz[i].abs())));
             bw[i] = widen(bd[i], err2[i]);
@@ -1005,10 +1119,20 @@ impl Bvh {
                 }
             }
             let (glo, ghi) = (glo.map(|x| f32_out(x, false)), ghi.map(|x| f32_out(x, true)));
+            // the box's ends as one vector: lanes 0-5 the high ends against the nodes'
+            // low bounds, lanes 6-11 the low ends against their high bounds (the node's layout)
+            let g16: [f32; 16] = [ghi[0], ghi[0], ghi[1], ghi[1], ghi[2], ghi[2], glo[0], glo[0], glo[1], glo[1], glo[2], glo[2], 0.0, 0.0, 0.0, 0.0];
             while cur.count == 0 {
                 let n = &self.nodes[cur.index as usize];
-                let meets = |c: usize| (0..3).all(|k| n.lo[k][c] <= ghi[k] && n.hi[k][c] >= glo[k]);
-                match (meets(0), meets(1)) {
+                let (m0, m1) = if W16 {
+                    // SAFETY: W16 is set only in the build compiled for AVX-512 F
+                    unsafe { boxes_meet16(n, &g16) }
+                } else {
+                    // every comparison made (no short cut): no branch to mispredict
+                    let meets = |c: usize| (0..3).fold(true, |a, k| a & (n.lo[k][c] <= ghi[k]) & (n.hi[k][c] >= glo[k]));
+                    (meets(0), meets(1))
+                };
+                match (m0, m1) {
                     (true, true) => break,
                     (true, false) => cur = n.child[0],
                     (false, true) => cur = n.child[1],
@@ -1027,7 +1151,7 @@ impl Bvh {
                         let i = mask.trailing_zeros() as usize;
                         if self.bounds[slot as usize].may_beat(&ps[i], bd[i], slack[i]) { mask } else { 0 }
                     } else {
-                        mask & self.bounds[slot as usize].may_beat_lanes_in::<AVX>([&px, &py, &pz], &bs, &slack)
+                        mask & self.bounds[slot as usize].may_beat_lanes_in::<AVX, W16>([&px, &py, &pz], &bs, &slack)
                     };
                     if m.count_ones() >= VECTOR_EXACT {
                         // many lanes: their exact tests at once, the same bits
@@ -1064,19 +1188,27 @@ impl Bvh {
             } else {
                 let n = &self.nodes[cur.index as usize];
                 let (mut d0, mut d1) = ([0.0f32; GROUP], [0.0f32; GROUP]);
-                for i in 0..GROUP {
-                    let q = [qx[i], qy[i], qz[i]];
-                    let (mut a, mut b) = (0.0f32, 0.0f32);
-                    for k in 0..3 {
-                        let u = larger(larger(n.lo[k][0] - q[k], q[k] - n.hi[k][0]), 0.0);
-                        let w = larger(larger(n.lo[k][1] - q[k], q[k] - n.hi[k][1]), 0.0);
-                        a += u * u;
-                        b += w * w;
+                let (m0, m1);
+                if W16 {
+                    // SAFETY: W16 is set only in the build compiled for AVX-512 F and VL,
+                    // run only where the processor has them
+                    let m = unsafe { child_boxes16(n, &q16, &bw, &mut d0, &mut d1) };
+                    (m0, m1) = (m & mask, (m >> GROUP) & mask);
+                } else {
+                    for i in 0..GROUP {
+                        let q = [qx[i], qy[i], qz[i]];
+                        let (mut a, mut b) = (0.0f32, 0.0f32);
+                        for k in 0..3 {
+                            let u = larger(larger(n.lo[k][0] - q[k], q[k] - n.hi[k][0]), 0.0);
+                            let w = larger(larger(n.lo[k][1] - q[k], q[k] - n.hi[k][1]), 0.0);
+                            a += u * u;
+                            b += w * w;
+                        }
+                        d0[i] = a;
+                        d1[i] = b;
                     }
-                    d0[i] = a;
-                    d1[i] = b;
+                    (m0, m1) = (open32(&d0, &bw, mask), open32(&d1, &bw, mask));
                 }
-                let (m0, m1) = (open32(&d0, &bw, mask), open32(&d1, &bw, mask));
                 if m0 != 0 || m1 != 0 {
                     // the nearer child first: the one nearer to most of the open lanes (not
                     // to the first open lane: 300 k points of the torus bench, 522 M against
@@ -1113,6 +1245,72 @@ impl Bvh {
         }
     }
 }
+
+/// A node's two children's squared single-precision box distances for the [`GROUP`]
+/// lanes in one 16-lane AVX-512 vector (lanes 0-7 the lanes against child 0, 8-15 against
+/// child 1; `q` each coordinate of the lanes twice over): written to `d0` and `d1`, and
+/// the mask of those within the lanes' widened best `bw` (bits 0-7 child 0, 8-15 child 1).
+/// The arithmetic of the eight-lane loop it replaces, operation for operation
+/// (`max(max(lo - q, q - hi), 0)` squared, summed over x, y, z from 0, no fused
+/// multiply-add; `vmaxps` is [`larger`]), so the same bits: half the vector instructions.
+///
+/// # Safety
+/// The processor has AVX-512 F and VL (the caller runs compiled for them).
+#[inline(always)]
+#[allow(unused_variables)]
+unsafe fn child_boxes16(n: &Node, q: &[[f32; 2 * GROUP]; 3], bw: &[f32; GROUP], d0: &mut [f32; GROUP], d1: &mut [f32; GROUP]) -> u32 {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::*;
+        // the node's 64 bytes: lo (x0 x1 y0 y1 z0 z1), hi (the same), the children
+        let raw = _mm512_load_ps(n as *const Node as *const f32);
+        let zero = _mm512_setzero_ps();
+        let mut d = zero;
+        for k in 0..3 {
+            let (l, h) = (2 * k as i32, 6 + 2 * k as i32);
+            // child 0's value in lanes 0-7, child 1's in lanes 8-15
+            let lo = _mm512_permutexvar_ps(_mm512_set_epi32(l + 1, l + 1, l + 1, l + 1, l + 1, l + 1, l + 1, l + 1, l, l, l, l, l, l, l, l), raw);
+            let hi = _mm512_permutexvar_ps(_mm512_set_epi32(h + 1, h + 1, h + 1, h + 1, h + 1, h + 1, h + 1, h + 1, h, h, h, h, h, h, h, h), raw);
+            let qk = _mm512_loadu_ps(q[k].as_ptr());
+            let u = _mm512_max_ps(_mm512_max_ps(_mm512_sub_ps(lo, qk), _mm512_sub_ps(qk, hi)), zero);
+            d = _mm512_add_ps(d, _mm512_mul_ps(u, u));
+        }
+        let w = _mm256_loadu_ps(bw.as_ptr());
+        let w16 = _mm512_castpd_ps(_mm512_broadcast_f64x4(_mm256_castps_pd(w)));
+        let m = _mm512_cmp_ps_mask::<_CMP_LE_OQ>(d, w16) as u32;
+        _mm256_storeu_ps(d0.as_mut_ptr(), _mm512_castps512_ps256(d));
+        _mm256_storeu_ps(d1.as_mut_ptr(), _mm256_castpd_ps(_mm512_extractf64x4_pd::<1>(_mm512_castps_pd(d))));
+        m
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    unreachable!("the 16-lane box test runs only in the AVX-512 build")
+}
+
+/// Does each child's box of `n` meet the box whose ends are `g` (lanes 0-5: the high
+/// ends x x y y z z, lanes 6-11: the low ends)? All 12 comparisons of the plain test
+/// (`lo <= high end`, `hi >= low end`, per axis and child) by two AVX-512 comparisons of
+/// the node loaded as one vector: (child 0, child 1).
+///
+/// # Safety
+/// The processor has AVX-512 F.
+#[inline(always)]
+#[allow(unused_variables)]
+unsafe fn boxes_meet16(n: &Node, g: &[f32; 16]) -> (bool, bool) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::*;
+        let raw = _mm512_load_ps(n as *const Node as *const f32);
+        let gv = _mm512_loadu_ps(g.as_ptr());
+        let le = _mm512_cmp_ps_mask::<_CMP_LE_OQ>(raw, gv) as u32;
+        let ge = _mm512_cmp_ps_mask::<_CMP_GE_OQ>(raw, gv) as u32;
+        let m = (le & 0x03f) | (ge & 0xfc0);
+        (m & 0x555 == 0x555, m & 0xaaa == 0xaaa)
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    unreachable!("only in the AVX-512 build")
+}
+
+const _: () = assert!(std::mem::size_of::<Node>() == 64 && std::mem::align_of::<Node>() == 64, "child_boxes16 loads a node as one aligned vector");
 
 /// Relative rounding of a coordinate to single precision, with room: the lanes' box
 /// tests of [`Bvh::nearest_group`] run on the point rounded to f32 (the boxes are f32
@@ -1214,6 +1412,23 @@ pub(crate) fn lanes_le64<const AVX: bool>(a: &[f64; GROUP], b: &[f64; GROUP]) ->
 /// bench: 3 lanes 728 M instructions, 5 lanes 717 M, never 728 M).
 const VECTOR_EXACT: u32 = 5;
 
+/// [`lanes_le64`] by one AVX-512 comparison of the eight f64 lanes into a mask (`<=`,
+/// ordered and quiet: false for a NaN, as `<=`).
+///
+/// # Safety
+/// The processor has AVX-512 F.
+#[inline(always)]
+#[allow(unused_variables)]
+pub(crate) unsafe fn lanes_le64_512(a: &[f64; GROUP], b: &[f64; GROUP]) -> u32 {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{_mm512_cmp_pd_mask, _mm512_loadu_pd, _CMP_LE_OQ};
+        _mm512_cmp_pd_mask::<_CMP_LE_OQ>(_mm512_loadu_pd(a.as_ptr()), _mm512_loadu_pd(b.as_ptr())) as u32
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    unreachable!("only in the AVX-512 build")
+}
+
 const _: () = assert!(GROUP == 8 && LANES == GROUP, "lanes_le32 and lanes_le64 compare eight lanes");
 
 /// Points per group of [`Bvh::nearest_group`].
@@ -1238,5 +1453,54 @@ fn better(d2: f64, slot: u32, best_d2: f64, best: Option<u32>) -> bool {
     match best {
         None => d2 <= best_d2,
         Some(b) => d2 < best_d2 || (d2 == best_d2 && slot < b),
+    }
+}
+
+#[cfg(test)]
+mod flatten_tests {
+    use super::*;
+
+    /// The nodes written in parallel in place ([`Part::flatten_into`]) are those appended
+    /// one subtree after another ([`Part::flatten`]): the same nodes in the same order.
+    #[test]
+    fn the_parallel_flatten_writes_the_serial_one() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+        let n = 20 * PAR + 37;
+        let corners: Vec<[V3; 3]> = (0..n)
+            .map(|_| {
+                let a: V3 = std::array::from_fn(|_| rng.random_range(-50.0..50.0));
+                std::array::from_fn(|_| std::array::from_fn(|k| a[k] + rng.random_range(-1.0..1.0)))
+            })
+            .collect();
+        let mut items = build_items(n, |i| corners[i]);
+        let part = build_par(&mut items, 0, 0, None);
+        let mut serial = Vec::new();
+        let root_serial = part.clone().flatten(&mut serial);
+        let mut par = vec![Node { lo: [[0.0f32; 2]; 3], hi: [[0.0f32; 2]; 3], child: [Child { index: 0, count: 0 }; 2] }; part.len()];
+        let root_par = part.flatten_into(&mut par, 0);
+        assert!(matches!(build_par(&mut build_items(n, |i| corners[i]), 0, 0, None), Part::Split(..)));
+        // the corners written over the items' buffer are the plainly collected ones, the
+        // items the same whichever way collected; a buffer of another size gets a new vector
+        let order: Vec<u32> = items.iter().map(|it| it.tri).collect();
+        let want: Vec<[V3; 3]> = order.iter().map(|&t| corners[t as usize]).collect();
+        for m in [n, 1, 8, 9, 10, 17, 18, 1000] {
+            let plain = build_items_plain(m, |i| corners[i]);
+            let fresh = build_items(m, |i| corners[i]);
+            assert_eq!(fresh.capacity() % 9, 0);
+            assert!(plain.iter().zip(&fresh).all(|(a, b)| a.tri == b.tri && a.lo == b.lo && a.hi == b.hi && a.centroid == b.centroid));
+            let ord: Vec<u32> = (0..m as u32).rev().collect();
+            let w: Vec<[V3; 3]> = ord.iter().map(|&t| corners[t as usize]).collect();
+            assert_eq!(corners_over_items(fresh, &ord, &|i| corners[i]), w);
+            assert_eq!(corners_over_items(plain, &ord, &|i| corners[i]), w);
+        }
+        assert_eq!(corners_over_items(items.clone(), &order, &|i| corners[i]), want);
+        assert_eq!(root_serial, root_par);
+        assert_eq!(serial.len(), par.len());
+        for (a, b) in serial.iter().zip(&par) {
+            assert_eq!(a.child, b.child);
+            assert_eq!(a.lo.map(|x| x.map(f32::to_bits)), b.lo.map(|x| x.map(f32::to_bits)));
+            assert_eq!(a.hi.map(|x| x.map(f32::to_bits)), b.hi.map(|x| x.map(f32::to_bits)));
+        }
     }
 }

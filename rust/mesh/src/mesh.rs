@@ -53,10 +53,6 @@ pub struct TriMesh {
     pub bvh: Bvh,
 }
 
-fn vertex(v: &[f64], i: usize) -> V3 {
-    [v[3 * i], v[3 * i + 1], v[3 * i + 2]]
-}
-
 impl TriMesh {
     /// Build from flat vertex coordinates (3 per vertex) and flat vertex indices (3 per
     /// triangle); see the module docs for what is refused.
@@ -74,22 +70,23 @@ impl TriMesh {
         }
         // copied first, then checked: the copy is what the mesh uses (the caller's arrays
         // may be read in place while other threads run)
-        let verts: Vec<V3> = (0..nv).map(|i| vertex(vertices, i)).collect();
-        let tris: Vec<[u32; 3]> = triangles.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect();
-        if let Some(pos) = verts.as_flattened().iter().position(|v| !v.is_finite()) {
+        // (the copies and checks in parallel; the first bad element is named, as by a scan)
+        use rayon::prelude::*;
+        let verts: Vec<V3> = vertices.par_chunks_exact(3).map(|v| [v[0], v[1], v[2]]).collect();
+        let tris: Vec<[u32; 3]> = triangles.par_chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect();
+        if let Some(pos) = verts.as_flattened().par_iter().position_first(|v| !v.is_finite()) {
             return Err(GkError::invalid(format!(
                 "mesh: vertex {} has a non-finite coordinate ({}); the model is damaged",
                 pos / 3,
                 verts.as_flattened()[pos]
             )));
         }
-        if let Some((i, &bad)) = tris.iter().enumerate().find_map(|(i, t)| t.iter().find(|&&k| k as usize >= nv).map(|b| (i, b))) {
+        if let Some((i, &bad)) = tris.par_iter().enumerate().find_map_first(|(i, t)| t.iter().find(|&&k| k as usize >= nv).map(|b| (i, b))) {
             return Err(GkError::invalid(format!("mesh: triangle {i} names vertex {bad}, but there are {nv} vertices")));
         }
         // per triangle (in parallel): the unit normal and twice the area, or ([0; 3], -1)
         // when degenerate; the area summed in triangle order
         let (mut normals, twice_area): (Vec<V3>, Vec<f64>) = {
-            use rayon::prelude::*;
             tris.par_iter()
                 .map(|t| {
                     let (a, b, c) = (verts[t[0] as usize], verts[t[1] as usize], verts[t[2] as usize]);
@@ -122,18 +119,29 @@ impl TriMesh {
                 first.join(", ")
             )));
         }
-        let edges = sorted_edges(&tris, nv);
-        let topology = topology(&verts, &tris, &edges);
-        if topology.flipped {
-            for n in normals.iter_mut() {
-                *n = scale(*n, -1.0);
-            }
-        }
-        let (vertex_normals, edge_normals) = pseudonormals(&verts, &tris, &normals, &edges);
-        let bvh = Bvh::build(tris.len(), |i| {
-            let t = &tris[i];
-            [verts[t[0] as usize], verts[t[1] as usize], verts[t[2] as usize]]
-        });
+        // the topology and pseudonormals (partly serial: the edges' counting sort, the
+        // topology loop, the edge normals' scatter) beside the tree's build, which needs
+        // neither: the idle core of the tree's serial stretches runs them. Each side is
+        // computed as alone (no shared state), so the same bits
+        let ((topology, normals, vertex_normals, edge_normals), bvh) = rayon::join(
+            || {
+                let edges = sorted_edges(&tris, nv);
+                let topology = topology(&verts, &tris, &edges);
+                if topology.flipped {
+                    for n in normals.iter_mut() {
+                        *n = scale(*n, -1.0);
+                    }
+                }
+                let (vertex_normals, edge_normals) = pseudonormals(&verts, &tris, &normals, &edges);
+                (topology, normals, vertex_normals, edge_normals)
+            },
+            || {
+                Bvh::build(tris.len(), |i| {
+                    let t = &tris[i];
+                    [verts[t[0] as usize], verts[t[1] as usize], verts[t[2] as usize]]
+                })
+            },
+        );
         Ok(Self { vertices: verts, triangles: tris, face_normals: normals, vertex_normals, edge_normals, area, topology, bvh })
     }
 

@@ -97,6 +97,30 @@ fn bad_meshes_are_refused() {
     let (v, t) = box_mesh([1.0, 1.0, 1.0]);
     let mesh = TriMesh::new(&v, &t).unwrap();
     assert_eq!(mesh.distances(&[f64::NAN, 0.0, 0.0], &Query::default()).unwrap_err().kind, ErrorKind::InvalidInput);
+    // the first bad point is named, however many blocks the parallel check reads (bad
+    // points in several blocks, an infinity after the first NaN); a ragged buffer is refused
+    let mut pts: Vec<f64> = (0..3 * 20_000).map(|i| (i % 7) as f64 * 0.1).collect();
+    pts[3 * 15_000 + 2] = f64::NAN;
+    pts[3 * 9_001 + 1] = f64::INFINITY;
+    pts[3 * 19_000] = f64::NAN;
+    let e = mesh.distances(&pts, &Query::default()).unwrap_err();
+    assert_eq!(e.kind, ErrorKind::InvalidInput);
+    assert!(e.message.contains("point 9001 "), "{}", e.message);
+    pts[3 * 5] = f64::NEG_INFINITY;
+    assert!(mesh.distances(&pts, &Query::default()).unwrap_err().message.contains("point 5 "));
+    assert_eq!(mesh.distances(&[0.0; 4], &Query::default()).unwrap_err().kind, ErrorKind::InvalidInput);
+    // bad vertices and triangle indices: the first is named
+    let mut v = v.clone();
+    let n_v = v.len() / 3;
+    v[3 * (n_v - 1)] = f64::NAN;
+    v[3 * 2 + 1] = f64::INFINITY;
+    assert!(TriMesh::new(&v, &t).unwrap_err().message.contains("vertex 2 "));
+    let (v, mut t) = box_mesh([1.0, 1.0, 1.0]);
+    let last = t.len() - 1;
+    t[last] = 99;
+    t[4] = 77;
+    let e = TriMesh::new(&v, &t).unwrap_err();
+    assert!(e.message.contains("triangle 1 names vertex 77"), "{}", e.message);
 }
 
 #[test]
@@ -736,6 +760,11 @@ proptest! {
         if std::is_x86_feature_detected!("avx2") {
             prop_assert_eq!(crate::bvh::lanes_le64::<true>(&a, &b), want64);
             prop_assert_eq!(crate::bvh::lanes_le32::<true>(&a32, &b32), want32);
+        }
+        #[cfg(target_arch = "x86_64")]
+        if std::is_x86_feature_detected!("avx512f") {
+            // SAFETY: the processor has AVX-512 F
+            prop_assert_eq!(unsafe { crate::bvh::lanes_le64_512(&a, &b) }, want64);
         }
     }
 }
