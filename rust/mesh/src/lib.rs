@@ -28,7 +28,7 @@ pub mod minimax;
 pub mod rigid;
 
 pub use distance::{Distances, Query};
-pub use mesh::TriMesh;
+pub use mesh::{TriMesh, VertexIndex};
 
 #[cfg(test)]
 mod tests;

@@ -36,6 +36,33 @@ pub struct Topology {
     pub volume: f64,
 }
 
+/// A vertex index as given to [`TriMesh::new`]: `u32`, or `i64` (numpy's indices) or `i32`.
+pub trait VertexIndex: Copy + Sync + std::fmt::Display {
+    /// The index as u32; `u32::MAX` (never a vertex: at most 2^32 - 2) when out of range.
+    fn to_u32(self) -> u32;
+}
+
+impl VertexIndex for u32 {
+    #[inline(always)]
+    fn to_u32(self) -> u32 {
+        self
+    }
+}
+
+impl VertexIndex for i64 {
+    #[inline(always)]
+    fn to_u32(self) -> u32 {
+        u32::try_from(self).unwrap_or(u32::MAX)
+    }
+}
+
+impl VertexIndex for i32 {
+    #[inline(always)]
+    fn to_u32(self) -> u32 {
+        u32::try_from(self).unwrap_or(u32::MAX)
+    }
+}
+
 /// A triangle mesh ready for distance queries.
 #[derive(Debug, Clone)]
 pub struct TriMesh {
@@ -55,8 +82,9 @@ pub struct TriMesh {
 
 impl TriMesh {
     /// Build from flat vertex coordinates (3 per vertex) and flat vertex indices (3 per
-    /// triangle); see the module docs for what is refused.
-    pub fn new(vertices: &[f64], triangles: &[u32]) -> Result<Self> {
+    /// triangle; `u32`, or `i64` as numpy gives them, converted in the parallel copy);
+    /// see the module docs for what is refused.
+    pub fn new<I: VertexIndex>(vertices: &[f64], triangles: &[I]) -> Result<Self> {
         if vertices.len() % 3 != 0 || triangles.len() % 3 != 0 {
             return Err(GkError::invalid("mesh: vertices and triangles must be (n, 3) arrays"));
         }
@@ -73,7 +101,8 @@ impl TriMesh {
         // (the copies and checks in parallel; the first bad element is named, as by a scan)
         use rayon::prelude::*;
         let verts: Vec<V3> = vertices.par_chunks_exact(3).map(|v| [v[0], v[1], v[2]]).collect();
-        let tris: Vec<[u32; 3]> = triangles.par_chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect();
+        // an index that is no u32 is read as u32::MAX (>= nv: refused below, by its value)
+        let tris: Vec<[u32; 3]> = triangles.par_chunks_exact(3).map(|t| [t[0].to_u32(), t[1].to_u32(), t[2].to_u32()]).collect();
         if let Some(pos) = verts.as_flattened().par_iter().position_first(|v| !v.is_finite()) {
             return Err(GkError::invalid(format!(
                 "mesh: vertex {} has a non-finite coordinate ({}); the model is damaged",
@@ -81,7 +110,8 @@ impl TriMesh {
                 verts.as_flattened()[pos]
             )));
         }
-        if let Some((i, &bad)) = tris.par_iter().enumerate().find_map_first(|(i, t)| t.iter().find(|&&k| k as usize >= nv).map(|b| (i, b))) {
+        if let Some((i, k)) = tris.par_iter().enumerate().find_map_first(|(i, t)| t.iter().position(|&k| k as usize >= nv).map(|k| (i, k))) {
+            let bad = triangles[3 * i + k];
             return Err(GkError::invalid(format!("mesh: triangle {i} names vertex {bad}, but there are {nv} vertices")));
         }
         // per triangle (in parallel): the unit normal and twice the area, or ([0; 3], -1)

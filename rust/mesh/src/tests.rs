@@ -92,7 +92,7 @@ fn bad_meshes_are_refused() {
     assert!(e.message.contains("vertex 1"));
     let e = TriMesh::new(&[0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 2.0, 1.0, 0.0], &[0, 1, 5]).unwrap_err();
     assert_eq!(e.kind, ErrorKind::InvalidInput);
-    let e = TriMesh::new(&[0.0; 9], &[]).unwrap_err();
+    let e = TriMesh::new(&[0.0; 9], &[] as &[u32]).unwrap_err();
     assert!(e.message.contains("no triangles"));
     let (v, t) = box_mesh([1.0, 1.0, 1.0]);
     let mesh = TriMesh::new(&v, &t).unwrap();
@@ -121,6 +121,19 @@ fn bad_meshes_are_refused() {
     t[4] = 77;
     let e = TriMesh::new(&v, &t).unwrap_err();
     assert!(e.message.contains("triangle 1 names vertex 77"), "{}", e.message);
+    // i64 indices (numpy's): the same mesh as from u32; one no u32 can hold is named by its value
+    let (v, t) = box_mesh([1.0, 2.0, 3.0]);
+    let wide: Vec<i64> = t.iter().map(|&k| k as i64).collect();
+    let (a, b) = (TriMesh::new(&v, &t).unwrap(), TriMesh::new(&v, &wide).unwrap());
+    assert_eq!((a.triangles.clone(), a.bvh.order.clone(), a.edge_normals.clone(), a.topology.clone()), (b.triangles, b.bvh.order, b.edge_normals, b.topology));
+    for (at, bad) in [(5usize, -1i64), (7, 1i64 << 32), (4, u32::MAX as i64), (8, i64::MIN)] {
+        let mut w = wide.clone();
+        w[at] = bad;
+        w[10] = -2;
+        let e = TriMesh::new(&v, &w).unwrap_err();
+        assert_eq!(e.kind, ErrorKind::InvalidInput);
+        assert!(e.message.contains(&format!("triangle {} names vertex {bad},", at / 3)), "{}", e.message);
+    }
 }
 
 #[test]

@@ -68,17 +68,15 @@ impl Mesh {
     /// Build from (n, 3) float64 vertices and (m, 3) int64 vertex indices.
     #[new]
     fn new(py: Python<'_>, vertices: PyReadonlyArray2<'_, f64>, triangles: PyReadonlyArray2<'_, i64>) -> PyResult<Self> {
-        // read in place (TriMesh::new copies the vertices before checking them)
+        // read in place (TriMesh::new copies the vertices and indices before checking them)
         let v = rows(py, &vertices, 3, "vertices")?;
         if triangles.shape()[1] != 3 {
             return Err(invalid(format!("triangles: expected an (m, 3) array, got shape {:?}", triangles.shape())));
         }
+        // the indices read in place too: TriMesh::new converts them to u32 in its parallel
+        // copy (without the GIL), refusing an index out of range by its value
         let t = triangles.as_slice().map_err(|_| invalid("triangles: array must be C-contiguous"))?;
-        let t: Vec<u32> = t
-            .iter()
-            .map(|&i| u32::try_from(i).map_err(|_| invalid(format!("triangles: vertex index {i} out of range"))))
-            .collect::<PyResult<_>>()?;
-        let mesh = run(py, || TriMesh::new(v, &t))?;
+        let mesh = run(py, || TriMesh::new(v, t))?;
         Ok(Self { mesh: Arc::new(mesh) })
     }
 
