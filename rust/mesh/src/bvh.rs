@@ -663,6 +663,21 @@ fn child_distances2(p: &V3, n: &Node) -> [f64; 2] {
     d
 }
 
+/// The build item of triangle `i` with corners `c`: its index, box and centroid.
+#[inline(always)]
+fn item_of(i: usize, c: &[V3; 3]) -> Item {
+    let mut lo = c[0];
+    let mut hi = c[0];
+    for v in &c[1..] {
+        for k in 0..3 {
+            lo[k] = lo[k].min(v[k]);
+            hi[k] = hi[k].max(v[k]);
+        }
+    }
+    let centroid = [(c[0][0] + c[1][0] + c[2][0]) / 3.0, (c[0][1] + c[1][1] + c[2][1]) / 3.0, (c[0][2] + c[1][2] + c[2][2]) / 3.0];
+    Item { tri: i as u32, centroid, lo, hi }
+}
+
 /// The build's items of `n` triangles (corners `corner(i)`): index, box and centroid.
 /// Their buffer's capacity is a multiple of 9 items (720 bytes, 10 slots' corners), so
 /// that [`corners_over_items`] can reuse it.
@@ -671,19 +686,7 @@ fn build_items(n: usize, corner: impl Fn(usize) -> [V3; 3] + Sync) -> Vec<Item> 
     // `with_capacity` gives exactly the capacity asked for, and `par_extend` of an
     // exact-length iterator within it does not reallocate
     let mut items = Vec::with_capacity(n.div_ceil(9) * 9);
-    items.par_extend((0..n).into_par_iter().map(|i| {
-        let c = &corner(i);
-        let mut lo = c[0];
-        let mut hi = c[0];
-        for v in &c[1..] {
-            for k in 0..3 {
-                lo[k] = lo[k].min(v[k]);
-                hi[k] = hi[k].max(v[k]);
-            }
-        }
-        let centroid = [(c[0][0] + c[1][0] + c[2][0]) / 3.0, (c[0][1] + c[1][1] + c[2][1]) / 3.0, (c[0][2] + c[1][2] + c[2][2]) / 3.0];
-        Item { tri: i as u32, centroid, lo, hi }
-    }));
+    items.par_extend((0..n).into_par_iter().map(|i| item_of(i, &corner(i))));
     items
 }
 
@@ -724,19 +727,7 @@ fn build_items_plain(n: usize, corner: impl Fn(usize) -> [V3; 3] + Sync) -> Vec<
     use rayon::prelude::*;
     (0..n)
         .into_par_iter()
-        .map(|i| {
-            let c = &corner(i);
-            let mut lo = c[0];
-            let mut hi = c[0];
-            for v in &c[1..] {
-                for k in 0..3 {
-                    lo[k] = lo[k].min(v[k]);
-                    hi[k] = hi[k].max(v[k]);
-                }
-            }
-            let centroid = [(c[0][0] + c[1][0] + c[2][0]) / 3.0, (c[0][1] + c[1][1] + c[2][1]) / 3.0, (c[0][2] + c[1][2] + c[2][2]) / 3.0];
-            Item { tri: i as u32, centroid, lo, hi }
-        })
+        .map(|i| item_of(i, &corner(i)))
         .collect()
 }
 
