@@ -67,6 +67,11 @@ pub struct Node {
     pub child: [Child; 2],
 }
 
+impl Node {
+    /// A node of zeros: the place of one not yet written.
+    const EMPTY: Node = Node { lo: [[0.0f32; 2]; 3], hi: [[0.0f32; 2]; 3], child: [Child { index: 0, count: 0 }; 2] };
+}
+
 /// `x` rounded down (`up == false`) or up to an f32: the box stored in single precision
 /// still holds every corner exactly (a conservative box, so its distance is a lower bound).
 #[inline]
@@ -553,7 +558,7 @@ fn build_seq(items: &mut [Item], first: u32, depth: usize, known: Option<Known>,
     let (mid, parts) = split(items, depth, known);
     let (left, right) = items.split_at_mut(mid);
     let at = out.len();
-    out.push(Node { lo: [[0.0f32; 2]; 3], hi: [[0.0f32; 2]; 3], child: [Child { index: 0, count: 0 }; 2] });
+    out.push(Node::EMPTY);
     let (lk, rk) = match parts {
         Some([l, r]) => (Some(l), Some(r)),
         None => (None, None),
@@ -640,7 +645,7 @@ impl Part {
             Part::Split(_, l, r) => {
                 let (lb, rb) = (l.bounds(), r.bounds());
                 let at = out.len();
-                out.push(Node { lo: [[0.0f32; 2]; 3], hi: [[0.0f32; 2]; 3], child: [Child { index: 0, count: 0 }; 2] });
+                out.push(Node::EMPTY);
                 let lc = l.flatten(out);
                 let rc = r.flatten(out);
                 out[at] = node_of(&lb, &rb, lc, rc);
@@ -747,7 +752,7 @@ impl Bvh {
         let b = part.bounds();
         // the nodes written in place by subtrees in parallel (zeroed first: fresh pages,
         // every node then written once)
-        let mut nodes = vec![Node { lo: [[0.0f32; 2]; 3], hi: [[0.0f32; 2]; 3], child: [Child { index: 0, count: 0 }; 2] }; part.len()];
+        let mut nodes = vec![Node::EMPTY; part.len()];
         let root = part.flatten_into(&mut nodes, 0);
         let order: Vec<u32> = items.par_iter().map(|it| it.tri).collect();
         let corners = corners_over_items(items, &order, &corner);
@@ -980,9 +985,9 @@ impl Bvh {
     }
 
     /// [`Bvh::nearest_group_impl`] compiled for AVX-512: a node's two children's box
-    /// tests in one 16-lane single-precision vector ([`child_boxes16`]); the other lanes'
-    /// masks by AVX2's comparisons
-    /// comparisons, [`lanes_le32`], [`lanes_le64`]).
+    /// tests in one 16-lane single-precision vector ([`child_boxes16`]), the descent's box
+    /// test in two ([`boxes_meet16`]) and the leaf bounds' comparison into a mask
+    /// ([`lanes_le64_512`]); the other lanes' masks by AVX2's comparisons ([`lanes_le32`]).
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx512f,avx512vl,avx2,bmi1,popcnt")]
     unsafe fn nearest_group_avx512(&self, ps: &[V3], bound2: f64, hints: &[u32], best: &mut [Option<Nearest>]) {
@@ -1468,7 +1473,7 @@ mod flatten_tests {
         let part = build_par(&mut items, 0, 0, None);
         let mut serial = Vec::new();
         let root_serial = part.clone().flatten(&mut serial);
-        let mut par = vec![Node { lo: [[0.0f32; 2]; 3], hi: [[0.0f32; 2]; 3], child: [Child { index: 0, count: 0 }; 2] }; part.len()];
+        let mut par = vec![Node::EMPTY; part.len()];
         let root_par = part.flatten_into(&mut par, 0);
         assert!(matches!(build_par(&mut build_items(n, |i| corners[i]), 0, 0, None), Part::Split(..)));
         // the corners written over the items' buffer are the plainly collected ones, the

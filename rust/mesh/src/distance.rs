@@ -292,7 +292,8 @@ impl TriMesh {
 /// depends on it. Their own order is None rather than the identity permutation: 4 bytes
 /// a point less to allocate, fill and read (56 MB at 14 M points).
 pub fn query_order(points: &[f64]) -> Option<Vec<u32>> {
-    query_order_in(points, bounds(points))
+    let (lo, hi, _) = bounds_finite(points);
+    query_order_in(points, (lo, hi))
 }
 
 /// [`query_order`] of points whose bounding box is `(lo, hi)`.
@@ -344,26 +345,6 @@ fn bounds_finite(points: &[f64]) -> (V3, V3, bool) {
         )
 }
 
-/// The bounding box of the points (flat (n, 3)).
-fn bounds(points: &[f64]) -> (V3, V3) {
-    points
-        .par_chunks(3 * 4096)
-        .map(|c| {
-            let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
-            for p in c.chunks_exact(3) {
-                for k in 0..3 {
-                    lo[k] = lo[k].min(p[k]);
-                    hi[k] = hi[k].max(p[k]);
-                }
-            }
-            (lo, hi)
-        })
-        .reduce(
-            || ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]),
-            |a, b| ([a.0[0].min(b.0[0]), a.0[1].min(b.0[1]), a.0[2].min(b.0[2])], [a.1[0].max(b.1[0]), a.1[1].max(b.1[1]), a.1[2].max(b.1[2])]),
-        )
-}
-
 /// Spread the low 21 bits of `v` to every third bit.
 #[inline]
 fn spread(v: u64) -> u64 {
@@ -381,7 +362,7 @@ fn spread(v: u64) -> u64 {
 /// the part of the tree its predecessor read; the order depends on the points only.
 pub fn morton_order(points: &[f64]) -> Vec<u32> {
     let n = points.len() / 3;
-    let (lo, hi) = bounds(points);
+    let (lo, hi, _) = bounds_finite(points);
     let ext = (0..3).map(|k| hi[k] - lo[k]).fold(0.0, f64::max);
     let scale = if ext > 0.0 { ((1u64 << 21) - 1) as f64 / ext } else { 0.0 };
     let mut keys: Vec<(u64, u32)> = points
