@@ -94,7 +94,8 @@ fn mesh_hash(m: &TriMesh) -> u64 {
     (b.root.index, b.root.count, &b.order).hash(&mut h);
     let f = |x: &f64| x.to_bits();
     let bits = b.root_lo.iter().chain(&b.root_hi).chain(b.corners.iter().flatten().flatten());
-    bits.chain(b.bounds.iter().flat_map(|q| q.n.iter().chain(q.m.iter().flatten()).chain(&q.w))).map(f).for_each(|x| x.hash(&mut h));
+    bits.map(f).for_each(|x| x.hash(&mut h));
+    b.bounds.iter().flat_map(|q| q.n.iter().chain(q.m.iter().flatten()).chain(&q.w)).for_each(|x| x.to_bits().hash(&mut h));
     (b.slack.to_bits(), b.size.to_bits(), m.area.to_bits(), format!("{:?}", m.topology)).hash(&mut h);
     m.face_normals.iter().chain(&m.vertex_normals).chain(m.edge_normals.iter().flatten()).flatten().map(f).for_each(|x| x.hash(&mut h));
     h.finish()

@@ -29,10 +29,10 @@
 //!
 //! Before the exact closest point of a leaf's triangle is computed, a cheap lower bound
 //! of its distance ([`Bound`]: the plane distance and the in-plane distance to the
-//! farthest-out edge line, from data precomputed per slot) is tested against the best
-//! distance so far; a triangle is skipped only when that bound, reduced by a slack far
-//! above rounding, proves it farther than the best (never a tie), so the answer is the
-//! one the exact test of every triangle gives, to the bit.
+//! farthest-out edge line, from planes precomputed per slot, in single precision) is
+//! tested against the best distance so far; a triangle is skipped only when that bound,
+//! reduced by a slack above its rounding, proves it farther than the best (never a
+//! tie), so the answer is the one the exact test of every triangle gives, to the bit.
 
 use crate::closest::{box_distance2, closest_lanes, closest_point, feature_of_code, Closest8, Feature, LANES};
 use gagekit_gdt::vec3::{cross, dot, norm, scale, sub, V3};
@@ -104,32 +104,54 @@ pub struct Bvh {
     pub size: f64,
 }
 
-/// Per triangle, the planes of its lower bound: `n` the unit normal and `m[k]` the unit
-/// in-plane outward normal of edge k (`n x` the edge, pointing away from the opposite
-/// corner), each with its offset (`w[0] = n . a`, `w[k + 1] = m[k] . corner k`). For any
-/// point x of the triangle n . x = w[0] and m[k] . x <= w[k + 1]; since |p - x|^2 is the
-/// squared plane component plus the squared in-plane part, and the in-plane part is at
-/// least m[k] . (p - x) for each k (m[k] is a unit vector in the plane),
+/// Per triangle, the planes of its lower bound, stored in single precision (64 bytes a
+/// slot, one cache line): `n` the unit normal and `m[k]` the unit in-plane outward normal
+/// of edge k (`n x` the edge, pointing away from the opposite corner), each with its
+/// offset (`w[0] = n . a`, `w[k + 1] = m[k] . corner k`). For any point x of the triangle
+/// n . x = w[0] and m[k] . x <= w[k + 1]; since |p - x|^2 is the squared plane component
+/// plus the squared in-plane part, and the in-plane part is at least m[k] . (p - x) for
+/// each k (m[k] is a unit vector in the plane),
 /// dist(p, T)^2 >= (n . p - w[0])^2 + max(0, max_k m[k] . p - w[k + 1])^2.
+///
+/// The planes are computed in double precision ([`Planes`]) and each number rounded to
+/// the nearest single precision one; the test runs in single precision on the point
+/// rounded to single precision ([`Bound::lower32`]), with each part reduced by a larger
+/// slack ([`SLACK32`]) that covers that rounding, and compared with the best widened by
+/// its own rounding ([`Bound::side32`]). It rejects a triangle only where the double
+/// precision test of the same planes (`Planes::may_beat`, the test before the planes were
+/// stored in single precision) rejects it, so it proves the triangle farther than the best
+/// just as well; it may pass a few more, whose exact test then decides. The error analysis
+/// is in [`Bound::lower32`]'s documentation.
 #[derive(Debug, Clone, Copy)]
 #[repr(C, align(64))]
 pub struct Bound {
-    pub n: V3,
-    pub m: [V3; 3],
-    pub w: [f64; 4],
+    pub n: [f32; 3],
+    pub m: [[f32; 3]; 3],
+    pub w: [f32; 4],
 }
 
-impl Bound {
+const _: () = assert!(std::mem::size_of::<Bound>() == 64, "a slot's bound is one cache line");
+
+/// The double-precision planes of a triangle's lower bound ([`Bound`]'s, before their
+/// rounding to single precision), and the double-precision test on them.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Planes {
+    pub(crate) n: V3,
+    pub(crate) m: [V3; 3],
+    pub(crate) w: [f64; 4],
+}
+
+impl Planes {
     /// No bound (never rejects): for triangles whose normal is ill-conditioned.
-    const NONE: Bound = Bound { n: [0.0; 3], m: [[0.0; 3]; 3], w: [0.0; 4] };
+    const NONE: Planes = Planes { n: [0.0; 3], m: [[0.0; 3]; 3], w: [0.0; 4] };
 
     /// The bound's planes of triangle `c`. The normal is the cross product of the two
     /// edges at the corner with the largest sine of its angle; its direction is then exact
     /// to a few ulp over that sine. Below a sine of 1e-4 (slivers) the triangle gets
-    /// [`Bound::NONE`]; above it every plane is within 1e-11 rad of the exact one, so the
+    /// [`Planes::NONE`]; above it every plane is within 1e-11 rad of the exact one, so the
     /// bound's error is below 1e-11 of the point's distance plus the coordinates'
     /// rounding, far inside [`Bvh::slack`].
-    fn of(c: &[V3; 3]) -> Bound {
+    pub(crate) fn of(c: &[V3; 3]) -> Planes {
         // the edges' lengths, each edge taken by two corners (reversed, the same length)
         let len: [f64; 3] = std::array::from_fn(|k| norm(sub(c[(k + 1) % 3], c[k])));
         let mut best = (0.0f64, [0.0; 3], 0.0);
@@ -143,7 +165,7 @@ impl Bound {
             }
         }
         if !(best.0 >= 1e-4) {
-            return Bound::NONE;
+            return Planes::NONE;
         }
         let n = scale(best.1, 1.0 / best.2);
         let m = std::array::from_fn(|k| {
@@ -158,38 +180,24 @@ impl Bound {
             }
         });
         let w = [dot(n, c[0]), dot(m[0], c[0]), dot(m[1], c[1]), dot(m[2], c[2])];
-        Bound { n, m, w }
+        Planes { n, m, w }
     }
 
-    /// May the triangle be as near to `p` as `best_d2` (squared)? False only when its
-    /// lower bound, each part reduced by `slack`, exceeds `best_d2` by more than rounding:
-    /// then the exact squared distance computed by [`closest_point`] is larger than
-    /// `best_d2` too (the slack covers the rounding of the bound's data, of its
-    /// evaluation and of the closest point; the margin 1e-12 covers the squares' rounding).
-    #[inline(always)]
-    pub fn may_beat(&self, p: &V3, best_d2: f64, slack: f64) -> bool {
-        let (bound, best) = self.terms(p, best_d2, slack);
-        bound <= best
+    /// The double-precision test: may the triangle be as near to `p` as `best_d2`
+    /// (squared)? False only when its lower bound, each part reduced by `slack`, exceeds
+    /// `best_d2` by more than rounding: then the exact squared distance computed by
+    /// [`closest_point`] is larger than `best_d2` too (the slack covers the rounding of the
+    /// planes, of their evaluation and of the closest point; the margin 1e-12 covers the
+    /// squares' rounding). `Bound::may_beat` rejects only where this rejects.
+    #[cfg(test)]
+    pub(crate) fn may_beat(&self, p: &V3, best_d2: f64, slack: f64) -> bool {
+        self.lower(p, slack) <= best_d2 * (1.0 + 1e-12)
     }
 
-    /// The two sides of [`Bound::may_beat`]'s comparison: the squared lower bound and the
-    /// best widened by the squares' rounding ([`Bound::best_side`]).
-    #[inline(always)]
-    fn terms(&self, p: &V3, best_d2: f64, slack: f64) -> (f64, f64) {
-        (self.lower(p, slack), Self::best_side(best_d2))
-    }
-
-    /// The best squared distance widened by the squares' rounding: the right side of
-    /// [`Bound::may_beat`]'s comparison.
-    #[inline(always)]
-    fn best_side(best_d2: f64) -> f64 {
-        best_d2 * (1.0 + 1e-12)
-    }
-
-    /// The squared lower bound, each part reduced by `slack`: the left side of
-    /// [`Bound::may_beat`]'s comparison.
-    #[inline(always)]
-    fn lower(&self, p: &V3, slack: f64) -> f64 {
+    /// The squared lower bound, each part reduced by `slack` (the left side of
+    /// `Planes::may_beat`).
+    #[cfg(test)]
+    pub(crate) fn lower(&self, p: &V3, slack: f64) -> f64 {
         let plane = (dot(self.n, *p) - self.w[0]).abs();
         let e0 = dot(self.m[0], *p) - self.w[1];
         let e1 = dot(self.m[1], *p) - self.w[2];
@@ -198,32 +206,125 @@ impl Bound {
         let b = larger(larger(larger(e0, e1), e2) - slack, 0.0);
         a * a + b * b
     }
+}
+
+/// The factor from a point's double-precision slack ([`Bvh::slack_at`], at least
+/// 1e-9 (size + |p|_inf) with size the largest |coordinate| of the root's box) to the
+/// reduction of the single-precision bound's parts: 1 + 11 * 2^-24 / 1e-9, so the
+/// reduction is at least the slack plus 11 * 2^-24 (size + |p|_inf), the rounding
+/// [`Bound::lower32`] is off by (its documentation).
+pub(crate) const SLACK32: f64 = 1.0 + 11.0 / (1u64 << 24) as f64 / 1e-9;
+
+impl Bound {
+    /// The single-precision planes of triangle `c`: [`Planes::of`] rounded to nearest.
+    fn of(c: &[V3; 3]) -> Bound {
+        let p = Planes::of(c);
+        let f = |v: V3| v.map(|x| x as f32);
+        Bound { n: f(p.n), m: p.m.map(f), w: p.w.map(|x| x as f32) }
+    }
+
+    /// May the triangle be as near to `p` as `best_d2` (squared)? `slack`: the point's
+    /// slack ([`Bvh::slack_at`]). False only where `Planes::may_beat` of the same
+    /// triangle is false too (see [`Bound::lower32`]), so only for a triangle proved
+    /// farther than `best_d2`.
+    #[inline(always)]
+    pub fn may_beat(&self, p: &V3, best_d2: f64, slack: f64) -> bool {
+        self.passes(&[p[0] as f32, p[1] as f32, p[2] as f32], Self::reach32(slack), Self::side32(best_d2))
+    }
+
+    /// [`Bound::may_beat`] of the point rounded to single precision `q`, with its
+    /// reduction `r` ([`Bound::reach32`]) and right side `side` ([`Bound::side32`]).
+    #[inline(always)]
+    pub(crate) fn passes(&self, q: &[f32; 3], r: f32, side: f32) -> bool {
+        self.lower32(q, r) <= side
+    }
+
+    /// The reduction of the bound's parts of a point whose double-precision slack is
+    /// `slack`: `slack` times [`SLACK32`], rounded up to single precision (the product
+    /// times 1 + 2^-22, then to nearest: never below it); infinity (no rejection) from a
+    /// slack of 1e20 on (and for NaN), where the single-precision planes could overflow.
+    #[inline(always)]
+    pub(crate) fn reach32(slack: f64) -> f32 {
+        if slack < 1e20 {
+            (slack * (SLACK32 * (1.0 + 1.0 / (1u64 << 22) as f64))) as f32
+        } else {
+            f32::INFINITY
+        }
+    }
+
+    /// The right side of the single-precision comparison for the best squared distance
+    /// `best_d2`: the double-precision test's right side `best_d2 (1 + 1e-12)` times
+    /// 1 + 2^-20, plus 1e-38, rounded to nearest single precision (see [`Bound::lower32`];
+    /// NaN never arises: `best_d2` is a distance, infinity or, for unused lanes, minus
+    /// infinity).
+    #[inline(always)]
+    pub(crate) fn side32(best_d2: f64) -> f32 {
+        (best_d2 * ((1.0 + 1e-12) * (1.0 + 1.0 / (1u64 << 20) as f64)) + 1e-38) as f32
+    }
+
+    /// The squared lower bound in single precision at the point `q` (the point rounded to
+    /// single precision), each part reduced by `r` ([`Bound::reach32`] of the point's
+    /// slack): the left side of [`Bound::may_beat`]'s comparison.
+    ///
+    /// Error analysis, against `Planes::lower` (the double-precision bound) at the point p
+    /// with the slack s (u = 2^-24, S = size + |p|_inf, every corner within the root's box
+    /// so |w| <= sqrt(3) size):
+    /// - a plane's value n'.q - w' (n', w' the stored numbers, q the point, left to right)
+    ///   differs from n.p - w (the double-precision planes, exact arithmetic) by at most
+    ///   gamma_6 (|n||p| + |w|) <= 6u / (1 - 6u) sqrt(3) S < 10.5 u S: each product carries
+    ///   three roundings (n', q, the product) and the sum and difference three more;
+    ///   below single precision's normal range each rounding adds at most 2^-150, far
+    ///   inside the slack's absolute 1e-9. The double-precision evaluation of [`Planes`]
+    ///   is off by under 2^-48 S. So with r >= s + 11 u S each reduced part here, before
+    ///   its own rounding, is at most the double-precision one before its rounding;
+    ///   after them (relative u here, 2^-53 there, and the max with 0 is monotone),
+    ///   a <= a64 (1 + u) (1 + 2^-52) and the same for b.
+    /// - The squares and their sum add three roundings: the bound here is at most the
+    ///   double-precision one times (1 + u)^5 (1 + 2^-50) < 1 + 6u, plus 3 * 2^-150 below
+    ///   the normal range. An overflow to infinity here means a bound above
+    ///   (1 - 6u) f32::MAX there.
+    /// - [`Bound::side32`] is at least the double-precision right side times
+    ///   (1 + 2^-20)(1 - u)(1 - 2^-51) > 1 + 14u, plus 1e-38 (1 - u).
+    ///
+    /// So bound > side here implies bound > right side there: the triangles this test
+    /// rejects are a subset of those the double-precision test rejects (tested), which are
+    /// farther than the best. Overflow: a point or root box beyond 1e29 (slack 1e20 or
+    /// more) gets r = infinity ([`Bound::reach32`]), so every part is 0 or NaN, and NaN
+    /// becomes 0 ([`larger`]): such a point's triangles are never rejected. Below it no
+    /// plane's value overflows, and a square that does is handled above.
+    #[inline(always)]
+    pub(crate) fn lower32(&self, q: &[f32; 3], r: f32) -> f32 {
+        let d = |v: &[f32; 3]| v[0] * q[0] + v[1] * q[1] + v[2] * q[2];
+        let plane = (d(&self.n) - self.w[0]).abs();
+        let e0 = d(&self.m[0]) - self.w[1];
+        let e1 = d(&self.m[1]) - self.w[2];
+        let e2 = d(&self.m[2]) - self.w[3];
+        let a = larger(plane - r, 0.0);
+        let b = larger(larger(larger(e0, e1), e2) - r, 0.0);
+        a * a + b * b
+    }
 
     /// [`Bound::may_beat`] of the [`GROUP`] lanes of a group at once (coordinates by axis,
     /// each lane's best and slack): bit i set when lane i may beat. The same arithmetic
-    /// lane by lane, so the same answers; written over arrays so it compiles to vector
-    /// instructions instead of one lane after another.
-    #[inline(always)]
+    /// lane by lane, so the same answers.
+    #[cfg(test)]
     pub fn may_beat_lanes(&self, p: [&[f64; GROUP]; 3], best_d2: &[f64; GROUP], slack: &[f64; GROUP]) -> u32 {
-        self.may_beat_lanes_in::<false, false>(p, &best_d2.map(Self::best_side), slack)
+        let q = p.map(|a| a.map(|x| x as f32));
+        self.may_beat_lanes_in::<false>([&q[0], &q[1], &q[2]], &best_d2.map(Self::side32), &slack.map(Self::reach32))
     }
 
-    /// [`Bound::may_beat_lanes`] with the lanes' right sides given ([`Bound::best_side`]
-    /// of their best, kept by the group query as the best changes instead of computed
-    /// again for every triangle); `AVX`: the lanes' comparison by AVX instructions (only
-    /// in code compiled for AVX2, see [`lanes_le64`]); `W16`: by one AVX-512 comparison
-    /// into a mask ([`lanes_le64_512`], only in code compiled for AVX-512).
+    /// [`Bound::lower32`] of the [`GROUP`] lanes (single-precision coordinates by axis,
+    /// each lane's reduction `r`) against their right sides `side` ([`Bound::side32`] of
+    /// their best, kept by the group query as the best changes): bit i set when lane i may
+    /// beat. Written over arrays so it compiles to eight-lane vector instructions; `AVX`:
+    /// the comparison by one AVX instruction ([`lanes_le32`], only in code compiled for AVX2).
     #[inline(always)]
-    fn may_beat_lanes_in<const AVX: bool, const W16: bool>(&self, p: [&[f64; GROUP]; 3], best_side: &[f64; GROUP], slack: &[f64; GROUP]) -> u32 {
-        let mut bound = [0.0; GROUP];
+    fn may_beat_lanes_in<const AVX: bool>(&self, q: [&[f32; GROUP]; 3], side: &[f32; GROUP], r: &[f32; GROUP]) -> u32 {
+        let mut bound = [0.0f32; GROUP];
         for i in 0..GROUP {
-            bound[i] = self.lower(&[p[0][i], p[1][i], p[2][i]], slack[i]);
+            bound[i] = self.lower32(&[q[0][i], q[1][i], q[2][i]], r[i]);
         }
-        if W16 {
-            // SAFETY: W16 is set only in the build compiled for AVX-512 F
-            return unsafe { lanes_le64_512(&bound, best_side) };
-        }
-        lanes_le64::<AVX>(&bound, best_side)
+        lanes_le32::<AVX>(&bound, side)
     }
 }
 
@@ -881,7 +982,10 @@ impl Bvh {
         let mut stack = [(Child { index: 0, count: 0 }, 0.0f64); MAX_DEPTH + 2];
         let mut sp = 0usize;
         let mut cur = self.root;
-        let slack = self.slack_at(&p);
+        // the point and its reduction in single precision for the triangles' lower bounds,
+        // and the bounds' right side (kept as the best changes)
+        let (q, reach) = ([p[0] as f32, p[1] as f32, p[2] as f32], Bound::reach32(self.slack_at(&p)));
+        let mut side = Bound::side32(best_d2);
         loop {
             if cur.count > 0 {
                 for slot in cur.index..cur.index + cur.count {
@@ -890,7 +994,7 @@ impl Bvh {
                     }
                     // a triangle proved farther than the best is not measured (without
                     // margins only: the margins need every triangle's distance)
-                    if !MARGIN && !self.bounds[slot as usize].may_beat(&p, best_d2, slack) {
+                    if !MARGIN && !self.bounds[slot as usize].passes(&q, reach, side) {
                         continue;
                     }
                     let c = &self.corners[slot as usize];
@@ -902,6 +1006,7 @@ impl Bvh {
                             passed!(b.slot, b.d2);
                         }
                         best_d2 = d2;
+                        side = Bound::side32(d2);
                         best = Some(Nearest { slot, d2, foot, feature });
                     } else {
                         passed!(slot, d2);
@@ -949,9 +1054,9 @@ impl Bvh {
     /// On x86-64 processors with AVX2 the same code is run compiled for AVX2 (chosen at
     /// run time): wider vectors for the per-lane box distances, and one instruction
     /// where the lanes' masks are counted (`count_ones`, `is_power_of_two`) instead of
-    /// about a dozen. With AVX-512 (F and VL) it is compiled for that: the eight lanes'
-    /// f64 lower bounds and exact tests in one vector each instead of two (the group
-    /// query alone, 1 M scan points, one thread: 4-14 % less CPU than the AVX2 build),
+    /// about a dozen; the eight lanes' single-precision triangle lower bounds
+    /// ([`Bound::lower32`]) are one vector either way. With AVX-512 (F and VL) it is
+    /// compiled for that: the eight lanes' f64 exact tests in one vector instead of two,
     /// and a node's two children's box tests in one 16-lane vector (`child_boxes16`).
     /// Rust never fuses a multiply and an add unless told to (`mul_add`; AVX-512 enables
     /// the FMA instructions, none is emitted here), so every build gives the same bits
@@ -986,8 +1091,8 @@ impl Bvh {
 
     /// [`Bvh::nearest_group_impl`] compiled for AVX-512: a node's two children's box
     /// tests in one 16-lane single-precision vector ([`child_boxes16`]), the descent's box
-    /// test in two ([`boxes_meet16`]) and the leaf bounds' comparison into a mask
-    /// ([`lanes_le64_512`]); the other lanes' masks by AVX2's comparisons ([`lanes_le32`]).
+    /// test in two ([`boxes_meet16`]); the other lanes' masks by AVX2's comparisons
+    /// ([`lanes_le32`]).
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx512f,avx512vl,avx2,bmi1,popcnt")]
     unsafe fn nearest_group_avx512(&self, ps: &[V3], bound2: f64, hints: &[u32], best: &mut [Option<Nearest>]) {
@@ -1025,8 +1130,10 @@ impl Bvh {
         // per lane: coordinates (SoA), the best squared distance, the start's slot
         let (mut px, mut py, mut pz) = ([0.0f64; GROUP], [0.0f64; GROUP], [0.0f64; GROUP]);
         let mut bd = [f64::NEG_INFINITY; GROUP];
-        // per lane: `Bound::best_side` of `bd`, the leaf bounds' right side
-        let mut bs = [f64::NEG_INFINITY; GROUP];
+        // per lane: `Bound::side32` of `bd` and `Bound::reach32` of the slack, the leaf
+        // bounds' right side and reduction
+        let mut side = [f32::NEG_INFINITY; GROUP];
+        let mut reach = [0.0f32; GROUP];
         let mut skip = [u32::MAX; GROUP];
         let mut slack = [0.0f64; GROUP];
         // the lanes in single precision for the box tests (see `widen`)
@@ -1067,7 +1174,8 @@ impl Bvh {
             for (q, v) in q16.iter_mut().zip([qx[i], qy[i], qz[i]]) {
                 (q[i], q[i + GROUP]) = (v, v);
             }
-            bs[i] = Bound::best_side(bd[i]);
+            side[i] = Bound::side32(bd[i]);
+            reach[i] = Bound::reach32(slack[i]);
             err2[i] = widen_err2(F32_ERR * (size + px[i].abs().max(py[i].abs()).max(pz[i].abs())));
             bw[i] = widen(bd[i], err2[i]);
             all |= 1 << i;
@@ -1145,9 +1253,9 @@ impl Bvh {
                     let mut m = if mask.is_power_of_two() {
                         // one lane (an outlier's search, mostly): its bound alone, the same bits
                         let i = mask.trailing_zeros() as usize;
-                        if self.bounds[slot as usize].may_beat(&ps[i], bd[i], slack[i]) { mask } else { 0 }
+                        if self.bounds[slot as usize].passes(&[qx[i], qy[i], qz[i]], reach[i], side[i]) { mask } else { 0 }
                     } else {
-                        mask & self.bounds[slot as usize].may_beat_lanes_in::<AVX, W16>([&px, &py, &pz], &bs, &slack)
+                        mask & self.bounds[slot as usize].may_beat_lanes_in::<AVX>([&qx, &qy, &qz], &side, &reach)
                     };
                     if m.count_ones() >= VECTOR_EXACT {
                         // many lanes: their exact tests at once, the same bits
@@ -1158,7 +1266,7 @@ impl Bvh {
                             let d2 = cl.d2[i];
                             if slot != skip[i] && better(d2, slot, bd[i], best[i].as_ref().map(|b| b.slot)) {
                                 bd[i] = d2;
-                                bs[i] = Bound::best_side(d2);
+                                side[i] = Bound::side32(d2);
                                 bw[i] = widen(d2, err2[i]);
                                 best[i] = Some(Nearest { slot, d2, foot: [cl.foot[0][i], cl.foot[1][i], cl.foot[2][i]], feature: feature_of_code(cl.code[i]) });
                             }
@@ -1175,7 +1283,7 @@ impl Bvh {
                         let d2 = dot(v, v);
                         if better(d2, slot, bd[i], best[i].as_ref().map(|b| b.slot)) {
                             bd[i] = d2;
-                            bs[i] = Bound::best_side(d2);
+                            side[i] = Bound::side32(d2);
                             bw[i] = widen(d2, err2[i]);
                             best[i] = Some(Nearest { slot, d2, foot, feature });
                         }
@@ -1383,49 +1491,12 @@ pub(crate) fn lanes_le32<const AVX: bool>(a: &[f32; GROUP], b: &[f32; GROUP]) ->
     o
 }
 
-/// [`lanes_le32`] for f64 lanes (two vectors of four).
-#[inline(always)]
-pub(crate) fn lanes_le64<const AVX: bool>(a: &[f64; GROUP], b: &[f64; GROUP]) -> u32 {
-    #[cfg(target_arch = "x86_64")]
-    if AVX {
-        use std::arch::x86_64::{_mm256_cmp_pd, _mm256_loadu_pd, _mm256_movemask_pd, _CMP_LE_OQ};
-        // SAFETY: as in `lanes_le32`; the loads read lanes 0-3 and 4-7
-        return unsafe {
-            let lo = _mm256_movemask_pd(_mm256_cmp_pd::<_CMP_LE_OQ>(_mm256_loadu_pd(a.as_ptr()), _mm256_loadu_pd(b.as_ptr())));
-            let hi = _mm256_movemask_pd(_mm256_cmp_pd::<_CMP_LE_OQ>(_mm256_loadu_pd(a.as_ptr().add(4)), _mm256_loadu_pd(b.as_ptr().add(4))));
-            (lo | hi << 4) as u32
-        };
-    }
-    let mut o = 0u32;
-    for i in 0..GROUP {
-        o |= ((a[i] <= b[i]) as u32) << i;
-    }
-    o
-}
-
 /// Lanes of a leaf's triangle from which their exact tests are made eight at once (one
 /// vector pass costs about five single tests in instructions; 300 k points of the torus
 /// bench: 3 lanes 728 M instructions, 5 lanes 717 M, never 728 M).
 const VECTOR_EXACT: u32 = 5;
 
-/// [`lanes_le64`] by one AVX-512 comparison of the eight f64 lanes into a mask (`<=`,
-/// ordered and quiet: false for a NaN, as `<=`).
-///
-/// # Safety
-/// The processor has AVX-512 F.
-#[inline(always)]
-#[allow(unused_variables)]
-pub(crate) unsafe fn lanes_le64_512(a: &[f64; GROUP], b: &[f64; GROUP]) -> u32 {
-    #[cfg(target_arch = "x86_64")]
-    {
-        use std::arch::x86_64::{_mm512_cmp_pd_mask, _mm512_loadu_pd, _CMP_LE_OQ};
-        _mm512_cmp_pd_mask::<_CMP_LE_OQ>(_mm512_loadu_pd(a.as_ptr()), _mm512_loadu_pd(b.as_ptr())) as u32
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    unreachable!("only in the AVX-512 build")
-}
-
-const _: () = assert!(GROUP == 8 && LANES == GROUP, "lanes_le32 and lanes_le64 compare eight lanes");
+const _: () = assert!(GROUP == 8 && LANES == GROUP, "lanes_le32 compares eight lanes");
 
 /// Points per group of [`Bvh::nearest_group`].
 pub const GROUP: usize = 8;

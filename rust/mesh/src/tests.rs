@@ -669,24 +669,52 @@ fn cached_queries_at_shared_edges_equal_the_search() {
 
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(64))]
-    /// The leaf test's lower bound never rejects a triangle at its own exact squared
-    /// distance (nor at anything larger), on soups of slivers, needles and shared edges,
-    /// for points near, far and very far; and it does reject where the bound is clearly
-    /// below (a point straight above a face, against a best at half its distance).
+    /// The leaf test's single-precision lower bound never rejects a triangle at its own
+    /// exact squared distance (nor at anything larger), and passes every triangle the
+    /// double-precision test of the same planes passes, down to the least best that test
+    /// passes; on soups of slivers, needles and shared edges, near the origin and moved
+    /// 1e3 and 1e5 away (where single precision's grid is 1e-4 and 1e-2 mm), for points
+    /// near, far, very far (1e6, 1e12) and beyond single precision's range. And it does
+    /// reject where the bound is clearly below (a point straight above a face, against a
+    /// best at half its distance).
     #[test]
     fn triangle_lower_bound_never_exceeds_the_exact_distance(seed in 0u64..1_000_000, n in 1usize..200) {
+        use crate::bvh::Planes;
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
-        let corners = soup(&mut rng, n);
+        let shift: f64 = [0.0, 1e3, 1e5][(seed % 3) as usize];
+        let corners: Vec<[[f64; 3]; 3]> = soup(&mut rng, n).into_iter().map(|c| c.map(|v| [v[0] + shift, v[1] - shift, v[2] + 0.5 * shift])).collect();
         let bvh = crate::bvh::Bvh::new(&corners);
+        let planes: Vec<Planes> = bvh.corners.iter().map(Planes::of).collect();
+        let (mut tight, mut above) = (0usize, 0usize);
         for k in 0..200 {
-            let s: f64 = [0.5, 12.0, 1e3, 1e6][k % 4];
-            let p: [f64; 3] = [rng.random_range(-s..s), rng.random_range(-s..s), rng.random_range(-s..s)];
+            let s: f64 = [0.5, 12.0, 1e3, 1e6, 1e12, 1e39][k % 6];
+            let p: [f64; 3] = [shift + rng.random_range(-s..s), rng.random_range(-s..s) - shift, 0.5 * shift + rng.random_range(-s..s)];
             let slack = bvh.slack + 1e-9 * p[0].abs().max(p[1].abs()).max(p[2].abs());
             for (slot, c) in bvh.corners.iter().enumerate() {
                 let d2 = brute_force(&[*c], p);
                 prop_assert!(bvh.bounds[slot].may_beat(&p, d2, slack), "slot {} point {:?} d2 {}", slot, p, d2);
+                // the least best the double-precision test passes (its right side
+                // best (1 + 1e-12) at its bound, then the next doubles down while it passes)
+                let lower = planes[slot].lower(&p, slack);
+                if !(lower > 0.0 && lower.is_finite()) {
+                    continue;
+                }
+                let mut best = lower / (1.0 + 1e-12);
+                while !planes[slot].may_beat(&p, best, slack) {
+                    best = best.next_up();
+                }
+                while planes[slot].may_beat(&p, best.next_down(), slack) {
+                    best = best.next_down();
+                }
+                prop_assert!(bvh.bounds[slot].may_beat(&p, best, slack), "slot {} point {:?} best {}", slot, p, best);
+                tight += 1;
+                // and above it: the double-precision test passes, so must this one
+                let more = best * [1.0 + 1e-9, 1.001, 4.0][k % 3];
+                prop_assert!(!planes[slot].may_beat(&p, more, slack) || bvh.bounds[slot].may_beat(&p, more, slack));
+                above += 1;
             }
         }
+        prop_assert!(tight > 0 && above > 0);
         // the lanes' form: bit i is lane i's may_beat (random lanes near and far, bests
         // at, below and above their exact distances)
         for k in 0..50 {
@@ -695,7 +723,7 @@ proptest! {
             let (mut best, mut slack) = ([0.0; crate::bvh::GROUP], [0.0; crate::bvh::GROUP]);
             let slot = rng.random_range(0..bvh.corners.len());
             for i in 0..crate::bvh::GROUP {
-                let p: [f64; 3] = [rng.random_range(-s..s), rng.random_range(-s..s), rng.random_range(-s..s)];
+                let p: [f64; 3] = [shift + rng.random_range(-s..s), rng.random_range(-s..s) - shift, 0.5 * shift + rng.random_range(-s..s)];
                 (lanes[0][i], lanes[1][i], lanes[2][i]) = (p[0], p[1], p[2]);
                 slack[i] = bvh.slack + 1e-9 * p[0].abs().max(p[1].abs()).max(p[2].abs());
                 best[i] = brute_force(&[bvh.corners[slot]], p) * [0.25, 1.0, 4.0, 0.999][rng.random_range(0..4)];
@@ -708,14 +736,16 @@ proptest! {
             }
         }
         // above the centroid of a fat triangle of the patch, 1 mm off its plane
-        let slot = (0..bvh.corners.len()).rev().find(|&s| bvh.corners[s][0][0].fract() == 0.0 && bvh.corners[s][1][0].fract() == 0.0).unwrap();
+        let slot = (0..bvh.corners.len()).rev().find(|&s| (bvh.corners[s][0][0] - shift).fract() == 0.0 && (bvh.corners[s][1][0] - shift).fract() == 0.0).unwrap();
         let c = bvh.corners[slot];
         let b = &bvh.bounds[slot];
+        let nrm = planes[slot].n;
         let g = [(c[0][0] + c[1][0] + c[2][0]) / 3.0, (c[0][1] + c[1][1] + c[2][1]) / 3.0, (c[0][2] + c[1][2] + c[2][2]) / 3.0];
-        let p = [g[0] + b.n[0], g[1] + b.n[1], g[2] + b.n[2]];
+        let p = [g[0] + nrm[0], g[1] + nrm[1], g[2] + nrm[2]];
         let d2 = brute_force(&[c], p);
-        prop_assert!((d2 - 1.0).abs() < 1e-9);
-        prop_assert!(!b.may_beat(&p, 0.25, bvh.slack));
+        prop_assert!((d2 - 1.0).abs() < 1e-9 * (1.0 + shift));
+        let slack = bvh.slack + 1e-9 * p[0].abs().max(p[1].abs()).max(p[2].abs());
+        prop_assert!(!b.may_beat(&p, 0.25, slack));
     }
 }
 
@@ -765,19 +795,11 @@ proptest! {
             b[i] = if rng.random_range(0..4) == 0 { a[i] } else { pick(&mut rng) };
         }
         let (a32, b32) = (a.map(|x| x as f32), b.map(|x| x as f32));
-        let want64 = (0..crate::bvh::GROUP).fold(0u32, |o, i| o | ((a[i] <= b[i]) as u32) << i);
         let want32 = (0..crate::bvh::GROUP).fold(0u32, |o, i| o | ((a32[i] <= b32[i]) as u32) << i);
-        prop_assert_eq!(crate::bvh::lanes_le64::<false>(&a, &b), want64);
         prop_assert_eq!(crate::bvh::lanes_le32::<false>(&a32, &b32), want32);
         #[cfg(target_arch = "x86_64")]
         if std::is_x86_feature_detected!("avx2") {
-            prop_assert_eq!(crate::bvh::lanes_le64::<true>(&a, &b), want64);
             prop_assert_eq!(crate::bvh::lanes_le32::<true>(&a32, &b32), want32);
-        }
-        #[cfg(target_arch = "x86_64")]
-        if std::is_x86_feature_detected!("avx512f") {
-            // SAFETY: the processor has AVX-512 F
-            prop_assert_eq!(unsafe { crate::bvh::lanes_le64_512(&a, &b) }, want64);
         }
     }
 }
