@@ -797,11 +797,26 @@ proptest! {
         let (a32, b32) = (a.map(|x| x as f32), b.map(|x| x as f32));
         let want32 = (0..crate::bvh::GROUP).fold(0u32, |o, i| o | ((a32[i] <= b32[i]) as u32) << i);
         prop_assert_eq!(crate::bvh::lanes_le32::<false>(&a32, &b32), want32);
+        // the slots' equality mask, with u32::MAX (no start) among the lanes
+        let slots = [0u32, 1, 7, u32::MAX];
+        let s: [u32; crate::bvh::GROUP] = std::array::from_fn(|_| slots[rng.random_range(0..slots.len())]);
+        let x = slots[rng.random_range(0..slots.len())];
+        let want_eq = (0..crate::bvh::GROUP).fold(0u32, |o, i| o | ((s[i] == x) as u32) << i);
+        prop_assert_eq!(crate::bvh::lanes_eq::<false>(&s, x), want_eq);
         #[cfg(target_arch = "x86_64")]
         if std::is_x86_feature_detected!("avx2") {
             prop_assert_eq!(crate::bvh::lanes_le32::<true>(&a32, &b32), want32);
+            // SAFETY: lanes_eq::<true> needs AVX2, detected above
+            prop_assert_eq!(unsafe { eq_avx2(&s, x) }, want_eq);
         }
     }
+}
+
+/// [`crate::bvh::lanes_eq`] compiled for AVX2, as the group query runs it.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn eq_avx2(a: &[u32; crate::bvh::GROUP], b: u32) -> u32 {
+    crate::bvh::lanes_eq::<true>(a, b)
 }
 
 /// [`crate::closest::closest_lanes`] on eight points, lane by lane against
