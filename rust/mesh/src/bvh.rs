@@ -98,7 +98,8 @@ pub struct Bvh {
     pub order: Vec<u32>,
     /// per slot: the data of the triangle's distance lower bound
     pub bounds: Vec<Bound>,
-    /// the slack (mm) the lower bounds are reduced by: far above their rounding error
+    /// the slack (mm) of the lower bounds' double-precision planes, far above their
+    /// rounding error (the single-precision test reduces by more, [`SLACK32`] times it)
     pub slack: f64,
     /// the largest |coordinate| of the root's box (the scale of the rounding errors)
     pub size: f64,
@@ -917,7 +918,8 @@ impl Bvh {
     }
 
     /// The slack of the lower bounds for a point `p`: [`Bvh::slack`] grown with the
-    /// point's own size (a far point's coordinates round on a coarser grid).
+    /// point's own size (a far point's coordinates round on a coarser grid); at least
+    /// 1e-9 (size + |p|_inf), which [`SLACK32`] relies on.
     #[inline(always)]
     fn slack_at(&self, p: &V3) -> f64 {
         self.slack + 1e-9 * p[0].abs().max(p[1].abs()).max(p[2].abs())
