@@ -226,7 +226,9 @@ impl TriMesh {
                         Some(o) => o[c * CHUNK + k] as usize,
                         None => c * CHUNK + k,
                     };
-                    ps[j] = [points[3 * i], points[3 * i + 1], points[3 * i + 2]];
+                    // one bounds check a point instead of three
+                    let q = &points[3 * i..3 * i + 3];
+                    ps[j] = [q[0], q[1], q[2]];
                 }
                 let g = ks.len();
                 let nh = (hint != u32::MAX) as usize;
