@@ -216,6 +216,61 @@ fn sphere_mesh(n: usize, r: f64) -> (Vec<f64>, Vec<u32>) {
     (v, t)
 }
 
+/// The topology's counts and the edge normals, against a map of every undirected edge
+/// to its (triangle, k) in triangle order: closed, open, non-manifold (a fin, a repeated
+/// triangle) and inconsistently wound meshes, with an unused vertex and vertices in
+/// several of the sort's blocks.
+#[test]
+fn edge_groups_equal_a_map_of_the_edges() {
+    let (v, t) = sphere_mesh(50, 10.0);
+    let nt = t.len() / 3;
+    let mut open = t.clone();
+    open.drain(3 * 100..3 * 103);
+    let mut fin_v = v.clone();
+    fin_v.extend([30.0, 0.0, 0.0, 31.0, 1.0, 2.0]);
+    let far = (fin_v.len() / 3 - 2) as u32;
+    let mut fin = t.clone();
+    fin.extend([t[3 * 7], t[3 * 7 + 1], far]);
+    let mut twice = t.clone();
+    twice.extend_from_slice(&t[3 * 40..3 * 41]);
+    let mut flipped = t.clone();
+    flipped.swap(3 * 50, 3 * 50 + 1);
+    let cases: [(&[f64], &[u32]); 5] = [(&v, &t), (&v, &open), (&fin_v, &fin), (&v, &twice), (&v, &flipped)];
+    for (case, (v, t)) in cases.into_iter().enumerate() {
+        let m = TriMesh::new(v, t).unwrap();
+        let mut map = std::collections::BTreeMap::<(u32, u32), Vec<(usize, usize)>>::new();
+        for (i, c) in t.chunks_exact(3).enumerate() {
+            for k in 0..3 {
+                let (a, b) = (c[k], c[(k + 1) % 3]);
+                map.entry((a.min(b), a.max(b))).or_default().push((i, k));
+            }
+        }
+        let (mut boundary, mut nonmanifold, mut inconsistent) = (0, 0, 0);
+        for (&(lo, _), g) in &map {
+            match g.len() {
+                1 => boundary += 1,
+                2 => inconsistent += usize::from((t[3 * g[0].0 + g[0].1] == lo) == (t[3 * g[1].0 + g[1].1] == lo)),
+                _ => nonmanifold += 1,
+            }
+            let mut sum = [0.0; 3];
+            for &(i, _) in g {
+                sum = gagekit_gdt::vec3::add(sum, m.face_normals[i]);
+            }
+            for &(i, k) in g {
+                assert_eq!(m.edge_normals[i][k].map(f64::to_bits), sum.map(f64::to_bits), "case {case}, triangle {i}, edge {k}");
+            }
+        }
+        assert_eq!((m.topology.boundary_edges, m.topology.nonmanifold_edges), (boundary, nonmanifold), "case {case}");
+        let reason = m.topology.reason.clone().unwrap_or_default();
+        assert_eq!(m.signed(), boundary + nonmanifold + inconsistent == 0, "case {case}: {reason}");
+        if boundary + nonmanifold == 0 && inconsistent > 0 {
+            assert!(reason.contains(&format!("({inconsistent} edges)")), "case {case}: {reason}");
+        }
+        assert_eq!([boundary > 0, nonmanifold > 0, inconsistent > 0], [[false; 3], [true, false, false], [true, true, false], [false, true, false], [false, false, true]][case], "case {case}");
+    }
+    assert!(nt > 9000 && v.len() / 3 > 4096);
+}
+
 #[test]
 fn results_do_not_depend_on_the_thread_count() {
     let (v, t) = sphere_mesh(60, 10.0);
