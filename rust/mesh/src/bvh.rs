@@ -367,7 +367,85 @@ pub(crate) fn bin_of(c: f64, lo: f64, scale: f64) -> usize {
     unsafe { x.to_int_unchecked::<u32>() as usize }
 }
 
+/// `f64`'s total order as integers (-0.0 just below +0.0), and back.
+#[inline]
+fn ordered(x: f64) -> u64 {
+    let b = x.to_bits();
+    if b >> 63 == 1 {
+        !b
+    } else {
+        b | 1 << 63
+    }
+}
+
+#[inline]
+fn from_ordered(o: u64) -> f64 {
+    f64::from_bits(if o >> 63 == 1 { o & !(1 << 63) } else { !o })
+}
+
+/// The least coordinate `t` of `lo_c..=hi_c` whose bin ([`bin_of`] of `lo`, `scale`) is
+/// at least `b`, given that `hi_c`'s is: for every centroid coordinate `c` of the node
+/// (all within `lo_c..=hi_c`), `bin_of(c, lo, scale) < b` exactly when `c < t`. `bin_of`
+/// never decreases as `c` grows (the subtraction, the product by `scale >= 0` and the
+/// clamps are monotone), and gives -0.0 and +0.0 the same bin, so one comparison replaces
+/// it. Found by bisection over the coordinates between the two, started at the estimate
+/// `lo + b / scale` (the bin's edge to within a few units in the last place).
+pub(crate) fn bin_threshold(lo: f64, scale: f64, b: usize, lo_c: f64, hi_c: f64) -> f64 {
+    let right = |o: u64| bin_of(from_ordered(o), lo, scale) >= b;
+    // the answer is in (l, h]: l's bin is below b, h's is not
+    let (mut l, mut h) = (ordered(lo_c), ordered(hi_c));
+    if right(l) {
+        return lo_c;
+    }
+    debug_assert!(right(h) && l < h);
+    let e = lo + b as f64 / scale;
+    if e.is_finite() {
+        let o = ordered(e);
+        if l < o && o < h {
+            if right(o) {
+                h = o;
+                let p = o.saturating_sub(4);
+                if l < p && !right(p) {
+                    l = p;
+                }
+            } else {
+                l = o;
+                let p = o.saturating_add(4);
+                if p < h && right(p) {
+                    h = p;
+                }
+            }
+        }
+    }
+    while h - l > 1 {
+        let m = l + (h - l) / 2;
+        if right(m) {
+            h = m;
+        } else {
+            l = m;
+        }
+    }
+    from_ordered(h)
+}
+
 fn bin_items(items: &[Item], k: usize, lo: f64, scale: f64) -> Binned {
+    #[cfg(target_arch = "x86_64")]
+    if std::is_x86_feature_detected!("avx2") {
+        // SAFETY: the feature was detected on this processor
+        return unsafe { bin_items_avx2(items, k, lo, scale) };
+    }
+    bin_items_in(items, k, lo, scale)
+}
+
+/// [`bin_items`] compiled for AVX2 (the same comparisons, wider: the same bins).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn bin_items_avx2(items: &[Item], k: usize, lo: f64, scale: f64) -> Binned {
+    bin_items_in(items, k, lo, scale)
+}
+
+#[inline(always)]
+fn bin_items_in(items: &[Item], k: usize, lo: f64, scale: f64) -> Binned {
     let mut b = Binned::new();
     for it in items {
         b.add(it, k, lo, scale);
@@ -378,12 +456,30 @@ fn bin_items(items: &[Item], k: usize, lo: f64, scale: f64) -> Binned {
 /// Two-pointer partition of `items` by bin `b` of (`k`, `lo`, `scale`), in place and
 /// deterministic (each item is tested once, where its side is known), binning each item
 /// into its side's bins (`L`, `R`: whether that side splits by bins, by `lp`, `rp`).
+/// The side is one comparison with the bin's edge `t` ([`bin_threshold`]: the same side).
 #[allow(clippy::too_many_arguments)]
-fn partition<const L: bool, const R: bool>(items: &mut [Item], (k, lo, scale): (usize, f64, f64), b: usize, lp: (usize, f64, f64), rp: (usize, f64, f64), lb: &mut Binned, rb: &mut Binned) -> usize {
+fn partition<const L: bool, const R: bool>(items: &mut [Item], (k, t): (usize, f64), lp: (usize, f64, f64), rp: (usize, f64, f64), lb: &mut Binned, rb: &mut Binned) -> usize {
+    #[cfg(target_arch = "x86_64")]
+    if std::is_x86_feature_detected!("avx2") {
+        // SAFETY: the feature was detected on this processor
+        return unsafe { partition_avx2::<L, R>(items, (k, t), lp, rp, lb, rb) };
+    }
+    partition_in::<L, R>(items, (k, t), lp, rp, lb, rb)
+}
+
+/// [`partition`] compiled for AVX2 (the same comparisons and moves, wider).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn partition_avx2<const L: bool, const R: bool>(items: &mut [Item], kt: (usize, f64), lp: (usize, f64, f64), rp: (usize, f64, f64), lb: &mut Binned, rb: &mut Binned) -> usize {
+    partition_in::<L, R>(items, kt, lp, rp, lb, rb)
+}
+
+#[inline(always)]
+fn partition_in<const L: bool, const R: bool>(items: &mut [Item], (k, t): (usize, f64), lp: (usize, f64, f64), rp: (usize, f64, f64), lb: &mut Binned, rb: &mut Binned) -> usize {
     let (mut i, mut j) = (0usize, items.len());
     while i < j {
         let it = &items[i];
-        if bin_of(it.centroid[k], lo, scale) < b {
+        if it.centroid[k] < t {
             if L {
                 lb.add(it, lp.0, lp.1, lp.2);
             }
@@ -468,14 +564,14 @@ fn split(items: &mut [Item], depth: usize, known: Option<Known>) -> (usize, Opti
             let (la, le, ls) = plan(&lcb, nl, depth + 1);
             let (ra, re, rs) = plan(&rcb, n - nl, depth + 1);
             let (lp, rp) = (if ls { bins_of(&lcb, la, le) } else { (0, 0.0, 0.0) }, if rs { bins_of(&rcb, ra, re) } else { (0, 0.0, 0.0) });
-            let kls = (k, lo, scale);
+            let kt = (k, bin_threshold(lo, scale, b, cb.lo[k], cb.hi[k]));
             let (mut lb, mut rb) = (Box::new(Binned::new()), Box::new(Binned::new()));
             let (l, r) = (&mut *lb, &mut *rb);
             let i = match (ls, rs) {
-                (true, true) => partition::<true, true>(items, kls, b, lp, rp, l, r),
-                (true, false) => partition::<true, false>(items, kls, b, lp, rp, l, r),
-                (false, true) => partition::<false, true>(items, kls, b, lp, rp, l, r),
-                (false, false) => partition::<false, false>(items, kls, b, lp, rp, l, r),
+                (true, true) => partition::<true, true>(items, kt, lp, rp, l, r),
+                (true, false) => partition::<true, false>(items, kt, lp, rp, l, r),
+                (false, true) => partition::<false, true>(items, kt, lp, rp, l, r),
+                (false, false) => partition::<false, false>(items, kt, lp, rp, l, r),
             };
             debug_assert_eq!(i, nl);
             if i > 0 && i < n {

@@ -957,3 +957,53 @@ proptest! {
         prop_assert_eq!(crate::bvh::bin_of(c, lo, scale), want);
     }
 }
+
+/// Checks `c < t` against `bin_of(c, lo, scale) < b` for the node's centroids `cs` (its
+/// bins: `lo` its least centroid, `scale` from the extent, as the build takes them).
+fn check_threshold(cs: &[f64]) -> Result<(), TestCaseError> {
+    use crate::bvh::{bin_of, bin_threshold, BINS};
+    let lo_c = cs.iter().fold(f64::INFINITY, |a, &c| if c < a { c } else { a });
+    let hi_c = cs.iter().fold(f64::NEG_INFINITY, |a, &c| if c > a { c } else { a });
+    let ext = hi_c - lo_c;
+    if !(ext > 0.0) {
+        return Ok(());
+    }
+    let scale = BINS as f64 / ext;
+    for b in 1..BINS {
+        if bin_of(hi_c, lo_c, scale) < b {
+            break;
+        }
+        let t = bin_threshold(lo_c, scale, b, lo_c, hi_c);
+        // the node's centroids, and the coordinates next to the edge and to the ends
+        let near = [t, t.next_down(), t.next_up(), t.next_down().next_down(), t.next_up().next_up(), lo_c, hi_c, lo_c.next_up(), hi_c.next_down()];
+        for &c in cs.iter().chain(near.iter().filter(|&&c| c >= lo_c && c <= hi_c)) {
+            prop_assert_eq!(c < t, bin_of(c, lo_c, scale) < b, "c {} t {} b {} lo {} scale {}", c, t, b, lo_c, scale);
+        }
+    }
+    Ok(())
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(2048))]
+    /// The partition's one comparison with the bin's edge (`bin_threshold`) puts every
+    /// centroid on the side its bin does: centroids at any offset and scale, spans down to
+    /// a few units in the last place, signed zeros, and coordinates at the edge.
+    #[test]
+    fn bin_threshold_splits_as_the_bins(seed in 0u64..1_000_000, e_off in -300.0f64..300.0, e_span in -300.0f64..300.0, ulps in 1u64..64, zeros in 0usize..3) {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let off = if rng.random_range(0..2) == 0 { 10f64.powf(e_off) } else { -(10f64.powf(e_off)) };
+        let span = 10f64.powf(e_span);
+        let mut cs: Vec<f64> = (0..40).map(|_| off + span * rng.random_range(-1.0..1.0)).collect();
+        cs.retain(|c| c.is_finite());
+        check_threshold(&cs)?;
+        // a span of a few units in the last place
+        let mut x = off;
+        let tiny: Vec<f64> = (0..ulps).map(|_| { x = x.next_up(); x }).collect();
+        check_threshold(&tiny)?;
+        // signed zeros among small values
+        let z: Vec<f64> = (0..20).map(|i| match (i + zeros) % 4 { 0 => 0.0, 1 => -0.0, 2 => 1e-300 * i as f64, _ => -1e-310 * i as f64 }).collect();
+        check_threshold(&z)?;
+        // huge values: infinite extent or scale 0
+        check_threshold(&[f64::MAX, -f64::MAX, 1.0, 0.0])?;
+    }
+}
