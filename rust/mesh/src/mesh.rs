@@ -114,33 +114,38 @@ impl TriMesh {
             let bad = triangles[3 * i + k];
             return Err(GkError::invalid(format!("mesh: triangle {i} names vertex {bad}, but there are {nv} vertices")));
         }
-        // per triangle (in parallel): the unit normal and twice the area, or ([0; 3], -1)
-        // when degenerate; the area summed in triangle order
-        let (mut normals, twice_area): (Vec<V3>, Vec<f64>) = {
-            tris.par_iter()
-                .map(|t| {
-                    let (a, b, c) = (verts[t[0] as usize], verts[t[1] as usize], verts[t[2] as usize]);
-                    let n = cross(sub(b, a), sub(c, a));
-                    let n2 = norm(n);
-                    let longest = [sub(b, a), sub(c, b), sub(a, c)].iter().map(|e| dot(*e, *e)).fold(0.0, f64::max);
-                    if t[0] == t[1] || t[1] == t[2] || t[0] == t[2] || !(n2 > 1e-12 * longest) {
-                        ([0.0; 3], -1.0)
-                    } else {
-                        (scale(n, 1.0 / n2), n2)
-                    }
-                })
-                .unzip()
-        };
+        // per triangle (in parallel): the unit normal, and twice the area (or -1 when
+        // degenerate: the normal [0; 3]) kept in the place of its first edge normal until
+        // the pseudonormals write every edge normal (no array of areas); the area summed
+        // in triangle order
+        let mut edge_normals = vec![[[0.0; 3]; 3]; nt];
+        let mut normals: Vec<V3> = tris
+            .par_iter()
+            .zip(edge_normals.par_iter_mut())
+            .map(|(t, en)| {
+                let (a, b, c) = (verts[t[0] as usize], verts[t[1] as usize], verts[t[2] as usize]);
+                let n = cross(sub(b, a), sub(c, a));
+                let n2 = norm(n);
+                let longest = [sub(b, a), sub(c, b), sub(a, c)].iter().map(|e| dot(*e, *e)).fold(0.0, f64::max);
+                if t[0] == t[1] || t[1] == t[2] || t[0] == t[2] || !(n2 > 1e-12 * longest) {
+                    en[0][0] = -1.0;
+                    [0.0; 3]
+                } else {
+                    en[0][0] = n2;
+                    scale(n, 1.0 / n2)
+                }
+            })
+            .collect();
         let mut area = 0.0;
         let mut degenerate = Vec::new();
-        for (i, &n2) in twice_area.iter().enumerate() {
+        for (i, en) in edge_normals.iter().enumerate() {
+            let n2 = en[0][0];
             if n2 < 0.0 {
                 degenerate.push(i);
             } else {
                 area += 0.5 * n2;
             }
         }
-        drop(twice_area);
         if !degenerate.is_empty() {
             let first: Vec<String> = degenerate.iter().take(5).map(|i| i.to_string()).collect();
             return Err(GkError::degenerate(format!(
@@ -162,7 +167,7 @@ impl TriMesh {
                         *n = scale(*n, -1.0);
                     }
                 }
-                let (vertex_normals, edge_normals) = pseudonormals(&verts, &tris, &normals, &edges);
+                let vertex_normals = pseudonormals(&verts, &tris, &normals, &edges, &mut edge_normals);
                 (topology, normals, vertex_normals, edge_normals)
             },
             || {
@@ -400,7 +405,9 @@ pub(crate) fn atan2_upper(y: f64, x: f64) -> f64 {
     }
 }
 
-fn pseudonormals(verts: &[V3], tris: &[[u32; 3]], normals: &[V3], edges: &Edges) -> (Vec<V3>, Vec<[V3; 3]>) {
+/// The vertex pseudonormals; the edge normals written into `en` (every entry: each
+/// triangle's edge is in one group).
+fn pseudonormals(verts: &[V3], tris: &[[u32; 3]], normals: &[V3], edges: &Edges, en: &mut [[V3; 3]]) -> Vec<V3> {
     use rayon::prelude::*;
     // each vertex's pseudonormal: its corners' angle-weighted face normals summed in
     // triangle order. The vertices in ranges, one a thread, in parallel: each range
@@ -422,7 +429,6 @@ fn pseudonormals(verts: &[V3], tris: &[[u32; 3]], normals: &[V3], edges: &Edges)
         }
     });
     // edge normals: the sum of the normals of the triangles sharing the edge
-    let mut en = vec![[[0.0; 3]; 3]; tris.len()];
     edges.for_each_group(|lo, g| {
         let mut sum = [0.0; 3];
         for &e in g {
@@ -433,5 +439,5 @@ fn pseudonormals(verts: &[V3], tris: &[[u32; 3]], normals: &[V3], edges: &Edges)
             en[t][edge_in(&tris[t], lo, e).0] = sum;
         }
     });
-    (vn, en)
+    vn
 }

@@ -216,6 +216,32 @@ fn sphere_mesh(n: usize, r: f64) -> (Vec<f64>, Vec<u32>) {
     (v, t)
 }
 
+/// The area is the sum of the triangles' in triangle order; degenerate triangles (a
+/// repeated corner, collinear corners) are refused by index, the first five named.
+#[test]
+fn degenerate_triangles_are_named_and_the_area_summed() {
+    let (v, t) = box_mesh([1.0, 2.0, 3.0]);
+    let m = TriMesh::new(&v, &t).unwrap();
+    let mut area = 0.0;
+    for c in t.chunks_exact(3) {
+        let p = |k: usize| [v[3 * c[k] as usize], v[3 * c[k] as usize + 1], v[3 * c[k] as usize + 2]];
+        let n = gagekit_gdt::vec3::cross(gagekit_gdt::vec3::sub(p(1), p(0)), gagekit_gdt::vec3::sub(p(2), p(0)));
+        area += 0.5 * gagekit_gdt::vec3::norm(n);
+    }
+    assert_eq!(m.area.to_bits(), area.to_bits());
+    assert!((m.area - 8.0 * (2.0 + 6.0 + 3.0)).abs() < 1e-12);
+    let mut bad_v = v.clone();
+    // a vertex on the line of two others: triangle 12 flat
+    bad_v.extend([0.0, 0.0, 0.0, 1.0, 1.0, 1.0, 2.0, 2.0, 2.0]);
+    let nv = (bad_v.len() / 3) as u32;
+    let mut bad_t = t.clone();
+    bad_t.extend([nv - 3, nv - 2, nv - 1]);
+    bad_t[3 * 4 + 2] = bad_t[3 * 4];
+    let e = TriMesh::new(&bad_v, &bad_t).unwrap_err();
+    assert_eq!(e.kind, ErrorKind::DegenerateGeometry);
+    assert!(e.message.contains("2 degenerate triangle(s)") && e.message.contains("first: 4, 12"), "{}", e.message);
+}
+
 /// The topology's counts and the edge normals, against a map of every undirected edge
 /// to its (triangle, k) in triangle order: closed, open, non-manifold (a fin, a repeated
 /// triangle) and inconsistently wound meshes, with an unused vertex and vertices in
