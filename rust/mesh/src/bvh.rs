@@ -613,15 +613,7 @@ pub(crate) fn sort_small(items: &mut [Item], axis: usize) {
         keys[pos] = key(it, pos);
     }
     let keys = &mut keys[..n];
-    for i in 1..n {
-        let x = keys[i];
-        let mut j = i;
-        while j > 0 && keys[j - 1] > x {
-            keys[j] = keys[j - 1];
-            j -= 1;
-        }
-        keys[j] = x;
-    }
+    keys.sort_unstable();
     let mut tmp = [items[0]; SMALL_SORT];
     tmp[..n].copy_from_slice(items);
     for (it, k) in items.iter_mut().zip(keys.iter()) {
