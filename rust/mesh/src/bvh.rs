@@ -614,10 +614,14 @@ pub(crate) fn sort_small(items: &mut [Item], axis: usize) {
     }
     let keys = &mut keys[..n];
     keys.sort_unstable();
-    let mut tmp = [items[0]; SMALL_SORT];
-    tmp[..n].copy_from_slice(items);
+    // the items copied aside: only the n there are (not an array of 32 filled first)
+    let mut tmp = [std::mem::MaybeUninit::<Item>::uninit(); SMALL_SORT];
+    for (t, it) in tmp.iter_mut().zip(items.iter()) {
+        t.write(*it);
+    }
     for (it, k) in items.iter_mut().zip(keys.iter()) {
-        *it = tmp[(*k as u32) as usize];
+        // SAFETY: a key's low bits are its item's position, below n, and tmp[..n] is written
+        *it = unsafe { tmp[(*k as u32) as usize].assume_init() };
     }
 }
 
