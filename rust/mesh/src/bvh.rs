@@ -318,6 +318,31 @@ impl Binned {
             x[q] = if hi[q] > x[q] { hi[q] } else { x[q] };
         }
     }
+
+    /// [`Binned::grow`] by AVX's `vminpd` and `vmaxpd` (`a < b ? a : b` and `a > b ? a : b`,
+    /// lane by lane: the same values) and whole stores. Written plainly, AVX2 code made
+    /// masked stores of the rows (a store only where a value changes), which the next
+    /// item's load of the same bin cannot take its data from.
+    /// # Safety
+    /// Only in code compiled for AVX (the AVX2 builds, after detection).
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    unsafe fn grow_avx(&mut self, b: usize, it: &Item) {
+        use std::arch::x86_64::*;
+        let (m, x) = (self.mins[b].as_mut_ptr(), self.maxs[b].as_mut_ptr());
+        // the item's low corner and centroid, and its centroid and high corner: six
+        // consecutive numbers each (`repr(C)`, offsets checked below)
+        let p = (it as *const Item).cast::<u8>();
+        let (l, h) = (p.add(std::mem::offset_of!(Item, lo)).cast::<f64>(), p.add(std::mem::offset_of!(Item, centroid)).cast::<f64>());
+        // SAFETY: unaligned loads and stores of lanes 0..4 and 4..6 of six-lane rows, and of
+        // the item's six numbers from `l` and from `h` (within the item)
+        unsafe {
+            _mm256_storeu_pd(m, _mm256_min_pd(_mm256_loadu_pd(l), _mm256_loadu_pd(m)));
+            _mm_storeu_pd(m.add(4), _mm_min_pd(_mm_loadu_pd(l.add(4)), _mm_loadu_pd(m.add(4))));
+            _mm256_storeu_pd(x, _mm256_max_pd(_mm256_loadu_pd(h), _mm256_loadu_pd(x)));
+            _mm_storeu_pd(x.add(4), _mm_max_pd(_mm_loadu_pd(h.add(4)), _mm_loadu_pd(x.add(4))));
+        }
+    }
     fn merge(mut self, o: &Binned) -> Self {
         for b in 0..BINS {
             self.count[b] += o.count[b];
@@ -325,10 +350,16 @@ impl Binned {
         }
         self
     }
+    /// Add an item to its bin; `AVX`: by [`Binned::grow_avx`] (only in the AVX2 builds).
     #[inline(always)]
-    fn add(&mut self, it: &Item, k: usize, lo: f64, scale: f64) {
+    fn add<const AVX: bool>(&mut self, it: &Item, k: usize, lo: f64, scale: f64) {
         let i = bin_of(it.centroid[k], lo, scale);
         self.count[i] += 1;
+        #[cfg(target_arch = "x86_64")]
+        if AVX {
+            // SAFETY: AVX is true only in the AVX2 builds, run after detection
+            return unsafe { self.grow_avx(i, it) };
+        }
         let (l, c, h) = (&it.lo, &it.centroid, &it.hi);
         self.grow(i, &[l[0], l[1], l[2], c[0], c[1], c[2]], &[c[0], c[1], c[2], h[0], h[1], h[2]]);
     }
@@ -434,21 +465,21 @@ fn bin_items(items: &[Item], k: usize, lo: f64, scale: f64) -> Binned {
         // SAFETY: the feature was detected on this processor
         return unsafe { bin_items_avx2(items, k, lo, scale) };
     }
-    bin_items_in(items, k, lo, scale)
+    bin_items_in::<false>(items, k, lo, scale)
 }
 
 /// [`bin_items`] compiled for AVX2 (the same comparisons, wider: the same bins).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 unsafe fn bin_items_avx2(items: &[Item], k: usize, lo: f64, scale: f64) -> Binned {
-    bin_items_in(items, k, lo, scale)
+    bin_items_in::<true>(items, k, lo, scale)
 }
 
 #[inline(always)]
-fn bin_items_in(items: &[Item], k: usize, lo: f64, scale: f64) -> Binned {
+fn bin_items_in<const AVX: bool>(items: &[Item], k: usize, lo: f64, scale: f64) -> Binned {
     let mut b = Binned::new();
     for it in items {
-        b.add(it, k, lo, scale);
+        b.add::<AVX>(it, k, lo, scale);
     }
     b
 }
@@ -464,29 +495,29 @@ fn partition<const L: bool, const R: bool>(items: &mut [Item], (k, t): (usize, f
         // SAFETY: the feature was detected on this processor
         return unsafe { partition_avx2::<L, R>(items, (k, t), lp, rp, lb, rb) };
     }
-    partition_in::<L, R>(items, (k, t), lp, rp, lb, rb)
+    partition_in::<L, R, false>(items, (k, t), lp, rp, lb, rb)
 }
 
 /// [`partition`] compiled for AVX2 (the same comparisons and moves, wider).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 unsafe fn partition_avx2<const L: bool, const R: bool>(items: &mut [Item], kt: (usize, f64), lp: (usize, f64, f64), rp: (usize, f64, f64), lb: &mut Binned, rb: &mut Binned) -> usize {
-    partition_in::<L, R>(items, kt, lp, rp, lb, rb)
+    partition_in::<L, R, true>(items, kt, lp, rp, lb, rb)
 }
 
 #[inline(always)]
-fn partition_in<const L: bool, const R: bool>(items: &mut [Item], (k, t): (usize, f64), lp: (usize, f64, f64), rp: (usize, f64, f64), lb: &mut Binned, rb: &mut Binned) -> usize {
+fn partition_in<const L: bool, const R: bool, const AVX: bool>(items: &mut [Item], (k, t): (usize, f64), lp: (usize, f64, f64), rp: (usize, f64, f64), lb: &mut Binned, rb: &mut Binned) -> usize {
     let (mut i, mut j) = (0usize, items.len());
     while i < j {
         let it = &items[i];
         if it.centroid[k] < t {
             if L {
-                lb.add(it, lp.0, lp.1, lp.2);
+                lb.add::<AVX>(it, lp.0, lp.1, lp.2);
             }
             i += 1;
         } else {
             if R {
-                rb.add(it, rp.0, rp.1, rp.2);
+                rb.add::<AVX>(it, rp.0, rp.1, rp.2);
             }
             j -= 1;
             items.swap(i, j);
@@ -788,6 +819,8 @@ fn build_items(n: usize, corner: impl Fn(usize) -> [V3; 3] + Sync) -> Vec<Item> 
 }
 
 const _: () = assert!(std::mem::size_of::<Item>() == 80 && std::mem::size_of::<[V3; 3]>() == 72 && std::mem::align_of::<Item>() == std::mem::align_of::<[V3; 3]>());
+// Binned::grow_avx reads the low corner and centroid, and the centroid and high corner, as six numbers each
+const _: () = assert!(std::mem::offset_of!(Item, centroid) == std::mem::offset_of!(Item, lo) + 24 && std::mem::offset_of!(Item, hi) == std::mem::offset_of!(Item, centroid) + 24);
 
 /// The slots' corners (`corner(order[s])` for slot s) written over the items' buffer,
 /// which the build no longer reads: 72 of each item's 80 bytes, front to back, in
