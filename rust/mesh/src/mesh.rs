@@ -367,6 +367,8 @@ fn angle(u: V3, v: V3) -> f64 {
 /// larger arguments by tan(3 pi / 8) and pi / 4 (Cephes Mathematical Library, atan.c; the
 /// same constants as Go's math.Atan). A third of libm's instructions; the pseudonormals'
 /// 3 M corner angles at 1 M triangles are weights, for which a few ulp do not matter.
+// the constants as published, digit for digit (they round to the same f64)
+#[allow(clippy::excessive_precision)]
 pub(crate) fn atan2_upper(y: f64, x: f64) -> f64 {
     use std::f64::consts::{FRAC_PI_2, FRAC_PI_4, PI};
     // atan of 0 <= t <= 0.66
@@ -377,22 +379,26 @@ pub(crate) fn atan2_upper(y: f64, x: f64) -> f64 {
         let z = z * ((((P[0] * z + P[1]) * z + P[2]) * z + P[3]) * z + P[4]) / (((((z + Q[0]) * z + Q[1]) * z + Q[2]) * z + Q[3]) * z + Q[4]);
         t * z + t
     }
-    // atan of t >= 0 (pi / 2 = FRAC_PI_2 + MORE)
-    fn satan(t: f64) -> f64 {
+    // atan of y / x for y >= 0, x > 0 (pi / 2 = FRAC_PI_2 + MORE), the reductions' quotients
+    // taken from y and x (one division before the approximation's own, not two)
+    fn satan(y: f64, x: f64) -> f64 {
         const MORE: f64 = 6.123233995736765886130e-17;
         const TAN_3PI_8: f64 = 2.41421356237309504880;
-        if t <= 0.66 {
-            xatan(t)
-        } else if t > TAN_3PI_8 {
-            FRAC_PI_2 - xatan(1.0 / t) + MORE
+        if y <= 0.66 * x {
+            xatan(y / x)
+        } else if y > TAN_3PI_8 * x {
+            FRAC_PI_2 - xatan(x / y) + MORE
         } else {
-            FRAC_PI_4 + xatan((t - 1.0) / (t + 1.0)) + 0.5 * MORE
+            let (d, s) = (y - x, y + x);
+            // (the quotient by way of y / x where y + x overflows)
+            let t = if s.is_finite() { d / s } else { (y / x - 1.0) / (y / x + 1.0) };
+            FRAC_PI_4 + xatan(t) + 0.5 * MORE
         }
     }
     if x > 0.0 {
-        satan(y / x)
+        satan(y, x)
     } else if x < 0.0 {
-        PI - satan(y / -x)
+        PI - satan(y, -x)
     } else if y > 0.0 {
         FRAC_PI_2
     } else {
