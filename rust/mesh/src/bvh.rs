@@ -732,16 +732,30 @@ impl Part {
         }
     }
 
+    /// The tree's nodes, depth first (the order and nodes of [`Part::flatten`]), written
+    /// once each, in parallel by subtrees, into a vector not filled before (the pages'
+    /// first touch is in the parallel writes, not in a serial fill of 20 MB at 1 M
+    /// triangles); and the root's reference.
+    fn flatten_all(self) -> (Vec<Node>, Child) {
+        let n = self.len();
+        let mut nodes = Vec::with_capacity(n);
+        let root = self.flatten_into(&mut nodes.spare_capacity_mut()[..n], 0);
+        // SAFETY: flatten_into wrote each of the n places (its slice is split exactly
+        // among the subtrees, each of which writes all of its own, lengths asserted)
+        unsafe { nodes.set_len(n) };
+        (nodes, root)
+    }
+
     /// Write the subtree's nodes into `out` (exactly [`Part::len`] of them, the first at
-    /// index `at` of the tree), depth first: the order and nodes of [`Part::flatten`], the
-    /// two halves of a split written in parallel; its reference.
-    fn flatten_into(self, out: &mut [Node], at: u32) -> Child {
-        debug_assert_eq!(out.len(), self.len());
+    /// index `at` of the tree, each written once), depth first: the order and nodes of
+    /// [`Part::flatten`], the two halves of a split written in parallel; its reference.
+    fn flatten_into(self, out: &mut [std::mem::MaybeUninit<Node>], at: u32) -> Child {
+        assert_eq!(out.len(), self.len());
         match self {
             Part::Seq(_, c, nodes) => {
                 let shift = |c: Child| if c.count == 0 { Child { index: c.index + at, count: 0 } } else { c };
                 for (o, n) in out.iter_mut().zip(&nodes) {
-                    *o = Node { child: [shift(n.child[0]), shift(n.child[1])], ..*n };
+                    o.write(Node { child: [shift(n.child[0]), shift(n.child[1])], ..*n });
                 }
                 shift(c)
             }
@@ -751,7 +765,7 @@ impl Part {
                 let (head, rest) = out.split_at_mut(1);
                 let (lo, ro) = rest.split_at_mut(nl);
                 let (lc, rc) = rayon::join(|| l.flatten_into(lo, at + 1), || r.flatten_into(ro, at + 1 + nl as u32));
-                head[0] = node_of(&lb, &rb, lc, rc);
+                head[0].write(node_of(&lb, &rb, lc, rc));
                 Child { index: at, count: 0 }
             }
         }
@@ -877,10 +891,8 @@ impl Bvh {
         let mut items = build_items(n, &corner);
         let part = build_par(&mut items, 0, 0, None);
         let b = part.bounds();
-        // the nodes written in place by subtrees in parallel (zeroed first: fresh pages,
-        // every node then written once)
-        let mut nodes = vec![Node::EMPTY; part.len()];
-        let root = part.flatten_into(&mut nodes, 0);
+        // the nodes written in place by subtrees in parallel
+        let (nodes, root) = part.flatten_all();
         let order: Vec<u32> = items.par_iter().map(|it| it.tri).collect();
         let corners = corners_over_items(items, &order, &corner);
         let bounds = corners.par_iter().map(Bound::of).collect();
@@ -1600,8 +1612,7 @@ mod flatten_tests {
         let part = build_par(&mut items, 0, 0, None);
         let mut serial = Vec::new();
         let root_serial = part.clone().flatten(&mut serial);
-        let mut par = vec![Node::EMPTY; part.len()];
-        let root_par = part.flatten_into(&mut par, 0);
+        let (par, root_par) = part.flatten_all();
         assert!(matches!(build_par(&mut build_items(n, |i| corners[i]), 0, 0, None), Part::Split(..)));
         // the corners written over the items' buffer are the plainly collected ones, the
         // items the same whichever way collected; a buffer of another size gets a new vector
