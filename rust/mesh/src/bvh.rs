@@ -1595,6 +1595,54 @@ fn better(d2: f64, slot: u32, best_d2: f64, best: Option<u32>) -> bool {
 mod flatten_tests {
     use super::*;
 
+    /// The partition and the binning compiled for AVX2 (vminpd/vmaxpd rows) give the plain
+    /// code's items, order and bins, to the bit: slivers, coincident and signed-zero
+    /// coordinates among them, each side binned or not.
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn avx2_partition_and_bins_equal_the_plain_ones() {
+        use rand::{Rng, SeedableRng};
+        if !std::is_x86_feature_detected!("avx2") {
+            return;
+        }
+        let same = |a: &Binned, b: &Binned| a.count == b.count && a.mins.iter().chain(&a.maxs).flatten().map(|x| x.to_bits()).eq(b.mins.iter().chain(&b.maxs).flatten().map(|x| x.to_bits()));
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+        for case in 0..40 {
+            let n = [1, 2, 7, 33, 300, 5000][case % 6];
+            let corners: Vec<[V3; 3]> = (0..n)
+                .map(|_| {
+                    let a: V3 = std::array::from_fn(|_| [0.0, -0.0, 1.0, rng.random_range(-50.0..50.0)][rng.random_range(0..4)]);
+                    std::array::from_fn(|_| std::array::from_fn(|k| if rng.random_range(0..3) == 0 { a[k] } else { a[k] + rng.random_range(-1.0..1.0) }))
+                })
+                .collect();
+            let items = build_items(n, |i| corners[i]);
+            let cb = centroid_bounds(&items);
+            let (axis, ext, _) = plan(&cb, n, 0);
+            if !(ext > 0.0) {
+                continue;
+            }
+            let (k, lo, scale) = bins_of(&cb, axis, ext);
+            // SAFETY: AVX2 detected above
+            let (plain, wide) = (bin_items_in::<false>(&items, k, lo, scale), unsafe { bin_items_avx2(&items, k, lo, scale) });
+            assert!(same(&plain, &wide), "case {case}: bins");
+            let b = 1 + case % (BINS - 1);
+            if bin_of(cb.hi[k], lo, scale) < b {
+                continue;
+            }
+            let t = bin_threshold(lo, scale, b, cb.lo[k], cb.hi[k]);
+            let (lp, rp) = ((case % 3, lo, scale), ((case + 1) % 3, lo, scale));
+            let (mut a, mut w) = (items.clone(), items.clone());
+            let (mut la, mut ra, mut lw, mut rw) = (Binned::new(), Binned::new(), Binned::new(), Binned::new());
+            let ia = partition_in::<true, true, false>(&mut a, (k, t), lp, rp, &mut la, &mut ra);
+            // SAFETY: AVX2 detected above
+            let iw = unsafe { partition_avx2::<true, true>(&mut w, (k, t), lp, rp, &mut lw, &mut rw) };
+            assert_eq!(ia, iw, "case {case}");
+            assert!(a.iter().map(|it| it.tri).eq(w.iter().map(|it| it.tri)), "case {case}: order");
+            assert!(same(&la, &lw) && same(&ra, &rw), "case {case}: the sides' bins");
+            assert_eq!(ia, items.iter().filter(|it| bin_of(it.centroid[k], lo, scale) < b).count());
+        }
+    }
+
     /// The nodes written in parallel in place ([`Part::flatten_into`]) are those appended
     /// one subtree after another ([`Part::flatten`]): the same nodes in the same order.
     #[test]
