@@ -161,13 +161,27 @@ impl TriMesh {
         let ((topology, normals, vertex_normals, edge_normals), bvh) = rayon::join(
             || {
                 let edges = sorted_edges(&tris, nv);
-                let topology = topology(&verts, &tris, &edges);
-                if topology.flipped {
+                // the signed volume first: when negative (a closed mesh wound inwards, read
+                // turned outwards) the normals are turned before the one pass over the edges
+                // that sums the edge normals and counts the topology. A mesh that turns out
+                // not closed is read as given: its normals turned back and its edge normals
+                // summed again (the same values as summed once from the right normals)
+                let signed = signed_volume(&verts, &tris);
+                let turn = |normals: &mut Vec<V3>| {
                     for n in normals.iter_mut() {
                         *n = scale(*n, -1.0);
                     }
+                };
+                if signed < 0.0 {
+                    turn(&mut normals);
                 }
-                let vertex_normals = pseudonormals(&verts, &tris, &normals, &edges, &mut edge_normals);
+                let topology = topology(edge_pass(&tris, &normals, &edges, &mut edge_normals), signed);
+                if topology.flipped != (signed < 0.0) {
+                    turn(&mut normals);
+                    edge_pass(&tris, &normals, &edges, &mut edge_normals);
+                }
+                drop(edges);
+                let vertex_normals = pseudonormals(&verts, &tris, &normals);
                 (topology, normals, vertex_normals, edge_normals)
             },
             || {
@@ -319,19 +333,47 @@ fn sorted_edges(tris: &[[u32; 3]], nv: usize) -> Edges {
     Edges { start, e }
 }
 
-fn topology(verts: &[V3], tris: &[[u32; 3]], edges: &Edges) -> Topology {
+/// The signed enclosed volume, summed in triangle order (meaningful for a closed mesh:
+/// negative when its triangles face inwards).
+fn signed_volume(verts: &[V3], tris: &[[u32; 3]]) -> f64 {
+    let mut volume = 0.0;
+    for t in tris {
+        let (a, b, c) = (verts[t[0] as usize], verts[t[1] as usize], verts[t[2] as usize]);
+        volume += dot(a, cross(b, c)) / 6.0;
+    }
+    volume
+}
+
+/// One pass over the edge groups: each edge normal (the sum of the normals of the
+/// triangles sharing the edge, in triangle order) written into `en` (every entry: each
+/// triangle's edge is in one group), and the numbers of boundary edges, of edges shared
+/// by more than two triangles, and of pairs run in the same direction.
+fn edge_pass(tris: &[[u32; 3]], normals: &[V3], edges: &Edges, en: &mut [[V3; 3]]) -> [usize; 3] {
     let (mut boundary, mut nonmanifold, mut inconsistent) = (0usize, 0usize, 0usize);
-    // an edge's direction in a triangle: forward when it runs from its low to its high vertex
-    let forward = |lo: u32, e: u64| edge_in(&tris[tri_of(e)], lo, e).1;
-    edges.for_each_group(|lo, g| match g.len() {
-        1 => boundary += 1,
-        2 => {
-            if forward(lo, g[0]) == forward(lo, g[1]) {
-                inconsistent += 1;
-            }
+    edges.for_each_group(|lo, g| {
+        let mut sum = [0.0; 3];
+        for &e in g {
+            sum = add(sum, normals[tri_of(e)]);
         }
-        _ => nonmanifold += 1,
+        // an edge's direction in a triangle: forward when it runs from its low to its high vertex
+        let mut forward = [false; 2];
+        for (i, &e) in g.iter().enumerate() {
+            let t = tri_of(e);
+            let (k, f) = edge_in(&tris[t], lo, e);
+            en[t][k] = sum;
+            forward[i.min(1)] = f;
+        }
+        match g.len() {
+            1 => boundary += 1,
+            2 => inconsistent += usize::from(forward[0] == forward[1]),
+            _ => nonmanifold += 1,
+        }
     });
+    [boundary, nonmanifold, inconsistent]
+}
+
+/// The topology from the edge groups' counts ([`edge_pass`]) and the signed volume.
+fn topology([boundary, nonmanifold, inconsistent]: [usize; 3], signed_volume: f64) -> Topology {
     let mut reason = None;
     if boundary > 0 {
         reason = Some(format!("the mesh is open ({boundary} boundary edges): it has no inside, distances are unsigned"));
@@ -343,10 +385,7 @@ fn topology(verts: &[V3], tris: &[[u32; 3]], edges: &Edges) -> Topology {
     let mut volume = 0.0;
     let mut flipped = false;
     if reason.is_none() {
-        for t in tris {
-            let (a, b, c) = (verts[t[0] as usize], verts[t[1] as usize], verts[t[2] as usize]);
-            volume += dot(a, cross(b, c)) / 6.0;
-        }
+        volume = signed_volume;
         if volume < 0.0 {
             flipped = true;
             volume = -volume;
@@ -411,9 +450,8 @@ pub(crate) fn atan2_upper(y: f64, x: f64) -> f64 {
     }
 }
 
-/// The vertex pseudonormals; the edge normals written into `en` (every entry: each
-/// triangle's edge is in one group).
-fn pseudonormals(verts: &[V3], tris: &[[u32; 3]], normals: &[V3], edges: &Edges, en: &mut [[V3; 3]]) -> Vec<V3> {
+/// The vertex pseudonormals (the edge normals: [`edge_pass`]).
+fn pseudonormals(verts: &[V3], tris: &[[u32; 3]], normals: &[V3]) -> Vec<V3> {
     use rayon::prelude::*;
     // each vertex's pseudonormal: its corners' angle-weighted face normals summed in
     // triangle order. The vertices in ranges, one a thread, in parallel: each range
@@ -432,17 +470,6 @@ fn pseudonormals(verts: &[V3], tris: &[[u32; 3]], normals: &[V3], edges: &Edges,
                     out[i] = add(out[i], scale(*n, a));
                 }
             }
-        }
-    });
-    // edge normals: the sum of the normals of the triangles sharing the edge
-    edges.for_each_group(|lo, g| {
-        let mut sum = [0.0; 3];
-        for &e in g {
-            sum = add(sum, normals[tri_of(e)]);
-        }
-        for &e in g {
-            let t = tri_of(e);
-            en[t][edge_in(&tris[t], lo, e).0] = sum;
         }
     });
     vn

@@ -244,8 +244,9 @@ fn degenerate_triangles_are_named_and_the_area_summed() {
 
 /// The topology's counts and the edge normals, against a map of every undirected edge
 /// to its (triangle, k) in triangle order: closed, open, non-manifold (a fin, a repeated
-/// triangle) and inconsistently wound meshes, with an unused vertex and vertices in
-/// several of the sort's blocks.
+/// triangle) and inconsistently wound meshes, and closed and open meshes wound inwards
+/// (the edge normals are the sums of the face normals as read: turned, or as given), with
+/// an unused vertex and vertices in several of the sort's blocks.
 #[test]
 fn edge_groups_equal_a_map_of_the_edges() {
     let (v, t) = sphere_mesh(50, 10.0);
@@ -261,9 +262,19 @@ fn edge_groups_equal_a_map_of_the_edges() {
     twice.extend_from_slice(&t[3 * 40..3 * 41]);
     let mut flipped = t.clone();
     flipped.swap(3 * 50, 3 * 50 + 1);
-    let cases: [(&[f64], &[u32]); 5] = [(&v, &t), (&v, &open), (&fin_v, &fin), (&v, &twice), (&v, &flipped)];
+    // wound inwards: closed (read turned outwards), and open (read as given)
+    let inward: Vec<u32> = t.chunks_exact(3).flat_map(|c| [c[0], c[2], c[1]]).collect();
+    let mut inward_open = inward.clone();
+    inward_open.drain(3 * 200..3 * 201);
+    let cases: [(&[f64], &[u32]); 7] = [(&v, &t), (&v, &open), (&fin_v, &fin), (&v, &twice), (&v, &flipped), (&v, &inward), (&v, &inward_open)];
     for (case, (v, t)) in cases.into_iter().enumerate() {
         let m = TriMesh::new(v, t).unwrap();
+        assert_eq!(m.topology.flipped, case == 5, "case {case}");
+        // the face normals: as wound, or turned for the closed inward mesh
+        let c = &t[3 * 9..3 * 9 + 3];
+        let p = |k: usize| [v[3 * c[k] as usize], v[3 * c[k] as usize + 1], v[3 * c[k] as usize + 2]];
+        let wound = gagekit_gdt::vec3::cross(gagekit_gdt::vec3::sub(p(1), p(0)), gagekit_gdt::vec3::sub(p(2), p(0)));
+        assert_eq!(gagekit_gdt::vec3::dot(wound, m.face_normals[9]) > 0.0, case != 5, "case {case}");
         let mut map = std::collections::BTreeMap::<(u32, u32), Vec<(usize, usize)>>::new();
         for (i, c) in t.chunks_exact(3).enumerate() {
             for k in 0..3 {
@@ -292,7 +303,7 @@ fn edge_groups_equal_a_map_of_the_edges() {
         if boundary + nonmanifold == 0 && inconsistent > 0 {
             assert!(reason.contains(&format!("({inconsistent} edges)")), "case {case}: {reason}");
         }
-        assert_eq!([boundary > 0, nonmanifold > 0, inconsistent > 0], [[false; 3], [true, false, false], [true, true, false], [false, true, false], [false, false, true]][case], "case {case}");
+        assert_eq!([boundary > 0, nonmanifold > 0, inconsistent > 0], [[false; 3], [true, false, false], [true, true, false], [false, true, false], [false, false, true], [false; 3], [true, false, false]][case], "case {case}");
     }
     assert!(nt > 9000 && v.len() / 3 > 4096);
 }
