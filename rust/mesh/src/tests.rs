@@ -216,6 +216,23 @@ fn sphere_mesh(n: usize, r: f64) -> (Vec<f64>, Vec<u32>) {
     (v, t)
 }
 
+/// Vertices no triangle names (more vertices than triangles: the pseudonormals get a
+/// vector of their own) leave every normal of the others as it was, and get none.
+#[test]
+fn unused_vertices_leave_the_normals_unchanged() {
+    let (v, t) = sphere_mesh(12, 5.0);
+    let a = TriMesh::new(&v, &t).unwrap();
+    let mut w = v.clone();
+    w.extend((0..3 * 2000).map(|i| i as f64 * 1e-3));
+    let b = TriMesh::new(&w, &t).unwrap();
+    assert!(w.len() / 3 > t.len() / 3 && v.len() / 3 < t.len() / 3);
+    let bits = |x: &[[f64; 3]]| x.iter().flatten().map(|c| c.to_bits()).collect::<Vec<_>>();
+    assert_eq!(bits(&b.vertex_normals[..v.len() / 3]), bits(&a.vertex_normals));
+    assert!(b.vertex_normals[v.len() / 3..].iter().all(|n| *n == [0.0; 3]));
+    assert_eq!(bits(&b.edge_normals.concat()), bits(&a.edge_normals.concat()));
+    assert!(a.vertex_normals.iter().all(|n| n.iter().any(|c| *c != 0.0)));
+}
+
 /// The area is the sum of the triangles' in triangle order; degenerate triangles (a
 /// repeated corner, collinear corners) are refused by index, the first five named.
 #[test]
