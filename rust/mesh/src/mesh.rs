@@ -265,7 +265,7 @@ impl Edges {
 /// vertices than triangles), a new vector.
 fn zeroed_in(e: Vec<u64>, n: usize) -> Vec<V3> {
     let bytes = e.capacity() * std::mem::size_of::<u64>();
-    if n == 0 || bytes % std::mem::size_of::<V3>() != 0 || bytes / std::mem::size_of::<V3>() < n {
+    if n == 0 || !bytes.is_multiple_of(std::mem::size_of::<V3>()) || bytes / std::mem::size_of::<V3>() < n {
         return vec![[0.0; 3]; n];
     }
     let cap = bytes / std::mem::size_of::<V3>();
