@@ -448,7 +448,7 @@ pub(crate) fn bin_threshold(lo: f64, scale: f64, b: usize, lo_c: f64, hi_c: f64)
             }
         }
     }
-    while h - l > 1 {
+    while l < h && h - l > 1 {
         let m = l + (h - l) / 2;
         if right(m) {
             h = m;
