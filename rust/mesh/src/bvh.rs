@@ -420,6 +420,31 @@ impl Binned {
             x[q] = if hi[q] > x[q] { hi[q] } else { x[q] };
         }
     }
+
+    /// [`Binned::grow`] by AVX's `vminpd` and `vmaxpd` (`a < b ? a : b` and `a > b ? a : b`,
+    /// lane by lane: the same values) and whole stores. Written plainly, AVX2 code made
+    /// masked stores of the rows (a store only where a value changes), which the next
+    /// item's load of the same bin cannot take its data from.
+    /// # Safety
+    /// Only in code compiled for AVX (the AVX2 builds, after detection).
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    unsafe fn grow_avx(&mut self, b: usize, it: &Item) {
+        use std::arch::x86_64::*;
+        let (m, x) = (self.mins[b].as_mut_ptr(), self.maxs[b].as_mut_ptr());
+        // the item's low corner and centroid, and its centroid and high corner: six
+        // consecutive numbers each (`repr(C)`, offsets checked below)
+        let p = (it as *const Item).cast::<u8>();
+        let (l, h) = (p.add(std::mem::offset_of!(Item, lo)).cast::<f64>(), p.add(std::mem::offset_of!(Item, centroid)).cast::<f64>());
+        // SAFETY: unaligned loads and stores of lanes 0..4 and 4..6 of six-lane rows, and of
+        // the item's six numbers from `l` and from `h` (within the item)
+        unsafe {
+            _mm256_storeu_pd(m, _mm256_min_pd(_mm256_loadu_pd(l), _mm256_loadu_pd(m)));
+            _mm_storeu_pd(m.add(4), _mm_min_pd(_mm_loadu_pd(l.add(4)), _mm_loadu_pd(m.add(4))));
+            _mm256_storeu_pd(x, _mm256_max_pd(_mm256_loadu_pd(h), _mm256_loadu_pd(x)));
+            _mm_storeu_pd(x.add(4), _mm_max_pd(_mm_loadu_pd(h.add(4)), _mm_loadu_pd(x.add(4))));
+        }
+    }
     fn merge(mut self, o: &Binned) -> Self {
         for b in 0..BINS {
             self.count[b] += o.count[b];
@@ -427,10 +452,16 @@ impl Binned {
         }
         self
     }
+    /// Add an item to its bin; `AVX`: by [`Binned::grow_avx`] (only in the AVX2 builds).
     #[inline(always)]
-    fn add(&mut self, it: &Item, k: usize, lo: f64, scale: f64) {
+    fn add<const AVX: bool>(&mut self, it: &Item, k: usize, lo: f64, scale: f64) {
         let i = bin_of(it.centroid[k], lo, scale);
         self.count[i] += 1;
+        #[cfg(target_arch = "x86_64")]
+        if AVX {
+            // SAFETY: AVX is true only in the AVX2 builds, run after detection
+            return unsafe { self.grow_avx(i, it) };
+        }
         let (l, c, h) = (&it.lo, &it.centroid, &it.hi);
         self.grow(i, &[l[0], l[1], l[2], c[0], c[1], c[2]], &[c[0], c[1], c[2], h[0], h[1], h[2]]);
     }
@@ -469,10 +500,88 @@ pub(crate) fn bin_of(c: f64, lo: f64, scale: f64) -> usize {
     unsafe { x.to_int_unchecked::<u32>() as usize }
 }
 
+/// `f64`'s total order as integers (-0.0 just below +0.0), and back.
+#[inline]
+fn ordered(x: f64) -> u64 {
+    let b = x.to_bits();
+    if b >> 63 == 1 {
+        !b
+    } else {
+        b | 1 << 63
+    }
+}
+
+#[inline]
+fn from_ordered(o: u64) -> f64 {
+    f64::from_bits(if o >> 63 == 1 { o & !(1 << 63) } else { !o })
+}
+
+/// The least coordinate `t` of `lo_c..=hi_c` whose bin ([`bin_of`] of `lo`, `scale`) is
+/// at least `b`, given that `hi_c`'s is: for every centroid coordinate `c` of the node
+/// (all within `lo_c..=hi_c`), `bin_of(c, lo, scale) < b` exactly when `c < t`. `bin_of`
+/// never decreases as `c` grows (the subtraction, the product by `scale >= 0` and the
+/// clamps are monotone), and gives -0.0 and +0.0 the same bin, so one comparison replaces
+/// it. Found by bisection over the coordinates between the two, started at the estimate
+/// `lo + b / scale` (the bin's edge to within a few units in the last place).
+pub(crate) fn bin_threshold(lo: f64, scale: f64, b: usize, lo_c: f64, hi_c: f64) -> f64 {
+    let right = |o: u64| bin_of(from_ordered(o), lo, scale) >= b;
+    // the answer is in (l, h]: l's bin is below b, h's is not
+    let (mut l, mut h) = (ordered(lo_c), ordered(hi_c));
+    if right(l) {
+        return lo_c;
+    }
+    debug_assert!(right(h) && l < h);
+    let e = lo + b as f64 / scale;
+    if e.is_finite() {
+        let o = ordered(e);
+        if l < o && o < h {
+            if right(o) {
+                h = o;
+                let p = o.saturating_sub(4);
+                if l < p && !right(p) {
+                    l = p;
+                }
+            } else {
+                l = o;
+                let p = o.saturating_add(4);
+                if p < h && right(p) {
+                    h = p;
+                }
+            }
+        }
+    }
+    while l < h && h - l > 1 {
+        let m = l + (h - l) / 2;
+        if right(m) {
+            h = m;
+        } else {
+            l = m;
+        }
+    }
+    from_ordered(h)
+}
+
 fn bin_items(items: &[Item], k: usize, lo: f64, scale: f64) -> Binned {
+    #[cfg(target_arch = "x86_64")]
+    if std::is_x86_feature_detected!("avx2") {
+        // SAFETY: the feature was detected on this processor
+        return unsafe { bin_items_avx2(items, k, lo, scale) };
+    }
+    bin_items_in::<false>(items, k, lo, scale)
+}
+
+/// [`bin_items`] compiled for AVX2 (the same comparisons, wider: the same bins).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn bin_items_avx2(items: &[Item], k: usize, lo: f64, scale: f64) -> Binned {
+    bin_items_in::<true>(items, k, lo, scale)
+}
+
+#[inline(always)]
+fn bin_items_in<const AVX: bool>(items: &[Item], k: usize, lo: f64, scale: f64) -> Binned {
     let mut b = Binned::new();
     for it in items {
-        b.add(it, k, lo, scale);
+        b.add::<AVX>(it, k, lo, scale);
     }
     b
 }
@@ -480,19 +589,37 @@ fn bin_items(items: &[Item], k: usize, lo: f64, scale: f64) -> Binned {
 /// Two-pointer partition of `items` by bin `b` of (`k`, `lo`, `scale`), in place and
 /// deterministic (each item is tested once, where its side is known), binning each item
 /// into its side's bins (`L`, `R`: whether that side splits by bins, by `lp`, `rp`).
+/// The side is one comparison with the bin's edge `t` ([`bin_threshold`]: the same side).
 #[allow(clippy::too_many_arguments)]
-fn partition<const L: bool, const R: bool>(items: &mut [Item], (k, lo, scale): (usize, f64, f64), b: usize, lp: (usize, f64, f64), rp: (usize, f64, f64), lb: &mut Binned, rb: &mut Binned) -> usize {
+fn partition<const L: bool, const R: bool>(items: &mut [Item], (k, t): (usize, f64), lp: (usize, f64, f64), rp: (usize, f64, f64), lb: &mut Binned, rb: &mut Binned) -> usize {
+    #[cfg(target_arch = "x86_64")]
+    if std::is_x86_feature_detected!("avx2") {
+        // SAFETY: the feature was detected on this processor
+        return unsafe { partition_avx2::<L, R>(items, (k, t), lp, rp, lb, rb) };
+    }
+    partition_in::<L, R, false>(items, (k, t), lp, rp, lb, rb)
+}
+
+/// [`partition`] compiled for AVX2 (the same comparisons and moves, wider).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn partition_avx2<const L: bool, const R: bool>(items: &mut [Item], kt: (usize, f64), lp: (usize, f64, f64), rp: (usize, f64, f64), lb: &mut Binned, rb: &mut Binned) -> usize {
+    partition_in::<L, R, true>(items, kt, lp, rp, lb, rb)
+}
+
+#[inline(always)]
+fn partition_in<const L: bool, const R: bool, const AVX: bool>(items: &mut [Item], (k, t): (usize, f64), lp: (usize, f64, f64), rp: (usize, f64, f64), lb: &mut Binned, rb: &mut Binned) -> usize {
     let (mut i, mut j) = (0usize, items.len());
     while i < j {
         let it = &items[i];
-        if bin_of(it.centroid[k], lo, scale) < b {
+        if it.centroid[k] < t {
             if L {
-                lb.add(it, lp.0, lp.1, lp.2);
+                lb.add::<AVX>(it, lp.0, lp.1, lp.2);
             }
             i += 1;
         } else {
             if R {
-                rb.add(it, rp.0, rp.1, rp.2);
+                rb.add::<AVX>(it, rp.0, rp.1, rp.2);
             }
             j -= 1;
             items.swap(i, j);
@@ -570,14 +697,14 @@ fn split(items: &mut [Item], depth: usize, known: Option<Known>) -> (usize, Opti
             let (la, le, ls) = plan(&lcb, nl, depth + 1);
             let (ra, re, rs) = plan(&rcb, n - nl, depth + 1);
             let (lp, rp) = (if ls { bins_of(&lcb, la, le) } else { (0, 0.0, 0.0) }, if rs { bins_of(&rcb, ra, re) } else { (0, 0.0, 0.0) });
-            let kls = (k, lo, scale);
+            let kt = (k, bin_threshold(lo, scale, b, cb.lo[k], cb.hi[k]));
             let (mut lb, mut rb) = (Box::new(Binned::new()), Box::new(Binned::new()));
             let (l, r) = (&mut *lb, &mut *rb);
             let i = match (ls, rs) {
-                (true, true) => partition::<true, true>(items, kls, b, lp, rp, l, r),
-                (true, false) => partition::<true, false>(items, kls, b, lp, rp, l, r),
-                (false, true) => partition::<false, true>(items, kls, b, lp, rp, l, r),
-                (false, false) => partition::<false, false>(items, kls, b, lp, rp, l, r),
+                (true, true) => partition::<true, true>(items, kt, lp, rp, l, r),
+                (true, false) => partition::<true, false>(items, kt, lp, rp, l, r),
+                (false, true) => partition::<false, true>(items, kt, lp, rp, l, r),
+                (false, false) => partition::<false, false>(items, kt, lp, rp, l, r),
             };
             debug_assert_eq!(i, nl);
             if i > 0 && i < n {
@@ -619,19 +746,15 @@ pub(crate) fn sort_small(items: &mut [Item], axis: usize) {
         keys[pos] = key(it, pos);
     }
     let keys = &mut keys[..n];
-    for i in 1..n {
-        let x = keys[i];
-        let mut j = i;
-        while j > 0 && keys[j - 1] > x {
-            keys[j] = keys[j - 1];
-            j -= 1;
-        }
-        keys[j] = x;
+    keys.sort_unstable();
+    // the items copied aside: only the n there are (not an array of 32 filled first)
+    let mut tmp = [std::mem::MaybeUninit::<Item>::uninit(); SMALL_SORT];
+    for (t, it) in tmp.iter_mut().zip(items.iter()) {
+        t.write(*it);
     }
-    let mut tmp = [items[0]; SMALL_SORT];
-    tmp[..n].copy_from_slice(items);
     for (it, k) in items.iter_mut().zip(keys.iter()) {
-        *it = tmp[(*k as u32) as usize];
+        // SAFETY: a key's low bits are its item's position, below n, and tmp[..n] is written
+        *it = unsafe { tmp[(*k as u32) as usize].assume_init() };
     }
 }
 
@@ -680,7 +803,9 @@ enum Part {
 
 fn build_par(items: &mut [Item], first: u32, depth: usize, known: Option<Known>) -> Part {
     if items.len() <= PAR {
-        let mut out = Vec::new();
+        // room for the nodes of leaves of 2.7 triangles on average (the torus's are 3.1:
+        // 0.32 nodes a triangle), so that the vector rarely grows (copies, fresh pages)
+        let mut out = Vec::with_capacity(items.len() * 3 / 8);
         let (b, c) = build_seq(items, first, depth, known, &mut out);
         return Part::Seq(b, c, out);
     }
@@ -709,16 +834,30 @@ impl Part {
         }
     }
 
+    /// The tree's nodes, depth first (the order and nodes of [`Part::flatten`]), written
+    /// once each, in parallel by subtrees, into a vector not filled before (the pages'
+    /// first touch is in the parallel writes, not in a serial fill of 20 MB at 1 M
+    /// triangles); and the root's reference.
+    fn flatten_all(self) -> (Vec<Node>, Child) {
+        let n = self.len();
+        let mut nodes = Vec::with_capacity(n);
+        let root = self.flatten_into(&mut nodes.spare_capacity_mut()[..n], 0);
+        // SAFETY: flatten_into wrote each of the n places (its slice is split exactly
+        // among the subtrees, each of which writes all of its own, lengths asserted)
+        unsafe { nodes.set_len(n) };
+        (nodes, root)
+    }
+
     /// Write the subtree's nodes into `out` (exactly [`Part::len`] of them, the first at
-    /// index `at` of the tree), depth first: the order and nodes of [`Part::flatten`], the
-    /// two halves of a split written in parallel; its reference.
-    fn flatten_into(self, out: &mut [Node], at: u32) -> Child {
-        debug_assert_eq!(out.len(), self.len());
+    /// index `at` of the tree, each written once), depth first: the order and nodes of
+    /// [`Part::flatten`], the two halves of a split written in parallel; its reference.
+    fn flatten_into(self, out: &mut [std::mem::MaybeUninit<Node>], at: u32) -> Child {
+        assert_eq!(out.len(), self.len());
         match self {
             Part::Seq(_, c, nodes) => {
                 let shift = |c: Child| if c.count == 0 { Child { index: c.index + at, count: 0 } } else { c };
                 for (o, n) in out.iter_mut().zip(&nodes) {
-                    *o = Node { child: [shift(n.child[0]), shift(n.child[1])], ..*n };
+                    o.write(Node { child: [shift(n.child[0]), shift(n.child[1])], ..*n });
                 }
                 shift(c)
             }
@@ -728,7 +867,7 @@ impl Part {
                 let (head, rest) = out.split_at_mut(1);
                 let (lo, ro) = rest.split_at_mut(nl);
                 let (lc, rc) = rayon::join(|| l.flatten_into(lo, at + 1), || r.flatten_into(ro, at + 1 + nl as u32));
-                head[0] = node_of(&lb, &rb, lc, rc);
+                head[0].write(node_of(&lb, &rb, lc, rc));
                 Child { index: at, count: 0 }
             }
         }
@@ -798,6 +937,8 @@ fn build_items(n: usize, corner: impl Fn(usize) -> [V3; 3] + Sync) -> Vec<Item> 
 }
 
 const _: () = assert!(std::mem::size_of::<Item>() == 80 && std::mem::size_of::<[V3; 3]>() == 72 && std::mem::align_of::<Item>() == std::mem::align_of::<[V3; 3]>());
+// Binned::grow_avx reads the low corner and centroid, and the centroid and high corner, as six numbers each
+const _: () = assert!(std::mem::offset_of!(Item, centroid) == std::mem::offset_of!(Item, lo) + 24 && std::mem::offset_of!(Item, hi) == std::mem::offset_of!(Item, centroid) + 24);
 
 /// The slots' corners (`corner(order[s])` for slot s) written over the items' buffer,
 /// which the build no longer reads: 72 of each item's 80 bytes, front to back, in
@@ -852,10 +993,8 @@ impl Bvh {
         let mut items = build_items(n, &corner);
         let part = build_par(&mut items, 0, 0, None);
         let b = part.bounds();
-        // the nodes written in place by subtrees in parallel (zeroed first: fresh pages,
-        // every node then written once)
-        let mut nodes = vec![Node::EMPTY; part.len()];
-        let root = part.flatten_into(&mut nodes, 0);
+        // the nodes written in place by subtrees in parallel
+        let (nodes, root) = part.flatten_all();
         let order: Vec<u32> = items.par_iter().map(|it| it.tri).collect();
         let corners = corners_over_items(items, &order, &corner);
         let bounds = corners.par_iter().map(Bound::of).collect();
@@ -1549,6 +1688,54 @@ fn better(d2: f64, slot: u32, best_d2: f64, best: Option<u32>) -> bool {
 mod flatten_tests {
     use super::*;
 
+    /// The partition and the binning compiled for AVX2 (vminpd/vmaxpd rows) give the plain
+    /// code's items, order and bins, to the bit: slivers, coincident and signed-zero
+    /// coordinates among them, each side binned or not.
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn avx2_partition_and_bins_equal_the_plain_ones() {
+        use rand::{Rng, SeedableRng};
+        if !std::is_x86_feature_detected!("avx2") {
+            return;
+        }
+        let same = |a: &Binned, b: &Binned| a.count == b.count && a.mins.iter().chain(&a.maxs).flatten().map(|x| x.to_bits()).eq(b.mins.iter().chain(&b.maxs).flatten().map(|x| x.to_bits()));
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+        for case in 0..40 {
+            let n = [1, 2, 7, 33, 300, 5000][case % 6];
+            let corners: Vec<[V3; 3]> = (0..n)
+                .map(|_| {
+                    let a: V3 = std::array::from_fn(|_| [0.0, -0.0, 1.0, rng.random_range(-50.0..50.0)][rng.random_range(0..4)]);
+                    std::array::from_fn(|_| std::array::from_fn(|k| if rng.random_range(0..3) == 0 { a[k] } else { a[k] + rng.random_range(-1.0..1.0) }))
+                })
+                .collect();
+            let items = build_items(n, |i| corners[i]);
+            let cb = centroid_bounds(&items);
+            let (axis, ext, _) = plan(&cb, n, 0);
+            if !(ext > 0.0) {
+                continue;
+            }
+            let (k, lo, scale) = bins_of(&cb, axis, ext);
+            // SAFETY: AVX2 detected above
+            let (plain, wide) = (bin_items_in::<false>(&items, k, lo, scale), unsafe { bin_items_avx2(&items, k, lo, scale) });
+            assert!(same(&plain, &wide), "case {case}: bins");
+            let b = 1 + case % (BINS - 1);
+            if bin_of(cb.hi[k], lo, scale) < b {
+                continue;
+            }
+            let t = bin_threshold(lo, scale, b, cb.lo[k], cb.hi[k]);
+            let (lp, rp) = ((case % 3, lo, scale), ((case + 1) % 3, lo, scale));
+            let (mut a, mut w) = (items.clone(), items.clone());
+            let (mut la, mut ra, mut lw, mut rw) = (Binned::new(), Binned::new(), Binned::new(), Binned::new());
+            let ia = partition_in::<true, true, false>(&mut a, (k, t), lp, rp, &mut la, &mut ra);
+            // SAFETY: AVX2 detected above
+            let iw = unsafe { partition_avx2::<true, true>(&mut w, (k, t), lp, rp, &mut lw, &mut rw) };
+            assert_eq!(ia, iw, "case {case}");
+            assert!(a.iter().map(|it| it.tri).eq(w.iter().map(|it| it.tri)), "case {case}: order");
+            assert!(same(&la, &lw) && same(&ra, &rw), "case {case}: the sides' bins");
+            assert_eq!(ia, items.iter().filter(|it| bin_of(it.centroid[k], lo, scale) < b).count());
+        }
+    }
+
     /// The nodes written in parallel in place ([`Part::flatten_into`]) are those appended
     /// one subtree after another ([`Part::flatten`]): the same nodes in the same order.
     #[test]
@@ -1566,8 +1753,7 @@ mod flatten_tests {
         let part = build_par(&mut items, 0, 0, None);
         let mut serial = Vec::new();
         let root_serial = part.clone().flatten(&mut serial);
-        let mut par = vec![Node::EMPTY; part.len()];
-        let root_par = part.flatten_into(&mut par, 0);
+        let (par, root_par) = part.flatten_all();
         assert!(matches!(build_par(&mut build_items(n, |i| corners[i]), 0, 0, None), Part::Split(..)));
         // the corners written over the items' buffer are the plainly collected ones, the
         // items the same whichever way collected; a buffer of another size gets a new vector

@@ -216,6 +216,115 @@ fn sphere_mesh(n: usize, r: f64) -> (Vec<f64>, Vec<u32>) {
     (v, t)
 }
 
+/// Vertices no triangle names (more vertices than triangles: the pseudonormals get a
+/// vector of their own) leave every normal of the others as it was, and get none.
+#[test]
+fn unused_vertices_leave_the_normals_unchanged() {
+    let (v, t) = sphere_mesh(12, 5.0);
+    let a = TriMesh::new(&v, &t).unwrap();
+    let mut w = v.clone();
+    w.extend((0..3 * 2000).map(|i| i as f64 * 1e-3));
+    let b = TriMesh::new(&w, &t).unwrap();
+    assert!(w.len() / 3 > t.len() / 3 && v.len() / 3 < t.len() / 3);
+    let bits = |x: &[[f64; 3]]| x.iter().flatten().map(|c| c.to_bits()).collect::<Vec<_>>();
+    assert_eq!(bits(&b.vertex_normals[..v.len() / 3]), bits(&a.vertex_normals));
+    assert!(b.vertex_normals[v.len() / 3..].iter().all(|n| *n == [0.0; 3]));
+    assert_eq!(bits(&b.edge_normals.concat()), bits(&a.edge_normals.concat()));
+    assert!(a.vertex_normals.iter().all(|n| n.iter().any(|c| *c != 0.0)));
+}
+
+/// The area is the sum of the triangles' in triangle order; degenerate triangles (a
+/// repeated corner, collinear corners) are refused by index, the first five named.
+#[test]
+fn degenerate_triangles_are_named_and_the_area_summed() {
+    let (v, t) = box_mesh([1.0, 2.0, 3.0]);
+    let m = TriMesh::new(&v, &t).unwrap();
+    let mut area = 0.0;
+    for c in t.chunks_exact(3) {
+        let p = |k: usize| [v[3 * c[k] as usize], v[3 * c[k] as usize + 1], v[3 * c[k] as usize + 2]];
+        let n = gagekit_gdt::vec3::cross(gagekit_gdt::vec3::sub(p(1), p(0)), gagekit_gdt::vec3::sub(p(2), p(0)));
+        area += 0.5 * gagekit_gdt::vec3::norm(n);
+    }
+    assert_eq!(m.area.to_bits(), area.to_bits());
+    assert!((m.area - 8.0 * (2.0 + 6.0 + 3.0)).abs() < 1e-12);
+    let mut bad_v = v.clone();
+    // a vertex on the line of two others: triangle 12 flat
+    bad_v.extend([0.0, 0.0, 0.0, 1.0, 1.0, 1.0, 2.0, 2.0, 2.0]);
+    let nv = (bad_v.len() / 3) as u32;
+    let mut bad_t = t.clone();
+    bad_t.extend([nv - 3, nv - 2, nv - 1]);
+    bad_t[3 * 4 + 2] = bad_t[3 * 4];
+    let e = TriMesh::new(&bad_v, &bad_t).unwrap_err();
+    assert_eq!(e.kind, ErrorKind::DegenerateGeometry);
+    assert!(e.message.contains("2 degenerate triangle(s)") && e.message.contains("first: 4, 12"), "{}", e.message);
+}
+
+/// The topology's counts and the edge normals, against a map of every undirected edge
+/// to its (triangle, k) in triangle order: closed, open, non-manifold (a fin, a repeated
+/// triangle) and inconsistently wound meshes, and closed and open meshes wound inwards
+/// (the edge normals are the sums of the face normals as read: turned, or as given), with
+/// an unused vertex and vertices in several of the sort's blocks.
+#[test]
+fn edge_groups_equal_a_map_of_the_edges() {
+    let (v, t) = sphere_mesh(50, 10.0);
+    let nt = t.len() / 3;
+    let mut open = t.clone();
+    open.drain(3 * 100..3 * 103);
+    let mut fin_v = v.clone();
+    fin_v.extend([30.0, 0.0, 0.0, 31.0, 1.0, 2.0]);
+    let far = (fin_v.len() / 3 - 2) as u32;
+    let mut fin = t.clone();
+    fin.extend([t[3 * 7], t[3 * 7 + 1], far]);
+    let mut twice = t.clone();
+    twice.extend_from_slice(&t[3 * 40..3 * 41]);
+    let mut flipped = t.clone();
+    flipped.swap(3 * 50, 3 * 50 + 1);
+    // wound inwards: closed (read turned outwards), and open (read as given)
+    let inward: Vec<u32> = t.chunks_exact(3).flat_map(|c| [c[0], c[2], c[1]]).collect();
+    let mut inward_open = inward.clone();
+    inward_open.drain(3 * 200..3 * 201);
+    let cases: [(&[f64], &[u32]); 7] = [(&v, &t), (&v, &open), (&fin_v, &fin), (&v, &twice), (&v, &flipped), (&v, &inward), (&v, &inward_open)];
+    for (case, (v, t)) in cases.into_iter().enumerate() {
+        let m = TriMesh::new(v, t).unwrap();
+        assert_eq!(m.topology.flipped, case == 5, "case {case}");
+        // the face normals: as wound, or turned for the closed inward mesh
+        let c = &t[3 * 9..3 * 9 + 3];
+        let p = |k: usize| [v[3 * c[k] as usize], v[3 * c[k] as usize + 1], v[3 * c[k] as usize + 2]];
+        let wound = gagekit_gdt::vec3::cross(gagekit_gdt::vec3::sub(p(1), p(0)), gagekit_gdt::vec3::sub(p(2), p(0)));
+        assert_eq!(gagekit_gdt::vec3::dot(wound, m.face_normals[9]) > 0.0, case != 5, "case {case}");
+        let mut map = std::collections::BTreeMap::<(u32, u32), Vec<(usize, usize)>>::new();
+        for (i, c) in t.chunks_exact(3).enumerate() {
+            for k in 0..3 {
+                let (a, b) = (c[k], c[(k + 1) % 3]);
+                map.entry((a.min(b), a.max(b))).or_default().push((i, k));
+            }
+        }
+        let (mut boundary, mut nonmanifold, mut inconsistent) = (0, 0, 0);
+        for (&(lo, _), g) in &map {
+            match g.len() {
+                1 => boundary += 1,
+                2 => inconsistent += usize::from((t[3 * g[0].0 + g[0].1] == lo) == (t[3 * g[1].0 + g[1].1] == lo)),
+                _ => nonmanifold += 1,
+            }
+            let mut sum = [0.0; 3];
+            for &(i, _) in g {
+                sum = gagekit_gdt::vec3::add(sum, m.face_normals[i]);
+            }
+            for &(i, k) in g {
+                assert_eq!(m.edge_normals[i][k].map(f64::to_bits), sum.map(f64::to_bits), "case {case}, triangle {i}, edge {k}");
+            }
+        }
+        assert_eq!((m.topology.boundary_edges, m.topology.nonmanifold_edges), (boundary, nonmanifold), "case {case}");
+        let reason = m.topology.reason.clone().unwrap_or_default();
+        assert_eq!(m.signed(), boundary + nonmanifold + inconsistent == 0, "case {case}: {reason}");
+        if boundary + nonmanifold == 0 && inconsistent > 0 {
+            assert!(reason.contains(&format!("({inconsistent} edges)")), "case {case}: {reason}");
+        }
+        assert_eq!([boundary > 0, nonmanifold > 0, inconsistent > 0], [[false; 3], [true, false, false], [true, true, false], [false, true, false], [false, false, true], [false; 3], [true, false, false]][case], "case {case}");
+    }
+    assert!(nt > 9000 && v.len() / 3 > 4096);
+}
+
 #[test]
 fn results_do_not_depend_on_the_thread_count() {
     let (v, t) = sphere_mesh(60, 10.0);
@@ -937,5 +1046,79 @@ proptest! {
     fn bin_of_is_the_saturating_cast(c in prop::num::f64::ANY, lo in prop::num::f64::ANY, scale in prop::num::f64::ANY) {
         let want = (((c - lo) * scale) as usize).min(crate::bvh::BINS - 1);
         prop_assert_eq!(crate::bvh::bin_of(c, lo, scale), want);
+    }
+}
+
+/// Checks `c < t` against `bin_of(c, lo, scale) < b` for the node's centroids `cs` (its
+/// bins: `lo` its least centroid, `scale` from the extent, as the build takes them).
+fn check_threshold(cs: &[f64]) -> Result<(), TestCaseError> {
+    use crate::bvh::{bin_of, bin_threshold, BINS};
+    let lo_c = cs.iter().fold(f64::INFINITY, |a, &c| if c < a { c } else { a });
+    let hi_c = cs.iter().fold(f64::NEG_INFINITY, |a, &c| if c > a { c } else { a });
+    let ext = hi_c - lo_c;
+    if !(ext > 0.0) {
+        return Ok(());
+    }
+    let scale = BINS as f64 / ext;
+    for b in 1..BINS {
+        if bin_of(hi_c, lo_c, scale) < b {
+            break;
+        }
+        let t = bin_threshold(lo_c, scale, b, lo_c, hi_c);
+        // the node's centroids, and the coordinates next to the edge and to the ends
+        let near = [t, t.next_down(), t.next_up(), t.next_down().next_down(), t.next_up().next_up(), lo_c, hi_c, lo_c.next_up(), hi_c.next_down()];
+        for &c in cs.iter().chain(near.iter().filter(|&&c| c >= lo_c && c <= hi_c)) {
+            prop_assert_eq!(c < t, bin_of(c, lo_c, scale) < b, "c {} t {} b {} lo {} scale {}", c, t, b, lo_c, scale);
+        }
+    }
+    Ok(())
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(2048))]
+    /// The partition's one comparison with the bin's edge (`bin_threshold`) puts every
+    /// centroid on the side its bin does: centroids at any offset and scale, spans down to
+    /// a few units in the last place, signed zeros, and coordinates at the edge.
+    #[test]
+    fn bin_threshold_splits_as_the_bins(seed in 0u64..1_000_000, e_off in -300.0f64..300.0, e_span in -300.0f64..300.0, ulps in 1u64..64, zeros in 0usize..3) {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let off = if rng.random_range(0..2) == 0 { 10f64.powf(e_off) } else { -(10f64.powf(e_off)) };
+        let span = 10f64.powf(e_span);
+        let mut cs: Vec<f64> = (0..40).map(|_| off + span * rng.random_range(-1.0..1.0)).collect();
+        cs.retain(|c| c.is_finite());
+        check_threshold(&cs)?;
+        // a span of a few units in the last place
+        let mut x = off;
+        let tiny: Vec<f64> = (0..ulps).map(|_| { x = x.next_up(); x }).collect();
+        check_threshold(&tiny)?;
+        // signed zeros among small values
+        let z: Vec<f64> = (0..20).map(|i| match (i + zeros) % 4 { 0 => 0.0, 1 => -0.0, 2 => 1e-300 * i as f64, _ => -1e-310 * i as f64 }).collect();
+        check_threshold(&z)?;
+        // huge values: infinite extent or scale 0
+        check_threshold(&[f64::MAX, -f64::MAX, 1.0, 0.0])?;
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(4096))]
+    /// The pseudonormals' atan2 (y >= 0) is within 2 units in the last place of libm's:
+    /// angles from 1e-12 rad to pi - 1e-12, at every scale (up to where y + x overflows),
+    /// and the axes and zeros.
+    #[test]
+    fn corner_angle_is_libm_atan2_within_two_ulp(e_a in -12.0f64..0.5, near_pi in any::<bool>(), e_s in -300.0f64..308.2, special in 0usize..8) {
+        let a = 10f64.powf(e_a).min(std::f64::consts::PI);
+        let a = if near_pi { std::f64::consts::PI - a } else { a };
+        let r = 10f64.powf(e_s);
+        let (y, x) = match special {
+            0 => (0.0, r),
+            1 => (0.0, -r),
+            2 => (r, 0.0),
+            3 => (0.0, 0.0),
+            4 => (0.0, -0.0),
+            _ => (r * a.sin(), r * a.cos()),
+        };
+        let (got, want) = (crate::mesh::atan2_upper(y, x), y.atan2(x));
+        prop_assert!((got - want).abs() <= 2.0 * f64::EPSILON * want, "atan2({}, {}): {} against {}", y, x, got, want);
+        prop_assert!(got >= 0.0 && got <= std::f64::consts::PI);
     }
 }
