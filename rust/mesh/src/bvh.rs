@@ -1386,11 +1386,14 @@ impl Bvh {
             }
         }
         loop {
-            if mask.is_power_of_two() {
+            if !W16 && mask.is_power_of_two() {
                 // one lane open (an outlier's search, mostly: its ball is far larger than
                 // its neighbours'): the subtree walked for that lane alone, each node's box
                 // test one small vector for the two children instead of eight lanes, the
-                // same numbers ([`Bvh::walk_one`])
+                // same numbers ([`Bvh::walk_one`]). Not in the AVX-512 build, whose
+                // eight-lane test is one vector already ([`child_boxes16`]): there it was
+                // no faster (one thread, 3 M points of the bench's scan, ten alternated
+                // runs: CPU median 0.555 s against 0.53 s)
                 let i = mask.trailing_zeros() as usize;
                 self.walk_one(cur, ps[i], [qx[i], qy[i], qz[i]], reach[i], err2[i], skip[i], &mut bd[i], &mut side[i], &mut bw[i], &mut best[i]);
             } else if cur.count > 0 {
