@@ -1302,7 +1302,6 @@ impl Bvh {
             }
         }
         for i in 0..g {
-            slack[i] = self.slack_at(&ps[i]);
             bd[i] = bound2;
             match best[i] {
                 Some(n) if n.d2 <= bound2 => {
@@ -1311,15 +1310,24 @@ impl Bvh {
                 }
                 _ => best[i] = None,
             }
+            all |= 1 << i;
+        }
+        // the lanes' numbers for the tests, over all GROUP lanes without a branch (they
+        // compile to vector instructions; lanes past `g` have the point 0 and `bd` minus
+        // infinity, so `side` and `bw` minus infinity, and are never in a mask)
+        for i in 0..GROUP {
+            // |p|_inf, as `slack_at` takes it
+            let m = px[i].abs().max(py[i].abs()).max(pz[i].abs());
+            slack[i] = self.slack + 1e-9 * m;
             (qx[i], qy[i], qz[i]) = (px[i] as f32, py[i] as f32, pz[i] as f32);
-            for (q, v) in q16.iter_mut().zip([qx[i], qy[i], qz[i]]) {
-                (q[i], q[i + GROUP]) = (v, v);
-            }
             side[i] = Bound::side32(bd[i]);
             reach[i] = Bound::reach32(slack[i]);
-            err2[i] = widen_err2(F32_ERR * (size + px[i].abs().max(py[i].abs()).max(pz[i].abs())));
+            err2[i] = widen_err2(F32_ERR * (size + m));
             bw[i] = widen(bd[i], err2[i]);
-            all |= 1 << i;
+        }
+        for (q, v) in q16.iter_mut().zip([&qx, &qy, &qz]) {
+            q[..GROUP].copy_from_slice(v);
+            q[GROUP..].copy_from_slice(v);
         }
         // lanes of `m` whose squared box distance in `d` may hold something better
         let open = |d: &[f64; GROUP], bd: &[f64; GROUP], m: u32| -> u32 {
@@ -1353,13 +1361,23 @@ impl Bvh {
         // walk's from the root. (The box alone is no walk: a ball touching the surface
         // meets few boxes, its bounding box many.)
         {
+            // the open lanes' radii, minus infinity for the others (their ends are then
+            // plus and minus infinity, which change no end); the ends kept by plain
+            // comparisons (one instruction each; the values are finite or infinite, never NaN)
+            let mut r = [f64::NEG_INFINITY; GROUP];
+            for i in 0..GROUP {
+                let ri = bd[i].sqrt() + slack[i];
+                r[i] = if mask & (1 << i) != 0 { ri } else { f64::NEG_INFINITY };
+            }
             let (mut glo, mut ghi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
-            for i in 0..g {
-                if mask & (1 << i) != 0 {
-                    let r = bd[i].sqrt() + slack[i];
-                    for k in 0..3 {
-                        glo[k] = glo[k].min(ps[i][k] - r);
-                        ghi[k] = ghi[k].max(ps[i][k] + r);
+            for (k, pk) in [&px, &py, &pz].into_iter().enumerate() {
+                for i in 0..GROUP {
+                    let (l, h) = (pk[i] - r[i], pk[i] + r[i]);
+                    if l < glo[k] {
+                        glo[k] = l;
+                    }
+                    if h > ghi[k] {
+                        ghi[k] = h;
                     }
                 }
             }
