@@ -1404,17 +1404,7 @@ impl Bvh {
             }
         }
         loop {
-            if !W16 && mask.is_power_of_two() {
-                // one lane open (an outlier's search, mostly: its ball is far larger than
-                // its neighbours'): the subtree walked for that lane alone, each node's box
-                // test one small vector for the two children instead of eight lanes, the
-                // same numbers ([`Bvh::walk_one`]). Not in the AVX-512 build, whose
-                // eight-lane test is one vector already ([`child_boxes16`]): there it was
-                // no faster (one thread, 3 M points of the bench's scan, ten alternated
-                // runs: CPU median 0.555 s against 0.53 s)
-                let i = mask.trailing_zeros() as usize;
-                self.walk_one(cur, ps[i], [qx[i], qy[i], qz[i]], reach[i], err2[i], skip[i], &mut bd[i], &mut side[i], &mut bw[i], &mut best[i]);
-            } else if cur.count > 0 {
+            if cur.count > 0 {
                 for slot in cur.index..cur.index + cur.count {
                     // the lanes whose start this slot is measured it already (each lane
                     // meets a slot once in the walk): not again, and not counted towards
@@ -1522,116 +1512,6 @@ impl Bvh {
                 }
             }
         }
-    }
-}
-
-impl Bvh {
-    /// The walk of the subtree `root` by one lane of [`Bvh::nearest_group_impl`] (the
-    /// point `p`, its single-precision copy `q`, its bound reduction `reach`, box rounding
-    /// term `err2` and start slot `skip`; its best `bd`, `side`, `bw` and `best` updated as
-    /// the group's are): the same tests as the group's walk makes for a lane that is alone
-    /// open, so the same answer. The nodes' box tests by [`child_boxes1`] (the same bits
-    /// as the eight-lane test's for this lane), a leaf's slots by the lane's own lower
-    /// bound ([`Bound::passes`]) and exact test ([`closest_point`]). 300 k points of the
-    /// bench's scan: 27 % of the group walk's node visits had one lane open, 73 % of those
-    /// an outlier's.
-    #[inline(always)]
-    #[allow(clippy::too_many_arguments)]
-    fn walk_one(&self, root: Child, p: V3, q: [f32; 3], reach: f32, err2: f64, skip: u32, bd: &mut f64, side: &mut f32, bw: &mut f32, best: &mut Option<Nearest>) {
-        // entries below `sp` are always written before they are read
-        let mut stack = [const { std::mem::MaybeUninit::<(Child, f32)>::uninit() }; MAX_DEPTH + 2];
-        let mut sp = 0usize;
-        let mut cur = root;
-        let (mut b_d2, mut b_side, mut b_bw, mut b) = (*bd, *side, *bw, *best);
-        loop {
-            if cur.count > 0 {
-                let (lo, hi) = (cur.index as usize, (cur.index + cur.count) as usize);
-                for (k, (c, bound)) in self.corners[lo..hi].iter().zip(&self.bounds[lo..hi]).enumerate() {
-                    let slot = cur.index + k as u32;
-                    if slot == skip || !bound.passes(&q, reach, b_side) {
-                        continue;
-                    }
-                    let (foot, feature) = closest_point(p, c[0], c[1], c[2]);
-                    let v = sub(p, foot);
-                    let d2 = dot(v, v);
-                    if better(d2, slot, b_d2, b.as_ref().map(|b| b.slot)) {
-                        b_d2 = d2;
-                        b_side = Bound::side32(d2);
-                        b_bw = widen(d2, err2);
-                        b = Some(Nearest { slot, d2, foot, feature });
-                    }
-                }
-            } else {
-                let n = &self.nodes[cur.index as usize];
-                let [d0, d1] = child_boxes1(n, &q);
-                let (o0, o1) = (d0 <= b_bw, d1 <= b_bw);
-                if o0 || o1 {
-                    // the nearer child first (the group's choice for one lane)
-                    let first = if !o0 || (o1 && !(d0 <= d1)) { 1 } else { 0 };
-                    if o0 && o1 {
-                        stack[sp].write((n.child[1 - first], if first == 0 { d1 } else { d0 }));
-                        sp += 1;
-                    }
-                    cur = n.child[first];
-                    continue;
-                }
-            }
-            loop {
-                if sp == 0 {
-                    (*bd, *side, *bw, *best) = (b_d2, b_side, b_bw, b);
-                    return;
-                }
-                sp -= 1;
-                // SAFETY: every entry below the old `sp` was written by a push
-                let (c, d) = unsafe { stack[sp].assume_init() };
-                if d <= b_bw {
-                    cur = c;
-                    break;
-                }
-            }
-        }
-    }
-}
-
-/// A node's two children's squared single-precision box distances from one point `q`
-/// (single precision), by the arithmetic of the group's box test ([`child_boxes16`] and
-/// the eight-lane loop), so the same bits as that test's lane: per axis
-/// `larger(larger(lo - q, q - hi), 0)` squared, summed x, y, z from 0 (0 + x^2 is x^2
-/// exactly; the sums' order is the loop's). On x86-64 in four-lane SSE vectors, the
-/// children and two axes at once.
-#[inline(always)]
-fn child_boxes1(n: &Node, q: &[f32; 3]) -> [f32; 2] {
-    #[cfg(target_arch = "x86_64")]
-    {
-        use std::arch::x86_64::*;
-        // SAFETY: SSE is part of x86-64; each load reads four of the six f32 of `lo` or
-        // `hi` ([[f32; 2]; 3], contiguous): (x0 x1 y0 y1) at 0 and (y0 y1 z0 z1) at 2
-        unsafe {
-            let (l, h) = (n.lo.as_ptr() as *const f32, n.hi.as_ptr() as *const f32);
-            let q1 = _mm_setr_ps(q[0], q[0], q[1], q[1]);
-            let q2 = _mm_setr_ps(q[1], q[1], q[2], q[2]);
-            let zero = _mm_setzero_ps();
-            // `_mm_max_ps(a, b)` is `larger(a, b)` (b when not a > b, NaN included)
-            let u1 = _mm_max_ps(_mm_max_ps(_mm_sub_ps(_mm_loadu_ps(l), q1), _mm_sub_ps(q1, _mm_loadu_ps(h))), zero);
-            let u2 = _mm_max_ps(_mm_max_ps(_mm_sub_ps(_mm_loadu_ps(l.add(2)), q2), _mm_sub_ps(q2, _mm_loadu_ps(h.add(2)))), zero);
-            let (s1, s2) = (_mm_mul_ps(u1, u1), _mm_mul_ps(u2, u2));
-            // (x^2 + y^2) + z^2 in lanes 0 (child 0) and 1 (child 1)
-            let d = _mm_add_ps(_mm_add_ps(s1, _mm_movehl_ps(s1, s1)), _mm_movehl_ps(s2, s2));
-            let mut out = [0.0f32; 4];
-            _mm_storeu_ps(out.as_mut_ptr(), d);
-            [out[0], out[1]]
-        }
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    {
-        let mut d = [0.0f32; 2];
-        for (c, dc) in d.iter_mut().enumerate() {
-            for k in 0..3 {
-                let u = larger(larger(n.lo[k][c] - q[k], q[k] - n.hi[k][c]), 0.0);
-                *dc += u * u;
-            }
-        }
-        d
     }
 }
 
@@ -1914,42 +1794,6 @@ mod flatten_tests {
             assert_eq!(a.child, b.child);
             assert_eq!(a.lo.map(|x| x.map(f32::to_bits)), b.lo.map(|x| x.map(f32::to_bits)));
             assert_eq!(a.hi.map(|x| x.map(f32::to_bits)), b.hi.map(|x| x.map(f32::to_bits)));
-        }
-    }
-}
-
-#[cfg(test)]
-mod one_lane_tests {
-    use super::*;
-    use rand::{Rng, SeedableRng};
-
-    /// [`child_boxes1`] gives the group's eight-lane box distances to the bit (the plain
-    /// loop's arithmetic, which every build's proptests compare): points inside, outside
-    /// and on the boxes, signed zeros, empty boxes (lo > hi), coordinates up to 1e30.
-    #[test]
-    fn one_lane_box_distances_equal_the_group_loop() {
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
-        let special = [0.0f32, -0.0, 1.0, -1.0, 1e-30, 1e30, -1e30, f32::MIN_POSITIVE];
-        for case in 0..20_000 {
-            let s = [1.0f32, 1e3, 1e-3, 1e20][case % 4];
-            let mut pick = |rng: &mut rand_chacha::ChaCha8Rng| if rng.random_range(0..5) == 0 { special[rng.random_range(0..special.len())] } else { rng.random_range(-s..s) };
-            let mut n = Node::EMPTY;
-            for k in 0..3 {
-                for c in 0..2 {
-                    let (a, b) = (pick(&mut rng), pick(&mut rng));
-                    // mostly lo <= hi; sometimes an empty box
-                    (n.lo[k][c], n.hi[k][c]) = if rng.random_range(0..8) == 0 || a <= b { (a, b) } else { (b, a) };
-                }
-            }
-            let q: [f32; 3] = std::array::from_fn(|k| if rng.random_range(0..6) == 0 { n.lo[k][rng.random_range(0..2)] } else { pick(&mut rng) });
-            let mut want = [0.0f32; 2];
-            for (c, w) in want.iter_mut().enumerate() {
-                for k in 0..3 {
-                    let u = larger(larger(n.lo[k][c] - q[k], q[k] - n.hi[k][c]), 0.0);
-                    *w += u * u;
-                }
-            }
-            assert_eq!(child_boxes1(&n, &q).map(f32::to_bits), want.map(f32::to_bits), "case {case}: node {n:?}, point {q:?}");
         }
     }
 }
