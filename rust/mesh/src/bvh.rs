@@ -1363,7 +1363,8 @@ impl Bvh {
         {
             // the open lanes' radii, minus infinity for the others (their ends are then
             // plus and minus infinity, which change no end); the ends kept by plain
-            // comparisons (one instruction each; the values are finite or infinite, never NaN)
+            // comparisons, one instruction each, which pass over a NaN (none arises from
+            // finite points) as `min` and `max` did
             let mut r = [f64::NEG_INFINITY; GROUP];
             for i in 0..GROUP {
                 let ri = bd[i].sqrt() + slack[i];
