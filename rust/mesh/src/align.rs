@@ -218,7 +218,9 @@ pub const COARSE: Tol = Tol { rot: 1e-7, tr: 1e-5, exact: false };
 /// step below 1e-12 rad and 1e-10 mm (the level of rounding is about 1e-14 mm), so that the
 /// answer is a property of the cloud, not of the way there: any start in the basin (the
 /// subsample stages, the point order, clutter that takes no part in the fit) ends at the
-/// same pose to about 1e-10 mm. Each next pose is the Anderson mix of the last few
+/// same pose to about 1e-10 mm. The pose kept is the last one evaluated, whose step is
+/// below the tolerance (so within about the tolerance of the fixed point), with its
+/// median, RMS and count (no pass more over the points). Each next pose is the Anderson mix of the last few
 /// ([`anderson`]): the plain iteration contracts by 0.1-0.6 a step (the bracket's slowest
 /// mode 0.58: 21 steps from 1e-6 mm), the mix lands in a few. With no fixed point after
 /// [`MAX_FINAL`] steps (a cycle: a point at the bound switching in and out, or a motion
@@ -400,6 +402,12 @@ pub fn iterate(frame: &Frame, idx: &[u32], p: &mut [f64; 6], hints: &mut [Cache]
                 _ => rot < tol.rot && tr < tol.tr,
             }
         };
+        if converged && tol.exact {
+            // the pose just evaluated: its step below the tolerance puts it within about
+            // the tolerance of the fixed point, and its figures are at hand (no pass more)
+            *p = before;
+            return Ok(summary(&mut ad, within, it));
+        }
         if converged {
             if !last {
                 return Ok(Iterated { iterations: it, median: f64::NAN, rms: f64::NAN, used: 0 });
