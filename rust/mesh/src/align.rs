@@ -7,7 +7,8 @@
 //! every order and sign (the cube group), centroid on centroid. Each start is screened on
 //! 256 points (the starts in parallel): 5 iterations, then the 8 best by their median
 //! |distance| 5 more (a start in the right basin is near after 5, a wrong one stays far);
-//! the 3 best are iterated (30) on 2000; the smallest median |distance| wins (ties: the first). Then coarse to fine:
+//! the 3 best are iterated (30) on 2000; the smallest median |distance| wins (ties: the first);
+//! with a bound, the search runs under it and without it ([`best_fit`]). Then coarse to fine:
 //! evenly spaced subsamples of 30 000, 100 000 and 300 000 points, each iterated until its
 //! step is below 1e-7 rad and 1e-5 mm (a subsample's optimum differs from the whole
 //! cloud's by more), and last every point, to the fixed point of the whole cloud's
@@ -637,25 +638,12 @@ pub fn refine(frame: &Frame, p: &mut [f64; 6], stages: &[usize]) -> Result<(Iter
     Err(GkError::invalid("best-fit: the stages must end with every point"))
 }
 
-/// The robust best-fit alignment (module docs): the pose applied to the scan.
-pub fn best_fit(mesh: &TriMesh, points: &[f64], opt: &FitOptions) -> Result<BestFit> {
-    let n = points.len() / 3;
-    let before = Frame::new(mesh, points, opt.initial, opt.max_distance, opt.free)?;
-    // the RMS before, on an evenly spaced sample (far points cost the most to query; the
-    // caller measures the whole cloud at its initial pose when it needs it)
-    let idx_before = sample(n, START_SAMPLE);
-    let mut hints_before = vec![Cache::EMPTY; idx_before.len()];
-    let rms_before = iterate(&before, &idx_before, &mut [0.0; 6], &mut hints_before, 0, FINE, true).map(|r| r.rms).unwrap_or(f64::NAN);
-    // the start search without the bound: from an arbitrary pose few points are within
-    // it, and the median |distance| of those few would favour a start that brings a few
-    // points near the model over the right one (the robust weights leave clutter out)
-    let search = Frame { bound2: f64::INFINITY, ..before.from_base(opt.initial) };
-    let mut starts = vec![opt.initial];
-    if opt.search && opt.free.iter().all(|&f| f) {
-        starts.extend(principal_starts(mesh, points, &opt.initial));
-    }
-    // screen every start briefly on a small sample, then iterate the best few further
-    let screen = sample(n, SCREEN_SAMPLE);
+/// The start search in `search` (its bound) from `starts`: every start screened briefly
+/// on [`SCREEN_SAMPLE`] points, the best few iterated further on `idx0`; the smallest
+/// median |distance| wins (ties: the first). Returns the winner (its index and parameters,
+/// None when no start brings points within reach) and the iterations done.
+fn search_starts(search: &Frame, starts: &[Pose], idx0: &[u32]) -> Result<(Option<(usize, [f64; 6])>, usize)> {
+    let screen = sample(search.n(), SCREEN_SAMPLE);
     let mut iterations = 0;
     // the starts in parallel (each on one chunk of points), their results taken in order;
     // two rounds: every start, then the best few of them further
@@ -691,26 +679,73 @@ pub fn best_fit(mesh: &TriMesh, points: &[f64], opt: &FitOptions) -> Result<Best
         }
     }
     scored.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-    let idx0 = sample(n, START_SAMPLE);
-    let mut best: Option<(f64, usize, Pose, [f64; 6])> = None;
+    let mut best: Option<(f64, usize, [f64; 6])> = None;
     for &(_, k, p0) in scored.iter().take(KEEP_STARTS) {
         let frame = search.from_base(starts[k]);
         let mut p = p0;
         let mut hints = vec![Cache::EMPTY; idx0.len()];
-        let r = match iterate(&frame, &idx0, &mut p, &mut hints, 30, FINE, true) {
+        let r = match iterate(&frame, idx0, &mut p, &mut hints, 30, FINE, true) {
             Ok(v) => v,
             Err(e) if e.kind == gagekit_core::ErrorKind::DegenerateGeometry && starts.len() > 1 => continue,
             Err(e) => return Err(e),
         };
         iterations += r.iterations;
         if best.as_ref().map_or(true, |b| r.median < b.0) {
-            best = Some((r.median, k, starts[k], p));
+            best = Some((r.median, k, p));
         }
     }
-    let (_, start, base, mut p) =
-        best.ok_or_else(|| GkError::degenerate("best-fit: no start brings the points within reach of the model"))?;
+    Ok((best.map(|(_, k, p)| (k, p)), iterations))
+}
+
+/// The robust best-fit alignment (module docs): the pose applied to the scan.
+///
+/// With a bound (`max_distance`) the start search runs twice: under the bound, and without
+/// it. From an arbitrary pose few points are within the bound, and the median |distance|
+/// of those few can favour a start that brings a few points near the model over the right
+/// one; without the bound, clutter that is a large share of the points (more than about a
+/// third: the median is then near it) pulls the fit off. Of the two winners, the one with
+/// more points of the 2000-point sample within the bound goes on (ties: the smaller median
+/// |distance| there, then the search under the bound).
+pub fn best_fit(mesh: &TriMesh, points: &[f64], opt: &FitOptions) -> Result<BestFit> {
+    let n = points.len() / 3;
+    let before = Frame::new(mesh, points, opt.initial, opt.max_distance, opt.free)?;
+    // the RMS before, on an evenly spaced sample (far points cost the most to query; the
+    // caller measures the whole cloud at its initial pose when it needs it)
+    let idx0 = sample(n, START_SAMPLE);
+    let mut hints_before = vec![Cache::EMPTY; idx0.len()];
+    let rms_before = iterate(&before, &idx0, &mut [0.0; 6], &mut hints_before, 0, FINE, true).map(|r| r.rms).unwrap_or(f64::NAN);
+    let mut starts = vec![opt.initial];
+    if opt.search && opt.free.iter().all(|&f| f) {
+        starts.extend(principal_starts(mesh, points, &opt.initial));
+    }
+    let (mut best, mut iterations) = match search_starts(&before, &starts, &idx0) {
+        Ok(v) => v,
+        // too few points within the bound from the given pose: the search without it may find more
+        Err(e) if e.kind == gagekit_core::ErrorKind::DegenerateGeometry && before.bound2.is_finite() => (None, 0),
+        Err(e) => return Err(e),
+    };
+    if before.bound2.is_finite() {
+        let unbounded = Frame { bound2: f64::INFINITY, ..before.from_base(opt.initial) };
+        let (other, it) = search_starts(&unbounded, &starts, &idx0)?;
+        iterations += it;
+        // each winner's points within the bound and their median |distance|, on the sample
+        let score = |w: &Option<(usize, [f64; 6])>| -> Result<(usize, f64)> {
+            let Some((k, p)) = w else { return Ok((0, f64::INFINITY)) };
+            let mut hints = vec![Cache::EMPTY; idx0.len()];
+            match iterate(&before.from_base(starts[*k]), &idx0, &mut p.clone(), &mut hints, 0, FINE, true) {
+                Ok(r) => Ok((r.used, r.median)),
+                Err(e) if e.kind == gagekit_core::ErrorKind::DegenerateGeometry => Ok((0, f64::INFINITY)),
+                Err(e) => Err(e),
+            }
+        };
+        let (a, b) = (score(&best)?, score(&other)?);
+        if b.0 > a.0 || (b.0 == a.0 && b.1 < a.1) {
+            best = other;
+        }
+    }
+    let (start, mut p) = best.ok_or_else(|| GkError::degenerate("best-fit: no start brings the points within reach of the model"))?;
     // the parameters keep accumulating on the winning start: a locked one stays exactly 0
-    let frame = before.from_base(base);
+    let frame = before.from_base(starts[start]);
     let (last, it) = refine(&frame, &mut p, &STAGES)?;
     iterations += it;
     Ok(BestFit { pose: frame.pose(&p), iterations, rms_before, rms_after: last.rms, n_used: last.used, start })
