@@ -100,7 +100,17 @@ def test_bad_meshes_are_typed_errors(tmp_path):
         read_cad(p)
     p = tmp_path / "junk.stl"
     p.write_bytes(b"\x00\xff" * 100)
-    with pytest.raises(FileFormatError):
+    with pytest.raises(FileFormatError, match="neither a binary STL"):
+        read_cad(p)
+    # a binary STL cut short (its header's count of triangles, more than the bytes hold),
+    # whether its header is text-like or not: the numbers, not a guess at ASCII
+    for head in (b"\0" * 80, b"solid exported by a CAD system".ljust(80, b" "), b"\x80" * 80):
+        p = tmp_path / "cut.stl"
+        p.write_bytes(head + (10).to_bytes(4, "little") + b"\x01" * 100)
+        with pytest.raises(FileFormatError, match=r"declares 10 triangles \(584 bytes\), the file has 184 bytes \(cut short\)"):
+            read_cad(p)
+    p.write_bytes(b"\0" * 20)
+    with pytest.raises(FileFormatError, match="84-byte header, the file has 20 bytes"):
         read_cad(p)
     p = tmp_path / "m.dxf"
     p.write_text("0\n")

@@ -50,6 +50,16 @@ def weld(corners: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return flat[first[order]], rank[inverse.ravel()].reshape(-1, 3).astype(np.int64)
 
 
+def _binary_size_note(data: bytes) -> str:
+    """Why ``data`` is no binary STL, in numbers: its header's triangle count against its size."""
+    if len(data) < 84:
+        return f"a binary STL has an 84-byte header, the file has {len(data)} bytes"
+    n = int.from_bytes(data[80:84], "little")
+    want = 84 + 50 * n
+    cut = "cut short" if len(data) < want else "extra bytes"
+    return f"as a binary STL its header declares {n} triangles ({want} bytes), the file has {len(data)} bytes ({cut})"
+
+
 def read_stl(p: Path, data: bytes) -> tuple[np.ndarray, np.ndarray, list[CadFace], np.ndarray]:
     if len(data) >= 84:
         n = int.from_bytes(data[80:84], "little")
@@ -62,12 +72,13 @@ def read_stl(p: Path, data: bytes) -> tuple[np.ndarray, np.ndarray, list[CadFace
     try:
         text = data.decode("ascii")
     except UnicodeDecodeError:
-        raise FileFormatError(f"{p}: neither a binary STL (its size does not match the triangle count) nor an ASCII one") from None
+        raise FileFormatError(f"{p}: neither a binary STL ({_binary_size_note(data)}) nor an ASCII one (not text)") from None
     if not text.lstrip().lower().startswith("solid"):
-        raise FileFormatError(f"{p}: not an STL file (an ASCII STL begins with 'solid')")
+        raise FileFormatError(f"{p}: not an STL file: {_binary_size_note(data)}; an ASCII STL would begin with 'solid'")
     nums = re.findall(r"^\s*vertex\s+(\S+)\s+(\S+)\s+(\S+)", text, flags=re.M)
     if not nums:
-        raise FileFormatError(f"{p}: the ASCII STL holds no 'vertex' lines")
+        # many binary STLs begin their header with "solid" too: say both readings
+        raise FileFormatError(f"{p}: read as an ASCII STL (it begins with 'solid') it holds no 'vertex' lines; {_binary_size_note(data)}")
     if len(nums) % 3:
         raise FileFormatError(f"{p}: {len(nums)} vertex lines, not a multiple of 3 (a facet is cut short)")
     try:
