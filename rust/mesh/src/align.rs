@@ -7,14 +7,16 @@
 //! every order and sign (the cube group), centroid on centroid. Each start is screened on
 //! 256 points (the starts in parallel): 5 iterations, then the 8 best by their median
 //! |distance| 5 more (a start in the right basin is near after 5, a wrong one stays far);
-//! the 3 best are iterated (30) on 2000; the smallest median |distance| wins (ties: the first). Then coarse to fine:
+//! the 3 best are iterated (30) on 2000; the smallest median |distance| wins (ties: the first);
+//! with a bound, the search runs under it and without it ([`best_fit`]). Then coarse to fine:
 //! evenly spaced subsamples of 30 000, 100 000 and 300 000 points, each iterated until its
 //! step is below 1e-7 rad and 1e-5 mm (a subsample's optimum differs from the whole
-//! cloud's by more), and last every point, until the step is below 1e-8 rad and 1e-6 mm
-//! or the rest of the way predicted from two linearly contracting steps is (then taken as
-//! one extrapolated step, [`FINE`]; it saves about one pass over every point):
-//! the answer is the whole cloud's robust fit (tested against iterating on every point
-//! from the start). Each point keeps its nearest triangle and that triangle's margin (no
+//! cloud's by more), and last every point, to the fixed point of the whole cloud's
+//! iteration: until a step is below 1e-12 rad and 1e-10 mm, the level of rounding
+//! ([`FIXED`]; the steps accelerated by Anderson mixing). The answer is thus a property
+//! of the cloud, not of the way there: the subsamples, the point order, a rigid motion of
+//! the scan, or clutter beyond the bound (which changes the subsamples) move it by about
+//! 1e-10 mm (tested), where a stop at a 1e-6 mm step left up to 1e-6 mm. Each point keeps its nearest triangle and that triangle's margin (no
 //! other triangle was nearer than it) from iteration to iteration and from stage to
 //! stage: while the point has moved less than the margin allows, the triangle is certified
 //! the nearest without a search ([`crate::distance::Cache`]; the same answer, to the bit,
@@ -200,16 +202,34 @@ pub fn sample(n: usize, m: usize) -> Vec<u32> {
 pub struct Tol {
     pub rot: f64,
     pub tr: f64,
+    /// to the fixed point: stop only on an evaluated step below the tolerance (an
+    /// extrapolated step only shortens the way, [`FIXED`]); otherwise also when the
+    /// predicted rest of the way is below it (the extrapolation then taken as the last step)
+    pub exact: bool,
 }
 
-/// The final iterations on all points: steps below 1e-8 rad and 1e-6 mm, or, once two
-/// steps show the linear contraction (same direction, ratio r < 1/2), the predicted rest
-/// of the way (the step times r / (1 - r)) below them, taken as a last extrapolated step
-/// (the iteration contracts about tenfold per step, so the pose is then within about
-/// 1e-9 of its fixed point).
-pub const FINE: Tol = Tol { rot: 1e-8, tr: 1e-6 };
+/// The start search's stop: steps below 1e-8 rad and 1e-6 mm, or, once two steps show
+/// the linear contraction (same direction, ratio r < 1/2), the predicted rest of the way
+/// (the step times r / (1 - r)) below them, taken as a last extrapolated step. Also the
+/// level below which [`FIXED`] accepts a stop short of the fixed point.
+pub const FINE: Tol = Tol { rot: 1e-8, tr: 1e-6, exact: false };
 /// Subsample stages: their optimum differs from the whole cloud's by far more than this.
-pub const COARSE: Tol = Tol { rot: 1e-7, tr: 1e-5 };
+pub const COARSE: Tol = Tol { rot: 1e-7, tr: 1e-5, exact: false };
+/// The last stage, on every point: to the fixed point of the whole cloud's iteration, a
+/// step below 1e-12 rad and 1e-10 mm (the level of rounding is about 1e-14 mm), so that the
+/// answer is a property of the cloud, not of the way there: any start in the basin (the
+/// subsample stages, the point order, clutter that takes no part in the fit) ends at the
+/// same pose to about 1e-10 mm. The pose kept is the last one evaluated, whose step is
+/// below the tolerance (so within about the tolerance of the fixed point), with its
+/// median, RMS and count (no pass more over the points). Each next pose is the Anderson mix of the last few
+/// ([`anderson`]): the plain iteration contracts by 0.1-0.6 a step (the bracket's slowest
+/// mode 0.58: 21 steps from 1e-6 mm), the mix lands in a few. With no fixed point after
+/// [`MAX_FINAL`] steps (a cycle: a point at the bound switching in and out, or a motion
+/// the surface hardly constrains, such as a patch of a tessellated sphere turning about
+/// its centre) the last pose is kept when the last step is below [`FINE`] or changes the
+/// distances by less than its 1e-6 mm (weighted RMS); otherwise the fit fails with a
+/// numerical error.
+pub const FIXED: Tol = Tol { rot: 1e-12, tr: 1e-10, exact: true };
 
 /// What [`iterate`] ends with: iterations done, and (when the last pose was evaluated)
 /// the median |d|, the RMS of d and the number of points within the bound there.
@@ -221,9 +241,10 @@ pub struct Iterated {
     pub used: usize,
 }
 
-/// Iterate the robust Gauss-Newton steps on the points `idx` from `p` until the step (or
-/// the predicted rest of the way, see [`FINE`]) is below `tol` or `max_iter` steps are done. `last`: evaluate the final pose too (the
-/// median, RMS and count of [`Iterated`]; NaN and 0 otherwise).
+/// Iterate the robust Gauss-Newton steps on the points `idx` from `p` until the step (or,
+/// unless `tol.exact`, the predicted rest of the way, see [`FINE`]) is below `tol` or
+/// `max_iter` steps are done ([`FIXED`]: what happens then). `last`: evaluate the final
+/// pose too (the median, RMS and count of [`Iterated`]; NaN and 0 otherwise).
 pub fn iterate(frame: &Frame, idx: &[u32], p: &mut [f64; 6], hints: &mut [Cache], max_iter: usize, tol: Tol, last: bool) -> Result<Iterated> {
     let nf = frame.free.len();
     let mut it = 0;
@@ -235,6 +256,8 @@ pub fn iterate(frame: &Frame, idx: &[u32], p: &mut [f64; 6], hints: &mut [Cache]
         Iterated { iterations: it, median, rms, used }
     };
     let mut prev: Option<[f64; 6]> = None;
+    // [`FIXED`]: the last poses before a step, the steps and their sizes (Anderson)
+    let mut hist: Vec<([f64; 6], [f64; 6], f64)> = Vec::new();
     let mut ev = empty_evals(idx.len());
     let mut ad = vec![0.0; idx.len()];
     loop {
@@ -255,11 +278,12 @@ pub fn iterate(frame: &Frame, idx: &[u32], p: &mut [f64; 6], hints: &mut [Cache]
         let (_, dr) = rotation_and_derivatives(p);
         // normal equations, summed per fixed chunk then in chunk order (deterministic);
         // the upper triangle only (the matrix is symmetric), mirrored after the sum
-        let parts: Vec<([f64; 21], [f64; 6])> = ev
+        // (and the sum of the weights, b's 7th entry)
+        let parts: Vec<([f64; 21], [f64; 7])> = ev
             .par_chunks(CHUNK)
             .map(|chunk| {
                 let mut a = [0.0f64; 21];
-                let mut b = [0.0f64; 6];
+                let mut b = [0.0f64; 7];
                 for e in chunk.iter().flatten() {
                     let u = e.d / c;
                     if u.abs() >= 1.0 {
@@ -267,6 +291,7 @@ pub fn iterate(frame: &Frame, idx: &[u32], p: &mut [f64; 6], hints: &mut [Cache]
                     }
                     let w = (1.0 - u * u) * (1.0 - u * u);
                     let j = Frame::jacobian(e, &dr);
+                    b[6] += w;
                     let mut k = 0;
                     for r in 0..6 {
                         let wj = w * j[r];
@@ -282,7 +307,9 @@ pub fn iterate(frame: &Frame, idx: &[u32], p: &mut [f64; 6], hints: &mut [Cache]
             .collect();
         let mut a = Matrix6::<f64>::zeros();
         let mut b = Vector6::<f64>::zeros();
+        let mut wsum = 0.0;
         for (pa, pb) in parts {
+            wsum += pb[6];
             let mut k = 0;
             for r in 0..6 {
                 b[r] += pb[r];
@@ -311,6 +338,7 @@ pub fn iterate(frame: &Frame, idx: &[u32], p: &mut [f64; 6], hints: &mut [Cache]
         }
         let rot = (step[3] * step[3] + step[4] * step[4] + step[5] * step[5]).sqrt();
         let s = if rot > 0.3 { 0.3 / rot } else { 1.0 };
+        let before = *p;
         for k in 0..6 {
             p[k] += s * step[k];
         }
@@ -324,16 +352,63 @@ pub fn iterate(frame: &Frame, idx: &[u32], p: &mut [f64; 6], hints: &mut [Cache]
         if !p.iter().all(|v| v.is_finite()) {
             return Err(GkError::numerical("best-fit: the iteration diverged"));
         }
-        let converged = match tail {
-            // the predicted rest of the way is below the tolerance: take it and stop
-            Some(f) if f * rot < tol.rot && f * tr < tol.tr => {
-                for k in 0..6 {
-                    p[k] += f * step[k];
-                }
+        // the step's size in units of the tolerance
+        let size = (rot / tol.rot).max(tr / tol.tr);
+        let converged = if tol.exact {
+            if size < 1.0 {
                 true
+            } else if it >= max_iter {
+                // no fixed point: a documented stop when the last step is below FINE or
+                // changes the distances by less than FINE's 1e-6 mm (weighted RMS of
+                // J . step: e.g. a motion the surface hardly constrains, such as turning
+                // a patch of a tessellated sphere about its centre); a numerical error
+                // otherwise
+                let sv = Vector6::from_column_slice(&step);
+                let change = ((sv.dot(&(a * sv))).max(0.0) / wsum).sqrt();
+                if (rot < FINE.rot && tr < FINE.tr) || change < FINE.tr {
+                    true
+                } else {
+                    return Err(GkError::numerical(format!(
+                        "best-fit: no fixed point after {it} iterations on every point (the last step moves the distances by {change:.3e} mm rms)"
+                    )));
+                }
+            } else {
+                if s == 1.0 {
+                    // Anderson: the next pose from the last few poses and their steps
+                    if hist.last().is_some_and(|&(_, _, q)| size > q) {
+                        // the step grew: start the history afresh
+                        hist.clear();
+                    }
+                    hist.push((before, step, size));
+                    if hist.len() > ANDERSON + 1 {
+                        hist.remove(0);
+                    }
+                    if let Some(next) = anderson(&hist, &tol) {
+                        *p = next;
+                    }
+                } else {
+                    hist.clear();
+                }
+                false
             }
-            _ => rot < tol.rot && tr < tol.tr,
+        } else {
+            match tail {
+                // the predicted rest of the way is below the tolerance: take it and stop
+                Some(f) if f * rot < tol.rot && f * tr < tol.tr => {
+                    for k in 0..6 {
+                        p[k] += f * step[k];
+                    }
+                    true
+                }
+                _ => rot < tol.rot && tr < tol.tr,
+            }
         };
+        if converged && tol.exact {
+            // the pose just evaluated: its step below the tolerance puts it within about
+            // the tolerance of the fixed point, and its figures are at hand (no pass more)
+            *p = before;
+            return Ok(summary(&mut ad, within, it));
+        }
         if converged {
             if !last {
                 return Ok(Iterated { iterations: it, median: f64::NAN, rms: f64::NAN, used: 0 });
@@ -363,6 +438,34 @@ fn geometric_tail(prev: &[f64; 6], step: &[f64; 6]) -> Option<f64> {
         r = r.max(nb / na);
     }
     (r < 0.5).then(|| r / (1.0 - r))
+}
+
+/// Steps of the history that [`FIXED`]'s Anderson acceleration combines.
+const ANDERSON: usize = 3;
+
+/// Anderson acceleration (type II; Walker and Ni, SIAM J. Numer. Anal. 49(4), 2011) of
+/// the fixed-point iteration x -> x + f(x): from the poses x_i and their steps f_i (the
+/// last `m + 1`), gamma minimising |f_k - sum gamma_j (f_{j+1} - f_j)| (each parameter in
+/// units of the tolerance), the next pose x_k + f_k - sum gamma_j ((x_{j+1} - x_j) +
+/// (f_{j+1} - f_j)). For a linear contraction and m at least the number of its slow
+/// modes this lands on the fixed point; near it the iteration is nearly linear.
+fn anderson(hist: &[([f64; 6], [f64; 6], f64)], tol: &Tol) -> Option<[f64; 6]> {
+    let m = hist.len().checked_sub(1).filter(|&m| m > 0)?;
+    let w = |k: usize| if k < 3 { 1.0 / tol.tr } else { 1.0 / tol.rot };
+    let (xk, fk, _) = hist[m];
+    let df = nalgebra::DMatrix::from_fn(6, m, |k, j| w(k) * (hist[j + 1].1[k] - hist[j].1[k]));
+    let rhs = nalgebra::DVector::from_fn(6, |k, _| w(k) * fk[k]);
+    let svd = df.svd(true, true);
+    let smax = svd.singular_values.max();
+    if !(smax > 0.0) {
+        return None;
+    }
+    let gamma = svd.solve(&rhs, smax * 1e-10).ok()?;
+    let next: [f64; 6] = std::array::from_fn(|k| {
+        let c: f64 = (0..m).map(|j| gamma[j] * ((hist[j + 1].0[k] - hist[j].0[k]) + (hist[j + 1].1[k] - hist[j].1[k]))).sum();
+        xk[k] + fk[k] - c
+    });
+    next.iter().all(|v| v.is_finite()).then_some(next)
 }
 
 fn principal_axes(mean: V3, cov: [[f64; 3]; 3]) -> (V3, M3) {
@@ -509,8 +612,8 @@ impl Default for FitOptions {
 
 /// Iterate from `p` on growing evenly spaced subsamples of the frame's points (`stages`,
 /// ascending; the last should be `usize::MAX`, every point): each subsample stage until
-/// its step is below [`COARSE`] (or 30 steps), then every point until [`FINE`] (or
-/// `MAX_FINAL` steps). The subsamples only bring the start near the whole cloud's
+/// its step is below [`COARSE`] (or 30 steps), then every point to the fixed point
+/// ([`FIXED`], at most [`MAX_FINAL`] steps). The subsamples only bring the start near the whole cloud's
 /// optimum; the answer is the fixed point of the iteration on all points. Returns the
 /// last stage's summary (at the final pose) and the total iterations.
 pub fn refine(frame: &Frame, p: &mut [f64; 6], stages: &[usize]) -> Result<(Iterated, usize)> {
@@ -523,7 +626,7 @@ pub fn refine(frame: &Frame, p: &mut [f64; 6], stages: &[usize]) -> Result<(Iter
         let idx = sample(n, m);
         if m >= n {
             // every point: their caches as they are (no copy)
-            let r = iterate(frame, &idx, p, &mut caches, MAX_FINAL, FINE, true)?;
+            let r = iterate(frame, &idx, p, &mut caches, MAX_FINAL, FIXED, true)?;
             return Ok((r, iterations + r.iterations));
         }
         let mut hints: Vec<Cache> = idx.par_iter().map(|&i| caches[i as usize]).collect();
@@ -535,21 +638,12 @@ pub fn refine(frame: &Frame, p: &mut [f64; 6], stages: &[usize]) -> Result<(Iter
     Err(GkError::invalid("best-fit: the stages must end with every point"))
 }
 
-/// The robust best-fit alignment (module docs): the pose applied to the scan.
-pub fn best_fit(mesh: &TriMesh, points: &[f64], opt: &FitOptions) -> Result<BestFit> {
-    let n = points.len() / 3;
-    let before = Frame::new(mesh, points, opt.initial, opt.max_distance, opt.free)?;
-    // the RMS before, on an evenly spaced sample (far points cost the most to query; the
-    // caller measures the whole cloud at its initial pose when it needs it)
-    let idx_before = sample(n, START_SAMPLE);
-    let mut hints_before = vec![Cache::EMPTY; idx_before.len()];
-    let rms_before = iterate(&before, &idx_before, &mut [0.0; 6], &mut hints_before, 0, FINE, true).map(|r| r.rms).unwrap_or(f64::NAN);
-    let mut starts = vec![opt.initial];
-    if opt.search && opt.free.iter().all(|&f| f) {
-        starts.extend(principal_starts(mesh, points, &opt.initial));
-    }
-    // screen every start briefly on a small sample, then iterate the best few further
-    let screen = sample(n, SCREEN_SAMPLE);
+/// The start search in `search` (its bound) from `starts`: every start screened briefly
+/// on [`SCREEN_SAMPLE`] points, the best few iterated further on `idx0`; the smallest
+/// median |distance| wins (ties: the first). Returns the winner (its index and parameters,
+/// None when no start brings points within reach) and the iterations done.
+fn search_starts(search: &Frame, starts: &[Pose], idx0: &[u32]) -> Result<(Option<(usize, [f64; 6])>, usize)> {
+    let screen = sample(search.n(), SCREEN_SAMPLE);
     let mut iterations = 0;
     // the starts in parallel (each on one chunk of points), their results taken in order;
     // two rounds: every start, then the best few of them further
@@ -560,7 +654,7 @@ pub fn best_fit(mesh: &TriMesh, points: &[f64], opt: &FitOptions) -> Result<Best
         let done: Vec<Result<(Iterated, usize, [f64; 6], Vec<Cache>)>> = round
             .into_par_iter()
             .map(|(k, mut p, mut hints)| {
-                let frame = before.from_base(starts[k]);
+                let frame = search.from_base(starts[k]);
                 let r = iterate(&frame, &screen, &mut p, &mut hints, if many { steps } else { 0 }, FINE, true)?;
                 Ok((r, k, p, hints))
             })
@@ -585,27 +679,77 @@ pub fn best_fit(mesh: &TriMesh, points: &[f64], opt: &FitOptions) -> Result<Best
         }
     }
     scored.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-    let idx0 = sample(n, START_SAMPLE);
-    let mut best: Option<(f64, usize, Pose, [f64; 6])> = None;
+    let mut best: Option<(f64, usize, [f64; 6])> = None;
     for &(_, k, p0) in scored.iter().take(KEEP_STARTS) {
-        let frame = before.from_base(starts[k]);
+        let frame = search.from_base(starts[k]);
         let mut p = p0;
         let mut hints = vec![Cache::EMPTY; idx0.len()];
-        let r = match iterate(&frame, &idx0, &mut p, &mut hints, 30, FINE, true) {
+        let r = match iterate(&frame, idx0, &mut p, &mut hints, 30, FINE, true) {
             Ok(v) => v,
             Err(e) if e.kind == gagekit_core::ErrorKind::DegenerateGeometry && starts.len() > 1 => continue,
             Err(e) => return Err(e),
         };
         iterations += r.iterations;
         if best.as_ref().map_or(true, |b| r.median < b.0) {
-            best = Some((r.median, k, starts[k], p));
+            best = Some((r.median, k, p));
         }
     }
-    let (_, start, base, mut p) =
-        best.ok_or_else(|| GkError::degenerate("best-fit: no start brings the points within reach of the model"))?;
+    Ok((best.map(|(_, k, p)| (k, p)), iterations))
+}
+
+/// The robust best-fit alignment (module docs): the pose applied to the scan.
+///
+/// With a bound (`max_distance`) the start search runs twice: under the bound, and without
+/// it. From an arbitrary pose few points are within the bound, and the median |distance|
+/// of those few can favour a start that brings a few points near the model over the right
+/// one; without the bound, clutter that is a large share of the points (more than about a
+/// third: the median is then near it) pulls the fit off. Of the two winners, the one with
+/// more points of the 2000-point sample within the bound goes on (ties: the smaller median
+/// |distance| there, then the search under the bound).
+pub fn best_fit(mesh: &TriMesh, points: &[f64], opt: &FitOptions) -> Result<BestFit> {
+    let n = points.len() / 3;
+    let before = Frame::new(mesh, points, opt.initial, opt.max_distance, opt.free)?;
+    // the RMS before, on an evenly spaced sample (far points cost the most to query; the
+    // caller measures the whole cloud at its initial pose when it needs it)
+    let idx0 = sample(n, START_SAMPLE);
+    let mut hints_before = vec![Cache::EMPTY; idx0.len()];
+    let rms_before = iterate(&before, &idx0, &mut [0.0; 6], &mut hints_before, 0, FINE, true).map(|r| r.rms).unwrap_or(f64::NAN);
+    let mut starts = vec![opt.initial];
+    if opt.search && opt.free.iter().all(|&f| f) {
+        starts.extend(principal_starts(mesh, points, &opt.initial));
+    }
+    let (mut best, mut iterations) = match search_starts(&before, &starts, &idx0) {
+        Ok(v) => v,
+        // too few points within the bound from the given pose: the search without it may find more
+        Err(e) if e.kind == gagekit_core::ErrorKind::DegenerateGeometry && before.bound2.is_finite() => (None, 0),
+        Err(e) => return Err(e),
+    };
+    if before.bound2.is_finite() {
+        let unbounded = Frame { bound2: f64::INFINITY, ..before.from_base(opt.initial) };
+        let (other, it) = search_starts(&unbounded, &starts, &idx0)?;
+        iterations += it;
+        // each winner's points within the bound and their median |distance|, on the sample
+        let score = |w: &Option<(usize, [f64; 6])>| -> Result<(usize, f64)> {
+            let Some((k, p)) = w else { return Ok((0, f64::INFINITY)) };
+            let mut hints = vec![Cache::EMPTY; idx0.len()];
+            match iterate(&before.from_base(starts[*k]), &idx0, &mut p.clone(), &mut hints, 0, FINE, true) {
+                Ok(r) => Ok((r.used, r.median)),
+                Err(e) if e.kind == gagekit_core::ErrorKind::DegenerateGeometry => Ok((0, f64::INFINITY)),
+                Err(e) => Err(e),
+            }
+        };
+        let (a, b) = (score(&best)?, score(&other)?);
+        if b.0 > a.0 || (b.0 == a.0 && b.1 < a.1) {
+            best = other;
+        }
+    }
+    let (start, mut p) = best.ok_or_else(|| GkError::degenerate("best-fit: no start brings the points within reach of the model"))?;
     // the parameters keep accumulating on the winning start: a locked one stays exactly 0
-    let frame = before.from_base(base);
+    let frame = before.from_base(starts[start]);
     let (last, it) = refine(&frame, &mut p, &STAGES)?;
     iterations += it;
     Ok(BestFit { pose: frame.pose(&p), iterations, rms_before, rms_after: last.rms, n_used: last.used, start })
 }
+
+#[cfg(test)]
+mod tests;
