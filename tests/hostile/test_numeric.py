@@ -97,3 +97,32 @@ def test_non_finite_results_are_never_printed():
     assert find_nonfinite({"a": None, "b": "nan", "c": 1}) is None
     with pytest.raises(NumericalError, match="normal\\[2\\]"):
         check_finite_result({"normal": [0.0, 0.0, float("inf")]})
+
+
+@pytest.mark.parametrize("value", ["1e10", "1e160", "1e308", "-1e308"])
+@pytest.mark.parametrize("align", ["none", "best-fit"])
+def test_compare_scan_beyond_the_limit(tmp_path, value, align):
+    """A scan point beyond 1e9 mm was measured (1e10: a deviation of 1e10 mm in the figures)
+    or, from 1e154 on (its square infinite), counted 'beyond --max-distance' with no bound
+    given: now one error naming the point and the units."""
+
+    v = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], float)
+    t = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
+    obj = tmp_path / "tet.obj"
+    obj.write_text("".join(f"v {a} {b} {c}\n" for a, b, c in v) + "".join(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in t))
+    pts = np.random.default_rng(0).random((50, 3)) * 0.3
+    scan = tmp_path / "scan.xyz"
+    scan.write_text("".join(f"{a} {b} {c}\n" for a, b, c in pts) + f"{value} 0.1 0.1\n")
+    err = _clean(["compare", scan, obj, "--align", align, "--deviations", tmp_path / "d.npy"], "point 50")
+    assert "beyond the supported 1e9" in err and "units" in err, err
+    assert not (tmp_path / "d.npy").exists()
+
+
+@pytest.mark.parametrize("value", ["1e10", "1e160", "1e300"])
+def test_compare_cad_vertex_beyond_the_limit(tmp_path, value):
+    """A CAD vertex at 1e300 was reported as a degenerate triangle: now the vertex and the units."""
+    obj = tmp_path / "big.obj"
+    obj.write_text(f"v 0 0 0\nv {value} 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n")
+    scan = tmp_path / "scan.xyz"
+    scan.write_text("0.1 0.1 0.1\n0.2 0.1 0.1\n")
+    _clean(["compare", scan, obj], "vertex 1 has a coordinate of magnitude")

@@ -139,7 +139,7 @@ impl std::error::Error for GkError {}
 
 pub type Result<T> = std::result::Result<T, GkError>;
 
-/// Largest coordinate magnitude the machine and gage kernels accept: 1e9 (mm for
+/// Largest coordinate magnitude the machine, gage and mesh kernels accept: 1e9 (mm for
 /// positions, the joint unit for commands). A machine tool or a casting spans at most a
 /// few 1e4 mm; beyond 1e9 the squares and products of the least-squares and LP
 /// kernels lose every significant digit long before they overflow (1e154 squared is

@@ -34,7 +34,7 @@
 use crate::distance::Cache;
 use crate::mesh::TriMesh;
 use crate::rigid::{apply, rotation_and_derivatives, Pose, M3};
-use gagekit_core::{check_finite, interrupt, GkError, Result};
+use gagekit_core::{check_coordinates, interrupt, GkError, Result};
 use gagekit_gdt::vec3::{dot, V3};
 use nalgebra::{Matrix3, Matrix6, SymmetricEigen, Vector6};
 use rayon::prelude::*;
@@ -76,7 +76,7 @@ pub struct Eval {
 
 impl<'a> Frame<'a> {
     pub fn new(mesh: &'a TriMesh, points: &'a [f64], base: Pose, max_distance: Option<f64>, free: [bool; 6]) -> Result<Self> {
-        check_finite(points, 3, "points")?;
+        check_coordinates(points, 3, "points")?;
         if points.is_empty() {
             return Err(GkError::invalid("points: no points to align"));
         }

@@ -19,7 +19,7 @@
 use crate::bvh::{Nearest, GROUP};
 use crate::closest::Feature;
 use crate::mesh::TriMesh;
-use gagekit_core::{check_finite, interrupt, GkError, Result};
+use gagekit_core::{check_coordinates, interrupt, GkError, Result, MAX_COORDINATE};
 use gagekit_gdt::vec3::{dot, norm, scale, sub, V3};
 use rayon::prelude::*;
 
@@ -180,9 +180,13 @@ impl TriMesh {
         // the finiteness check in the parallel pass that takes the points' bounds (one
         // read of the points instead of two, the first of them serial); the error, naming
         // the first bad point, from the plain check
+        // and the coordinates' range from that box (beyond +-MAX_COORDINATE: a damaged
+        // file or a wrong unit; beyond 1e154 the squares would overflow and the point would
+        // pass for one beyond `max_distance`)
         let (lo, hi, finite) = bounds_finite(points);
-        if points.len() % 3 != 0 || !finite {
-            check_finite(points, 3, "points")?;
+        let inside = (0..3).all(|k| lo[k] >= -MAX_COORDINATE && hi[k] <= MAX_COORDINATE);
+        if points.len() % 3 != 0 || !finite || !inside {
+            check_coordinates(points, 3, "points")?;
         }
         let bound2 = match q.max_distance {
             Some(m) if m.is_nan() || m < 0.0 => {

@@ -1,7 +1,8 @@
 //! Validated triangle meshes, their topology and their angle-weighted pseudonormals.
 //!
-//! A mesh is refused (typed error naming the element) when a vertex is not finite, a
-//! triangle names a vertex that does not exist, or a triangle is degenerate (two equal
+//! A mesh is refused (typed error naming the element) when a vertex is not finite or lies
+//! beyond +-[`MAX_COORDINATE`] (1e9 mm: a damaged file or a wrong unit; beyond 1e154 the
+//! squared distances would overflow to infinity), a triangle names a vertex that does not exist, or a triangle is degenerate (two equal
 //! corners, or a height below 1e-12 of its longest edge: no normal). Its topology decides
 //! whether distances can be signed: every edge shared by exactly two triangles that run
 //! it in opposite directions (a closed, consistently oriented 2-manifold) gives signed
@@ -16,7 +17,7 @@
 //! incident face normals weighted by their angles at a vertex.
 
 use crate::bvh::Bvh;
-use gagekit_core::{GkError, Result};
+use gagekit_core::{GkError, Result, MAX_COORDINATE};
 use gagekit_gdt::vec3::{add, cross, dot, norm, scale, sub, V3};
 
 /// How the triangles fit together.
@@ -103,12 +104,19 @@ impl TriMesh {
         let verts: Vec<V3> = vertices.par_chunks_exact(3).map(|v| [v[0], v[1], v[2]]).collect();
         // an index that is no u32 is read as u32::MAX (>= nv: refused below, by its value)
         let tris: Vec<[u32; 3]> = triangles.par_chunks_exact(3).map(|t| [t[0].to_u32(), t[1].to_u32(), t[2].to_u32()]).collect();
-        if let Some(pos) = verts.as_flattened().par_iter().position_first(|v| !v.is_finite()) {
-            return Err(GkError::invalid(format!(
-                "mesh: vertex {} has a non-finite coordinate ({}); the model is damaged",
-                pos / 3,
-                verts.as_flattened()[pos]
-            )));
+        // one scan for both: `!(|v| <= MAX)` holds for NaN and the infinities too
+        if let Some(pos) = verts.as_flattened().par_iter().position_first(|v| !(v.abs() <= MAX_COORDINATE)) {
+            let v = verts.as_flattened()[pos];
+            return Err(GkError::invalid(if v.is_finite() {
+                format!(
+                    "mesh: vertex {} has a coordinate of magnitude {:e}, beyond the supported {:e}; the model is damaged or its unit is wrong (--cad-units)",
+                    pos / 3,
+                    v.abs(),
+                    MAX_COORDINATE
+                )
+            } else {
+                format!("mesh: vertex {} has a non-finite coordinate ({v}); the model is damaged", pos / 3)
+            }));
         }
         if let Some((i, k)) = tris.par_iter().enumerate().find_map_first(|(i, t)| t.iter().position(|&k| k as usize >= nv).map(|k| (i, k))) {
             let bad = triangles[3 * i + k];
