@@ -23,14 +23,19 @@ def bracket_model():
     return read_cad(data_path("bracket.step"))
 
 
-@pytest.fixture(scope="module")
-def bracket_scan():
+def _make_bracket(density: float) -> np.ndarray:
+    """The bundled data's bracket scan (data/make_bracket.py), `density` times its points."""
     import importlib.util
 
     spec = importlib.util.spec_from_file_location("make_bracket", data_path("make_bracket.py"))
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
-    return mod.make_bracket(0.3)
+    return mod.make_bracket(density)
+
+
+@pytest.fixture(scope="module")
+def bracket_scan():
+    return _make_bracket(0.3)
 
 
 def _on_bottom(p):
@@ -98,12 +103,7 @@ def test_best_fit_is_invariant_under_rigid_motion(bracket_model, bracket_scan, s
 @pytest.fixture(scope="module")
 def dense_bracket_scan():
     """138 097 points: through the 30 000 and 100 000 point stages of the best fit."""
-    import importlib.util
-
-    spec = importlib.util.spec_from_file_location("make_bracket", data_path("make_bracket.py"))
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod.make_bracket(5.0)
+    return _make_bracket(5.0)
 
 
 def test_best_fit_ignores_clutter_beyond_the_bound_the_point_order_and_a_motion(bracket_model, dense_bracket_scan):

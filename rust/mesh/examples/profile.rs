@@ -17,25 +17,10 @@ fn tube(u: f64, v: f64, bumpy: bool) -> f64 {
 }
 
 fn torus(nu: usize, nv: usize, bumpy: bool) -> (Vec<f64>, Vec<u32>) {
-    let mut v = Vec::new();
-    for i in 0..nu {
-        for j in 0..nv {
-            let (u, w) = (2.0 * PI * i as f64 / nu as f64, 2.0 * PI * j as f64 / nv as f64);
-            let r = tube(u, w, bumpy);
-            v.extend([((100.0 + r * w.cos()) * u.cos()) as f32 as f64, ((100.0 + r * w.cos()) * u.sin()) as f32 as f64, (r * w.sin()) as f32 as f64]);
-        }
-    }
-    let mut t = Vec::new();
-    for i in 0..nu {
-        for j in 0..nv {
-            let a = (i * nv + j) as u32;
-            let b = (((i + 1) % nu) * nv + j) as u32;
-            let c = (((i + 1) % nu) * nv + (j + 1) % nv) as u32;
-            let d = (i * nv + (j + 1) % nv) as u32;
-            t.extend([a, b, c, a, c, d]);
-        }
-    }
-    (v, t)
+    gagekit_mesh::grid::periodic_grid(nu, nv, |u, w| {
+        let r = tube(u, w, bumpy);
+        [((100.0 + r * w.cos()) * u.cos()) as f32 as f64, ((100.0 + r * w.cos()) * u.sin()) as f32 as f64, (r * w.sin()) as f32 as f64]
+    })
 }
 
 fn scan(n: usize, seed: u64, bumpy: bool) -> Vec<f64> {

@@ -23,6 +23,8 @@ pub mod align;
 pub mod bvh;
 pub mod closest;
 pub mod distance;
+#[doc(hidden)]
+pub mod grid;
 pub mod mesh;
 pub mod minimax;
 pub mod rigid;

@@ -15,25 +15,10 @@ fn tube(u: f64, v: f64) -> f64 {
 }
 
 fn torus(nu: usize, nv: usize) -> (Vec<f64>, Vec<u32>) {
-    let mut v = Vec::new();
-    for i in 0..nu {
-        for j in 0..nv {
-            let (u, w) = (2.0 * PI * i as f64 / nu as f64, 2.0 * PI * j as f64 / nv as f64);
-            let r = tube(u, w);
-            v.extend([(100.0 + r * w.cos()) * u.cos(), (100.0 + r * w.cos()) * u.sin(), r * w.sin()]);
-        }
-    }
-    let mut t = Vec::new();
-    for i in 0..nu {
-        for j in 0..nv {
-            let a = (i * nv + j) as u32;
-            let b = (((i + 1) % nu) * nv + j) as u32;
-            let c = (((i + 1) % nu) * nv + (j + 1) % nv) as u32;
-            let d = (i * nv + (j + 1) % nv) as u32;
-            t.extend([a, b, c, a, c, d]);
-        }
-    }
-    (v, t)
+    crate::grid::periodic_grid(nu, nv, |u, w| {
+        let r = tube(u, w);
+        [(100.0 + r * w.cos()) * u.cos(), (100.0 + r * w.cos()) * u.sin(), r * w.sin()]
+    })
 }
 
 /// `n` points near the torus at random (u, v): offsets +-0.35 mm, 2 % up to 5 mm.
