@@ -1060,8 +1060,14 @@ impl Bvh {
     /// point's own size (a far point's coordinates round on a coarser grid); at least
     /// 1e-9 (size + |p|_inf), which [`SLACK32`] relies on.
     #[inline(always)]
-    fn slack_at(&self, p: &V3) -> f64 {
-        self.slack + 1e-9 * p[0].abs().max(p[1].abs()).max(p[2].abs())
+    pub(crate) fn slack_at(&self, p: &V3) -> f64 {
+        self.slack_of(p[0].abs().max(p[1].abs()).max(p[2].abs()))
+    }
+
+    /// [`Bvh::slack_at`] of a point whose largest |coordinate| is `inf`.
+    #[inline(always)]
+    fn slack_of(&self, inf: f64) -> f64 {
+        self.slack + 1e-9 * inf
     }
 
     #[inline(always)]
@@ -1316,9 +1322,9 @@ impl Bvh {
         // compile to vector instructions; lanes past `g` have the point 0 and `bd` minus
         // infinity, so `side` and `bw` minus infinity, and are never in a mask)
         for i in 0..GROUP {
-            // |p|_inf, as `slack_at` takes it
+            // |p|_inf, taken once for the slack and the box tests' rounding
             let m = px[i].abs().max(py[i].abs()).max(pz[i].abs());
-            slack[i] = self.slack + 1e-9 * m;
+            slack[i] = self.slack_of(m);
             (qx[i], qy[i], qz[i]) = (px[i] as f32, py[i] as f32, pz[i] as f32);
             side[i] = Bound::side32(bd[i]);
             reach[i] = Bound::reach32(slack[i]);

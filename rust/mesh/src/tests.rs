@@ -798,7 +798,7 @@ proptest! {
         for k in 0..200 {
             let s: f64 = [0.5, 12.0, 1e3, 1e6, 1e12, 1e39][k % 6];
             let p: [f64; 3] = [shift + rng.random_range(-s..s), rng.random_range(-s..s) - shift, 0.5 * shift + rng.random_range(-s..s)];
-            let slack = bvh.slack + 1e-9 * p[0].abs().max(p[1].abs()).max(p[2].abs());
+            let slack = bvh.slack_at(&p);
             for (slot, c) in bvh.corners.iter().enumerate() {
                 let d2 = brute_force(&[*c], p);
                 prop_assert!(bvh.bounds[slot].may_beat(&p, d2, slack), "slot {} point {:?} d2 {}", slot, p, d2);
@@ -834,7 +834,7 @@ proptest! {
             for i in 0..crate::bvh::GROUP {
                 let p: [f64; 3] = [shift + rng.random_range(-s..s), rng.random_range(-s..s) - shift, 0.5 * shift + rng.random_range(-s..s)];
                 (lanes[0][i], lanes[1][i], lanes[2][i]) = (p[0], p[1], p[2]);
-                slack[i] = bvh.slack + 1e-9 * p[0].abs().max(p[1].abs()).max(p[2].abs());
+                slack[i] = bvh.slack_at(&p);
                 best[i] = brute_force(&[bvh.corners[slot]], p) * [0.25, 1.0, 4.0, 0.999][rng.random_range(0..4)];
             }
             let b = &bvh.bounds[slot];
@@ -853,7 +853,7 @@ proptest! {
         let p = [g[0] + nrm[0], g[1] + nrm[1], g[2] + nrm[2]];
         let d2 = brute_force(&[c], p);
         prop_assert!((d2 - 1.0).abs() < 1e-9 * (1.0 + shift));
-        let slack = bvh.slack + 1e-9 * p[0].abs().max(p[1].abs()).max(p[2].abs());
+        let slack = bvh.slack_at(&p);
         prop_assert!(!b.may_beat(&p, 0.25, slack));
     }
 }
