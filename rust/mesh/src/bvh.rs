@@ -227,13 +227,14 @@ impl Bound {
     /// May the triangle be as near to `p` as `best_d2` (squared)? `slack`: the point's
     /// slack ([`Bvh::slack_at`]). False only where `Planes::may_beat` of the same
     /// triangle is false too (see [`Bound::lower32`]), so only for a triangle proved
-    /// farther than `best_d2`.
-    #[inline(always)]
-    pub fn may_beat(&self, p: &V3, best_d2: f64, slack: f64) -> bool {
+    /// farther than `best_d2`. The tests' form: the queries call [`Bound::passes`] with
+    /// the point rounded once and the two sides kept as the best changes.
+    #[cfg(test)]
+    pub(crate) fn may_beat(&self, p: &V3, best_d2: f64, slack: f64) -> bool {
         self.passes(&[p[0] as f32, p[1] as f32, p[2] as f32], Self::reach32(slack), Self::side32(best_d2))
     }
 
-    /// [`Bound::may_beat`] of the point rounded to single precision `q`, with its
+    /// `Bound::may_beat` of the point rounded to single precision `q`, with its
     /// reduction `r` ([`Bound::reach32`]) and right side `side` ([`Bound::side32`]).
     #[inline(always)]
     pub(crate) fn passes(&self, q: &[f32; 3], r: f32, side: f32) -> bool {
@@ -265,7 +266,7 @@ impl Bound {
 
     /// The squared lower bound in single precision at the point `q` (the point rounded to
     /// single precision), each part reduced by `r` ([`Bound::reach32`] of the point's
-    /// slack): the left side of [`Bound::may_beat`]'s comparison.
+    /// slack): the left side of `Bound::may_beat`'s comparison.
     ///
     /// Error analysis, against `Planes::lower` (the double-precision bound) at the point p
     /// with the slack s (u = 2^-24, S = size + |p|_inf, every corner within the root's box
@@ -305,7 +306,7 @@ impl Bound {
         a * a + b * b
     }
 
-    /// [`Bound::may_beat`] of the [`GROUP`] lanes of a group at once (coordinates by axis,
+    /// `Bound::may_beat` of the [`GROUP`] lanes of a group at once (coordinates by axis,
     /// each lane's best and slack): bit i set when lane i may beat. The same arithmetic
     /// lane by lane, so the same answers.
     #[cfg(test)]
