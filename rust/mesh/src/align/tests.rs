@@ -37,6 +37,15 @@ fn scan(n: usize, seed: u64) -> Vec<f64> {
     p
 }
 
+/// `n` points of a fixture beside the torus (250-480 mm out along x, beyond any bound the
+/// tests give), and the scan `s` with half of them before it and half after it.
+fn with_fixture(s: &[f64], n: usize, rng: &mut ChaCha8Rng) -> (Vec<f64>, Vec<f64>) {
+    let fixture: Vec<f64> = (0..n).flat_map(|_| [rng.random_range(250.0..480.0), rng.random_range(-150.0..150.0), rng.random_range(-80.0..80.0)]).collect();
+    let half = 3 * (n / 2);
+    let cluttered = fixture[..half].iter().chain(s).chain(&fixture[half..]).cloned().collect();
+    (fixture, cluttered)
+}
+
 fn moved(v: &[f64], pose: &Pose) -> Vec<f64> {
     v.chunks_exact(3).flat_map(|p| pose.apply([p[0], p[1], p[2]])).collect()
 }
@@ -73,8 +82,7 @@ fn clutter_order_and_motion_leave_the_fit_unchanged() {
     let opt = FitOptions { max_distance: Some(2.0), ..Default::default() };
     let plain = best_fit(&mesh, &s, &opt).unwrap();
     let mut rng = ChaCha8Rng::seed_from_u64(2);
-    let fixture: Vec<f64> = (0..5000).flat_map(|_| [rng.random_range(250.0..480.0), rng.random_range(-150.0..150.0), rng.random_range(-80.0..80.0)]).collect();
-    let cluttered: Vec<f64> = fixture[..7500].iter().chain(&s).chain(&fixture[7500..]).cloned().collect();
+    let (fixture, cluttered) = with_fixture(&s, 5000, &mut rng);
     let fit = best_fit(&mesh, &cluttered, &opt).unwrap();
     assert_eq!(fit.n_used, plain.n_used);
     let worst = displacement(&s, &plain.pose, &s, &fit.pose);
@@ -161,9 +169,7 @@ fn clutter_as_large_as_the_scan_leaves_a_fit_in_place_unchanged() {
     let s = scan(40_000, 3);
     let opt = FitOptions { max_distance: Some(2.0), ..Default::default() };
     let plain = best_fit(&mesh, &s, &opt).unwrap();
-    let mut rng = ChaCha8Rng::seed_from_u64(4);
-    let fixture: Vec<f64> = (0..40_000).flat_map(|_| [rng.random_range(250.0..480.0), rng.random_range(-150.0..150.0), rng.random_range(-80.0..80.0)]).collect();
-    let cluttered: Vec<f64> = fixture[..60_000].iter().chain(&s).chain(&fixture[60_000..]).cloned().collect();
+    let (_, cluttered) = with_fixture(&s, 40_000, &mut ChaCha8Rng::seed_from_u64(4));
     let fit = best_fit(&mesh, &cluttered, &opt).unwrap();
     assert_eq!(fit.n_used, plain.n_used);
     let worst = displacement(&s, &plain.pose, &s, &fit.pose);
