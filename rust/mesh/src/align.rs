@@ -226,10 +226,17 @@ pub const COARSE: Tol = Tol { rot: 1e-7, tr: 1e-5, exact: false };
 /// mode 0.58: 21 steps from 1e-6 mm), the mix lands in a few. With no fixed point after
 /// [`MAX_FINAL`] steps (a cycle: a point at the bound switching in and out, or a motion
 /// the surface hardly constrains, such as a patch of a tessellated sphere turning about
-/// its centre) the last pose is kept when the last step is below [`FINE`] or changes the
-/// distances by less than its 1e-6 mm (weighted RMS); otherwise the fit fails with a
-/// numerical error.
+/// its centre, or a tessellated surface of revolution turning about its axis from facet to
+/// facet) the last pose is kept when the last step is below [`FINE`] or changes the
+/// distances by less than its 1e-6 mm or [`IMMATERIAL`] of their robust scale (weighted
+/// RMS); otherwise the fit fails with a numerical error. In such a cycle the pose along
+/// the free motion is the path's, not the cloud's (a 300 x 100 torus: distances within
+/// about 2e-4 mm of each other).
 pub const FIXED: Tol = Tol { rot: 1e-12, tr: 1e-10, exact: true };
+
+/// The share of the distances' robust scale (sigma = 1.4826 median |d|) below which the
+/// last step of a cycle at [`MAX_FINAL`] moves them immaterially ([`FIXED`]): 1 %.
+pub const IMMATERIAL: f64 = 1e-2;
 
 /// What [`iterate`] ends with: iterations done, and (when the last pose was evaluated)
 /// the median |d|, the RMS of d and the number of points within the bound there.
@@ -359,13 +366,14 @@ pub fn iterate(frame: &Frame, idx: &[u32], p: &mut [f64; 6], hints: &mut [Cache]
                 true
             } else if it >= max_iter {
                 // no fixed point: a documented stop when the last step is below FINE or
-                // changes the distances by less than FINE's 1e-6 mm (weighted RMS of
-                // J . step: e.g. a motion the surface hardly constrains, such as turning
-                // a patch of a tessellated sphere about its centre); a numerical error
-                // otherwise
+                // changes the distances (weighted RMS of J . step) by less than FINE's
+                // 1e-6 mm or 1 % of their robust scale sigma: a motion the faceted surface
+                // hardly constrains, such as a patch of a tessellated sphere turning about
+                // its centre or a tessellated surface of revolution about its axis, where
+                // the iteration steps from facet to facet; a numerical error otherwise
                 let sv = Vector6::from_column_slice(&step);
                 let change = ((sv.dot(&(a * sv))).max(0.0) / wsum).sqrt();
-                if (rot < FINE.rot && tr < FINE.tr) || change < FINE.tr {
+                if (rot < FINE.rot && tr < FINE.tr) || change < FINE.tr.max(IMMATERIAL * sigma) {
                     true
                 } else {
                     return Err(GkError::numerical(format!(

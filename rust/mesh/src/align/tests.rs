@@ -175,3 +175,33 @@ fn clutter_as_large_as_the_scan_leaves_a_fit_in_place_unchanged() {
     let worst = displacement(&s, &plain.pose, &s, &fit.pose);
     assert!(worst < 1e-9, "clutter moved the fit by {worst:.3e} mm");
 }
+
+/// A surface of revolution (a torus of constant tube radius, 300 x 100 facets): turning
+/// about its axis is constrained only by the facets, and the last stage steps from facet
+/// to facet with no fixed point (distances moved by about 1e-4 mm a step). The fit keeps
+/// its last pose (the step immaterial against the scan's noise) instead of failing, with
+/// and without clutter beyond the bound, and the deviations stay those of the scan in place
+/// (the scan is the torus's own, in place).
+#[test]
+fn a_surface_of_revolution_is_fitted() {
+    let (v, t) = crate::grid::periodic_grid(300, 100, |u, w| [(100.0 + 30.0 * w.cos()) * u.cos(), (100.0 + 30.0 * w.cos()) * u.sin(), 30.0 * w.sin()]);
+    let mesh = TriMesh::new(&v, &t).unwrap();
+    let mut rng = ChaCha8Rng::seed_from_u64(6);
+    let s: Vec<f64> = (0..200_000)
+        .flat_map(|_| {
+            let (u, w) = (rng.random_range(0.0..2.0 * PI), rng.random_range(0.0..2.0 * PI));
+            let r = 30.0 + rng.random_range(-0.35..0.35);
+            [(100.0 + r * w.cos()) * u.cos(), (100.0 + r * w.cos()) * u.sin(), r * w.sin()]
+        })
+        .collect();
+    let opt = FitOptions { max_distance: Some(10.0), ..Default::default() };
+    let in_place = figures(&mesh, &s, 10.0);
+    let (_, cluttered) = with_fixture(&s, 5000, &mut rng);
+    for pts in [&s, &cluttered] {
+        let fit = best_fit(&mesh, pts, &opt).expect("a surface of revolution is fitted");
+        let f = figures(&mesh, &moved(&s, &fit.pose), 10.0);
+        for k in 0..4 {
+            assert!((f[k] - in_place[k]).abs() < 1e-2, "figure {k}: {} against {} in place", f[k], in_place[k]);
+        }
+    }
+}
